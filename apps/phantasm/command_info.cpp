@@ -1,0 +1,46 @@
+#include "apps/phantasm/commands.hpp"
+#include "pipeline/run_pipeline.hpp"
+#include "scene/scene_json.hpp"
+
+#include <iostream>
+#include <memory>
+
+namespace phantasm::cli {
+
+void add_info_command(CLI::App& app, std::function<int()>& action) {
+  struct Options {
+    std::string scene;
+    bool json = false;
+  };
+  auto options = std::make_shared<Options>();
+  CLI::App* command = app.add_subcommand(
+      "info", "Show what a scene models: grid, organs, tissues, sequences and each stage's plan");
+  command->add_option("scene", options->scene, "Scene file (YAML)")->required();
+  command->add_flag("--json", options->json, "Print every setting, defaults filled in, as JSON");
+  command->callback([options, &action] {
+    action = [options] {
+      const SceneLoadResult result = load_scene(options->scene);
+      if (!result.scene) {
+        std::cerr << format_diagnostics(result.problems);
+        return static_cast<int>(exit_bad_input);
+      }
+      const Scene& scene = *result.scene;
+      if (options->json) {
+        std::cout << scene_settings_json(scene).dump(2) << '\n';
+        return static_cast<int>(exit_ok);
+      }
+      const ImageGrid grid = scene.grid.grid();
+      std::cout << "scene " << scene.name << " (" << scene.file.string() << ", sha256 " << scene.sha256.substr(0, 12)
+                << ")\nseed " << scene.seed << ", " << scene.field_strength_T << " T, grid " << grid.dims.x() << " x "
+                << grid.dims.y() << " x " << grid.dims.z() << " (" << grid.voxel_count() << " voxels)\n";
+      for (const auto& stage : plan_stages(scene)) {
+        std::cout << "\n" << stage.stage << (stage.status == "skipped" ? " (skipped)" : "") << ":\n";
+        for (const auto& line : stage.modelled) std::cout << "  " << line << '\n';
+        for (const auto& line : stage.skipped) std::cout << "  skipped: " << line << '\n';
+      }
+      return static_cast<int>(exit_ok);
+    };
+  });
+}
+
+} // namespace phantasm::cli

@@ -1,0 +1,50 @@
+#include "apps/phantasm/commands.hpp"
+#include "core/progress.hpp"
+#include "io/atomic_file.hpp"
+#include "pipeline/run_pipeline.hpp"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <iostream>
+#include <memory>
+
+namespace phantasm::cli {
+
+void add_run_command(CLI::App& app, std::function<int()>& action) {
+  struct Options {
+    std::string scene;
+    std::string output = "out";
+    bool force = false;
+    bool quiet = false;
+    int write_delay_ms = 0;
+  };
+  auto options = std::make_shared<Options>();
+  CLI::App* command = app.add_subcommand(
+      "run", "Run a scene through every stage and write the dataset (BIDS-like, see DESIGN.md)");
+  command->add_option("scene", options->scene, "Scene file (YAML)")->required();
+  command->add_option("-o,--output", options->output, "Dataset folder to write")->capture_default_str();
+  command->add_flag("--force", options->force, "Write into a folder that already holds files");
+  command->add_flag("-q,--quiet", options->quiet, "Print nothing but errors");
+  // For tests that interrupt a run while it writes; hidden from --help.
+  command->add_option("--write-delay-ms", options->write_delay_ms)->group("")->check(CLI::NonNegativeNumber);
+  command->callback([options, &action] {
+    action = [options] {
+      const auto start = std::chrono::steady_clock::now();
+      const SceneLoadResult result = load_scene(options->scene);
+      if (!result.scene) {
+        std::cerr << format_diagnostics(result.problems);
+        return static_cast<int>(exit_bad_input);
+      }
+      set_write_delay_for_testing(options->write_delay_ms);
+      Reporter reporter(std::cerr, progress_style_for(STDERR_FILENO, options->quiet));
+      const RunSummary summary = run_scene(*result.scene, RunOptions{options->output, options->force}, reporter);
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      reporter.note("wrote " + std::to_string(summary.files.size()) + " files to " + options->output + " in " +
+                    std::to_string(seconds).substr(0, 5) + " s");
+      return static_cast<int>(exit_ok);
+    };
+  });
+}
+
+} // namespace phantasm::cli

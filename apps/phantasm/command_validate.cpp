@@ -1,0 +1,31 @@
+#include "apps/phantasm/commands.hpp"
+#include "scene/scene.hpp"
+
+#include <iostream>
+#include <memory>
+
+namespace phantasm::cli {
+
+void add_validate_command(CLI::App& app, std::function<int()>& action) {
+  auto files = std::make_shared<std::vector<std::string>>();
+  CLI::App* command = app.add_subcommand(
+      "validate", "Check scene files and report every problem as file:line:column: key: expected, found");
+  command->add_option("scenes", *files, "Scene files (YAML)")->required();
+  command->callback([files, &action] {
+    action = [files] {
+      int exit_code = exit_ok;
+      for (const auto& file : *files) {
+        const SceneLoadResult result = load_scene(file);
+        if (result.problems.empty()) {
+          std::cout << file << ": valid\n";
+        } else {
+          std::cerr << format_diagnostics(result.problems);
+          exit_code = exit_bad_input;
+        }
+      }
+      return exit_code;
+    };
+  });
+}
+
+} // namespace phantasm::cli

@@ -1,0 +1,22 @@
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+
+namespace phantasm::cli {
+
+/// Exit codes of the phantasm command.
+enum ExitCode : int {
+  exit_ok = 0,
+  exit_failure = 1,     ///< a fault of the program or the system (disk full, ...)
+  exit_bad_input = 2,   ///< the scene or another input is wrong; the message says where
+  exit_interrupted = 130, ///< SIGINT or SIGTERM; nothing half-written is left
+};
+
+/// Each subcommand registers itself and sets the action run after parsing.
+void add_run_command(CLI::App& app, std::function<int()>& action);
+void add_validate_command(CLI::App& app, std::function<int()>& action);
+void add_info_command(CLI::App& app, std::function<int()>& action);
+
+} // namespace phantasm::cli

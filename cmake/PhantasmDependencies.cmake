@@ -1,0 +1,36 @@
+# Every third-party dependency is found here, once; targets link them where they are used.
+# scripts/install-deps.sh installs the Debian 12 packages that provide them.
+find_package(PkgConfig REQUIRED)
+find_package(Threads REQUIRED)
+find_package(OpenMP REQUIRED COMPONENTS CXX)
+find_package(Eigen3 3.4 REQUIRED NO_MODULE)
+find_package(yaml-cpp REQUIRED)
+find_package(nlohmann_json 3.10 REQUIRED)
+find_package(CLI11 REQUIRED)
+find_package(ZLIB REQUIRED)
+
+# Deformation: sparse Cholesky with an OpenMP OpenBLAS underneath.
+find_package(CHOLMOD REQUIRED)
+find_package(OpenBLAS CONFIG QUIET)
+
+# Anatomy: CGAL Mesh_3 (header-only; one translation unit includes it).
+find_package(CGAL REQUIRED)
+
+# Voxelization and .vdb output.
+list(APPEND CMAKE_MODULE_PATH /usr/lib/x86_64-linux-gnu/cmake/OpenVDB)
+find_package(OpenVDB REQUIRED)
+
+# MR acquisition: FFTW (double precision, with its OpenMP threads).
+pkg_check_modules(FFTW3 REQUIRED IMPORTED_TARGET fftw3)
+
+# Output formats: NIfTI, HDF5, VTK (mesh I/O and ParaView files, PNG), no ITK.
+find_package(Nifti2 MODULE REQUIRED)
+find_package(HDF5 REQUIRED COMPONENTS C)
+find_package(VTK 9 REQUIRED COMPONENTS CommonCore CommonDataModel IOXML IOGeometry IOPLY IOImage)
+
+if(PHANTASM_BUILD_TESTS)
+  find_package(GTest REQUIRED)
+endif()
+if(PHANTASM_BUILD_BENCHMARKS)
+  find_package(benchmark REQUIRED)
+endif()

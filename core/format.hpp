@@ -1,0 +1,15 @@
+#pragma once
+
+#include <Eigen/Core>
+
+#include <string>
+
+namespace phantasm {
+
+/// "(x, y, z)" with up to 6 significant digits, for log lines and messages.
+std::string format_vector(const Eigen::Vector3d& v);
+
+/// A number with up to 6 significant digits ("0.0001", "1e+10", "3").
+std::string format_number(double value);
+
+} // namespace phantasm

@@ -1,0 +1,82 @@
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <cstddef>
+#include <iosfwd>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace phantasm {
+
+/// How a Reporter shows progress on its stream.
+enum class ProgressStyle {
+  bar,   ///< a bar redrawn in place (stderr is a terminal)
+  lines, ///< one plain line per tenth of the work (stderr is a file or a pipe)
+  none,  ///< nothing (--quiet)
+};
+
+class Reporter;
+
+/// Progress of one long stage. advance() may be called from several threads at once.
+class ProgressBar {
+public:
+  ProgressBar(Reporter& reporter, std::string label, std::size_t total);
+  ~ProgressBar();
+  ProgressBar(const ProgressBar&) = delete;
+  ProgressBar& operator=(const ProgressBar&) = delete;
+
+  /// Marks `steps` more units of work as done.
+  void advance(std::size_t steps = 1);
+  /// Marks all work as done and ends the bar's line (also done by the destructor).
+  void finish();
+
+private:
+  void draw(std::size_t done, bool final);
+
+  Reporter& m_reporter;
+  std::string m_label;
+  std::size_t m_total;
+  std::atomic<std::size_t> m_done{0};
+  std::size_t m_last_tenth = 0;
+  std::chrono::steady_clock::time_point m_start;
+  std::chrono::steady_clock::time_point m_last_draw;
+  bool m_finished = false;
+  std::mutex m_mutex;
+};
+
+/// The record of what each stage modelled and what it skipped, shown on stderr (unless quiet)
+/// and kept for the run's log file.
+class Reporter {
+public:
+  Reporter(std::ostream& stream, ProgressStyle style);
+
+  /// A reporter that prints nothing and only keeps the log.
+  static Reporter silent();
+
+  /// "[stage] message": what was modelled, and why.
+  void modelled(const std::string& stage, const std::string& message);
+  /// "[stage] skipped: message": what the scene did not need.
+  void skipped(const std::string& stage, const std::string& message);
+  /// A note that belongs on screen but not in the log (timings, where files went).
+  void note(const std::string& message);
+
+  /// The log lines so far, in order, without timings (deterministic for a given scene).
+  const std::vector<std::string>& log_lines() const { return m_log; }
+  ProgressStyle style() const { return m_style; }
+
+private:
+  friend class ProgressBar;
+  void print(const std::string& line);
+
+  std::ostream* m_stream;
+  ProgressStyle m_style;
+  std::vector<std::string> m_log;
+  std::mutex m_mutex;
+};
+
+/// The style that suits a stream: a bar on a terminal, plain lines otherwise, none when quiet.
+ProgressStyle progress_style_for(int file_descriptor, bool quiet);
+
+} // namespace phantasm

@@ -1,0 +1,113 @@
+#include "io/atomic_file.hpp"
+
+#include "core/cancellation.hpp"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <stdexcept>
+#include <thread>
+
+namespace phantasm {
+namespace {
+
+constexpr const char* k_temporary_marker = ".phantasm-tmp-";
+constexpr std::size_t k_chunk_bytes = std::size_t{1} << 20;
+std::atomic<int> g_write_delay_ms{0};
+std::atomic<unsigned> g_temporary_counter{0};
+
+std::runtime_error io_error(const std::string& what, const std::filesystem::path& path) {
+  return std::runtime_error(what + " '" + path.string() + "': " + std::strerror(errno));
+}
+
+void fsync_folder(const std::filesystem::path& folder) {
+  const int fd = ::open(folder.empty() ? "." : folder.c_str(), O_RDONLY | O_DIRECTORY);
+  if (fd >= 0) {
+    ::fsync(fd);
+    ::close(fd);
+  }
+}
+
+} // namespace
+
+AtomicFileWriter::AtomicFileWriter(std::filesystem::path final_path) : m_final_path(std::move(final_path)) {
+  const std::filesystem::path folder = m_final_path.parent_path();
+  if (!folder.empty()) std::filesystem::create_directories(folder);
+  const std::string name = "." + m_final_path.filename().string() + k_temporary_marker +
+                           std::to_string(::getpid()) + "-" + std::to_string(g_temporary_counter++);
+  m_temporary_path = folder / name;
+  m_fd = ::open(m_temporary_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (m_fd < 0) throw io_error("cannot create", m_temporary_path);
+}
+
+AtomicFileWriter::~AtomicFileWriter() {
+  if (m_fd >= 0) ::close(m_fd);
+  if (!m_committed) ::unlink(m_temporary_path.c_str());
+}
+
+void AtomicFileWriter::write(const void* data, std::size_t size) {
+  const auto* bytes = static_cast<const char*>(data);
+  while (size > 0) {
+    throw_if_cancelled();
+    if (const int delay = g_write_delay_ms.load(); delay > 0) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(delay));
+      throw_if_cancelled();
+    }
+    const std::size_t chunk = std::min(size, g_write_delay_ms.load() > 0 ? std::size_t{64} : k_chunk_bytes);
+    const ssize_t written = ::write(m_fd, bytes, chunk);
+    if (written < 0) {
+      if (errno == EINTR) continue;
+      throw io_error("cannot write", m_temporary_path);
+    }
+    bytes += written;
+    size -= static_cast<std::size_t>(written);
+  }
+}
+
+void AtomicFileWriter::commit() {
+  throw_if_cancelled();
+  if (::fsync(m_fd) != 0) throw io_error("cannot flush", m_temporary_path);
+  if (::close(m_fd) != 0) {
+    m_fd = -1;
+    throw io_error("cannot close", m_temporary_path);
+  }
+  m_fd = -1;
+  if (::rename(m_temporary_path.c_str(), m_final_path.c_str()) != 0) {
+    throw io_error("cannot rename to " + m_final_path.string() + " from", m_temporary_path);
+  }
+  m_committed = true;
+  fsync_folder(m_final_path.parent_path());
+}
+
+void write_file_atomically(const std::filesystem::path& path, std::string_view bytes) {
+  AtomicFileWriter writer(path);
+  writer.write(bytes);
+  writer.commit();
+}
+
+bool is_temporary_file_name(const std::filesystem::path& path) {
+  const std::string name = path.filename().string();
+  return !name.empty() && name[0] == '.' && name.find(k_temporary_marker) != std::string::npos;
+}
+
+std::size_t remove_stale_temporaries(const std::filesystem::path& root) {
+  std::size_t removed = 0;
+  std::error_code error;
+  if (!std::filesystem::is_directory(root, error)) return 0;
+  for (auto it = std::filesystem::recursive_directory_iterator(root, error);
+       it != std::filesystem::recursive_directory_iterator(); it.increment(error)) {
+    if (error) break;
+    if (it->is_regular_file(error) && is_temporary_file_name(it->path())) {
+      if (std::filesystem::remove(it->path(), error)) ++removed;
+    }
+  }
+  return removed;
+}
+
+void set_write_delay_for_testing(int milliseconds_per_chunk) { g_write_delay_ms = milliseconds_per_chunk; }
+
+} // namespace phantasm

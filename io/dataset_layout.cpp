@@ -1,0 +1,101 @@
+#include "io/dataset_layout.hpp"
+
+#include "core/error.hpp"
+#include "io/atomic_file.hpp"
+
+namespace phantasm {
+
+const char* session_label(PhantomState state) { return state == PhantomState::reference ? "ref" : "def"; }
+
+DatasetLayout::DatasetLayout(std::filesystem::path root, std::string subject)
+    : m_root(std::move(root)), m_subject(std::move(subject)) {}
+
+std::string DatasetLayout::prefix(PhantomState state) const {
+  return "sub-" + m_subject + "_ses-" + session_label(state);
+}
+
+std::filesystem::path DatasetLayout::dataset_description() const { return m_root / "dataset_description.json"; }
+
+std::filesystem::path DatasetLayout::anat_image(PhantomState state, const std::string& suffix) const {
+  return m_root / ("sub-" + m_subject) / (std::string("ses-") + session_label(state)) / "anat" /
+         (prefix(state) + "_" + suffix + ".nii.gz");
+}
+
+std::filesystem::path DatasetLayout::derivatives() const { return m_root / "derivatives" / "phantasm"; }
+
+std::filesystem::path DatasetLayout::derivatives_description() const {
+  return derivatives() / "dataset_description.json";
+}
+
+std::filesystem::path DatasetLayout::dseg_table() const { return derivatives() / "dseg.tsv"; }
+
+std::filesystem::path DatasetLayout::subject_derivatives() const { return derivatives() / ("sub-" + m_subject); }
+
+std::filesystem::path DatasetLayout::dseg(PhantomState state) const {
+  return subject_derivatives() / (std::string("ses-") + session_label(state)) / "anat" /
+         (prefix(state) + "_dseg.nii.gz");
+}
+
+std::filesystem::path DatasetLayout::probseg(PhantomState state, const std::string& tissue) const {
+  return subject_derivatives() / (std::string("ses-") + session_label(state)) / "anat" /
+         (prefix(state) + "_label-" + tissue + "_probseg.nii.gz");
+}
+
+std::filesystem::path DatasetLayout::transform(PhantomState from, PhantomState to) const {
+  return subject_derivatives() / "xfm" /
+         ("sub-" + m_subject + "_from-" + session_label(from) + "_to-" + session_label(to) +
+          "_mode-image_xfm.nii.gz");
+}
+
+std::filesystem::path DatasetLayout::jacobian() const {
+  return subject_derivatives() / "xfm" / ("sub-" + m_subject + "_from-ref_to-def_jacobian.nii.gz");
+}
+
+std::filesystem::path DatasetLayout::landmarks(PhantomState state) const {
+  return subject_derivatives() / "landmarks" / (prefix(state) + "_landmarks.csv");
+}
+
+std::filesystem::path DatasetLayout::mesh(PhantomState state, const std::string& organ) const {
+  return subject_derivatives() / "meshes" / (prefix(state) + "_organ-" + organ + "_mesh.vtp");
+}
+
+std::filesystem::path DatasetLayout::provenance() const { return subject_derivatives() / "provenance.json"; }
+
+std::filesystem::path DatasetLayout::log() const { return subject_derivatives() / "log.txt"; }
+
+std::filesystem::path DatasetLayout::scene_copy() const { return subject_derivatives() / "scene.yaml"; }
+
+std::filesystem::path sidecar_path(const std::filesystem::path& image) {
+  std::string name = image.filename().string();
+  for (const char* extension : {".nii.gz", ".nii", ".csv", ".vtp", ".vtu"}) {
+    const std::string ext = extension;
+    if (name.size() > ext.size() && name.compare(name.size() - ext.size(), ext.size(), ext) == 0) {
+      name.resize(name.size() - ext.size());
+      break;
+    }
+  }
+  return image.parent_path() / (name + ".json");
+}
+
+void prepare_output_folder(const std::filesystem::path& folder, bool force) {
+  std::error_code error;
+  if (std::filesystem::exists(folder, error)) {
+    if (!std::filesystem::is_directory(folder, error)) {
+      throw InputError(folder.string() + ": expected an output folder, found a file");
+    }
+    const bool empty = std::filesystem::is_empty(folder, error);
+    if (!empty && !force) {
+      throw InputError(folder.string() +
+                       ": expected an empty or new output folder, found one with files in it "
+                       "(use --force to write over them)");
+    }
+    remove_stale_temporaries(folder);
+    return;
+  }
+  std::filesystem::create_directories(folder, error);
+  if (error) {
+    throw InputError(folder.string() + ": cannot create the output folder: " + error.message());
+  }
+}
+
+} // namespace phantasm

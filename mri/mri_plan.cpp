@@ -1,0 +1,57 @@
+#include "mri/mri_plan.hpp"
+
+#include "core/format.hpp"
+#include "mri/tissue_parameters.hpp"
+
+#include <sstream>
+
+namespace phantasm {
+namespace {
+
+std::string value_text(const std::optional<double>& value) { return value ? format_number(*value) : "-"; }
+
+} // namespace
+
+StageReport plan_mri(const Scene& scene) {
+  StageReport report;
+  report.stage = "mri";
+  if (!scene.outputs.images || scene.sequences.empty()) {
+    report.status = "skipped";
+    report.skipped.push_back(scene.sequences.empty() ? "MR images (the scene lists no sequences)"
+                                                     : "MR images (outputs.images is false)");
+    return report;
+  }
+  for (const auto& s : scene.sequences) {
+    std::ostringstream line;
+    line << s.name << ": " << to_string(s.kind) << ", TR " << s.TR_ms << " ms, TE " << s.TE_ms << " ms";
+    if (s.kind != SequenceKind::spin_echo) line << ", flip " << s.flip_deg << " deg";
+    if (s.kind == SequenceKind::inversion_recovery || s.kind == SequenceKind::mprage) line << ", TI " << s.TI_ms << " ms";
+    line << "; reference and deformed";
+    report.modelled.push_back(line.str());
+  }
+  for (const auto& [name, p] : resolve_tissue_parameters(scene)) {
+    report.modelled.push_back("tissue " + name + " at " + value_text(scene.field_strength_T) + " T: T1 " +
+                              value_text(p.T1_ms) + " ms, T2 " + value_text(p.T2_ms) + " ms, T2* " +
+                              value_text(p.T2star_ms) + " ms, PD " + value_text(p.PD));
+  }
+  const AcquisitionSettings& a = scene.acquisition;
+  if (a.kspace) {
+    report.modelled.push_back("k-space truncation with " + std::to_string(a.kspace_oversampling) + "x oversampled object");
+  } else {
+    report.skipped.push_back("k-space simulation (acquisition.kspace is false): images are sampled directly");
+  }
+  if (a.bias_percent > 0.0) {
+    report.modelled.push_back("bias field of " + value_text(a.bias_percent) + " %");
+  } else {
+    report.skipped.push_back("bias field (acquisition.bias_percent is 0)");
+  }
+  if (a.coils > 1) report.modelled.push_back(std::to_string(a.coils) + " coils, sum of squares");
+  if (a.noise_percent > 0.0) {
+    report.modelled.push_back("Rician noise, " + value_text(a.noise_percent) + " % of " + a.noise_reference_tissue);
+  } else {
+    report.skipped.push_back("noise (acquisition.noise_percent is 0)");
+  }
+  return report;
+}
+
+} // namespace phantasm

@@ -1,0 +1,23 @@
+#pragma once
+
+#include "scene/scene.hpp"
+
+#include <map>
+#include <optional>
+#include <string>
+
+namespace phantasm {
+
+/// The MR parameters of one tissue as used for a scene, with where each value came from.
+struct TissueParameters {
+  std::string tissue;
+  std::optional<double> T1_ms, T2_ms, T2star_ms, PD;
+  std::string T1_source, T2_source, T2star_source, PD_source; ///< "scene" or the table's source
+};
+
+/// The parameters of every tissue the scene's organs use, at the scene's field strength:
+/// scene values first, then the built-in table. Values neither provides stay empty (the scene's
+/// validation has already made sure that its sequences need none of those).
+std::map<std::string, TissueParameters> resolve_tissue_parameters(const Scene& scene);
+
+} // namespace phantasm

@@ -1,0 +1,247 @@
+#include "core/format.hpp"
+#include "core/tissue_table.hpp"
+#include "scene/parse_sections.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+namespace phantasm::scene_detail {
+namespace {
+
+std::string indexed(const std::string& list, std::size_t i, const std::string& key) {
+  return list + "[" + std::to_string(i) + "]" + (key.empty() ? "" : "." + key);
+}
+
+class ConsistencyChecker {
+public:
+  ConsistencyChecker(YamlContext& context, Scene& scene) : m_context(context), m_scene(scene) {}
+
+  void problem(const std::string& key_path, const std::string& message) {
+    m_context.problem(m_scene.location_of(key_path), key_path, message);
+  }
+
+  void check_grid() {
+    const GridSettings& g = m_scene.grid;
+    std::int64_t total = 1;
+    for (int a = 0; a < 3; ++a) {
+      const double count = std::round(g.field_of_view_mm[a] / g.voxel_size_mm[a]);
+      if (count < 1.0) {
+        problem("grid.voxel_size_mm", "expected voxels no larger than the field of view (" +
+                                          format_number(g.field_of_view_mm[a]) + " mm), found " +
+                                          format_number(g.voxel_size_mm[a]) + " mm");
+        return;
+      }
+      if (count > 4096.0) {
+        problem("grid.voxel_size_mm", "expected at most 4096 voxels along an axis, found " +
+                                          format_number(count) + " along axis " + std::to_string(a));
+        return;
+      }
+      total *= static_cast<std::int64_t>(count);
+    }
+    if (total > (std::int64_t{1} << 31)) {
+      problem("grid.voxel_size_mm", "expected at most 2^31 voxels, found " + std::to_string(total));
+    }
+  }
+
+  bool tissue_known(const std::string& tissue) const {
+    if (TissueTable::builtin().has_tissue(tissue)) return true;
+    for (const auto& t : m_scene.tissues) {
+      if (t.tissue == tissue) return true;
+    }
+    return false;
+  }
+
+  void check_organs() {
+    const auto& organs = m_scene.anatomy.organs;
+    std::set<std::string> names;
+    for (std::size_t i = 0; i < organs.size(); ++i) {
+      const OrganSettings& organ = organs[i];
+      if (!names.insert(organ.name).second) {
+        problem(indexed("anatomy.organs", i, "name"),
+                "expected a unique organ name, found '" + organ.name + "' a second time");
+      }
+      if (!tissue_known(organ.tissue)) {
+        problem(indexed("anatomy.organs", i, "tissue"),
+                "expected a tissue of the built-in table or of the scene's tissues section, found '" +
+                    organ.tissue + "'");
+      }
+      if (!organ.material.empty() && m_scene.find_material(organ.material) == nullptr) {
+        problem(indexed("anatomy.organs", i, "material"),
+                "expected a material defined under materials, found '" + organ.material + "'");
+      }
+      if (!organ.inside.empty()) {
+        if (organ.inside == organ.name) {
+          problem(indexed("anatomy.organs", i, "inside"), "expected another organ, found the organ itself");
+        } else if (m_scene.find_organ(organ.inside) == nullptr) {
+          problem(indexed("anatomy.organs", i, "inside"),
+                  "expected the name of an organ in this scene, found '" + organ.inside + "'");
+        }
+      }
+    }
+    // Nesting must be a forest: following 'inside' from any organ reaches an outermost organ.
+    for (std::size_t i = 0; i < organs.size(); ++i) {
+      std::set<std::string> chain{organs[i].name};
+      const OrganSettings* current = &organs[i];
+      while (current != nullptr && !current->inside.empty()) {
+        if (!chain.insert(current->inside).second) {
+          problem(indexed("anatomy.organs", i, "inside"),
+                  "expected nesting without cycles, found a cycle through '" + current->inside + "'");
+          return;
+        }
+        current = m_scene.find_organ(current->inside);
+      }
+    }
+  }
+
+  void check_organ_reference(const std::string& key_path, const std::string& organ) {
+    if (m_scene.find_organ(organ) == nullptr) {
+      problem(key_path, "expected the name of an organ in this scene, found '" + organ + "'");
+    }
+  }
+
+  void check_deformation() {
+    DeformationSettings& d = m_scene.deformation;
+    for (std::size_t i = 0; i < d.fixed.size(); ++i) {
+      check_organ_reference(indexed("deformation.fixed", i, ""), d.fixed[i]);
+    }
+    for (std::size_t i = 0; i < d.loads.size(); ++i) {
+      const LoadSettings& load = d.loads[i];
+      for (std::size_t j = 0; j < load.organs.size(); ++j) {
+        check_organ_reference(indexed("deformation.loads", i, "organs") + "[" + std::to_string(j) + "]",
+                              load.organs[j]);
+      }
+      if (load.kind == LoadKind::displacement) {
+        check_organ_reference(indexed("deformation.loads", i, "organ"), load.organ);
+        for (const auto& fixed : d.fixed) {
+          if (fixed == load.organ) {
+            problem(indexed("deformation.loads", i, "organ"),
+                    "expected an organ that is not fixed, found '" + load.organ + "', listed under deformation.fixed");
+          }
+        }
+      }
+    }
+    if (d.mode == DeformationMode::none && !d.loads.empty()) {
+      problem("deformation.mode", "expected quasi_static or dynamic when loads are given, found 'none'");
+    }
+  }
+
+  void check_sequence_timing(std::size_t i, SequenceSettings& s) {
+    const std::string base = indexed("sequences", i, "");
+    if (s.kind == SequenceKind::bssfp) {
+      if (s.TE_ms < 0.0) {
+        s.TE_ms = 0.5 * s.TR_ms;
+      } else if (std::abs(s.TE_ms - 0.5 * s.TR_ms) > 1e-9 * s.TR_ms) {
+        problem(base + ".TE_ms", "expected TE_ms = TR_ms / 2 = " + format_number(0.5 * s.TR_ms) +
+                                     " (on-resonance bSSFP), found " + format_number(s.TE_ms));
+      }
+      return;
+    }
+    if (s.kind == SequenceKind::mprage) {
+      // TI runs from the inversion to the centre of the gradient-echo train; the train must fit
+      // between the inversion and the next one.
+      const double half_train = 0.5 * s.turbo_factor * s.echo_spacing_ms;
+      if (s.TE_ms >= s.echo_spacing_ms) {
+        problem(base + ".TE_ms", "expected TE_ms shorter than echo_spacing_ms (" +
+                                     format_number(s.echo_spacing_ms) + "), found " + format_number(s.TE_ms));
+      }
+      if (s.TI_ms <= half_train) {
+        problem(base + ".TI_ms", "expected TI_ms greater than half the echo train (" +
+                                     format_number(half_train) + " ms), found " + format_number(s.TI_ms));
+      } else if (s.TI_ms + half_train >= s.TR_ms) {
+        problem(base + ".TR_ms", "expected TR_ms greater than TI_ms + half the echo train (" +
+                                     format_number(s.TI_ms + half_train) + " ms), found " + format_number(s.TR_ms));
+      }
+      return;
+    }
+    if (s.TE_ms >= s.TR_ms) {
+      problem(base + ".TE_ms", "expected TE_ms less than TR_ms (" + format_number(s.TR_ms) + "), found " +
+                                   format_number(s.TE_ms));
+    }
+    if (s.kind == SequenceKind::inversion_recovery && s.TI_ms + s.TE_ms >= s.TR_ms) {
+      problem(base + ".TI_ms", "expected TI_ms + TE_ms less than TR_ms (" + format_number(s.TR_ms) +
+                                   "), found " + format_number(s.TI_ms + s.TE_ms));
+    }
+  }
+
+  /// The quantities a sequence's signal equation reads (DESIGN.md, MR signal).
+  static std::vector<std::string> needed_values(const SequenceSettings& s) {
+    switch (s.kind) {
+    case SequenceKind::spin_echo:
+    case SequenceKind::bssfp: return {"T1_ms", "T2_ms", "PD"};
+    case SequenceKind::inversion_recovery:
+      return {"T1_ms", s.readout == Readout::spin_echo ? "T2_ms" : "T2star_ms", "PD"};
+    case SequenceKind::spoiled_gre:
+    case SequenceKind::mprage: return {"T1_ms", "T2star_ms", "PD"};
+    }
+    return {};
+  }
+
+  bool has_value(const std::string& tissue, const std::string& quantity) const {
+    for (const auto& t : m_scene.tissues) {
+      if (t.tissue != tissue) continue;
+      if (quantity == "T1_ms" && t.T1_ms) return true;
+      if (quantity == "T2_ms" && t.T2_ms) return true;
+      if (quantity == "T2star_ms" && t.T2star_ms) return true;
+      if (quantity == "PD" && t.PD) return true;
+    }
+    const TissueRecord* record = TissueTable::builtin().find(tissue, m_scene.field_strength_T);
+    if (record == nullptr) return false;
+    if (quantity == "T1_ms") return record->T1_ms.has_value();
+    if (quantity == "T2_ms") return record->T2_ms.has_value();
+    if (quantity == "T2star_ms") return record->T2star_ms.has_value();
+    return record->PD.has_value();
+  }
+
+  void check_sequences() {
+    std::set<std::string> names;
+    std::set<std::string> reported;
+    std::vector<std::string> tissues;
+    for (const auto& organ : m_scene.anatomy.organs) {
+      if (tissue_known(organ.tissue) &&
+          std::find(tissues.begin(), tissues.end(), organ.tissue) == tissues.end()) {
+        tissues.push_back(organ.tissue);
+      }
+    }
+    for (std::size_t i = 0; i < m_scene.sequences.size(); ++i) {
+      SequenceSettings& s = m_scene.sequences[i];
+      if (!names.insert(s.name).second) {
+        problem(indexed("sequences", i, "name"), "expected a unique sequence name, found '" + s.name + "' again");
+      }
+      check_sequence_timing(i, s);
+      for (const auto& tissue : tissues) {
+        for (const auto& quantity : needed_values(s)) {
+          if (has_value(tissue, quantity) || !reported.insert(tissue + "." + quantity).second) continue;
+          problem(indexed("sequences", i, "type"),
+                  "this sequence needs " + quantity + " of tissue '" + tissue + "' at " +
+                      format_number(m_scene.field_strength_T) +
+                      " T, which the built-in table lacks; expected tissues." + tissue + "." + quantity +
+                      " in the scene, found none");
+        }
+      }
+    }
+    const AcquisitionSettings& a = m_scene.acquisition;
+    if (a.noise_percent > 0.0 && !m_scene.sequences.empty() &&
+        std::find(tissues.begin(), tissues.end(), a.noise_reference_tissue) == tissues.end()) {
+      problem("acquisition.noise_reference_tissue",
+              "expected the tissue of an organ in this scene (noise is relative to its signal), found '" +
+                  a.noise_reference_tissue + "'");
+    }
+  }
+
+private:
+  YamlContext& m_context;
+  Scene& m_scene;
+};
+
+} // namespace
+
+void check_consistency(YamlContext& context, Scene& scene) {
+  ConsistencyChecker checker(context, scene);
+  checker.check_grid();
+  checker.check_organs();
+  checker.check_deformation();
+  checker.check_sequences();
+}
+
+} // namespace phantasm::scene_detail

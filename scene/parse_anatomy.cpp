@@ -1,0 +1,80 @@
+#include "scene/parse_sections.hpp"
+
+namespace phantasm::scene_detail {
+namespace {
+
+void parse_shape(CheckedMap& map, const std::filesystem::path& scene_folder, ShapeSettings& shape) {
+  std::string kind;
+  if (!map.choice("type", kind, {"ellipsoid", "superquadric", "mesh", "label_volume"}, true)) {
+    return;
+  }
+  const NumberRule coordinate{-1e5, 1e5, false, false, "mm"};
+  if (kind == "ellipsoid" || kind == "superquadric") {
+    shape.kind = kind == "ellipsoid" ? ShapeKind::ellipsoid : ShapeKind::superquadric;
+    map.vec3("center_mm", shape.center_mm, coordinate, true);
+    map.vec3("radii_mm", shape.radii_mm, positive("mm"), true, true);
+    map.vec3("rotation_deg", shape.rotation_deg, between(-360.0, 360.0, "degrees"));
+    if (shape.kind == ShapeKind::superquadric) {
+      // Exponents below 0.1 or above 4 make creases sharper than a patch mesh can follow.
+      map.number("exponent_1", shape.exponent_1, between(0.1, 4.0, ""), true);
+      map.number("exponent_2", shape.exponent_2, between(0.1, 4.0, ""), true);
+    }
+    return;
+  }
+  shape.kind = kind == "mesh" ? ShapeKind::mesh : ShapeKind::label_volume;
+  std::string file;
+  if (map.string("file", file, true)) {
+    shape.file = std::filesystem::path(file).is_absolute() ? std::filesystem::path(file)
+                                                            : scene_folder / file;
+    std::error_code error;
+    if (!std::filesystem::is_regular_file(shape.file, error)) {
+      map.context().problem(map.get("file"), map.child_path("file"),
+                            "expected an existing file, found no file at '" + shape.file.string() + "'");
+    } else if (kind == "mesh") {
+      const std::string extension = shape.file.extension().string();
+      if (extension != ".stl" && extension != ".obj" && extension != ".ply" && extension != ".vtp") {
+        map.context().problem(map.get("file"), map.child_path("file"),
+                              "expected a .stl, .obj, .ply or .vtp mesh, found '" + extension + "'");
+      }
+    }
+  }
+  if (shape.kind == ShapeKind::label_volume) {
+    map.integer("label", shape.label, 1, 65535, true);
+  }
+}
+
+} // namespace
+
+void parse_anatomy(CheckedMap& map, const std::filesystem::path& scene_folder, AnatomySettings& anatomy) {
+  map.number("variation", anatomy.variation, between(0.0, 0.3, "relative size"));
+  map.integer("base_mesh_triangles", anatomy.base_mesh_triangles, 20, 200000);
+  const YAML::Node organs = map.get("organs");
+  const std::string path = map.child_path("organs");
+  if (!organs.IsDefined()) {
+    map.missing("organs", "a list of organs");
+    return;
+  }
+  if (!organs.IsSequence() || organs.size() == 0) {
+    map.context().problem(organs, path, "expected a non-empty list of organs, found " + describe(organs));
+    return;
+  }
+  for (std::size_t i = 0; i < organs.size(); ++i) {
+    CheckedMap entry(map.context(), organs[i], path + "[" + std::to_string(i) + "]");
+    if (!entry.valid()) continue;
+    OrganSettings organ;
+    entry.string("name", organ.name, true);
+    entry.string("tissue", organ.tissue, true);
+    entry.string("material", organ.material);
+    entry.string("inside", organ.inside);
+    entry.boolean("solid", organ.solid);
+    if (entry.has("shape")) {
+      CheckedMap shape(map.context(), entry.get("shape"), entry.child_path("shape"));
+      if (shape.valid()) parse_shape(shape, scene_folder, organ.shape);
+    } else {
+      entry.missing("shape", "a mapping with a type (ellipsoid, superquadric, mesh, label_volume)");
+    }
+    anatomy.organs.push_back(organ);
+  }
+}
+
+} // namespace phantasm::scene_detail

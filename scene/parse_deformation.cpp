@@ -1,0 +1,90 @@
+#include "scene/parse_sections.hpp"
+
+namespace phantasm::scene_detail {
+namespace {
+
+void parse_solver(CheckedMap& map, SolverSettings& solver) {
+  std::string method;
+  if (map.choice("method", method,
+                 {"local_global", "newton", "gauss_seidel_pbd", "jacobi_chebyshev", "xpbd"})) {
+    if (method == "local_global") solver.method = SolverMethod::local_global;
+    if (method == "newton") solver.method = SolverMethod::newton;
+    if (method == "gauss_seidel_pbd") solver.method = SolverMethod::gauss_seidel_pbd;
+    if (method == "jacobi_chebyshev") solver.method = SolverMethod::jacobi_chebyshev;
+    if (method == "xpbd") solver.method = SolverMethod::xpbd;
+  }
+  map.integer("max_iterations", solver.max_iterations, 1, 1000000);
+  map.number("relative_energy_tolerance", solver.relative_energy_tolerance, between(0.0, 1.0, ""));
+  map.number("position_tolerance_mm", solver.position_tolerance_mm, non_negative("mm"));
+  map.integer("threads", solver.threads, 0, 1024);
+}
+
+MotionProfile parse_motion(CheckedMap& map, LoadSettings& load) {
+  std::string motion;
+  if (map.choice("motion", motion, {"constant", "ramp", "sine"})) {
+    load.motion = motion == "ramp" ? MotionProfile::ramp
+                  : motion == "sine" ? MotionProfile::sine
+                                     : MotionProfile::constant;
+  }
+  map.number("period_s", load.period_s, positive("s"));
+  return load.motion;
+}
+
+void parse_load(CheckedMap& map, LoadSettings& load) {
+  std::string kind;
+  if (!map.choice("type", kind, {"gravity", "displacement"}, true)) return;
+  const NumberRule coordinate{-1e5, 1e5, false, false, "mm"};
+  if (kind == "gravity") {
+    load.kind = LoadKind::gravity;
+    map.vec3("acceleration_m_s2", load.acceleration_m_s2, NumberRule{-1e4, 1e4, false, false, "m/s^2"}, true);
+    map.string_list("organs", load.organs);
+  } else {
+    load.kind = LoadKind::displacement;
+    map.string("organ", load.organ, true);
+    map.vec3("displacement_mm", load.displacement_mm, NumberRule{-1e3, 1e3, false, false, "mm"}, true);
+    if (map.has("region")) {
+      CheckedMap region(map.context(), map.get("region"), map.child_path("region"));
+      if (region.valid()) {
+        region.vec3("center_mm", load.region_center_mm, coordinate, true);
+        region.number("radius_mm", load.region_radius_mm, positive("mm"), true);
+      }
+    } else {
+      map.missing("region", "a mapping with center_mm and radius_mm (the part of the surface moved)");
+    }
+  }
+  parse_motion(map, load);
+}
+
+} // namespace
+
+void parse_deformation(CheckedMap& map, DeformationSettings& deformation) {
+  std::string mode;
+  if (map.choice("mode", mode, {"none", "quasi_static", "dynamic"}, true)) {
+    deformation.mode = mode == "quasi_static" ? DeformationMode::quasi_static
+                       : mode == "dynamic"    ? DeformationMode::dynamic
+                                              : DeformationMode::none;
+  }
+  if (map.has("solver")) {
+    CheckedMap solver(map.context(), map.get("solver"), map.child_path("solver"));
+    if (solver.valid()) parse_solver(solver, deformation.solver);
+  }
+  map.number("time_step_s", deformation.time_step_s, between(1e-6, 10.0, "s"));
+  map.integer("frames", deformation.frames, 1, 100000);
+  map.string_list("fixed", deformation.fixed);
+  const YAML::Node loads = map.get("loads");
+  if (!loads.IsDefined()) return;
+  const std::string path = map.child_path("loads");
+  if (!loads.IsSequence()) {
+    map.context().problem(loads, path, "expected a list of loads, found " + describe(loads));
+    return;
+  }
+  for (std::size_t i = 0; i < loads.size(); ++i) {
+    CheckedMap entry(map.context(), loads[i], path + "[" + std::to_string(i) + "]");
+    if (!entry.valid()) continue;
+    LoadSettings load;
+    parse_load(entry, load);
+    deformation.loads.push_back(load);
+  }
+}
+
+} // namespace phantasm::scene_detail

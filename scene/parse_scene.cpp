@@ -1,0 +1,191 @@
+#include "core/sha256.hpp"
+#include "scene/parse_sections.hpp"
+
+#include <fstream>
+#include <sstream>
+
+namespace phantasm {
+namespace scene_detail {
+
+bool is_bids_label(const std::string& text) {
+  if (text.empty()) return false;
+  for (const char c : text) {
+    if (!std::isalnum(static_cast<unsigned char>(c))) return false;
+  }
+  return true;
+}
+
+void parse_grid(CheckedMap& map, GridSettings& grid) {
+  map.vec3("field_of_view_mm", grid.field_of_view_mm, positive("mm"), true, true);
+  map.vec3("voxel_size_mm", grid.voxel_size_mm, positive("mm"), true, true);
+  map.vec3("center_mm", grid.center_mm, NumberRule{-1e5, 1e5, false, false, "mm"});
+  if (map.string("orientation", grid.orientation) &&
+      !direction_from_axis_code(grid.orientation)) {
+    map.context().problem(map.get("orientation"), map.child_path("orientation"),
+                          "expected a 3-letter axis code with one of R/L, A/P, S/I each (e.g. RAS, "
+                          "LPS), found '" + grid.orientation + "'");
+  }
+}
+
+void parse_materials(CheckedMap& map, std::vector<MaterialSettings>& materials) {
+  if (!map.valid()) return;
+  for (const auto& pair : map.node()) {
+    const std::string name = pair.first.Scalar();
+    CheckedMap entry(map.context(), map.get(name), map.child_path(name));
+    MaterialSettings material;
+    material.name = name;
+    entry.number("youngs_modulus_Pa", material.youngs_modulus_Pa, NumberRule{0.0, 1e12, true, false, "Pa"}, true);
+    entry.number("poisson_ratio", material.poisson_ratio, NumberRule{0.0, 0.5, false, true, ""}, true);
+    entry.number("density_kg_m3", material.density_kg_m3, NumberRule{0.0, 1e5, true, false, "kg/m^3"});
+    materials.push_back(material);
+  }
+}
+
+void parse_tissues(CheckedMap& map, std::vector<TissueOverride>& tissues) {
+  if (!map.valid()) return;
+  for (const auto& pair : map.node()) {
+    const std::string name = pair.first.Scalar();
+    CheckedMap entry(map.context(), map.get(name), map.child_path(name));
+    TissueOverride tissue;
+    tissue.tissue = name;
+    double value = 0.0;
+    if (entry.number("T1_ms", value, positive("ms"))) tissue.T1_ms = value;
+    if (entry.number("T2_ms", value, positive("ms"))) tissue.T2_ms = value;
+    if (entry.number("T2star_ms", value, positive("ms"))) tissue.T2star_ms = value;
+    if (entry.number("PD", value, between(0.0, 1.5, "units of CSF proton density"))) tissue.PD = value;
+    tissues.push_back(tissue);
+  }
+}
+
+void parse_voxelization(CheckedMap& map, VoxelizationSettings& voxelization) {
+  map.integer("supersampling", voxelization.supersampling, 1, 16);
+  map.number("tessellation_tolerance_mm", voxelization.tessellation_tolerance_mm,
+             NumberRule{0.0, 10.0, true, false, "mm"});
+}
+
+void parse_acquisition(CheckedMap& map, AcquisitionSettings& acquisition) {
+  map.boolean("kspace", acquisition.kspace);
+  map.integer("kspace_oversampling", acquisition.kspace_oversampling, 1, 8);
+  map.number("slice_thickness_mm", acquisition.slice_thickness_mm, between(0.0, 100.0, "mm"));
+  map.number("noise_percent", acquisition.noise_percent, between(0.0, 100.0, "percent"));
+  map.string("noise_reference_tissue", acquisition.noise_reference_tissue);
+  map.number("bias_percent", acquisition.bias_percent, between(0.0, 100.0, "percent"));
+  map.integer("coils", acquisition.coils, 1, 64);
+}
+
+void parse_outputs(CheckedMap& map, OutputSettings& outputs) {
+  if (map.string("subject", outputs.subject) && !is_bids_label(outputs.subject)) {
+    map.context().problem(map.get("subject"), map.child_path("subject"),
+                          "expected a BIDS label (letters and digits only), found '" + outputs.subject + "'");
+  }
+  map.boolean("images", outputs.images);
+  map.boolean("labels", outputs.labels);
+  map.boolean("fractions", outputs.fractions);
+  map.boolean("displacement_fields", outputs.displacement_fields);
+  map.boolean("jacobian", outputs.jacobian);
+  map.boolean("landmarks", outputs.landmarks);
+  map.boolean("meshes", outputs.meshes);
+  map.boolean("vdb", outputs.vdb);
+  map.boolean("previews", outputs.previews);
+}
+
+} // namespace scene_detail
+
+using namespace scene_detail;
+
+SceneLoadResult parse_scene(const std::string& text, const std::filesystem::path& file) {
+  SceneLoadResult result;
+  Scene scene;
+  scene.file = file;
+  scene.sha256 = sha256_hex(text);
+  scene.source_text = text;
+  const std::string file_name = file.string();
+
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& error) {
+    SourceLocation where{file_name, error.mark.line + 1, error.mark.column + 1};
+    if (error.mark.is_null()) where.line = where.column = 0;
+    result.problems.push_back(Diagnostic{where, "", "expected valid YAML, found a syntax error: " + error.msg});
+    return result;
+  }
+
+  YamlContext context(file_name, result.problems, scene.locations);
+  {
+    CheckedMap top(context, root, "");
+    if (!top.valid()) return result;
+    int format_version = 0;
+    if (top.integer("phantasm", format_version, 1, 1, true)) {
+      // Only version 1 exists; the key is there so that later formats can be told apart.
+    }
+    if (top.string("name", scene.name, true) &&
+        scene.name.find_first_of("/\\ \t") != std::string::npos) {
+      context.problem(top.get("name"), "name", "expected a name without spaces or slashes, found '" + scene.name + "'");
+    }
+    top.unsigned_integer("seed", scene.seed, true);
+    top.number("field_strength_T", scene.field_strength_T, NumberRule{0.0, 11.7, true, false, "T"}, true);
+
+    if (top.has("grid")) {
+      CheckedMap grid(context, top.get("grid"), "grid");
+      if (grid.valid()) parse_grid(grid, scene.grid);
+    } else {
+      top.missing("grid", "a mapping with field_of_view_mm and voxel_size_mm");
+    }
+    if (top.has("materials")) {
+      CheckedMap materials(context, top.get("materials"), "materials");
+      parse_materials(materials, scene.materials);
+    }
+    if (top.has("tissues")) {
+      CheckedMap tissues(context, top.get("tissues"), "tissues");
+      parse_tissues(tissues, scene.tissues);
+    }
+    if (top.has("anatomy")) {
+      CheckedMap anatomy(context, top.get("anatomy"), "anatomy");
+      if (anatomy.valid()) parse_anatomy(anatomy, file.parent_path(), scene.anatomy);
+    } else {
+      top.missing("anatomy", "a mapping with a list of organs");
+    }
+    if (top.has("deformation")) {
+      CheckedMap deformation(context, top.get("deformation"), "deformation");
+      if (deformation.valid()) parse_deformation(deformation, scene.deformation);
+    }
+    if (top.has("voxelization")) {
+      CheckedMap voxelization(context, top.get("voxelization"), "voxelization");
+      if (voxelization.valid()) parse_voxelization(voxelization, scene.voxelization);
+    }
+    if (top.has("sequences")) parse_sequences(context, top.get("sequences"), scene.sequences);
+    if (top.has("acquisition")) {
+      CheckedMap acquisition(context, top.get("acquisition"), "acquisition");
+      if (acquisition.valid()) parse_acquisition(acquisition, scene.acquisition);
+    }
+    if (top.has("outputs")) {
+      CheckedMap outputs(context, top.get("outputs"), "outputs");
+      if (outputs.valid()) parse_outputs(outputs, scene.outputs);
+    }
+  } // unknown keys are reported here, when the checked maps close
+
+  if (!result.problems.empty()) return result;
+  check_consistency(context, scene);
+  if (result.problems.empty()) result.scene = std::move(scene);
+  return result;
+}
+
+SceneLoadResult load_scene(const std::filesystem::path& file) {
+  std::ifstream stream(file, std::ios::binary);
+  if (!stream) {
+    SceneLoadResult result;
+    std::error_code error;
+    const bool exists = std::filesystem::exists(file, error);
+    result.problems.push_back(Diagnostic{
+        SourceLocation{file.string(), 0, 0}, "",
+        exists ? "expected a readable scene file, found a file that cannot be opened"
+               : "expected a scene file, found no such file"});
+    return result;
+  }
+  std::ostringstream text;
+  text << stream.rdbuf();
+  return parse_scene(text.str(), file);
+}
+
+} // namespace phantasm

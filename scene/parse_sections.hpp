@@ -1,0 +1,27 @@
+#pragma once
+
+// The parsers of each scene section. Internal to the scene target.
+
+#include "scene/scene.hpp"
+#include "scene/yaml_checker.hpp"
+
+namespace phantasm::scene_detail {
+
+void parse_grid(CheckedMap& map, GridSettings& grid);
+void parse_materials(CheckedMap& map, std::vector<MaterialSettings>& materials);
+void parse_tissues(CheckedMap& map, std::vector<TissueOverride>& tissues);
+void parse_anatomy(CheckedMap& map, const std::filesystem::path& scene_folder, AnatomySettings& anatomy);
+void parse_deformation(CheckedMap& map, DeformationSettings& deformation);
+void parse_voxelization(CheckedMap& map, VoxelizationSettings& voxelization);
+void parse_sequences(YamlContext& context, const YAML::Node& node, std::vector<SequenceSettings>& sequences);
+void parse_acquisition(CheckedMap& map, AcquisitionSettings& acquisition);
+void parse_outputs(CheckedMap& map, OutputSettings& outputs);
+
+/// Checks that need more than one section: references between sections, tissue values the
+/// sequences need, consistent timings. Runs only on a scene whose sections parsed cleanly.
+void check_consistency(YamlContext& context, Scene& scene);
+
+/// True for a BIDS label: letters and digits only.
+bool is_bids_label(const std::string& text);
+
+} // namespace phantasm::scene_detail

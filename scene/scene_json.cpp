@@ -1,0 +1,136 @@
+#include "scene/scene_json.hpp"
+
+namespace phantasm {
+namespace {
+
+nlohmann::json vec3(const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); }
+
+nlohmann::json optional_value(const std::optional<double>& value) {
+  return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
+}
+
+nlohmann::json organ_json(const OrganSettings& organ) {
+  nlohmann::json shape = {{"type", to_string(organ.shape.kind)}};
+  if (organ.shape.kind == ShapeKind::ellipsoid || organ.shape.kind == ShapeKind::superquadric) {
+    shape["center_mm"] = vec3(organ.shape.center_mm);
+    shape["radii_mm"] = vec3(organ.shape.radii_mm);
+    shape["rotation_deg"] = vec3(organ.shape.rotation_deg);
+    if (organ.shape.kind == ShapeKind::superquadric) {
+      shape["exponent_1"] = organ.shape.exponent_1;
+      shape["exponent_2"] = organ.shape.exponent_2;
+    }
+  } else {
+    shape["file"] = organ.shape.file.string();
+    if (organ.shape.kind == ShapeKind::label_volume) shape["label"] = organ.shape.label;
+  }
+  return {{"name", organ.name},     {"tissue", organ.tissue}, {"material", organ.material},
+          {"inside", organ.inside}, {"solid", organ.solid},   {"shape", shape}};
+}
+
+nlohmann::json load_json(const LoadSettings& load) {
+  nlohmann::json j = {{"type", to_string(load.kind)},
+                      {"motion", to_string(load.motion)},
+                      {"period_s", load.period_s}};
+  if (load.kind == LoadKind::gravity) {
+    j["acceleration_m_s2"] = vec3(load.acceleration_m_s2);
+    j["organs"] = load.organs;
+  } else {
+    j["organ"] = load.organ;
+    j["displacement_mm"] = vec3(load.displacement_mm);
+    j["region"] = {{"center_mm", vec3(load.region_center_mm)}, {"radius_mm", load.region_radius_mm}};
+  }
+  return j;
+}
+
+nlohmann::json sequence_json(const SequenceSettings& s) {
+  nlohmann::json j = {{"name", s.name}, {"type", to_string(s.kind)}, {"TR_ms", s.TR_ms}, {"TE_ms", s.TE_ms}};
+  if (s.kind != SequenceKind::spin_echo) j["flip_deg"] = s.flip_deg;
+  if (s.kind == SequenceKind::inversion_recovery || s.kind == SequenceKind::mprage) j["TI_ms"] = s.TI_ms;
+  if (s.kind == SequenceKind::inversion_recovery) j["readout"] = to_string(s.readout);
+  if (s.kind == SequenceKind::mprage) {
+    j["echo_spacing_ms"] = s.echo_spacing_ms;
+    j["turbo_factor"] = s.turbo_factor;
+  }
+  return j;
+}
+
+} // namespace
+
+nlohmann::json scene_settings_json(const Scene& scene) {
+  nlohmann::json materials = nlohmann::json::object();
+  for (const auto& m : scene.materials) {
+    materials[m.name] = {{"youngs_modulus_Pa", m.youngs_modulus_Pa},
+                         {"poisson_ratio", m.poisson_ratio},
+                         {"density_kg_m3", m.density_kg_m3}};
+  }
+  nlohmann::json tissues = nlohmann::json::object();
+  for (const auto& t : scene.tissues) {
+    tissues[t.tissue] = {{"T1_ms", optional_value(t.T1_ms)},
+                         {"T2_ms", optional_value(t.T2_ms)},
+                         {"T2star_ms", optional_value(t.T2star_ms)},
+                         {"PD", optional_value(t.PD)}};
+  }
+  nlohmann::json organs = nlohmann::json::array();
+  for (const auto& organ : scene.anatomy.organs) organs.push_back(organ_json(organ));
+  nlohmann::json loads = nlohmann::json::array();
+  for (const auto& load : scene.deformation.loads) loads.push_back(load_json(load));
+  nlohmann::json sequences = nlohmann::json::array();
+  for (const auto& s : scene.sequences) sequences.push_back(sequence_json(s));
+
+  const DeformationSettings& d = scene.deformation;
+  const AcquisitionSettings& a = scene.acquisition;
+  const OutputSettings& o = scene.outputs;
+  return {
+      {"name", scene.name},
+      {"seed", scene.seed},
+      {"field_strength_T", scene.field_strength_T},
+      {"grid",
+       {{"field_of_view_mm", vec3(scene.grid.field_of_view_mm)},
+        {"voxel_size_mm", vec3(scene.grid.voxel_size_mm)},
+        {"center_mm", vec3(scene.grid.center_mm)},
+        {"orientation", scene.grid.orientation}}},
+      {"materials", materials},
+      {"tissues", tissues},
+      {"anatomy",
+       {{"variation", scene.anatomy.variation},
+        {"base_mesh_triangles", scene.anatomy.base_mesh_triangles},
+        {"organs", organs}}},
+      {"deformation",
+       {{"mode", to_string(d.mode)},
+        {"solver",
+         {{"method", to_string(d.solver.method)},
+          {"max_iterations", d.solver.max_iterations},
+          {"relative_energy_tolerance", d.solver.relative_energy_tolerance},
+          {"position_tolerance_mm", d.solver.position_tolerance_mm},
+          {"threads", d.solver.threads}}},
+        {"time_step_s", d.time_step_s},
+        {"frames", d.frames},
+        {"fixed", d.fixed},
+        {"loads", loads}}},
+      {"voxelization",
+       {{"supersampling", scene.voxelization.supersampling},
+        {"tessellation_tolerance_mm", scene.voxelization.tessellation_tolerance_mm}}},
+      {"sequences", sequences},
+      {"acquisition",
+       {{"kspace", a.kspace},
+        {"kspace_oversampling", a.kspace_oversampling},
+        {"slice_thickness_mm", a.slice_thickness_mm},
+        {"noise_percent", a.noise_percent},
+        {"noise_reference_tissue", a.noise_reference_tissue},
+        {"bias_percent", a.bias_percent},
+        {"coils", a.coils}}},
+      {"outputs",
+       {{"subject", o.subject},
+        {"images", o.images},
+        {"labels", o.labels},
+        {"fractions", o.fractions},
+        {"displacement_fields", o.displacement_fields},
+        {"jacobian", o.jacobian},
+        {"landmarks", o.landmarks},
+        {"meshes", o.meshes},
+        {"vdb", o.vdb},
+        {"previews", o.previews}}},
+  };
+}
+
+} // namespace phantasm

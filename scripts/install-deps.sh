@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages phantasm builds and tests with. Idempotent: when every
+# package is already installed it does nothing (no apt-get update, no network).
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config ninja-build clang-format
+  libeigen3-dev
+  libsuitesparse-dev libopenblas0-openmp libopenblas-openmp-dev
+  libopenvdb-dev libboost-iostreams-dev libtbb-dev
+  libcgal-dev
+  libvtk9-dev
+  libhdf5-dev
+  libnifti2-dev libniftiio-dev libznz-dev libnifticdf-dev nifti-bin
+  libfftw3-dev
+  libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  pybind11-dev python3-dev python3-numpy python3-nibabel python3-h5py python3-matplotlib
+  elastix
+  zlib1g-dev libpng-dev
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed'; then
+    missing+=("$p")
+  fi
+done
+
+sudo_cmd=()
+if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi
+
+# CHOLMOD's supernodal factorization calls BLAS/LAPACK through Debian's alternatives. The
+# OpenMP build of OpenBLAS shares the OpenMP runtime with our local step instead of starting
+# its own pthread pool that competes for the same two cores.
+select_openmp_blas() {
+  local arch_dir=/usr/lib/x86_64-linux-gnu
+  [ "$(uname -m)" = x86_64 ] || return 0
+  for lib in libblas.so.3 liblapack.so.3; do
+    local want="$arch_dir/openblas-openmp/$lib"
+    [ -e "$want" ] || continue
+    if [ "$(readlink -f "$arch_dir/$lib")" != "$(readlink -f "$want")" ]; then
+      "${sudo_cmd[@]}" update-alternatives --set "$lib-x86_64-linux-gnu" "$want" >/dev/null
+    fi
+  done
+}
+
+if [ ${#missing[@]} -eq 0 ]; then
+  select_openmp_blas
+  exit 0
+fi
+
+echo "phantasm: installing ${#missing[@]} missing Debian packages: ${missing[*]}" >&2
+export DEBIAN_FRONTEND=noninteractive
+"${sudo_cmd[@]}" apt-get update
+"${sudo_cmd[@]}" apt-get install -y --no-install-recommends "${missing[@]}"
+select_openmp_blas

@@ -1,0 +1,68 @@
+#include "voxelize/voxelize_plan.hpp"
+
+#include "anatomy/anatomy_plan.hpp"
+
+#include <sstream>
+
+namespace phantasm {
+namespace {
+
+WorldBox field_of_view_box(const ImageGrid& grid) {
+  // The field of view covers the voxels' full extent, half a voxel beyond the outer centres.
+  WorldBox box{Eigen::Vector3d::Constant(1e300), Eigen::Vector3d::Constant(-1e300)};
+  for (int corner = 0; corner < 8; ++corner) {
+    Eigen::Vector3d ijk;
+    for (int a = 0; a < 3; ++a) ijk[a] = (corner >> a) & 1 ? grid.dims[a] - 0.5 : -0.5;
+    const Eigen::Vector3d p = grid.world_from_index(ijk);
+    box.min_mm = box.min_mm.cwiseMin(p);
+    box.max_mm = box.max_mm.cwiseMax(p);
+  }
+  return box;
+}
+
+} // namespace
+
+bool organ_in_field_of_view(const Scene& scene, const OrganSettings& organ) {
+  const auto bounds = analytic_shape_bounds(organ.shape);
+  return !bounds || bounds->intersects(field_of_view_box(scene.grid.grid()));
+}
+
+StageReport plan_voxelize(const Scene& scene) {
+  StageReport report;
+  report.stage = "voxelize";
+  const ImageGrid grid = scene.grid.grid();
+  std::ostringstream line;
+  line << "grid " << grid.dims.x() << " x " << grid.dims.y() << " x " << grid.dims.z() << " voxels of "
+       << grid.spacing_mm.x() << " x " << grid.spacing_mm.y() << " x " << grid.spacing_mm.z() << " mm, "
+       << scene.grid.orientation << ", narrow-band level sets until dense output";
+  report.modelled.push_back(line.str());
+  for (const auto& organ : scene.anatomy.organs) {
+    if (organ_in_field_of_view(scene, organ)) {
+      report.modelled.push_back(organ.name + ": level set, reference and deformed");
+    } else {
+      report.skipped.push_back(organ.name + ": outside the field of view");
+    }
+  }
+  const OutputSettings& o = scene.outputs;
+  const bool deformed = scene.deformation.mode != DeformationMode::none;
+  auto want = [&](bool asked, const std::string& what, const std::string& why_not) {
+    if (asked) {
+      report.modelled.push_back(what);
+    } else {
+      report.skipped.push_back(what + " (" + why_not + ")");
+    }
+  };
+  want(o.labels, "label maps", "outputs.labels is false");
+  std::ostringstream fractions;
+  fractions << "partial-volume fractions, " << scene.voxelization.supersampling << "^3 samples per voxel";
+  want(o.fractions || o.images, fractions.str(), "neither outputs.fractions nor outputs.images asks for them");
+  want(o.displacement_fields && deformed, "displacement fields both ways",
+       deformed ? "outputs.displacement_fields is false" : "nothing deforms");
+  want(o.jacobian && deformed, "Jacobian determinant map",
+       deformed ? "outputs.jacobian is false" : "nothing deforms");
+  want(o.landmarks, "anatomical landmarks", "outputs.landmarks is false");
+  want(o.vdb, ".vdb grids", "outputs.vdb is false");
+  return report;
+}
+
+} // namespace phantasm
