@@ -50,10 +50,10 @@ StageReport plan_anatomy(const Scene& scene) {
   const AnatomySettings& anatomy = scene.anatomy;
   for (const auto& organ : anatomy.organs) {
     std::ostringstream line;
-    line << organ.name << ": " << to_string(organ.shape.kind) << " surface of "
-         << anatomy.base_mesh_triangles << " base triangles with fitted patches, tissue "
-         << organ.tissue;
-    if (!organ.inside.empty()) line << ", inside " << organ.inside << " (depth " << nesting_depth(scene, organ) << ")";
+    line << organ.name << ": " << to_string(organ.shape.kind) << " surface of " << anatomy.base_mesh_triangles
+         << " base triangles with fitted patches, tissue " << organ.tissue;
+    if (!organ.inside.empty())
+      line << ", inside " << organ.inside << " (depth " << nesting_depth(scene, organ) << ")";
     line << (organ.solid ? ", solid (tetrahedral interior)" : ", surface only (no interior mesh)");
     report.modelled.push_back(line.str());
   }

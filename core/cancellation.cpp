@@ -12,14 +12,20 @@ std::atomic<bool> g_cancel_requested{false};
 static_assert(std::atomic<bool>::is_always_lock_free);
 } // namespace
 
-void request_cancellation() noexcept { g_cancel_requested.store(true, std::memory_order_relaxed); }
+void request_cancellation() noexcept {
+  g_cancel_requested.store(true, std::memory_order_relaxed);
+}
 
-bool cancellation_requested() noexcept { return g_cancel_requested.load(std::memory_order_relaxed); }
+bool cancellation_requested() noexcept {
+  return g_cancel_requested.load(std::memory_order_relaxed);
+}
 
 void throw_if_cancelled() {
   if (cancellation_requested()) throw Cancelled();
 }
 
-void reset_cancellation() noexcept { g_cancel_requested.store(false, std::memory_order_relaxed); }
+void reset_cancellation() noexcept {
+  g_cancel_requested.store(false, std::memory_order_relaxed);
+}
 
 } // namespace phantasm

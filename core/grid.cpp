@@ -30,11 +30,20 @@ std::optional<Eigen::Matrix3d> direction_from_axis_code(const std::string& code)
     double sign = 1.0;
     switch (letter) {
     case 'R': world_axis = 0; break;
-    case 'L': world_axis = 0; sign = -1.0; break;
+    case 'L':
+      world_axis = 0;
+      sign = -1.0;
+      break;
     case 'A': world_axis = 1; break;
-    case 'P': world_axis = 1; sign = -1.0; break;
+    case 'P':
+      world_axis = 1;
+      sign = -1.0;
+      break;
     case 'S': world_axis = 2; break;
-    case 'I': world_axis = 2; sign = -1.0; break;
+    case 'I':
+      world_axis = 2;
+      sign = -1.0;
+      break;
     default: return std::nullopt;
     }
     if (used[world_axis]) return std::nullopt;
@@ -44,9 +53,8 @@ std::optional<Eigen::Matrix3d> direction_from_axis_code(const std::string& code)
   return direction;
 }
 
-ImageGrid make_centered_grid(const Eigen::Vector3d& field_of_view_mm,
-                             const Eigen::Vector3d& voxel_size_mm, const Eigen::Vector3d& center_mm,
-                             const Eigen::Matrix3d& direction) {
+ImageGrid make_centered_grid(const Eigen::Vector3d& field_of_view_mm, const Eigen::Vector3d& voxel_size_mm,
+                             const Eigen::Vector3d& center_mm, const Eigen::Matrix3d& direction) {
   ImageGrid grid;
   grid.spacing_mm = voxel_size_mm;
   for (int a = 0; a < 3; ++a) {

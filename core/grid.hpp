@@ -11,8 +11,8 @@ namespace phantasm {
 /// A regular voxel grid placed in world space (RAS+, millimetres). Voxel centres sit at integer
 /// indices (i, j, k), as in NIfTI: world = world_from_voxel * (i, j, k, 1).
 struct ImageGrid {
-  Eigen::Vector3i dims{0, 0, 0};                              ///< voxels along i, j, k
-  Eigen::Vector3d spacing_mm{1.0, 1.0, 1.0};                  ///< voxel size along i, j, k, in mm
+  Eigen::Vector3i dims{0, 0, 0};                                  ///< voxels along i, j, k
+  Eigen::Vector3d spacing_mm{1.0, 1.0, 1.0};                      ///< voxel size along i, j, k, in mm
   Eigen::Matrix4d world_from_voxel = Eigen::Matrix4d::Identity(); ///< RAS mm from voxel index
 
   /// World position (RAS mm) of a continuous voxel index.
@@ -36,8 +36,7 @@ std::optional<Eigen::Matrix3d> direction_from_axis_code(const std::string& code)
 /// @param center_mm world position (RAS mm) of the centre of the field of view
 /// @param direction direction cosines from direction_from_axis_code()
 /// The number of voxels along an axis is round(field_of_view / voxel_size), at least 1.
-ImageGrid make_centered_grid(const Eigen::Vector3d& field_of_view_mm,
-                             const Eigen::Vector3d& voxel_size_mm, const Eigen::Vector3d& center_mm,
-                             const Eigen::Matrix3d& direction);
+ImageGrid make_centered_grid(const Eigen::Vector3d& field_of_view_mm, const Eigen::Vector3d& voxel_size_mm,
+                             const Eigen::Vector3d& center_mm, const Eigen::Matrix3d& direction);
 
 } // namespace phantasm

@@ -15,7 +15,9 @@ ProgressStyle progress_style_for(int file_descriptor, bool quiet) {
 
 Reporter::Reporter(std::ostream& stream, ProgressStyle style) : m_stream(&stream), m_style(style) {}
 
-Reporter Reporter::silent() { return Reporter(std::cerr, ProgressStyle::none); }
+Reporter Reporter::silent() {
+  return Reporter(std::cerr, ProgressStyle::none);
+}
 
 void Reporter::modelled(const std::string& stage, const std::string& message) {
   std::string line = "[" + stage + "] " + message;
@@ -30,7 +32,9 @@ void Reporter::skipped(const std::string& stage, const std::string& message) {
   modelled(stage, "skipped: " + message);
 }
 
-void Reporter::note(const std::string& message) { print(message); }
+void Reporter::note(const std::string& message) {
+  print(message);
+}
 
 void Reporter::print(const std::string& line) {
   if (m_style == ProgressStyle::none) return;
@@ -42,7 +46,9 @@ ProgressBar::ProgressBar(Reporter& reporter, std::string label, std::size_t tota
     : m_reporter(reporter), m_label(std::move(label)), m_total(total == 0 ? 1 : total),
       m_start(std::chrono::steady_clock::now()), m_last_draw(m_start) {}
 
-ProgressBar::~ProgressBar() { finish(); }
+ProgressBar::~ProgressBar() {
+  finish();
+}
 
 void ProgressBar::advance(std::size_t steps) {
   const std::size_t done = m_done.fetch_add(steps) + steps;
@@ -63,8 +69,8 @@ void ProgressBar::draw(std::size_t done, bool final) {
   const double seconds = std::chrono::duration<double>(now - m_start).count();
   const double fraction = static_cast<double>(done) / static_cast<double>(m_total);
   char tail[64];
-  std::snprintf(tail, sizeof tail, " %3d%% (%zu/%zu) %.1f s", static_cast<int>(100.0 * fraction),
-                done, m_total, seconds);
+  std::snprintf(tail, sizeof tail, " %3d%% (%zu/%zu) %.1f s", static_cast<int>(100.0 * fraction), done,
+                m_total, seconds);
 
   std::ostringstream text;
   if (m_reporter.m_style == ProgressStyle::bar) {
@@ -73,8 +79,8 @@ void ProgressBar::draw(std::size_t done, bool final) {
     m_last_draw = now;
     constexpr int width = 30;
     const int filled = static_cast<int>(fraction * width);
-    text << '\r' << m_label << " [" << std::string(filled, '#') << std::string(width - filled, '-')
-         << ']' << tail;
+    text << '\r' << m_label << " [" << std::string(filled, '#') << std::string(width - filled, '-') << ']'
+         << tail;
     if (final) text << '\n';
   } else {
     const std::size_t tenth = static_cast<std::size_t>(fraction * 10.0);

@@ -17,7 +17,9 @@ constexpr std::array<std::uint32_t, 64> k_round_constants = {
     0x19a4c116, 0x1e376c08, 0x2748774c, 0x34b0bcb5, 0x391c0cb3, 0x4ed8aa4a, 0x5b9cca4f, 0x682e6ff3,
     0x748f82ee, 0x78a5636f, 0x84c87814, 0x8cc70208, 0x90befffa, 0xa4506ceb, 0xbef9a3f7, 0xc67178f2};
 
-constexpr std::uint32_t rotr(std::uint32_t x, int n) { return (x >> n) | (x << (32 - n)); }
+constexpr std::uint32_t rotr(std::uint32_t x, int n) {
+  return (x >> n) | (x << (32 - n));
+}
 
 void compress(std::array<std::uint32_t, 8>& h, const unsigned char* block) {
   std::array<std::uint32_t, 64> w{};
@@ -47,7 +49,14 @@ void compress(std::array<std::uint32_t, 8>& h, const unsigned char* block) {
     b = a;
     a = t1 + t2;
   }
-  h[0] += a; h[1] += b; h[2] += c; h[3] += d; h[4] += e; h[5] += f; h[6] += g; h[7] += hh;
+  h[0] += a;
+  h[1] += b;
+  h[2] += c;
+  h[3] += d;
+  h[4] += e;
+  h[5] += f;
+  h[6] += g;
+  h[7] += hh;
 }
 
 } // namespace
@@ -57,16 +66,19 @@ std::string sha256_hex(std::string_view bytes) {
                                     0x510e527f, 0x9b05688c, 0x1f83d9ab, 0x5be0cd19};
   const auto* data = reinterpret_cast<const unsigned char*>(bytes.data());
   std::size_t full = bytes.size() / 64;
-  for (std::size_t i = 0; i < full; ++i) compress(h, data + 64 * i);
+  for (std::size_t i = 0; i < full; ++i)
+    compress(h, data + 64 * i);
 
   // Padding: 0x80, zeros, then the message length in bits as a 64-bit big-endian number.
   unsigned char tail[128] = {};
   const std::size_t rest = bytes.size() % 64;
-  for (std::size_t i = 0; i < rest; ++i) tail[i] = data[64 * full + i];
+  for (std::size_t i = 0; i < rest; ++i)
+    tail[i] = data[64 * full + i];
   tail[rest] = 0x80;
   const std::size_t tail_size = rest < 56 ? 64 : 128;
   const std::uint64_t bit_length = std::uint64_t{bytes.size()} * 8;
-  for (int i = 0; i < 8; ++i) tail[tail_size - 1 - i] = static_cast<unsigned char>(bit_length >> (8 * i));
+  for (int i = 0; i < 8; ++i)
+    tail[tail_size - 1 - i] = static_cast<unsigned char>(bit_length >> (8 * i));
   compress(h, tail);
   if (tail_size == 128) compress(h, tail + 64);
 

@@ -9,10 +9,10 @@ namespace phantasm {
 /// What one pipeline stage modelled, what it skipped because the scene did not need it, and the
 /// accuracy it achieved. Collected into the run log and provenance.json.
 struct StageReport {
-  std::string stage;                     ///< "anatomy", "sim", "voxelize", "mri"
-  std::string status = "planned";        ///< "planned", "done" or "skipped"
-  std::vector<std::string> modelled;     ///< one line per thing modelled, with why
-  std::vector<std::string> skipped;      ///< one line per thing left out, with why
+  std::string stage;                      ///< "anatomy", "sim", "voxelize", "mri"
+  std::string status = "planned";         ///< "planned", "done" or "skipped"
+  std::vector<std::string> modelled;      ///< one line per thing modelled, with why
+  std::vector<std::string> skipped;       ///< one line per thing left out, with why
   std::map<std::string, double> accuracy; ///< achieved accuracy figures, named with their unit
 };
 

@@ -62,8 +62,10 @@ std::optional<double> parse_value(const std::string& text, const std::string& wh
   char* end = nullptr;
   const double value = std::strtod(text.c_str(), &end);
   if (end == text.c_str() || *end != '\0' || !std::isfinite(value) || value < 0.0) {
-    throw InputError(where + ": column " + column + ": expected a non-negative number or an empty "
-                     "field, found '" + text + "'");
+    throw InputError(where + ": column " + column +
+                     ": expected a non-negative number or an empty "
+                     "field, found '" +
+                     text + "'");
   }
   return value;
 }
@@ -77,12 +79,12 @@ const TissueTable& TissueTable::builtin() {
 
 TissueTable TissueTable::parse_csv(std::string_view text, const std::string& source_name) {
   const auto rows = split_csv(text, source_name);
-  const std::vector<std::string> expected = {
-      "tissue",    "field_T",   "T1_ms",         "T2_ms",     "T2star_ms", "PD_rel",
-      "T1_source", "T2_source", "T2star_source", "PD_source", "status",    "notes"};
+  const std::vector<std::string> expected = {"tissue",        "field_T",   "T1_ms",     "T2_ms",
+                                             "T2star_ms",     "PD_rel",    "T1_source", "T2_source",
+                                             "T2star_source", "PD_source", "status",    "notes"};
   if (rows.empty() || rows[0] != expected) {
     throw InputError(source_name + ":1: expected the header tissue,field_T,T1_ms,T2_ms,T2star_ms,"
-                     "PD_rel,T1_source,T2_source,T2star_source,PD_source,status,notes");
+                                   "PD_rel,T1_source,T2_source,T2star_source,PD_source,status,notes");
   }
   TissueTable table;
   for (std::size_t r = 1; r < rows.size(); ++r) {

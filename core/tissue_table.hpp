@@ -10,12 +10,12 @@ namespace phantasm {
 /// Relaxation and proton-density values of one tissue at one field strength, with the source of
 /// each value. A value the literature did not provide is empty; a scene must then supply it.
 struct TissueRecord {
-  std::string tissue;           ///< e.g. "white_matter"
-  double field_T = 0.0;         ///< main field strength in tesla
-  std::optional<double> T1_ms;  ///< longitudinal relaxation time in ms
-  std::optional<double> T2_ms;  ///< transverse relaxation time in ms
+  std::string tissue;              ///< e.g. "white_matter"
+  double field_T = 0.0;            ///< main field strength in tesla
+  std::optional<double> T1_ms;     ///< longitudinal relaxation time in ms
+  std::optional<double> T2_ms;     ///< transverse relaxation time in ms
   std::optional<double> T2star_ms; ///< effective transverse relaxation time in ms
-  std::optional<double> PD;     ///< proton density relative to CSF (= 1)
+  std::optional<double> PD;        ///< proton density relative to CSF (= 1)
   std::string T1_source, T2_source, T2star_source, PD_source;
   std::string status; ///< how the sources were checked (read / secondary / simulator / proxy)
   std::string notes;

@@ -108,6 +108,8 @@ std::size_t remove_stale_temporaries(const std::filesystem::path& root) {
   return removed;
 }
 
-void set_write_delay_for_testing(int milliseconds_per_chunk) { g_write_delay_ms = milliseconds_per_chunk; }
+void set_write_delay_for_testing(int milliseconds_per_chunk) {
+  g_write_delay_ms = milliseconds_per_chunk;
+}
 
 } // namespace phantasm

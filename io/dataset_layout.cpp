@@ -5,7 +5,9 @@
 
 namespace phantasm {
 
-const char* session_label(PhantomState state) { return state == PhantomState::reference ? "ref" : "def"; }
+const char* session_label(PhantomState state) {
+  return state == PhantomState::reference ? "ref" : "def";
+}
 
 DatasetLayout::DatasetLayout(std::filesystem::path root, std::string subject)
     : m_root(std::move(root)), m_subject(std::move(subject)) {}
@@ -14,22 +16,30 @@ std::string DatasetLayout::prefix(PhantomState state) const {
   return "sub-" + m_subject + "_ses-" + session_label(state);
 }
 
-std::filesystem::path DatasetLayout::dataset_description() const { return m_root / "dataset_description.json"; }
+std::filesystem::path DatasetLayout::dataset_description() const {
+  return m_root / "dataset_description.json";
+}
 
 std::filesystem::path DatasetLayout::anat_image(PhantomState state, const std::string& suffix) const {
   return m_root / ("sub-" + m_subject) / (std::string("ses-") + session_label(state)) / "anat" /
          (prefix(state) + "_" + suffix + ".nii.gz");
 }
 
-std::filesystem::path DatasetLayout::derivatives() const { return m_root / "derivatives" / "phantasm"; }
+std::filesystem::path DatasetLayout::derivatives() const {
+  return m_root / "derivatives" / "phantasm";
+}
 
 std::filesystem::path DatasetLayout::derivatives_description() const {
   return derivatives() / "dataset_description.json";
 }
 
-std::filesystem::path DatasetLayout::dseg_table() const { return derivatives() / "dseg.tsv"; }
+std::filesystem::path DatasetLayout::dseg_table() const {
+  return derivatives() / "dseg.tsv";
+}
 
-std::filesystem::path DatasetLayout::subject_derivatives() const { return derivatives() / ("sub-" + m_subject); }
+std::filesystem::path DatasetLayout::subject_derivatives() const {
+  return derivatives() / ("sub-" + m_subject);
+}
 
 std::filesystem::path DatasetLayout::dseg(PhantomState state) const {
   return subject_derivatives() / (std::string("ses-") + session_label(state)) / "anat" /
@@ -59,11 +69,17 @@ std::filesystem::path DatasetLayout::mesh(PhantomState state, const std::string&
   return subject_derivatives() / "meshes" / (prefix(state) + "_organ-" + organ + "_mesh.vtp");
 }
 
-std::filesystem::path DatasetLayout::provenance() const { return subject_derivatives() / "provenance.json"; }
+std::filesystem::path DatasetLayout::provenance() const {
+  return subject_derivatives() / "provenance.json";
+}
 
-std::filesystem::path DatasetLayout::log() const { return subject_derivatives() / "log.txt"; }
+std::filesystem::path DatasetLayout::log() const {
+  return subject_derivatives() / "log.txt";
+}
 
-std::filesystem::path DatasetLayout::scene_copy() const { return subject_derivatives() / "scene.yaml"; }
+std::filesystem::path DatasetLayout::scene_copy() const {
+  return subject_derivatives() / "scene.yaml";
+}
 
 std::filesystem::path sidecar_path(const std::filesystem::path& image) {
   std::string name = image.filename().string();

@@ -8,7 +8,9 @@
 namespace phantasm {
 namespace {
 
-std::string value_text(const std::optional<double>& value) { return value ? format_number(*value) : "-"; }
+std::string value_text(const std::optional<double>& value) {
+  return value ? format_number(*value) : "-";
+}
 
 } // namespace
 
@@ -25,7 +27,8 @@ StageReport plan_mri(const Scene& scene) {
     std::ostringstream line;
     line << s.name << ": " << to_string(s.kind) << ", TR " << s.TR_ms << " ms, TE " << s.TE_ms << " ms";
     if (s.kind != SequenceKind::spin_echo) line << ", flip " << s.flip_deg << " deg";
-    if (s.kind == SequenceKind::inversion_recovery || s.kind == SequenceKind::mprage) line << ", TI " << s.TI_ms << " ms";
+    if (s.kind == SequenceKind::inversion_recovery || s.kind == SequenceKind::mprage)
+      line << ", TI " << s.TI_ms << " ms";
     line << "; reference and deformed";
     report.modelled.push_back(line.str());
   }
@@ -36,7 +39,8 @@ StageReport plan_mri(const Scene& scene) {
   }
   const AcquisitionSettings& a = scene.acquisition;
   if (a.kspace) {
-    report.modelled.push_back("k-space truncation with " + std::to_string(a.kspace_oversampling) + "x oversampled object");
+    report.modelled.push_back("k-space truncation with " + std::to_string(a.kspace_oversampling) +
+                              "x oversampled object");
   } else {
     report.skipped.push_back("k-space simulation (acquisition.kspace is false): images are sampled directly");
   }
@@ -47,7 +51,8 @@ StageReport plan_mri(const Scene& scene) {
   }
   if (a.coils > 1) report.modelled.push_back(std::to_string(a.coils) + " coils, sum of squares");
   if (a.noise_percent > 0.0) {
-    report.modelled.push_back("Rician noise, " + value_text(a.noise_percent) + " % of " + a.noise_reference_tissue);
+    report.modelled.push_back("Rician noise, " + value_text(a.noise_percent) + " % of " +
+                              a.noise_reference_tissue);
   } else {
     report.skipped.push_back("noise (acquisition.noise_percent is 0)");
   }

@@ -35,7 +35,8 @@ std::string dseg_table(const Scene& scene) {
   std::ostringstream text;
   text << "index\tname\ttissue\n0\tbackground\tbackground\n";
   int index = 1;
-  for (const auto& organ : scene.anatomy.organs) text << index++ << '\t' << organ.name << '\t' << organ.tissue << '\n';
+  for (const auto& organ : scene.anatomy.organs)
+    text << index++ << '\t' << organ.name << '\t' << organ.tissue << '\n';
   return text.str();
 }
 
@@ -78,10 +79,13 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& re
   RunSummary summary;
   summary.stages = plan_stages(scene);
   for (const auto& stage : summary.stages) {
-    for (const auto& line : stage.modelled) reporter.modelled(stage.stage, line);
-    for (const auto& line : stage.skipped) reporter.skipped(stage.stage, line);
+    for (const auto& line : stage.modelled)
+      reporter.modelled(stage.stage, line);
+    for (const auto& line : stage.skipped)
+      reporter.skipped(stage.stage, line);
     if (stage.status == "planned") {
-      reporter.modelled(stage.stage, "planned only: this version records the plan; the stage itself does not run yet");
+      reporter.modelled(stage.stage,
+                        "planned only: this version records the plan; the stage itself does not run yet");
     }
   }
 
@@ -102,19 +106,23 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& re
   }
 
   std::string log;
-  for (const auto& line : reporter.log_lines()) log += line + "\n";
+  for (const auto& line : reporter.log_lines())
+    log += line + "\n";
   writer.text(layout.log(), log);
 
   nlohmann::json stages = nlohmann::json::array();
-  for (const auto& stage : summary.stages) stages.push_back(stage_json(stage));
+  for (const auto& stage : summary.stages)
+    stages.push_back(stage_json(stage));
   nlohmann::json files = nlohmann::json::array();
-  for (const auto& file : writer.files()) files.push_back(file.generic_string());
-  writer.json(layout.provenance(), {{"phantasm_version", version},
-                                    {"scene", {{"file", scene.file.filename().string()}, {"sha256", scene.sha256}}},
-                                    {"seed", scene.seed},
-                                    {"settings", scene_settings_json(scene)},
-                                    {"stages", stages},
-                                    {"files", files}});
+  for (const auto& file : writer.files())
+    files.push_back(file.generic_string());
+  writer.json(layout.provenance(),
+              {{"phantasm_version", version},
+               {"scene", {{"file", scene.file.filename().string()}, {"sha256", scene.sha256}}},
+               {"seed", scene.seed},
+               {"settings", scene_settings_json(scene)},
+               {"stages", stages},
+               {"files", files}});
   summary.files = writer.files();
   return summary;
 }

@@ -55,9 +55,11 @@ public:
   void check_organs() {
     const auto& organs = m_scene.anatomy.organs;
     std::set<std::string> names;
+    bool unique_names = true;
     for (std::size_t i = 0; i < organs.size(); ++i) {
       const OrganSettings& organ = organs[i];
       if (!names.insert(organ.name).second) {
+        unique_names = false;
         problem(indexed("anatomy.organs", i, "name"),
                 "expected a unique organ name, found '" + organ.name + "' a second time");
       }
@@ -70,7 +72,8 @@ public:
         problem(indexed("anatomy.organs", i, "material"),
                 "expected a material defined under materials, found '" + organ.material + "'");
       }
-      if (!organ.inside.empty()) {
+      // With duplicate names a reference is ambiguous: report the duplicate alone.
+      if (!organ.inside.empty() && unique_names) {
         if (organ.inside == organ.name) {
           problem(indexed("anatomy.organs", i, "inside"), "expected another organ, found the organ itself");
         } else if (m_scene.find_organ(organ.inside) == nullptr) {
@@ -79,6 +82,7 @@ public:
         }
       }
     }
+    if (!unique_names) return;
     // Nesting must be a forest: following 'inside' from any organ reaches an outermost organ.
     for (std::size_t i = 0; i < organs.size(); ++i) {
       std::set<std::string> chain{organs[i].name};
@@ -115,8 +119,9 @@ public:
         check_organ_reference(indexed("deformation.loads", i, "organ"), load.organ);
         for (const auto& fixed : d.fixed) {
           if (fixed == load.organ) {
-            problem(indexed("deformation.loads", i, "organ"),
-                    "expected an organ that is not fixed, found '" + load.organ + "', listed under deformation.fixed");
+            problem(indexed("deformation.loads", i, "organ"), "expected an organ that is not fixed, found '" +
+                                                                  load.organ +
+                                                                  "', listed under deformation.fixed");
           }
         }
       }
@@ -150,7 +155,8 @@ public:
                                      format_number(half_train) + " ms), found " + format_number(s.TI_ms));
       } else if (s.TI_ms + half_train >= s.TR_ms) {
         problem(base + ".TR_ms", "expected TR_ms greater than TI_ms + half the echo train (" +
-                                     format_number(s.TI_ms + half_train) + " ms), found " + format_number(s.TR_ms));
+                                     format_number(s.TI_ms + half_train) + " ms), found " +
+                                     format_number(s.TR_ms));
       }
       return;
     }
@@ -206,7 +212,8 @@ public:
     for (std::size_t i = 0; i < m_scene.sequences.size(); ++i) {
       SequenceSettings& s = m_scene.sequences[i];
       if (!names.insert(s.name).second) {
-        problem(indexed("sequences", i, "name"), "expected a unique sequence name, found '" + s.name + "' again");
+        problem(indexed("sequences", i, "name"),
+                "expected a unique sequence name, found '" + s.name + "' again");
       }
       check_sequence_timing(i, s);
       for (const auto& tissue : tissues) {

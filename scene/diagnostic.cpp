@@ -12,7 +12,8 @@ std::string Diagnostic::format() const {
 
 std::string format_diagnostics(const std::vector<Diagnostic>& diagnostics) {
   std::string text;
-  for (const auto& d : diagnostics) text += d.format() + "\n";
+  for (const auto& d : diagnostics)
+    text += d.format() + "\n";
   return text;
 }
 

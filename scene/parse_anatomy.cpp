@@ -6,6 +6,7 @@ namespace {
 void parse_shape(CheckedMap& map, const std::filesystem::path& scene_folder, ShapeSettings& shape) {
   std::string kind;
   if (!map.choice("type", kind, {"ellipsoid", "superquadric", "mesh", "label_volume"}, true)) {
+    map.accept_remaining_keys();
     return;
   }
   const NumberRule coordinate{-1e5, 1e5, false, false, "mm"};
@@ -24,8 +25,8 @@ void parse_shape(CheckedMap& map, const std::filesystem::path& scene_folder, Sha
   shape.kind = kind == "mesh" ? ShapeKind::mesh : ShapeKind::label_volume;
   std::string file;
   if (map.string("file", file, true)) {
-    shape.file = std::filesystem::path(file).is_absolute() ? std::filesystem::path(file)
-                                                            : scene_folder / file;
+    shape.file =
+        std::filesystem::path(file).is_absolute() ? std::filesystem::path(file) : scene_folder / file;
     std::error_code error;
     if (!std::filesystem::is_regular_file(shape.file, error)) {
       map.context().problem(map.get("file"), map.child_path("file"),

@@ -22,7 +22,7 @@ void parse_solver(CheckedMap& map, SolverSettings& solver) {
 MotionProfile parse_motion(CheckedMap& map, LoadSettings& load) {
   std::string motion;
   if (map.choice("motion", motion, {"constant", "ramp", "sine"})) {
-    load.motion = motion == "ramp" ? MotionProfile::ramp
+    load.motion = motion == "ramp"   ? MotionProfile::ramp
                   : motion == "sine" ? MotionProfile::sine
                                      : MotionProfile::constant;
   }
@@ -32,7 +32,10 @@ MotionProfile parse_motion(CheckedMap& map, LoadSettings& load) {
 
 void parse_load(CheckedMap& map, LoadSettings& load) {
   std::string kind;
-  if (!map.choice("type", kind, {"gravity", "displacement"}, true)) return;
+  if (!map.choice("type", kind, {"gravity", "displacement"}, true)) {
+    map.accept_remaining_keys();
+    return;
+  }
   const NumberRule coordinate{-1e5, 1e5, false, false, "mm"};
   if (kind == "gravity") {
     load.kind = LoadKind::gravity;

@@ -19,11 +19,11 @@ void parse_grid(CheckedMap& map, GridSettings& grid) {
   map.vec3("field_of_view_mm", grid.field_of_view_mm, positive("mm"), true, true);
   map.vec3("voxel_size_mm", grid.voxel_size_mm, positive("mm"), true, true);
   map.vec3("center_mm", grid.center_mm, NumberRule{-1e5, 1e5, false, false, "mm"});
-  if (map.string("orientation", grid.orientation) &&
-      !direction_from_axis_code(grid.orientation)) {
+  if (map.string("orientation", grid.orientation) && !direction_from_axis_code(grid.orientation)) {
     map.context().problem(map.get("orientation"), map.child_path("orientation"),
                           "expected a 3-letter axis code with one of R/L, A/P, S/I each (e.g. RAS, "
-                          "LPS), found '" + grid.orientation + "'");
+                          "LPS), found '" +
+                              grid.orientation + "'");
   }
 }
 
@@ -34,7 +34,8 @@ void parse_materials(CheckedMap& map, std::vector<MaterialSettings>& materials) 
     CheckedMap entry(map.context(), map.get(name), map.child_path(name));
     MaterialSettings material;
     material.name = name;
-    entry.number("youngs_modulus_Pa", material.youngs_modulus_Pa, NumberRule{0.0, 1e12, true, false, "Pa"}, true);
+    entry.number("youngs_modulus_Pa", material.youngs_modulus_Pa, NumberRule{0.0, 1e12, true, false, "Pa"},
+                 true);
     entry.number("poisson_ratio", material.poisson_ratio, NumberRule{0.0, 0.5, false, true, ""}, true);
     entry.number("density_kg_m3", material.density_kg_m3, NumberRule{0.0, 1e5, true, false, "kg/m^3"});
     materials.push_back(material);
@@ -107,7 +108,8 @@ SceneLoadResult parse_scene(const std::string& text, const std::filesystem::path
   } catch (const YAML::Exception& error) {
     SourceLocation where{file_name, error.mark.line + 1, error.mark.column + 1};
     if (error.mark.is_null()) where.line = where.column = 0;
-    result.problems.push_back(Diagnostic{where, "", "expected valid YAML, found a syntax error: " + error.msg});
+    result.problems.push_back(
+        Diagnostic{where, "", "expected valid YAML, found a syntax error: " + error.msg});
     return result;
   }
 
@@ -119,9 +121,9 @@ SceneLoadResult parse_scene(const std::string& text, const std::filesystem::path
     if (top.integer("phantasm", format_version, 1, 1, true)) {
       // Only version 1 exists; the key is there so that later formats can be told apart.
     }
-    if (top.string("name", scene.name, true) &&
-        scene.name.find_first_of("/\\ \t") != std::string::npos) {
-      context.problem(top.get("name"), "name", "expected a name without spaces or slashes, found '" + scene.name + "'");
+    if (top.string("name", scene.name, true) && scene.name.find_first_of("/\\ \t") != std::string::npos) {
+      context.problem(top.get("name"), "name",
+                      "expected a name without spaces or slashes, found '" + scene.name + "'");
     }
     top.unsigned_integer("seed", scene.seed, true);
     top.number("field_strength_T", scene.field_strength_T, NumberRule{0.0, 11.7, true, false, "T"}, true);
@@ -177,10 +179,10 @@ SceneLoadResult load_scene(const std::filesystem::path& file) {
     SceneLoadResult result;
     std::error_code error;
     const bool exists = std::filesystem::exists(file, error);
-    result.problems.push_back(Diagnostic{
-        SourceLocation{file.string(), 0, 0}, "",
-        exists ? "expected a readable scene file, found a file that cannot be opened"
-               : "expected a scene file, found no such file"});
+    result.problems.push_back(
+        Diagnostic{SourceLocation{file.string(), 0, 0}, "",
+                   exists ? "expected a readable scene file, found a file that cannot be opened"
+                          : "expected a scene file, found no such file"});
     return result;
   }
   std::ostringstream text;

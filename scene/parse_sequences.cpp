@@ -9,12 +9,13 @@ const NumberRule k_echo_time_rule{0.0, 1e5, false, false, "ms"};
 void parse_sequence(CheckedMap& map, SequenceSettings& sequence) {
   if (map.string("name", sequence.name, true) && !is_bids_label(sequence.name)) {
     map.context().problem(map.get("name"), map.child_path("name"),
-                          "expected a BIDS suffix (letters and digits, e.g. T1w), found '" +
-                              sequence.name + "'");
+                          "expected a BIDS suffix (letters and digits, e.g. T1w), found '" + sequence.name +
+                              "'");
   }
   std::string kind;
   if (!map.choice("type", kind, {"spin_echo", "spoiled_gre", "inversion_recovery", "bssfp", "mprage"},
                   true)) {
+    map.accept_remaining_keys();
     return;
   }
   map.number("TR_ms", sequence.TR_ms, k_time_rule, true);
@@ -51,8 +52,7 @@ void parse_sequence(CheckedMap& map, SequenceSettings& sequence) {
 
 } // namespace
 
-void parse_sequences(YamlContext& context, const YAML::Node& node,
-                     std::vector<SequenceSettings>& sequences) {
+void parse_sequences(YamlContext& context, const YAML::Node& node, std::vector<SequenceSettings>& sequences) {
   if (!node.IsSequence()) {
     context.problem(node, "sequences", "expected a list of sequences, found " + describe(node));
     return;

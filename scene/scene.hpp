@@ -43,13 +43,13 @@ enum class ShapeKind { ellipsoid, superquadric, mesh, label_volume };
 /// The target shape of an organ's surface.
 struct ShapeSettings {
   ShapeKind kind = ShapeKind::ellipsoid;
-  Eigen::Vector3d center_mm{0, 0, 0};   ///< ellipsoid / superquadric centre, RAS mm
-  Eigen::Vector3d radii_mm{1, 1, 1};    ///< semi-axes before rotation, mm
+  Eigen::Vector3d center_mm{0, 0, 0};    ///< ellipsoid / superquadric centre, RAS mm
+  Eigen::Vector3d radii_mm{1, 1, 1};     ///< semi-axes before rotation, mm
   Eigen::Vector3d rotation_deg{0, 0, 0}; ///< rotations about x, then y, then z, degrees
-  double exponent_1 = 1.0; ///< superquadric north-south exponent (1 = ellipsoid)
-  double exponent_2 = 1.0; ///< superquadric east-west exponent (1 = ellipsoid)
-  std::filesystem::path file; ///< mesh or label volume, resolved against the scene's folder
-  int label = 0;              ///< label value to extract from a label volume
+  double exponent_1 = 1.0;               ///< superquadric north-south exponent (1 = ellipsoid)
+  double exponent_2 = 1.0;               ///< superquadric east-west exponent (1 = ellipsoid)
+  std::filesystem::path file;            ///< mesh or label volume, resolved against the scene's folder
+  int label = 0;                         ///< label value to extract from a label volume
 };
 
 /// One organ of the phantom.
@@ -86,9 +86,9 @@ enum class MotionProfile { constant, ramp, sine };
 /// surface inside a sphere (a retractor, a probe, a compression paddle).
 struct LoadSettings {
   LoadKind kind = LoadKind::gravity;
-  std::vector<std::string> organs;          ///< gravity: organs it acts on (empty = all moving)
+  std::vector<std::string> organs; ///< gravity: organs it acts on (empty = all moving)
   Eigen::Vector3d acceleration_m_s2{0, 0, -9.81};
-  std::string organ;                        ///< displacement: the organ pushed
+  std::string organ; ///< displacement: the organ pushed
   Eigen::Vector3d displacement_mm{0, 0, 0};
   Eigen::Vector3d region_center_mm{0, 0, 0};
   double region_radius_mm = 10.0;
@@ -106,7 +106,7 @@ struct DeformationSettings {
 };
 
 struct VoxelizationSettings {
-  int supersampling = 4;                  ///< samples per voxel edge for partial-volume fractions
+  int supersampling = 4;                   ///< samples per voxel edge for partial-volume fractions
   double tessellation_tolerance_mm = 0.05; ///< patch surface tessellation deviation
 };
 
@@ -120,20 +120,20 @@ struct SequenceSettings {
   double TR_ms = 0.0;
   double TE_ms = 0.0;
   double flip_deg = 90.0;
-  double TI_ms = 0.0;                      ///< inversion recovery and MPRAGE
+  double TI_ms = 0.0;                       ///< inversion recovery and MPRAGE
   Readout readout = Readout::gradient_echo; ///< inversion recovery
-  double echo_spacing_ms = 0.0;            ///< MPRAGE: gradient-echo spacing in the train
-  int turbo_factor = 0;                    ///< MPRAGE: echoes per inversion
+  double echo_spacing_ms = 0.0;             ///< MPRAGE: gradient-echo spacing in the train
+  int turbo_factor = 0;                     ///< MPRAGE: echoes per inversion
 };
 
 struct AcquisitionSettings {
-  bool kspace = false;          ///< simulate k-space truncation (Gibbs ringing)
-  int kspace_oversampling = 2;  ///< object samples per acquired sample along each axis
+  bool kspace = false;             ///< simulate k-space truncation (Gibbs ringing)
+  int kspace_oversampling = 2;     ///< object samples per acquired sample along each axis
   double slice_thickness_mm = 0.0; ///< 0 = the voxel size
-  double noise_percent = 0.0;   ///< 100 sigma / signal of the reference tissue (BrainWeb)
+  double noise_percent = 0.0;      ///< 100 sigma / signal of the reference tissue (BrainWeb)
   std::string noise_reference_tissue = "white_matter";
-  double bias_percent = 0.0;    ///< peak-to-peak multiplicative bias field, percent
-  int coils = 1;                ///< receive coils combined by sum of squares
+  double bias_percent = 0.0; ///< peak-to-peak multiplicative bias field, percent
+  int coils = 1;             ///< receive coils combined by sum of squares
 };
 
 struct OutputSettings {

@@ -3,7 +3,9 @@
 namespace phantasm {
 namespace {
 
-nlohmann::json vec3(const Eigen::Vector3d& v) { return nlohmann::json::array({v.x(), v.y(), v.z()}); }
+nlohmann::json vec3(const Eigen::Vector3d& v) {
+  return nlohmann::json::array({v.x(), v.y(), v.z()});
+}
 
 nlohmann::json optional_value(const std::optional<double>& value) {
   return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
@@ -28,9 +30,8 @@ nlohmann::json organ_json(const OrganSettings& organ) {
 }
 
 nlohmann::json load_json(const LoadSettings& load) {
-  nlohmann::json j = {{"type", to_string(load.kind)},
-                      {"motion", to_string(load.motion)},
-                      {"period_s", load.period_s}};
+  nlohmann::json j = {
+      {"type", to_string(load.kind)}, {"motion", to_string(load.motion)}, {"period_s", load.period_s}};
   if (load.kind == LoadKind::gravity) {
     j["acceleration_m_s2"] = vec3(load.acceleration_m_s2);
     j["organs"] = load.organs;
@@ -71,11 +72,14 @@ nlohmann::json scene_settings_json(const Scene& scene) {
                          {"PD", optional_value(t.PD)}};
   }
   nlohmann::json organs = nlohmann::json::array();
-  for (const auto& organ : scene.anatomy.organs) organs.push_back(organ_json(organ));
+  for (const auto& organ : scene.anatomy.organs)
+    organs.push_back(organ_json(organ));
   nlohmann::json loads = nlohmann::json::array();
-  for (const auto& load : scene.deformation.loads) loads.push_back(load_json(load));
+  for (const auto& load : scene.deformation.loads)
+    loads.push_back(load_json(load));
   nlohmann::json sequences = nlohmann::json::array();
-  for (const auto& s : scene.sequences) sequences.push_back(sequence_json(s));
+  for (const auto& s : scene.sequences)
+    sequences.push_back(sequence_json(s));
 
   const DeformationSettings& d = scene.deformation;
   const AcquisitionSettings& a = scene.acquisition;

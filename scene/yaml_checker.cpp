@@ -2,6 +2,7 @@
 
 #include "core/format.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -9,12 +10,46 @@
 namespace phantasm::scene_detail {
 namespace {
 
-bool is_quoted(const YAML::Node& node) { return node.Tag() == "!"; }
+bool is_quoted(const YAML::Node& node) {
+  return node.Tag() == "!";
+}
 
 std::string join(const std::vector<std::string>& items) {
   std::string text;
-  for (std::size_t i = 0; i < items.size(); ++i) text += (i ? ", " : "") + items[i];
+  for (std::size_t i = 0; i < items.size(); ++i)
+    text += (i ? ", " : "") + items[i];
   return text;
+}
+
+/// Levenshtein distance, for "did you mean" suggestions.
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j)
+    row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t substitution = diagonal + (a[i - 1] == b[j - 1] ? 0 : 1);
+      diagonal = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, substitution});
+    }
+  }
+  return row[b.size()];
+}
+
+/// The accepted key closest to a misspelt one, if it is close enough to be a typo.
+std::string closest_key(const std::string& key, const std::vector<std::string>& accepted) {
+  std::string best;
+  std::size_t best_distance = std::max<std::size_t>(2, key.size() / 4) + 1;
+  for (const auto& candidate : accepted) {
+    const std::size_t d = edit_distance(key, candidate);
+    if (d < best_distance) {
+      best_distance = d;
+      best = candidate;
+    }
+  }
+  return best;
 }
 
 } // namespace
@@ -79,13 +114,11 @@ SourceLocation YamlContext::location(const YAML::Node& node) const {
   return where;
 }
 
-void YamlContext::problem(const YAML::Node& at, const std::string& key_path,
-                          const std::string& message) {
+void YamlContext::problem(const YAML::Node& at, const std::string& key_path, const std::string& message) {
   problem(location(at), key_path, message);
 }
 
-void YamlContext::problem(const SourceLocation& at, const std::string& key_path,
-                          const std::string& message) {
+void YamlContext::problem(const SourceLocation& at, const std::string& key_path, const std::string& message) {
   m_problems.push_back(Diagnostic{at, key_path, message});
 }
 
@@ -120,8 +153,8 @@ bool read_number(YamlContext& context, const YAML::Node& node, const std::string
   return false;
 }
 
-bool read_integer(YamlContext& context, const YAML::Node& node, const std::string& path,
-                  long long min, long long max, long long& out) {
+bool read_integer(YamlContext& context, const YAML::Node& node, const std::string& path, long long min,
+                  long long max, long long& out) {
   const std::string expected =
       "expected an integer in [" + std::to_string(min) + ", " + std::to_string(max) + "]";
   if (node.IsScalar() && !is_quoted(node)) {
@@ -129,8 +162,7 @@ bool read_integer(YamlContext& context, const YAML::Node& node, const std::strin
     char* end = nullptr;
     errno = 0;
     const long long value = std::strtoll(text.c_str(), &end, 10);
-    if (!text.empty() && end != text.c_str() && *end == '\0' && errno == 0 && value >= min &&
-        value <= max) {
+    if (!text.empty() && end != text.c_str() && *end == '\0' && errno == 0 && value >= min && value <= max) {
       out = value;
       return true;
     }
@@ -139,8 +171,7 @@ bool read_integer(YamlContext& context, const YAML::Node& node, const std::strin
   return false;
 }
 
-bool read_string(YamlContext& context, const YAML::Node& node, const std::string& path,
-                 std::string& out) {
+bool read_string(YamlContext& context, const YAML::Node& node, const std::string& path, std::string& out) {
   if (node.IsScalar() && !node.Scalar().empty()) {
     out = node.Scalar();
     return true;
@@ -168,9 +199,11 @@ CheckedMap::~CheckedMap() {
     const std::string where = child_path(name);
     if (!seen.insert(name).second) {
       m_context.problem(key, where, "expected each key once, found '" + name + "' again");
-    } else if (m_known.count(name) == 0) {
+    } else if (m_known.count(name) == 0 && !m_accept_all) {
+      const std::string suggestion = closest_key(name, accepted);
       m_context.problem(key, where,
-                        "unknown key '" + name + "'; expected one of: " + join(accepted));
+                        "expected one of the keys " + join(accepted) + ", found unknown key '" + name + "'" +
+                            (suggestion.empty() ? "" : " (did you mean '" + suggestion + "'?)"));
     }
   }
 }
@@ -193,10 +226,12 @@ YAML::Node CheckedMap::get(const std::string& key) {
   return YAML::Node(YAML::NodeType::Undefined);
 }
 
-bool CheckedMap::has(const std::string& key) { return get(key).IsDefined(); }
+bool CheckedMap::has(const std::string& key) {
+  return get(key).IsDefined();
+}
 
 void CheckedMap::missing(const std::string& key, const std::string& expected) {
-  m_context.problem(m_node, child_path(key), "missing key; expected " + expected);
+  m_context.problem(m_node, child_path(key), "expected " + expected + ", found no such key");
 }
 
 bool CheckedMap::number(const std::string& key, double& out, const NumberRule& rule, bool required) {
@@ -230,8 +265,7 @@ bool CheckedMap::unsigned_integer(const std::string& key, std::uint64_t& out, bo
     return false;
   }
   long long value = 0;
-  if (!read_integer(m_context, node, child_path(key), 0, std::numeric_limits<long long>::max(),
-                    value)) {
+  if (!read_integer(m_context, node, child_path(key), 0, std::numeric_limits<long long>::max(), value)) {
     return false;
   }
   out = static_cast<std::uint64_t>(value);
@@ -261,8 +295,8 @@ bool CheckedMap::string(const std::string& key, std::string& out, bool required)
   return read_string(m_context, node, child_path(key), out);
 }
 
-bool CheckedMap::choice(const std::string& key, std::string& out,
-                        const std::vector<std::string>& choices, bool required) {
+bool CheckedMap::choice(const std::string& key, std::string& out, const std::vector<std::string>& choices,
+                        bool required) {
   const YAML::Node node = get(key);
   const std::string expected = "one of " + join(choices);
   if (!node.IsDefined()) {
@@ -281,8 +315,8 @@ bool CheckedMap::choice(const std::string& key, std::string& out,
   return false;
 }
 
-bool CheckedMap::vec3(const std::string& key, Eigen::Vector3d& out, const NumberRule& rule,
-                      bool required, bool allow_scalar) {
+bool CheckedMap::vec3(const std::string& key, Eigen::Vector3d& out, const NumberRule& rule, bool required,
+                      bool allow_scalar) {
   const YAML::Node node = get(key);
   const std::string path = child_path(key);
   const std::string expected =
@@ -304,7 +338,9 @@ bool CheckedMap::vec3(const std::string& key, Eigen::Vector3d& out, const Number
   Eigen::Vector3d value;
   bool ok = true;
   for (std::size_t i = 0; i < 3; ++i) {
-    ok = read_number(m_context, node[i], path + "[" + std::to_string(i) + "]", rule, value[static_cast<int>(i)]) && ok;
+    ok = read_number(m_context, node[i], path + "[" + std::to_string(i) + "]", rule,
+                     value[static_cast<int>(i)]) &&
+         ok;
   }
   if (ok) out = value;
   return ok;

@@ -57,10 +57,9 @@ std::string describe(const YAML::Node& node);
 /// Reads a value node (not a key of a map): each returns false after reporting a problem.
 bool read_number(YamlContext& context, const YAML::Node& node, const std::string& path,
                  const NumberRule& rule, double& out);
-bool read_integer(YamlContext& context, const YAML::Node& node, const std::string& path,
-                  long long min, long long max, long long& out);
-bool read_string(YamlContext& context, const YAML::Node& node, const std::string& path,
-                 std::string& out);
+bool read_integer(YamlContext& context, const YAML::Node& node, const std::string& path, long long min,
+                  long long max, long long& out);
+bool read_string(YamlContext& context, const YAML::Node& node, const std::string& path, std::string& out);
 
 /// A YAML mapping whose keys are checked: every key a reader asks for is known; the destructor
 /// reports every other key as unknown, with the list of keys that would have been accepted.
@@ -80,6 +79,9 @@ public:
   /// The value of a key (undefined when absent); marks the key as known.
   YAML::Node get(const std::string& key);
   bool has(const std::string& key);
+  /// Stops unknown-key reports for this mapping: used when its type key is wrong, so that the
+  /// keys of the intended type do not each produce a second message.
+  void accept_remaining_keys() { m_accept_all = true; }
   /// Reports a missing required key at the mapping's location.
   void missing(const std::string& key, const std::string& expected);
 
@@ -91,8 +93,8 @@ public:
   bool choice(const std::string& key, std::string& out, const std::vector<std::string>& choices,
               bool required = false);
   /// Three numbers [x, y, z]; with allow_scalar a single number stands for all three.
-  bool vec3(const std::string& key, Eigen::Vector3d& out, const NumberRule& rule,
-            bool required = false, bool allow_scalar = false);
+  bool vec3(const std::string& key, Eigen::Vector3d& out, const NumberRule& rule, bool required = false,
+            bool allow_scalar = false);
   bool string_list(const std::string& key, std::vector<std::string>& out, bool required = false);
 
 private:
@@ -100,6 +102,7 @@ private:
   YAML::Node m_node;
   std::string m_path;
   bool m_valid = false;
+  bool m_accept_all = false;
   std::set<std::string> m_known;
 };
 

@@ -26,8 +26,9 @@ std::vector<OrganMotion> classify_organ_motion(const Scene& scene) {
       continue;
     }
     for (const auto& load : d.loads) {
-      const bool acts = load.kind == LoadKind::displacement ? load.organ == name
-                                                            : load.organs.empty() || contains(load.organs, name);
+      const bool acts = load.kind == LoadKind::displacement
+                            ? load.organ == name
+                            : load.organs.empty() || contains(load.organs, name);
       if (acts) motion[i] = OrganMotion::simulated;
     }
   }
@@ -40,7 +41,8 @@ StageReport plan_sim(const Scene& scene) {
   const DeformationSettings& d = scene.deformation;
   if (d.mode == DeformationMode::none) {
     report.status = "skipped";
-    report.skipped.push_back("deformation (deformation.mode is none): the deformed state equals the reference");
+    report.skipped.push_back(
+        "deformation (deformation.mode is none): the deformed state equals the reference");
     return report;
   }
   const auto motion = classify_organ_motion(scene);
@@ -51,8 +53,8 @@ StageReport plan_sim(const Scene& scene) {
       std::ostringstream line;
       line << organs[i].name << ": simulated";
       if (material != nullptr) {
-        line << " (" << material->name << ", E = " << material->youngs_modulus_Pa << " Pa, nu = "
-             << material->poisson_ratio << ")";
+        line << " (" << material->name << ", E = " << material->youngs_modulus_Pa
+             << " Pa, nu = " << material->poisson_ratio << ")";
       }
       report.modelled.push_back(line.str());
     } else if (motion[i] == OrganMotion::fixed) {
@@ -75,8 +77,10 @@ StageReport plan_sim(const Scene& scene) {
   std::ostringstream solver;
   solver << to_string(d.solver.method) << " solver, " << to_string(d.mode) << ", at most "
          << d.solver.max_iterations << " iterations, stop at relative energy decrease "
-         << d.solver.relative_energy_tolerance << " or position change " << d.solver.position_tolerance_mm << " mm";
-  if (d.mode == DeformationMode::dynamic) solver << ", " << d.frames << " frames of " << d.time_step_s << " s";
+         << d.solver.relative_energy_tolerance << " or position change " << d.solver.position_tolerance_mm
+         << " mm";
+  if (d.mode == DeformationMode::dynamic)
+    solver << ", " << d.frames << " frames of " << d.time_step_s << " s";
   report.modelled.push_back(solver.str());
   return report;
 }

@@ -12,7 +12,8 @@ WorldBox field_of_view_box(const ImageGrid& grid) {
   WorldBox box{Eigen::Vector3d::Constant(1e300), Eigen::Vector3d::Constant(-1e300)};
   for (int corner = 0; corner < 8; ++corner) {
     Eigen::Vector3d ijk;
-    for (int a = 0; a < 3; ++a) ijk[a] = (corner >> a) & 1 ? grid.dims[a] - 0.5 : -0.5;
+    for (int a = 0; a < 3; ++a)
+      ijk[a] = (corner >> a) & 1 ? grid.dims[a] - 0.5 : -0.5;
     const Eigen::Vector3d p = grid.world_from_index(ijk);
     box.min_mm = box.min_mm.cwiseMin(p);
     box.max_mm = box.max_mm.cwiseMax(p);
@@ -55,7 +56,8 @@ StageReport plan_voxelize(const Scene& scene) {
   want(o.labels, "label maps", "outputs.labels is false");
   std::ostringstream fractions;
   fractions << "partial-volume fractions, " << scene.voxelization.supersampling << "^3 samples per voxel";
-  want(o.fractions || o.images, fractions.str(), "neither outputs.fractions nor outputs.images asks for them");
+  want(o.fractions || o.images, fractions.str(),
+       "neither outputs.fractions nor outputs.images asks for them");
   want(o.displacement_fields && deformed, "displacement fields both ways",
        deformed ? "outputs.displacement_fields is false" : "nothing deforms");
   want(o.jacobian && deformed, "Jacobian determinant map",

@@ -30,13 +30,16 @@ void add_info_command(CLI::App& app, std::function<int()>& action) {
         return static_cast<int>(exit_ok);
       }
       const ImageGrid grid = scene.grid.grid();
-      std::cout << "scene " << scene.name << " (" << scene.file.string() << ", sha256 " << scene.sha256.substr(0, 12)
-                << ")\nseed " << scene.seed << ", " << scene.field_strength_T << " T, grid " << grid.dims.x() << " x "
-                << grid.dims.y() << " x " << grid.dims.z() << " (" << grid.voxel_count() << " voxels)\n";
+      std::cout << "scene " << scene.name << " (" << scene.file.string() << ", sha256 "
+                << scene.sha256.substr(0, 12) << ")\nseed " << scene.seed << ", " << scene.field_strength_T
+                << " T, grid " << grid.dims.x() << " x " << grid.dims.y() << " x " << grid.dims.z() << " ("
+                << grid.voxel_count() << " voxels)\n";
       for (const auto& stage : plan_stages(scene)) {
         std::cout << "\n" << stage.stage << (stage.status == "skipped" ? " (skipped)" : "") << ":\n";
-        for (const auto& line : stage.modelled) std::cout << "  " << line << '\n';
-        for (const auto& line : stage.skipped) std::cout << "  skipped: " << line << '\n';
+        for (const auto& line : stage.modelled)
+          std::cout << "  " << line << '\n';
+        for (const auto& line : stage.skipped)
+          std::cout << "  skipped: " << line << '\n';
       }
       return static_cast<int>(exit_ok);
     };

@@ -38,10 +38,11 @@ void add_run_command(CLI::App& app, std::function<int()>& action) {
       }
       set_write_delay_for_testing(options->write_delay_ms);
       Reporter reporter(std::cerr, progress_style_for(STDERR_FILENO, options->quiet));
-      const RunSummary summary = run_scene(*result.scene, RunOptions{options->output, options->force}, reporter);
+      const RunSummary summary =
+          run_scene(*result.scene, RunOptions{options->output, options->force}, reporter);
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      reporter.note("wrote " + std::to_string(summary.files.size()) + " files to " + options->output + " in " +
-                    std::to_string(seconds).substr(0, 5) + " s");
+      reporter.note("wrote " + std::to_string(summary.files.size()) + " files to " + options->output +
+                    " in " + std::to_string(seconds).substr(0, 5) + " s");
       return static_cast<int>(exit_ok);
     };
   });

@@ -9,8 +9,8 @@ namespace phantasm::cli {
 /// Exit codes of the phantasm command.
 enum ExitCode : int {
   exit_ok = 0,
-  exit_failure = 1,     ///< a fault of the program or the system (disk full, ...)
-  exit_bad_input = 2,   ///< the scene or another input is wrong; the message says where
+  exit_failure = 1,       ///< a fault of the program or the system (disk full, ...)
+  exit_bad_input = 2,     ///< the scene or another input is wrong; the message says where
   exit_interrupted = 130, ///< SIGINT or SIGTERM; nothing half-written is left
 };
 

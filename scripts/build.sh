@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Configures and builds one build tree. Usage: scripts/build.sh release|asan
+# release: optimized (-O3), tests and benchmarks; asan: AddressSanitizer + UBSan, tests only.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+kind=${1:-release}
+case "$kind" in
+  release) flags=(-DCMAKE_BUILD_TYPE=Release) ;;
+  asan) flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DPHANTASM_SANITIZE=ON -DPHANTASM_BUILD_BENCHMARKS=OFF) ;;
+  *) echo "usage: $0 release|asan" >&2; exit 2 ;;
+esac
+
+build_dir="build/$kind"
+if [ ! -f "$build_dir/CMakeCache.txt" ]; then
+  cmake -S . -B "$build_dir" -G Ninja "${flags[@]}"
+fi
+cmake --build "$build_dir" --parallel "$(nproc)"

@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Installs what is missing, builds, and runs the whole test suite twice: optimized, then with
+# AddressSanitizer + UndefinedBehaviorSanitizer. Arguments go to ctest (e.g. -L fast).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+bash scripts/install-deps.sh
+jobs=$(nproc)
+
+echo "== Release build and tests"
+bash scripts/build.sh release
+ctest --test-dir build/release --output-on-failure --parallel "$jobs" "$@"
+
+echo "== ASan + UBSan build and tests"
+bash scripts/build.sh asan
+ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+  ctest --test-dir build/asan --output-on-failure --parallel "$jobs" "$@"

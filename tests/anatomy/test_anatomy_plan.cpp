@@ -1,0 +1,37 @@
+#include "anatomy/anatomy_plan.hpp"
+
+#include <gtest/gtest.h>
+
+using namespace phantasm;
+
+TEST(AnalyticShapeBounds, EllipsoidBoundsFollowItsRotation) {
+  ShapeSettings shape;
+  shape.center_mm = {1, 2, 3};
+  shape.radii_mm = {10, 20, 30};
+  auto box = analytic_shape_bounds(shape);
+  ASSERT_TRUE(box);
+  EXPECT_TRUE(box->max_mm.isApprox(Eigen::Vector3d(11, 22, 33)));
+  shape.rotation_deg = {0, 0, 90}; // x and y radii swap
+  box = analytic_shape_bounds(shape);
+  EXPECT_TRUE((box->max_mm - shape.center_mm).isApprox(Eigen::Vector3d(20, 10, 30), 1e-12));
+  // At 45 degrees about z the x extent is sqrt((10^2 + 20^2) / 2), tighter than the box bound.
+  shape.rotation_deg = {0, 0, 45};
+  box = analytic_shape_bounds(shape);
+  EXPECT_NEAR(box->max_mm.x() - 1.0, std::sqrt(250.0), 1e-12);
+}
+
+TEST(AnalyticShapeBounds, FileShapesHaveNoBoundsUntilRead) {
+  ShapeSettings shape;
+  shape.kind = ShapeKind::mesh;
+  EXPECT_FALSE(analytic_shape_bounds(shape));
+}
+
+TEST(NestingDepth, CountsContainingOrgans) {
+  Scene scene;
+  scene.anatomy.organs = {{"scalp", "skin", "", "", true, {}},
+                          {"skull", "bone_cortical", "", "scalp", true, {}},
+                          {"brain", "white_matter", "", "skull", true, {}}};
+  EXPECT_EQ(nesting_depth(scene, scene.anatomy.organs[0]), 0);
+  EXPECT_EQ(nesting_depth(scene, scene.anatomy.organs[2]), 2);
+  EXPECT_EQ(plan_anatomy(scene).modelled.size(), 3u);
+}

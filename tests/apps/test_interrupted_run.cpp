@@ -1,0 +1,103 @@
+#include "tests/apps/cli_fixtures.hpp"
+#include "tests/support/subprocess.hpp"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <csignal>
+#include <random>
+#include <thread>
+
+using namespace phantasm::testing;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// The files of an uninterrupted run, to compare interrupted runs with.
+const std::map<std::string, std::string>& reference_run() {
+  static const auto contents = [] {
+    const fs::path out = fresh_folder("interrupt-reference") / "out";
+    const CommandResult result =
+        run_command({k_phantasm, "run", k_head_scene.string(), "-o", out.string(), "-q"});
+    EXPECT_EQ(result.exit_code, 0) << result.err;
+    return folder_contents(out);
+  }();
+  return contents;
+}
+
+bool is_temporary(const std::string& relative_path) {
+  return fs::path(relative_path).filename().string().find(".phantasm-tmp-") != std::string::npos;
+}
+
+/// Starts a slowed-down run, sends a signal after a delay, and checks that every file under a
+/// final name is complete, i.e. byte-identical to the uninterrupted run's file. Returns whether
+/// the signal arrived before the run ended.
+bool interrupt_and_check(int signal_number, int delay_ms, const fs::path& out, bool expect_no_temporaries) {
+  // 2 ms per 64-byte chunk stretches the writes over more than half a second.
+  BackgroundProcess run(
+      {k_phantasm, "run", k_head_scene.string(), "-o", out.string(), "--force", "--write-delay-ms", "2"});
+  std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+  run.send_signal(signal_number);
+  const int exit_code = run.wait();
+  if (signal_number == SIGINT) {
+    EXPECT_TRUE(exit_code == 130 || exit_code == 0) << exit_code;
+  } else {
+    EXPECT_TRUE(exit_code == 128 + SIGKILL || exit_code == 0) << exit_code;
+  }
+  const auto& reference = reference_run();
+  const bool interrupted = exit_code != 0;
+  if (!fs::exists(out)) return interrupted;
+  for (const auto& [path, bytes] : folder_contents(out)) {
+    if (is_temporary(path)) {
+      EXPECT_FALSE(expect_no_temporaries) << "temporary file left: " << path;
+      continue;
+    }
+    if (reference.count(path) == 0) {
+      ADD_FAILURE() << "unexpected file " << path;
+      continue;
+    }
+    EXPECT_EQ(bytes, reference.at(path)) << "partial or wrong file under a final name: " << path;
+  }
+  return interrupted;
+}
+
+void rerun_with_force_completes(const fs::path& out) {
+  const CommandResult rerun =
+      run_command({k_phantasm, "run", k_head_scene.string(), "-o", out.string(), "--force", "-q"});
+  ASSERT_EQ(rerun.exit_code, 0) << rerun.err;
+  EXPECT_EQ(folder_contents(out), reference_run()); // complete, and no temporary file left behind
+}
+
+/// Interrupts runs at four random moments (seeded), each into its own folder, then reruns each
+/// with --force. At least two signals must land while the run is still writing.
+void interrupt_at_random_moments(int signal_number, unsigned seed, const std::string& name,
+                                 bool expect_no_temporaries) {
+  std::mt19937 random(seed);
+  std::uniform_int_distribution<int> delay(20, 500);
+  const fs::path root = fresh_folder(name);
+  int interrupted = 0;
+  for (int attempt = 0; attempt < 4; ++attempt) {
+    SCOPED_TRACE("attempt " + std::to_string(attempt));
+    const fs::path out = root / ("out" + std::to_string(attempt));
+    interrupted += interrupt_and_check(signal_number, delay(random), out, expect_no_temporaries);
+    rerun_with_force_completes(out);
+  }
+  EXPECT_GE(interrupted, 2) << "the signal should arrive while the run is writing";
+}
+
+} // namespace
+
+TEST(InterruptedRun, SigintLeavesOnlyCompleteFilesAndNoTemporaries) {
+  interrupt_at_random_moments(SIGINT, 20261122, "sigint", true);
+}
+
+TEST(InterruptedRun, SigkillLeavesNoPartialFileUnderAFinalName) {
+  interrupt_at_random_moments(SIGKILL, 1122, "sigkill", false);
+}
+
+TEST(InterruptedRun, ARunKilledRepeatedlyIntoOneFolderStillEndsComplete) {
+  const fs::path out = fresh_folder("sigkill-repeated") / "out";
+  for (int delay_ms : {50, 200, 400})
+    EXPECT_TRUE(interrupt_and_check(SIGKILL, delay_ms, out, false));
+  rerun_with_force_completes(out);
+}

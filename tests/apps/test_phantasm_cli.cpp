@@ -1,0 +1,178 @@
+#include "core/sha256.hpp"
+#include "tests/apps/cli_fixtures.hpp"
+#include "tests/support/subprocess.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <regex>
+
+using namespace phantasm::testing;
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Expectation {
+  std::string location; ///< "line:column"
+  std::string key_path; ///< empty for problems without a key (syntax errors)
+};
+
+Expectation expectation_of(const fs::path& scene) {
+  std::ifstream stream(scene);
+  std::string first_line;
+  std::getline(stream, first_line);
+  std::smatch match;
+  const std::regex pattern(R"(^# expect: (\d+:\d+) ?(\S*)$)");
+  if (!std::regex_match(first_line, match, pattern)) {
+    ADD_FAILURE() << scene << ": first line must be '# expect: LINE:COLUMN KEY.PATH', found '" << first_line
+                  << "'";
+    return {};
+  }
+  return {match[1], match[2]};
+}
+
+} // namespace
+
+TEST(ValidateCommand, EveryMalformedSceneGetsOneMessageAtItsLocationAndExitCode2) {
+  const fs::path folder = k_source_dir / "tests" / "data" / "bad-scenes";
+  std::vector<fs::path> scenes;
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    if (entry.path().extension() == ".yaml") scenes.push_back(entry.path());
+  }
+  std::sort(scenes.begin(), scenes.end());
+  ASSERT_GE(scenes.size(), 12u);
+  for (const auto& scene : scenes) {
+    SCOPED_TRACE(scene.filename().string());
+    const Expectation expected = expectation_of(scene);
+    const CommandResult result = run_command({k_phantasm, "validate", scene.string()});
+    EXPECT_EQ(result.exit_code, 2);
+    EXPECT_TRUE(result.out.empty()) << result.out;
+    std::string prefix = scene.string() + ":" + expected.location + ": ";
+    if (!expected.key_path.empty()) prefix += expected.key_path + ": ";
+    EXPECT_EQ(result.err.rfind(prefix, 0), 0u)
+        << "expected a message starting with\n  " << prefix << "\nfound\n  " << result.err;
+    EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+    EXPECT_NE(result.err.find("expected"), std::string::npos) << result.err;
+    EXPECT_NE(result.err.find("found"), std::string::npos) << result.err;
+  }
+}
+
+TEST(ValidateCommand, ShippedScenesAreValid) {
+  for (const auto& entry : fs::directory_iterator(k_source_dir / "data-synthetic")) {
+    if (entry.path().extension() != ".yaml") continue;
+    const CommandResult result = run_command({k_phantasm, "validate", entry.path().string()});
+    EXPECT_EQ(result.exit_code, 0) << entry.path() << "\n" << result.err;
+  }
+}
+
+TEST(ValidateCommand, AMissingSceneFileIsABadInput) {
+  const CommandResult result = run_command({k_phantasm, "validate", "/no/such/scene.yaml"});
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_EQ(result.err, "/no/such/scene.yaml: expected a scene file, found no such file\n");
+}
+
+TEST(Cli, EverySubcommandHasHelp) {
+  for (const char* command : {"run", "validate", "info"}) {
+    const CommandResult result = run_command({k_phantasm, command, "--help"});
+    EXPECT_EQ(result.exit_code, 0) << command;
+    EXPECT_NE(result.out.find("Usage"), std::string::npos) << command << ": " << result.out;
+  }
+  const CommandResult top = run_command({k_phantasm, "--help"});
+  EXPECT_EQ(top.exit_code, 0);
+  for (const char* command : {"run", "validate", "info"})
+    EXPECT_NE(top.out.find(command), std::string::npos);
+}
+
+TEST(Cli, UnknownOptionsAreBadInput) {
+  EXPECT_EQ(run_command({k_phantasm, "run", k_head_scene.string(), "--no-such-option"}).exit_code, 2);
+  EXPECT_EQ(run_command({k_phantasm}).exit_code, 2);
+}
+
+TEST(InfoCommand, ShowsTheGridAndEveryStagePlan) {
+  const CommandResult result = run_command({k_phantasm, "info", k_head_scene.string()});
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.out.find("grid 176 x 208 x 192"), std::string::npos) << result.out;
+  for (const char* stage : {"anatomy:", "sim:", "voxelize:", "mri:"})
+    EXPECT_NE(result.out.find(stage), std::string::npos);
+  const CommandResult json = run_command({k_phantasm, "info", "--json", k_head_scene.string()});
+  ASSERT_EQ(json.exit_code, 0);
+  EXPECT_EQ(nlohmann::json::parse(json.out)["seed"], 1);
+}
+
+TEST(RunCommand, WritesTheDatasetSkeletonWithProvenance) {
+  const fs::path out = fresh_folder("skeleton") / "out";
+  const CommandResult result = run_command({k_phantasm, "run", k_head_scene.string(), "-o", out.string()});
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const auto description = nlohmann::json::parse(read_file(out / "dataset_description.json"));
+  EXPECT_EQ(description["Name"], "head");
+  EXPECT_EQ(description["DatasetType"], "raw");
+  EXPECT_TRUE(fs::is_directory(out / "sub-01" / "ses-ref" / "anat"));
+  EXPECT_TRUE(fs::is_directory(out / "sub-01" / "ses-def" / "anat"));
+
+  const fs::path derivatives = out / "derivatives" / "phantasm";
+  EXPECT_EQ(nlohmann::json::parse(read_file(derivatives / "dataset_description.json"))["DatasetType"],
+            "derivative");
+  const std::string dseg = read_file(derivatives / "dseg.tsv");
+  EXPECT_EQ(dseg.rfind("index\tname\ttissue\n0\tbackground\tbackground\n1\tscalp\tskin\n", 0), 0u) << dseg;
+  EXPECT_EQ(std::count(dseg.begin(), dseg.end(), '\n'), 9); // header, background, 7 organs
+
+  const auto provenance = nlohmann::json::parse(read_file(derivatives / "sub-01" / "provenance.json"));
+  EXPECT_EQ(provenance["scene"]["sha256"], phantasm::sha256_hex(read_file(k_head_scene)));
+  EXPECT_EQ(provenance["seed"], 1);
+  EXPECT_EQ(provenance["settings"]["deformation"]["solver"]["method"], "local_global");
+  ASSERT_EQ(provenance["stages"].size(), 4u);
+  EXPECT_EQ(provenance["stages"][0]["stage"], "anatomy");
+  EXPECT_TRUE(provenance["stages"][0].contains("accuracy"));
+  EXPECT_EQ(read_file(derivatives / "sub-01" / "scene.yaml"), read_file(k_head_scene));
+  const std::string log = read_file(derivatives / "sub-01" / "log.txt");
+  EXPECT_NE(log.find("[sim] scalp: held fixed"), std::string::npos) << log;
+  EXPECT_NE(log.find("[voxelize] skipped: .vdb grids"), std::string::npos) << log;
+}
+
+TEST(RunCommand, RefusesANonEmptyOutputFolderWithoutForceAndLeavesItUntouched) {
+  const fs::path out = fresh_folder("refuse");
+  std::ofstream(out / "precious.txt") << "user data";
+  const CommandResult refused = run_command({k_phantasm, "run", k_head_scene.string(), "-o", out.string()});
+  EXPECT_EQ(refused.exit_code, 2);
+  EXPECT_NE(refused.err.find("--force"), std::string::npos) << refused.err;
+  EXPECT_EQ(folder_contents(out).size(), 1u);
+  const CommandResult forced =
+      run_command({k_phantasm, "run", k_head_scene.string(), "-o", out.string(), "--force"});
+  EXPECT_EQ(forced.exit_code, 0) << forced.err;
+  EXPECT_EQ(read_file(out / "precious.txt"), "user data");
+}
+
+TEST(RunCommand, SameSceneTwiceGivesIdenticalBytes) {
+  const fs::path root = fresh_folder("determinism");
+  ASSERT_EQ(
+      run_command({k_phantasm, "run", k_head_scene.string(), "-o", (root / "a").string(), "-q"}).exit_code,
+      0);
+  ASSERT_EQ(
+      run_command({k_phantasm, "run", k_head_scene.string(), "-o", (root / "b").string(), "-q"}).exit_code,
+      0);
+  const auto a = folder_contents(root / "a");
+  EXPECT_GE(a.size(), 6u);
+  EXPECT_EQ(a, folder_contents(root / "b"));
+}
+
+TEST(RunCommand, QuietPrintsNothingAndAPipeGetsPlainProgressLines) {
+  const fs::path root = fresh_folder("verbosity");
+  const CommandResult quiet =
+      run_command({k_phantasm, "run", k_head_scene.string(), "-o", (root / "q").string(), "--quiet"});
+  EXPECT_EQ(quiet.exit_code, 0);
+  EXPECT_TRUE(quiet.err.empty()) << quiet.err;
+  const CommandResult plain =
+      run_command({k_phantasm, "run", k_head_scene.string(), "-o", (root / "p").string()});
+  EXPECT_EQ(plain.exit_code, 0);
+  EXPECT_NE(plain.err.find("writing 100% (6/6)"), std::string::npos) << plain.err;
+  EXPECT_EQ(plain.err.find('\r'), std::string::npos);
+  EXPECT_NE(plain.err.find("[voxelize] skipped: .vdb grids"), std::string::npos) << plain.err;
+}
+
+TEST(RunCommand, AnInvalidSceneWritesNothing) {
+  const fs::path out = fresh_folder("invalid") / "out";
+  const fs::path scene = k_source_dir / "tests" / "data" / "bad-scenes" / "unknown-tissue.yaml";
+  const CommandResult result = run_command({k_phantasm, "run", scene.string(), "-o", out.string()});
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_FALSE(fs::exists(out));
+}

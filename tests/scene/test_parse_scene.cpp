@@ -1,0 +1,231 @@
+#include "scene/scene.hpp"
+#include "scene/scene_json.hpp"
+
+#include <gtest/gtest.h>
+
+using namespace phantasm;
+
+namespace {
+
+const std::string k_minimal = R"(phantasm: 1
+name: ball
+seed: 7
+field_strength_T: 3.0
+grid:
+  field_of_view_mm: 64
+  voxel_size_mm: [2, 2, 4]
+anatomy:
+  organs:
+    - name: ball
+      tissue: white_matter
+      shape: {type: ellipsoid, center_mm: [0, 0, 0], radii_mm: 20}
+)";
+
+SceneLoadResult parse(const std::string& text) {
+  return parse_scene(text, "scene.yaml");
+}
+
+/// The only problem of a scene, formatted; fails the test when there is not exactly one.
+std::string only_problem(const std::string& text) {
+  const SceneLoadResult result = parse(text);
+  EXPECT_FALSE(result.scene.has_value());
+  EXPECT_EQ(result.problems.size(), 1u) << format_diagnostics(result.problems);
+  return result.problems.empty() ? "" : result.problems.front().format();
+}
+
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const auto at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return text.replace(at, from.size(), to);
+}
+
+} // namespace
+
+TEST(ParseScene, MinimalSceneGetsDocumentedDefaults) {
+  const SceneLoadResult result = parse(k_minimal);
+  ASSERT_TRUE(result.scene) << format_diagnostics(result.problems);
+  const Scene& s = *result.scene;
+  EXPECT_EQ(s.name, "ball");
+  EXPECT_EQ(s.seed, 7u);
+  EXPECT_EQ(s.grid.field_of_view_mm, Eigen::Vector3d(64, 64, 64));
+  EXPECT_EQ(s.grid.grid().dims, Eigen::Vector3i(32, 32, 16));
+  EXPECT_EQ(s.grid.orientation, "RAS");
+  EXPECT_EQ(s.anatomy.organs.at(0).shape.radii_mm, Eigen::Vector3d(20, 20, 20));
+  EXPECT_EQ(s.deformation.mode, DeformationMode::none);
+  EXPECT_EQ(s.outputs.subject, "01");
+  EXPECT_TRUE(s.sequences.empty());
+  EXPECT_EQ(s.sha256.size(), 64u);
+}
+
+TEST(ParseScene, KeyLocationsAreRememberedForLaterMessages) {
+  const Scene s = *parse(k_minimal).scene;
+  const SourceLocation voxel = s.location_of("grid.voxel_size_mm");
+  EXPECT_EQ(voxel.line, 7);
+  EXPECT_EQ(voxel.column, 18);
+  // An unknown path falls back to its nearest known ancestor.
+  EXPECT_EQ(s.location_of("grid.voxel_size_mm[5]").line, 7);
+}
+
+TEST(ParseScene, UnknownKeyListsTheKeysThatWouldBeAccepted) {
+  const std::string message =
+      only_problem(replaced(k_minimal, "  voxel_size_mm", "  voxelsize_mm: 1\n  voxel_size_mm"));
+  EXPECT_EQ(message,
+            "scene.yaml:7:3: grid.voxelsize_mm: expected one of the keys center_mm, field_of_view_mm, "
+            "orientation, voxel_size_mm, found unknown key 'voxelsize_mm' (did you mean 'voxel_size_mm'?)");
+}
+
+TEST(ParseScene, WrongTypesSayWhatWasExpectedAndFound) {
+  EXPECT_EQ(only_problem(replaced(k_minimal, "seed: 7", "seed: many")),
+            "scene.yaml:3:7: seed: expected an integer in [0, 9223372036854775807], found 'many'");
+  EXPECT_EQ(
+      only_problem(replaced(k_minimal, "field_strength_T: 3.0", "field_strength_T: [3]")),
+      "scene.yaml:4:19: field_strength_T: expected a number in T in (0, 11.7], found a list of 1 items");
+  // A quoted number is text, not a number.
+  EXPECT_NE(only_problem(replaced(k_minimal, "seed: 7", "seed: \"7\"")).find("found '7'"), std::string::npos);
+}
+
+TEST(ParseScene, OutOfRangeValuesPointAtTheElement) {
+  EXPECT_EQ(only_problem(replaced(k_minimal, "[2, 2, 4]", "[2, -2, 4]")),
+            "scene.yaml:7:22: grid.voxel_size_mm[1]: expected a number in mm greater than 0, found '-2'");
+}
+
+TEST(ParseScene, MissingRequiredKeyIsReportedAtItsParent) {
+  const std::string message = only_problem(replaced(k_minimal, "      tissue: white_matter\n", ""));
+  EXPECT_NE(
+      message.find("scene.yaml:10:7: anatomy.organs[0].tissue: expected a non-empty text, found no such key"),
+      std::string::npos)
+      << message;
+}
+
+TEST(ParseScene, EveryProblemIsReportedNotOnlyTheFirst) {
+  std::string text = replaced(k_minimal, "seed: 7", "seed: -1");
+  text = replaced(text, "[2, 2, 4]", "[2, 2, 0]");
+  const SceneLoadResult result = parse(text);
+  EXPECT_EQ(result.problems.size(), 2u) << format_diagnostics(result.problems);
+}
+
+TEST(ParseScene, SyntaxErrorsGiveTheirLineAndColumn) {
+  const SceneLoadResult result = parse("phantasm: 1\ngrid: [1, 2\nname: x\n");
+  ASSERT_EQ(result.problems.size(), 1u);
+  EXPECT_GT(result.problems[0].where.line, 1);
+  EXPECT_NE(result.problems[0].message.find("expected valid YAML"), std::string::npos);
+}
+
+TEST(ParseScene, DuplicateKeysAreRejected) {
+  const std::string message = only_problem(replaced(k_minimal, "seed: 7\n", "seed: 7\nseed: 8\n"));
+  EXPECT_NE(message.find("scene.yaml:4:1: seed: expected each key once"), std::string::npos) << message;
+}
+
+TEST(ParseScene, TissuesMustExistInTheTableOrTheScene) {
+  const std::string message = only_problem(replaced(k_minimal, "tissue: white_matter", "tissue: brain"));
+  EXPECT_NE(
+      message.find("scene.yaml:11:15: anatomy.organs[0].tissue: expected a tissue of the built-in table"),
+      std::string::npos)
+      << message;
+  const std::string custom = replaced(k_minimal, "tissue: white_matter", "tissue: gel") +
+                             "tissues:\n  gel: {T1_ms: 1000, T2_ms: 100, T2star_ms: 50, PD: 1}\n";
+  EXPECT_TRUE(parse(custom).scene.has_value());
+}
+
+TEST(ParseScene, SequencesNeedTheTissueValuesTheirSignalEquationReads) {
+  const std::string csf = replaced(k_minimal, "tissue: white_matter", "tissue: csf");
+  const std::string gre =
+      "sequences:\n  - {name: T1w, type: spoiled_gre, TR_ms: 20, TE_ms: 4, flip_deg: 20}\n";
+  const std::string message = only_problem(csf + gre);
+  EXPECT_NE(message.find("sequences[0].type: this sequence needs T2star_ms of tissue 'csf' at 3 T"),
+            std::string::npos)
+      << message;
+  EXPECT_NE(message.find("expected tissues.csf.T2star_ms"), std::string::npos);
+  // A spin echo reads T2, not T2*, and the table has T2 of CSF.
+  EXPECT_TRUE(parse(csf + "sequences:\n  - {name: T2w, type: spin_echo, TR_ms: 4000, TE_ms: 100}\n").scene);
+  // A scene value completes the table.
+  EXPECT_TRUE(parse(csf + gre + "tissues:\n  csf: {T2star_ms: 100}\n").scene);
+}
+
+TEST(ParseScene, SequenceTimingsAreCheckedAgainstEachOther) {
+  const auto problem_of = [&](const std::string& sequence) {
+    return only_problem(k_minimal + "sequences:\n  - " + sequence + "\n");
+  };
+  EXPECT_NE(problem_of("{name: T2w, type: spin_echo, TR_ms: 40, TE_ms: 40}")
+                .find("TE_ms: expected TE_ms less than TR_ms (40), found 40"),
+            std::string::npos);
+  EXPECT_NE(
+      problem_of(
+          "{name: FLAIR, type: inversion_recovery, readout: spin_echo, TR_ms: 1000, TI_ms: 950, TE_ms: 80}")
+          .find("TI_ms: expected TI_ms + TE_ms less than TR_ms"),
+      std::string::npos);
+  EXPECT_NE(problem_of("{name: bSSFP, type: bssfp, TR_ms: 5, TE_ms: 2, flip_deg: 50}")
+                .find("TE_ms = TR_ms / 2 = 2.5"),
+            std::string::npos);
+  EXPECT_NE(
+      problem_of(
+          "{name: T1w, type: mprage, TR_ms: 2300, TI_ms: 500, TE_ms: 3, flip_deg: 9, echo_spacing_ms: 7, "
+          "turbo_factor: 176}")
+          .find("TI_ms: expected TI_ms greater than half the echo train (616 ms)"),
+      std::string::npos);
+  EXPECT_NE(problem_of("{name: T1w, type: spoiled_gre, TR_ms: 20, TE_ms: 4, flip_deg: 190}")
+                .find("flip_deg: expected a number in degrees in [0, 180]"),
+            std::string::npos);
+  // Keys of other sequence types are unknown here.
+  EXPECT_NE(problem_of("{name: T2w, type: spin_echo, TR_ms: 4000, TE_ms: 100, TI_ms: 3}")
+                .find("found unknown key 'TI_ms'"),
+            std::string::npos);
+}
+
+TEST(ParseScene, BssfpEchoTimeDefaultsToHalfTheRepetitionTime) {
+  const Scene s =
+      *parse(k_minimal + "sequences:\n  - {name: bSSFP, type: bssfp, TR_ms: 5, flip_deg: 50}\n").scene;
+  EXPECT_DOUBLE_EQ(s.sequences.at(0).TE_ms, 2.5);
+}
+
+TEST(ParseScene, OrganReferencesAndNestingAreChecked) {
+  const std::string two = k_minimal + R"(    - name: core
+      tissue: csf
+      inside: ball
+      shape: {type: ellipsoid, center_mm: [0, 0, 0], radii_mm: 5}
+)";
+  ASSERT_TRUE(parse(two).scene);
+  EXPECT_NE(only_problem(replaced(two, "inside: ball", "inside: nothing"))
+                .find("anatomy.organs[1].inside: expected the name of an organ"),
+            std::string::npos);
+  EXPECT_NE(only_problem(replaced(two, "name: core", "name: ball"))
+                .find("anatomy.organs[1].name: expected a unique organ name"),
+            std::string::npos);
+  const std::string cycle =
+      replaced(two, "      tissue: white_matter\n", "      tissue: white_matter\n      inside: core\n");
+  EXPECT_NE(only_problem(cycle).find("expected nesting without cycles"), std::string::npos);
+}
+
+TEST(ParseScene, DeformationReferencesExistingOrgans) {
+  const std::string deformation = "deformation:\n  mode: quasi_static\n  fixed: [skull]\n";
+  EXPECT_EQ(
+      only_problem(k_minimal + deformation),
+      "scene.yaml:15:11: deformation.fixed[0]: expected the name of an organ in this scene, found 'skull'");
+  const std::string loads =
+      "deformation:\n  mode: none\n  loads:\n    - {type: gravity, acceleration_m_s2: [0, 0, -9.81]}\n";
+  EXPECT_NE(only_problem(k_minimal + loads).find("deformation.mode: expected quasi_static or dynamic"),
+            std::string::npos);
+}
+
+TEST(ParseScene, MeshFilesMustExist) {
+  const std::string mesh = replaced(k_minimal, "{type: ellipsoid, center_mm: [0, 0, 0], radii_mm: 20}",
+                                    "{type: mesh, file: no-such-mesh.stl}");
+  EXPECT_NE(
+      only_problem(mesh).find("anatomy.organs[0].shape.file: expected an existing file, found no file at"),
+      std::string::npos);
+}
+
+TEST(ParseScene, SettingsJsonRecordsEverySection) {
+  const nlohmann::json j = scene_settings_json(*parse(k_minimal).scene);
+  for (const char* key : {"name", "seed", "field_strength_T", "grid", "materials", "tissues", "anatomy",
+                          "deformation", "voxelization", "sequences", "acquisition", "outputs"}) {
+    EXPECT_TRUE(j.contains(key)) << key;
+  }
+  EXPECT_EQ(j["grid"]["voxel_size_mm"], nlohmann::json::array({2.0, 2.0, 4.0}));
+}
+
+TEST(LoadScene, AMissingFileIsOneClearProblem) {
+  const SceneLoadResult result = load_scene("/no/such/scene.yaml");
+  ASSERT_EQ(result.problems.size(), 1u);
+  EXPECT_EQ(result.problems[0].format(), "/no/such/scene.yaml: expected a scene file, found no such file");
+}
