@@ -1,0 +1,238 @@
+#include "anatomy/patch_fit.hpp"
+
+#include "anatomy/mesh_distance.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+
+#include <array>
+#include <cmath>
+
+namespace phantasm {
+namespace {
+
+int icosphere_level_for(int base_triangles) {
+  int level = 0;
+  while (20 * (1 << (2 * (level + 1))) <= base_triangles && level < 8)
+    ++level;
+  return level;
+}
+
+/// The fitting basis of one patch: incircles (in rest geometry) of the sub-triangles of
+/// subdivision levels 0..levels, and, along each base edge, ellipses that hug the edge, so the
+/// strip the round bumps cannot reach gets bumps too.
+std::vector<PatchBump> basis_bumps(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
+                                   const Eigen::Vector3d& x2, int levels) {
+  std::vector<PatchBump> bumps;
+  const Eigen::Vector3d e1 = x1 - x0, e2 = x2 - x0;
+  Eigen::Matrix2d metric;
+  metric << e1.dot(e1), e1.dot(e2), e1.dot(e2), e2.dot(e2);
+  for (int level = 0; level <= levels; ++level) {
+    const int n = 1 << level;
+    auto add = [&](Eigen::Vector2d a, Eigen::Vector2d b, Eigen::Vector2d c) {
+      const Eigen::Vector3d pa = x0 + a.x() * e1 + a.y() * e2, pb = x0 + b.x() * e1 + b.y() * e2,
+                            pc = x0 + c.x() * e1 + c.y() * e2;
+      const double la = (pb - pc).norm(), lb = (pc - pa).norm(), lc = (pa - pb).norm();
+      const double perimeter = la + lb + lc;
+      const double area = 0.5 * (pb - pa).cross(pc - pa).norm();
+      bumps.push_back(PatchBump::disc((la * a + lb * b + lc * c) / perimeter,
+                                      (1.0 - 1e-9) * 2.0 * area / perimeter, metric));
+    };
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i + j < n; ++i) {
+        const Eigen::Vector2d p(double(i) / n, double(j) / n), du(1.0 / n, 0.0), dv(0.0, 1.0 / n);
+        add(p, p + du, p + dv);
+        if (i + j < n - 1) add(p + du, p + du + dv, p + dv);
+      }
+    }
+  }
+  // Edge ellipses, built in the edge's own affine coordinates (s along the edge from A to B,
+  // t towards the opposite corner C), where the triangle is (0,0), (1,0), (0,1): centre
+  // (1/2 - beta/2, beta), semi-axes alpha along the edge and beta across, as long as fits.
+  const std::array<std::array<Eigen::Vector2d, 3>, 3> edges = {
+      {{Eigen::Vector2d(0, 0), Eigen::Vector2d(1, 0), Eigen::Vector2d(0, 1)},
+       {Eigen::Vector2d(1, 0), Eigen::Vector2d(0, 1), Eigen::Vector2d(0, 0)},
+       {Eigen::Vector2d(0, 1), Eigen::Vector2d(0, 0), Eigen::Vector2d(1, 0)}}};
+  for (const auto& [A, B, C] : edges) {
+    Eigen::Matrix2d J;
+    J << B - A, C - A;
+    const Eigen::Matrix2d J_inverse = J.inverse();
+    for (double beta : {0.1, 0.05}) {
+      const double centre_s = 0.5 - 0.5 * beta;
+      const double alpha = (1.0 - 1e-9) * std::sqrt(centre_s * centre_s - beta * beta);
+      const Eigen::Matrix2d shape_st =
+          Eigen::Vector2d(1.0 / (alpha * alpha), 1.0 / (beta * beta)).asDiagonal();
+      PatchBump bump;
+      bump.center_uv = A + J * Eigen::Vector2d(centre_s, beta * (1.0 + 1e-9));
+      bump.shape_uv = J_inverse.transpose() * shape_st * J_inverse;
+      bumps.push_back(bump);
+    }
+  }
+  return bumps;
+}
+
+/// Height of the target above base point b along unit normal n, within +-limit (NaN if none).
+double target_height(const ImplicitShape& target, const Eigen::Vector3d& b, const Eigen::Vector3d& n,
+                     double limit) {
+  const double f0 = target.value(b);
+  if (f0 == 0.0) return 0.0;
+  // Walk outward in both directions from b until the sign changes; take the nearer change.
+  constexpr int steps = 32;
+  for (int s = 1; s <= steps; ++s) {
+    for (double direction : {1.0, -1.0}) {
+      const double h = direction * limit * s / steps;
+      const double hp = direction * limit * (s - 1) / steps;
+      if ((target.value(b + h * n) > 0.0) != (target.value(b + hp * n) > 0.0)) {
+        double lo = hp, hi = h;
+        const bool lo_inside = target.value(b + lo * n) > 0.0;
+        for (int i = 0; i < 80; ++i) {
+          const double mid = 0.5 * (lo + hi);
+          ((target.value(b + mid * n) > 0.0) == lo_inside ? lo : hi) = mid;
+        }
+        return 0.5 * (lo + hi);
+      }
+    }
+  }
+  return std::nan("");
+}
+
+} // namespace
+
+void match_volume(PatchSurface& surface, double target_volume) {
+  // Volume is linear in the amplitudes: raise the first (central) bump of every patch by the
+  // same height, which changes the volume by that height times the sum of their disc integrals.
+  double per_unit_height = 0.0;
+  for (Eigen::Index t = 0; t < surface.patch_count(); ++t) {
+    const auto& bumps = surface.bumps(t);
+    if (bumps.empty()) continue;
+    const TriangleMesh& base = surface.base_mesh();
+    const Eigen::Vector3d a = base.vertex(base.faces(t, 0)), b = base.vertex(base.faces(t, 1)),
+                          c = base.vertex(base.faces(t, 2));
+    per_unit_height += (b - a).cross(c - a).norm() * bumps[0].uv_area() / 4.0;
+  }
+  if (per_unit_height <= 0.0) return;
+  const double raise = (target_volume - surface.volume()) / per_unit_height;
+  for (Eigen::Index t = 0; t < surface.patch_count(); ++t) {
+    std::vector<PatchBump> bumps = surface.bumps(t);
+    if (bumps.empty()) continue;
+    bumps[0].amplitude_mm += raise;
+    surface.set_bumps(t, bumps);
+  }
+}
+
+TriangleMesh target_base_mesh(const ImplicitShape& target, int base_triangles,
+                              const Eigen::Vector3d& radii_hint, const Eigen::Matrix3d& rotation) {
+  TriangleMesh mesh = unit_icosphere(icosphere_level_for(base_triangles));
+  for (Eigen::Index v = 0; v < mesh.vertex_count(); ++v) {
+    const Eigen::Vector3d direction = (rotation * radii_hint.cwiseProduct(mesh.vertex(v))).normalized();
+    mesh.vertices.row(v) = target.ray_from_center(direction).transpose();
+  }
+  return mesh;
+}
+
+Eigen::MatrixX3d straddle_vertices(const TriangleMesh& base, const ImplicitShape& target, double factor) {
+  Eigen::VectorXd sag_sum = Eigen::VectorXd::Zero(base.vertex_count());
+  Eigen::VectorXd count = Eigen::VectorXd::Zero(base.vertex_count());
+  for (Eigen::Index t = 0; t < base.face_count(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = base.faces(t, k), b = base.faces(t, (k + 1) % 3);
+      if (a > b) continue; // each edge once (its other triangle has it as b > a)
+      const Eigen::Vector3d mid = 0.5 * (base.vertex(a) + base.vertex(b));
+      // Depth of the chord midpoint below the surface (positive inside a convex target).
+      const double sag = (target.project(mid) - mid).norm() * (target.value(mid) > 0.0 ? 1.0 : -1.0);
+      sag_sum[a] += sag, sag_sum[b] += sag;
+      count[a] += 1.0, count[b] += 1.0;
+    }
+  }
+  Eigen::MatrixX3d moved = base.vertices;
+  for (Eigen::Index v = 0; v < base.vertex_count(); ++v) {
+    const Eigen::Vector3d x = base.vertex(v);
+    moved.row(v) = (x + factor * sag_sum[v] / std::max(1.0, count[v]) * target.outward_normal(x)).transpose();
+  }
+  return moved;
+}
+
+void fit_bumps(PatchSurface& surface, const ImplicitShape& target, const PatchFitOptions& options) {
+  const TriangleMesh& base = surface.base_mesh();
+  const int n = 1 << options.sample_level;
+  for (Eigen::Index t = 0; t < surface.patch_count(); ++t) {
+    const PatchFrame frame = surface.frame(t);
+    const Eigen::Vector3d x0 = surface.rest_positions().row(base.faces(t, 0)).transpose();
+    const Eigen::Vector3d x1 = surface.rest_positions().row(base.faces(t, 1)).transpose();
+    const Eigen::Vector3d x2 = surface.rest_positions().row(base.faces(t, 2)).transpose();
+    std::vector<PatchBump> bumps = basis_bumps(x0, x1, x2, options.bump_levels);
+    std::vector<Eigen::Vector2d> uv;
+    std::vector<double> heights;
+    for (int j = 1; j < n; ++j) {
+      for (int i = 1; i + j < n; ++i) {
+        const double u = double(i) / n, v = double(j) / n;
+        const double h = target_height(target, frame.origin + u * frame.edge1 + v * frame.edge2, frame.normal,
+                                       frame.length_scale);
+        if (std::isnan(h)) continue;
+        uv.emplace_back(u, v);
+        heights.push_back(h);
+      }
+    }
+    const Eigen::Index m = static_cast<Eigen::Index>(uv.size()), k = static_cast<Eigen::Index>(bumps.size());
+    if (m == 0) continue;
+    // Bumps do not depend on w, so a unit bump's height at (u, v) is max(Q, 0)^3.
+    Eigen::MatrixXd A(m, k);
+    for (Eigen::Index c = 0; c < k; ++c) {
+      for (Eigen::Index r = 0; r < m; ++r) {
+        const double q = bumps[static_cast<std::size_t>(c)].shape_value(uv[static_cast<std::size_t>(r)]);
+        A(r, c) = q > 0.0 ? q * q * q : 0.0;
+      }
+    }
+    const Eigen::Map<const Eigen::VectorXd> b(heights.data(), m);
+    Eigen::MatrixXd normal = A.transpose() * A;
+    const double lambda = options.regularization * std::max(1e-300, normal.diagonal().mean());
+    normal.diagonal().array() += lambda;
+    const Eigen::VectorXd amplitudes = normal.ldlt().solve(A.transpose() * b);
+    for (Eigen::Index c = 0; c < k; ++c)
+      bumps[static_cast<std::size_t>(c)].amplitude_mm = amplitudes[c];
+    surface.set_bumps(t, bumps);
+  }
+}
+
+PatchSurface fit_patch_surface(const ImplicitShape& target, const Eigen::Vector3d& radii_hint,
+                               const Eigen::Matrix3d& rotation, const PatchFitOptions& options,
+                               const std::string& what, PatchFitReport* report) {
+  const TriangleMesh on_target = target_base_mesh(target, options.base_triangles, radii_hint, rotation);
+  TriangleMesh base = on_target;
+  if (options.vertex_offset_factor != 0.0) {
+    base.vertices = straddle_vertices(on_target, target, options.vertex_offset_factor);
+  }
+  PatchSurface surface(base, what);
+  fit_bumps(surface, target, options);
+  if (options.match_volume) match_volume(surface, target.volume());
+  if (report) {
+    *report = measure_fit(surface, target, 1e-3 * target.bounding_radius());
+    report->vertex_offset_factor = options.vertex_offset_factor;
+  }
+  return surface;
+}
+
+PatchFitReport measure_fit(const PatchSurface& surface, const ImplicitShape& target, double tessellation_mm,
+                           int target_sample_level) {
+  PatchFitReport report;
+  report.base_triangles = static_cast<int>(surface.patch_count());
+  // Surface to target: exact surface points on every patch's level-5 grid (1/32 of an edge).
+  std::vector<double> to_target;
+  for (Eigen::Index t = 0; t < surface.patch_count(); ++t) {
+    for (const Eigen::Vector3d& p : surface.patch_grid_points(t, 5))
+      to_target.push_back((target.project(p) - p).norm());
+  }
+  // Target to surface: distances to a tessellation within tessellation_mm.
+  const TriangleMesh tessellation = surface.tessellate(tessellation_mm);
+  const TriangleMesh sphere = unit_icosphere(target_sample_level);
+  std::vector<Eigen::Vector3d> samples;
+  for (Eigen::Index v = 0; v < sphere.vertex_count(); ++v)
+    samples.push_back(target.ray_from_center(sphere.vertex(v)));
+  const SurfaceDistance d = symmetric_distance(tessellation, samples, to_target);
+  report.hausdorff_mm = d.hausdorff_mm;
+  report.mean_distance_mm = d.mean_mm;
+  report.volume_error = (surface.volume() - target.volume()) / target.volume();
+  return report;
+}
+
+} // namespace phantasm

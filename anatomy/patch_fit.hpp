@@ -1,0 +1,62 @@
+#pragma once
+
+#include "anatomy/implicit_shape.hpp"
+#include "anatomy/patch_surface.hpp"
+
+namespace phantasm {
+
+/// Settings of a patch fit: the anatomy's speed/accuracy knob is the base mesh size.
+struct PatchFitOptions {
+  int base_triangles = 320;     ///< requested base size; an icosphere of 20 * 4^k <= this (at least 20)
+  int bump_levels = 2;          ///< bumps on the incircles of subdivision levels 0..bump_levels (1 + 4 + 16)
+  int sample_level = 5;         ///< least-squares samples on this level's interior grid points per patch
+  double regularization = 1e-6; ///< Tikhonov weight relative to the normal matrix's mean diagonal
+  /// Base vertices move outward by this fraction of their edges' mean chord sag, so chords
+  /// straddle a convex target (0 keeps them on the target; 0.5 balances vertex and mid-edge
+  /// errors on a sphere).
+  double vertex_offset_factor = 0.6;
+  bool match_volume = true; ///< correct the patches' central bumps so the volume equals the target's
+};
+
+/// How well a patch surface matches its target.
+struct PatchFitReport {
+  int base_triangles = 0;
+  double vertex_offset_factor = 0.6; ///< fraction of each vertex's mean chord sag it was moved out by
+  double hausdorff_mm = 0.0;         ///< symmetric Hausdorff distance to the target
+  double mean_distance_mm = 0.0;
+  double volume_error = 0.0; ///< (V_fit - V_target) / V_target
+};
+
+/// The icosphere base mesh of a star-shaped target: vertices on the target along rays from its
+/// centre, through an ellipsoid-shaped icosphere of the target's extent.
+/// @param radii_hint semi-axes used to spread the vertices (e.g. the target's radii)
+/// @param rotation the target's frame
+TriangleMesh target_base_mesh(const ImplicitShape& target, int base_triangles,
+                              const Eigen::Vector3d& radii_hint, const Eigen::Matrix3d& rotation);
+
+/// Fits the bump amplitudes of every patch to the target by linear least squares (heights of the
+/// target along each patch's normal at interior sample points).
+void fit_bumps(PatchSurface& surface, const ImplicitShape& target, const PatchFitOptions& options);
+
+/// Adds the same amplitude to the first bump of every patch so the enclosed volume equals
+/// `target_volume` (mm^3); patches without bumps are left alone.
+void match_volume(PatchSurface& surface, double target_volume);
+
+/// Moves base vertices outward along the target normal by `factor` times the mean depth of their
+/// edges' chord midpoints below the target, so that chords straddle a convex target.
+Eigen::MatrixX3d straddle_vertices(const TriangleMesh& base, const ImplicitShape& target, double factor);
+
+/// Builds a fitted patch surface: base mesh, vertex placement, bumps, and a volume correction
+/// spread over the central bump of every patch.
+PatchSurface fit_patch_surface(const ImplicitShape& target, const Eigen::Vector3d& radii_hint,
+                               const Eigen::Matrix3d& rotation, const PatchFitOptions& options,
+                               const std::string& what, PatchFitReport* report = nullptr);
+
+/// Measures a surface against its target: Hausdorff and mean distance between exact surface
+/// points (each patch's level-5 grid) and the target, and between points on the target (an
+/// icosphere of `target_sample_level` cast onto it) and a tessellation within `tessellation_mm`;
+/// and the volume error.
+PatchFitReport measure_fit(const PatchSurface& surface, const ImplicitShape& target, double tessellation_mm,
+                           int target_sample_level = 5);
+
+} // namespace phantasm

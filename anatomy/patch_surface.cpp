@@ -1,0 +1,254 @@
+#include "anatomy/patch_surface.hpp"
+
+#include "core/error.hpp"
+
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+
+#include <cmath>
+#include <map>
+
+namespace phantasm {
+
+double Quadric::value(const Eigen::Vector3d& p) const {
+  const double u = p.x(), v = p.y(), w = p.z();
+  return c[0] + c[1] * u + c[2] * v + c[3] * w + c[4] * u * u + c[5] * u * v + c[6] * v * v + c[7] * u * w +
+         c[8] * v * w + c[9] * w * w;
+}
+
+Eigen::Vector3d Quadric::gradient(const Eigen::Vector3d& p) const {
+  const double u = p.x(), v = p.y(), w = p.z();
+  return {c[1] + 2.0 * c[4] * u + c[5] * v + c[7] * w, c[2] + c[5] * u + 2.0 * c[6] * v + c[8] * w,
+          c[3] + c[7] * u + c[8] * v + 2.0 * c[9] * w};
+}
+
+PatchBump PatchBump::disc(const Eigen::Vector2d& center_uv, double radius_mm,
+                          const Eigen::Matrix2d& rest_metric) {
+  PatchBump bump;
+  bump.center_uv = center_uv;
+  bump.shape_uv = rest_metric / (radius_mm * radius_mm);
+  return bump;
+}
+
+double PatchBump::shape_value(const Eigen::Vector2d& uv) const {
+  const Eigen::Vector2d d = uv - center_uv;
+  return 1.0 - d.dot(shape_uv * d);
+}
+
+double PatchBump::uv_area() const {
+  return M_PI / std::sqrt(shape_uv.determinant());
+}
+
+namespace {
+
+/// Q = 1 - d^T S d with d = (u, v) - c, expanded into quadric coefficients.
+Quadric bump_quadric(const PatchBump& bump) {
+  const double s11 = bump.shape_uv(0, 0), s12 = 0.5 * (bump.shape_uv(0, 1) + bump.shape_uv(1, 0)),
+               s22 = bump.shape_uv(1, 1);
+  const double cu = bump.center_uv.x(), cv = bump.center_uv.y();
+  Quadric q;
+  q.c[0] = 1.0 - (s11 * cu * cu + 2.0 * s12 * cu * cv + s22 * cv * cv);
+  q.c[1] = 2.0 * (s11 * cu + s12 * cv);
+  q.c[2] = 2.0 * (s22 * cv + s12 * cu);
+  q.c[4] = -s11;
+  q.c[5] = -2.0 * s12;
+  q.c[6] = -s22;
+  return q;
+}
+
+Eigen::Vector3d corner(const TriangleMesh& mesh, Eigen::Index t, int k) {
+  return mesh.vertex(mesh.faces(t, k));
+}
+
+} // namespace
+
+PatchSurface::PatchSurface(TriangleMesh base, const std::string& what)
+    : m_what(what), m_base(std::move(base)) {
+  check_closed_manifold(m_base, what);
+  m_rest = m_base.vertices;
+  const Eigen::Index n = m_base.face_count();
+  m_rest_triangles.resize(static_cast<std::size_t>(n));
+  m_bumps.assign(static_cast<std::size_t>(n), {});
+  m_perturbations.assign(static_cast<std::size_t>(n), {});
+  std::map<std::pair<int, int>, std::pair<Eigen::Index, int>> directed;
+  for (Eigen::Index t = 0; t < n; ++t) {
+    const Eigen::Vector3d x0 = corner(m_base, t, 0), e1 = corner(m_base, t, 1) - x0,
+                          e2 = corner(m_base, t, 2) - x0;
+    RestTriangle& rest = m_rest_triangles[static_cast<std::size_t>(t)];
+    rest.metric << e1.dot(e1), e1.dot(e2), e1.dot(e2), e2.dot(e2);
+    rest.area = 0.5 * e1.cross(e2).norm();
+    rest.length_scale = (e1.norm() + e2.norm() + (e2 - e1).norm()) / 3.0;
+    for (int k = 0; k < 3; ++k)
+      directed[{m_base.faces(t, k), m_base.faces(t, (k + 1) % 3)}] = {t, k};
+  }
+  m_neighbours.resize(n, 3);
+  for (Eigen::Index t = 0; t < n; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      m_neighbours(t, k) =
+          static_cast<int>(directed.at({m_base.faces(t, (k + 1) % 3), m_base.faces(t, k)}).first);
+    }
+  }
+}
+
+void PatchSurface::set_bumps(Eigen::Index t, std::vector<PatchBump> bumps) {
+  std::vector<Perturbation> perturbations;
+  for (std::size_t i = 0; i < bumps.size(); ++i) {
+    const PatchBump& b = bumps[i];
+    const std::string where = m_what + ": triangle " + std::to_string(t) + ", bump " + std::to_string(i);
+    const Eigen::Matrix2d S = 0.5 * (b.shape_uv + b.shape_uv.transpose());
+    if (!std::isfinite(b.amplitude_mm) || !(S(0, 0) > 0.0) || !(S.determinant() > 0.0)) {
+      throw InputError(where + ": expected a positive definite shape and a finite amplitude");
+    }
+    // The ellipse {d^T S d <= 1} around c lies inside u >= 0, v >= 0, u + v <= 1 when each
+    // linear function g . p stays on the inner side at its extreme, g . c -+ sqrt(g^T S^-1 g).
+    const Eigen::Matrix2d inverse = S.inverse();
+    const Eigen::Vector2d c = b.center_uv;
+    const double slack = 1e-12;
+    if (c.x() - std::sqrt(inverse(0, 0)) < -slack || c.y() - std::sqrt(inverse(1, 1)) < -slack ||
+        1.0 - c.sum() - std::sqrt(inverse.sum()) < -slack) {
+      throw InputError(where + ": expected its ellipse inside the triangle, found it crossing an edge");
+    }
+    perturbations.push_back({bump_quadric(b), b.amplitude_mm});
+  }
+  m_bumps[static_cast<std::size_t>(t)] = std::move(bumps);
+  m_perturbations[static_cast<std::size_t>(t)] = std::move(perturbations);
+}
+
+void PatchSurface::set_positions(const Eigen::MatrixX3d& positions) {
+  if (positions.rows() != m_base.vertex_count()) {
+    throw InputError(m_what + ": expected " + std::to_string(m_base.vertex_count()) +
+                     " vertex positions, found " + std::to_string(positions.rows()));
+  }
+  m_base.vertices = positions;
+}
+
+PatchFrame PatchSurface::frame(Eigen::Index t) const {
+  PatchFrame f;
+  f.origin = corner(m_base, t, 0);
+  f.edge1 = corner(m_base, t, 1) - f.origin;
+  f.edge2 = corner(m_base, t, 2) - f.origin;
+  f.normal = f.edge1.cross(f.edge2).normalized();
+  f.length_scale = m_rest_triangles[static_cast<std::size_t>(t)].length_scale;
+  Eigen::Matrix3d world_from_local;
+  world_from_local << f.edge1, f.edge2, f.length_scale * f.normal;
+  f.local_from_world = world_from_local.inverse();
+  return f;
+}
+
+Eigen::Vector3d PatchSurface::local_coordinates(Eigen::Index t, const Eigen::Vector3d& x) const {
+  const PatchFrame f = frame(t);
+  return f.local_from_world * (x - f.origin);
+}
+
+double PatchSurface::value(Eigen::Index t, const Eigen::Vector3d& x) const {
+  const PatchFrame f = frame(t);
+  const Eigen::Vector3d uvw = f.local_from_world * (x - f.origin);
+  double F = -f.length_scale * uvw.z();
+  for (const auto& p : m_perturbations[static_cast<std::size_t>(t)]) {
+    const double q = p.quadric.value(uvw);
+    if (q > 0.0) F += p.amplitude_mm * q * q * q;
+  }
+  return F;
+}
+
+Eigen::Vector3d PatchSurface::gradient(Eigen::Index t, const Eigen::Vector3d& x) const {
+  const PatchFrame f = frame(t);
+  const Eigen::Vector3d uvw = f.local_from_world * (x - f.origin);
+  Eigen::Vector3d d_local(0.0, 0.0, -f.length_scale);
+  for (const auto& p : m_perturbations[static_cast<std::size_t>(t)]) {
+    const double q = p.quadric.value(uvw);
+    if (q > 0.0) d_local += 3.0 * p.amplitude_mm * q * q * p.quadric.gradient(uvw);
+  }
+  return f.local_from_world.transpose() * d_local;
+}
+
+double PatchSurface::height(Eigen::Index t, double u, double v) const {
+  const auto& perturbations = m_perturbations[static_cast<std::size_t>(t)];
+  if (perturbations.empty()) return 0.0;
+  const PatchFrame f = frame(t);
+  const double L = f.length_scale;
+  // g(h) = F(b + h n) = -h + sum a Q(u, v, h / L)^3; the bracket holds every root of bounded bumps.
+  auto g = [&](double h, double* slope) {
+    const Eigen::Vector3d uvw(u, v, h / L);
+    double value = -h, derivative = -1.0;
+    for (const auto& p : perturbations) {
+      const double q = p.quadric.value(uvw);
+      if (q <= 0.0) continue;
+      value += p.amplitude_mm * q * q * q;
+      derivative += 3.0 * p.amplitude_mm * q * q * p.quadric.gradient(uvw).z() / L;
+    }
+    if (slope) *slope = derivative;
+    return value;
+  };
+  double h = g(0.0, nullptr); // exact when the quadrics do not depend on w
+  double slope = 0.0;
+  double residual = g(h, &slope);
+  if (std::abs(residual) <= 1e-14 * (L + std::abs(h))) return h;
+  double bound = L;
+  for (const auto& p : perturbations)
+    bound += std::abs(p.amplitude_mm) * 8.0;
+  double lo = -bound, hi = bound; // g(lo) > 0 > g(hi) when the bumps are bounded there
+  for (int i = 0; i < 100; ++i) {
+    (residual > 0.0 ? lo : hi) = h;
+    double next = h - residual / slope;
+    if (!(slope < 0.0) || !(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    if (std::abs(next - h) <= 1e-14 * (L + std::abs(h))) return next;
+    h = next;
+    residual = g(h, &slope);
+  }
+  return h;
+}
+
+Eigen::Vector3d PatchSurface::surface_point(Eigen::Index t, double u, double v) const {
+  const PatchFrame f = frame(t);
+  return f.origin + u * f.edge1 + v * f.edge2 + height(t, u, v) * f.normal;
+}
+
+std::array<Plane, 3> PatchSurface::clipping_planes(Eigen::Index t) const {
+  std::array<Plane, 3> planes;
+  const Eigen::Vector3d normal = frame(t).normal;
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d a = corner(m_base, t, k), b = corner(m_base, t, (k + 1) % 3),
+                          c = corner(m_base, t, (k + 2) % 3);
+    const Eigen::Vector3d mean_normal = (normal + frame(m_neighbours(t, k)).normal).normalized();
+    Eigen::Vector3d plane_normal = (b - a).cross(mean_normal).normalized();
+    if (plane_normal.dot(c - a) < 0.0) plane_normal = -plane_normal;
+    planes[static_cast<std::size_t>(k)] = Plane{plane_normal, plane_normal.dot(a)};
+  }
+  return planes;
+}
+
+bool PatchSurface::in_wedge(Eigen::Index t, const Eigen::Vector3d& x, double tolerance_mm) const {
+  for (const Plane& p : clipping_planes(t)) {
+    if (p.signed_distance(x) < -tolerance_mm) return false;
+  }
+  return true;
+}
+
+double PatchSurface::volume() const {
+  double six_volume = 0.0, bumps = 0.0;
+  for (Eigen::Index t = 0; t < m_base.face_count(); ++t) {
+    const Eigen::Vector3d a = corner(m_base, t, 0), b = corner(m_base, t, 1), c = corner(m_base, t, 2);
+    six_volume += a.dot(b.cross(c));
+    // A bump's height a (1 - r^2)^3 integrates to a / 4 times its ellipse's area, which is its
+    // (u, v) area times the current |e1 x e2|.
+    const double jacobian = (b - a).cross(c - a).norm();
+    for (const PatchBump& bump : m_bumps[static_cast<std::size_t>(t)]) {
+      bumps += bump.amplitude_mm * jacobian * bump.uv_area() / 4.0;
+    }
+  }
+  return six_volume / 6.0 + bumps;
+}
+
+std::vector<Eigen::Vector3d> PatchSurface::patch_grid_points(Eigen::Index t, int level) const {
+  const int n = 1 << level;
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(static_cast<std::size_t>((n + 1) * (n + 2) / 2));
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i + j <= n; ++i)
+      points.push_back(surface_point(t, double(i) / n, double(j) / n));
+  }
+  return points;
+}
+
+} // namespace phantasm

@@ -1,0 +1,197 @@
+// Adaptive, watertight tessellation of a patch surface.
+
+#include "anatomy/patch_surface.hpp"
+
+#include <algorithm>
+#include <map>
+
+namespace phantasm {
+namespace {
+
+// 2^8 segments per base edge; a patch that needs more reports its remaining deviation.
+constexpr int k_max_level = 8;
+
+int grid_index(int i, int j, int n) {
+  // Row j holds n + 1 - j points; rows before j hold sum_{r<j} (n + 1 - r).
+  return j * (n + 1) - j * (j - 1) / 2 + i;
+}
+
+} // namespace
+
+int PatchSurface::level_for(Eigen::Index t, double max_deviation_mm, double* deviation) const {
+  *deviation = 0.0;
+  if (m_perturbations[static_cast<std::size_t>(t)].empty()) return 0;
+  for (int level = 0; level <= k_max_level; ++level) {
+    // Deviation of the level-`level` interpolation, measured at the midpoints of its edges.
+    const int fine = 2 << level;
+    const auto points = patch_grid_points(t, level + 1);
+    double worst = 0.0;
+    for (int j = 0; j <= fine; ++j) {
+      for (int i = 0; i + j <= fine; ++i) {
+        if (i % 2 == 0 && j % 2 == 0) continue;
+        int ai, aj, bi, bj;
+        if (j % 2 == 0) {
+          ai = i - 1, aj = j, bi = i + 1, bj = j;
+        } else if (i % 2 == 0) {
+          ai = i, aj = j - 1, bi = i, bj = j + 1;
+        } else {
+          ai = i + 1, aj = j - 1, bi = i - 1, bj = j + 1;
+        }
+        const Eigen::Vector3d mid = 0.5 * (points[static_cast<std::size_t>(grid_index(ai, aj, fine))] +
+                                           points[static_cast<std::size_t>(grid_index(bi, bj, fine))]);
+        worst = std::max(worst, (points[static_cast<std::size_t>(grid_index(i, j, fine))] - mid).norm());
+      }
+    }
+    // Edge midpoints miss bumps that sit inside a sub-triangle (all of them at level 0, where
+    // the midpoints lie on the base edges): check the centroids too.
+    const int n = 1 << level;
+    const auto corners = patch_grid_points(t, level);
+    auto check_centroid = [&](int ai, int aj, int bi, int bj, int ci, int cj) {
+      const Eigen::Vector3d mean = (corners[static_cast<std::size_t>(grid_index(ai, aj, n))] +
+                                    corners[static_cast<std::size_t>(grid_index(bi, bj, n))] +
+                                    corners[static_cast<std::size_t>(grid_index(ci, cj, n))]) /
+                                   3.0;
+      const Eigen::Vector3d actual = surface_point(t, (ai + bi + ci) / (3.0 * n), (aj + bj + cj) / (3.0 * n));
+      worst = std::max(worst, (actual - mean).norm());
+    };
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i + j < n; ++i) {
+        check_centroid(i, j, i + 1, j, i, j + 1);
+        if (i + j < n - 1) check_centroid(i + 1, j, i + 1, j + 1, i, j + 1);
+      }
+    }
+    *deviation = worst;
+    if (worst <= max_deviation_mm) return level;
+  }
+  return k_max_level; // the finest level; *deviation tells how far it still is
+}
+
+TriangleMesh PatchSurface::tessellate(double max_deviation_mm, TessellationStats* stats) const {
+  const Eigen::Index nf = m_base.face_count();
+  std::vector<int> level(static_cast<std::size_t>(nf));
+  TessellationStats local_stats;
+  for (Eigen::Index t = 0; t < nf; ++t) {
+    double deviation = 0.0;
+    level[static_cast<std::size_t>(t)] = level_for(t, max_deviation_mm, &deviation);
+    local_stats.max_level = std::max(local_stats.max_level, level[static_cast<std::size_t>(t)]);
+    local_stats.max_deviation_mm = std::max(local_stats.max_deviation_mm, deviation);
+  }
+  if (stats) *stats = local_stats;
+
+  std::vector<Eigen::Vector3d> points;
+  for (Eigen::Index v = 0; v < m_base.vertex_count(); ++v)
+    points.push_back(m_base.vertex(v));
+
+  // Every undirected edge is split into as many segments as its finer neighbour needs. Its
+  // points are computed once, from the lower vertex index, so both sides share them exactly;
+  // bumps vanish on base edges, so the surface there is the straight edge.
+  struct EdgeSplit {
+    int segments;
+    int first_point;
+  };
+  std::map<std::pair<int, int>, EdgeSplit> edges;
+  for (Eigen::Index t = 0; t < nf; ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const auto key = std::minmax(m_base.faces(t, k), m_base.faces(t, (k + 1) % 3));
+      if (edges.count(key)) continue;
+      const int finer =
+          std::max(level[static_cast<std::size_t>(t)], level[static_cast<std::size_t>(m_neighbours(t, k))]);
+      const int segments = 1 << finer;
+      edges[key] = {segments, static_cast<int>(points.size())};
+      const Eigen::Vector3d a = m_base.vertex(key.first), b = m_base.vertex(key.second);
+      for (int s = 1; s < segments; ++s)
+        points.push_back(a + (double(s) / segments) * (b - a));
+    }
+  }
+  // The point at fraction numerator/denominator along the directed edge (from, to).
+  auto edge_point = [&](int from, int to, int numerator, int denominator) {
+    if (numerator == 0) return from;
+    if (numerator == denominator) return to;
+    const EdgeSplit& e = edges.at(std::minmax(from, to));
+    const int steps = numerator * (e.segments / denominator);
+    return e.first_point + (from < to ? steps : e.segments - steps) - 1;
+  };
+
+  std::vector<Eigen::Vector3i> triangles;
+  for (Eigen::Index t = 0; t < nf; ++t) {
+    const int n = 1 << level[static_cast<std::size_t>(t)];
+    const int f0 = m_base.faces(t, 0), f1 = m_base.faces(t, 1), f2 = m_base.faces(t, 2);
+    std::vector<int> id(static_cast<std::size_t>((n + 1) * (n + 2) / 2));
+    for (int j = 0; j <= n; ++j) {
+      for (int i = 0; i + j <= n; ++i) {
+        int global;
+        if (j == 0) {
+          global = edge_point(f0, f1, i, n);
+        } else if (i == 0) {
+          global = edge_point(f0, f2, j, n);
+        } else if (i + j == n) {
+          global = edge_point(f1, f2, j, n);
+        } else {
+          global = static_cast<int>(points.size());
+          points.push_back(surface_point(t, double(i) / n, double(j) / n));
+        }
+        id[static_cast<std::size_t>(grid_index(i, j, n))] = global;
+      }
+    }
+    // The finer points of a base edge between two consecutive grid points (exclusive), in order.
+    auto between = [&](int ia, int ja, int ib, int jb) {
+      std::vector<int> inner;
+      int from, to, na, nb;
+      if (ja == 0 && jb == 0) {
+        from = f0, to = f1, na = ia, nb = ib;
+      } else if (ia == 0 && ib == 0) {
+        from = f0, to = f2, na = ja, nb = jb;
+      } else if (ia + ja == n && ib + jb == n) {
+        from = f1, to = f2, na = ja, nb = jb;
+      } else {
+        return inner;
+      }
+      const int segments = edges.at(std::minmax(from, to)).segments;
+      const int m = segments / n;
+      const int direction = nb > na ? 1 : -1;
+      for (int s = 1; s < m; ++s)
+        inner.push_back(edge_point(from, to, na * m + direction * s, segments));
+      return inner;
+    };
+    auto emit = [&](std::array<std::pair<int, int>, 3> corners) {
+      std::vector<int> polygon;
+      for (int k = 0; k < 3; ++k) {
+        const auto [ia, ja] = corners[static_cast<std::size_t>(k)];
+        const auto [ib, jb] = corners[static_cast<std::size_t>((k + 1) % 3)];
+        polygon.push_back(id[static_cast<std::size_t>(grid_index(ia, ja, n))]);
+        for (int p : between(ia, ja, ib, jb))
+          polygon.push_back(p);
+      }
+      if (polygon.size() == 3) {
+        triangles.push_back({polygon[0], polygon[1], polygon[2]});
+        return;
+      }
+      // A fan from the sub-triangle's centre keeps the finer edge points of the neighbour.
+      double cu = 0.0, cv = 0.0;
+      for (const auto& [i, j] : corners)
+        cu += i, cv += j;
+      const int centre = static_cast<int>(points.size());
+      points.push_back(surface_point(t, cu / (3.0 * n), cv / (3.0 * n)));
+      for (std::size_t k = 0; k < polygon.size(); ++k) {
+        triangles.push_back({polygon[k], polygon[(k + 1) % polygon.size()], centre});
+      }
+    };
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i + j < n; ++i) {
+        emit({{{i, j}, {i + 1, j}, {i, j + 1}}});
+        if (i + j < n - 1) emit({{{i + 1, j}, {i + 1, j + 1}, {i, j + 1}}});
+      }
+    }
+  }
+
+  TriangleMesh mesh;
+  mesh.vertices.resize(static_cast<Eigen::Index>(points.size()), 3);
+  for (std::size_t i = 0; i < points.size(); ++i)
+    mesh.vertices.row(static_cast<Eigen::Index>(i)) = points[i].transpose();
+  mesh.faces.resize(static_cast<Eigen::Index>(triangles.size()), 3);
+  for (std::size_t i = 0; i < triangles.size(); ++i)
+    mesh.faces.row(static_cast<Eigen::Index>(i)) = triangles[i].transpose();
+  return mesh;
+}
+
+} // namespace phantasm

@@ -1,0 +1,267 @@
+#include "anatomy/patch_surface.hpp"
+#include "anatomy/triangle_mesh.hpp"
+#include "core/error.hpp"
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <random>
+
+using namespace phantasm;
+
+namespace {
+
+TriangleMesh sphere_mesh(int level, double radius) {
+  TriangleMesh mesh = unit_icosphere(level);
+  mesh.vertices *= radius;
+  return mesh;
+}
+
+/// A sphere base mesh whose patches carry a few bumps of both signs.
+PatchSurface bumpy_sphere() {
+  PatchSurface surface(sphere_mesh(1, 30.0), "bumpy sphere");
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> amplitude(-1.0, 1.0);
+  for (Eigen::Index t = 0; t < surface.patch_count(); ++t) {
+    const TriangleMesh& base = surface.base_mesh();
+    const Eigen::Vector3d e1 = base.vertex(base.faces(t, 1)) - base.vertex(base.faces(t, 0));
+    const Eigen::Vector3d e2 = base.vertex(base.faces(t, 2)) - base.vertex(base.faces(t, 0));
+    Eigen::Matrix2d metric;
+    metric << e1.dot(e1), e1.dot(e2), e1.dot(e2), e2.dot(e2);
+    const double inradius = e1.cross(e2).norm() / (e1.norm() + e2.norm() + (e2 - e1).norm());
+    PatchBump centre = PatchBump::disc({1.0 / 3.0, 1.0 / 3.0}, 0.9 * inradius, metric);
+    centre.amplitude_mm = amplitude(random);
+    PatchBump side = PatchBump::disc({0.5, 0.25}, 0.5 * inradius, metric);
+    side.amplitude_mm = amplitude(random);
+    surface.set_bumps(t, {centre, side});
+  }
+  return surface;
+}
+
+} // namespace
+
+TEST(PatchSurface, GradientMatchesCentralFiniteDifferences) {
+  PatchSurface surface = bumpy_sphere();
+  // Move the vertices so the frames are not the rest frames.
+  Eigen::MatrixX3d moved = surface.base_mesh().vertices;
+  moved.col(0) *= 1.2;
+  moved.col(2) *= 0.9;
+  surface.set_positions(moved);
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> coordinate(0.05, 0.6), height(-1.0, 1.0);
+  const double h = 1e-5;
+  for (Eigen::Index t = 0; t < surface.patch_count(); t += 7) {
+    const PatchFrame f = surface.frame(t);
+    for (int sample = 0; sample < 5; ++sample) {
+      const double u = coordinate(random), v = 0.5 * coordinate(random);
+      const Eigen::Vector3d x = f.origin + u * f.edge1 + v * f.edge2 + height(random) * f.normal;
+      Eigen::Vector3d numeric;
+      for (int a = 0; a < 3; ++a) {
+        Eigen::Vector3d dx = Eigen::Vector3d::Zero();
+        dx[a] = h;
+        numeric[a] = (surface.value(t, x + dx) - surface.value(t, x - dx)) / (2.0 * h);
+      }
+      EXPECT_LT((surface.gradient(t, x) - numeric).norm(), 1e-6 * (1.0 + numeric.norm())) << "triangle " << t;
+    }
+  }
+}
+
+TEST(PatchSurface, SurfacePointsAreRootsOfThePatchFunction) {
+  const PatchSurface surface = bumpy_sphere();
+  for (Eigen::Index t = 0; t < surface.patch_count(); t += 5) {
+    for (double u : {0.1, 0.3, 0.5}) {
+      const Eigen::Vector3d p = surface.surface_point(t, u, 0.3);
+      EXPECT_NEAR(surface.value(t, p), 0.0, 1e-12);
+    }
+  }
+}
+
+TEST(PatchSurface, GeneralQuadricsWithHeightTermsAreSolvedByNewton) {
+  Quadric q;
+  q.c = {1.0, 0.0, 0.0, 0.5, -1.0, 0.0, -1.0, 0.0, 0.0, -2.0};
+  const Eigen::Vector3d p(0.2, -0.1, 0.3);
+  const double h = 1e-6;
+  for (int a = 0; a < 3; ++a) {
+    Eigen::Vector3d d = Eigen::Vector3d::Zero();
+    d[a] = h;
+    EXPECT_NEAR(q.gradient(p)[a], (q.value(p + d) - q.value(p - d)) / (2 * h), 1e-8);
+  }
+}
+
+TEST(PatchSurface, NeighbouringPatchTessellationsShareTheirBoundary) {
+  const PatchSurface surface = bumpy_sphere();
+  const TriangleMesh tessellation = surface.tessellate(0.05);
+  // Watertight: every edge of the tessellation is shared by exactly two triangles, in opposite
+  // directions, so neighbouring patches meet without gaps or T-junctions.
+  std::map<std::pair<int, int>, int> directed;
+  for (Eigen::Index t = 0; t < tessellation.face_count(); ++t) {
+    for (int k = 0; k < 3; ++k)
+      ++directed[{tessellation.faces(t, k), tessellation.faces(t, (k + 1) % 3)}];
+  }
+  for (const auto& [edge, count] : directed) {
+    ASSERT_EQ(count, 1);
+    ASSERT_EQ(directed.count({edge.second, edge.first}), 1u)
+        << "open edge " << edge.first << "-" << edge.second;
+  }
+  EXPECT_NO_THROW(check_closed_manifold(tessellation, "tessellation"));
+  // Each patch evaluated on its own gives the same points along a shared edge (the straight
+  // base edge): gap below 1e-9 of the edge length.
+  const TriangleMesh& base = surface.base_mesh();
+  const int n = 16;
+  for (Eigen::Index t = 0; t < surface.patch_count(); ++t) {
+    const Eigen::Vector3d a = base.vertex(base.faces(t, 0)), b = base.vertex(base.faces(t, 1));
+    for (int i = 0; i <= n; ++i) {
+      const Eigen::Vector3d p = surface.surface_point(t, double(i) / n, 0.0);
+      const Eigen::Vector3d on_edge = a + (double(i) / n) * (b - a);
+      EXPECT_LT((p - on_edge).norm(), 1e-9 * (b - a).norm());
+    }
+  }
+}
+
+TEST(PatchSurface, TessellationStaysWithinTheRequestedDeviation) {
+  const PatchSurface surface = bumpy_sphere();
+  for (double tolerance : {0.2, 0.05, 0.02}) {
+    TessellationStats stats;
+    const TriangleMesh mesh = surface.tessellate(tolerance, &stats);
+    EXPECT_LE(stats.max_deviation_mm, tolerance);
+    // The tessellation's volume converges to the exact patch volume as the tolerance shrinks.
+    const double error = std::abs(enclosed_volume(mesh) - surface.volume()) / surface.volume();
+    EXPECT_LT(error, 2e-3 * tolerance / 0.01) << tolerance;
+  }
+}
+
+TEST(PatchSurface, ExactBumpVolumeMatchesAFineTessellation) {
+  PatchSurface surface = bumpy_sphere();
+  const double fine = enclosed_volume(surface.tessellate(1e-4));
+  EXPECT_NEAR(surface.volume(), fine, 1e-6 * fine);
+  // Still exact after the vertices move (bumps follow their triangles affinely).
+  Eigen::MatrixX3d moved = surface.base_mesh().vertices;
+  moved.col(1) *= 1.3;
+  surface.set_positions(moved);
+  const double moved_fine = enclosed_volume(surface.tessellate(1e-4));
+  EXPECT_NEAR(surface.volume(), moved_fine, 1e-6 * moved_fine);
+}
+
+TEST(PatchSurface, PlainSphereVolumeErrorFallsAtOrderTwo) {
+  const double radius = 10.0, exact = 4.0 / 3.0 * M_PI * radius * radius * radius;
+  std::vector<double> errors, sizes;
+  for (int level = 1; level <= 5; ++level) {
+    const PatchSurface surface(sphere_mesh(level, radius), "sphere");
+    errors.push_back(std::abs(surface.volume() - exact) / exact);
+    sizes.push_back(mean_edge_length(surface.base_mesh()));
+  }
+  for (std::size_t i = 1; i < errors.size(); ++i) {
+    const double order = std::log(errors[i - 1] / errors[i]) / std::log(sizes[i - 1] / sizes[i]);
+    EXPECT_NEAR(order, 2.0, 0.1) << "level " << i + 1;
+  }
+}
+
+TEST(PatchSurface, ClippingPlanesAreSharedByNeighboursAndContainTheirEdge) {
+  const PatchSurface surface = bumpy_sphere();
+  const TriangleMesh& base = surface.base_mesh();
+  for (Eigen::Index t = 0; t < surface.patch_count(); ++t) {
+    const auto planes = surface.clipping_planes(t);
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d a = base.vertex(base.faces(t, k)), b = base.vertex(base.faces(t, (k + 1) % 3));
+      EXPECT_NEAR(planes[static_cast<std::size_t>(k)].signed_distance(a), 0.0, 1e-9);
+      EXPECT_NEAR(planes[static_cast<std::size_t>(k)].signed_distance(b), 0.0, 1e-9);
+    }
+    // The patch's own surface points lie in its wedge.
+    EXPECT_TRUE(surface.in_wedge(t, surface.surface_point(t, 1.0 / 3.0, 1.0 / 3.0)));
+  }
+}
+
+TEST(PatchSurface, BumpsThatLeaveTheirTriangleAreRejected) {
+  PatchSurface surface(sphere_mesh(0, 10.0), "sphere");
+  const TriangleMesh& base = surface.base_mesh();
+  const Eigen::Vector3d e1 = base.vertex(base.faces(0, 1)) - base.vertex(base.faces(0, 0));
+  Eigen::Matrix2d metric = Eigen::Matrix2d::Identity() * e1.squaredNorm();
+  metric(0, 1) = metric(1, 0) = 0.5 * e1.squaredNorm(); // equilateral
+  EXPECT_NO_THROW(surface.set_bumps(0, {PatchBump::disc({1.0 / 3.0, 1.0 / 3.0}, 0.28 * e1.norm(), metric)}));
+  EXPECT_THROW(surface.set_bumps(0, {PatchBump::disc({1.0 / 3.0, 1.0 / 3.0}, 0.30 * e1.norm(), metric)}),
+               InputError);
+  EXPECT_THROW(surface.set_bumps(0, {PatchBump::disc({0.05, 0.5}, 0.1 * e1.norm(), metric)}), InputError);
+}
+
+namespace {
+std::string error_of(const TriangleMesh& mesh) {
+  try {
+    check_closed_manifold(mesh, "organ test");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+} // namespace
+
+TEST(BaseMeshValidation, EachKindOfDefectGetsItsOwnMessageNamingTheElement) {
+  const TriangleMesh good = sphere_mesh(1, 10.0);
+  EXPECT_EQ(error_of(good), "");
+
+  TriangleMesh open = good;
+  open.faces.conservativeResize(open.faces.rows() - 1, 3);
+  EXPECT_NE(error_of(open).find("found an open edge (boundary)"), std::string::npos) << error_of(open);
+
+  TriangleMesh flipped = good;
+  flipped.faces.row(5) = Eigen::Vector3i(good.faces(5, 0), good.faces(5, 2), good.faces(5, 1));
+  EXPECT_NE(error_of(flipped).find("(inconsistent orientation)"), std::string::npos) << error_of(flipped);
+
+  TriangleMesh inward = good;
+  inward.faces.col(1).swap(inward.faces.col(2));
+  EXPECT_NE(error_of(inward).find("found an inward orientation"), std::string::npos) << error_of(inward);
+
+  TriangleMesh repeated = good;
+  repeated.faces(3, 1) = repeated.faces(3, 0);
+  EXPECT_NE(error_of(repeated).find("organ test: triangle 3: expected three distinct vertices"),
+            std::string::npos)
+      << error_of(repeated);
+
+  TriangleMesh flat = good;
+  flat.vertices.row(flat.faces(2, 2)) =
+      0.5 * (flat.vertices.row(flat.faces(2, 0)) + flat.vertices.row(flat.faces(2, 1)));
+  EXPECT_NE(error_of(flat).find("degenerate one"), std::string::npos) << error_of(flat);
+
+  TriangleMesh out_of_range = good;
+  out_of_range.faces(0, 0) = 100000;
+  EXPECT_NE(error_of(out_of_range).find("triangle 0: expected vertex indices in [0, 41], found 100000"),
+            std::string::npos)
+      << error_of(out_of_range);
+
+  // A triangle fin glued onto an edge: three triangles share that edge.
+  TriangleMesh fin = good;
+  fin.vertices.conservativeResize(fin.vertices.rows() + 1, 3);
+  fin.vertices.row(fin.vertices.rows() - 1) = Eigen::RowVector3d(30, 30, 30);
+  fin.faces.conservativeResize(fin.faces.rows() + 1, 3);
+  fin.faces.row(fin.faces.rows() - 1) =
+      Eigen::Vector3i(good.faces(0, 1), good.faces(0, 0), int(fin.vertices.rows() - 1));
+  EXPECT_NE(error_of(fin).find("(non-manifold)"), std::string::npos) << error_of(fin);
+
+  // Two spheres touching at one shared vertex: every edge is fine, the vertex is not.
+  TriangleMesh pinched = good;
+  TriangleMesh other = good;
+  other.vertices.rowwise() += Eigen::RowVector3d(20, 0, 0);
+  const int offset = static_cast<int>(pinched.vertices.rows());
+  pinched.vertices.conservativeResize(offset + other.vertices.rows(), 3);
+  pinched.vertices.bottomRows(other.vertices.rows()) = other.vertices;
+  Eigen::MatrixX3i other_faces = other.faces.array() + offset;
+  // Glue: the other sphere's vertex 0 becomes this sphere's vertex 0.
+  const Eigen::Index glued = 0;
+  for (Eigen::Index i = 0; i < other_faces.size(); ++i) {
+    if (other_faces.data()[i] == offset + glued) other_faces.data()[i] = static_cast<int>(glued);
+  }
+  pinched.faces.conservativeResize(pinched.faces.rows() + other_faces.rows(), 3);
+  pinched.faces.bottomRows(other_faces.rows()) = other_faces;
+  EXPECT_NE(error_of(pinched).find("vertex 0: expected its"), std::string::npos) << error_of(pinched);
+  EXPECT_NE(error_of(pinched).find("(non-manifold vertex)"), std::string::npos);
+
+  TriangleMesh tiny;
+  tiny.vertices = good.vertices;
+  tiny.faces = good.faces.topRows(2);
+  EXPECT_NE(error_of(tiny).find("expected a closed surface of at least 4 triangles"), std::string::npos);
+
+  TriangleMesh nan = good;
+  nan.vertices(0, 0) = std::nan("");
+  EXPECT_NE(error_of(nan).find("NaN"), std::string::npos);
+}
