@@ -12,7 +12,7 @@ bool WorldBox::intersects(const WorldBox& other) const {
 }
 
 std::optional<WorldBox> analytic_shape_bounds(const ShapeSettings& shape) {
-  if (shape.kind != ShapeKind::ellipsoid && shape.kind != ShapeKind::superquadric) return std::nullopt;
+  if (shape.kind == ShapeKind::mesh || shape.kind == ShapeKind::label_volume) return std::nullopt;
   constexpr double degree = M_PI / 180.0;
   const Eigen::Matrix3d rotation =
       (Eigen::AngleAxisd(shape.rotation_deg.z() * degree, Eigen::Vector3d::UnitZ()) *
@@ -25,9 +25,11 @@ std::optional<WorldBox> analytic_shape_bounds(const ShapeSettings& shape) {
     for (int a = 0; a < 3; ++a) {
       half_extent[a] = (shape.radii_mm.asDiagonal() * rotation.row(a).transpose()).norm();
     }
-  } else {
+  } else if (shape.kind == ShapeKind::superquadric) {
     // A superquadric lies inside its box of radii; bound the rotated box.
     half_extent = rotation.cwiseAbs() * shape.radii_mm;
+  } else {
+    half_extent = rotation.cwiseAbs() * (0.5 * shape.size_mm);
   }
   return WorldBox{shape.center_mm - half_extent, shape.center_mm + half_extent};
 }

@@ -116,7 +116,29 @@ private:
   double m_e1, m_e2;
 };
 
+class Box final : public FramedShape {
+public:
+  Box(const Eigen::Vector3d& c, const Eigen::Vector3d& size, const Eigen::Matrix3d& rot)
+      : FramedShape(c, 0.5 * size, rot) {}
+  double value(const Eigen::Vector3d& x) const override { return (m_radii - local(x).cwiseAbs()).minCoeff(); }
+  Eigen::Vector3d gradient(const Eigen::Vector3d& x) const override {
+    const Eigen::Vector3d l = local(x);
+    Eigen::Index axis = 0;
+    (m_radii - l.cwiseAbs()).minCoeff(&axis);
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    g[axis] = l[axis] >= 0.0 ? -1.0 : 1.0;
+    return m_rotation * g;
+  }
+  double bounding_radius() const override { return m_radii.norm(); }
+  double volume() const override { return 8.0 * m_radii.prod(); }
+};
+
 } // namespace
+
+std::unique_ptr<ImplicitShape> make_box(const Eigen::Vector3d& center_mm, const Eigen::Vector3d& size_mm,
+                                        const Eigen::Matrix3d& rotation) {
+  return std::make_unique<Box>(center_mm, size_mm, rotation);
+}
 
 std::unique_ptr<ImplicitShape> make_ellipsoid(const Eigen::Vector3d& center_mm,
                                               const Eigen::Vector3d& radii_mm,

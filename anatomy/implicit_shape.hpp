@@ -39,6 +39,11 @@ std::unique_ptr<ImplicitShape> make_superquadric(const Eigen::Vector3d& center_m
                                                  const Eigen::Vector3d& radii_mm, double exponent_1,
                                                  double exponent_2, const Eigen::Matrix3d& rotation);
 
+/// Box of edge lengths `size_mm` along the columns of `rotation`: value = min_i (size_i / 2 - |x_i|),
+/// the signed distance inside (exact there) and its lower bound outside.
+std::unique_ptr<ImplicitShape> make_box(const Eigen::Vector3d& center_mm, const Eigen::Vector3d& size_mm,
+                                        const Eigen::Matrix3d& rotation);
+
 /// Rotation about x, then y, then z, by angles in degrees (the scene's rotation_deg).
 Eigen::Matrix3d rotation_from_degrees(const Eigen::Vector3d& rotation_deg);
 

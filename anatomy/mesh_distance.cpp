@@ -61,7 +61,9 @@ MeshDistance::MeshDistance(const TriangleMesh& mesh) : m_mesh(mesh) {
       const Eigen::Vector3d e1 = (corner[(k + 1) % 3] - corner[k]).normalized();
       const Eigen::Vector3d e2 = (corner[(k + 2) % 3] - corner[k]).normalized();
       m_vertex_normals.row(mesh.faces(t, k)) += std::acos(std::clamp(e1.dot(e2), -1.0, 1.0)) * n.transpose();
-      edge_sum[std::minmax(mesh.faces(t, k), mesh.faces(t, (k + 1) % 3))] += n;
+      // try_emplace with an explicit zero: Eigen vectors are not zero-initialized by default.
+      edge_sum.try_emplace(std::minmax(mesh.faces(t, k), mesh.faces(t, (k + 1) % 3)), Eigen::Vector3d::Zero())
+          .first->second += n;
     }
     const Eigen::Vector3d lo = corner[0].cwiseMin(corner[1]).cwiseMin(corner[2]);
     const Eigen::Vector3d hi = corner[0].cwiseMax(corner[1]).cwiseMax(corner[2]);
@@ -96,22 +98,23 @@ MeshDistance::Closest MeshDistance::closest(const Eigen::Vector3d& x) const {
   Closest best{std::numeric_limits<double>::infinity(), x, -1, 0};
   const Eigen::Vector3i centre = cell_of(x);
   // Search growing shells of cells until the nearest candidate is closer than the shell.
+  auto visit = [&](int cx, int cy, int cz) {
+    if (cz < 0 || cy < 0 || cx < 0 || cz >= m_cells.z() || cy >= m_cells.y() || cx >= m_cells.x()) return;
+    for (Eigen::Index t : bucket({cx, cy, cz})) {
+      const auto [point, feature] =
+          closest_on_triangle(x, m_mesh.vertex(m_mesh.faces(t, 0)), m_mesh.vertex(m_mesh.faces(t, 1)),
+                              m_mesh.vertex(m_mesh.faces(t, 2)));
+      const double d2 = (point - x).squaredNorm();
+      if (d2 < best.distance_squared) best = {d2, point, t, feature};
+    }
+  };
   for (int ring = 0;; ++ring) {
-    for (int z = centre.z() - ring; z <= centre.z() + ring; ++z) {
-      for (int y = centre.y() - ring; y <= centre.y() + ring; ++y) {
-        for (int xx = centre.x() - ring; xx <= centre.x() + ring; ++xx) {
-          const bool on_shell = std::max({std::abs(z - centre.z()), std::abs(y - centre.y()),
-                                          std::abs(xx - centre.x())}) == ring;
-          if (!on_shell || z < 0 || y < 0 || xx < 0 || z >= m_cells.z() || y >= m_cells.y() ||
-              xx >= m_cells.x())
-            continue;
-          for (Eigen::Index t : bucket({xx, y, z})) {
-            const auto [point, feature] =
-                closest_on_triangle(x, m_mesh.vertex(m_mesh.faces(t, 0)), m_mesh.vertex(m_mesh.faces(t, 1)),
-                                    m_mesh.vertex(m_mesh.faces(t, 2)));
-            const double d2 = (point - x).squaredNorm();
-            if (d2 < best.distance_squared) best = {d2, point, t, feature};
-          }
+    // Only the shell of cells at Chebyshev distance `ring`: O(ring^2) cells per ring.
+    for (int dz = -ring; dz <= ring; ++dz) {
+      for (int dy = -ring; dy <= ring; ++dy) {
+        const bool whole_row = std::abs(dz) == ring || std::abs(dy) == ring;
+        for (int dx = -ring; dx <= ring; dx += whole_row ? 1 : std::max(1, 2 * ring)) {
+          visit(centre.x() + dx, centre.y() + dy, centre.z() + dz);
         }
       }
     }

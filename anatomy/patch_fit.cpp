@@ -71,29 +71,48 @@ std::vector<PatchBump> basis_bumps(const Eigen::Vector3d& x0, const Eigen::Vecto
   return bumps;
 }
 
-/// Height of the target above base point b along unit normal n, within +-limit (NaN if none).
+/// Height of the target above base point b along unit normal n, within +-limit (NaN if none):
+/// a sign change bracketed by stepping outward from b, then regula falsi (Illinois variant).
 double target_height(const ImplicitShape& target, const Eigen::Vector3d& b, const Eigen::Vector3d& n,
                      double limit) {
-  const double f0 = target.value(b);
+  auto f = [&](double h) { return target.value(b + h * n); };
+  const double f0 = f(0.0);
   if (f0 == 0.0) return 0.0;
-  // Walk outward in both directions from b until the sign changes; take the nearer change.
   constexpr int steps = 32;
-  for (int s = 1; s <= steps; ++s) {
-    for (double direction : {1.0, -1.0}) {
-      const double h = direction * limit * s / steps;
-      const double hp = direction * limit * (s - 1) / steps;
-      if ((target.value(b + h * n) > 0.0) != (target.value(b + hp * n) > 0.0)) {
-        double lo = hp, hi = h;
-        const bool lo_inside = target.value(b + lo * n) > 0.0;
-        for (int i = 0; i < 80; ++i) {
-          const double mid = 0.5 * (lo + hi);
-          ((target.value(b + mid * n) > 0.0) == lo_inside ? lo : hi) = mid;
-        }
-        return 0.5 * (lo + hi);
-      }
+  double lo = 0.0, f_lo = f0, hi = 0.0, f_hi = 0.0;
+  bool bracketed = false;
+  double previous_up = 0.0, f_previous_up = f0, previous_down = 0.0, f_previous_down = f0;
+  for (int s = 1; s <= steps && !bracketed; ++s) {
+    const double up = limit * s / steps, f_up = f(up);
+    if ((f_up > 0.0) != (f_previous_up > 0.0)) {
+      lo = previous_up, f_lo = f_previous_up, hi = up, f_hi = f_up, bracketed = true;
+      break;
+    }
+    previous_up = up, f_previous_up = f_up;
+    const double down = -up, f_down = f(down);
+    if ((f_down > 0.0) != (f_previous_down > 0.0)) {
+      lo = previous_down, f_lo = f_previous_down, hi = down, f_hi = f_down, bracketed = true;
+      break;
+    }
+    previous_down = down, f_previous_down = f_down;
+  }
+  if (!bracketed) return std::nan("");
+  int side = 0;
+  for (int i = 0; i < 100 && std::abs(hi - lo) > 1e-12 * limit; ++i) {
+    const double h = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
+    const double fh = f(h);
+    if (fh == 0.0) return h;
+    if ((fh > 0.0) == (f_lo > 0.0)) {
+      lo = h, f_lo = fh;
+      if (side == -1) f_hi *= 0.5;
+      side = -1;
+    } else {
+      hi = h, f_hi = fh;
+      if (side == 1) f_lo *= 0.5;
+      side = 1;
     }
   }
-  return std::nan("");
+  return 0.5 * (lo + hi);
 }
 
 } // namespace
@@ -138,8 +157,11 @@ Eigen::MatrixX3d straddle_vertices(const TriangleMesh& base, const ImplicitShape
       const int a = base.faces(t, k), b = base.faces(t, (k + 1) % 3);
       if (a > b) continue; // each edge once (its other triangle has it as b > a)
       const Eigen::Vector3d mid = 0.5 * (base.vertex(a) + base.vertex(b));
-      // Depth of the chord midpoint below the surface (positive inside a convex target).
-      const double sag = (target.project(mid) - mid).norm() * (target.value(mid) > 0.0 ? 1.0 : -1.0);
+      // Depth of the chord midpoint below the surface along the ray from the centre (positive
+      // inside); radial, so it stays robust on flat-sided superquadrics.
+      const Eigen::Vector3d radial = mid - target.center();
+      const double sag =
+          (target.ray_from_center(radial.normalized()) - target.center()).norm() - radial.norm();
       sag_sum[a] += sag, sag_sum[b] += sag;
       count[a] += 1.0, count[b] += 1.0;
     }
@@ -216,19 +238,22 @@ PatchFitReport measure_fit(const PatchSurface& surface, const ImplicitShape& tar
                            int target_sample_level) {
   PatchFitReport report;
   report.base_triangles = static_cast<int>(surface.patch_count());
-  // Surface to target: exact surface points on every patch's level-5 grid (1/32 of an edge).
+  // The target as a dense mesh: an icosphere of target_sample_level cast onto it from its centre.
+  TriangleMesh target_mesh = unit_icosphere(target_sample_level);
+  std::vector<Eigen::Vector3d> samples;
+  for (Eigen::Index v = 0; v < target_mesh.vertex_count(); ++v) {
+    samples.push_back(target.ray_from_center(target_mesh.vertex(v)));
+    target_mesh.vertices.row(v) = samples.back().transpose();
+  }
+  // Surface to target: exact surface points on every patch's level-4 grid (1/16 of an edge).
+  const MeshDistance to_target_mesh(target_mesh);
   std::vector<double> to_target;
   for (Eigen::Index t = 0; t < surface.patch_count(); ++t) {
-    for (const Eigen::Vector3d& p : surface.patch_grid_points(t, 5))
-      to_target.push_back((target.project(p) - p).norm());
+    for (const Eigen::Vector3d& p : surface.patch_grid_points(t, 4))
+      to_target.push_back(to_target_mesh.distance(p));
   }
   // Target to surface: distances to a tessellation within tessellation_mm.
-  const TriangleMesh tessellation = surface.tessellate(tessellation_mm);
-  const TriangleMesh sphere = unit_icosphere(target_sample_level);
-  std::vector<Eigen::Vector3d> samples;
-  for (Eigen::Index v = 0; v < sphere.vertex_count(); ++v)
-    samples.push_back(target.ray_from_center(sphere.vertex(v)));
-  const SurfaceDistance d = symmetric_distance(tessellation, samples, to_target);
+  const SurfaceDistance d = symmetric_distance(surface.tessellate(tessellation_mm), samples, to_target);
   report.hausdorff_mm = d.hausdorff_mm;
   report.mean_distance_mm = d.mean_mm;
   report.volume_error = (surface.volume() - target.volume()) / target.volume();

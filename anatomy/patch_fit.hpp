@@ -53,10 +53,10 @@ PatchSurface fit_patch_surface(const ImplicitShape& target, const Eigen::Vector3
                                const std::string& what, PatchFitReport* report = nullptr);
 
 /// Measures a surface against its target: Hausdorff and mean distance between exact surface
-/// points (each patch's level-5 grid) and the target, and between points on the target (an
-/// icosphere of `target_sample_level` cast onto it) and a tessellation within `tessellation_mm`;
-/// and the volume error.
+/// points (each patch's level-4 grid) and the target (as an icosphere of `target_sample_level`
+/// cast onto it from its centre), and from those target points to a tessellation within
+/// `tessellation_mm`; and the volume error.
 PatchFitReport measure_fit(const PatchSurface& surface, const ImplicitShape& target, double tessellation_mm,
-                           int target_sample_level = 5);
+                           int target_sample_level = 6);
 
 } // namespace phantasm

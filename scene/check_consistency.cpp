@@ -68,6 +68,10 @@ public:
                 "expected a tissue of the built-in table or of the scene's tissues section, found '" +
                     organ.tissue + "'");
       }
+      if (organ.shape.kind == ShapeKind::sheet && organ.solid) {
+        problem(indexed("anatomy.organs", i, "shape.type"),
+                "a sheet has no interior: expected 'solid: false' on this organ, found solid (the default)");
+      }
       if (!organ.material.empty() && m_scene.find_material(organ.material) == nullptr) {
         problem(indexed("anatomy.organs", i, "material"),
                 "expected a material defined under materials, found '" + organ.material + "'");

@@ -5,7 +5,8 @@ namespace {
 
 void parse_shape(CheckedMap& map, const std::filesystem::path& scene_folder, ShapeSettings& shape) {
   std::string kind;
-  if (!map.choice("type", kind, {"ellipsoid", "superquadric", "mesh", "label_volume"}, true)) {
+  if (!map.choice("type", kind, {"ellipsoid", "superquadric", "box", "sheet", "mesh", "label_volume"},
+                  true)) {
     map.accept_remaining_keys();
     return;
   }
@@ -19,6 +20,47 @@ void parse_shape(CheckedMap& map, const std::filesystem::path& scene_folder, Sha
       // Exponents below 0.1 or above 4 make creases sharper than a patch mesh can follow.
       map.number("exponent_1", shape.exponent_1, between(0.1, 4.0, ""), true);
       map.number("exponent_2", shape.exponent_2, between(0.1, 4.0, ""), true);
+    }
+    return;
+  }
+  if (kind == "box" || kind == "sheet") {
+    shape.kind = kind == "box" ? ShapeKind::box : ShapeKind::sheet;
+    map.vec3("center_mm", shape.center_mm, coordinate, true);
+    map.vec3("rotation_deg", shape.rotation_deg, between(-360.0, 360.0, "degrees"));
+    const YAML::Node cells = map.get("cells");
+    const std::size_t axes = kind == "box" ? 3 : 2;
+    const std::string expected = "a list of " + std::to_string(axes) + " integers in [1, 1000]";
+    if (kind == "box") {
+      map.vec3("size_mm", shape.size_mm, positive("mm"), true);
+    } else {
+      const YAML::Node size = map.get("size_mm");
+      if (!size.IsDefined()) {
+        map.missing("size_mm", "a list of 2 numbers in mm greater than 0");
+      } else if (!size.IsSequence() || size.size() != 2) {
+        map.context().problem(size, map.child_path("size_mm"),
+                              "expected a list of 2 numbers in mm greater than 0, found " + describe(size));
+      } else {
+        for (std::size_t i = 0; i < 2; ++i) {
+          read_number(map.context(), size[i], map.child_path("size_mm") + "[" + std::to_string(i) + "]",
+                      positive("mm"), shape.size_mm[static_cast<int>(i)]);
+        }
+        shape.size_mm.z() = 0.0;
+      }
+    }
+    if (!cells.IsDefined()) {
+      map.missing("cells", expected);
+    } else if (!cells.IsSequence() || cells.size() != axes) {
+      map.context().problem(cells, map.child_path("cells"),
+                            "expected " + expected + ", found " + describe(cells));
+    } else {
+      shape.cells.setOnes();
+      for (std::size_t i = 0; i < axes; ++i) {
+        long long count = 1;
+        if (read_integer(map.context(), cells[i], map.child_path("cells") + "[" + std::to_string(i) + "]", 1,
+                         1000, count)) {
+          shape.cells[static_cast<int>(i)] = static_cast<int>(count);
+        }
+      }
     }
     return;
   }
@@ -68,6 +110,7 @@ void parse_anatomy(CheckedMap& map, const std::filesystem::path& scene_folder, A
     entry.string("material", organ.material);
     entry.string("inside", organ.inside);
     entry.boolean("solid", organ.solid);
+    entry.integer("base_mesh_triangles", organ.base_mesh_triangles, 20, 200000);
     if (entry.has("shape")) {
       CheckedMap shape(map.context(), entry.get("shape"), entry.child_path("shape"));
       if (shape.valid()) parse_shape(shape, scene_folder, organ.shape);

@@ -39,6 +39,8 @@ const char* to_string(ShapeKind kind) {
   switch (kind) {
   case ShapeKind::ellipsoid: return "ellipsoid";
   case ShapeKind::superquadric: return "superquadric";
+  case ShapeKind::box: return "box";
+  case ShapeKind::sheet: return "sheet";
   case ShapeKind::mesh: return "mesh";
   case ShapeKind::label_volume: return "label_volume";
   }

@@ -38,7 +38,7 @@ struct TissueOverride {
   std::optional<double> T1_ms, T2_ms, T2star_ms, PD;
 };
 
-enum class ShapeKind { ellipsoid, superquadric, mesh, label_volume };
+enum class ShapeKind { ellipsoid, superquadric, box, sheet, mesh, label_volume };
 
 /// The target shape of an organ's surface.
 struct ShapeSettings {
@@ -48,6 +48,8 @@ struct ShapeSettings {
   Eigen::Vector3d rotation_deg{0, 0, 0}; ///< rotations about x, then y, then z, degrees
   double exponent_1 = 1.0;               ///< superquadric north-south exponent (1 = ellipsoid)
   double exponent_2 = 1.0;               ///< superquadric east-west exponent (1 = ellipsoid)
+  Eigen::Vector3d size_mm{10, 10, 10};   ///< box edge lengths; sheet: x and y extent (z unused)
+  Eigen::Vector3i cells{1, 1, 1};        ///< box: hexahedral cells per axis (5 tets each); sheet: x, y
   std::filesystem::path file;            ///< mesh or label volume, resolved against the scene's folder
   int label = 0;                         ///< label value to extract from a label volume
 };
@@ -56,9 +58,10 @@ struct ShapeSettings {
 struct OrganSettings {
   std::string name;
   std::string tissue;
-  std::string material; ///< a name from the scene's materials
-  std::string inside;   ///< the organ that contains this one; empty for the outermost
-  bool solid = true;    ///< true: tetrahedralized interior; false: surface (shell, sheet) only
+  std::string material;        ///< a name from the scene's materials
+  std::string inside;          ///< the organ that contains this one; empty for the outermost
+  bool solid = true;           ///< true: tetrahedralized interior; false: surface (shell, sheet) only
+  int base_mesh_triangles = 0; ///< this organ's patch base size; 0 = anatomy.base_mesh_triangles
   ShapeSettings shape;
 };
 

@@ -21,12 +21,19 @@ nlohmann::json organ_json(const OrganSettings& organ) {
       shape["exponent_1"] = organ.shape.exponent_1;
       shape["exponent_2"] = organ.shape.exponent_2;
     }
+  } else if (organ.shape.kind == ShapeKind::box || organ.shape.kind == ShapeKind::sheet) {
+    shape["center_mm"] = vec3(organ.shape.center_mm);
+    shape["size_mm"] = vec3(organ.shape.size_mm);
+    shape["rotation_deg"] = vec3(organ.shape.rotation_deg);
+    shape["cells"] = {organ.shape.cells.x(), organ.shape.cells.y(), organ.shape.cells.z()};
   } else {
     shape["file"] = organ.shape.file.string();
     if (organ.shape.kind == ShapeKind::label_volume) shape["label"] = organ.shape.label;
   }
-  return {{"name", organ.name},     {"tissue", organ.tissue}, {"material", organ.material},
-          {"inside", organ.inside}, {"solid", organ.solid},   {"shape", shape}};
+  return {
+      {"name", organ.name},     {"tissue", organ.tissue}, {"material", organ.material},
+      {"inside", organ.inside}, {"solid", organ.solid},   {"base_mesh_triangles", organ.base_mesh_triangles},
+      {"shape", shape}};
 }
 
 nlohmann::json load_json(const LoadSettings& load) {

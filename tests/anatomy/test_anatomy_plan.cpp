@@ -28,9 +28,9 @@ TEST(AnalyticShapeBounds, FileShapesHaveNoBoundsUntilRead) {
 
 TEST(NestingDepth, CountsContainingOrgans) {
   Scene scene;
-  scene.anatomy.organs = {{"scalp", "skin", "", "", true, {}},
-                          {"skull", "bone_cortical", "", "scalp", true, {}},
-                          {"brain", "white_matter", "", "skull", true, {}}};
+  scene.anatomy.organs = {{"scalp", "skin", "", "", true, 0, {}},
+                          {"skull", "bone_cortical", "", "scalp", true, 0, {}},
+                          {"brain", "white_matter", "", "skull", true, 0, {}}};
   EXPECT_EQ(nesting_depth(scene, scene.anatomy.organs[0]), 0);
   EXPECT_EQ(nesting_depth(scene, scene.anatomy.organs[2]), 2);
   EXPECT_EQ(plan_anatomy(scene).modelled.size(), 3u);

@@ -8,9 +8,9 @@ using namespace phantasm;
 TEST(TissueParameters, SceneValuesWinAndTheTableFillsTheRest) {
   Scene scene;
   scene.field_strength_T = 3.0;
-  scene.anatomy.organs = {{"a", "csf", "", "", true, {}},
-                          {"b", "white_matter", "", "", true, {}},
-                          {"c", "csf", "", "a", true, {}}};
+  scene.anatomy.organs = {{"a", "csf", "", "", true, 0, {}},
+                          {"b", "white_matter", "", "", true, 0, {}},
+                          {"c", "csf", "", "a", true, 0, {}}};
   TissueOverride csf;
   csf.tissue = "csf";
   csf.T2star_ms = 100.0;

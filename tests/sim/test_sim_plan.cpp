@@ -7,9 +7,9 @@ using namespace phantasm;
 namespace {
 Scene three_organs() {
   Scene scene;
-  scene.anatomy.organs = {{"skull", "bone_cortical", "", "", true, {}},
-                          {"brain", "white_matter", "", "skull", true, {}},
-                          {"eye", "csf", "", "", true, {}}};
+  scene.anatomy.organs = {{"skull", "bone_cortical", "", "", true, 0, {}},
+                          {"brain", "white_matter", "", "skull", true, 0, {}},
+                          {"eye", "csf", "", "", true, 0, {}}};
   return scene;
 }
 } // namespace

@@ -7,7 +7,7 @@ using namespace phantasm;
 TEST(VoxelizePlan, OrgansOutsideTheFieldOfViewAreSkipped) {
   Scene scene;
   scene.grid.field_of_view_mm = {100, 100, 100};
-  OrganSettings inside{"inside", "csf", "", "", true, {}};
+  OrganSettings inside{"inside", "csf", "", "", true, 0, {}};
   inside.shape.radii_mm = {10, 10, 10};
   OrganSettings outside = inside;
   outside.name = "outside";

@@ -1,0 +1,134 @@
+// Implicit shapes from files: closed triangle meshes and label volumes.
+
+#include "anatomy/mesh_distance.hpp"
+#include "anatomy/phantom.hpp"
+#include "core/error.hpp"
+
+#include <Eigen/LU>
+
+#include <cmath>
+
+namespace phantasm {
+namespace {
+
+/// Central differences of a shape's value; the step is small against the shape's size.
+Eigen::Vector3d numeric_gradient(const ImplicitShape& shape, const Eigen::Vector3d& x, double step) {
+  Eigen::Vector3d g;
+  for (int a = 0; a < 3; ++a) {
+    Eigen::Vector3d d = Eigen::Vector3d::Zero();
+    d[a] = step;
+    g[a] = (shape.value(x + d) - shape.value(x - d)) / (2.0 * step);
+  }
+  return g;
+}
+
+class MeshShape final : public ImplicitShape {
+public:
+  MeshShape(const TriangleMesh& mesh, const std::string& what) : m_distance(mesh) {
+    check_closed_manifold(mesh, what);
+    m_center = mesh.vertices.colwise().mean().transpose();
+    m_radius = (mesh.vertices.rowwise() - m_center.transpose()).rowwise().norm().maxCoeff();
+    m_volume = enclosed_volume(mesh);
+    m_step = 1e-4 * m_radius;
+  }
+  double value(const Eigen::Vector3d& x) const override { return -m_distance.signed_distance(x); }
+  Eigen::Vector3d gradient(const Eigen::Vector3d& x) const override {
+    return numeric_gradient(*this, x, m_step);
+  }
+  Eigen::Vector3d center() const override { return m_center; }
+  double bounding_radius() const override { return m_radius; }
+  double volume() const override { return m_volume; }
+
+private:
+  MeshDistance m_distance;
+  Eigen::Vector3d m_center;
+  double m_radius = 0.0, m_volume = 0.0, m_step = 1e-3;
+};
+
+class LabelShape final : public ImplicitShape {
+public:
+  LabelShape(const ImageGrid& grid, const std::vector<std::int32_t>& labels, int label,
+             const std::string& what)
+      : m_grid(grid), m_inside(labels.size(), 0.0f) {
+    if (static_cast<std::int64_t>(labels.size()) != grid.voxel_count()) {
+      throw InputError(what + ": expected " + std::to_string(grid.voxel_count()) + " label values, found " +
+                       std::to_string(labels.size()));
+    }
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    std::int64_t count = 0;
+    for (int k = 0; k < grid.dims.z(); ++k)
+      for (int j = 0; j < grid.dims.y(); ++j)
+        for (int i = 0; i < grid.dims.x(); ++i) {
+          const std::size_t index =
+              static_cast<std::size_t>((std::int64_t{k} * grid.dims.y() + j) * grid.dims.x() + i);
+          if (labels[index] != label) continue;
+          m_inside[index] = 1.0f;
+          sum += grid.world_from_index(Eigen::Vector3d(i, j, k));
+          ++count;
+        }
+    if (count == 0)
+      throw InputError(what + ": expected voxels with label " + std::to_string(label) + ", found none");
+    m_center = sum / static_cast<double>(count);
+    const double voxel_volume = std::abs(grid.world_from_voxel.topLeftCorner<3, 3>().determinant());
+    m_volume = static_cast<double>(count) * voxel_volume;
+    m_radius = 0.0;
+    for (int k = 0; k < grid.dims.z(); ++k)
+      for (int j = 0; j < grid.dims.y(); ++j)
+        for (int i = 0; i < grid.dims.x(); ++i) {
+          const std::size_t index =
+              static_cast<std::size_t>((std::int64_t{k} * grid.dims.y() + j) * grid.dims.x() + i);
+          if (m_inside[index] > 0.0f) {
+            m_radius =
+                std::max(m_radius, (grid.world_from_index(Eigen::Vector3d(i, j, k)) - m_center).norm());
+          }
+        }
+    m_radius += grid.spacing_mm.norm();
+    m_step = 0.05 * grid.spacing_mm.minCoeff();
+  }
+
+  double value(const Eigen::Vector3d& x) const override {
+    const Eigen::Vector3d ijk = m_grid.index_from_world(x);
+    const Eigen::Vector3d base = ijk.array().floor();
+    double total = 0.0;
+    for (int corner = 0; corner < 8; ++corner) {
+      double weight = 1.0;
+      Eigen::Vector3i at;
+      for (int a = 0; a < 3; ++a) {
+        const int offset = (corner >> a) & 1;
+        at[a] = static_cast<int>(base[a]) + offset;
+        const double t = ijk[a] - base[a];
+        weight *= offset ? t : 1.0 - t;
+      }
+      if ((at.array() < 0).any() || (at.array() >= m_grid.dims.array()).any() || weight == 0.0) continue;
+      total += weight * m_inside[static_cast<std::size_t>(
+                            (std::int64_t{at.z()} * m_grid.dims.y() + at.y()) * m_grid.dims.x() + at.x())];
+    }
+    return total - 0.5;
+  }
+  Eigen::Vector3d gradient(const Eigen::Vector3d& x) const override {
+    return numeric_gradient(*this, x, m_step);
+  }
+  Eigen::Vector3d center() const override { return m_center; }
+  double bounding_radius() const override { return m_radius; }
+  double volume() const override { return m_volume; }
+
+private:
+  ImageGrid m_grid;
+  std::vector<float> m_inside;
+  Eigen::Vector3d m_center;
+  double m_radius = 0.0, m_volume = 0.0, m_step = 0.05;
+};
+
+} // namespace
+
+std::unique_ptr<ImplicitShape> make_mesh_shape(const TriangleMesh& mesh, const std::string& what) {
+  return std::make_unique<MeshShape>(mesh, what);
+}
+
+std::unique_ptr<ImplicitShape> make_label_shape(const ImageGrid& grid,
+                                                const std::vector<std::int32_t>& labels, int label,
+                                                const std::string& what) {
+  return std::make_unique<LabelShape>(grid, labels, label, what);
+}
+
+} // namespace phantasm

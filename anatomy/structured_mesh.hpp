@@ -1,0 +1,24 @@
+#pragma once
+
+#include "anatomy/tet_mesh.hpp"
+#include "anatomy/triangle_mesh.hpp"
+
+#include <Eigen/Core>
+
+namespace phantasm {
+
+/// A box of `cells` hexahedra, each split into 5 tetrahedra (alternating so neighbouring cells
+/// share their face diagonals): (nx+1)(ny+1)(nz+1) vertices, 5 nx ny nz tets. Centred at the
+/// origin with edge lengths size_mm, then rotated and moved to center_mm.
+TetMesh structured_box(const Eigen::Vector3d& size_mm, const Eigen::Vector3i& cells,
+                       const Eigen::Matrix3d& rotation, const Eigen::Vector3d& center_mm);
+
+/// A rectangular sheet in its local xy plane of nx by ny quads, each split into 2 triangles
+/// (an open surface; normal along local +z).
+TriangleMesh structured_sheet(const Eigen::Vector2d& size_mm, const Eigen::Vector2i& cells,
+                              const Eigen::Matrix3d& rotation, const Eigen::Vector3d& center_mm);
+
+/// The triangles that belong to exactly one tet, oriented outward.
+Eigen::MatrixX3i boundary_faces_of(const Eigen::MatrixX3d& vertices, const Eigen::MatrixX4i& tets);
+
+} // namespace phantasm

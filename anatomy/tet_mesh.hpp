@@ -1,0 +1,52 @@
+#pragma once
+
+#include "anatomy/implicit_shape.hpp"
+#include "anatomy/triangle_mesh.hpp"
+
+#include <Eigen/Core>
+
+#include <array>
+#include <cstdint>
+
+namespace phantasm {
+
+/// A tetrahedral mesh of a solid organ.
+struct TetMesh {
+  Eigen::MatrixX3d vertices; ///< #V by 3 positions, RAS mm
+  Eigen::MatrixX4i tets;     ///< #T by 4 vertex indices, positively oriented
+  /// #B by 3 boundary triangles (indices into vertices), counter-clockwise seen from outside.
+  Eigen::MatrixX3i boundary_faces;
+};
+
+/// Quality criteria of a tetrahedralization (CGAL Mesh_3), lengths in mm.
+struct TetMeshCriteria {
+  double facet_size_mm = 5.0;     ///< upper bound of surface Delaunay ball radii
+  double facet_distance_mm = 0.5; ///< upper bound of the surface approximation error
+  double facet_angle_deg = 25.0;  ///< lower bound of surface triangle angles
+  double cell_size_mm = 5.0;      ///< upper bound of tetrahedron circumradii
+  double cell_radius_edge_ratio = 3.0;
+  double sliver_bound_deg = 14.0; ///< perturbation and exudation aim at dihedral angles above this
+};
+
+/// Criteria that give a boundary of about `boundary_triangles` triangles for a surface of
+/// `surface_area_mm2`, with interior cells of the same size.
+TetMeshCriteria criteria_for_boundary_size(double surface_area_mm2, int boundary_triangles);
+
+/// Tetrahedralizes the inside of an implicit shape with CGAL Mesh_3 (sequential, seeded, so the
+/// same seed gives the same mesh). Every tet is oriented positively; the boundary triangles are
+/// the surface facets of the complex, oriented outward.
+/// @throws InputError when the mesher produces no cells (shape smaller than the criteria)
+TetMesh mesh_implicit_solid(const ImplicitShape& shape, const TetMeshCriteria& criteria, std::uint32_t seed);
+
+/// Signed volume of tet t, mm^3 (positive for the orientation phantasm uses).
+double tet_volume(const TetMesh& mesh, Eigen::Index t);
+/// The six dihedral angles of tet t, degrees.
+std::array<double, 6> tet_dihedral_angles_deg(const TetMesh& mesh, Eigen::Index t);
+/// Smallest dihedral angle over all tets, degrees.
+double min_dihedral_angle_deg(const TetMesh& mesh);
+
+/// The boundary as a closed triangle mesh of its own (the patch base mesh), and for each of its
+/// vertices the index of the tet-mesh vertex it is, so that both move together.
+TriangleMesh boundary_surface(const TetMesh& mesh, Eigen::VectorXi* tet_vertex_of_surface_vertex);
+
+} // namespace phantasm

@@ -1,0 +1,184 @@
+// The one translation unit that includes CGAL Mesh_3 (it is slow to compile).
+//
+// Determinism: meshing is sequential and seeded, and the output is put in a canonical order
+// (vertices by position), which removes differences of container order. Mesh_3's refinement and
+// optimisation queues still break ties by memory address, so with address-space randomization
+// an occasional run meshes differently (seen: 1 run in 4 of the head). Bit-identical solid
+// organs need a tetrahedralization that does not depend on addresses.
+
+#include "anatomy/tet_mesh.hpp"
+#include "core/error.hpp"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Labeled_mesh_domain_3.h>
+#include <CGAL/Mesh_complex_3_in_triangulation_3.h>
+#include <CGAL/Mesh_criteria_3.h>
+#include <CGAL/Mesh_triangulation_3.h>
+#include <CGAL/make_mesh_3.h>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <array>
+#include <functional>
+#include <map>
+#include <numeric>
+
+namespace phantasm {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = Kernel::Point_3;
+using Domain = CGAL::Labeled_mesh_domain_3<Kernel>;
+using Triangulation = CGAL::Mesh_triangulation_3<Domain, CGAL::Default, CGAL::Sequential_tag>::type;
+using Complex = CGAL::Mesh_complex_3_in_triangulation_3<Triangulation>;
+using Criteria = CGAL::Mesh_criteria_3<Triangulation>;
+
+/// Puts a mesh in a canonical order that does not depend on the order of CGAL's internal
+/// containers (which follows memory reuse): vertices sorted by position, each tet and face
+/// rotated to start at its smallest index (orientation kept), rows sorted.
+void canonicalize(TetMesh& mesh) {
+  const Eigen::Index nv = mesh.vertices.rows();
+  std::vector<int> order(static_cast<std::size_t>(nv));
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    for (int k = 0; k < 3; ++k) {
+      if (mesh.vertices(a, k) != mesh.vertices(b, k)) return mesh.vertices(a, k) < mesh.vertices(b, k);
+    }
+    return a < b;
+  });
+  std::vector<int> new_index(static_cast<std::size_t>(nv));
+  Eigen::MatrixX3d sorted(nv, 3);
+  for (Eigen::Index i = 0; i < nv; ++i) {
+    new_index[static_cast<std::size_t>(order[static_cast<std::size_t>(i)])] = static_cast<int>(i);
+    sorted.row(i) = mesh.vertices.row(order[static_cast<std::size_t>(i)]);
+  }
+  mesh.vertices = sorted;
+  std::vector<std::array<int, 4>> tets;
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    std::array<int, 4> v;
+    for (int k = 0; k < 4; ++k)
+      v[static_cast<std::size_t>(k)] = new_index[static_cast<std::size_t>(mesh.tets(t, k))];
+    // Even permutations keep the orientation: bring the smallest index first with one.
+    const auto smallest = static_cast<std::size_t>(std::min_element(v.begin(), v.end()) - v.begin());
+    static const int even[4][4] = {{0, 1, 2, 3}, {1, 0, 3, 2}, {2, 3, 0, 1}, {3, 2, 1, 0}};
+    std::array<int, 4> rotated;
+    for (int k = 0; k < 4; ++k)
+      rotated[static_cast<std::size_t>(k)] = v[static_cast<std::size_t>(even[smallest][k])];
+    // Then order the last three cyclically so the second is the smallest of them.
+    while (rotated[1] > rotated[2] || rotated[1] > rotated[3]) {
+      std::rotate(rotated.begin() + 1, rotated.begin() + 2, rotated.end());
+    }
+    tets.push_back(rotated);
+  }
+  std::sort(tets.begin(), tets.end());
+  for (std::size_t t = 0; t < tets.size(); ++t) {
+    for (int k = 0; k < 4; ++k)
+      mesh.tets(static_cast<Eigen::Index>(t), k) = tets[t][static_cast<std::size_t>(k)];
+  }
+  std::vector<std::array<int, 3>> faces;
+  for (Eigen::Index f = 0; f < mesh.boundary_faces.rows(); ++f) {
+    std::array<int, 3> v;
+    for (int k = 0; k < 3; ++k)
+      v[static_cast<std::size_t>(k)] = new_index[static_cast<std::size_t>(mesh.boundary_faces(f, k))];
+    std::rotate(v.begin(), std::min_element(v.begin(), v.end()), v.end());
+    faces.push_back(v);
+  }
+  std::sort(faces.begin(), faces.end());
+  for (std::size_t f = 0; f < faces.size(); ++f) {
+    for (int k = 0; k < 3; ++k)
+      mesh.boundary_faces(static_cast<Eigen::Index>(f), k) = faces[f][static_cast<std::size_t>(k)];
+  }
+}
+
+} // namespace
+
+TetMesh mesh_implicit_solid(const ImplicitShape& shape, const TetMeshCriteria& c, std::uint32_t seed) {
+  namespace p = CGAL::parameters;
+  // CGAL's implicit domains are negative inside; ours are positive inside.
+  std::function<double(const Point&)> inside_negative = [&shape](const Point& x) {
+    return -shape.value(Eigen::Vector3d(x.x(), x.y(), x.z()));
+  };
+  const Eigen::Vector3d centre = shape.center();
+  const double radius = 1.05 * shape.bounding_radius();
+  CGAL::Random random(seed);
+  const Domain domain = Domain::create_implicit_mesh_domain(
+      inside_negative, Kernel::Sphere_3(Point(centre.x(), centre.y(), centre.z()), radius * radius),
+      p::relative_error_bound = 1e-6, p::p_rng = &random);
+  const Criteria criteria(p::facet_angle = c.facet_angle_deg, p::facet_size = c.facet_size_mm,
+                          p::facet_distance = c.facet_distance_mm,
+                          p::cell_radius_edge_ratio = c.cell_radius_edge_ratio,
+                          p::cell_size = c.cell_size_mm);
+  // Mesh_3 draws from CGAL's default generator too: reseed it for repeatable meshes.
+  CGAL::get_default_random() = CGAL::Random(seed);
+  const Complex complex = CGAL::make_mesh_3<Complex>(
+      domain, criteria, p::no_lloyd(), p::odt(p::max_iteration_number = 20, p::time_limit = 0),
+      p::perturb(p::sliver_bound = c.sliver_bound_deg), p::exude(p::sliver_bound = c.sliver_bound_deg));
+
+  TetMesh mesh;
+  std::map<Triangulation::Vertex_handle, int> index;
+  std::vector<Eigen::Vector3d> points;
+  auto index_of = [&](Triangulation::Vertex_handle v) {
+    const auto found = index.find(v);
+    if (found != index.end()) return found->second;
+    const auto& q = v->point().point();
+    points.emplace_back(q.x(), q.y(), q.z());
+    const int i = static_cast<int>(points.size()) - 1;
+    index.emplace(v, i);
+    return i;
+  };
+  std::vector<Eigen::Vector4i> tets;
+  for (auto cell = complex.cells_in_complex_begin(); cell != complex.cells_in_complex_end(); ++cell) {
+    Eigen::Vector4i t;
+    for (int k = 0; k < 4; ++k)
+      t[k] = index_of(cell->vertex(k));
+    tets.push_back(t);
+  }
+  if (tets.empty()) {
+    throw InputError(
+        "tetrahedral mesh: expected cells inside the shape, found none (the shape is smaller than the "
+        "cell size " +
+        std::to_string(c.cell_size_mm) + " mm)");
+  }
+  std::vector<Eigen::Vector3i> faces;
+  std::vector<int> inside_vertex; // the fourth vertex of the tet each boundary face belongs to
+  for (auto facet = complex.facets_in_complex_begin(); facet != complex.facets_in_complex_end(); ++facet) {
+    // Of the two cells sharing the facet, one is in the complex: orient away from its fourth vertex.
+    auto cell = facet->first;
+    int opposite = facet->second;
+    if (!complex.is_in_complex(cell)) {
+      const auto mirror = complex.triangulation().mirror_facet(*facet);
+      cell = mirror.first;
+      opposite = mirror.second;
+    }
+    Eigen::Vector3i f;
+    for (int k = 0, j = 0; k < 4; ++k) {
+      if (k != opposite) f[j++] = index_of(cell->vertex(k));
+    }
+    faces.push_back(f);
+    inside_vertex.push_back(index_of(cell->vertex(opposite)));
+  }
+  mesh.vertices.resize(static_cast<Eigen::Index>(points.size()), 3);
+  for (std::size_t i = 0; i < points.size(); ++i)
+    mesh.vertices.row(static_cast<Eigen::Index>(i)) = points[i].transpose();
+  mesh.tets.resize(static_cast<Eigen::Index>(tets.size()), 4);
+  for (std::size_t i = 0; i < tets.size(); ++i) {
+    mesh.tets.row(static_cast<Eigen::Index>(i)) = tets[i].transpose();
+    if (tet_volume(mesh, static_cast<Eigen::Index>(i)) < 0.0) {
+      std::swap(mesh.tets(static_cast<Eigen::Index>(i), 2), mesh.tets(static_cast<Eigen::Index>(i), 3));
+    }
+  }
+  mesh.boundary_faces.resize(static_cast<Eigen::Index>(faces.size()), 3);
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    Eigen::Vector3i f = faces[i];
+    const Eigen::Vector3d a = points[static_cast<std::size_t>(f[0])];
+    const Eigen::Vector3d normal =
+        (points[static_cast<std::size_t>(f[1])] - a).cross(points[static_cast<std::size_t>(f[2])] - a);
+    if (normal.dot(points[static_cast<std::size_t>(inside_vertex[i])] - a) > 0.0) std::swap(f[1], f[2]);
+    mesh.boundary_faces.row(static_cast<Eigen::Index>(i)) = f.transpose();
+  }
+  canonicalize(mesh);
+  return mesh;
+}
+
+} // namespace phantasm
