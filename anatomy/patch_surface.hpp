@@ -103,6 +103,8 @@ public:
 
   /// Enclosed volume in mm^3: base polyhedron plus each bump's exact volume.
   double volume() const;
+  /// Surface area in mm^2, from a tessellation within `max_deviation_mm`.
+  double area(double max_deviation_mm) const;
   /// A triangle mesh within `max_deviation_mm` of the surface (estimated at sub-triangle edge
   /// midpoints and centroids). Each patch is subdivided as finely as it needs, up to 2^8 segments
   /// per base edge (stats->max_deviation_mm then tells what remains); shared edges are split at

@@ -66,6 +66,10 @@ int PatchSurface::level_for(Eigen::Index t, double max_deviation_mm, double* dev
   return k_max_level; // the finest level; *deviation tells how far it still is
 }
 
+double PatchSurface::area(double max_deviation_mm) const {
+  return surface_area(tessellate(max_deviation_mm));
+}
+
 TriangleMesh PatchSurface::tessellate(double max_deviation_mm, TessellationStats* stats) const {
   const Eigen::Index nf = m_base.face_count();
   std::vector<int> level(static_cast<std::size_t>(nf));

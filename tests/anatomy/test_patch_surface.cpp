@@ -144,6 +144,14 @@ TEST(PatchSurface, ExactBumpVolumeMatchesAFineTessellation) {
   EXPECT_NEAR(surface.volume(), moved_fine, 1e-6 * moved_fine);
 }
 
+TEST(PatchSurface, AreaOfABumplessSphereMeshIsItsTriangleArea) {
+  const PatchSurface plain(sphere_mesh(2, 10.0), "sphere");
+  EXPECT_NEAR(plain.area(0.01), surface_area(plain.base_mesh()), 1e-9);
+  // Bumps add area: a bumpy surface has more than its base mesh.
+  const PatchSurface bumpy = bumpy_sphere();
+  EXPECT_GT(bumpy.area(0.01), surface_area(bumpy.base_mesh()));
+}
+
 TEST(PatchSurface, PlainSphereVolumeErrorFallsAtOrderTwo) {
   const double radius = 10.0, exact = 4.0 / 3.0 * M_PI * radius * radius * radius;
   std::vector<double> errors, sizes;
