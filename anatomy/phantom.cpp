@@ -103,14 +103,17 @@ void build_solid(Organ& organ, const Scene& scene, std::size_t index) {
   // Mesh_3's sliver removal usually clears the quality bound; when it does not, mesh again from
   // another seed (deterministic: the attempts follow the scene seed).
   TetMesh tets;
+  // The quality bound is checked after the boundary vertices moved to straddle the target,
+  // since that move changes the boundary tets' angles a little.
+  TriangleMesh base;
   for (std::uint32_t attempt = 0; attempt < 8; ++attempt) {
     tets = mesh_implicit_solid(target, criteria, organ_seed(scene.seed, index) + attempt);
+    base = boundary_surface(tets, &organ.tet_vertex_of_surface_vertex);
+    base.vertices = straddle_vertices(base, target, PatchFitOptions{}.vertex_offset_factor);
+    for (Eigen::Index v = 0; v < base.vertex_count(); ++v) {
+      tets.vertices.row(organ.tet_vertex_of_surface_vertex[v]) = base.vertices.row(v);
+    }
     if (min_dihedral_angle_deg(tets) >= k_min_dihedral_deg) break;
-  }
-  TriangleMesh base = boundary_surface(tets, &organ.tet_vertex_of_surface_vertex);
-  base.vertices = straddle_vertices(base, target, PatchFitOptions{}.vertex_offset_factor);
-  for (Eigen::Index v = 0; v < base.vertex_count(); ++v) {
-    tets.vertices.row(organ.tet_vertex_of_surface_vertex[v]) = base.vertices.row(v);
   }
   PatchSurface surface(base, "organ " + organ.name);
   fit_bumps(surface, target, PatchFitOptions{});
