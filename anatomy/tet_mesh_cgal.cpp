@@ -1,10 +1,9 @@
 // The one translation unit that includes CGAL Mesh_3 (it is slow to compile).
 //
-// Determinism: meshing is sequential and seeded, and the output is put in a canonical order
-// (vertices by position), which removes differences of container order. Mesh_3's refinement and
-// optimisation queues still break ties by memory address, so with address-space randomization
-// an occasional run meshes differently (seen: 1 run in 4 of the head). Bit-identical solid
-// organs need a tetrahedralization that does not depend on addresses.
+// Determinism: meshing is sequential and seeded, every optimisation step runs without a time
+// limit (Mesh_3 otherwise stops perturbation and exudation after as long as the refinement
+// took, so the mesh depended on the machine's load), and the output is put in a canonical order
+// (vertices by position), which removes differences of container order.
 
 #include "anatomy/tet_mesh.hpp"
 #include "core/error.hpp"
@@ -113,7 +112,8 @@ TetMesh mesh_implicit_solid(const ImplicitShape& shape, const TetMeshCriteria& c
   CGAL::get_default_random() = CGAL::Random(seed);
   const Complex complex = CGAL::make_mesh_3<Complex>(
       domain, criteria, p::no_lloyd(), p::odt(p::max_iteration_number = 20, p::time_limit = 0),
-      p::perturb(p::sliver_bound = c.sliver_bound_deg), p::exude(p::sliver_bound = c.sliver_bound_deg));
+      p::perturb(p::sliver_bound = c.sliver_bound_deg, p::time_limit = 0),
+      p::exude(p::sliver_bound = c.sliver_bound_deg, p::time_limit = 0));
 
   TetMesh mesh;
   std::map<Triangulation::Vertex_handle, int> index;

@@ -26,7 +26,7 @@ pkg_check_modules(FFTW3 REQUIRED IMPORTED_TARGET fftw3)
 # Output formats: NIfTI, HDF5, VTK (mesh I/O and ParaView files, PNG), no ITK.
 find_package(Nifti2 MODULE REQUIRED)
 find_package(HDF5 REQUIRED COMPONENTS C)
-find_package(VTK 9 REQUIRED COMPONENTS CommonCore CommonDataModel IOXML IOGeometry IOPLY IOImage)
+find_package(VTK 9 REQUIRED COMPONENTS CommonCore CommonDataModel FiltersCore IOXML IOGeometry IOPLY IOImage)
 
 if(PHANTASM_BUILD_TESTS)
   find_package(GTest REQUIRED)

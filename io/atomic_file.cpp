@@ -17,6 +17,7 @@ namespace {
 
 constexpr const char* k_temporary_marker = ".phantasm-tmp-";
 constexpr std::size_t k_chunk_bytes = std::size_t{1} << 20;
+constexpr std::size_t k_slow_chunk_bytes = 4096; // with a test delay: small chunks, many pauses
 std::atomic<int> g_write_delay_ms{0};
 std::atomic<unsigned> g_temporary_counter{0};
 
@@ -57,7 +58,8 @@ void AtomicFileWriter::write(const void* data, std::size_t size) {
       std::this_thread::sleep_for(std::chrono::milliseconds(delay));
       throw_if_cancelled();
     }
-    const std::size_t chunk = std::min(size, g_write_delay_ms.load() > 0 ? std::size_t{64} : k_chunk_bytes);
+    const std::size_t chunk =
+        std::min(size, g_write_delay_ms.load() > 0 ? k_slow_chunk_bytes : k_chunk_bytes);
     const ssize_t written = ::write(m_fd, bytes, chunk);
     if (written < 0) {
       if (errno == EINTR) continue;

@@ -45,7 +45,8 @@ bool is_temporary_file_name(const std::filesystem::path& path);
 /// Removes the temporary files a killed run left under a folder; returns how many.
 std::size_t remove_stale_temporaries(const std::filesystem::path& root);
 
-/// Slows every chunk written by AtomicFileWriter by this many milliseconds. Only for tests that
+/// Slows every chunk written by AtomicFileWriter (4 KiB while a delay is set) by this many
+/// milliseconds. Only for tests that
 /// interrupt a run while it writes; 0 (the default) turns it off.
 void set_write_delay_for_testing(int milliseconds_per_chunk);
 

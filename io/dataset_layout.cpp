@@ -69,6 +69,10 @@ std::filesystem::path DatasetLayout::mesh(PhantomState state, const std::string&
   return subject_derivatives() / "meshes" / (prefix(state) + "_organ-" + organ + "_mesh.vtp");
 }
 
+std::filesystem::path DatasetLayout::tet_mesh(PhantomState state, const std::string& organ) const {
+  return subject_derivatives() / "meshes" / (prefix(state) + "_organ-" + organ + "_tetmesh.vtu");
+}
+
 std::filesystem::path DatasetLayout::provenance() const {
   return subject_derivatives() / "provenance.json";
 }

@@ -35,7 +35,10 @@ public:
   std::filesystem::path transform(PhantomState from, PhantomState to) const;
   std::filesystem::path jacobian() const;
   std::filesystem::path landmarks(PhantomState state) const;
+  /// An organ's surface (the tessellated patch surface, or its sheet), VTK PolyData.
   std::filesystem::path mesh(PhantomState state, const std::string& organ) const;
+  /// A solid organ's tetrahedral mesh, VTK UnstructuredGrid.
+  std::filesystem::path tet_mesh(PhantomState state, const std::string& organ) const;
   std::filesystem::path provenance() const;
   std::filesystem::path log() const;
   /// The scene file as it was run, copied for reproducibility.

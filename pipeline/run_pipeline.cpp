@@ -1,11 +1,15 @@
 #include "pipeline/run_pipeline.hpp"
 
 #include "anatomy/anatomy_plan.hpp"
+#include "anatomy/phantom.hpp"
 #include "core/cancellation.hpp"
+#include "core/format.hpp"
 #include "core/version.hpp"
 #include "io/atomic_file.hpp"
 #include "io/dataset_layout.hpp"
 #include "io/json_file.hpp"
+#include "io/mesh_file.hpp"
+#include "io/shape_files.hpp"
 #include "mri/mri_plan.hpp"
 #include "scene/scene_json.hpp"
 #include "sim/sim_plan.hpp"
@@ -54,6 +58,8 @@ public:
     write_json_file(path, content);
     done(path);
   }
+  /// Records a file written by one of io's format writers.
+  void written(const std::filesystem::path& path) { done(path); }
   const std::vector<std::filesystem::path>& files() const { return m_files; }
 
 private:
@@ -67,6 +73,61 @@ private:
   ProgressBar m_progress;
   std::vector<std::filesystem::path> m_files;
 };
+
+/// Whether this version runs a stage (the others record their plan only).
+bool stage_runs(const std::string& stage) {
+  return stage == "anatomy";
+}
+
+/// The anatomy stage: reads the scene's shape files and builds every organ; records fit errors.
+Phantom build_anatomy(const Scene& scene, StageReport& report, Reporter& reporter) {
+  const std::map<std::string, ShapeData> files = read_shape_files(scene);
+  Phantom phantom = build_phantom(scene, files, reporter);
+  for (const Organ& organ : phantom.organs) {
+    if (!organ.surface) continue;
+    report.accuracy[organ.name + " fit Hausdorff mm"] = organ.fit.hausdorff_mm;
+    report.accuracy[organ.name + " fit mean distance mm"] = organ.fit.mean_distance_mm;
+    report.accuracy[organ.name + " fit relative volume error"] = organ.fit.volume_error;
+  }
+  report.status = "done";
+  return phantom;
+}
+
+/// Number of mesh files write_organ_meshes writes.
+std::size_t organ_mesh_count(const Scene& scene, const Phantom& phantom) {
+  if (!scene.outputs.meshes) return 0;
+  std::size_t count = 0;
+  for (const Organ& organ : phantom.organs)
+    count += (organ.surface || organ.sheet ? 1 : 0) + (organ.solid ? 1 : 0);
+  return count;
+}
+
+/// How closely exported surfaces follow the patch surfaces: a fifth of the smallest voxel edge
+/// (invisible at image resolution, and a few MB per organ; the voxelizer's own tolerance,
+/// voxelization.tessellation_tolerance_mm, is finer), never coarser than 0.5 mm.
+double mesh_export_tolerance_mm(const Scene& scene) {
+  return std::min(
+      0.5, std::max(scene.voxelization.tessellation_tolerance_mm, 0.2 * scene.grid.voxel_size_mm.minCoeff()));
+}
+
+/// Each organ's surface (.vtp: the patch surface tessellated within mesh_export_tolerance_mm, or
+/// the sheet) and tet mesh (.vtu) in one state.
+void write_organ_meshes(const Scene& scene, const Phantom& phantom, PhantomState state,
+                        const DatasetLayout& layout, DatasetWriter& writer) {
+  const double tolerance = mesh_export_tolerance_mm(scene);
+  for (const Organ& organ : phantom.organs) {
+    if (organ.surface || organ.sheet) {
+      const std::filesystem::path path = layout.mesh(state, organ.name);
+      write_vtp(path, organ.surface ? organ.surface->tessellate(tolerance) : *organ.sheet);
+      writer.written(path);
+    }
+    if (organ.solid) {
+      const std::filesystem::path path = layout.tet_mesh(state, organ.name);
+      write_vtu(path, *organ.solid);
+      writer.written(path);
+    }
+  }
+}
 
 } // namespace
 
@@ -83,14 +144,16 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& re
       reporter.modelled(stage.stage, line);
     for (const auto& line : stage.skipped)
       reporter.skipped(stage.stage, line);
-    if (stage.status == "planned") {
+    if (!stage_runs(stage.stage)) {
       reporter.modelled(stage.stage,
                         "planned only: this version records the plan; the stage itself does not run yet");
     }
   }
 
+  const Phantom phantom = build_anatomy(scene, summary.stages[0], reporter);
+
   const DatasetLayout layout(options.output, scene.outputs.subject);
-  DatasetWriter writer(layout, reporter, 6);
+  DatasetWriter writer(layout, reporter, 6 + organ_mesh_count(scene, phantom));
   writer.json(layout.dataset_description(), {{"Name", scene.name},
                                              {"BIDSVersion", "1.9.0"},
                                              {"DatasetType", "raw"},
@@ -103,6 +166,14 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& re
   writer.text(layout.scene_copy(), scene.source_text);
   for (PhantomState state : {PhantomState::reference, PhantomState::deformed}) {
     std::filesystem::create_directories(layout.anat_image(state, "T1w").parent_path());
+  }
+  if (scene.outputs.meshes) {
+    reporter.modelled("anatomy", "organ meshes for ParaView: surfaces tessellated within " +
+                                     format_number(mesh_export_tolerance_mm(scene)) +
+                                     " mm, tet meshes as built");
+    write_organ_meshes(scene, phantom, PhantomState::reference, layout, writer);
+  } else {
+    reporter.skipped("anatomy", "organ meshes (outputs.meshes is false)");
   }
 
   std::string log;

@@ -1,5 +1,5 @@
-// Builds a scene's phantom and prints the SHA-256 of every base vertex, bump amplitude and tet
-// vertex, so tests can compare phantoms built in separate processes.
+// Builds a scene's phantom and prints the SHA-256 of every base vertex, bump amplitude, tet
+// vertex and tet, so tests can compare phantoms built in separate processes.
 // Usage: phantom_fingerprint SCENE.yaml SEED [--surfaces-only]
 // --surfaces-only builds every closed organ as a surface (no CGAL tet mesh).
 
@@ -41,7 +41,12 @@ int main(int argc, char** argv) {
           add(&bump.amplitude_mm, 1);
       }
     }
-    if (organ.solid) add(organ.solid->vertices.data(), organ.solid->vertices.size());
+    if (organ.solid) {
+      add(organ.solid->vertices.data(), organ.solid->vertices.size());
+      const Eigen::MatrixX4i& tets = organ.solid->tets;
+      bytes.append(reinterpret_cast<const char*>(tets.data()),
+                   static_cast<std::size_t>(tets.size()) * sizeof(int));
+    }
   }
   std::cout << sha256_hex(bytes) << '\n';
   return 0;

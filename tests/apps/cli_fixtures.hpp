@@ -2,6 +2,8 @@
 
 // Shared helpers of the phantasm command tests.
 
+#include "tests/support/files.hpp"
+
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -14,22 +16,9 @@ namespace phantasm::testing {
 inline const std::filesystem::path k_source_dir = PHANTASM_SOURCE_DIR;
 inline const std::string k_phantasm = PHANTASM_EXECUTABLE;
 inline const std::filesystem::path k_head_scene = k_source_dir / "data-synthetic" / "head.yaml";
-
-/// A new empty folder under the system's temporary folder, unique to this process and name.
-inline std::filesystem::path fresh_folder(const std::string& name) {
-  const auto folder =
-      std::filesystem::temp_directory_path() / ("phantasm-cli-" + name + "-" + std::to_string(::getpid()));
-  std::filesystem::remove_all(folder);
-  std::filesystem::create_directories(folder);
-  return folder;
-}
-
-inline std::string read_file(const std::filesystem::path& path) {
-  std::ifstream stream(path, std::ios::binary);
-  std::ostringstream text;
-  text << stream.rdbuf();
-  return text.str();
-}
+/// Three organs on coarse meshes: command tests that run many times use it.
+inline const std::filesystem::path k_small_scene =
+    k_source_dir / "tests" / "data" / "scenes" / "small-head.yaml";
 
 /// Every regular file under a folder, by path relative to it, with its bytes.
 inline std::map<std::string, std::string> folder_contents(const std::filesystem::path& folder) {

@@ -13,16 +13,29 @@ namespace fs = std::filesystem;
 
 namespace {
 
+struct ReferenceRun {
+  std::map<std::string, std::string> files;
+  int milliseconds = 0; ///< how long it took (without write delays)
+};
+
 /// The files of an uninterrupted run, to compare interrupted runs with.
-const std::map<std::string, std::string>& reference_run() {
-  static const auto contents = [] {
+const ReferenceRun& reference() {
+  static const ReferenceRun run = [] {
     const fs::path out = fresh_folder("interrupt-reference") / "out";
+    const auto start = std::chrono::steady_clock::now();
     const CommandResult result =
-        run_command({k_phantasm, "run", k_head_scene.string(), "-o", out.string(), "-q"});
+        run_command({k_phantasm, "run", k_small_scene.string(), "-o", out.string(), "-q"});
     EXPECT_EQ(result.exit_code, 0) << result.err;
-    return folder_contents(out);
+    const auto elapsed = std::chrono::steady_clock::now() - start;
+    return ReferenceRun{
+        folder_contents(out),
+        static_cast<int>(std::chrono::duration_cast<std::chrono::milliseconds>(elapsed).count())};
   }();
-  return contents;
+  return run;
+}
+
+const std::map<std::string, std::string>& reference_run() {
+  return reference().files;
 }
 
 bool is_temporary(const std::string& relative_path) {
@@ -33,9 +46,9 @@ bool is_temporary(const std::string& relative_path) {
 /// final name is complete, i.e. byte-identical to the uninterrupted run's file. Returns whether
 /// the signal arrived before the run ended.
 bool interrupt_and_check(int signal_number, int delay_ms, const fs::path& out, bool expect_no_temporaries) {
-  // 2 ms per 64-byte chunk stretches the writes over more than half a second.
+  // 2 ms per 4 KiB chunk stretches the writes (about 2 MB of meshes) over half a second or more.
   BackgroundProcess run(
-      {k_phantasm, "run", k_head_scene.string(), "-o", out.string(), "--force", "--write-delay-ms", "2"});
+      {k_phantasm, "run", k_small_scene.string(), "-o", out.string(), "--force", "--write-delay-ms", "2"});
   std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
   run.send_signal(signal_number);
   const int exit_code = run.wait();
@@ -63,7 +76,7 @@ bool interrupt_and_check(int signal_number, int delay_ms, const fs::path& out, b
 
 void rerun_with_force_completes(const fs::path& out) {
   const CommandResult rerun =
-      run_command({k_phantasm, "run", k_head_scene.string(), "-o", out.string(), "--force", "-q"});
+      run_command({k_phantasm, "run", k_small_scene.string(), "-o", out.string(), "--force", "-q"});
   ASSERT_EQ(rerun.exit_code, 0) << rerun.err;
   EXPECT_EQ(folder_contents(out), reference_run()); // complete, and no temporary file left behind
 }
@@ -73,7 +86,9 @@ void rerun_with_force_completes(const fs::path& out) {
 void interrupt_at_random_moments(int signal_number, unsigned seed, const std::string& name,
                                  bool expect_no_temporaries) {
   std::mt19937 random(seed);
-  std::uniform_int_distribution<int> delay(20, 500);
+  // Signals land anywhere from the anatomy stage to the end of the (slowed) writes; the
+  // reference run's time scales the range to this build (sanitizers are several times slower).
+  std::uniform_int_distribution<int> delay(20, 300 + reference().milliseconds);
   const fs::path root = fresh_folder(name);
   int interrupted = 0;
   for (int attempt = 0; attempt < 4; ++attempt) {
@@ -97,7 +112,8 @@ TEST(InterruptedRun, SigkillLeavesNoPartialFileUnderAFinalName) {
 
 TEST(InterruptedRun, ARunKilledRepeatedlyIntoOneFolderStillEndsComplete) {
   const fs::path out = fresh_folder("sigkill-repeated") / "out";
-  for (int delay_ms : {50, 200, 400})
+  const int t = reference().milliseconds;
+  for (int delay_ms : {t / 3, t + 100, t + 300})
     EXPECT_TRUE(interrupt_and_check(SIGKILL, delay_ms, out, false));
   rerun_with_force_completes(out);
 }

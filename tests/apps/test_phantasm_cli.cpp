@@ -1,4 +1,5 @@
 #include "core/sha256.hpp"
+#include "io/mesh_file.hpp"
 #include "tests/apps/cli_fixtures.hpp"
 #include "tests/support/subprocess.hpp"
 
@@ -99,8 +100,9 @@ TEST(InfoCommand, ShowsTheGridAndEveryStagePlan) {
   EXPECT_EQ(nlohmann::json::parse(json.out)["seed"], 1);
 }
 
-TEST(RunCommand, WritesTheDatasetSkeletonWithProvenance) {
-  const fs::path out = fresh_folder("skeleton") / "out";
+// The README's main job on the default scene.
+TEST(RunCommand, WritesTheHeadDatasetWithOrganMeshesAndProvenance) {
+  const fs::path out = fresh_folder("head") / "out";
   const CommandResult result = run_command({k_phantasm, "run", k_head_scene.string(), "-o", out.string()});
   ASSERT_EQ(result.exit_code, 0) << result.err;
   const auto description = nlohmann::json::parse(read_file(out / "dataset_description.json"));
@@ -116,28 +118,61 @@ TEST(RunCommand, WritesTheDatasetSkeletonWithProvenance) {
   EXPECT_EQ(dseg.rfind("index\tname\ttissue\n0\tbackground\tbackground\n1\tscalp\tskin\n", 0), 0u) << dseg;
   EXPECT_EQ(std::count(dseg.begin(), dseg.end(), '\n'), 9); // header, background, 7 organs
 
+  // Every organ of the head is solid: a closed surface (.vtp) and a tet mesh (.vtu) each, which
+  // VTK reads back; the surface encloses about the tet mesh's volume.
+  const fs::path meshes = derivatives / "sub-01" / "meshes";
+  for (const std::string organ :
+       {"scalp", "skull", "csf", "grey_matter", "white_matter", "ventricle_left", "ventricle_right"}) {
+    SCOPED_TRACE(organ);
+    const phantasm::TriangleMesh surface =
+        phantasm::read_triangle_mesh(meshes / ("sub-01_ses-ref_organ-" + organ + "_mesh.vtp"));
+    EXPECT_NO_THROW(phantasm::check_closed_manifold(surface, organ));
+    const phantasm::TetMesh solid =
+        phantasm::read_vtu(meshes / ("sub-01_ses-ref_organ-" + organ + "_tetmesh.vtu"));
+    double volume = 0.0;
+    for (Eigen::Index t = 0; t < solid.tets.rows(); ++t) {
+      ASSERT_GT(phantasm::tet_volume(solid, t), 0.0);
+      volume += phantasm::tet_volume(solid, t);
+    }
+    EXPECT_NEAR(phantasm::enclosed_volume(surface) / volume, 1.0, 0.02);
+  }
+
   const auto provenance = nlohmann::json::parse(read_file(derivatives / "sub-01" / "provenance.json"));
   EXPECT_EQ(provenance["scene"]["sha256"], phantasm::sha256_hex(read_file(k_head_scene)));
   EXPECT_EQ(provenance["seed"], 1);
   EXPECT_EQ(provenance["settings"]["deformation"]["solver"]["method"], "local_global");
   ASSERT_EQ(provenance["stages"].size(), 4u);
   EXPECT_EQ(provenance["stages"][0]["stage"], "anatomy");
-  EXPECT_TRUE(provenance["stages"][0].contains("accuracy"));
+  EXPECT_EQ(provenance["stages"][0]["status"], "done");
+  EXPECT_LT(provenance["stages"][0]["accuracy"]["white_matter fit Hausdorff mm"].get<double>(), 3.0);
+  EXPECT_EQ(provenance["files"].size(), 19u); // every file but provenance.json itself
   EXPECT_EQ(read_file(derivatives / "sub-01" / "scene.yaml"), read_file(k_head_scene));
   const std::string log = read_file(derivatives / "sub-01" / "log.txt");
   EXPECT_NE(log.find("[sim] scalp: held fixed"), std::string::npos) << log;
   EXPECT_NE(log.find("[voxelize] skipped: .vdb grids"), std::string::npos) << log;
+  EXPECT_NE(log.find("[anatomy] organ meshes for ParaView: surfaces tessellated within 0.2 mm"),
+            std::string::npos)
+      << log;
+}
+
+TEST(RunCommand, WritesSheetAndShellSurfacesWithoutTetMeshes) {
+  const fs::path out = fresh_folder("small") / "out";
+  ASSERT_EQ(run_command({k_phantasm, "run", k_small_scene.string(), "-o", out.string(), "-q"}).exit_code, 0);
+  const fs::path meshes = out / "derivatives" / "phantasm" / "sub-01" / "meshes";
+  EXPECT_TRUE(fs::exists(meshes / "sub-01_ses-ref_organ-scalp_mesh.vtp"));
+  EXPECT_FALSE(fs::exists(meshes / "sub-01_ses-ref_organ-scalp_tetmesh.vtu")); // solid: false
+  EXPECT_TRUE(fs::exists(meshes / "sub-01_ses-ref_organ-grey_matter_tetmesh.vtu"));
 }
 
 TEST(RunCommand, RefusesANonEmptyOutputFolderWithoutForceAndLeavesItUntouched) {
   const fs::path out = fresh_folder("refuse");
   std::ofstream(out / "precious.txt") << "user data";
-  const CommandResult refused = run_command({k_phantasm, "run", k_head_scene.string(), "-o", out.string()});
+  const CommandResult refused = run_command({k_phantasm, "run", k_small_scene.string(), "-o", out.string()});
   EXPECT_EQ(refused.exit_code, 2);
   EXPECT_NE(refused.err.find("--force"), std::string::npos) << refused.err;
   EXPECT_EQ(folder_contents(out).size(), 1u);
   const CommandResult forced =
-      run_command({k_phantasm, "run", k_head_scene.string(), "-o", out.string(), "--force"});
+      run_command({k_phantasm, "run", k_small_scene.string(), "-o", out.string(), "--force"});
   EXPECT_EQ(forced.exit_code, 0) << forced.err;
   EXPECT_EQ(read_file(out / "precious.txt"), "user data");
 }
@@ -145,10 +180,10 @@ TEST(RunCommand, RefusesANonEmptyOutputFolderWithoutForceAndLeavesItUntouched) {
 TEST(RunCommand, SameSceneTwiceGivesIdenticalBytes) {
   const fs::path root = fresh_folder("determinism");
   ASSERT_EQ(
-      run_command({k_phantasm, "run", k_head_scene.string(), "-o", (root / "a").string(), "-q"}).exit_code,
+      run_command({k_phantasm, "run", k_small_scene.string(), "-o", (root / "a").string(), "-q"}).exit_code,
       0);
   ASSERT_EQ(
-      run_command({k_phantasm, "run", k_head_scene.string(), "-o", (root / "b").string(), "-q"}).exit_code,
+      run_command({k_phantasm, "run", k_small_scene.string(), "-o", (root / "b").string(), "-q"}).exit_code,
       0);
   const auto a = folder_contents(root / "a");
   EXPECT_GE(a.size(), 6u);
@@ -158,13 +193,13 @@ TEST(RunCommand, SameSceneTwiceGivesIdenticalBytes) {
 TEST(RunCommand, QuietPrintsNothingAndAPipeGetsPlainProgressLines) {
   const fs::path root = fresh_folder("verbosity");
   const CommandResult quiet =
-      run_command({k_phantasm, "run", k_head_scene.string(), "-o", (root / "q").string(), "--quiet"});
+      run_command({k_phantasm, "run", k_small_scene.string(), "-o", (root / "q").string(), "--quiet"});
   EXPECT_EQ(quiet.exit_code, 0);
   EXPECT_TRUE(quiet.err.empty()) << quiet.err;
   const CommandResult plain =
-      run_command({k_phantasm, "run", k_head_scene.string(), "-o", (root / "p").string()});
+      run_command({k_phantasm, "run", k_small_scene.string(), "-o", (root / "p").string()});
   EXPECT_EQ(plain.exit_code, 0);
-  EXPECT_NE(plain.err.find("writing 100% (6/6)"), std::string::npos) << plain.err;
+  EXPECT_NE(plain.err.find("writing 100% (10/10)"), std::string::npos) << plain.err;
   EXPECT_EQ(plain.err.find('\r'), std::string::npos);
   EXPECT_NE(plain.err.find("[voxelize] skipped: .vdb grids"), std::string::npos) << plain.err;
 }

@@ -1,6 +1,7 @@
 #include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
+#include "tests/support/files.hpp"
 
 #include <gtest/gtest.h>
 
@@ -8,24 +9,11 @@
 #include <sstream>
 
 using namespace phantasm;
+using phantasm::testing::fresh_folder;
+using phantasm::testing::read_file;
 namespace fs = std::filesystem;
 
 namespace {
-
-fs::path fresh_folder(const std::string& name) {
-  const fs::path folder =
-      fs::temp_directory_path() / ("phantasm-test-" + name + "-" + std::to_string(::getpid()));
-  fs::remove_all(folder);
-  fs::create_directories(folder);
-  return folder;
-}
-
-std::string read(const fs::path& path) {
-  std::ifstream stream(path, std::ios::binary);
-  std::ostringstream text;
-  text << stream.rdbuf();
-  return text.str();
-}
 
 std::size_t file_count(const fs::path& folder) {
   std::size_t count = 0;
@@ -39,7 +27,7 @@ std::size_t file_count(const fs::path& folder) {
 TEST(AtomicFile, CommitMakesTheFileAppearWithNoTemporaryLeft) {
   const fs::path folder = fresh_folder("commit");
   write_file_atomically(folder / "a" / "b.json", "{}\n");
-  EXPECT_EQ(read(folder / "a" / "b.json"), "{}\n");
+  EXPECT_EQ(read_file(folder / "a" / "b.json"), "{}\n");
   EXPECT_EQ(file_count(folder), 2u); // the folder a and the file
 }
 
@@ -49,12 +37,12 @@ TEST(AtomicFile, TheFinalNameKeepsItsOldContentUntilCommit) {
   {
     AtomicFileWriter writer(folder / "f.txt");
     writer.write("new content");
-    EXPECT_EQ(read(folder / "f.txt"), "old");
+    EXPECT_EQ(read_file(folder / "f.txt"), "old");
     EXPECT_TRUE(is_temporary_file_name(writer.temporary_path()));
     EXPECT_EQ(writer.temporary_path().parent_path(), folder);
     writer.commit();
   }
-  EXPECT_EQ(read(folder / "f.txt"), "new content");
+  EXPECT_EQ(read_file(folder / "f.txt"), "new content");
   EXPECT_EQ(file_count(folder), 1u);
 }
 
@@ -73,7 +61,7 @@ TEST(AtomicFile, CancellationStopsAWriteAndRemovesTheTemporaryFile) {
   request_cancellation();
   EXPECT_THROW(write_file_atomically(folder / "f.txt", std::string(1 << 22, 'x')), Cancelled);
   reset_cancellation();
-  EXPECT_EQ(read(folder / "f.txt"), "complete");
+  EXPECT_EQ(read_file(folder / "f.txt"), "complete");
   EXPECT_EQ(file_count(folder), 1u);
 }
 

@@ -1,0 +1,41 @@
+#pragma once
+
+#include "anatomy/tet_mesh.hpp"
+#include "anatomy/triangle_mesh.hpp"
+
+#include <Eigen/Core>
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace phantasm {
+
+/// Reads a triangle mesh from .stl, .obj, .ply or .vtp (VTK readers). Polygons are split into
+/// triangles and exactly coincident points merged (STL files repeat them per triangle); points
+/// no triangle uses are dropped; otherwise the file's order is kept. Whether the mesh is closed is checked by
+/// its user.
+/// @throws InputError naming the file: missing, unknown extension, unreadable, no triangles
+TriangleMesh read_triangle_mesh(const std::filesystem::path& path);
+
+/// A per-vertex array written with a mesh (ParaView shows it as point data).
+struct PointArray {
+  std::string name;
+  int components = 1;
+  std::vector<double> values; ///< #vertices * components, vertex-major
+};
+
+/// Writes a triangle mesh as VTK XML PolyData (.vtp, binary, zlib), atomically; also reads back
+/// with read_triangle_mesh.
+void write_vtp(const std::filesystem::path& path, const TriangleMesh& mesh,
+               const std::vector<PointArray>& arrays = {});
+
+/// Writes a tet mesh as VTK XML UnstructuredGrid (.vtu, binary, zlib), atomically.
+void write_vtu(const std::filesystem::path& path, const TetMesh& mesh,
+               const std::vector<PointArray>& arrays = {});
+
+/// Reads a tet mesh written by write_vtu (every cell a VTK_TETRA); boundary faces are recomputed.
+/// @throws InputError naming the file
+TetMesh read_vtu(const std::filesystem::path& path);
+
+} // namespace phantasm

@@ -1,0 +1,58 @@
+#pragma once
+
+#include "core/grid.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace phantasm {
+
+/// NIfTI intent codes phantasm writes (nifti1.h).
+enum class NiftiIntent : std::int16_t {
+  none = 0,
+  label = 1002,        ///< label maps
+  displacement = 1007, ///< vector displacement fields
+};
+
+/// What a NIfTI file stores, besides its grid.
+struct NiftiWriteOptions {
+  NiftiIntent intent = NiftiIntent::none;
+  int components = 1;      ///< 1 for scalar images; 3 for vector fields (dim [5, X, Y, Z, 1, 3])
+  std::string description; ///< the header's descrip field (at most 79 characters kept)
+};
+
+/// Writes a NIfTI-1 image (float32), gzip-compressed when the path ends in ".gz", atomically
+/// (temporary file, then rename). The grid's world_from_voxel becomes both the qform and the
+/// sform (code 1, scanner anatomical) in RAS mm; xyzt_units are mm and seconds.
+/// values: grid.voxel_count() * components values, i fastest, then j, k, then the component.
+/// @throws std::invalid_argument when the value count does not match the grid
+void write_nifti(const std::filesystem::path& path, const ImageGrid& grid, const std::vector<float>& values,
+                 const NiftiWriteOptions& options = {});
+
+/// Writes a label map as NIfTI-1, datatype uint8 when every label fits, else int16 or int32
+/// (intent label unless the options say otherwise).
+void write_nifti_labels(const std::filesystem::path& path, const ImageGrid& grid,
+                        const std::vector<std::int32_t>& labels, const NiftiWriteOptions& options = {});
+
+/// A scalar volume read from a NIfTI file.
+struct NiftiVolume {
+  ImageGrid grid;
+  std::vector<double> values; ///< grid.voxel_count() values, i fastest
+  int datatype = 0;           ///< NIfTI datatype code of the file
+};
+
+/// Reads a 3-D NIfTI-1 or NIfTI-2 file (.nii or .nii.gz). The grid comes from the sform when
+/// its code is positive, else the qform, else the voxel sizes alone; scaling (scl_slope,
+/// scl_inter) is applied.
+/// @throws InputError naming the file when it is missing, unreadable, not 3-D, or has
+/// a shear (phantasm grids are rotations times spacings)
+NiftiVolume read_nifti(const std::filesystem::path& path);
+
+/// Reads a label volume: a NIfTI file of integer labels (an integer datatype, or floats that
+/// are all whole numbers).
+/// @throws InputError as read_nifti, and naming the first voxel that is not a whole number
+std::vector<std::int32_t> read_nifti_labels(const std::filesystem::path& path, ImageGrid* grid);
+
+} // namespace phantasm

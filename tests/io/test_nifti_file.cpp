@@ -1,0 +1,149 @@
+#include "core/error.hpp"
+#include "io/nifti_file.hpp"
+#include "tests/support/error_message.hpp"
+#include "tests/support/files.hpp"
+#include "tests/support/subprocess.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+using namespace phantasm;
+using phantasm::testing::fresh_folder;
+using phantasm::testing::input_error_message;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// A rotated, anisotropic grid with an offset: every part of the affine is exercised.
+ImageGrid oblique_grid() {
+  ImageGrid grid;
+  grid.dims = {5, 4, 3};
+  grid.spacing_mm = {1.5, 2.0, 2.5};
+  const Eigen::Matrix3d rotation =
+      Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  grid.world_from_voxel.topLeftCorner<3, 3>() = rotation * grid.spacing_mm.asDiagonal();
+  grid.world_from_voxel.topRightCorner<3, 1>() = Eigen::Vector3d(-10, 20.5, 7);
+  return grid;
+}
+
+} // namespace
+
+TEST(NiftiFile, FloatImageRoundTripKeepsValuesAndAffine) {
+  const fs::path folder = fresh_folder("nifti-float");
+  const ImageGrid grid = oblique_grid();
+  std::vector<float> values(static_cast<std::size_t>(grid.voxel_count()));
+  for (std::size_t i = 0; i < values.size(); ++i)
+    values[i] = 0.5f * static_cast<float>(i) - 3.0f;
+  for (const char* name : {"image.nii.gz", "image.nii"}) {
+    write_nifti(folder / name, grid, values);
+    const NiftiVolume back = read_nifti(folder / name);
+    EXPECT_EQ(back.grid.dims, grid.dims);
+    EXPECT_TRUE(back.grid.spacing_mm.isApprox(grid.spacing_mm, 1e-6));
+    EXPECT_TRUE(back.grid.world_from_voxel.isApprox(grid.world_from_voxel, 1e-6))
+        << back.grid.world_from_voxel;
+    ASSERT_EQ(back.values.size(), values.size());
+    for (std::size_t i = 0; i < values.size(); ++i)
+      ASSERT_EQ(back.values[i], static_cast<double>(values[i]));
+  }
+  // Identical input, identical bytes (no time stamp in the gzip stream).
+  const std::string first = phantasm::testing::read_file(folder / "image.nii.gz");
+  write_nifti(folder / "image.nii.gz", grid, values);
+  EXPECT_EQ(phantasm::testing::read_file(folder / "image.nii.gz"), first);
+  EXPECT_THROW(write_nifti(folder / "short.nii.gz", grid, {1.0f}), std::invalid_argument);
+}
+
+TEST(NiftiFile, LabelsUseTheNarrowestIntegerType) {
+  const fs::path folder = fresh_folder("nifti-labels");
+  const ImageGrid grid = oblique_grid();
+  std::vector<std::int32_t> labels(static_cast<std::size_t>(grid.voxel_count()), 0);
+  labels[7] = 3;
+  write_nifti_labels(folder / "small.nii.gz", grid, labels);
+  ImageGrid back_grid;
+  EXPECT_EQ(read_nifti_labels(folder / "small.nii.gz", &back_grid), labels);
+  EXPECT_EQ(read_nifti(folder / "small.nii.gz").datatype, 2); // uint8
+  labels[8] = 40000;
+  write_nifti_labels(folder / "large.nii.gz", grid, labels);
+  EXPECT_EQ(read_nifti(folder / "large.nii.gz").datatype, 8); // int32
+  EXPECT_EQ(read_nifti_labels(folder / "large.nii.gz", nullptr), labels);
+}
+
+TEST(NiftiFile, BadFilesGetMessagesNamingFileAndProblem) {
+  const fs::path folder = fresh_folder("nifti-bad");
+  EXPECT_EQ(input_error_message([&] { read_nifti(folder / "none.nii.gz"); }),
+            (folder / "none.nii.gz").string() + ": expected a NIfTI file, found no such file");
+  phantasm::testing::write_text_file(folder / "text.nii", "not a nifti file at all");
+  EXPECT_NE(input_error_message([&] { read_nifti(folder / "text.nii"); }).find("libnifti cannot read"),
+            std::string::npos);
+
+  ImageGrid grid = oblique_grid();
+  const std::vector<float> field(static_cast<std::size_t>(grid.voxel_count()) * 3, 1.0f);
+  write_nifti(folder / "field.nii.gz", grid, field, {NiftiIntent::displacement, 3, "field"});
+  EXPECT_NE(input_error_message([&] {
+              read_nifti(folder / "field.nii.gz");
+            }).find("expected a 3-D volume, found dimension 5 of size 3"),
+            std::string::npos);
+
+  std::vector<float> fractional(static_cast<std::size_t>(grid.voxel_count()), 1.0f);
+  fractional[0 + 5 * 2] = 0.5f; // voxel (0, 2, 0): i + nx j
+  write_nifti(folder / "fraction.nii.gz", grid, fractional);
+  EXPECT_NE(input_error_message([&] {
+              read_nifti_labels(folder / "fraction.nii.gz", nullptr);
+            }).find("expected whole-number labels, found 0.5"),
+            std::string::npos);
+  EXPECT_NE(input_error_message([&] {
+              read_nifti_labels(folder / "fraction.nii.gz", nullptr);
+            }).find("at voxel (0, 2, 0)"),
+            std::string::npos);
+
+  grid.world_from_voxel(0, 1) += 0.5; // shear: the sform can hold it, phantasm grids cannot
+  write_nifti(folder / "shear.nii.gz", grid, fractional);
+  EXPECT_NE(input_error_message([&] { read_nifti(folder / "shear.nii.gz"); }).find("without shear"),
+            std::string::npos);
+}
+
+// nibabel, the reader most users load our images with, sees the affine, shape, datatype and
+// intent DESIGN.md specifies.
+TEST(NiftiFile, NibabelReadsAffineShapeDatatypeAndIntent) {
+  const fs::path folder = fresh_folder("nifti-nibabel");
+  const ImageGrid grid = oblique_grid();
+  const std::vector<float> image(static_cast<std::size_t>(grid.voxel_count()), 2.5f);
+  std::vector<float> field(static_cast<std::size_t>(grid.voxel_count()) * 3);
+  for (std::size_t i = 0; i < field.size(); ++i)
+    field[i] = static_cast<float>(i / static_cast<std::size_t>(grid.voxel_count())); // component index
+  std::vector<std::int32_t> labels(static_cast<std::size_t>(grid.voxel_count()), 2);
+  write_nifti(folder / "image.nii.gz", grid, image);
+  write_nifti(folder / "field.nii.gz", grid, field, {NiftiIntent::displacement, 3, ""});
+  write_nifti_labels(folder / "labels.nii.gz", grid, labels);
+
+  std::ostringstream expected_affine;
+  expected_affine.precision(17);
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c)
+      expected_affine << (r || c ? "," : "") << grid.world_from_voxel(r, c);
+  const std::string script = R"(
+import sys, numpy as np, nibabel as nib
+folder, expected = sys.argv[1], np.array([float(v) for v in sys.argv[2].split(',')]).reshape(4, 4)
+def check(name, shape, dtype, intent):
+    img = nib.load(folder + '/' + name)
+    h = img.header
+    assert img.shape == shape, (name, img.shape)
+    assert img.get_data_dtype() == np.dtype(dtype), (name, img.get_data_dtype())
+    assert h.get_intent()[0] == intent, (name, h.get_intent())
+    assert int(h['qform_code']) == 1 and int(h['sform_code']) == 1, name
+    assert np.allclose(img.affine, expected, atol=1e-4), (name, img.affine)
+    assert np.allclose(h.get_qform(), expected, atol=1e-4), (name, h.get_qform())
+    assert h.get_xyzt_units() == ('mm', 'sec'), h.get_xyzt_units()
+    return np.asanyarray(img.dataobj)
+check('image.nii.gz', (5, 4, 3), 'float32', 'none')
+f = check('field.nii.gz', (5, 4, 3, 1, 3), 'float32', 'vector')
+assert all((f[..., 0, c] == c).all() for c in range(3))
+check('labels.nii.gz', (5, 4, 3), 'uint8', 'label')
+print('ok')
+)";
+  phantasm::testing::write_text_file(folder / "check.py", script);
+  const auto result = phantasm::testing::run_command(
+      {PHANTASM_PYTHON, (folder / "check.py").string(), folder.string(), expected_affine.str()});
+  EXPECT_EQ(result.exit_code, 0) << result.out << result.err;
+  EXPECT_EQ(result.out, "ok\n") << result.err;
+}

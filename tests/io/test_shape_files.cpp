@@ -1,0 +1,116 @@
+// Organs made of files: a triangle mesh (STL) and labels of a NIfTI label volume, read by io
+// and built into a phantom by anatomy.
+
+#include "anatomy/phantom.hpp"
+#include "core/error.hpp"
+#include "io/mesh_file.hpp"
+#include "io/nifti_file.hpp"
+#include "io/shape_files.hpp"
+#include "tests/support/files.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace phantasm;
+using phantasm::testing::fresh_folder;
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr double k_pi = 3.14159265358979323846;
+
+/// A label volume on a 1 mm grid: label 1 a ball of radius 12 mm at (-15, 0, 0), label 2 a ball
+/// of radius 9 mm at (15, 0, 0).
+void write_two_balls(const fs::path& path) {
+  ImageGrid grid;
+  grid.dims = {64, 40, 40};
+  grid.world_from_voxel.topRightCorner<3, 1>() = Eigen::Vector3d(-31.5, -19.5, -19.5);
+  std::vector<std::int32_t> labels(static_cast<std::size_t>(grid.voxel_count()), 0);
+  std::size_t i = 0;
+  for (int k = 0; k < grid.dims.z(); ++k)
+    for (int j = 0; j < grid.dims.y(); ++j)
+      for (int x = 0; x < grid.dims.x(); ++x, ++i) {
+        const Eigen::Vector3d p = grid.world_from_index(Eigen::Vector3d(x, j, k));
+        if ((p - Eigen::Vector3d(-15, 0, 0)).norm() < 12.0) labels[i] = 1;
+        if ((p - Eigen::Vector3d(15, 0, 0)).norm() < 9.0) labels[i] = 2;
+      }
+  write_nifti_labels(path, grid, labels);
+}
+
+Scene scene_in(const fs::path& folder, const std::string& organs) {
+  const std::string text = "phantasm: 1\nname: files\nseed: 1\nfield_strength_T: 3.0\n"
+                           "grid: {field_of_view_mm: 96, voxel_size_mm: 2}\n"
+                           "anatomy:\n  base_mesh_triangles: 80\n  organs:\n" +
+                           organs;
+  const SceneLoadResult result = parse_scene(text, folder / "scene.yaml");
+  EXPECT_TRUE(result.scene) << format_diagnostics(result.problems);
+  return result.scene ? *result.scene : Scene{};
+}
+
+} // namespace
+
+TEST(ShapeFiles, MeshAndLabelVolumeOrgansBecomePatchSurfacesOfTheirVolume) {
+  const fs::path folder = fresh_folder("shape-files");
+  TriangleMesh ball = unit_icosphere(3); // 1280 triangles: a dense target for 80 patches
+  ball.vertices *= 20.0;
+  write_vtp(folder / "ball.vtp", ball);
+  write_two_balls(folder / "labels.nii.gz");
+  const Scene scene = scene_in(
+      folder, R"(    - {name: ball, tissue: white_matter, solid: false, shape: {type: mesh, file: ball.vtp}}
+    - {name: left, tissue: gray_matter, solid: false, shape: {type: label_volume, file: labels.nii.gz, label: 1}}
+    - {name: right, tissue: csf, shape: {type: label_volume, file: labels.nii.gz, label: 2}}
+)");
+  const std::map<std::string, ShapeData> files = read_shape_files(scene);
+  ASSERT_EQ(files.size(), 3u);
+  EXPECT_EQ(files.at("ball").mesh->face_count(), 1280);
+  EXPECT_EQ(files.at("left").labels.size(), 64u * 40u * 40u);
+
+  Reporter quiet = Reporter::silent();
+  const Phantom phantom = build_phantom(scene, files, quiet);
+  // The mesh organ follows its dense mesh; the label organs the balls the voxels sample (the
+  // 1/2-level of trilinear interpolated indicators lies within about half a voxel of the sphere).
+  EXPECT_NEAR(phantom.find("ball")->surface->volume() / enclosed_volume(ball), 1.0, 1e-3);
+  EXPECT_LT(phantom.find("ball")->fit.hausdorff_mm, 1.0);
+  EXPECT_NEAR(phantom.find("left")->surface->volume() / (4.0 / 3.0 * k_pi * 12 * 12 * 12), 1.0, 0.05);
+  EXPECT_NEAR(phantom.find("right")->surface->volume() / (4.0 / 3.0 * k_pi * 9 * 9 * 9), 1.0, 0.07);
+  ASSERT_TRUE(phantom.find("right")->solid);
+  for (Eigen::Index t = 0; t < phantom.find("right")->solid->tets.rows(); ++t)
+    ASSERT_GT(tet_volume(*phantom.find("right")->solid, t), 0.0);
+}
+
+TEST(ShapeFiles, ALabelMissingFromItsVolumeIsReportedAtItsSceneField) {
+  const fs::path folder = fresh_folder("shape-files-missing");
+  write_two_balls(folder / "labels.nii.gz");
+  const Scene scene = scene_in(
+      folder,
+      "    - {name: gone, tissue: csf, shape: {type: label_volume, file: labels.nii.gz, label: 7}}\n");
+  try {
+    read_shape_files(scene);
+    FAIL() << "no error";
+  } catch (const InputError& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find("scene.yaml:"), std::string::npos) << message;
+    EXPECT_NE(message.find("anatomy.organs[0].shape.file: "), std::string::npos) << message;
+    EXPECT_NE(message.find("expected voxels of label 7 (organ gone), found none"), std::string::npos)
+        << message;
+  }
+}
+
+TEST(ShapeFiles, AnOpenMeshIsRejectedWithTheDefectNamed) {
+  const fs::path folder = fresh_folder("shape-files-open");
+  TriangleMesh ball = unit_icosphere(2);
+  ball.vertices *= 20.0;
+  TriangleMesh open = ball;
+  open.faces = ball.faces.topRows(ball.face_count() - 1);
+  write_vtp(folder / "open.vtp", open);
+  const Scene scene =
+      scene_in(folder, "    - {name: cup, tissue: csf, shape: {type: mesh, file: open.vtp}}\n");
+  Reporter quiet = Reporter::silent();
+  try {
+    build_phantom(scene, read_shape_files(scene), quiet);
+    FAIL() << "no error";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("open edge"), std::string::npos) << error.what();
+  }
+}
