@@ -1,0 +1,122 @@
+#include "sim/elastic_model.hpp"
+
+#include <stdexcept>
+
+namespace phantasm {
+
+LameParameters lame_parameters(double E, double nu) {
+  return {E / (2.0 * (1.0 + nu)), E * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))};
+}
+
+int add_body(ElasticModel& model, const Eigen::MatrixX3d& rest_m, const Eigen::MatrixX4i& tets,
+             const LameParameters& material, double density_kg_m3) {
+  const auto first_vertex = static_cast<int>(model.rest_positions_m.rows());
+  const Eigen::Index total = first_vertex + rest_m.rows();
+  model.rest_positions_m.conservativeResize(total, 3);
+  model.rest_positions_m.bottomRows(rest_m.rows()) = rest_m;
+  model.masses_kg.conservativeResize(total);
+  model.masses_kg.tail(rest_m.rows()).setZero();
+  model.fixed.resize(static_cast<std::size_t>(total), 0);
+  Eigen::Matrix<double, 4, 3> selector;
+  selector << -1, -1, -1, 1, 0, 0, 0, 1, 0, 0, 0, 1;
+  for (Eigen::Index t = 0; t < tets.rows(); ++t) {
+    TetElement e;
+    Eigen::Matrix3d Dm;
+    for (int k = 0; k < 4; ++k)
+      e.vertices[static_cast<std::size_t>(k)] = first_vertex + tets(t, k);
+    for (int k = 0; k < 3; ++k)
+      Dm.col(k) = (rest_m.row(tets(t, k + 1)) - rest_m.row(tets(t, 0))).transpose();
+    e.rest_volume_m3 = Dm.determinant() / 6.0;
+    if (!(e.rest_volume_m3 > 0.0)) {
+      throw std::invalid_argument("tet " + std::to_string(t) + " has rest volume " +
+                                  std::to_string(e.rest_volume_m3) + " m^3; expected a positive volume");
+    }
+    e.Q = selector * Dm.inverse();
+    e.strain_weight = 2.0 * material.mu * e.rest_volume_m3;
+    e.volume_weight = 3.0 * material.lambda * e.rest_volume_m3;
+    for (int k = 0; k < 4; ++k)
+      model.masses_kg[e.vertices[static_cast<std::size_t>(k)]] += 0.25 * density_kg_m3 * e.rest_volume_m3;
+    model.tets.push_back(e);
+  }
+  return first_vertex;
+}
+
+namespace {
+
+Eigen::Matrix3d deformation_gradient(const TetElement& e, const Eigen::MatrixX3d& p) {
+  Eigen::Matrix<double, 3, 4> X;
+  for (int k = 0; k < 4; ++k)
+    X.col(k) = p.row(e.vertices[static_cast<std::size_t>(k)]).transpose();
+  return X * e.Q;
+}
+
+Eigen::Vector3d point_of(const PointConstraint& c, const Eigen::MatrixX3d& p) {
+  Eigen::Vector3d x = Eigen::Vector3d::Zero();
+  for (int k = 0; k < c.count; ++k)
+    x += c.coefficients[k] * p.row(c.vertices[static_cast<std::size_t>(k)]).transpose();
+  return x;
+}
+
+/// dE/dF of both tet constraints at F: U diag(psi_strain + psi_volume) V^T, and their energy.
+Eigen::Matrix3d tet_stress(const ElasticModel& model, const TetElement& e, const Eigen::Matrix3d& F,
+                           double* energy) {
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+  const SignedSvd svd = signed_svd(F, rotation);
+  const SingularValueEnergy strain =
+      singular_value_energy(TetConstraintKind::strain, model.strain_range, e.strain_weight, svd.sigma);
+  const SingularValueEnergy volume =
+      singular_value_energy(TetConstraintKind::volume, model.volume_range, e.volume_weight, svd.sigma);
+  *energy = strain.value + volume.value;
+  return svd.U * (strain.gradient + volume.gradient).asDiagonal() * svd.V.transpose();
+}
+
+} // namespace
+
+double model_energy(const ElasticModel& model, const StepInertia& inertia, const Eigen::MatrixX3d& p) {
+  double energy = 0.0;
+  if (inertia.weight > 0.0) {
+    energy += 0.5 * inertia.weight *
+              (model.masses_kg.asDiagonal() * (p - inertia.target_m).rowwise().squaredNorm()).sum();
+  }
+  if (model.external_forces_N.rows() == p.rows()) energy -= model.external_forces_N.cwiseProduct(p).sum();
+  for (const TetElement& e : model.tets) {
+    double tet = 0.0;
+    tet_stress(model, e, deformation_gradient(e, p), &tet);
+    energy += tet;
+  }
+  for (const PointConstraint& c : model.points)
+    energy += 0.5 * c.stiffness_N_m * (point_of(c, p) - c.target_m).squaredNorm();
+  return energy;
+}
+
+Eigen::MatrixX3d model_gradient(const ElasticModel& model, const StepInertia& inertia,
+                                const Eigen::MatrixX3d& p) {
+  Eigen::MatrixX3d g = Eigen::MatrixX3d::Zero(p.rows(), 3);
+  if (inertia.weight > 0.0) g += inertia.weight * (model.masses_kg.asDiagonal() * (p - inertia.target_m));
+  if (model.external_forces_N.rows() == p.rows()) g -= model.external_forces_N;
+  for (const TetElement& e : model.tets) {
+    double unused = 0.0;
+    const Eigen::Matrix3d P = tet_stress(model, e, deformation_gradient(e, p), &unused);
+    // dE/dX = P Q^T: column k is the force on vertex k.
+    const Eigen::Matrix<double, 3, 4> forces = P * e.Q.transpose();
+    for (int k = 0; k < 4; ++k)
+      g.row(e.vertices[static_cast<std::size_t>(k)]) += forces.col(k).transpose();
+  }
+  for (const PointConstraint& c : model.points) {
+    const Eigen::Vector3d r = c.stiffness_N_m * (point_of(c, p) - c.target_m);
+    for (int k = 0; k < c.count; ++k)
+      g.row(c.vertices[static_cast<std::size_t>(k)]) += c.coefficients[k] * r.transpose();
+  }
+  return g;
+}
+
+double free_gradient_norm(const ElasticModel& model, const Eigen::MatrixX3d& gradient) {
+  double largest = 0.0;
+  for (Eigen::Index v = 0; v < gradient.rows(); ++v) {
+    if (!model.fixed.empty() && model.fixed[static_cast<std::size_t>(v)]) continue;
+    largest = std::max(largest, gradient.row(v).norm());
+  }
+  return largest;
+}
+
+} // namespace phantasm

@@ -1,0 +1,88 @@
+#pragma once
+
+#include "sim/tet_constraints.hpp"
+
+#include <Eigen/Core>
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace phantasm {
+
+/// A tet carrying a strain and a volume constraint. Positions are in metres inside the solver.
+struct TetElement {
+  std::array<int, 4> vertices{};
+  /// F = X Q with X the 3x4 matrix of the tet's current vertex positions (columns).
+  Eigen::Matrix<double, 4, 3> Q = Eigen::Matrix<double, 4, 3>::Zero();
+  double rest_volume_m3 = 0.0;
+  double strain_weight = 0.0; ///< 2 mu V (J per unit squared strain)
+  double volume_weight = 0.0; ///< 3 lambda V
+};
+
+/// A point of the model (a vertex, or a barycentric combination of up to four vertices, e.g. a
+/// point of an embedded organ) pulled to a target by a zero-rest-length spring:
+/// energy stiffness / 2 |sum_k b_k x_k - target|^2.
+struct PointConstraint {
+  std::array<int, 4> vertices{};
+  Eigen::Vector4d coefficients = Eigen::Vector4d::Zero();
+  int count = 1;
+  Eigen::Vector3d target_m = Eigen::Vector3d::Zero();
+  double stiffness_N_m = 0.0;
+};
+
+/// An elastic solid: vertices with lumped masses, tet strain and volume constraints, point
+/// constraints, vertices held in place (Dirichlet: the solvers never move them), and external
+/// forces. The objective of one step (METHOD.md section 2) is
+///   E(p) = a/2 (p - s)^T M (p - s) - f . p + sum_tets [ws/2 |F - P_strain(F)|^2 + wv/2 |F - P_volume(F)|^2]
+///          + sum_points k/2 |b . x - t|^2
+/// with a = 1/h^2 for a dynamic step (s the inertial target, gravity folded into s, f = 0) and
+/// a = 0 for quasi-static equilibrium (f the external forces).
+struct ElasticModel {
+  Eigen::MatrixX3d rest_positions_m;
+  Eigen::VectorXd masses_kg;
+  std::vector<TetElement> tets;
+  SingularValueRange strain_range; ///< {1, 1}: as-rigid-as-possible
+  SingularValueRange volume_range; ///< {1, 1}: volume preserving
+  std::vector<PointConstraint> points;
+  std::vector<char> fixed;            ///< per vertex: held where the solver finds it
+  Eigen::MatrixX3d external_forces_N; ///< per vertex; may be empty (no force)
+
+  Eigen::Index vertex_count() const { return rest_positions_m.rows(); }
+};
+
+/// Lame parameters from Young's modulus and Poisson ratio.
+struct LameParameters {
+  double mu = 0.0;
+  double lambda = 0.0;
+};
+LameParameters lame_parameters(double youngs_modulus_Pa, double poisson_ratio);
+
+/// Appends a tet mesh (positions in metres, tets positively oriented) as a body of its own:
+/// its vertices (free), its tets with the material's weights and lumped masses (a quarter of
+/// each tet's mass per vertex). Weights [choice, METHOD.md section 3]: strain 2 mu V and volume
+/// 3 lambda V. For small principal strains e_i the strain term is mu V |e|^2 and the volume
+/// term (its distance to det = 1 is |tr e| / sqrt 3) lambda V (tr e)^2 / 2: together exactly
+/// the linear-elastic energy, so E and nu mean what they mean in linear elasticity.
+/// Returns the model index of the mesh's first vertex.
+/// @throws std::invalid_argument for a tet with non-positive rest volume
+int add_body(ElasticModel& model, const Eigen::MatrixX3d& rest_m, const Eigen::MatrixX4i& tets,
+             const LameParameters& material, double density_kg_m3);
+
+/// The inertial part of one step.
+struct StepInertia {
+  double weight = 0.0;       ///< 1/h^2, or 0 for quasi-static
+  Eigen::MatrixX3d target_m; ///< s; unused when weight is 0
+};
+
+/// E(p) as above; p has one row per vertex, metres.
+double model_energy(const ElasticModel& model, const StepInertia& inertia, const Eigen::MatrixX3d& p);
+
+/// The gradient of E with respect to every vertex (rows of fixed vertices included).
+Eigen::MatrixX3d model_gradient(const ElasticModel& model, const StepInertia& inertia,
+                                const Eigen::MatrixX3d& p);
+
+/// Largest gradient row norm over the free vertices (the residual the solvers report), N.
+double free_gradient_norm(const ElasticModel& model, const Eigen::MatrixX3d& gradient);
+
+} // namespace phantasm

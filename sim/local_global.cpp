@@ -1,0 +1,351 @@
+#include "sim/local_global.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/CholmodSupport>
+#include <Eigen/Sparse>
+#include <omp.h>
+
+#include <chrono>
+#include <numeric>
+#include <stdexcept>
+
+namespace phantasm {
+
+struct LocalGlobalSolver::Impl {
+  const ElasticModel& model;
+  double alpha = 0.0;
+  int threads = 1;
+  int anderson_history = 0;
+  std::vector<int> free_index;            ///< per vertex: row in the free system, -1 for fixed vertices
+  std::vector<int> free_vertex;           ///< per free row: the vertex
+  Eigen::SparseMatrix<double> K_free;     ///< free x free
+  Eigen::SparseMatrix<double> K_coupling; ///< free x all vertices, columns of fixed vertices only
+  Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> factor;
+  // Per tet: warm-started rotation and the projection term w_s T_s^T + w_v T_v^T.
+  std::vector<Eigen::Quaterniond> rotations, eigenvectors;
+  std::vector<Eigen::Matrix3d> projections;
+  // Per vertex (CSR): the tets (index, corner) and point constraints (index, corner) using it.
+  std::vector<int> tet_offsets, tet_entries, point_offsets, point_entries;
+  Eigen::MatrixX3d rhs, coupling_rhs, solution;
+
+  Impl(const ElasticModel& m, double a, int t) : model(m), alpha(a), threads(t) {}
+
+  void build_adjacency() {
+    const auto n = static_cast<std::size_t>(model.vertex_count());
+    auto build = [n](auto&& for_each_use, std::vector<int>& offsets, std::vector<int>& entries) {
+      offsets.assign(n + 1, 0);
+      for_each_use([&](int vertex, int, int) { ++offsets[static_cast<std::size_t>(vertex) + 1]; });
+      for (std::size_t v = 0; v < n; ++v)
+        offsets[v + 1] += offsets[v];
+      entries.assign(2 * static_cast<std::size_t>(offsets[n]), 0);
+      std::vector<int> cursor(offsets.begin(), offsets.end() - 1);
+      for_each_use([&](int vertex, int element, int corner) {
+        const auto at = 2 * static_cast<std::size_t>(cursor[static_cast<std::size_t>(vertex)]++);
+        entries[at] = element;
+        entries[at + 1] = corner;
+      });
+    };
+    build(
+        [&](auto&& use) {
+          for (std::size_t t = 0; t < model.tets.size(); ++t)
+            for (int k = 0; k < 4; ++k)
+              use(model.tets[t].vertices[static_cast<std::size_t>(k)], static_cast<int>(t), k);
+        },
+        tet_offsets, tet_entries);
+    build(
+        [&](auto&& use) {
+          for (std::size_t c = 0; c < model.points.size(); ++c)
+            for (int k = 0; k < model.points[c].count; ++k)
+              use(model.points[c].vertices[static_cast<std::size_t>(k)], static_cast<int>(c), k);
+        },
+        point_offsets, point_entries);
+  }
+
+  void assemble_and_factor() {
+    const Eigen::Index n = model.vertex_count();
+    free_index.assign(static_cast<std::size_t>(n), -1);
+    free_vertex.clear();
+    for (Eigen::Index v = 0; v < n; ++v) {
+      if (model.fixed.empty() || !model.fixed[static_cast<std::size_t>(v)]) {
+        free_index[static_cast<std::size_t>(v)] = static_cast<int>(free_vertex.size());
+        free_vertex.push_back(static_cast<int>(v));
+      }
+    }
+    const auto nf = static_cast<Eigen::Index>(free_vertex.size());
+    std::vector<Eigen::Triplet<double>> inner, coupling;
+    auto add = [&](int a, int b, double value) {
+      const int fa = free_index[static_cast<std::size_t>(a)];
+      if (fa < 0) return;
+      const int fb = free_index[static_cast<std::size_t>(b)];
+      if (fb >= 0) {
+        if (fb <= fa) inner.emplace_back(fa, fb, value); // lower triangle
+      } else {
+        coupling.emplace_back(fa, b, value);
+      }
+    };
+    for (Eigen::Index v = 0; v < n; ++v)
+      add(static_cast<int>(v), static_cast<int>(v), alpha * model.masses_kg[v]);
+    for (const TetElement& e : model.tets) {
+      const Eigen::Matrix4d L = (e.strain_weight + e.volume_weight) * e.Q * e.Q.transpose();
+      for (int a = 0; a < 4; ++a)
+        for (int b = 0; b < 4; ++b)
+          add(e.vertices[static_cast<std::size_t>(a)], e.vertices[static_cast<std::size_t>(b)], L(a, b));
+    }
+    for (const PointConstraint& c : model.points) {
+      for (int a = 0; a < c.count; ++a)
+        for (int b = 0; b < c.count; ++b)
+          add(c.vertices[static_cast<std::size_t>(a)], c.vertices[static_cast<std::size_t>(b)],
+              c.stiffness_N_m * c.coefficients[a] * c.coefficients[b]);
+    }
+    K_free.resize(nf, nf);
+    K_free.setFromTriplets(inner.begin(), inner.end());
+    K_coupling.resize(nf, n);
+    K_coupling.setFromTriplets(coupling.begin(), coupling.end());
+    if (alpha == 0.0) check_held();
+    factor.setMode(Eigen::CholmodAuto);
+    factor.compute(K_free);
+    if (factor.info() != Eigen::Success) {
+      throw std::runtime_error(
+          "local/global: the global matrix is not positive definite (is anything holding "
+          "the model? quasi-static solves need fixed vertices or attachments)");
+    }
+    rhs.resize(nf, 3);
+    coupling_rhs.setZero(nf, 3);
+    solution.resize(nf, 3);
+  }
+
+  /// Quasi-static solves have no inertia: every connected piece of the model must touch a fixed
+  /// vertex or a point constraint, else it can float and the matrix is singular (round-off can
+  /// hide that from the factorization, so it is checked here).
+  void check_held() const {
+    std::vector<int> parent(static_cast<std::size_t>(model.vertex_count()));
+    std::iota(parent.begin(), parent.end(), 0);
+    auto find = [&](int v) {
+      while (parent[static_cast<std::size_t>(v)] != v)
+        v = parent[static_cast<std::size_t>(v)] =
+            parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(v)])];
+      return v;
+    };
+    for (const TetElement& e : model.tets)
+      for (int k = 1; k < 4; ++k)
+        parent[static_cast<std::size_t>(find(e.vertices[static_cast<std::size_t>(k)]))] = find(e.vertices[0]);
+    std::vector<char> held(parent.size(), 0);
+    for (std::size_t v = 0; v < parent.size(); ++v)
+      if (!model.fixed.empty() && model.fixed[v])
+        held[static_cast<std::size_t>(find(static_cast<int>(v)))] = 1;
+    for (const PointConstraint& c : model.points)
+      for (int k = 0; k < c.count; ++k)
+        held[static_cast<std::size_t>(find(c.vertices[static_cast<std::size_t>(k)]))] = 1;
+    for (int v : free_vertex) {
+      if (!held[static_cast<std::size_t>(find(v))]) {
+        throw std::runtime_error("local/global: the global matrix is not positive definite: vertex " +
+                                 std::to_string(v) +
+                                 " belongs to a piece that nothing holds (quasi-static solves need fixed "
+                                 "vertices or attachments on every piece)");
+      }
+    }
+  }
+
+  /// The local step: projections of every tet at p; returns E(p).
+  double local_step(const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& target) {
+    const auto count = static_cast<std::ptrdiff_t>(model.tets.size());
+    double tet_energy = 0.0;
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 128) reduction(+ : tet_energy)
+    for (std::ptrdiff_t t = 0; t < count; ++t) {
+      const TetElement& e = model.tets[static_cast<std::size_t>(t)];
+      Eigen::Matrix<double, 3, 4> X;
+      for (int k = 0; k < 4; ++k)
+        X.col(k) = p.row(e.vertices[static_cast<std::size_t>(k)]).transpose();
+      const Eigen::Matrix3d F = X * e.Q;
+      const SignedSvd svd =
+          signed_svd(F, rotations[static_cast<std::size_t>(t)], eigenvectors[static_cast<std::size_t>(t)]);
+      const Eigen::Vector3d strain = project_strain(svd.sigma, model.strain_range);
+      const Eigen::Vector3d volume = project_volume(svd.sigma, model.volume_range);
+      const Eigen::Vector3d combined = e.strain_weight * strain + e.volume_weight * volume;
+      // w_s T_s^T + w_v T_v^T = V diag(w_s s_s + w_v s_v) U^T
+      projections[static_cast<std::size_t>(t)].noalias() = svd.V * combined.asDiagonal() * svd.U.transpose();
+      tet_energy += 0.5 * (e.strain_weight * (svd.sigma - strain).squaredNorm() +
+                           e.volume_weight * (svd.sigma - volume).squaredNorm());
+    }
+    double energy = tet_energy;
+    if (alpha > 0.0) { // over every vertex, as model_energy (fixed ones add a constant)
+      for (Eigen::Index v = 0; v < p.rows(); ++v)
+        energy += 0.5 * alpha * model.masses_kg[v] * (p.row(v) - target.row(v)).squaredNorm();
+    }
+    if (model.external_forces_N.rows() == p.rows()) energy -= model.external_forces_N.cwiseProduct(p).sum();
+    for (const PointConstraint& c : model.points) {
+      Eigen::RowVector3d x = Eigen::RowVector3d::Zero();
+      for (int k = 0; k < c.count; ++k)
+        x += c.coefficients[k] * p.row(c.vertices[static_cast<std::size_t>(k)]);
+      energy += 0.5 * c.stiffness_N_m * (x - c.target_m.transpose()).squaredNorm();
+    }
+    return energy;
+  }
+
+  /// The right-hand side of the free vertices from the current projections.
+  void gather_rhs(const Eigen::MatrixX3d& target) {
+    const auto nf = static_cast<std::ptrdiff_t>(free_vertex.size());
+    const bool forces = model.external_forces_N.rows() == model.vertex_count();
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (std::ptrdiff_t f = 0; f < nf; ++f) {
+      const auto v = static_cast<std::size_t>(free_vertex[static_cast<std::size_t>(f)]);
+      Eigen::RowVector3d r = Eigen::RowVector3d::Zero();
+      if (alpha > 0.0)
+        r += alpha * model.masses_kg[static_cast<Eigen::Index>(v)] * target.row(static_cast<Eigen::Index>(v));
+      if (forces) r += model.external_forces_N.row(static_cast<Eigen::Index>(v));
+      for (int i = tet_offsets[v]; i < tet_offsets[v + 1]; ++i) {
+        const auto t = static_cast<std::size_t>(tet_entries[2 * static_cast<std::size_t>(i)]);
+        const int corner = tet_entries[2 * static_cast<std::size_t>(i) + 1];
+        r.noalias() += model.tets[t].Q.row(corner) * projections[t];
+      }
+      for (int i = point_offsets[v]; i < point_offsets[v + 1]; ++i) {
+        const PointConstraint& c =
+            model.points[static_cast<std::size_t>(point_entries[2 * static_cast<std::size_t>(i)])];
+        const int corner = point_entries[2 * static_cast<std::size_t>(i) + 1];
+        r += c.stiffness_N_m * c.coefficients[corner] * c.target_m.transpose();
+      }
+      rhs.row(f) = r - coupling_rhs.row(f);
+    }
+  }
+};
+
+LocalGlobalSolver::LocalGlobalSolver(const ElasticModel& model, double inertia_weight, int threads,
+                                     int anderson_history)
+    : m(std::make_unique<Impl>(model, inertia_weight, threads > 0 ? threads : omp_get_max_threads())) {
+  m->anderson_history = std::max(0, anderson_history);
+  m->rotations.assign(model.tets.size(), Eigen::Quaterniond::Identity());
+  m->eigenvectors.assign(model.tets.size(), Eigen::Quaterniond::Identity());
+  m->projections.assign(model.tets.size(), Eigen::Matrix3d::Zero());
+  m->build_adjacency();
+  m->assemble_and_factor();
+}
+
+LocalGlobalSolver::~LocalGlobalSolver() = default;
+
+double LocalGlobalSolver::energy(const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& inertial_target) {
+  return m->local_step(p, inertial_target);
+}
+
+SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d& target,
+                                     const StopCriteria& stop, bool record_energies,
+                                     const IterationObserver& observer) {
+  using Clock = std::chrono::steady_clock;
+  auto seconds_since = [](Clock::time_point start) {
+    return std::chrono::duration<double>(Clock::now() - start).count();
+  };
+  SolveReport report;
+  report.solver = "local_global";
+  m->coupling_rhs = m->K_coupling * p; // the fixed vertices' pull, constant during the solve
+  auto start = Clock::now();
+  double energy = m->local_step(p, target);
+  report.local_seconds += seconds_since(start);
+  report.initial_energy_J = energy;
+  if (record_energies) {
+    report.energies_J.push_back(energy);
+    report.seconds.push_back(report.local_seconds);
+  }
+  if (observer) observer(0, p, energy);
+  report.stopped_by = "max_iterations";
+  const auto nf = static_cast<Eigen::Index>(m->free_vertex.size());
+  auto free_positions = [&] {
+    Eigen::MatrixX3d x(nf, 3);
+    for (Eigen::Index f = 0; f < nf; ++f)
+      x.row(f) = p.row(m->free_vertex[static_cast<std::size_t>(f)]);
+    return x;
+  };
+  auto set_free_positions = [&](const Eigen::MatrixX3d& x) {
+    for (Eigen::Index f = 0; f < nf; ++f)
+      p.row(m->free_vertex[static_cast<std::size_t>(f)]) = x.row(f);
+  };
+  // Anderson acceleration of the fixed-point map x -> G(x) (global step after local step), with
+  // Peng et al. (2018)'s energy safeguard: the accelerated point is kept only when its energy is
+  // below the current one; otherwise the plain step, which never raises the energy, is taken and
+  // the history restarts. Either way the energy never increases.
+  const int history = m->anderson_history;
+  Eigen::MatrixXd dG(3 * nf, std::max(history, 1)), dF(3 * nf, std::max(history, 1));
+  Eigen::VectorXd g_previous, f_previous;
+  int stored = 0, next_column = 0;
+  Eigen::MatrixX3d x = free_positions();
+  for (int iteration = 1; iteration <= stop.max_iterations; ++iteration) {
+    start = Clock::now();
+    m->gather_rhs(target);
+    report.local_seconds += seconds_since(start);
+    start = Clock::now();
+    m->solution = m->factor.solve(m->rhs);
+    report.global_seconds += seconds_since(start);
+    start = Clock::now();
+    const double previous = energy;
+    const Eigen::MatrixX3d g_matrix = m->solution;
+    Eigen::MatrixX3d accepted = g_matrix;
+    bool accelerated = false, tried = false;
+    if (history > 0) {
+      const Eigen::Map<const Eigen::VectorXd> g(g_matrix.data(), 3 * nf);
+      const Eigen::Map<const Eigen::VectorXd> xv(x.data(), 3 * nf);
+      const Eigen::VectorXd f = g - xv;
+      if (g_previous.size() == g.size()) {
+        dG.col(next_column) = g - g_previous;
+        dF.col(next_column) = f - f_previous;
+        next_column = (next_column + 1) % history;
+        stored = std::min(stored + 1, history);
+      }
+      g_previous = g;
+      f_previous = f;
+      if (stored > 0) {
+        const Eigen::MatrixXd F = dF.leftCols(stored);
+        Eigen::MatrixXd normal = F.transpose() * F;
+        normal.diagonal().array() += 1e-10 * normal.diagonal().maxCoeff() + 1e-300;
+        const Eigen::VectorXd theta = normal.ldlt().solve(F.transpose() * f);
+        if (theta.allFinite()) {
+          tried = true;
+          Eigen::MatrixX3d candidate(nf, 3);
+          Eigen::Map<Eigen::VectorXd>(candidate.data(), 3 * nf) = g - dG.leftCols(stored) * theta;
+          set_free_positions(candidate);
+          const double candidate_energy = m->local_step(p, target);
+          if (candidate_energy < previous) {
+            accepted = candidate;
+            energy = candidate_energy;
+            accelerated = true;
+          }
+        }
+      }
+    }
+    if (!accelerated) {
+      set_free_positions(g_matrix);
+      energy = m->local_step(p, target);
+      if (tried) { // rejected: restart the history from this point
+        stored = 0;
+        next_column = 0;
+        g_previous.resize(0);
+      }
+    }
+    report.local_seconds += seconds_since(start);
+    const double change = nf > 0 ? (accepted - x).rowwise().norm().maxCoeff() : 0.0;
+    x = accepted;
+    report.iterations = iteration;
+    if (record_energies) {
+      report.energies_J.push_back(energy);
+      report.seconds.push_back(report.local_seconds + report.global_seconds);
+    }
+    if (observer) observer(iteration, p, energy);
+    if (change <= stop.position_change_m) {
+      report.stopped_by = "position";
+      break;
+    }
+    if ((previous - energy) <= stop.relative_energy_decrease * std::abs(energy)) {
+      report.stopped_by = "energy";
+      break;
+    }
+  }
+  report.final_energy_J = energy;
+  // The residual: the gradient K p - b(p) of the free vertices, with b from the projections at
+  // the result (the last local step computed them).
+  m->gather_rhs(target);
+  Eigen::MatrixX3d p_free(static_cast<Eigen::Index>(m->free_vertex.size()), 3);
+  for (std::size_t f = 0; f < m->free_vertex.size(); ++f)
+    p_free.row(static_cast<Eigen::Index>(f)) = p.row(m->free_vertex[f]);
+  const Eigen::MatrixX3d K_p = m->K_free.selfadjointView<Eigen::Lower>() * p_free;
+  report.residual_N = p_free.rows() > 0 ? (K_p - m->rhs).rowwise().norm().maxCoeff() : 0.0;
+  return report;
+}
+
+} // namespace phantasm

@@ -1,0 +1,167 @@
+#include "sim/newton.hpp"
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/Sparse>
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+namespace phantasm {
+namespace {
+
+/// The PSD-projected Hessian over the free coordinates (3 per free vertex, lower triangle).
+Eigen::SparseMatrix<double> assemble_hessian(const ElasticModel& model, const StepInertia& inertia,
+                                             const Eigen::MatrixX3d& p, const std::vector<int>& free_index,
+                                             Eigen::Index free_count) {
+  std::vector<Eigen::Triplet<double>> entries;
+  auto add_block = [&](int a, int b, const Eigen::Matrix3d& block) {
+    const int fa = free_index[static_cast<std::size_t>(a)];
+    const int fb = free_index[static_cast<std::size_t>(b)];
+    if (fa < 0 || fb < 0) return;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        if (3 * fb + c <= 3 * fa + r && block(r, c) != 0.0)
+          entries.emplace_back(3 * fa + r, 3 * fb + c, block(r, c));
+  };
+  for (Eigen::Index v = 0; v < model.vertex_count(); ++v)
+    add_block(static_cast<int>(v), static_cast<int>(v),
+              (inertia.weight * model.masses_kg[v]) * Eigen::Matrix3d::Identity());
+  for (const TetElement& e : model.tets) {
+    Eigen::Matrix<double, 3, 4> X;
+    for (int k = 0; k < 4; ++k)
+      X.col(k) = p.row(e.vertices[static_cast<std::size_t>(k)]).transpose();
+    Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+    const SignedSvd svd = signed_svd(X * e.Q, rotation);
+    const SingularValueEnergy strain =
+        singular_value_energy(TetConstraintKind::strain, model.strain_range, e.strain_weight, svd.sigma);
+    const SingularValueEnergy volume =
+        singular_value_energy(TetConstraintKind::volume, model.volume_range, e.volume_weight, svd.sigma);
+    const Eigen::Matrix<double, 9, 9> H_F = projected_hessian(svd, strain) + projected_hessian(svd, volume);
+    // vec(F) = (Q^T kron I3) vec(X): H_X = (Q kron I3) H_F (Q^T kron I3).
+    Eigen::Matrix<double, 12, 9> dF;
+    dF.setZero();
+    for (int k = 0; k < 4; ++k)
+      for (int c = 0; c < 3; ++c)
+        dF.block<3, 3>(3 * k, 3 * c) = e.Q(k, c) * Eigen::Matrix3d::Identity();
+    const Eigen::Matrix<double, 12, 12> H = dF * H_F * dF.transpose();
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b)
+        add_block(e.vertices[static_cast<std::size_t>(a)], e.vertices[static_cast<std::size_t>(b)],
+                  H.block<3, 3>(3 * a, 3 * b));
+  }
+  for (const PointConstraint& c : model.points) {
+    for (int a = 0; a < c.count; ++a)
+      for (int b = 0; b < c.count; ++b)
+        add_block(c.vertices[static_cast<std::size_t>(a)], c.vertices[static_cast<std::size_t>(b)],
+                  (c.stiffness_N_m * c.coefficients[a] * c.coefficients[b]) * Eigen::Matrix3d::Identity());
+  }
+  Eigen::SparseMatrix<double> H(3 * free_count, 3 * free_count);
+  H.setFromTriplets(entries.begin(), entries.end());
+  return H;
+}
+
+} // namespace
+
+SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, Eigen::MatrixX3d& p,
+                         const StopCriteria& stop, bool record_energies, const IterationObserver& observer) {
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  double observer_seconds = 0.0;
+  auto elapsed = [&] {
+    return std::chrono::duration<double>(Clock::now() - start).count() - observer_seconds;
+  };
+  SolveReport report;
+  report.solver = "newton";
+  std::vector<int> free_index(static_cast<std::size_t>(model.vertex_count()), -1);
+  std::vector<int> free_vertex;
+  for (Eigen::Index v = 0; v < model.vertex_count(); ++v) {
+    if (model.fixed.empty() || !model.fixed[static_cast<std::size_t>(v)]) {
+      free_index[static_cast<std::size_t>(v)] = static_cast<int>(free_vertex.size());
+      free_vertex.push_back(static_cast<int>(v));
+    }
+  }
+  const auto nf = static_cast<Eigen::Index>(free_vertex.size());
+  double energy = model_energy(model, inertia, p);
+  report.initial_energy_J = energy;
+  if (record_energies) {
+    report.energies_J.push_back(energy);
+    report.seconds.push_back(elapsed());
+  }
+  if (observer) {
+    const auto before = Clock::now();
+    observer(0, p, energy);
+    observer_seconds += std::chrono::duration<double>(Clock::now() - before).count();
+  }
+  report.stopped_by = "max_iterations";
+  Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> factor;
+  factor.setMode(Eigen::CholmodAuto);
+  Eigen::MatrixX3d gradient = model_gradient(model, inertia, p);
+  for (int iteration = 1; iteration <= stop.max_iterations; ++iteration) {
+    if (free_gradient_norm(model, gradient) <= stop.gradient_norm_N) {
+      report.stopped_by = "gradient";
+      break;
+    }
+    Eigen::VectorXd g(3 * nf);
+    for (Eigen::Index f = 0; f < nf; ++f)
+      g.segment<3>(3 * f) = gradient.row(free_vertex[static_cast<std::size_t>(f)]).transpose();
+    Eigen::SparseMatrix<double> H = assemble_hessian(model, inertia, p, free_index, nf);
+    // A PSD Hessian can be singular (a quasi-static model held only in part): shift until it factors.
+    double shift = 0.0;
+    Eigen::VectorXd direction;
+    for (int attempt = 0; attempt < 30; ++attempt) {
+      factor.setShift(shift);
+      factor.compute(H);
+      if (factor.info() == Eigen::Success) {
+        direction = -factor.solve(g);
+        if (direction.allFinite()) break;
+      }
+      shift = shift == 0.0 ? 1e-8 * H.diagonal().cwiseAbs().maxCoeff() : 10.0 * shift;
+    }
+    if (direction.size() != g.size()) throw std::runtime_error("newton: the Hessian could not be factored");
+    const double slope = g.dot(direction);
+    double step = 1.0;
+    Eigen::MatrixX3d trial = p;
+    double trial_energy = energy;
+    bool accepted = false;
+    for (int backtrack = 0; backtrack < 60; ++backtrack) {
+      for (Eigen::Index f = 0; f < nf; ++f)
+        trial.row(free_vertex[static_cast<std::size_t>(f)]) =
+            p.row(free_vertex[static_cast<std::size_t>(f)]) + step * direction.segment<3>(3 * f).transpose();
+      trial_energy = model_energy(model, inertia, trial);
+      if (trial_energy <= energy + 1e-4 * step * slope) {
+        accepted = true;
+        break;
+      }
+      step *= 0.5;
+    }
+    report.iterations = iteration;
+    if (!accepted) { // no decrease representable in double precision: converged
+      report.stopped_by = "energy";
+      break;
+    }
+    const double previous = energy;
+    p = trial;
+    energy = trial_energy;
+    gradient = model_gradient(model, inertia, p);
+    if (record_energies) {
+      report.energies_J.push_back(energy);
+      report.seconds.push_back(elapsed());
+    }
+    if (observer) {
+      const auto before = Clock::now();
+      observer(iteration, p, energy);
+      observer_seconds += std::chrono::duration<double>(Clock::now() - before).count();
+    }
+    if (stop.gradient_norm_N <= 0.0 &&
+        previous - energy <= stop.relative_energy_decrease * std::abs(energy)) {
+      report.stopped_by = "energy";
+      break;
+    }
+  }
+  report.final_energy_J = energy;
+  report.residual_N = free_gradient_norm(model, gradient);
+  return report;
+}
+
+} // namespace phantasm

@@ -1,0 +1,17 @@
+#pragma once
+
+#include "sim/elastic_model.hpp"
+#include "sim/solve_report.hpp"
+
+namespace phantasm {
+
+/// The Newton reference on the same objective (METHOD.md section 5): per-tet Hessians from the
+/// closed-form eigensystem of the isotropic constraint energies, projected to positive
+/// semi-definite; sparse Cholesky (CHOLMOD) every iteration; Armijo backtracking. Fixed vertices
+/// stay where they are in p. Stops on the gradient norm (stop.gradient_norm_N), the energy
+/// decrease, or the iteration limit.
+SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, Eigen::MatrixX3d& p,
+                         const StopCriteria& stop, bool record_energies = false,
+                         const IterationObserver& observer = {});
+
+} // namespace phantasm
