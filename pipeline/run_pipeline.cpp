@@ -12,9 +12,11 @@
 #include "io/shape_files.hpp"
 #include "mri/mri_plan.hpp"
 #include "scene/scene_json.hpp"
+#include "sim/deform_phantom.hpp"
 #include "sim/sim_plan.hpp"
 #include "voxelize/voxelize_plan.hpp"
 
+#include <optional>
 #include <sstream>
 
 namespace phantasm {
@@ -76,7 +78,7 @@ private:
 
 /// Whether this version runs a stage (the others record their plan only).
 bool stage_runs(const std::string& stage) {
-  return stage == "anatomy";
+  return stage == "anatomy" || stage == "sim";
 }
 
 /// The anatomy stage: reads the scene's shape files and builds every organ; records fit errors.
@@ -93,7 +95,7 @@ Phantom build_anatomy(const Scene& scene, StageReport& report, Reporter& reporte
   return phantom;
 }
 
-/// Number of mesh files write_organ_meshes writes.
+/// Number of mesh files write_organ_meshes writes for one state.
 std::size_t organ_mesh_count(const Scene& scene, const Phantom& phantom) {
   if (!scene.outputs.meshes) return 0;
   std::size_t count = 0;
@@ -111,10 +113,13 @@ double mesh_export_tolerance_mm(const Scene& scene) {
 }
 
 /// Each organ's surface (.vtp: the patch surface tessellated within mesh_export_tolerance_mm, or
-/// the sheet) and tet mesh (.vtu) in one state.
+/// the sheet) and tet mesh (.vtu) in one state. The deformed state's tet meshes carry each
+/// vertex's displacement from the reference (mm).
 void write_organ_meshes(const Scene& scene, const Phantom& phantom, PhantomState state,
-                        const DatasetLayout& layout, DatasetWriter& writer) {
+                        const DatasetLayout& layout, DatasetWriter& writer,
+                        const Phantom* reference = nullptr) {
   const double tolerance = mesh_export_tolerance_mm(scene);
+  std::size_t index = 0;
   for (const Organ& organ : phantom.organs) {
     if (organ.surface || organ.sheet) {
       const std::filesystem::path path = layout.mesh(state, organ.name);
@@ -123,10 +128,34 @@ void write_organ_meshes(const Scene& scene, const Phantom& phantom, PhantomState
     }
     if (organ.solid) {
       const std::filesystem::path path = layout.tet_mesh(state, organ.name);
-      write_vtu(path, *organ.solid);
+      std::vector<PointArray> arrays;
+      if (reference) {
+        const Eigen::MatrixX3d displacement =
+            organ.solid->vertices - reference->organs[index].solid->vertices;
+        PointArray array{"displacement_mm", 3, {}};
+        for (Eigen::Index v = 0; v < displacement.rows(); ++v)
+          for (int c = 0; c < 3; ++c)
+            array.values.push_back(displacement(v, c));
+        arrays.push_back(std::move(array));
+      }
+      write_vtu(path, *organ.solid, arrays);
       writer.written(path);
     }
+    ++index;
   }
+}
+
+nlohmann::json solves_json(const std::vector<SolveReport>& solves) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const SolveReport& s : solves) {
+    list.push_back({{"solver", s.solver},
+                    {"iterations", s.iterations},
+                    {"stopped_by", s.stopped_by},
+                    {"residual_N", s.residual_N},
+                    {"initial_energy_J", s.initial_energy_J},
+                    {"final_energy_J", s.final_energy_J}});
+  }
+  return list;
 }
 
 } // namespace
@@ -152,8 +181,21 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& re
 
   const Phantom phantom = build_anatomy(scene, summary.stages[0], reporter);
 
+  StageReport& sim = summary.stages[1];
+  std::optional<PhantomDeformation> deformation;
+  std::optional<Phantom> deformed;
+  if (scene.deformation.mode != DeformationMode::none) {
+    const std::size_t planned = sim.modelled.size(), planned_skips = sim.skipped.size();
+    deformation = deform_phantom(scene, phantom, sim, reporter);
+    for (std::size_t k = planned; k < sim.modelled.size(); ++k)
+      reporter.modelled("sim", sim.modelled[k]);
+    for (std::size_t k = planned_skips; k < sim.skipped.size(); ++k)
+      reporter.skipped("sim", sim.skipped[k]);
+    deformed = deformed_phantom(phantom, *deformation);
+  }
+
   const DatasetLayout layout(options.output, scene.outputs.subject);
-  DatasetWriter writer(layout, reporter, 6 + organ_mesh_count(scene, phantom));
+  DatasetWriter writer(layout, reporter, 6 + organ_mesh_count(scene, phantom) * (deformed ? 2 : 1));
   writer.json(layout.dataset_description(), {{"Name", scene.name},
                                              {"BIDSVersion", "1.9.0"},
                                              {"DatasetType", "raw"},
@@ -172,6 +214,7 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& re
                                      format_number(mesh_export_tolerance_mm(scene)) +
                                      " mm, tet meshes as built");
     write_organ_meshes(scene, phantom, PhantomState::reference, layout, writer);
+    if (deformed) write_organ_meshes(scene, *deformed, PhantomState::deformed, layout, writer, &phantom);
   } else {
     reporter.skipped("anatomy", "organ meshes (outputs.meshes is false)");
   }
@@ -193,6 +236,7 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& re
                {"seed", scene.seed},
                {"settings", scene_settings_json(scene)},
                {"stages", stages},
+               {"solves", deformation ? solves_json(deformation->solves) : nlohmann::json::array()},
                {"files", files}});
   summary.files = writer.files();
   return summary;

@@ -10,6 +10,15 @@ LameParameters lame_parameters(double E, double nu) {
 
 int add_body(ElasticModel& model, const Eigen::MatrixX3d& rest_m, const Eigen::MatrixX4i& tets,
              const LameParameters& material, double density_kg_m3) {
+  return add_body(
+      model, rest_m, tets,
+      std::vector<TetMaterial>(static_cast<std::size_t>(tets.rows()), TetMaterial{material, density_kg_m3}));
+}
+
+int add_body(ElasticModel& model, const Eigen::MatrixX3d& rest_m, const Eigen::MatrixX4i& tets,
+             const std::vector<TetMaterial>& materials) {
+  if (materials.size() != static_cast<std::size_t>(tets.rows()))
+    throw std::invalid_argument("add_body: expected one material per tet");
   const auto first_vertex = static_cast<int>(model.rest_positions_m.rows());
   const Eigen::Index total = first_vertex + rest_m.rows();
   model.rest_positions_m.conservativeResize(total, 3);
@@ -32,10 +41,12 @@ int add_body(ElasticModel& model, const Eigen::MatrixX3d& rest_m, const Eigen::M
                                   std::to_string(e.rest_volume_m3) + " m^3; expected a positive volume");
     }
     e.Q = selector * Dm.inverse();
-    e.strain_weight = 2.0 * material.mu * e.rest_volume_m3;
-    e.volume_weight = 3.0 * material.lambda * e.rest_volume_m3;
+    const TetMaterial& material = materials[static_cast<std::size_t>(t)];
+    e.strain_weight = 2.0 * material.lame.mu * e.rest_volume_m3;
+    e.volume_weight = 3.0 * material.lame.lambda * e.rest_volume_m3;
     for (int k = 0; k < 4; ++k)
-      model.masses_kg[e.vertices[static_cast<std::size_t>(k)]] += 0.25 * density_kg_m3 * e.rest_volume_m3;
+      model.masses_kg[e.vertices[static_cast<std::size_t>(k)]] +=
+          0.25 * material.density_kg_m3 * e.rest_volume_m3;
     model.tets.push_back(e);
   }
   return first_vertex;

@@ -69,6 +69,16 @@ LameParameters lame_parameters(double youngs_modulus_Pa, double poisson_ratio);
 int add_body(ElasticModel& model, const Eigen::MatrixX3d& rest_m, const Eigen::MatrixX4i& tets,
              const LameParameters& material, double density_kg_m3);
 
+/// The material of one tet.
+struct TetMaterial {
+  LameParameters lame;
+  double density_kg_m3 = 1000.0;
+};
+
+/// As above, with a material per tet (e.g. from which organ holds the tet's centroid).
+int add_body(ElasticModel& model, const Eigen::MatrixX3d& rest_m, const Eigen::MatrixX4i& tets,
+             const std::vector<TetMaterial>& materials);
+
 /// The inertial part of one step.
 struct StepInertia {
   double weight = 0.0;       ///< 1/h^2, or 0 for quasi-static

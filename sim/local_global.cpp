@@ -24,6 +24,7 @@ struct LocalGlobalSolver::Impl {
   // Per tet: warm-started rotation and the projection term w_s T_s^T + w_v T_v^T.
   std::vector<Eigen::Quaterniond> rotations, eigenvectors;
   std::vector<Eigen::Matrix3d> projections;
+  std::vector<double> tet_energies;
   // Per vertex (CSR): the tets (index, corner) and point constraints (index, corner) using it.
   std::vector<int> tet_offsets, tet_entries, point_offsets, point_entries;
   Eigen::MatrixX3d rhs, coupling_rhs, solution;
@@ -149,8 +150,7 @@ struct LocalGlobalSolver::Impl {
   /// The local step: projections of every tet at p; returns E(p).
   double local_step(const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& target) {
     const auto count = static_cast<std::ptrdiff_t>(model.tets.size());
-    double tet_energy = 0.0;
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 128) reduction(+ : tet_energy)
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 128)
     for (std::ptrdiff_t t = 0; t < count; ++t) {
       const TetElement& e = model.tets[static_cast<std::size_t>(t)];
       Eigen::Matrix<double, 3, 4> X;
@@ -164,10 +164,15 @@ struct LocalGlobalSolver::Impl {
       const Eigen::Vector3d combined = e.strain_weight * strain + e.volume_weight * volume;
       // w_s T_s^T + w_v T_v^T = V diag(w_s s_s + w_v s_v) U^T
       projections[static_cast<std::size_t>(t)].noalias() = svd.V * combined.asDiagonal() * svd.U.transpose();
-      tet_energy += 0.5 * (e.strain_weight * (svd.sigma - strain).squaredNorm() +
-                           e.volume_weight * (svd.sigma - volume).squaredNorm());
+      tet_energies[static_cast<std::size_t>(t)] =
+          0.5 * (e.strain_weight * (svd.sigma - strain).squaredNorm() +
+                 e.volume_weight * (svd.sigma - volume).squaredNorm());
     }
-    double energy = tet_energy;
+    // Summed in tet order, not by a parallel reduction: the energy, and so every stop decision,
+    // is the same for any number of threads.
+    double energy = 0.0;
+    for (double e : tet_energies)
+      energy += e;
     if (alpha > 0.0) { // over every vertex, as model_energy (fixed ones add a constant)
       for (Eigen::Index v = 0; v < p.rows(); ++v)
         energy += 0.5 * alpha * model.masses_kg[v] * (p.row(v) - target.row(v)).squaredNorm();
@@ -216,6 +221,7 @@ LocalGlobalSolver::LocalGlobalSolver(const ElasticModel& model, double inertia_w
   m->rotations.assign(model.tets.size(), Eigen::Quaterniond::Identity());
   m->eigenvectors.assign(model.tets.size(), Eigen::Quaterniond::Identity());
   m->projections.assign(model.tets.size(), Eigen::Matrix3d::Zero());
+  m->tet_energies.assign(model.tets.size(), 0.0);
   m->build_adjacency();
   m->assemble_and_factor();
 }

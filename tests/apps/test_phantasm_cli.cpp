@@ -119,7 +119,8 @@ TEST(RunCommand, WritesTheHeadDatasetWithOrganMeshesAndProvenance) {
   EXPECT_EQ(std::count(dseg.begin(), dseg.end(), '\n'), 9); // header, background, 7 organs
 
   // Every organ of the head is solid: a closed surface (.vtp) and a tet mesh (.vtu) each, which
-  // VTK reads back; the surface encloses about the tet mesh's volume.
+  // VTK reads back; the surface encloses about the tet mesh's volume. In the deformed state the
+  // fixed scalp and skull have not moved, the grey matter has (the retractor), no tet inverted.
   const fs::path meshes = derivatives / "sub-01" / "meshes";
   for (const std::string organ :
        {"scalp", "skull", "csf", "grey_matter", "white_matter", "ventricle_left", "ventricle_right"}) {
@@ -135,6 +136,20 @@ TEST(RunCommand, WritesTheHeadDatasetWithOrganMeshesAndProvenance) {
       volume += phantasm::tet_volume(solid, t);
     }
     EXPECT_NEAR(phantasm::enclosed_volume(surface) / volume, 1.0, 0.02);
+    const phantasm::TetMesh deformed =
+        phantasm::read_vtu(meshes / ("sub-01_ses-def_organ-" + organ + "_tetmesh.vtu"));
+    ASSERT_EQ(deformed.tets, solid.tets);
+    for (Eigen::Index t = 0; t < deformed.tets.rows(); ++t)
+      ASSERT_GT(phantasm::tet_volume(deformed, t), 0.0);
+    const double moved = (deformed.vertices - solid.vertices).rowwise().norm().maxCoeff();
+    if (organ == "scalp" || organ == "skull") {
+      EXPECT_EQ(moved, 0.0);
+    }
+    if (organ == "grey_matter") {
+      EXPECT_GT(moved, 3.0);
+    }
+    EXPECT_NO_THROW(phantasm::check_closed_manifold(
+        phantasm::read_triangle_mesh(meshes / ("sub-01_ses-def_organ-" + organ + "_mesh.vtp")), organ));
   }
 
   const auto provenance = nlohmann::json::parse(read_file(derivatives / "sub-01" / "provenance.json"));
@@ -145,7 +160,13 @@ TEST(RunCommand, WritesTheHeadDatasetWithOrganMeshesAndProvenance) {
   EXPECT_EQ(provenance["stages"][0]["stage"], "anatomy");
   EXPECT_EQ(provenance["stages"][0]["status"], "done");
   EXPECT_LT(provenance["stages"][0]["accuracy"]["white_matter fit Hausdorff mm"].get<double>(), 3.0);
-  EXPECT_EQ(provenance["files"].size(), 19u); // every file but provenance.json itself
+  EXPECT_EQ(provenance["files"].size(), 33u); // every file but provenance.json itself
+  // The head was deformed: one quasi-static solve, stopped by a criterion, its residual reported.
+  EXPECT_EQ(provenance["stages"][1]["status"], "done");
+  ASSERT_EQ(provenance["solves"].size(), 1u);
+  EXPECT_NE(provenance["solves"][0]["stopped_by"], "max_iterations");
+  EXPECT_LT(provenance["solves"][0]["residual_N"].get<double>(), 1.0);
+  EXPECT_LT(provenance["stages"][1]["accuracy"]["displacement load error mm"].get<double>(), 0.05);
   EXPECT_EQ(read_file(derivatives / "sub-01" / "scene.yaml"), read_file(k_head_scene));
   const std::string log = read_file(derivatives / "sub-01" / "log.txt");
   EXPECT_NE(log.find("[sim] scalp: held fixed"), std::string::npos) << log;
@@ -199,7 +220,7 @@ TEST(RunCommand, QuietPrintsNothingAndAPipeGetsPlainProgressLines) {
   const CommandResult plain =
       run_command({k_phantasm, "run", k_small_scene.string(), "-o", (root / "p").string()});
   EXPECT_EQ(plain.exit_code, 0);
-  EXPECT_NE(plain.err.find("writing 100% (10/10)"), std::string::npos) << plain.err;
+  EXPECT_NE(plain.err.find("writing 100% (14/14)"), std::string::npos) << plain.err;
   EXPECT_EQ(plain.err.find('\r'), std::string::npos);
   EXPECT_NE(plain.err.find("[voxelize] skipped: .vdb grids"), std::string::npos) << plain.err;
 }

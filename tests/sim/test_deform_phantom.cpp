@@ -1,0 +1,99 @@
+// The deformation stage on whole scenes: bodies, embedded organs, held boundaries, loads, and
+// the dynamic mode against the closed form of implicit Euler.
+
+#include "core/error.hpp"
+#include "sim/deform_phantom.hpp"
+#include "sim/newton.hpp"
+
+#include <gtest/gtest.h>
+
+using namespace phantasm;
+
+namespace {
+
+Scene load(const std::string& path) {
+  SceneLoadResult result = load_scene(std::string(PHANTASM_SOURCE_DIR) + "/" + path);
+  EXPECT_TRUE(result.scene) << format_diagnostics(result.problems);
+  return *result.scene;
+}
+
+double signed_tet_volume(const Eigen::MatrixX3d& x, const Eigen::MatrixX4i& tets, Eigen::Index t) {
+  Eigen::Matrix3d D;
+  for (int k = 0; k < 3; ++k)
+    D.col(k) = (x.row(tets(t, k + 1)) - x.row(tets(t, 0))).transpose();
+  return D.determinant() / 6.0;
+}
+
+} // namespace
+
+// The small head: grey matter is the body (inside the fixed scalp, so its boundary is held
+// except where the load pushes it), white matter is embedded in it.
+TEST(DeformPhantom, PushedSurfaceReachesItsTargetAndEmbeddedOrgansFollow) {
+  const Scene scene = load("tests/data/scenes/small-head.yaml");
+  Reporter quiet = Reporter::silent();
+  const Phantom phantom = build_phantom(scene, {}, quiet);
+  StageReport report;
+  const PhantomDeformation d = deform_phantom(scene, phantom, report, quiet);
+  ASSERT_EQ(d.organs.size(), 3u);
+  EXPECT_EQ(d.organs[0].moved_by, "fixed");
+  EXPECT_EQ(d.organs[1].moved_by, "solver");
+  EXPECT_EQ(d.organs[2].moved_by, "embedded in grey_matter");
+  ASSERT_EQ(d.bodies.size(), 1u);
+  EXPECT_EQ(report.status, "done");
+  EXPECT_LT(d.attachment_error_mm, 0.01);
+  EXPECT_LT(d.solves.back().residual_N, 1e-2);
+
+  // The fixed scalp does not move; the pushed cortex moved by the load, (-2, 0, -3) mm.
+  EXPECT_EQ(d.organs[0].surface_mm, phantom.organs[0].surface->rest_positions());
+  const Eigen::MatrixX3d moved = d.organs[1].surface_mm - phantom.organs[1].surface->rest_positions();
+  const double largest = moved.rowwise().norm().maxCoeff();
+  EXPECT_NEAR(largest, std::sqrt(13.0), 0.01);
+  // The white matter follows, by less than the surface that was pushed.
+  const double inner =
+      (d.organs[2].surface_mm - phantom.organs[2].surface->rest_positions()).rowwise().norm().maxCoeff();
+  EXPECT_GT(inner, 0.01);
+  EXPECT_LT(inner, largest);
+  // No tet inverted; the body's volume nearly kept (nu 0.45 under a local push).
+  double rest_volume = 0.0, volume = 0.0;
+  for (Eigen::Index t = 0; t < d.bodies[0].tets.rows(); ++t) {
+    ASSERT_GT(signed_tet_volume(d.bodies[0].deformed_mm, d.bodies[0].tets, t), 0.0);
+    rest_volume += signed_tet_volume(d.bodies[0].rest_mm, d.bodies[0].tets, t);
+    volume += signed_tet_volume(d.bodies[0].deformed_mm, d.bodies[0].tets, t);
+  }
+  EXPECT_NEAR(volume / rest_volume, 1.0, 0.01);
+  // The deformed phantom's patch surfaces follow their base.
+  const Phantom deformed = deformed_phantom(phantom, d);
+  EXPECT_EQ(deformed.organs[1].surface->base_mesh().vertices, d.organs[1].surface_mm);
+}
+
+// The twisting-bar scene is dynamic with gravity only and nothing holding the bar: it falls as
+// a rigid body, and implicit Euler's free fall after n steps is h^2 g n (n + 1) / 2 exactly.
+TEST(DeformPhantom, DynamicFreeFallMatchesImplicitEulerInClosedForm) {
+  Scene scene = load("data-synthetic/bar.yaml");
+  scene.deformation.frames = 10;
+  Reporter quiet = Reporter::silent();
+  const Phantom phantom = build_phantom(scene, {}, quiet);
+  StageReport report;
+  const PhantomDeformation d = deform_phantom(scene, phantom, report, quiet);
+  ASSERT_EQ(d.solves.size(), 10u);
+  const double h = scene.deformation.time_step_s;
+  const double fall_mm = 1e3 * h * h * 9.81 * 10 * 11 / 2.0;
+  const Eigen::MatrixX3d displacement = d.organs[0].solid_mm - phantom.organs[0].solid->vertices;
+  EXPECT_NEAR(displacement.col(1).mean(), -fall_mm, 1e-3 * fall_mm);
+  EXPECT_LT((displacement.col(1).array() + fall_mm).abs().maxCoeff(), 1e-3 * fall_mm); // rigid: no sag
+  EXPECT_LT(displacement.col(0).cwiseAbs().maxCoeff(), 1e-6);
+}
+
+TEST(DeformPhantom, AQuasiStaticBodyThatNothingHoldsIsAClearError) {
+  Scene scene = load("data-synthetic/bar.yaml");
+  scene.deformation.mode = DeformationMode::quasi_static;
+  Reporter quiet = Reporter::silent();
+  const Phantom phantom = build_phantom(scene, {}, quiet);
+  StageReport report;
+  try {
+    deform_phantom(scene, phantom, report, quiet);
+    FAIL() << "no error";
+  } catch (const InputError& error) {
+    EXPECT_NE(std::string(error.what()).find("deformation.fixed"), std::string::npos) << error.what();
+  }
+}
