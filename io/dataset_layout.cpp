@@ -57,6 +57,12 @@ std::filesystem::path DatasetLayout::transform(PhantomState from, PhantomState t
           "_mode-image_xfm.nii.gz");
 }
 
+std::filesystem::path DatasetLayout::transform_mask(PhantomState from, PhantomState to) const {
+  return subject_derivatives() / "xfm" /
+         ("sub-" + m_subject + "_from-" + session_label(from) + "_to-" + session_label(to) +
+          "_desc-exact_mask.nii.gz");
+}
+
 std::filesystem::path DatasetLayout::jacobian() const {
   return subject_derivatives() / "xfm" / ("sub-" + m_subject + "_from-ref_to-def_jacobian.nii.gz");
 }

@@ -33,6 +33,8 @@ public:
   std::filesystem::path probseg(PhantomState state, const std::string& tissue) const;
   /// The field that maps `from` positions to `to` positions (see DESIGN.md, Conventions).
   std::filesystem::path transform(PhantomState from, PhantomState to) const;
+  /// Where the field is the solved motion (1) and where it is the smooth extension (0).
+  std::filesystem::path transform_mask(PhantomState from, PhantomState to) const;
   std::filesystem::path jacobian() const;
   std::filesystem::path landmarks(PhantomState state) const;
   /// An organ's surface (the tessellated patch surface, or its sheet), VTK PolyData.

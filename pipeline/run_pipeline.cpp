@@ -9,11 +9,13 @@
 #include "io/dataset_layout.hpp"
 #include "io/json_file.hpp"
 #include "io/mesh_file.hpp"
+#include "io/nifti_file.hpp"
 #include "io/shape_files.hpp"
 #include "mri/mri_plan.hpp"
 #include "scene/scene_json.hpp"
 #include "sim/deform_phantom.hpp"
 #include "sim/sim_plan.hpp"
+#include "voxelize/voxelize_phantom.hpp"
 #include "voxelize/voxelize_plan.hpp"
 
 #include <optional>
@@ -158,6 +160,88 @@ nlohmann::json solves_json(const std::vector<SolveReport>& solves) {
   return list;
 }
 
+/// Number of volume files write_volumes writes.
+std::size_t volume_file_count(const Scene& scene, const VoxelizedPhantom& v) {
+  const std::size_t states = v.deformed ? 2 : 1;
+  std::size_t count = 0;
+  if (scene.outputs.labels) count += states;
+  if (scene.outputs.fractions) count += states * v.tissues.size();
+  if (v.motion && scene.outputs.displacement_fields) count += 2 * 3; // field, sidecar, mask per direction
+  if (v.motion && scene.outputs.jacobian) count += 1;
+  return count;
+}
+
+/// A field in the ITK/elastix convention (DESIGN.md): 5-D, components in LPS mm.
+std::vector<float> lps_components(const std::vector<float>& ras) {
+  std::vector<float> lps = ras;
+  const std::size_t count = ras.size() / 3;
+  for (std::size_t i = 0; i < 2 * count; ++i)
+    lps[i] = -lps[i];
+  return lps;
+}
+
+nlohmann::json field_sidecar(PhantomState from, PhantomState to, const std::string& mask) {
+  const std::string f = session_label(from), t = session_label(to);
+  return {{"Description", "Displacement field from the " + f + " state to the " + t +
+                              " state: a point x of the " + f + " grid is at x + u(x) in the " + t +
+                              " state. With fixed image = ses-" + f + " and moving image = ses-" + t +
+                              ", elastix/transformix and ITK resample the " + t + " image onto the " + f +
+                              " grid with it."},
+          {"Convention",
+           "ITK displacement field: 5-D NIfTI (X, Y, Z, 1, 3), intent 1007 (vector), components in "
+           "world LPS millimetres (RAS with x and y negated), x_moving = x_fixed + u(x_fixed)"},
+          {"FixedImageSession", "ses-" + f},
+          {"MovingImageSession", "ses-" + t},
+          {"ExactMask", mask},
+          {"ExactMaskDescription",
+           "1 where u is the solved motion (inside the simulated tets, or tissue that does not "
+           "move), 0 where it is the smooth extension outside them"}};
+}
+
+/// Labels, fractions, both fields with sidecars and masks, the Jacobian.
+void write_volumes(const Scene& scene, const VoxelizedPhantom& v, const DatasetLayout& layout,
+                   DatasetWriter& writer) {
+  const std::vector<std::pair<PhantomState, const TissueVolumes*>> states = {
+      {PhantomState::reference, &v.reference}, {PhantomState::deformed, v.deformed ? &*v.deformed : nullptr}};
+  for (const auto& [state, volumes] : states) {
+    if (!volumes) continue;
+    if (scene.outputs.labels) {
+      write_nifti_labels(layout.dseg(state), v.grid, volumes->labels,
+                         {NiftiIntent::label, 1, "phantasm dseg"});
+      writer.written(layout.dseg(state));
+    }
+    if (scene.outputs.fractions) {
+      for (std::size_t t = 0; t < v.tissues.size(); ++t) {
+        write_nifti(layout.probseg(state, v.tissues[t]), v.grid, volumes->fractions[t],
+                    {NiftiIntent::none, 1, "fraction of " + v.tissues[t]});
+        writer.written(layout.probseg(state, v.tissues[t]));
+      }
+    }
+  }
+  if (!v.motion) return;
+  if (scene.outputs.displacement_fields) {
+    for (const auto& [from, to] : {std::pair{PhantomState::reference, PhantomState::deformed},
+                                   std::pair{PhantomState::deformed, PhantomState::reference}}) {
+      const bool forward = from == PhantomState::reference;
+      const std::filesystem::path field = layout.transform(from, to);
+      write_nifti(field, v.grid, lps_components(forward ? v.motion->ref_to_def : v.motion->def_to_ref),
+                  {NiftiIntent::displacement, 3, "phantasm displacement, LPS mm"});
+      writer.written(field);
+      const std::filesystem::path mask = layout.transform_mask(from, to);
+      const auto& exact = forward ? v.motion->ref_to_def_exact : v.motion->def_to_ref_exact;
+      write_nifti_labels(mask, v.grid, std::vector<std::int32_t>(exact.begin(), exact.end()),
+                         {NiftiIntent::none, 1, "1 where the field is exact"});
+      writer.written(mask);
+      writer.json(sidecar_path(field), field_sidecar(from, to, mask.filename().string()));
+    }
+  }
+  if (scene.outputs.jacobian) {
+    write_nifti(layout.jacobian(), v.grid, v.motion->jacobian,
+                {NiftiIntent::none, 1, "det(I + grad u), ref to def"});
+    writer.written(layout.jacobian());
+  }
+}
+
 } // namespace
 
 std::vector<StageReport> plan_stages(const Scene& scene) {
@@ -194,8 +278,20 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& re
     deformed = deformed_phantom(phantom, *deformation);
   }
 
+  StageReport& voxelize = summary.stages[2];
+  const std::size_t planned = voxelize.modelled.size(), planned_skips = voxelize.skipped.size();
+  const VoxelizedPhantom volumes =
+      voxelize_phantom(scene, phantom, deformed ? &*deformed : nullptr, deformation ? &*deformation : nullptr,
+                       voxelize, reporter);
+  for (std::size_t k = planned; k < voxelize.modelled.size(); ++k)
+    reporter.modelled("voxelize", voxelize.modelled[k]);
+  for (std::size_t k = planned_skips; k < voxelize.skipped.size(); ++k)
+    reporter.skipped("voxelize", voxelize.skipped[k]);
+
   const DatasetLayout layout(options.output, scene.outputs.subject);
-  DatasetWriter writer(layout, reporter, 6 + organ_mesh_count(scene, phantom) * (deformed ? 2 : 1));
+  DatasetWriter writer(layout, reporter,
+                       6 + organ_mesh_count(scene, phantom) * (deformed ? 2 : 1) +
+                           volume_file_count(scene, volumes));
   writer.json(layout.dataset_description(), {{"Name", scene.name},
                                              {"BIDSVersion", "1.9.0"},
                                              {"DatasetType", "raw"},
@@ -218,6 +314,7 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& re
   } else {
     reporter.skipped("anatomy", "organ meshes (outputs.meshes is false)");
   }
+  write_volumes(scene, volumes, layout, writer);
 
   std::string log;
   for (const auto& line : reporter.log_lines())

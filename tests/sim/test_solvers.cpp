@@ -102,21 +102,29 @@ TEST(LocalGlobal, StableAtTheExtremesFromInvertedAndDegenerateStarts) {
             inverted += tet_volume_at(bar.model, e, p) <= 0.0;
           ASSERT_GT(inverted, 0);
           LocalGlobalSolver solver(bar.model, bar.inertia.weight, 1);
+          // Iterate in rounds of 300 (the solver keeps its warm rotations), energies checked
+          // across rounds too; without a load, until every tet is positive again.
           StopCriteria stop;
-          stop.max_iterations = 20000;
-          stop.relative_energy_decrease = 1e-13;
+          stop.max_iterations = 300;
+          stop.relative_energy_decrease = 0.0;
           stop.position_change_m = 0.0;
-          const SolveReport report = solver.solve(p, bar.inertia.target_m, stop, true);
-          ASSERT_TRUE(p.allFinite());
-          ASSERT_TRUE(std::isfinite(report.final_energy_J));
-          ASSERT_TRUE(std::isfinite(report.residual_N));
-          expect_monotone(report.energies_J);
-          if (gravity == 0.0) {
-            int still_inverted = 0;
+          std::vector<double> energies;
+          int still_inverted = 0, iterations = 0;
+          for (int round = 0; round < (gravity == 0.0 ? 60 : 1); ++round) {
+            const SolveReport report = solver.solve(p, bar.inertia.target_m, stop, true);
+            ASSERT_TRUE(p.allFinite());
+            ASSERT_TRUE(std::isfinite(report.final_energy_J));
+            ASSERT_TRUE(std::isfinite(report.residual_N));
+            energies.insert(energies.end(), report.energies_J.begin() + (round > 0 ? 1 : 0), report.energies_J.end());
+            iterations += report.iterations;
+            still_inverted = 0;
             for (const TetElement& e : bar.model.tets)
               still_inverted += tet_volume_at(bar.model, e, p) <= 0.0;
-            EXPECT_EQ(still_inverted, 0)
-                << inverted << " inverted at the start; " << report.iterations << " iterations";
+            if (still_inverted == 0 || report.stopped_by == "position") break;
+          }
+          expect_monotone(energies);
+          if (gravity == 0.0) {
+            EXPECT_EQ(still_inverted, 0) << inverted << " inverted at the start; " << iterations << " iterations";
           }
         }
       }

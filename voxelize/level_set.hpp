@@ -1,0 +1,53 @@
+#pragma once
+
+#include "anatomy/triangle_mesh.hpp"
+
+#include <Eigen/Core>
+
+#include <memory>
+
+namespace phantasm {
+
+/// A narrow-band signed distance level set of a closed surface (OpenVDB FloatGrid, world RAS mm,
+/// axis-aligned voxels of one size), negative inside. Built from a triangle mesh (a patch surface
+/// tessellated within a stated tolerance); deep inside and outside it holds -/+ the band width.
+class LevelSet {
+public:
+  /// @param voxel_size_mm the level set's voxel edge
+  /// @param half_width_voxels narrow band half width
+  LevelSet(const TriangleMesh& surface, double voxel_size_mm, double half_width_voxels = 3.0);
+  ~LevelSet();
+  LevelSet(LevelSet&&) noexcept;
+  LevelSet& operator=(LevelSet&&) noexcept;
+
+  double voxel_size_mm() const { return m_voxel_size; }
+  double half_width_mm() const { return m_half_width * m_voxel_size; }
+  /// Voxels of the narrow band (the sparse storage; memory follows the surface area).
+  std::size_t active_voxel_count() const;
+
+  /// Trilinear samples with a cached tree accessor; one probe per thread.
+  class Probe {
+  public:
+    explicit Probe(const LevelSet& level_set);
+    ~Probe();
+    Probe(Probe&&) noexcept;
+    /// Signed distance at a world point, mm (negative inside), clamped to the band.
+    double operator()(const Eigen::Vector3d& x) const;
+
+  private:
+    struct Impl;
+    std::unique_ptr<Impl> m;
+  };
+
+  /// The OpenVDB grid (openvdb::FloatGrid), for writing .vdb files; opaque here so that only
+  /// voxelize and io include OpenVDB.
+  const void* grid() const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> m;
+  double m_voxel_size = 1.0;
+  double m_half_width = 3.0;
+};
+
+} // namespace phantasm

@@ -1,0 +1,260 @@
+#include "voxelize/motion_fields.hpp"
+
+#include <Eigen/LU>
+
+#include <array>
+#include <limits>
+#include <map>
+
+#include <algorithm>
+#include <cmath>
+
+namespace phantasm {
+
+DeformationMap::DeformationMap(std::vector<DeformedBody> bodies, double extension_mm)
+    : m_bodies(std::move(bodies)), m_extension(extension_mm) {
+  for (const DeformedBody& body : m_bodies) {
+    // Boundary faces: those used by one tet. Faces with a moved vertex drive the extension.
+    std::map<std::array<int, 3>, int> faces;
+    for (Eigen::Index t = 0; t < body.tets.rows(); ++t) {
+      for (int k = 0; k < 4; ++k) {
+        std::array<int, 3> f = {body.tets(t, (k + 1) % 4), body.tets(t, (k + 2) % 4),
+                                body.tets(t, (k + 3) % 4)};
+        std::sort(f.begin(), f.end());
+        ++faces[f];
+      }
+    }
+    for (const auto& [f, count] : faces) {
+      if (count != 1) continue;
+      MovedFace face;
+      bool moved = false;
+      for (int k = 0; k < 3; ++k) {
+        face.rest[k] = body.rest_mm.row(f[static_cast<std::size_t>(k)]).transpose();
+        face.deformed[k] = body.deformed_mm.row(f[static_cast<std::size_t>(k)]).transpose();
+        moved |= (face.deformed[k] - face.rest[k]).norm() > 1e-9;
+      }
+      if (moved) m_moved_faces.push_back(face);
+    }
+    for (bool deformed : {false, true}) {
+      const Eigen::MatrixX3d& x = deformed ? body.deformed_mm : body.rest_mm;
+      TetCache cache;
+      for (Eigen::Index t = 0; t < body.tets.rows(); ++t) {
+        Eigen::Matrix3d D;
+        Eigen::Vector3d low = x.row(body.tets(t, 0)).transpose(), high = low;
+        for (int k = 0; k < 3; ++k) {
+          D.col(k) = (x.row(body.tets(t, k + 1)) - x.row(body.tets(t, 0))).transpose();
+          low = low.cwiseMin(x.row(body.tets(t, k + 1)).transpose());
+          high = high.cwiseMax(x.row(body.tets(t, k + 1)).transpose());
+        }
+        cache.inverse.push_back(D.inverse());
+        cache.origin.push_back(x.row(body.tets(t, 0)).transpose());
+        cache.low.push_back(low);
+        cache.high.push_back(high);
+      }
+      (deformed ? m_deformed : m_rest).push_back(std::move(cache));
+    }
+  }
+}
+
+bool DeformationMap::locate(const Eigen::Vector3d& x, bool deformed, std::size_t* body, Eigen::Index* tet,
+                            Eigen::Vector4d* weights) const {
+  const auto& caches = deformed ? m_deformed : m_rest;
+  for (std::size_t b = 0; b < caches.size(); ++b) {
+    const TetCache& c = caches[b];
+    for (std::size_t t = 0; t < c.inverse.size(); ++t) {
+      if ((x.array() < c.low[t].array() - 1e-9).any() || (x.array() > c.high[t].array() + 1e-9).any())
+        continue;
+      const Eigen::Vector3d l = c.inverse[t] * (x - c.origin[t]);
+      const Eigen::Vector4d w(1.0 - l.sum(), l[0], l[1], l[2]);
+      if (w.minCoeff() >= -1e-12) {
+        *body = b;
+        *tet = static_cast<Eigen::Index>(t);
+        *weights = w;
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
+namespace {
+
+/// The point of triangle (a, b, c) closest to p, as barycentric weights (Ericson, Real-Time
+/// Collision Detection, 5.1.5).
+Eigen::Vector3d closest_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                                    const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return {1, 0, 0};
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return {0, 1, 0};
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    const double v = d1 / (d1 - d3);
+    return {1 - v, v, 0};
+  }
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return {0, 0, 1};
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    const double w = d2 / (d2 - d6);
+    return {1 - w, 0, w};
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return {0, 1 - w, w};
+  }
+  const double denominator = 1.0 / (va + vb + vc);
+  const double v = vb * denominator, w = vc * denominator;
+  return {1 - v - w, v, w};
+}
+
+} // namespace
+
+double DeformationMap::moved_boundary_distance(const Eigen::Vector3d& x, bool deformed,
+                                               Eigen::Vector3d* displacement) const {
+  double best = std::numeric_limits<double>::infinity();
+  for (const MovedFace& f : m_moved_faces) {
+    const auto& v = deformed ? f.deformed : f.rest;
+    const Eigen::Vector3d w = closest_on_triangle(x, v[0], v[1], v[2]);
+    const double d = (x - (w[0] * v[0] + w[1] * v[1] + w[2] * v[2])).norm();
+    if (d < best) {
+      best = d;
+      if (displacement) {
+        *displacement = Eigen::Vector3d::Zero();
+        for (int k = 0; k < 3; ++k)
+          *displacement += w[k] * (f.deformed[k] - f.rest[k]);
+      }
+    }
+  }
+  return best;
+}
+
+Eigen::Vector3d DeformationMap::extension(const Eigen::Vector3d& x) const {
+  Eigen::Vector3d u = Eigen::Vector3d::Zero();
+  const double d = moved_boundary_distance(x, false, &u);
+  if (!(d < m_extension)) return Eigen::Vector3d::Zero();
+  const double s = 1.0 - d / m_extension;
+  return s * s * (3.0 - 2.0 * s) * u;
+}
+
+bool DeformationMap::near_moved_boundary(const Eigen::Vector3d& x) const {
+  return moved_boundary_distance(x, false, nullptr) < m_extension ||
+         moved_boundary_distance(x, true, nullptr) < m_extension;
+}
+
+bool DeformationMap::through_tets(const Eigen::Vector3d& x, bool from_deformed, Eigen::Vector3d* y) const {
+  std::size_t b = 0;
+  Eigen::Index t = 0;
+  Eigen::Vector4d w;
+  if (!locate(x, from_deformed, &b, &t, &w)) return false;
+  const Eigen::MatrixX3d& to = from_deformed ? m_bodies[b].rest_mm : m_bodies[b].deformed_mm;
+  *y = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 4; ++k)
+    *y += w[k] * to.row(m_bodies[b].tets(t, k)).transpose();
+  return true;
+}
+
+Eigen::Vector3d DeformationMap::forward(const Eigen::Vector3d& x, bool* exact) const {
+  Eigen::Vector3d y;
+  if (through_tets(x, false, &y)) {
+    if (exact) *exact = true;
+    return y;
+  }
+  const Eigen::Vector3d u = extension(x);
+  if (exact) *exact = !near_moved_boundary(x);
+  return x + u;
+}
+
+Eigen::Vector3d DeformationMap::inverse(const Eigen::Vector3d& x, bool* exact) const {
+  Eigen::Vector3d y;
+  if (through_tets(x, true, &y)) {
+    if (exact) *exact = true;
+    return y;
+  }
+  y = x;
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    const Eigen::Vector3d next = x - extension(y);
+    const double change = (next - y).norm();
+    y = next;
+    if (change < 1e-9) break;
+  }
+  if (exact) *exact = !near_moved_boundary(x) && !near_moved_boundary(y);
+  return y;
+}
+
+MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& map) {
+  const auto count = static_cast<std::size_t>(grid.voxel_count());
+  MotionFields f;
+  f.ref_to_def.assign(3 * count, 0.0f);
+  f.def_to_ref.assign(3 * count, 0.0f);
+  f.ref_to_def_exact.assign(count, 1);
+  f.def_to_ref_exact.assign(count, 1);
+  f.jacobian.assign(count, 1.0f);
+  const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
+  auto at = [&](int i, int j, int k) {
+    return static_cast<std::size_t>(i) +
+           static_cast<std::size_t>(nx) *
+               (static_cast<std::size_t>(j) + static_cast<std::size_t>(ny) * static_cast<std::size_t>(k));
+  };
+  if (map.bodies().empty()) return f;
+#pragma omp parallel for schedule(dynamic, 1)
+  for (int k = 0; k < nz; ++k) {
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        const std::size_t v = at(i, j, k);
+        const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
+        bool exact = true;
+        const Eigen::Vector3d to_def = map.forward(x, &exact) - x;
+        f.ref_to_def_exact[v] = exact;
+        const Eigen::Vector3d to_ref = map.inverse(x, &exact) - x;
+        f.def_to_ref_exact[v] = exact;
+        for (int c = 0; c < 3; ++c) {
+          f.ref_to_def[static_cast<std::size_t>(c) * count + v] = static_cast<float>(to_def[c]);
+          f.def_to_ref[static_cast<std::size_t>(c) * count + v] = static_cast<float>(to_ref[c]);
+        }
+      }
+    }
+  }
+  // Jacobian determinant of x -> x + u(x): central differences in index space (one-sided at the
+  // border), mapped to world derivatives by the inverse of the grid's linear part.
+  const Eigen::Matrix3d index_from_world = grid.world_from_voxel.topLeftCorner<3, 3>().inverse();
+  double min_jacobian = 1.0, max_displacement = 0.0;
+#pragma omp parallel for schedule(static) reduction(min : min_jacobian) reduction(max : max_displacement)
+  for (int k = 0; k < nz; ++k) {
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        const int index[3] = {i, j, k};
+        const int size[3] = {nx, ny, nz};
+        Eigen::Matrix3d d_index; // column a: du / d(index a)
+        for (int a = 0; a < 3; ++a) {
+          int lo[3] = {i, j, k}, hi[3] = {i, j, k};
+          lo[a] = std::max(0, index[a] - 1);
+          hi[a] = std::min(size[a] - 1, index[a] + 1);
+          const double span = hi[a] - lo[a];
+          for (int c = 0; c < 3; ++c) {
+            const auto base = static_cast<std::size_t>(c) * count;
+            d_index(c, a) = span > 0 ? (f.ref_to_def[base + at(hi[0], hi[1], hi[2])] -
+                                        f.ref_to_def[base + at(lo[0], lo[1], lo[2])]) /
+                                           span
+                                     : 0.0;
+          }
+        }
+        const double det = (Eigen::Matrix3d::Identity() + d_index * index_from_world).determinant();
+        const std::size_t v = at(i, j, k);
+        f.jacobian[v] = static_cast<float>(det);
+        min_jacobian = std::min(min_jacobian, det);
+        const Eigen::Vector3d u(f.ref_to_def[v], f.ref_to_def[count + v], f.ref_to_def[2 * count + v]);
+        max_displacement = std::max(max_displacement, u.norm());
+      }
+    }
+  }
+  f.min_jacobian = min_jacobian;
+  f.max_displacement_mm = max_displacement;
+  return f;
+}
+
+} // namespace phantasm

@@ -1,0 +1,73 @@
+#pragma once
+
+#include "core/grid.hpp"
+#include "sim/deform_phantom.hpp"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace phantasm {
+
+/// The map between the reference and deformed phantom, from the solved bodies: barycentric in
+/// their tets (exact), and outside them a smooth extension that fades out [choice]: the
+/// displacement of the closest point on the body boundary faces that moved, times a smoothstep
+/// from 1 on the face to 0 at extension_mm (continuous with the body's own motion). Tissue
+/// outside the bodies does not move, so the zero displacement is exact there too, except within
+/// extension_mm of a moved boundary face in either state (the extension, and the gap a boundary
+/// leaves when it moves away from its container, have no exact correspondence).
+class DeformationMap {
+public:
+  DeformationMap(std::vector<DeformedBody> bodies, double extension_mm);
+
+  /// Deformed position of a reference point (RAS mm); *exact tells whether it is the solved motion.
+  Eigen::Vector3d forward(const Eigen::Vector3d& x_ref, bool* exact = nullptr) const;
+  /// Reference position of a deformed point: barycentric in the deformed tets, else the inverse
+  /// of the extension by fixed-point iteration.
+  Eigen::Vector3d inverse(const Eigen::Vector3d& x_def, bool* exact = nullptr) const;
+
+  const std::vector<DeformedBody>& bodies() const { return m_bodies; }
+  double extension_mm() const { return m_extension; }
+
+private:
+  /// The body tet holding x (rest or deformed positions): body, tet and barycentric weights.
+  bool locate(const Eigen::Vector3d& x, bool deformed, std::size_t* body, Eigen::Index* tet,
+              Eigen::Vector4d* weights) const;
+  /// Maps x through the body tet holding it, from one state to the other; false outside the bodies.
+  bool through_tets(const Eigen::Vector3d& x, bool from_deformed, Eigen::Vector3d* y) const;
+  Eigen::Vector3d extension(const Eigen::Vector3d& x_ref) const;
+  bool near_moved_boundary(const Eigen::Vector3d& x) const;
+
+  std::vector<DeformedBody> m_bodies;
+  double m_extension = 10.0;
+  /// Distance from x to the moved boundary faces in one state, and the displacement of the
+  /// closest point.
+  double moved_boundary_distance(const Eigen::Vector3d& x, bool deformed,
+                                 Eigen::Vector3d* displacement) const;
+
+  struct MovedFace {
+    std::array<Eigen::Vector3d, 3> rest, deformed;
+  };
+  std::vector<MovedFace> m_moved_faces;
+  // Per body and state: inverse edge matrices of each tet, and its bounding box.
+  struct TetCache {
+    std::vector<Eigen::Matrix3d> inverse;
+    std::vector<Eigen::Vector3d> origin, low, high;
+  };
+  std::vector<TetCache> m_rest, m_deformed;
+};
+
+/// Dense displacement fields both ways on one grid (RAS mm, x_to = x + u(x)), their exact-masks,
+/// and the Jacobian determinant of the reference-to-deformed map.
+struct MotionFields {
+  std::vector<float> ref_to_def; ///< 3 * voxel_count: component-major (all x, then all y, then all z)
+  std::vector<float> def_to_ref;
+  std::vector<std::uint8_t> ref_to_def_exact, def_to_ref_exact;
+  std::vector<float> jacobian; ///< det(I + grad u) of ref_to_def, central differences
+  double max_displacement_mm = 0.0;
+  double min_jacobian = 1.0;
+};
+
+MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& map);
+
+} // namespace phantasm
