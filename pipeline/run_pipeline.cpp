@@ -168,6 +168,7 @@ std::size_t volume_file_count(const Scene& scene, const VoxelizedPhantom& v) {
   if (scene.outputs.fractions) count += states * v.tissues.size();
   if (v.motion && scene.outputs.displacement_fields) count += 2 * 3; // field, sidecar, mask per direction
   if (v.motion && scene.outputs.jacobian) count += 1;
+  if (scene.outputs.landmarks) count += states;
   return count;
 }
 
@@ -216,6 +217,12 @@ void write_volumes(const Scene& scene, const VoxelizedPhantom& v, const DatasetL
                     {NiftiIntent::none, 1, "fraction of " + v.tissues[t]});
         writer.written(layout.probseg(state, v.tissues[t]));
       }
+    }
+  }
+  if (scene.outputs.landmarks) {
+    for (const auto& [state, volumes] : states) {
+      if (!volumes) continue;
+      writer.text(layout.landmarks(state), landmarks_csv(v.landmarks, state == PhantomState::deformed));
     }
   }
   if (!v.motion) return;

@@ -94,6 +94,7 @@ VoxelizedPhantom voxelize_phantom(const Scene& scene, const Phantom& reference, 
     const double extension = 2.0 * out.grid.spacing_mm.maxCoeff();
     const DeformationMap map(deformation->bodies, extension);
     out.motion = compute_motion_fields(out.grid, map);
+    out.landmarks = organ_landmarks(reference, deformation, &map);
     progress.advance();
     report.modelled.push_back(
         "displacement fields both ways: barycentric in the solved tets (exact), outside "
@@ -102,6 +103,7 @@ VoxelizedPhantom voxelize_phantom(const Scene& scene, const Phantom& reference, 
     report.accuracy["largest displacement mm"] = out.motion->max_displacement_mm;
     report.accuracy["smallest Jacobian determinant"] = out.motion->min_jacobian;
   }
+  if (!deformation) out.landmarks = organ_landmarks(reference, nullptr, nullptr);
   report.status = "done";
   return out;
 }

@@ -5,6 +5,7 @@
 #include "core/stage_report.hpp"
 #include "scene/scene.hpp"
 #include "sim/deform_phantom.hpp"
+#include "voxelize/landmarks.hpp"
 #include "voxelize/motion_fields.hpp"
 #include "voxelize/tissue_volumes.hpp"
 
@@ -21,6 +22,7 @@ struct VoxelizedPhantom {
   TissueVolumes reference;
   std::optional<TissueVolumes> deformed; ///< when the scene deforms
   std::optional<MotionFields> motion;    ///< when the scene deforms
+  std::vector<Landmark> landmarks;       ///< both states (equal when nothing deforms)
 };
 
 /// Voxelizes the reference phantom (and the deformed one with the motion fields when given) on
