@@ -12,6 +12,7 @@
 #include "io/nifti_file.hpp"
 #include "io/shape_files.hpp"
 #include "mri/mri_plan.hpp"
+#include "mri/synthesize_images.hpp"
 #include "scene/scene_json.hpp"
 #include "sim/deform_phantom.hpp"
 #include "sim/sim_plan.hpp"
@@ -78,10 +79,21 @@ private:
   std::vector<std::filesystem::path> m_files;
 };
 
-/// Whether this version runs a stage (the others record their plan only).
-bool stage_runs(const std::string& stage) {
-  return stage == "anatomy" || stage == "sim";
-}
+/// Prints what a stage adds to its report while it runs (its plan was printed before).
+class StageLines {
+public:
+  explicit StageLines(const StageReport& report)
+      : m_modelled(report.modelled.size()), m_skipped(report.skipped.size()) {}
+  void print_new(const StageReport& report, Reporter& reporter) const {
+    for (std::size_t k = m_modelled; k < report.modelled.size(); ++k)
+      reporter.modelled(report.stage, report.modelled[k]);
+    for (std::size_t k = m_skipped; k < report.skipped.size(); ++k)
+      reporter.skipped(report.stage, report.skipped[k]);
+  }
+
+private:
+  std::size_t m_modelled, m_skipped;
+};
 
 /// The anatomy stage: reads the scene's shape files and builds every organ; records fit errors.
 Phantom build_anatomy(const Scene& scene, StageReport& report, Reporter& reporter) {
@@ -158,6 +170,48 @@ nlohmann::json solves_json(const std::vector<SolveReport>& solves) {
                     {"final_energy_J", s.final_energy_J}});
   }
   return list;
+}
+
+/// BIDS sidecar of one image: timing in seconds, flip angle in degrees, field strength, and how
+/// noise and bias were modelled.
+nlohmann::json image_sidecar(const Scene& scene, const MrImage& image) {
+  const SequenceSettings& s = *image.sequence;
+  nlohmann::json j = {
+      {"MagneticFieldStrength", scene.field_strength_T},
+      {"PulseSequenceType", to_string(s.kind)},
+      {"RepetitionTime", s.TR_ms / 1000.0},
+      {"EchoTime", (s.kind == SequenceKind::bssfp && s.TE_ms < 0 ? 0.5 * s.TR_ms : s.TE_ms) / 1000.0},
+      {"FlipAngle", s.kind == SequenceKind::spin_echo ? 90.0 : s.flip_deg},
+      {"NoiseSigma", image.noise_sigma},
+      {"NoisePercent", scene.acquisition.noise_percent},
+      {"NoiseReferenceTissue", scene.acquisition.noise_reference_tissue},
+      {"BiasPercent", scene.acquisition.bias_percent},
+      {"Units", "arbitrary (proton density 1 = 1)"},
+      {"GeneratedBy", "phantasm " + std::string(version)}};
+  if (s.kind == SequenceKind::inversion_recovery || s.kind == SequenceKind::mprage)
+    j["InversionTime"] = s.TI_ms / 1000.0;
+  if (s.kind == SequenceKind::mprage) {
+    j["EchoSpacing"] = s.echo_spacing_ms / 1000.0;
+    j["TurboFactor"] = s.turbo_factor;
+  }
+  return j;
+}
+
+/// Number of image files write_images writes.
+std::size_t image_file_count(const MrImages& images) {
+  return 2 * (images.reference.size() + images.deformed.size());
+}
+
+void write_images(const ImageGrid& grid, const Scene& scene, const MrImages& images,
+                  const DatasetLayout& layout, DatasetWriter& writer) {
+  for (PhantomState state : {PhantomState::reference, PhantomState::deformed}) {
+    for (const MrImage& image : state == PhantomState::reference ? images.reference : images.deformed) {
+      const std::filesystem::path path = layout.anat_image(state, image.sequence->name);
+      write_nifti(path, grid, image.magnitude, {NiftiIntent::none, 1, "phantasm " + image.sequence->name});
+      writer.written(path);
+      writer.json(sidecar_path(path), image_sidecar(scene, image));
+    }
+  }
 }
 
 /// Number of volume files write_volumes writes.
@@ -264,10 +318,6 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& re
       reporter.modelled(stage.stage, line);
     for (const auto& line : stage.skipped)
       reporter.skipped(stage.stage, line);
-    if (!stage_runs(stage.stage)) {
-      reporter.modelled(stage.stage,
-                        "planned only: this version records the plan; the stage itself does not run yet");
-    }
   }
 
   const Phantom phantom = build_anatomy(scene, summary.stages[0], reporter);
@@ -276,29 +326,31 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& re
   std::optional<PhantomDeformation> deformation;
   std::optional<Phantom> deformed;
   if (scene.deformation.mode != DeformationMode::none) {
-    const std::size_t planned = sim.modelled.size(), planned_skips = sim.skipped.size();
+    const StageLines lines(sim);
     deformation = deform_phantom(scene, phantom, sim, reporter);
-    for (std::size_t k = planned; k < sim.modelled.size(); ++k)
-      reporter.modelled("sim", sim.modelled[k]);
-    for (std::size_t k = planned_skips; k < sim.skipped.size(); ++k)
-      reporter.skipped("sim", sim.skipped[k]);
+    lines.print_new(sim, reporter);
     deformed = deformed_phantom(phantom, *deformation);
   }
 
   StageReport& voxelize = summary.stages[2];
-  const std::size_t planned = voxelize.modelled.size(), planned_skips = voxelize.skipped.size();
+  const StageLines voxelize_lines(voxelize);
   const VoxelizedPhantom volumes =
       voxelize_phantom(scene, phantom, deformed ? &*deformed : nullptr, deformation ? &*deformation : nullptr,
                        voxelize, reporter);
-  for (std::size_t k = planned; k < voxelize.modelled.size(); ++k)
-    reporter.modelled("voxelize", voxelize.modelled[k]);
-  for (std::size_t k = planned_skips; k < voxelize.skipped.size(); ++k)
-    reporter.skipped("voxelize", voxelize.skipped[k]);
+  voxelize_lines.print_new(voxelize, reporter);
+
+  StageReport& mri = summary.stages[3];
+  MrImages images;
+  if (scene.outputs.images && !scene.sequences.empty()) {
+    const StageLines mri_lines(mri);
+    images = synthesize_images(scene, volumes, mri, reporter);
+    mri_lines.print_new(mri, reporter);
+  }
 
   const DatasetLayout layout(options.output, scene.outputs.subject);
   DatasetWriter writer(layout, reporter,
                        6 + organ_mesh_count(scene, phantom) * (deformed ? 2 : 1) +
-                           volume_file_count(scene, volumes));
+                           volume_file_count(scene, volumes) + image_file_count(images));
   writer.json(layout.dataset_description(), {{"Name", scene.name},
                                              {"BIDSVersion", "1.9.0"},
                                              {"DatasetType", "raw"},
@@ -322,6 +374,7 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& re
     reporter.skipped("anatomy", "organ meshes (outputs.meshes is false)");
   }
   write_volumes(scene, volumes, layout, writer);
+  write_images(volumes.grid, scene, images, layout, writer);
 
   std::string log;
   for (const auto& line : reporter.log_lines())

@@ -41,7 +41,9 @@ def compare(name, resampled, target):
 # mm, and the datatype and intent of its kind.
 import glob
 reference_affine = nib.load(sub + "/ses-ref/anat/sub-01_ses-ref_dseg.nii.gz").affine
-for path in sorted(glob.glob(sub + "/**/*.nii.gz", recursive=True)):
+paths = sorted(glob.glob(sub + "/**/*.nii.gz", recursive=True)) + sorted(glob.glob(root + "/sub-01/**/*.nii.gz", recursive=True))
+check("the subject has images of both states", any("ses-ref_T1w" in p for p in paths) and any("ses-def_T1w" in p for p in paths), "%d NIfTI files" % len(paths))
+for path in paths:
     image = nib.load(path)
     h = image.header
     name = path.split("/")[-1]

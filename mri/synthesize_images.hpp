@@ -1,0 +1,34 @@
+#pragma once
+
+#include "core/progress.hpp"
+#include "core/stage_report.hpp"
+#include "scene/scene.hpp"
+#include "voxelize/voxelize_phantom.hpp"
+
+#include <string>
+#include <vector>
+
+namespace phantasm {
+
+/// One magnitude image of one sequence in one state.
+struct MrImage {
+  const SequenceSettings* sequence = nullptr;
+  std::vector<float> magnitude; ///< grid voxel count
+  double noise_sigma = 0.0;     ///< std of each of the real and imaginary noise parts
+};
+
+struct MrImages {
+  std::vector<MrImage> reference; ///< one per scene sequence
+  std::vector<MrImage> deformed;  ///< when the phantom was deformed
+};
+
+/// MR images of every sequence of the scene, for each state the volumes hold: each voxel's
+/// signal is the fraction-weighted sum of its tissues' signed closed-form signals (so partial
+/// volume can cancel at an inversion null), times a smooth multiplicative bias field (a seeded
+/// linear ramp spanning bias_percent peak to peak over the object), plus complex Gaussian noise
+/// of sigma = noise_percent / 100 x the reference tissue's signal; the image is the magnitude
+/// (Rician). Noise and bias are seeded from the scene's seed, the sequence and the state.
+MrImages synthesize_images(const Scene& scene, const VoxelizedPhantom& volumes, StageReport& report,
+                           Reporter& reporter);
+
+} // namespace phantasm
