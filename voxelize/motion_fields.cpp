@@ -33,7 +33,15 @@ DeformationMap::DeformationMap(std::vector<DeformedBody> bodies, double extensio
         face.deformed[k] = body.deformed_mm.row(f[static_cast<std::size_t>(k)]).transpose();
         moved |= (face.deformed[k] - face.rest[k]).norm() > 1e-9;
       }
-      if (moved) m_moved_faces.push_back(face);
+      if (moved) {
+        m_moved_faces.push_back(face);
+        for (int k = 0; k < 3; ++k) {
+          m_moved_low[0] = m_moved_low[0].cwiseMin(face.rest[k]);
+          m_moved_high[0] = m_moved_high[0].cwiseMax(face.rest[k]);
+          m_moved_low[1] = m_moved_low[1].cwiseMin(face.deformed[k]);
+          m_moved_high[1] = m_moved_high[1].cwiseMax(face.deformed[k]);
+        }
+      }
     }
     for (bool deformed : {false, true}) {
       const Eigen::MatrixX3d& x = deformed ? body.deformed_mm : body.rest_mm;
@@ -50,6 +58,8 @@ DeformationMap::DeformationMap(std::vector<DeformedBody> bodies, double extensio
         cache.origin.push_back(x.row(body.tets(t, 0)).transpose());
         cache.low.push_back(low);
         cache.high.push_back(high);
+        cache.body_low = cache.body_low.cwiseMin(low);
+        cache.body_high = cache.body_high.cwiseMax(high);
       }
       (deformed ? m_deformed : m_rest).push_back(std::move(cache));
     }
@@ -61,6 +71,8 @@ bool DeformationMap::locate(const Eigen::Vector3d& x, bool deformed, std::size_t
   const auto& caches = deformed ? m_deformed : m_rest;
   for (std::size_t b = 0; b < caches.size(); ++b) {
     const TetCache& c = caches[b];
+    if ((x.array() < c.body_low.array() - 1e-9).any() || (x.array() > c.body_high.array() + 1e-9).any())
+      continue;
     for (std::size_t t = 0; t < c.inverse.size(); ++t) {
       if ((x.array() < c.low[t].array() - 1e-9).any() || (x.array() > c.high[t].array() + 1e-9).any())
         continue;
@@ -164,6 +176,10 @@ Eigen::Vector3d DeformationMap::forward(const Eigen::Vector3d& x, bool* exact) c
     if (exact) *exact = true;
     return y;
   }
+  return forward_outside(x, exact);
+}
+
+Eigen::Vector3d DeformationMap::forward_outside(const Eigen::Vector3d& x, bool* exact) const {
   const Eigen::Vector3d u = extension(x);
   if (exact) *exact = !near_moved_boundary(x);
   return x + u;
@@ -175,7 +191,11 @@ Eigen::Vector3d DeformationMap::inverse(const Eigen::Vector3d& x, bool* exact) c
     if (exact) *exact = true;
     return y;
   }
-  y = x;
+  return inverse_outside(x, exact);
+}
+
+Eigen::Vector3d DeformationMap::inverse_outside(const Eigen::Vector3d& x, bool* exact) const {
+  Eigen::Vector3d y = x;
   for (int iteration = 0; iteration < 30; ++iteration) {
     const Eigen::Vector3d next = x - extension(y);
     const double change = (next - y).norm();
@@ -184,6 +204,53 @@ Eigen::Vector3d DeformationMap::inverse(const Eigen::Vector3d& x, bool* exact) c
   }
   if (exact) *exact = !near_moved_boundary(x) && !near_moved_boundary(y);
   return y;
+}
+
+void DeformationMap::rasterize(const ImageGrid& grid, bool deformed, std::vector<float>& field,
+                               std::vector<std::uint8_t>& inside) const {
+  const auto count = static_cast<std::size_t>(grid.voxel_count());
+  const auto& caches = deformed ? m_deformed : m_rest;
+  for (std::size_t b = 0; b < m_bodies.size(); ++b) {
+    const DeformedBody& body = m_bodies[b];
+    const Eigen::MatrixX3d& from = deformed ? body.deformed_mm : body.rest_mm;
+    const Eigen::MatrixX3d& to = deformed ? body.rest_mm : body.deformed_mm;
+    for (Eigen::Index t = 0; t < body.tets.rows(); ++t) {
+      Eigen::Vector3d low = Eigen::Vector3d::Constant(1e300), high = -low;
+      for (int k = 0; k < 4; ++k) {
+        const Eigen::Vector3d index = grid.index_from_world(from.row(body.tets(t, k)).transpose());
+        low = low.cwiseMin(index);
+        high = high.cwiseMax(index);
+      }
+      int lo[3], hi[3];
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::max(0, static_cast<int>(std::ceil(low[a] - 1e-9)));
+        hi[a] = std::min(grid.dims[a] - 1, static_cast<int>(std::floor(high[a] + 1e-9)));
+      }
+      const Eigen::Matrix3d& inverse = caches[b].inverse[static_cast<std::size_t>(t)];
+      const Eigen::Vector3d& origin = caches[b].origin[static_cast<std::size_t>(t)];
+      for (int k = lo[2]; k <= hi[2]; ++k) {
+        for (int j = lo[1]; j <= hi[1]; ++j) {
+          for (int i = lo[0]; i <= hi[0]; ++i) {
+            const std::size_t v = static_cast<std::size_t>(i) +
+                                  static_cast<std::size_t>(grid.dims.x()) *
+                                      (static_cast<std::size_t>(j) +
+                                       static_cast<std::size_t>(grid.dims.y()) * static_cast<std::size_t>(k));
+            if (inside[v]) continue;
+            const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
+            const Eigen::Vector3d l = inverse * (x - origin);
+            const Eigen::Vector4d w(1.0 - l.sum(), l[0], l[1], l[2]);
+            if (w.minCoeff() < -1e-12) continue;
+            Eigen::Vector3d y = Eigen::Vector3d::Zero();
+            for (int c = 0; c < 4; ++c)
+              y += w[c] * to.row(body.tets(t, c)).transpose();
+            for (int c = 0; c < 3; ++c)
+              field[static_cast<std::size_t>(c) * count + v] = static_cast<float>(y[c] - x[c]);
+            inside[v] = 1;
+          }
+        }
+      }
+    }
+  }
 }
 
 MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& map) {
@@ -201,6 +268,11 @@ MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& 
                (static_cast<std::size_t>(j) + static_cast<std::size_t>(ny) * static_cast<std::size_t>(k));
   };
   if (map.bodies().empty()) return f;
+  // Inside the bodies: tet by tet. Outside: the extension, voxel by voxel in parallel (each
+  // voxel's value depends on nothing else, so the result does not depend on the threads).
+  std::vector<std::uint8_t> inside_ref(count, 0), inside_def(count, 0);
+  map.rasterize(grid, false, f.ref_to_def, inside_ref);
+  map.rasterize(grid, true, f.def_to_ref, inside_def);
 #pragma omp parallel for schedule(dynamic, 1)
   for (int k = 0; k < nz; ++k) {
     for (int j = 0; j < ny; ++j) {
@@ -208,13 +280,17 @@ MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& 
         const std::size_t v = at(i, j, k);
         const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
         bool exact = true;
-        const Eigen::Vector3d to_def = map.forward(x, &exact) - x;
-        f.ref_to_def_exact[v] = exact;
-        const Eigen::Vector3d to_ref = map.inverse(x, &exact) - x;
-        f.def_to_ref_exact[v] = exact;
-        for (int c = 0; c < 3; ++c) {
-          f.ref_to_def[static_cast<std::size_t>(c) * count + v] = static_cast<float>(to_def[c]);
-          f.def_to_ref[static_cast<std::size_t>(c) * count + v] = static_cast<float>(to_ref[c]);
+        if (!inside_ref[v]) {
+          const Eigen::Vector3d to_def = map.forward_outside(x, &exact) - x;
+          f.ref_to_def_exact[v] = exact;
+          for (int c = 0; c < 3; ++c)
+            f.ref_to_def[static_cast<std::size_t>(c) * count + v] = static_cast<float>(to_def[c]);
+        }
+        if (!inside_def[v]) {
+          const Eigen::Vector3d to_ref = map.inverse_outside(x, &exact) - x;
+          f.def_to_ref_exact[v] = exact;
+          for (int c = 0; c < 3; ++c)
+            f.def_to_ref[static_cast<std::size_t>(c) * count + v] = static_cast<float>(to_ref[c]);
         }
       }
     }

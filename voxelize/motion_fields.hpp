@@ -26,6 +26,17 @@ public:
   /// of the extension by fixed-point iteration.
   Eigen::Vector3d inverse(const Eigen::Vector3d& x_def, bool* exact = nullptr) const;
 
+  /// Fills the field of every grid voxel inside a body's tets in one state (rest: the
+  /// reference-to-deformed field; deformed: the way back), tet by tet, so the work follows the
+  /// voxels the bodies cover; marks them in `inside`. Sequential, so shared faces resolve the
+  /// same way every run.
+  void rasterize(const ImageGrid& grid, bool deformed, std::vector<float>& field,
+                 std::vector<std::uint8_t>& inside) const;
+
+  /// The extension part of forward() and inverse(), for points outside every body.
+  Eigen::Vector3d forward_outside(const Eigen::Vector3d& x_ref, bool* exact) const;
+  Eigen::Vector3d inverse_outside(const Eigen::Vector3d& x_def, bool* exact) const;
+
   const std::vector<DeformedBody>& bodies() const { return m_bodies; }
   double extension_mm() const { return m_extension; }
 
@@ -49,10 +60,15 @@ private:
     std::array<Eigen::Vector3d, 3> rest, deformed;
   };
   std::vector<MovedFace> m_moved_faces;
+  /// Bounding boxes of the moved faces, rest [0] and deformed [1].
+  Eigen::Vector3d m_moved_low[2] = {Eigen::Vector3d::Constant(1e300), Eigen::Vector3d::Constant(1e300)};
+  Eigen::Vector3d m_moved_high[2] = {Eigen::Vector3d::Constant(-1e300), Eigen::Vector3d::Constant(-1e300)};
   // Per body and state: inverse edge matrices of each tet, and its bounding box.
   struct TetCache {
     std::vector<Eigen::Matrix3d> inverse;
     std::vector<Eigen::Vector3d> origin, low, high;
+    Eigen::Vector3d body_low = Eigen::Vector3d::Constant(1e300),
+                    body_high = Eigen::Vector3d::Constant(-1e300);
   };
   std::vector<TetCache> m_rest, m_deformed;
 };
