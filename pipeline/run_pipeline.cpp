@@ -10,6 +10,7 @@
 #include "io/json_file.hpp"
 #include "io/mesh_file.hpp"
 #include "io/nifti_file.hpp"
+#include "io/preview_png.hpp"
 #include "io/shape_files.hpp"
 #include "mri/mri_plan.hpp"
 #include "mri/synthesize_images.hpp"
@@ -197,9 +198,9 @@ nlohmann::json image_sidecar(const Scene& scene, const MrImage& image) {
   return j;
 }
 
-/// Number of image files write_images writes.
-std::size_t image_file_count(const MrImages& images) {
-  return 2 * (images.reference.size() + images.deformed.size());
+/// Number of image files write_images writes (image, sidecar, and a preview when asked for).
+std::size_t image_file_count(const Scene& scene, const MrImages& images) {
+  return (scene.outputs.previews ? 3 : 2) * (images.reference.size() + images.deformed.size());
 }
 
 void write_images(const ImageGrid& grid, const Scene& scene, const MrImages& images,
@@ -210,6 +211,11 @@ void write_images(const ImageGrid& grid, const Scene& scene, const MrImages& ima
       write_nifti(path, grid, image.magnitude, {NiftiIntent::none, 1, "phantasm " + image.sequence->name});
       writer.written(path);
       writer.json(sidecar_path(path), image_sidecar(scene, image));
+      if (scene.outputs.previews) {
+        const std::filesystem::path preview = layout.preview(state, image.sequence->name);
+        write_preview_png(preview, grid, image.magnitude);
+        writer.written(preview);
+      }
     }
   }
 }
@@ -350,7 +356,7 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& re
   const DatasetLayout layout(options.output, scene.outputs.subject);
   DatasetWriter writer(layout, reporter,
                        6 + organ_mesh_count(scene, phantom) * (deformed ? 2 : 1) +
-                           volume_file_count(scene, volumes) + image_file_count(images));
+                           volume_file_count(scene, volumes) + image_file_count(scene, images));
   writer.json(layout.dataset_description(), {{"Name", scene.name},
                                              {"BIDSVersion", "1.9.0"},
                                              {"DatasetType", "raw"},

@@ -105,6 +105,23 @@ TEST(RunCommand, WritesSheetAndShellSurfacesWithoutTetMeshes) {
   EXPECT_TRUE(fs::exists(meshes / "sub-01_ses-ref_organ-scalp_mesh.vtp"));
   EXPECT_FALSE(fs::exists(meshes / "sub-01_ses-ref_organ-scalp_tetmesh.vtu")); // solid: false
   EXPECT_TRUE(fs::exists(meshes / "sub-01_ses-ref_organ-grey_matter_tetmesh.vtu"));
+
+  // A preview per image: a PNG of the three middle slices side by side (48 + 48 + 56 wide,
+  // max(56, 52) high for the 48 x 56 x 52 grid).
+  for (const char* state : {"ref", "def"}) {
+    const std::string png = read_file(out / "derivatives" / "phantasm" / "sub-01" / "previews" /
+                                      (std::string("sub-01_ses-") + state + "_T1w.png"));
+    ASSERT_GT(png.size(), 24u);
+    EXPECT_EQ(png.substr(1, 3), "PNG");
+    auto be32 = [&](std::size_t at) {
+      return (static_cast<unsigned>(static_cast<unsigned char>(png[at])) << 24) |
+             (static_cast<unsigned>(static_cast<unsigned char>(png[at + 1])) << 16) |
+             (static_cast<unsigned>(static_cast<unsigned char>(png[at + 2])) << 8) |
+             static_cast<unsigned>(static_cast<unsigned char>(png[at + 3]));
+    };
+    EXPECT_EQ(be32(16), 152u);
+    EXPECT_EQ(be32(20), 56u);
+  }
 }
 
 TEST(RunCommand, RefusesANonEmptyOutputFolderWithoutForceAndLeavesItUntouched) {
@@ -142,7 +159,7 @@ TEST(RunCommand, QuietPrintsNothingAndAPipeGetsPlainProgressLines) {
   const CommandResult plain =
       run_command({k_phantasm, "run", k_small_scene.string(), "-o", (root / "p").string()});
   EXPECT_EQ(plain.exit_code, 0);
-  EXPECT_NE(plain.err.find("writing 100% (39/39)"), std::string::npos) << plain.err;
+  EXPECT_NE(plain.err.find("writing 100% (43/43)"), std::string::npos) << plain.err;
   EXPECT_EQ(plain.err.find('\r'), std::string::npos);
   EXPECT_NE(plain.err.find("[voxelize] skipped: .vdb grids"), std::string::npos) << plain.err;
 }

@@ -1,0 +1,67 @@
+#include "io/preview_png.hpp"
+
+#include "io/atomic_file.hpp"
+
+#include <vtkImageData.h>
+#include <vtkNew.h>
+#include <vtkPNGWriter.h>
+#include <vtkPointData.h>
+#include <vtkUnsignedCharArray.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace phantasm {
+
+void write_preview_png(const std::filesystem::path& path, const ImageGrid& grid,
+                       const std::vector<float>& values) {
+  const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
+  if (values.size() != static_cast<std::size_t>(grid.voxel_count()))
+    throw std::invalid_argument(path.string() + ": preview of a volume whose size does not match its grid");
+  std::vector<float> sorted = values;
+  const std::size_t rank = static_cast<std::size_t>(0.995 * static_cast<double>(sorted.size() - 1));
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(rank), sorted.end());
+  const double top = std::max(1e-30, static_cast<double>(sorted[rank]));
+  auto at = [&](int i, int j, int k) {
+    return values[static_cast<std::size_t>(i) +
+                  static_cast<std::size_t>(nx) *
+                      (static_cast<std::size_t>(j) +
+                       static_cast<std::size_t>(ny) * static_cast<std::size_t>(k))];
+  };
+  // Panels: k = nz/2 (i across, j up), j = ny/2 (i across, k up), i = nx/2 (j across, k up).
+  const int width = nx + nx + ny, height = std::max(ny, nz);
+  std::vector<unsigned char> pixels(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), 0);
+  auto put = [&](int x, int y, float v) {
+    const double g = std::clamp(255.0 * v / top, 0.0, 255.0);
+    pixels[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)] =
+        static_cast<unsigned char>(std::lround(g));
+  };
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i)
+      put(i, j, at(i, j, nz / 2));
+  for (int k = 0; k < nz; ++k)
+    for (int i = 0; i < nx; ++i)
+      put(nx + i, k, at(i, ny / 2, k));
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      put(2 * nx + j, k, at(nx / 2, j, k));
+  // VTK's image origin is the lower left; rows above are higher indices, as wanted.
+  vtkNew<vtkImageData> image;
+  image->SetDimensions(width, height, 1);
+  vtkNew<vtkUnsignedCharArray> scalars;
+  scalars->SetNumberOfComponents(1);
+  scalars->SetNumberOfTuples(static_cast<vtkIdType>(pixels.size()));
+  std::copy(pixels.begin(), pixels.end(), scalars->GetPointer(0));
+  image->GetPointData()->SetScalars(scalars);
+  vtkNew<vtkPNGWriter> writer;
+  writer->SetInputData(image);
+  writer->WriteToMemoryOn();
+  writer->Write();
+  vtkUnsignedCharArray* bytes = writer->GetResult();
+  if (!bytes) throw std::runtime_error(path.string() + ": VTK could not encode the PNG");
+  write_file_atomically(path, std::string_view(reinterpret_cast<const char*>(bytes->GetPointer(0)),
+                                               static_cast<std::size_t>(bytes->GetNumberOfTuples())));
+}
+
+} // namespace phantasm

@@ -1,0 +1,16 @@
+#pragma once
+
+#include "core/grid.hpp"
+
+#include <filesystem>
+#include <vector>
+
+namespace phantasm {
+
+/// Writes a PNG preview of a volume: its three orthogonal middle slices (axial, coronal,
+/// sagittal in index space) side by side, grey levels from 0 to the 99.5th percentile of the
+/// volume, one pixel per voxel (voxel spacing is not resampled). Atomic, like every output.
+void write_preview_png(const std::filesystem::path& path, const ImageGrid& grid,
+                       const std::vector<float>& values);
+
+} // namespace phantasm
