@@ -79,6 +79,10 @@ std::filesystem::path DatasetLayout::tet_mesh(PhantomState state, const std::str
   return subject_derivatives() / "meshes" / (prefix(state) + "_organ-" + organ + "_tetmesh.vtu");
 }
 
+std::filesystem::path DatasetLayout::vdb(PhantomState state) const {
+  return subject_derivatives() / "vdb" / (prefix(state) + "_grids.vdb");
+}
+
 std::filesystem::path DatasetLayout::preview(PhantomState state, const std::string& suffix) const {
   return subject_derivatives() / "previews" / (prefix(state) + "_" + suffix + ".png");
 }

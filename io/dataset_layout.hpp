@@ -41,6 +41,8 @@ public:
   std::filesystem::path mesh(PhantomState state, const std::string& organ) const;
   /// A solid organ's tetrahedral mesh, VTK UnstructuredGrid.
   std::filesystem::path tet_mesh(PhantomState state, const std::string& organ) const;
+  /// derivatives/phantasm/sub-<id>/vdb/sub-<id>_ses-<state>_grids.vdb
+  std::filesystem::path vdb(PhantomState state) const;
   /// derivatives/phantasm/sub-<id>/previews/sub-<id>_ses-<state>_<suffix>.png
   std::filesystem::path preview(PhantomState state, const std::string& suffix) const;
   std::filesystem::path provenance() const;

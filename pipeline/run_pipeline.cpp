@@ -12,6 +12,7 @@
 #include "io/nifti_file.hpp"
 #include "io/preview_png.hpp"
 #include "io/shape_files.hpp"
+#include "io/vdb_file.hpp"
 #include "mri/mri_plan.hpp"
 #include "mri/synthesize_images.hpp"
 #include "scene/scene_json.hpp"
@@ -229,6 +230,7 @@ std::size_t volume_file_count(const Scene& scene, const VoxelizedPhantom& v) {
   if (v.motion && scene.outputs.displacement_fields) count += 2 * 3; // field, sidecar, mask per direction
   if (v.motion && scene.outputs.jacobian) count += 1;
   if (scene.outputs.landmarks) count += states;
+  if (scene.outputs.vdb) count += states;
   return count;
 }
 
@@ -277,6 +279,20 @@ void write_volumes(const Scene& scene, const VoxelizedPhantom& v, const DatasetL
                     {NiftiIntent::none, 1, "fraction of " + v.tissues[t]});
         writer.written(layout.probseg(state, v.tissues[t]));
       }
+    }
+  }
+  if (scene.outputs.vdb) {
+    for (const auto& [state, volumes] : states) {
+      if (!volumes) continue;
+      VdbContents contents;
+      contents.level_sets =
+          state == PhantomState::reference ? &v.reference_level_sets : &v.deformed_level_sets;
+      contents.grid = &v.grid;
+      contents.labels = &volumes->labels;
+      for (std::size_t t = 0; t < v.tissues.size(); ++t)
+        contents.fractions.emplace_back(v.tissues[t], &volumes->fractions[t]);
+      write_vdb(layout.vdb(state), contents);
+      writer.written(layout.vdb(state));
     }
   }
   if (scene.outputs.landmarks) {

@@ -110,7 +110,7 @@ struct DeformationSettings {
 
 struct VoxelizationSettings {
   int supersampling = 4;                   ///< samples per voxel edge for partial-volume fractions
-  double tessellation_tolerance_mm = 0.1; ///< patch surface tessellation deviation
+  double tessellation_tolerance_mm = 0.2; ///< patch surface tessellation deviation
 };
 
 enum class SequenceKind { spin_echo, spoiled_gre, inversion_recovery, bssfp, mprage };

@@ -48,6 +48,14 @@ StateLevelSets level_sets_of(const Scene& scene, const Phantom& phantom,
   return out;
 }
 
+void keep_level_sets(const Phantom& phantom, StateLevelSets&& sets,
+                     std::vector<std::pair<std::string, LevelSet>>& kept) {
+  for (std::size_t k = 0; k < sets.organs.size(); ++k) {
+    const auto organ = static_cast<std::size_t>(sets.organs[k].label - 1);
+    kept.emplace_back(phantom.organs[organ].name, std::move(sets.level_sets[k]));
+  }
+}
+
 } // namespace
 
 VoxelizedPhantom voxelize_phantom(const Scene& scene, const Phantom& reference, const Phantom* deformed,
@@ -78,12 +86,14 @@ VoxelizedPhantom voxelize_phantom(const Scene& scene, const Phantom& reference, 
     out.reference = voxelize_tissues(out.grid, sets.organs, static_cast<int>(out.tissues.size()),
                                      scene.voxelization.supersampling);
     progress.advance();
+    if (scene.outputs.vdb) keep_level_sets(reference, std::move(sets), out.reference_level_sets);
   }
   if (deformed) {
     StateLevelSets sets = level_sets_of(scene, *deformed, out.tissues, voxel_size, progress);
     out.deformed = voxelize_tissues(out.grid, sets.organs, static_cast<int>(out.tissues.size()),
                                     scene.voxelization.supersampling);
     progress.advance();
+    if (scene.outputs.vdb) keep_level_sets(*deformed, std::move(sets), out.deformed_level_sets);
   }
   report.modelled.push_back("fractions from " + std::to_string(scene.voxelization.supersampling) +
                             "^3 samples in the " + std::to_string(out.reference.supersampled_voxels) +

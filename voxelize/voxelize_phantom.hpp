@@ -23,6 +23,8 @@ struct VoxelizedPhantom {
   std::optional<TissueVolumes> deformed; ///< when the scene deforms
   std::optional<MotionFields> motion;    ///< when the scene deforms
   std::vector<Landmark> landmarks;       ///< both states (equal when nothing deforms)
+  /// The organs' level sets by organ name, kept when the scene asks for .vdb output.
+  std::vector<std::pair<std::string, LevelSet>> reference_level_sets, deformed_level_sets;
 };
 
 /// Voxelizes the reference phantom (and the deformed one with the motion fields when given) on

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <openvdb/io/File.h>
+#include <openvdb/openvdb.h>
 
 #include <regex>
 
@@ -162,6 +164,40 @@ TEST(RunCommand, QuietPrintsNothingAndAPipeGetsPlainProgressLines) {
   EXPECT_NE(plain.err.find("writing 100% (43/43)"), std::string::npos) << plain.err;
   EXPECT_EQ(plain.err.find('\r'), std::string::npos);
   EXPECT_NE(plain.err.find("[voxelize] skipped: .vdb grids"), std::string::npos) << plain.err;
+}
+
+// outputs.vdb: each state's organ level sets and its label and fraction volumes in one .vdb file.
+TEST(RunCommand, VdbFilesHoldLevelSetsLabelsAndFractions) {
+  const fs::path root = fresh_folder("vdb");
+  std::string scene = read_file(k_small_scene);
+  const std::string marker = "outputs:\n  subject: \"01\"\n";
+  ASSERT_NE(scene.find(marker), std::string::npos);
+  scene.replace(scene.find(marker), marker.size(), marker + "  vdb: true\n");
+  write_text_file(root / "scene.yaml", scene);
+  ASSERT_EQ(
+      run_command({k_phantasm, "run", (root / "scene.yaml").string(), "-o", (root / "out").string(), "-q"})
+          .exit_code,
+      0);
+  openvdb::initialize();
+  for (const char* state : {"ref", "def"}) {
+    openvdb::io::File file((root / "out" / "derivatives" / "phantasm" / "sub-01" / "vdb" /
+                            (std::string("sub-01_ses-") + state + "_grids.vdb"))
+                               .string());
+    file.open();
+    auto sdf = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("white_matter_sdf"));
+    auto labels = openvdb::gridPtrCast<openvdb::Int32Grid>(file.readGrid("labels"));
+    auto fraction = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("fraction_white_matter"));
+    ASSERT_TRUE(sdf && labels && fraction);
+    EXPECT_EQ(sdf->getGridClass(), openvdb::GRID_LEVEL_SET);
+    // The grid centre (world origin) is deep in the white matter (dseg index 3).
+    const openvdb::Coord centre = labels->transform().worldToIndexCellCentered(openvdb::Vec3d(0, 0, 0));
+    EXPECT_EQ(labels->tree().getValue(centre), 3);
+    EXPECT_FLOAT_EQ(fraction->tree().getValue(centre), 1.0f);
+    EXPECT_LT(sdf->tree().getValue(sdf->transform().worldToIndexCellCentered(openvdb::Vec3d(0, 0, 0))), 0.0f);
+    EXPECT_EQ(
+        labels->tree().getValue(labels->transform().worldToIndexCellCentered(openvdb::Vec3d(47, 55, 51))), 0);
+    file.close();
+  }
 }
 
 TEST(RunCommand, AnInvalidSceneWritesNothing) {

@@ -1,0 +1,75 @@
+#include "io/vdb_file.hpp"
+
+#include "io/atomic_file.hpp"
+
+#include <openvdb/io/File.h>
+#include <openvdb/openvdb.h>
+
+#include <unistd.h>
+
+#include <stdexcept>
+
+namespace phantasm {
+namespace {
+
+openvdb::math::Transform::Ptr transform_of(const ImageGrid& grid) {
+  // OpenVDB matrices act on row vectors: the transpose of world_from_voxel.
+  openvdb::math::Mat4d m;
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c)
+      m(c, r) = grid.world_from_voxel(r, c);
+  return openvdb::math::Transform::createLinearTransform(m);
+}
+
+template <typename GridType, typename Value>
+typename GridType::Ptr sparse_grid(const ImageGrid& grid, const std::vector<Value>& values,
+                                   const std::string& name) {
+  auto out = GridType::create(typename GridType::ValueType(0));
+  out->setTransform(transform_of(grid));
+  out->setName(name);
+  auto accessor = out->getAccessor();
+  std::size_t v = 0;
+  for (int k = 0; k < grid.dims.z(); ++k)
+    for (int j = 0; j < grid.dims.y(); ++j)
+      for (int i = 0; i < grid.dims.x(); ++i, ++v)
+        if (values[v] != Value(0))
+          accessor.setValue(openvdb::Coord(i, j, k), static_cast<typename GridType::ValueType>(values[v]));
+  return out;
+}
+
+} // namespace
+
+void write_vdb(const std::filesystem::path& path, const VdbContents& contents) {
+  openvdb::initialize();
+  openvdb::GridPtrVec grids;
+  if (contents.level_sets) {
+    for (const auto& [organ, level_set] : *contents.level_sets) {
+      auto copy = static_cast<const openvdb::FloatGrid*>(level_set.grid())->deepCopy();
+      copy->setName(organ + "_sdf");
+      grids.push_back(copy);
+    }
+  }
+  if (contents.grid && contents.labels)
+    grids.push_back(sparse_grid<openvdb::Int32Grid>(*contents.grid, *contents.labels, "labels"));
+  for (const auto& [tissue, fractions] : contents.fractions)
+    grids.push_back(sparse_grid<openvdb::FloatGrid>(*contents.grid, *fractions, "fraction_" + tissue));
+  // OpenVDB writes to a path: a hidden temporary next to the final name, then rename, as
+  // AtomicFileWriter does (it also removes the temporary if anything throws).
+  std::filesystem::create_directories(path.parent_path());
+  const std::filesystem::path temporary =
+      path.parent_path() /
+      ("." + path.filename().string() + ".phantasm-tmp-" + std::to_string(::getpid()) + "-vdb");
+  try {
+    openvdb::io::File file(temporary.string());
+    file.setCompression(openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK);
+    file.write(grids);
+    file.close();
+    std::filesystem::rename(temporary, path);
+  } catch (...) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    throw;
+  }
+}
+
+} // namespace phantasm

@@ -1,0 +1,27 @@
+#pragma once
+
+#include "core/grid.hpp"
+#include "voxelize/level_set.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace phantasm {
+
+/// The grids of one state, for a .vdb file.
+struct VdbContents {
+  const std::vector<std::pair<std::string, LevelSet>>* level_sets = nullptr; ///< "<organ>_sdf"
+  const ImageGrid* grid = nullptr;                                           ///< of the dense volumes
+  const std::vector<std::int32_t>* labels = nullptr;                         ///< "labels" (Int32Grid)
+  std::vector<std::pair<std::string, const std::vector<float>*>> fractions;  ///< "fraction_<tissue>"
+};
+
+/// Writes an OpenVDB file (atomically: a temporary file, then rename): every organ's level set
+/// as it is (world RAS mm), and the label and fraction volumes as sparse grids on the image
+/// grid's transform (zero background, so they store only the object).
+void write_vdb(const std::filesystem::path& path, const VdbContents& contents);
+
+} // namespace phantasm
