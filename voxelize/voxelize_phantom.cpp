@@ -29,22 +29,36 @@ struct StateLevelSets {
 StateLevelSets level_sets_of(const Scene& scene, const Phantom& phantom,
                              const std::vector<std::string>& tissues, double voxel_size,
                              ProgressBar& progress) {
-  StateLevelSets out;
-  out.level_sets.reserve(phantom.organs.size());
+  std::vector<std::size_t> chosen;
   for (std::size_t o = 0; o < phantom.organs.size(); ++o) {
-    const Organ& organ = phantom.organs[o];
-    if (organ.surface && organ_in_field_of_view(scene, scene.anatomy.organs[o])) {
-      out.level_sets.emplace_back(organ.surface->tessellate(scene.voxelization.tessellation_tolerance_mm),
-                                  voxel_size);
-      VoxelizedOrgan v;
-      v.level_set = &out.level_sets.back();
-      v.depth = nesting_depth_of(scene, o);
-      v.label = static_cast<int>(o) + 1;
-      v.tissue = static_cast<int>(std::find(tissues.begin(), tissues.end(), organ.tissue) - tissues.begin());
-      out.organs.push_back(v);
-    }
-    progress.advance();
+    if (phantom.organs[o].surface && organ_in_field_of_view(scene, scene.anatomy.organs[o]))
+      chosen.push_back(o);
   }
+  // Tessellations in parallel (each organ's is independent and deterministic), then the level
+  // sets one after the other (OpenVDB parallelizes each with TBB).
+  std::vector<TriangleMesh> meshes(chosen.size());
+  const auto count = static_cast<std::ptrdiff_t>(chosen.size());
+#pragma omp parallel for schedule(dynamic, 1)
+  for (std::ptrdiff_t k = 0; k < count; ++k) {
+    meshes[static_cast<std::size_t>(k)] =
+        phantom.organs[chosen[static_cast<std::size_t>(k)]].surface->tessellate(
+            scene.voxelization.tessellation_tolerance_mm);
+  }
+  StateLevelSets out;
+  out.level_sets.reserve(chosen.size());
+  for (std::size_t k = 0; k < chosen.size(); ++k) {
+    const std::size_t o = chosen[k];
+    out.level_sets.emplace_back(meshes[k], voxel_size);
+    meshes[k] = TriangleMesh();
+    VoxelizedOrgan v;
+    v.level_set = &out.level_sets.back();
+    v.depth = nesting_depth_of(scene, o);
+    v.label = static_cast<int>(o) + 1;
+    v.tissue = static_cast<int>(std::find(tissues.begin(), tissues.end(), phantom.organs[o].tissue) -
+                                tissues.begin());
+    out.organs.push_back(v);
+  }
+  progress.advance(phantom.organs.size());
   return out;
 }
 
