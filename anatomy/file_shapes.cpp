@@ -54,8 +54,8 @@ public:
       throw InputError(what + ": expected " + std::to_string(grid.voxel_count()) + " label values, found " +
                        std::to_string(labels.size()));
     }
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    std::int64_t count = 0;
+    // One pass over the volume: mark the label's voxels and keep their centres.
+    std::vector<Eigen::Vector3d> centres;
     for (int k = 0; k < grid.dims.z(); ++k)
       for (int j = 0; j < grid.dims.y(); ++j)
         for (int i = 0; i < grid.dims.x(); ++i) {
@@ -63,25 +63,19 @@ public:
               static_cast<std::size_t>((std::int64_t{k} * grid.dims.y() + j) * grid.dims.x() + i);
           if (labels[index] != label) continue;
           m_inside[index] = 1.0f;
-          sum += grid.world_from_index(Eigen::Vector3d(i, j, k));
-          ++count;
+          centres.push_back(grid.world_from_index(Eigen::Vector3d(i, j, k)));
         }
-    if (count == 0)
+    if (centres.empty())
       throw InputError(what + ": expected voxels with label " + std::to_string(label) + ", found none");
-    m_center = sum / static_cast<double>(count);
+    m_center = Eigen::Vector3d::Zero();
+    for (const Eigen::Vector3d& c : centres)
+      m_center += c;
+    m_center /= static_cast<double>(centres.size());
     const double voxel_volume = std::abs(grid.world_from_voxel.topLeftCorner<3, 3>().determinant());
-    m_volume = static_cast<double>(count) * voxel_volume;
+    m_volume = static_cast<double>(centres.size()) * voxel_volume;
     m_radius = 0.0;
-    for (int k = 0; k < grid.dims.z(); ++k)
-      for (int j = 0; j < grid.dims.y(); ++j)
-        for (int i = 0; i < grid.dims.x(); ++i) {
-          const std::size_t index =
-              static_cast<std::size_t>((std::int64_t{k} * grid.dims.y() + j) * grid.dims.x() + i);
-          if (m_inside[index] > 0.0f) {
-            m_radius =
-                std::max(m_radius, (grid.world_from_index(Eigen::Vector3d(i, j, k)) - m_center).norm());
-          }
-        }
+    for (const Eigen::Vector3d& c : centres)
+      m_radius = std::max(m_radius, (c - m_center).norm());
     m_radius += grid.spacing_mm.norm();
     m_step = 0.05 * grid.spacing_mm.minCoeff();
   }

@@ -109,7 +109,7 @@ struct DeformationSettings {
 };
 
 struct VoxelizationSettings {
-  int supersampling = 4;                   ///< samples per voxel edge for partial-volume fractions
+  int supersampling = 4;                  ///< samples per voxel edge for partial-volume fractions
   double tessellation_tolerance_mm = 0.2; ///< patch surface tessellation deviation
 };
 

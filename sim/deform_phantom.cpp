@@ -296,10 +296,11 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
   if (!bodies.empty()) {
     const SolverSettings& solver = scene.deformation.solver;
     if (solver.method != SolverMethod::local_global && solver.method != SolverMethod::newton) {
-      throw InputError(scene.location_of("deformation.solver.method").file +
-                       ": deformation.solver.method: expected "
-                       "local_global or newton in this version, found " +
-                       std::string(to_string(solver.method)));
+      const std::string key = "deformation.solver.method";
+      throw InputError(Diagnostic{scene.location_of(key), key,
+                                  "expected local_global or newton in this version, found " +
+                                      std::string(to_string(solver.method))}
+                           .format());
     }
     StopCriteria stop;
     stop.max_iterations = solver.max_iterations;

@@ -97,3 +97,23 @@ TEST(DeformPhantom, AQuasiStaticBodyThatNothingHoldsIsAClearError) {
     EXPECT_NE(std::string(error.what()).find("deformation.fixed"), std::string::npos) << error.what();
   }
 }
+
+// Solvers the scene format names but this version lacks stop the run with the scene's location.
+TEST(DeformPhantom, AnUnavailableSolverIsAClearErrorAtItsSceneField) {
+  Scene scene = load("tests/data/scenes/small-head.yaml");
+  scene.deformation.solver.method = SolverMethod::xpbd;
+  Reporter quiet = Reporter::silent();
+  const Phantom phantom = build_phantom(scene, {}, quiet);
+  StageReport report;
+  try {
+    deform_phantom(scene, phantom, report, quiet);
+    FAIL() << "no error";
+  } catch (const InputError& error) {
+    const std::string message = error.what();
+    EXPECT_NE(message.find("small-head.yaml"), std::string::npos) << message;
+    EXPECT_NE(message.find(
+                  "deformation.solver.method: expected local_global or newton in this version, found xpbd"),
+              std::string::npos)
+        << message;
+  }
+}

@@ -115,7 +115,8 @@ TEST(LocalGlobal, StableAtTheExtremesFromInvertedAndDegenerateStarts) {
             ASSERT_TRUE(p.allFinite());
             ASSERT_TRUE(std::isfinite(report.final_energy_J));
             ASSERT_TRUE(std::isfinite(report.residual_N));
-            energies.insert(energies.end(), report.energies_J.begin() + (round > 0 ? 1 : 0), report.energies_J.end());
+            energies.insert(energies.end(), report.energies_J.begin() + (round > 0 ? 1 : 0),
+                            report.energies_J.end());
             iterations += report.iterations;
             still_inverted = 0;
             for (const TetElement& e : bar.model.tets)
@@ -124,7 +125,8 @@ TEST(LocalGlobal, StableAtTheExtremesFromInvertedAndDegenerateStarts) {
           }
           expect_monotone(energies);
           if (gravity == 0.0) {
-            EXPECT_EQ(still_inverted, 0) << inverted << " inverted at the start; " << iterations << " iterations";
+            EXPECT_EQ(still_inverted, 0)
+                << inverted << " inverted at the start; " << iterations << " iterations";
           }
         }
       }
