@@ -51,6 +51,10 @@ std::filesystem::path DatasetLayout::probseg(PhantomState state, const std::stri
          (prefix(state) + "_label-" + tissue + "_probseg.nii.gz");
 }
 
+std::filesystem::path DatasetLayout::parameter_map(PhantomState state, const std::string& suffix) const {
+  return dseg(state).parent_path() / (prefix(state) + "_" + suffix + ".nii.gz");
+}
+
 std::filesystem::path DatasetLayout::transform(PhantomState from, PhantomState to) const {
   return subject_derivatives() / "xfm" /
          ("sub-" + m_subject + "_from-" + session_label(from) + "_to-" + session_label(to) +

@@ -31,6 +31,8 @@ public:
   std::filesystem::path dseg_table() const;
   std::filesystem::path dseg(PhantomState state) const;
   std::filesystem::path probseg(PhantomState state, const std::string& tissue) const;
+  /// A ground-truth quantitative map next to the labels, suffix e.g. "T1map" (BIDS qMRI names).
+  std::filesystem::path parameter_map(PhantomState state, const std::string& suffix) const;
   /// The field that maps `from` positions to `to` positions (see DESIGN.md, Conventions).
   std::filesystem::path transform(PhantomState from, PhantomState to) const;
   /// Where the field is the solved motion (1) and where it is the smooth extension (0).

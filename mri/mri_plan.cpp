@@ -39,8 +39,15 @@ StageReport plan_mri(const Scene& scene) {
   }
   const AcquisitionSettings& a = scene.acquisition;
   if (a.kspace) {
-    report.modelled.push_back("k-space truncation with " + std::to_string(a.kspace_oversampling) +
-                              "x oversampled object");
+    const std::string acquired =
+        a.acquired_voxel_mm ? "acquired voxel " + format_number((*a.acquired_voxel_mm).x()) + " x " +
+                                  format_number((*a.acquired_voxel_mm).y()) + " x " +
+                                  format_number((*a.acquired_voxel_mm).z()) + " mm"
+                            : std::to_string(a.kspace_oversampling) + " grid voxels per acquired sample";
+    report.modelled.push_back("k-space truncation (" + acquired + "), zero-filled onto the grid" +
+                              (a.slice_thickness_mm > 0.0
+                                   ? ", slice profile " + format_number(a.slice_thickness_mm) + " mm"
+                                   : std::string()));
   } else {
     report.skipped.push_back("k-space simulation (acquisition.kspace is false): images are sampled directly");
   }
@@ -50,6 +57,11 @@ StageReport plan_mri(const Scene& scene) {
     report.skipped.push_back("bias field (acquisition.bias_percent is 0)");
   }
   if (a.coils > 1) report.modelled.push_back(std::to_string(a.coils) + " coils, sum of squares");
+  if (scene.outputs.parameter_maps) {
+    report.modelled.push_back("parameter maps PD, T1, T2, T2* of each state");
+  } else {
+    report.skipped.push_back("parameter maps (outputs.parameter_maps is false)");
+  }
   if (a.noise_percent > 0.0) {
     report.modelled.push_back("Rician noise, " + value_text(a.noise_percent) + " % of " +
                               a.noise_reference_tissue);

@@ -1,72 +1,151 @@
 #include "mri/synthesize_images.hpp"
 
 #include "core/format.hpp"
+#include "mri/kspace.hpp"
+#include "mri/receive_coils.hpp"
 #include "mri/signal_equations.hpp"
 #include "mri/tissue_parameters.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <complex>
 #include <random>
 
 namespace phantasm {
 namespace {
 
-/// A seed for one image's random numbers: the scene's seed mixed with the sequence and state
-/// (splitmix64), so images differ from each other and every run repeats them.
-std::uint64_t image_seed(std::uint64_t seed, std::size_t sequence, int state) {
-  std::uint64_t z = seed + 0x9e3779b97f4a7c15ULL * (2 * sequence + static_cast<std::uint64_t>(state) + 1);
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
+/// Complex Gaussian noise of std sigma on each part of every voxel, drawn per line along i from
+/// streams seeded by `seed`, so the result does not depend on the number of threads.
+void add_image_noise(std::vector<std::complex<double>>& image, const Eigen::Vector3i& dims, double sigma,
+                     std::uint64_t seed) {
+  const std::int64_t lines = std::int64_t{dims.y()} * dims.z();
+#pragma omp parallel for schedule(static)
+  for (std::int64_t line = 0; line < lines; ++line) {
+    std::mt19937_64 random(mix_seed(seed, static_cast<std::uint64_t>(line)));
+    std::normal_distribution<double> noise(0.0, sigma);
+    std::complex<double>* row = image.data() + line * dims.x();
+    for (int i = 0; i < dims.x(); ++i) {
+      const double re = noise(random), im = noise(random);
+      row[i] += std::complex<double>(re, im);
+    }
+  }
 }
 
-MrImage image_of(const Scene& scene, const SequenceSettings& sequence, std::size_t sequence_index, int state,
-                 const ImageGrid& grid, const TissueVolumes& volumes,
-                 const std::vector<double>& tissue_signal, double reference_signal) {
+/// A linear ramp along a seeded direction spanning 1 -/+ bias_percent / 200 over the object.
+std::vector<double> bias_field(double bias_percent, std::mt19937_64& random, const ImageGrid& grid,
+                               const TissueVolumes& volumes) {
+  const auto count = static_cast<std::size_t>(grid.voxel_count());
+  std::vector<double> bias(count, 1.0);
+  if (bias_percent <= 0.0) return bias;
+  std::normal_distribution<double> normal;
+  Eigen::Vector3d direction(normal(random), normal(random), normal(random));
+  direction.normalize();
+  // The position along the direction is affine in the voxel index: a . (i, j, k) + offset.
+  const Eigen::Vector3d a = grid.world_from_voxel.topLeftCorner<3, 3>().transpose() * direction;
+  const double offset = direction.dot(grid.world_from_voxel.topRightCorner<3, 1>());
+  const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
+  double low = std::numeric_limits<double>::infinity(), high = -low;
+#pragma omp parallel for reduction(min : low) reduction(max : high) schedule(static)
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const std::size_t v = (static_cast<std::size_t>(k) * ny + j) * nx + i;
+        if (volumes.background[v] >= 0.5f) continue;
+        const double along = a.x() * i + a.y() * j + a.z() * k + offset;
+        low = std::min(low, along);
+        high = std::max(high, along);
+      }
+  if (high > low) {
+    const double half_span = bias_percent / 200.0;
+#pragma omp parallel for schedule(static)
+    for (int k = 0; k < nz; ++k)
+      for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) {
+          const double along = a.x() * i + a.y() * j + a.z() * k + offset;
+          bias[(static_cast<std::size_t>(k) * ny + j) * nx + i] =
+              1.0 + half_span * (2.0 * (along - low) / (high - low) - 1.0);
+        }
+  }
+  return bias;
+}
+
+/// What stays the same for every image of a run: the grid, the coils and the k-space sampling.
+struct Acquisition {
+  const ImageGrid& grid;
+  const ReceiveCoils& coils;
+  std::optional<KspaceSampling> kspace;
+  double bias_percent;
+};
+
+MrImage image_of(const Acquisition& acquisition, const SequenceSettings& sequence, std::uint64_t seed,
+                 const TissueVolumes& volumes, const std::vector<double>& tissue_signal, double noise_sigma) {
+  const ImageGrid& grid = acquisition.grid;
   MrImage image;
   image.sequence = &sequence;
+  image.noise_sigma = noise_sigma;
   const auto count = static_cast<std::size_t>(grid.voxel_count());
-  std::vector<double> signal(count, 0.0);
-  for (std::size_t t = 0; t < tissue_signal.size(); ++t) {
-    const std::vector<float>& f = volumes.fractions[t];
-    for (std::size_t v = 0; v < count; ++v)
-      signal[v] += f[v] * tissue_signal[t];
+  std::mt19937_64 random(seed);
+  const std::vector<double> bias = bias_field(acquisition.bias_percent, random, grid, volumes);
+  // The object: fraction-weighted signed signals (partial volume may cancel at a null) x bias.
+  const auto voxels = static_cast<std::int64_t>(count);
+  std::vector<double> object(count);
+#pragma omp parallel for schedule(static)
+  for (std::int64_t n = 0; n < voxels; ++n) {
+    const auto v = static_cast<std::size_t>(n);
+    double sum = 0.0;
+    for (std::size_t t = 0; t < tissue_signal.size(); ++t)
+      sum += volumes.fractions[t][v] * tissue_signal[t];
+    object[v] = sum * bias[v];
   }
-  std::mt19937_64 random(image_seed(scene.seed, sequence_index, state));
-  // Bias: a linear ramp along a seeded direction, spanning 1 -/+ bias/200 over the object.
-  std::vector<double> bias(count, 1.0);
-  if (scene.acquisition.bias_percent > 0.0) {
-    std::normal_distribution<double> normal;
-    Eigen::Vector3d direction(normal(random), normal(random), normal(random));
-    direction.normalize();
-    double low = std::numeric_limits<double>::infinity(), high = -low;
-    std::vector<double> along(count);
-    for (int k = 0, v = 0; k < grid.dims.z(); ++k)
-      for (int j = 0; j < grid.dims.y(); ++j)
-        for (int i = 0; i < grid.dims.x(); ++i, ++v) {
-          along[static_cast<std::size_t>(v)] = direction.dot(grid.world_from_index(Eigen::Vector3d(i, j, k)));
-          if (volumes.background[static_cast<std::size_t>(v)] < 0.5) {
-            low = std::min(low, along[static_cast<std::size_t>(v)]);
-            high = std::max(high, along[static_cast<std::size_t>(v)]);
-          }
-        }
-    if (high > low) {
-      const double half_span = scene.acquisition.bias_percent / 200.0;
-      for (std::size_t v = 0; v < count; ++v)
-        bias[v] = 1.0 + half_span * (2.0 * (along[v] - low) / (high - low) - 1.0);
-    }
-  }
-  image.noise_sigma = scene.acquisition.noise_percent / 100.0 * std::abs(reference_signal);
-  std::normal_distribution<double> noise(0.0, image.noise_sigma > 0.0 ? image.noise_sigma : 1.0);
+
+  const int nx = grid.dims.x(), ny = grid.dims.y();
+  const std::int64_t rows = std::int64_t{ny} * grid.dims.z();
+  const int coils = acquisition.coils.count();
+  std::vector<double> sum_of_squares(coils > 1 ? count : 0, 0.0);
+  std::vector<std::complex<double>> coil_image(count);
   image.magnitude.resize(count);
-  for (std::size_t v = 0; v < count; ++v) {
-    double re = signal[v] * bias[v], im = 0.0;
-    if (image.noise_sigma > 0.0) {
-      re += noise(random);
-      im += noise(random);
+  for (int c = 0; c < coils; ++c) {
+#pragma omp parallel for schedule(static)
+    for (std::int64_t row = 0; row < rows; ++row) {
+      const int j = static_cast<int>(row % ny);
+      for (int i = 0; i < nx; ++i) {
+        const auto v = static_cast<std::size_t>(row * nx + i);
+        coil_image[v] = acquisition.coils.sensitivity(c, i, j) * object[v];
+      }
     }
-    image.magnitude[v] = static_cast<float>(std::hypot(re, im));
+    const std::uint64_t coil_seed = mix_seed(seed, static_cast<std::uint64_t>(c) + 1);
+    if (acquisition.kspace) {
+      acquire_in_kspace(coil_image, *acquisition.kspace, noise_sigma, coil_seed);
+    } else if (noise_sigma > 0.0) {
+      add_image_noise(coil_image, grid.dims, noise_sigma, coil_seed);
+    }
+#pragma omp parallel for schedule(static)
+    for (std::int64_t n = 0; n < voxels; ++n) {
+      const auto v = static_cast<std::size_t>(n);
+      if (coils == 1) {
+        image.magnitude[v] = static_cast<float>(std::abs(coil_image[v]));
+      } else {
+        sum_of_squares[v] += std::norm(coil_image[v]);
+        if (c + 1 == coils) image.magnitude[v] = static_cast<float>(std::sqrt(sum_of_squares[v]));
+      }
+    }
   }
   return image;
+}
+
+/// The k-space sampling the scene asks for, or nothing when images are sampled directly.
+std::optional<KspaceSampling> kspace_sampling(const AcquisitionSettings& a, const ImageGrid& grid) {
+  if (!a.kspace) return std::nullopt;
+  KspaceSampling sampling;
+  sampling.dims = grid.dims;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double acquired = a.acquired_voxel_mm
+                                ? grid.dims[axis] * grid.spacing_mm[axis] / (*a.acquired_voxel_mm)[axis]
+                                : static_cast<double>(grid.dims[axis]) / a.kspace_oversampling;
+    sampling.acquired[axis] = std::clamp(static_cast<int>(std::lround(acquired)), 1, grid.dims[axis]);
+  }
+  sampling.slice_thickness_voxels = a.slice_thickness_mm / grid.spacing_mm.z();
+  return sampling;
 }
 
 } // namespace
@@ -81,6 +160,37 @@ MrImages synthesize_images(const Scene& scene, const VoxelizedPhantom& volumes, 
     return Relaxation{p.PD.value_or(0.0), p.T1_ms.value_or(1.0), p.T2_ms.value_or(0.0),
                       p.T2star_ms.value_or(p.T2_ms.value_or(0.0))};
   };
+  const ImageGrid& grid = volumes.grid;
+  const AcquisitionSettings& settings = scene.acquisition;
+  std::vector<bool> object_mask(volumes.reference.background.size());
+  for (std::size_t v = 0; v < object_mask.size(); ++v)
+    object_mask[v] = volumes.reference.background[v] < 0.5f;
+  const ReceiveCoils coils(grid, settings.coils, object_mask);
+  const Acquisition acquisition{grid, coils, kspace_sampling(settings, grid), settings.bias_percent};
+  images.kspace = acquisition.kspace;
+  images.coils = coils.count();
+  if (acquisition.kspace) {
+    const KspaceSampling& k = *acquisition.kspace;
+    std::string line = "k-space: object " + std::to_string(k.dims.x()) + "x" + std::to_string(k.dims.y()) +
+                       "x" + std::to_string(k.dims.z()) + ", acquired matrix " +
+                       std::to_string(k.acquired.x()) + "x" + std::to_string(k.acquired.y()) + "x" +
+                       std::to_string(k.acquired.z()) + " (voxel " +
+                       format_number(k.dims.x() * grid.spacing_mm.x() / k.acquired.x()) + " x " +
+                       format_number(k.dims.y() * grid.spacing_mm.y() / k.acquired.y()) + " x " +
+                       format_number(k.dims.z() * grid.spacing_mm.z() / k.acquired.z()) +
+                       " mm), unfiltered truncation (Gibbs ringing), zero-filled onto the grid";
+    if (k.slice_thickness_voxels > 0.0)
+      line += ", rectangular slice profile " + format_number(settings.slice_thickness_mm) + " mm along k";
+    report.modelled.push_back(line + "; noise added in k-space");
+  } else if (settings.acquired_voxel_mm || settings.slice_thickness_mm > 0.0) {
+    report.skipped.push_back("acquired voxel size and slice thickness: they act in k-space, and "
+                             "acquisition.kspace is false");
+  }
+  if (coils.count() > 1) {
+    report.modelled.push_back(
+        std::to_string(coils.count()) +
+        " receive coils on a ring (sensitivity ~ 1/distance), noise per coil, sum of squares");
+  }
   ProgressBar progress(reporter, "mri", scene.sequences.size() * (volumes.deformed ? 2 : 1));
   for (std::size_t q = 0; q < scene.sequences.size(); ++q) {
     const SequenceSettings& sequence = scene.sequences[q];
@@ -92,28 +202,30 @@ MrImages synthesize_images(const Scene& scene, const VoxelizedPhantom& volumes, 
     }
     report.modelled.push_back(line);
     double reference_signal = 0.0;
-    const std::string& reference_tissue = scene.acquisition.noise_reference_tissue;
+    const std::string& reference_tissue = settings.noise_reference_tissue;
     if (parameters.count(reference_tissue)) {
       reference_signal = sequence_signal(sequence, relaxation_of(reference_tissue));
-    } else if (scene.acquisition.noise_percent > 0.0) {
+    } else if (settings.noise_percent > 0.0) {
       report.skipped.push_back("noise of " + sequence.name + ": the reference tissue " + reference_tissue +
                                " is not in the phantom");
     }
-    images.reference.push_back(
-        image_of(scene, sequence, q, 0, volumes.grid, volumes.reference, tissue_signal, reference_signal));
+    const double sigma = settings.noise_percent / 100.0 * std::abs(reference_signal);
+    // One seed per image (sequence and state): images differ, and every run repeats them.
+    images.reference.push_back(image_of(acquisition, sequence, mix_seed(scene.seed, 2 * q), volumes.reference,
+                                        tissue_signal, sigma));
     progress.advance();
     if (volumes.deformed) {
-      images.deformed.push_back(
-          image_of(scene, sequence, q, 1, volumes.grid, *volumes.deformed, tissue_signal, reference_signal));
+      images.deformed.push_back(image_of(acquisition, sequence, mix_seed(scene.seed, 2 * q + 1),
+                                         *volumes.deformed, tissue_signal, sigma));
       progress.advance();
     }
   }
-  if (scene.acquisition.kspace) {
-    report.skipped.push_back(
-        "k-space simulation: not available in this version; images are sampled directly");
-  }
-  if (scene.acquisition.coils > 1) {
-    report.skipped.push_back("coil sensitivities: not available in this version; one uniform coil");
+  if (scene.outputs.parameter_maps) {
+    images.reference_maps = parameter_maps(volumes.reference, volumes.tissues, parameters);
+    if (volumes.deformed)
+      images.deformed_maps = parameter_maps(*volumes.deformed, volumes.tissues, parameters);
+    report.modelled.push_back(
+        "parameter maps PD, T1, T2, T2* (fraction-weighted; PD summed, times averaged)");
   }
   report.status = "done";
   return images;

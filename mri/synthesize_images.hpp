@@ -2,9 +2,12 @@
 
 #include "core/progress.hpp"
 #include "core/stage_report.hpp"
+#include "mri/kspace.hpp"
+#include "mri/parameter_maps.hpp"
 #include "scene/scene.hpp"
 #include "voxelize/voxelize_phantom.hpp"
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,16 +21,23 @@ struct MrImage {
 };
 
 struct MrImages {
-  std::vector<MrImage> reference; ///< one per scene sequence
-  std::vector<MrImage> deformed;  ///< when the phantom was deformed
+  std::vector<MrImage> reference;       ///< one per scene sequence
+  std::vector<MrImage> deformed;        ///< when the phantom was deformed
+  std::optional<KspaceSampling> kspace; ///< how the images were acquired, when in k-space
+  int coils = 1;                        ///< receive coils combined by sum of squares
+  std::optional<ParameterMaps> reference_maps, deformed_maps; ///< when outputs.parameter_maps
 };
 
 /// MR images of every sequence of the scene, for each state the volumes hold: each voxel's
 /// signal is the fraction-weighted sum of its tissues' signed closed-form signals (so partial
 /// volume can cancel at an inversion null), times a smooth multiplicative bias field (a seeded
-/// linear ramp spanning bias_percent peak to peak over the object), plus complex Gaussian noise
-/// of sigma = noise_percent / 100 x the reference tissue's signal; the image is the magnitude
-/// (Rician). Noise and bias are seeded from the scene's seed, the sequence and the state.
+/// linear ramp spanning bias_percent peak to peak over the object), times each receive coil's
+/// sensitivity; with acquisition.kspace the object on the grid is transformed, truncated to the
+/// acquired matrix (and slice profile) and reconstructed on the grid by zero filling; complex
+/// Gaussian noise of sigma = noise_percent / 100 x the reference tissue's signal per coil (in
+/// k-space when it is simulated); the image is the magnitude (Rician), or the sum of squares of
+/// several coils. Noise and bias are seeded from the scene's seed, the sequence and the state;
+/// the result does not depend on the number of threads. Parameter maps come with the images.
 MrImages synthesize_images(const Scene& scene, const VoxelizedPhantom& volumes, StageReport& report,
                            Reporter& reporter);
 

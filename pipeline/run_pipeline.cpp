@@ -176,7 +176,7 @@ nlohmann::json solves_json(const std::vector<SolveReport>& solves) {
 
 /// BIDS sidecar of one image: timing in seconds, flip angle in degrees, field strength, and how
 /// noise and bias were modelled.
-nlohmann::json image_sidecar(const Scene& scene, const MrImage& image) {
+nlohmann::json image_sidecar(const Scene& scene, const MrImages& images, const MrImage& image) {
   const SequenceSettings& s = *image.sequence;
   nlohmann::json j = {
       {"MagneticFieldStrength", scene.field_strength_T},
@@ -188,10 +188,21 @@ nlohmann::json image_sidecar(const Scene& scene, const MrImage& image) {
       {"NoisePercent", scene.acquisition.noise_percent},
       {"NoiseReferenceTissue", scene.acquisition.noise_reference_tissue},
       {"BiasPercent", scene.acquisition.bias_percent},
+      {"ReceiveCoils", images.coils},
+      {"CoilCombinationMethod", images.coils > 1 ? "sum of squares" : "single uniform coil"},
       {"Units", "arbitrary (proton density 1 = 1)"},
       {"GeneratedBy", "phantasm " + std::string(version)}};
   if (s.kind == SequenceKind::inversion_recovery || s.kind == SequenceKind::mprage)
     j["InversionTime"] = s.TI_ms / 1000.0;
+  if (images.kspace) {
+    const KspaceSampling& k = *images.kspace;
+    j["AcquisitionMatrix"] = {k.acquired.x(), k.acquired.y(), k.acquired.z()};
+    j["ReconstructionMatrix"] = {k.dims.x(), k.dims.y(), k.dims.z()};
+    j["KspaceTruncation"] = "central samples kept, no filter (Gibbs ringing); zero-filled reconstruction";
+    if (k.slice_thickness_voxels > 0.0) j["SliceThickness"] = scene.acquisition.slice_thickness_mm;
+  } else {
+    j["KspaceTruncation"] = "none (images sampled directly on the grid)";
+  }
   if (s.kind == SequenceKind::mprage) {
     j["EchoSpacing"] = s.echo_spacing_ms / 1000.0;
     j["TurboFactor"] = s.turbo_factor;
@@ -199,19 +210,50 @@ nlohmann::json image_sidecar(const Scene& scene, const MrImage& image) {
   return j;
 }
 
-/// Number of image files write_images writes (image, sidecar, and a preview when asked for).
+/// Number of image files write_images writes (image, sidecar, and a preview when asked for;
+/// four parameter maps with sidecars per state).
 std::size_t image_file_count(const Scene& scene, const MrImages& images) {
-  return (scene.outputs.previews ? 3 : 2) * (images.reference.size() + images.deformed.size());
+  return (scene.outputs.previews ? 3 : 2) * (images.reference.size() + images.deformed.size()) +
+         8 * ((images.reference_maps ? 1 : 0) + (images.deformed_maps ? 1 : 0));
+}
+
+void write_parameter_maps(const ImageGrid& grid, const ParameterMaps& maps, PhantomState state,
+                          const DatasetLayout& layout, DatasetWriter& writer) {
+  struct Map {
+    const char* suffix;
+    const std::vector<float>* values;
+    const char* units;
+    const char* description;
+  };
+  const Map list[] = {
+      {"PDmap", &maps.PD, "arbitrary (water = 1)",
+       "proton density: fraction-weighted sum over the voxel's tissues"},
+      {"T1map", &maps.T1_ms, "ms", "T1: fraction-weighted mean over the voxel's tissues that have one"},
+      {"T2map", &maps.T2_ms, "ms", "T2: fraction-weighted mean over the voxel's tissues that have one"},
+      {"T2starmap", &maps.T2star_ms, "ms",
+       "T2*: fraction-weighted mean over the voxel's tissues that have one"}};
+  for (const Map& map : list) {
+    const std::filesystem::path path = layout.parameter_map(state, map.suffix);
+    write_nifti(path, grid, *map.values, {NiftiIntent::none, 1, std::string("phantasm ") + map.suffix});
+    writer.written(path);
+    writer.json(sidecar_path(path), {{"Units", map.units},
+                                     {"Description", map.description},
+                                     {"GeneratedBy", "phantasm " + std::string(version)}});
+  }
 }
 
 void write_images(const ImageGrid& grid, const Scene& scene, const MrImages& images,
                   const DatasetLayout& layout, DatasetWriter& writer) {
+  if (images.reference_maps)
+    write_parameter_maps(grid, *images.reference_maps, PhantomState::reference, layout, writer);
+  if (images.deformed_maps)
+    write_parameter_maps(grid, *images.deformed_maps, PhantomState::deformed, layout, writer);
   for (PhantomState state : {PhantomState::reference, PhantomState::deformed}) {
     for (const MrImage& image : state == PhantomState::reference ? images.reference : images.deformed) {
       const std::filesystem::path path = layout.anat_image(state, image.sequence->name);
       write_nifti(path, grid, image.magnitude, {NiftiIntent::none, 1, "phantasm " + image.sequence->name});
       writer.written(path);
-      writer.json(sidecar_path(path), image_sidecar(scene, image));
+      writer.json(sidecar_path(path), image_sidecar(scene, images, image));
       if (scene.outputs.previews) {
         const std::filesystem::path preview = layout.preview(state, image.sequence->name);
         write_preview_png(preview, grid, image.magnitude);

@@ -238,6 +238,18 @@ public:
               "expected the tissue of an organ in this scene (noise is relative to its signal), found '" +
                   a.noise_reference_tissue + "'");
     }
+    if (a.acquired_voxel_mm) {
+      for (int axis = 0; axis < 3; ++axis) {
+        const double acquired = (*a.acquired_voxel_mm)[axis], object = m_scene.grid.voxel_size_mm[axis];
+        if (acquired < object * (1.0 - 1e-9)) {
+          problem("acquisition.acquired_voxel_mm",
+                  "expected acquired voxels no smaller than the grid's (" + format_number(object) +
+                      " mm along axis " + std::to_string(axis) + "; the grid samples the object), found " +
+                      format_number(acquired) + " mm");
+          break;
+        }
+      }
+    }
   }
 
 private:

@@ -66,7 +66,15 @@ void parse_voxelization(CheckedMap& map, VoxelizationSettings& voxelization) {
 
 void parse_acquisition(CheckedMap& map, AcquisitionSettings& acquisition) {
   map.boolean("kspace", acquisition.kspace);
-  map.integer("kspace_oversampling", acquisition.kspace_oversampling, 1, 8);
+  const bool oversampling = map.integer("kspace_oversampling", acquisition.kspace_oversampling, 1, 8);
+  Eigen::Vector3d acquired_voxel;
+  if (map.vec3("acquired_voxel_mm", acquired_voxel, positive("mm"), false, true)) {
+    acquisition.acquired_voxel_mm = acquired_voxel;
+    if (oversampling) {
+      map.context().problem(map.get("acquired_voxel_mm"), map.child_path("acquired_voxel_mm"),
+                            "expected either acquired_voxel_mm or kspace_oversampling, found both");
+    }
+  }
   map.number("slice_thickness_mm", acquisition.slice_thickness_mm, between(0.0, 100.0, "mm"));
   map.number("noise_percent", acquisition.noise_percent, between(0.0, 100.0, "percent"));
   map.string("noise_reference_tissue", acquisition.noise_reference_tissue);
@@ -88,6 +96,7 @@ void parse_outputs(CheckedMap& map, OutputSettings& outputs) {
   map.boolean("meshes", outputs.meshes);
   map.boolean("vdb", outputs.vdb);
   map.boolean("previews", outputs.previews);
+  map.boolean("parameter_maps", outputs.parameter_maps);
 }
 
 } // namespace scene_detail

@@ -130,9 +130,11 @@ struct SequenceSettings {
 };
 
 struct AcquisitionSettings {
-  bool kspace = false;             ///< simulate k-space truncation (Gibbs ringing)
-  int kspace_oversampling = 2;     ///< object samples per acquired sample along each axis
-  double slice_thickness_mm = 0.0; ///< 0 = the voxel size
+  bool kspace = false;         ///< simulate k-space truncation (Gibbs ringing)
+  int kspace_oversampling = 2; ///< object samples per acquired sample along each axis
+  /// Acquired voxel size along i, j, k (replaces kspace_oversampling; anisotropic allowed).
+  std::optional<Eigen::Vector3d> acquired_voxel_mm;
+  double slice_thickness_mm = 0.0; ///< rectangular slice profile along k; 0 = none (3-D acquisition)
   double noise_percent = 0.0;      ///< 100 sigma / signal of the reference tissue (BrainWeb)
   std::string noise_reference_tissue = "white_matter";
   double bias_percent = 0.0; ///< peak-to-peak multiplicative bias field, percent
@@ -150,6 +152,7 @@ struct OutputSettings {
   bool meshes = true;
   bool vdb = false;
   bool previews = true;
+  bool parameter_maps = true; ///< PD, T1, T2, T2* maps of each state
 };
 
 /// A parsed and validated scene file: typed settings for every stage.

@@ -125,6 +125,7 @@ nlohmann::json scene_settings_json(const Scene& scene) {
       {"acquisition",
        {{"kspace", a.kspace},
         {"kspace_oversampling", a.kspace_oversampling},
+        {"acquired_voxel_mm", a.acquired_voxel_mm ? vec3(*a.acquired_voxel_mm) : nlohmann::json()},
         {"slice_thickness_mm", a.slice_thickness_mm},
         {"noise_percent", a.noise_percent},
         {"noise_reference_tissue", a.noise_reference_tissue},
@@ -140,7 +141,8 @@ nlohmann::json scene_settings_json(const Scene& scene) {
         {"landmarks", o.landmarks},
         {"meshes", o.meshes},
         {"vdb", o.vdb},
-        {"previews", o.previews}}},
+        {"previews", o.previews},
+        {"parameter_maps", o.parameter_maps}}},
   };
 }
 

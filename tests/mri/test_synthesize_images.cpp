@@ -1,12 +1,15 @@
 // Images from tissue fractions: Rician noise statistics on an empty background, the bias
 // field's span, partial-volume mixing, and seeded repeatability.
 
+#include "mri/parameter_maps.hpp"
+#include "mri/receive_coils.hpp"
 #include "mri/signal_equations.hpp"
 #include "mri/synthesize_images.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 
 using namespace phantasm;
 
@@ -99,4 +102,113 @@ TEST(SynthesizeImages, TissueSignalBiasSpanAndSeededRepeatability) {
   scene.seed = 6;
   EXPECT_NE(synthesize_images(scene, volumes(32), report, quiet).reference[0].magnitude,
             a.reference[0].magnitude);
+}
+
+// Sum of squares over a ring of coils: without noise the image is the one-coil image times the
+// coils' root sum of squares (mean 1 over the object, brighter towards the coils); on an empty
+// background it is a chi magnitude with 2 N degrees of freedom, mean sigma sqrt(2) G(N+1/2)/G(N).
+TEST(SynthesizeImages, CoilsCombineBySumOfSquares) {
+  StageReport report;
+  Reporter quiet = Reporter::silent();
+  // A cylinder of radius 24 voxels along k in the 64^3 grid.
+  VoxelizedPhantom object = volumes(0);
+  for (std::size_t v = 0; v < object.reference.background.size(); ++v) {
+    const double x = static_cast<double>(v % 64) - 31.5, y = static_cast<double>((v / 64) % 64) - 31.5;
+    if (std::hypot(x, y) < 24.0) {
+      object.reference.fractions[0][v] = 1.0f;
+      object.reference.background[v] = 0.0f;
+    }
+  }
+  const MrImages one = synthesize_images(noisy_scene(0.0, 0.0), object, report, quiet);
+  Scene scene = noisy_scene(0.0, 0.0);
+  scene.acquisition.coils = 8;
+  const MrImages eight = synthesize_images(scene, object, report, quiet);
+  EXPECT_EQ(eight.coils, 8);
+  std::vector<bool> mask(object.reference.background.size());
+  for (std::size_t v = 0; v < mask.size(); ++v)
+    mask[v] = object.reference.background[v] < 0.5f;
+  const ReceiveCoils coils(object.grid, 8, mask);
+  double ratio_sum = 0.0, low = 1e9, high = 0.0, voxels = 0.0;
+  for (std::size_t v = 0; v < mask.size(); ++v) {
+    if (!mask[v]) continue;
+    const double ratio = eight.reference[0].magnitude[v] / one.reference[0].magnitude[v];
+    const double rss = coils.root_sum_of_squares(static_cast<int>(v % 64), static_cast<int>((v / 64) % 64));
+    ASSERT_NEAR(ratio, rss, 1e-5 * rss);
+    ratio_sum += ratio;
+    low = std::min(low, ratio);
+    high = std::max(high, ratio);
+    voxels += 1.0;
+  }
+  EXPECT_NEAR(ratio_sum / voxels, 1.0, 1e-5);
+  std::cout << "coil shading over the object: " << high / low << "\n";
+  EXPECT_GT(high / low, 1.2); // receive arrays are brighter near their elements
+  EXPECT_LT(high / low, 4.0);
+
+  Scene noisy = noisy_scene(5.0, 0.0);
+  const int n = 4;
+  noisy.acquisition.coils = n;
+  const MrImages background = synthesize_images(noisy, volumes(0), report, quiet);
+  const std::vector<float>& m = background.reference[0].magnitude;
+  double mean = 0.0;
+  for (float x : m)
+    mean += x;
+  mean /= static_cast<double>(m.size());
+  const double sigma = background.reference[0].noise_sigma;
+  const double expected = sigma * std::sqrt(2.0) * std::exp(std::lgamma(n + 0.5) - std::lgamma(n));
+  EXPECT_NEAR(mean / expected, 1.0, 0.02);
+}
+
+// k-space in the image stage: keeping every sample gives the directly sampled image; truncated,
+// the background noise is still Rayleigh with the requested sigma, and the report says what was
+// modelled.
+TEST(SynthesizeImages, KspaceAcquisitionOnTheGrid) {
+  StageReport report;
+  Reporter quiet = Reporter::silent();
+  const VoxelizedPhantom object = volumes(20);
+  const MrImages direct = synthesize_images(noisy_scene(0.0, 10.0), object, report, quiet);
+  Scene scene = noisy_scene(0.0, 10.0);
+  scene.acquisition.kspace = true;
+  scene.acquisition.kspace_oversampling = 1;
+  const MrImages full = synthesize_images(scene, object, report, quiet);
+  ASSERT_TRUE(full.kspace);
+  EXPECT_TRUE(full.kspace->keeps_everything());
+  for (std::size_t v = 0; v < direct.reference[0].magnitude.size(); ++v)
+    ASSERT_NEAR(full.reference[0].magnitude[v], direct.reference[0].magnitude[v], 1e-6);
+
+  scene.acquisition.acquired_voxel_mm = Eigen::Vector3d(2.0, 1.0, 4.0);
+  scene.acquisition.noise_percent = 5.0;
+  StageReport truncated_report;
+  const MrImages truncated = synthesize_images(scene, volumes(0), truncated_report, quiet);
+  EXPECT_EQ(truncated.kspace->acquired, Eigen::Vector3i(32, 64, 16));
+  const std::vector<float>& m = truncated.reference[0].magnitude;
+  double mean = 0.0;
+  for (float x : m)
+    mean += x;
+  mean /= static_cast<double>(m.size());
+  EXPECT_NEAR(mean / (truncated.reference[0].noise_sigma * std::sqrt(M_PI / 2.0)), 1.0, 0.02);
+  bool reported = false;
+  for (const std::string& line : truncated_report.modelled)
+    reported = reported || line.find("acquired matrix 32x64x16") != std::string::npos;
+  EXPECT_TRUE(reported);
+}
+
+// Parameter maps: PD adds up over a voxel's tissues, relaxation times are fraction-weighted means
+// over the tissue present, and background holds 0.
+TEST(SynthesizeImages, ParameterMapsMixByFraction) {
+  TissueVolumes v;
+  v.fractions = {{1.0f, 0.5f, 0.0f, 0.25f}, {0.0f, 0.5f, 0.0f, 0.25f}};
+  v.background = {0.0f, 0.0f, 1.0f, 0.5f};
+  std::map<std::string, TissueParameters> parameters;
+  parameters["a"] = {"a", 800.0, 80.0, 60.0, 0.7, "", "", "", ""};
+  parameters["b"] = {"b", 1200.0, 100.0, std::nullopt, 0.9, "", "", "", ""};
+  const ParameterMaps maps = parameter_maps(v, {"a", "b"}, parameters);
+  EXPECT_FLOAT_EQ(maps.PD[0], 0.7f);
+  EXPECT_FLOAT_EQ(maps.PD[1], 0.8f);
+  EXPECT_FLOAT_EQ(maps.PD[3], 0.4f);
+  EXPECT_FLOAT_EQ(maps.T1_ms[1], 1000.0f);
+  EXPECT_FLOAT_EQ(maps.T1_ms[3], 1000.0f);
+  EXPECT_FLOAT_EQ(maps.T2_ms[1], 90.0f);
+  EXPECT_FLOAT_EQ(maps.T2star_ms[1], 60.0f); // b has no T2*: the mean is over a only
+  for (const auto* map : {&maps.PD, &maps.T1_ms, &maps.T2_ms, &maps.T2star_ms})
+    EXPECT_EQ((*map)[2], 0.0f);
 }

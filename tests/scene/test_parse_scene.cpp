@@ -229,3 +229,25 @@ TEST(LoadScene, AMissingFileIsOneClearProblem) {
   ASSERT_EQ(result.problems.size(), 1u);
   EXPECT_EQ(result.problems[0].format(), "/no/such/scene.yaml: expected a scene file, found no such file");
 }
+
+TEST(ParseScene, AcquiredVoxelSizeIsOneWayAndNoFinerThanTheGrid) {
+  const SceneLoadResult ok = parse(k_minimal + "acquisition: {kspace: true, acquired_voxel_mm: [3, 2, 4]}\n");
+  ASSERT_TRUE(ok.scene) << format_diagnostics(ok.problems);
+  EXPECT_EQ(*ok.scene->acquisition.acquired_voxel_mm, Eigen::Vector3d(3, 2, 4));
+  EXPECT_FALSE(parse(k_minimal).scene->acquisition.acquired_voxel_mm);
+
+  std::string message =
+      only_problem(k_minimal + "acquisition: {kspace: true, kspace_oversampling: 2, acquired_voxel_mm: 3}\n");
+  EXPECT_NE(message.find("scene.yaml:13:"), std::string::npos) << message;
+  EXPECT_NE(
+      message.find("acquisition.acquired_voxel_mm: expected either acquired_voxel_mm or kspace_oversampling, "
+                   "found both"),
+      std::string::npos)
+      << message;
+  message = only_problem(k_minimal + "acquisition: {kspace: true, acquired_voxel_mm: [2, 2, 3]}\n");
+  EXPECT_NE(
+      message.find("acquisition.acquired_voxel_mm: expected acquired voxels no smaller than the grid's (4 mm "
+                   "along axis 2; the grid samples the object), found 3 mm"),
+      std::string::npos)
+      << message;
+}

@@ -1,0 +1,49 @@
+#include "mri/parameter_maps.hpp"
+
+#include <optional>
+
+namespace phantasm {
+namespace {
+
+/// Fraction-weighted mean of one quantity over the tissues that have it; the sum instead when
+/// `additive`.
+std::vector<float> mixed(const TissueVolumes& volumes, const std::vector<std::optional<double>>& values,
+                         bool additive) {
+  const std::size_t count = volumes.background.size();
+  std::vector<double> sum(count, 0.0), weight(count, 0.0);
+  for (std::size_t t = 0; t < values.size(); ++t) {
+    if (!values[t]) continue;
+    const std::vector<float>& f = volumes.fractions[t];
+    for (std::size_t v = 0; v < count; ++v) {
+      sum[v] += f[v] * *values[t];
+      weight[v] += f[v];
+    }
+  }
+  std::vector<float> map(count, 0.0f);
+  for (std::size_t v = 0; v < count; ++v) {
+    if (weight[v] > 0.0) map[v] = static_cast<float>(additive ? sum[v] : sum[v] / weight[v]);
+  }
+  return map;
+}
+
+} // namespace
+
+ParameterMaps parameter_maps(const TissueVolumes& volumes, const std::vector<std::string>& tissues,
+                             const std::map<std::string, TissueParameters>& parameters) {
+  auto values = [&](std::optional<double> TissueParameters::*member) {
+    std::vector<std::optional<double>> list;
+    for (const std::string& tissue : tissues) {
+      const auto found = parameters.find(tissue);
+      list.push_back(found == parameters.end() ? std::nullopt : found->second.*member);
+    }
+    return list;
+  };
+  ParameterMaps maps;
+  maps.PD = mixed(volumes, values(&TissueParameters::PD), true);
+  maps.T1_ms = mixed(volumes, values(&TissueParameters::T1_ms), false);
+  maps.T2_ms = mixed(volumes, values(&TissueParameters::T2_ms), false);
+  maps.T2star_ms = mixed(volumes, values(&TissueParameters::T2star_ms), false);
+  return maps;
+}
+
+} // namespace phantasm
