@@ -189,7 +189,11 @@ void write_nifti_labels(const std::filesystem::path& path, const ImageGrid& grid
   }
 }
 
-NiftiVolume read_nifti(const std::filesystem::path& path) {
+namespace {
+
+/// Reads a NIfTI file holding `components` values per voxel: a 3-D volume for 1, a 5-D
+/// (X, Y, Z, 1, components) image in the ITK vector convention otherwise.
+NiftiVolume read_volume(const std::filesystem::path& path, int components) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error)) fail(path, "expected a NIfTI file, found no such file");
   nifti_set_debug_level(0);
@@ -197,10 +201,26 @@ NiftiVolume read_nifti(const std::filesystem::path& path) {
                                                                    nifti_image_free);
   if (!image || !image->data)
     fail(path, "expected a NIfTI-1 or NIfTI-2 image, found a file libnifti cannot read");
-  for (int d = 4; d <= 7; ++d) {
-    if (image->dim[0] >= d && image->dim[d] > 1) {
-      fail(path, "expected a 3-D volume, found dimension " + std::to_string(d) + " of size " +
-                     std::to_string(image->dim[d]));
+  if (components == 1) {
+    for (int d = 4; d <= 7; ++d) {
+      if (image->dim[0] >= d && image->dim[d] > 1) {
+        fail(path, "expected a 3-D volume, found dimension " + std::to_string(d) + " of size " +
+                       std::to_string(image->dim[d]));
+      }
+    }
+  } else {
+    const std::string expected =
+        "expected a 5-D vector image (X, Y, Z, 1, " + std::to_string(components) + ") in the ITK convention";
+    if (image->dim[0] == 4 && image->dim[4] == components) {
+      fail(path, expected + ", found a 4-D (X, Y, Z, " + std::to_string(components) +
+                     ") volume, which ITK and elastix read as a time series");
+    }
+    if (image->dim[0] < 5 || image->dim[4] != 1 || image->dim[5] != components ||
+        (image->dim[0] >= 6 && image->dim[6] > 1) || (image->dim[0] >= 7 && image->dim[7] > 1)) {
+      std::string found = "dimensions (";
+      for (int d = 1; d <= image->dim[0]; ++d)
+        found += (d > 1 ? ", " : "") + std::to_string(image->dim[d]);
+      fail(path, expected + ", found " + found + ")");
     }
   }
   NiftiVolume volume;
@@ -260,6 +280,16 @@ NiftiVolume read_nifti(const std::filesystem::path& path) {
                    " (" + nifti_datatype_string(image->datatype) + ")");
   }
   return volume;
+}
+
+} // namespace
+
+NiftiVolume read_nifti(const std::filesystem::path& path) {
+  return read_volume(path, 1);
+}
+
+NiftiVolume read_nifti_vectors(const std::filesystem::path& path, int components) {
+  return read_volume(path, components);
 }
 
 std::vector<std::int32_t> read_nifti_labels(const std::filesystem::path& path, ImageGrid* grid) {

@@ -39,7 +39,7 @@ void write_nifti_labels(const std::filesystem::path& path, const ImageGrid& grid
 /// A scalar volume read from a NIfTI file.
 struct NiftiVolume {
   ImageGrid grid;
-  std::vector<double> values; ///< grid.voxel_count() values, i fastest
+  std::vector<double> values; ///< grid.voxel_count() values per component, i fastest
   int datatype = 0;           ///< NIfTI datatype code of the file
 };
 
@@ -49,6 +49,13 @@ struct NiftiVolume {
 /// @throws InputError naming the file when it is missing, unreadable, not 3-D, or has
 /// a shear (phantasm grids are rotations times spacings)
 NiftiVolume read_nifti(const std::filesystem::path& path);
+
+/// Reads a vector image in the ITK convention, 5-D (X, Y, Z, 1, components), e.g. a
+/// displacement field (components = 3, as phantasm, elastix and transformix write them). The
+/// values come component by component: all voxels' first component, then the second, ...
+/// @throws InputError naming the file as read_nifti, and for any other layout (a 4-D
+/// (X, Y, Z, 3) file is named as such: ITK would read it as a time series)
+NiftiVolume read_nifti_vectors(const std::filesystem::path& path, int components = 3);
 
 /// Reads a label volume: a NIfTI file of integer labels (an integer datatype, or floats that
 /// are all whole numbers).

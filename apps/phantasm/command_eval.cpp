@@ -1,0 +1,50 @@
+#include "apps/phantasm/commands.hpp"
+#include "evaluation/evaluate_registration.hpp"
+#include "io/json_file.hpp"
+
+#include <iostream>
+#include <memory>
+
+namespace phantasm::cli {
+
+void add_eval_command(CLI::App& app, std::function<int()>& action) {
+  struct Options {
+    std::string dataset, field, labels, json, subject, fixed = "ref";
+    bool identity = false, quiet = false;
+  };
+  auto options = std::make_shared<Options>();
+  CLI::App* command = app.add_subcommand(
+      "eval", "Evaluate a registration result against a dataset's ground truth (TRE, Dice, HD95, endpoint "
+              "error, Jacobian)");
+  command->add_option("dataset", options->dataset, "Dataset folder written by phantasm run")->required();
+  auto* field = command->add_option(
+      "--field", options->field, "Displacement field on the fixed grid (ITK/elastix convention, 5-D NIfTI)");
+  auto* labels =
+      command->add_option("--labels", options->labels, "Moving label map warped onto the fixed grid");
+  auto* identity =
+      command->add_flag("--identity", options->identity, "Evaluate no registration (the baseline)");
+  field->excludes(labels)->excludes(identity);
+  labels->excludes(identity);
+  command->add_option("--json", options->json, "Write the evaluation as JSON to this file");
+  command->add_option("--subject", options->subject, "Subject label when the dataset holds several");
+  command->add_option("--fixed", options->fixed, "Session of the fixed image: ref (default) or def")
+      ->check(CLI::IsMember({"ref", "def"}));
+  command->add_flag("-q,--quiet", options->quiet, "Do not print the table");
+  command->callback([options, &action] {
+    action = [options] {
+      EvaluationRequest request;
+      request.dataset = options->dataset;
+      request.subject = options->subject;
+      request.fixed_session = options->fixed;
+      if (!options->field.empty()) request.field = options->field;
+      if (!options->labels.empty()) request.warped_labels = options->labels;
+      request.identity = options->identity;
+      const nlohmann::json evaluation = evaluate_registration(request);
+      if (!options->json.empty()) write_json_file(options->json, evaluation);
+      if (!options->quiet) std::cout << evaluation_table(evaluation);
+      return static_cast<int>(exit_ok);
+    };
+  });
+}
+
+} // namespace phantasm::cli

@@ -1,0 +1,289 @@
+#include "evaluation/evaluate_registration.hpp"
+
+#include "core/error.hpp"
+#include "core/format.hpp"
+#include "evaluation/registration_metrics.hpp"
+#include "io/dataset_layout.hpp"
+#include "io/nifti_file.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+namespace phantasm {
+namespace {
+
+struct LandmarkRow {
+  std::string name, organ;
+  Eigen::Vector3d ras_mm;
+};
+
+std::vector<LandmarkRow> read_landmarks(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path.string() + ": expected the subject's landmarks (CSV), found no such file");
+  std::vector<LandmarkRow> rows;
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    if (number == 1 || line.empty()) continue;
+    std::stringstream fields(line);
+    LandmarkRow row;
+    std::string x, y, z;
+    if (!std::getline(fields, row.name, ',') || !std::getline(fields, row.organ, ',') ||
+        !std::getline(fields, x, ',') || !std::getline(fields, y, ',') || !std::getline(fields, z)) {
+      throw InputError(path.string() + ":" + std::to_string(number) +
+                       ": expected name,organ,x_mm,y_mm,z_mm, found '" + line + "'");
+    }
+    try {
+      row.ras_mm = Eigen::Vector3d(std::stod(x), std::stod(y), std::stod(z));
+    } catch (const std::exception&) {
+      throw InputError(path.string() + ":" + std::to_string(number) + ": expected three numbers, found '" +
+                       line + "'");
+    }
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+/// Label index -> organ name, from dseg.tsv ("index<TAB>name<TAB>tissue").
+std::map<std::int32_t, std::string> read_label_names(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path.string() + ": expected the dataset's label table, found no such file");
+  std::map<std::int32_t, std::string> names;
+  std::string line;
+  std::getline(in, line); // header
+  while (std::getline(in, line)) {
+    std::stringstream fields(line);
+    std::string index, name;
+    if (std::getline(fields, index, '\t') && std::getline(fields, name, '\t')) {
+      try {
+        names[std::stoi(index)] = name;
+      } catch (const std::exception&) {
+        throw InputError(path.string() + ": expected an integer label index, found '" + index + "'");
+      }
+    }
+  }
+  return names;
+}
+
+std::string find_subject(const std::filesystem::path& dataset) {
+  const std::filesystem::path derivatives = dataset / "derivatives" / "phantasm";
+  std::vector<std::string> subjects;
+  std::error_code error;
+  if (std::filesystem::is_directory(derivatives, error)) {
+    for (const auto& entry : std::filesystem::directory_iterator(derivatives)) {
+      const std::string name = entry.path().filename().string();
+      if (entry.is_directory() && name.rfind("sub-", 0) == 0) subjects.push_back(name.substr(4));
+    }
+  }
+  std::sort(subjects.begin(), subjects.end());
+  if (subjects.empty()) {
+    throw InputError(dataset.string() +
+                     ": expected a phantasm dataset (derivatives/phantasm/sub-<id>), found none");
+  }
+  if (subjects.size() > 1) {
+    std::string list;
+    for (const auto& s : subjects)
+      list += (list.empty() ? "" : ", ") + s;
+    throw InputError(dataset.string() + ": expected --subject with a dataset of several subjects, found " +
+                     list);
+  }
+  return subjects.front();
+}
+
+void require_same_grid(const ImageGrid& expected, const ImageGrid& found, const std::filesystem::path& path) {
+  const double mismatch = (expected.world_from_voxel - found.world_from_voxel).cwiseAbs().maxCoeff();
+  if (expected.dims != found.dims || mismatch > 1e-3) {
+    std::ostringstream message;
+    message << path.string() << ": expected the fixed image's grid (" << expected.dims.x() << " x "
+            << expected.dims.y() << " x " << expected.dims.z() << " voxels, the same affine), found "
+            << found.dims.x() << " x " << found.dims.y() << " x " << found.dims.z()
+            << " voxels with an affine differing by up to " << mismatch << " mm";
+    throw InputError(message.str());
+  }
+}
+
+nlohmann::json summary_json(const Summary& s) {
+  return {{"count", s.count}, {"mean", s.mean}, {"sd", s.sd}, {"p95", s.p95}, {"max", s.max}};
+}
+
+nlohmann::json number_or_null(double value) {
+  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json();
+}
+
+} // namespace
+
+nlohmann::json evaluate_registration(const EvaluationRequest& request) {
+  if (request.fixed_session != "ref" && request.fixed_session != "def") {
+    throw InputError("--fixed: expected ref or def, found '" + request.fixed_session + "'");
+  }
+  if ((request.field ? 1 : 0) + (request.warped_labels ? 1 : 0) + (request.identity ? 1 : 0) != 1) {
+    throw InputError("expected exactly one registration result: --field, --labels or --identity");
+  }
+  const std::string subject = request.subject.empty() ? find_subject(request.dataset) : request.subject;
+  const DatasetLayout layout(request.dataset, subject);
+  const PhantomState fixed =
+      request.fixed_session == "ref" ? PhantomState::reference : PhantomState::deformed;
+  const PhantomState moving =
+      fixed == PhantomState::reference ? PhantomState::deformed : PhantomState::reference;
+
+  ImageGrid grid, moving_grid;
+  const std::vector<std::int32_t> fixed_labels = read_nifti_labels(layout.dseg(fixed), &grid);
+  const std::vector<std::int32_t> moving_labels = read_nifti_labels(layout.dseg(moving), &moving_grid);
+  const std::map<std::int32_t, std::string> names = read_label_names(layout.dseg_table());
+
+  nlohmann::json result = {
+      {"dataset", request.dataset.string()},
+      {"subject", subject},
+      {"fixed_session", std::string("ses-") + session_label(fixed)},
+      {"moving_session", std::string("ses-") + session_label(moving)},
+      {"voxel_size_mm", {grid.spacing_mm.x(), grid.spacing_mm.y(), grid.spacing_mm.z()}}};
+  nlohmann::json not_available = nlohmann::json::array();
+
+  std::optional<DisplacementField> field;
+  std::vector<std::int32_t> warped;
+  if (request.field) {
+    field = read_displacement_field(*request.field);
+    require_same_grid(grid, field->grid, *request.field);
+    result["result"] = {{"kind", "field"}, {"path", request.field->string()}};
+  } else if (request.identity) {
+    field = zero_field(grid);
+    result["result"] = {{"kind", "identity"}};
+  } else {
+    ImageGrid warped_grid;
+    warped = read_nifti_labels(*request.warped_labels, &warped_grid);
+    require_same_grid(grid, warped_grid, *request.warped_labels);
+    result["result"] = {{"kind", "labels"}, {"path", request.warped_labels->string()}};
+  }
+  if (field) warped = warp_labels(moving_labels, moving_grid, *field);
+
+  // Landmarks: the fixed ones carried by the result against the moving ones (same names).
+  const std::vector<LandmarkRow> fixed_points = read_landmarks(layout.landmarks(fixed));
+  const std::vector<LandmarkRow> moving_points = read_landmarks(layout.landmarks(moving));
+  std::map<std::string, Eigen::Vector3d> moving_by_name;
+  for (const auto& row : moving_points)
+    moving_by_name[row.name] = row.ras_mm;
+  std::vector<double> displacement;
+  std::vector<double> tre;
+  nlohmann::json landmarks = nlohmann::json::array();
+  for (const auto& row : fixed_points) {
+    const auto found = moving_by_name.find(row.name);
+    if (found == moving_by_name.end()) {
+      throw InputError(layout.landmarks(moving).string() + ": expected landmark '" + row.name + "' of " +
+                       layout.landmarks(fixed).filename().string() + ", found none");
+    }
+    displacement.push_back((found->second - row.ras_mm).norm());
+    nlohmann::json entry = {
+        {"name", row.name}, {"organ", row.organ}, {"true_displacement_mm", displacement.back()}};
+    if (field) {
+      tre.push_back((field->moved(row.ras_mm) - found->second).norm());
+      entry["tre_mm"] = tre.back();
+    }
+    landmarks.push_back(entry);
+  }
+  result["landmarks"] = landmarks;
+  result["landmark_displacement_mm"] = summary_json(summarize(displacement));
+  if (field) {
+    result["tre_mm"] = summary_json(summarize(tre));
+  } else {
+    result["tre_mm"] = nullptr;
+    not_available.push_back("target registration error: a warped label map does not carry points");
+  }
+
+  // Label overlap, per label of either map.
+  nlohmann::json labels = nlohmann::json::array();
+  double dice_sum = 0.0;
+  std::set<std::int32_t> present(fixed_labels.begin(), fixed_labels.end());
+  present.insert(warped.begin(), warped.end());
+  for (std::int32_t label : present) {
+    if (label == 0) continue;
+    const LabelOverlap overlap = label_overlap(fixed_labels, warped, grid, label);
+    const auto name = names.find(label);
+    labels.push_back({{"label", label},
+                      {"name", name != names.end() ? name->second : std::to_string(label)},
+                      {"dice", overlap.dice},
+                      {"hd95_mm", number_or_null(overlap.hd95_mm)},
+                      {"fixed_voxels", overlap.fixed_voxels},
+                      {"warped_voxels", overlap.warped_voxels}});
+    dice_sum += overlap.dice;
+  }
+  result["labels"] = labels;
+  result["mean_dice"] =
+      labels.empty() ? nlohmann::json() : nlohmann::json(dice_sum / static_cast<double>(labels.size()));
+
+  if (field) {
+    // Dense endpoint error where the ground truth is exact.
+    const DisplacementField truth = read_displacement_field(layout.transform(fixed, moving));
+    require_same_grid(grid, truth.grid, layout.transform(fixed, moving));
+    const NiftiVolume mask = read_nifti(layout.transform_mask(fixed, moving));
+    std::vector<double> error;
+    for (std::size_t v = 0; v < truth.lps_mm.size(); ++v)
+      if (mask.values[v] > 0.5) error.push_back((field->lps_mm[v] - truth.lps_mm[v]).norm());
+    result["endpoint_error_mm"] = summary_json(summarize(std::move(error)));
+    std::vector<bool> foreground(fixed_labels.size());
+    for (std::size_t v = 0; v < foreground.size(); ++v)
+      foreground[v] = fixed_labels[v] > 0;
+    const JacobianStatistics j = jacobian_statistics(*field, foreground);
+    result["jacobian"] = {{"region", "fixed foreground (label > 0)"},
+                          {"voxels", j.voxels},
+                          {"folding_voxels", j.folding_voxels},
+                          {"folding_fraction", j.folding_fraction},
+                          {"log_jacobian_sd", j.log_jacobian_sd},
+                          {"min_determinant", number_or_null(j.min_determinant)},
+                          {"max_determinant", number_or_null(j.max_determinant)}};
+  } else {
+    result["endpoint_error_mm"] = nullptr;
+    result["jacobian"] = nullptr;
+    not_available.push_back("endpoint error and Jacobian: they need a displacement field");
+  }
+  result["not_available"] = not_available;
+  result["conventions"] = {
+      {"field", "ITK/elastix: 5-D NIfTI on the fixed grid, LPS mm, x_moving = x_fixed + u(x_fixed)"},
+      {"tre",
+       "distance between a fixed landmark carried by the result (trilinear field) and its moving position"},
+      {"hd95", "larger of the two directed 95th percentiles of surface-voxel distances"},
+      {"endpoint_error", "|u - u_true| inside the ground truth's exact mask"},
+      {"jacobian", "det(I + grad u), central differences; folding counted before clipping to [1e-9, 1e9] for "
+                   "the log"}};
+  return result;
+}
+
+std::string evaluation_table(const nlohmann::json& e) {
+  std::ostringstream out;
+  auto number = [](const nlohmann::json& value) {
+    return value.is_number() ? format_number(value.get<double>()) : std::string("-");
+  };
+  out << "registration of " << e["moving_session"].get<std::string>() << " onto "
+      << e["fixed_session"].get<std::string>() << ", subject " << e["subject"].get<std::string>() << " ("
+      << e["result"]["kind"].get<std::string>() << ")\n";
+  auto summary_line = [&](const std::string& what, const nlohmann::json& s) {
+    out << "  " << what;
+    if (s.is_null()) {
+      out << "  -\n";
+      return;
+    }
+    out << "  mean " << number(s["mean"]) << "  sd " << number(s["sd"]) << "  p95 " << number(s["p95"])
+        << "  max " << number(s["max"]) << "  (" << s["count"].get<std::size_t>() << ")\n";
+  };
+  summary_line("landmark motion mm   ", e["landmark_displacement_mm"]);
+  summary_line("TRE mm               ", e["tre_mm"]);
+  summary_line("endpoint error mm    ", e["endpoint_error_mm"]);
+  if (!e["jacobian"].is_null()) {
+    out << "  log-Jacobian sd        " << number(e["jacobian"]["log_jacobian_sd"]) << "\n"
+        << "  folding voxels         " << e["jacobian"]["folding_voxels"].get<std::int64_t>() << " ("
+        << number(e["jacobian"]["folding_fraction"]) << ")\n";
+  }
+  out << "  label                  Dice      HD95 mm\n";
+  for (const auto& label : e["labels"]) {
+    std::string name = label["name"].get<std::string>();
+    name.resize(std::max<std::size_t>(name.size(), 22), ' ');
+    out << "  " << name << " " << number(label["dice"]) << "  " << number(label["hd95_mm"]) << "\n";
+  }
+  out << "  mean Dice              " << number(e["mean_dice"]) << "\n";
+  return out.str();
+}
+
+} // namespace phantasm
