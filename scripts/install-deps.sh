@@ -15,7 +15,8 @@ packages=(
   libfftw3-dev
   libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  pybind11-dev python3-dev python3-numpy python3-nibabel python3-h5py python3-matplotlib
+  pybind11-dev python3-dev python3-numpy python3-scipy python3-yaml python3-nibabel python3-h5py
+  python3-matplotlib
   elastix
   zlib1g-dev libpng-dev
 )

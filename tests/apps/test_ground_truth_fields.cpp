@@ -4,43 +4,21 @@
 
 #include "io/nifti_file.hpp"
 #include "tests/apps/cli_fixtures.hpp"
+#include "tests/apps/transformix_parameters.hpp"
 #include "tests/support/subprocess.hpp"
 
 #include <gtest/gtest.h>
-
-#include <sstream>
 
 using namespace phantasm::testing;
 namespace fs = std::filesystem;
 
 namespace {
 
-/// A transformix parameter file for a displacement field on a grid (ITK conventions: origin and
-/// direction in LPS; elastix lists the direction matrix column by column).
+/// A transformix parameter file that applies a displacement field on a grid.
 std::string transform_parameters(const fs::path& field, const phantasm::ImageGrid& grid) {
-  const Eigen::Matrix3d ras_to_lps = Eigen::Vector3d(-1, -1, 1).asDiagonal();
-  const Eigen::Vector3d origin = ras_to_lps * grid.world_from_voxel.topRightCorner<3, 1>();
-  const Eigen::Matrix3d direction =
-      ras_to_lps * grid.world_from_voxel.topLeftCorner<3, 3>() * grid.spacing_mm.cwiseInverse().asDiagonal();
-  std::ostringstream p;
-  p.precision(17);
-  p << "(Transform \"DeformationFieldTransform\")\n"
-    << "(DeformationFieldFileName \"" << field.string() << "\")\n"
-    << "(DeformationFieldInterpolationOrder 1)\n(NumberOfParameters 0)\n"
-    << "(InitialTransformParametersFileName \"NoInitialTransform\")\n(HowToCombineTransforms \"Compose\")\n"
-    << "(FixedImageDimension 3)\n(MovingImageDimension 3)\n"
-    << "(FixedInternalImagePixelType \"float\")\n(MovingInternalImagePixelType \"float\")\n"
-    << "(Size " << grid.dims.x() << ' ' << grid.dims.y() << ' ' << grid.dims.z() << ")\n(Index 0 0 0)\n"
-    << "(Spacing " << grid.spacing_mm.x() << ' ' << grid.spacing_mm.y() << ' ' << grid.spacing_mm.z() << ")\n"
-    << "(Origin " << origin.x() << ' ' << origin.y() << ' ' << origin.z() << ")\n(Direction";
-  for (int c = 0; c < 3; ++c)
-    for (int r = 0; r < 3; ++r)
-      p << ' ' << direction(r, c);
-  p << ")\n(UseDirectionCosines \"true\")\n"
-    << "(ResampleInterpolator \"FinalBSplineInterpolator\")\n(FinalBSplineInterpolationOrder 0)\n"
-    << "(Resampler \"DefaultResampler\")\n(DefaultPixelValue 0)\n"
-    << "(ResultImageFormat \"nii.gz\")\n(ResultImagePixelType \"short\")\n(CompressResultImage \"true\")\n";
-  return p.str();
+  return "(Transform \"DeformationFieldTransform\")\n(DeformationFieldFileName \"" + field.string() +
+         "\")\n(DeformationFieldInterpolationOrder 1)\n(NumberOfParameters 0)\n" +
+         transformix_grid_lines(grid);
 }
 
 fs::path run_transformix(const fs::path& moving, const fs::path& field, const phantasm::ImageGrid& grid,

@@ -1,0 +1,214 @@
+// `phantasm eval` against real clients: the identity gives the true landmark motion, the ground
+// truth scores perfectly, a known affine turned into a field by Debian's transformix (`-def all`)
+// is read in our convention and scored as the transform says, bad results get clear messages;
+// and the elastix registration study reduces the target registration error.
+
+#include "evaluation/registration_metrics.hpp"
+#include "io/nifti_file.hpp"
+#include "tests/apps/cli_fixtures.hpp"
+#include "tests/apps/transformix_parameters.hpp"
+#include "tests/support/subprocess.hpp"
+
+#include <Eigen/Dense>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+using namespace phantasm::testing;
+namespace fs = std::filesystem;
+
+namespace {
+
+const Eigen::Vector3d k_lps(-1.0, -1.0, 1.0);
+
+/// A small-head dataset, made once for the tests of this file.
+const fs::path& small_dataset() {
+  static const fs::path out = [] {
+    const fs::path folder = fresh_folder("eval-dataset") / "out";
+    const CommandResult run =
+        run_command({k_phantasm, "run", k_small_scene.string(), "-o", folder.string(), "-q"});
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+    return folder;
+  }();
+  return out;
+}
+
+fs::path subject_folder() {
+  return small_dataset() / "derivatives" / "phantasm" / "sub-01";
+}
+
+std::map<std::string, Eigen::Vector3d> landmarks(const std::string& session) {
+  std::istringstream csv(
+      read_file(subject_folder() / "landmarks" / ("sub-01_ses-" + session + "_landmarks.csv")));
+  std::map<std::string, Eigen::Vector3d> points;
+  std::string line;
+  std::getline(csv, line);
+  while (std::getline(csv, line)) {
+    std::istringstream fields(line);
+    std::string name, organ, x, y, z;
+    std::getline(fields, name, ',');
+    std::getline(fields, organ, ',');
+    std::getline(fields, x, ',');
+    std::getline(fields, y, ',');
+    std::getline(fields, z);
+    points[name] = Eigen::Vector3d(std::stod(x), std::stod(y), std::stod(z));
+  }
+  return points;
+}
+
+nlohmann::json evaluate(const std::vector<std::string>& result_options, const fs::path& json) {
+  std::vector<std::string> command = {k_phantasm, "eval", small_dataset().string()};
+  command.insert(command.end(), result_options.begin(), result_options.end());
+  command.insert(command.end(), {"--json", json.string()});
+  const CommandResult run = run_command(command);
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("mean Dice"), std::string::npos) << run.out;
+  return nlohmann::json::parse(read_file(json));
+}
+
+phantasm::ImageGrid reference_grid() {
+  phantasm::ImageGrid grid;
+  phantasm::read_nifti_labels(subject_folder() / "ses-ref" / "anat" / "sub-01_ses-ref_dseg.nii.gz", &grid);
+  return grid;
+}
+
+} // namespace
+
+TEST(EvalCommand, IdentityGivesTheTrueMotionAndTheGroundTruthScoresPerfectly) {
+  const fs::path folder = fresh_folder("eval-identity");
+  const nlohmann::json identity = evaluate({"--identity"}, folder / "identity.json");
+  const auto ref = landmarks("ref"), def = landmarks("def");
+  ASSERT_EQ(identity["landmarks"].size(), ref.size());
+  double moved = 0.0;
+  for (const auto& landmark : identity["landmarks"]) {
+    const std::string name = landmark["name"];
+    const double truth = (def.at(name) - ref.at(name)).norm();
+    EXPECT_NEAR(landmark["tre_mm"].get<double>(), truth, 1e-9) << name;
+    moved = std::max(moved, truth);
+  }
+  EXPECT_GT(moved, 0.3); // the scene moves landmarks: otherwise the test would prove nothing
+  EXPECT_EQ(identity["jacobian"]["folding_voxels"], 0);
+  EXPECT_DOUBLE_EQ(identity["jacobian"]["log_jacobian_sd"].get<double>(), 0.0);
+
+  const fs::path truth_field = subject_folder() / "xfm" / "sub-01_from-ref_to-def_mode-image_xfm.nii.gz";
+  const nlohmann::json truth = evaluate({"--field", truth_field.string()}, folder / "truth.json");
+  const double voxel = 2.0;
+  EXPECT_LT(truth["tre_mm"]["mean"].get<double>(), 0.1 * voxel);
+  EXPECT_LT(truth["tre_mm"]["p95"].get<double>(), 0.1 * voxel);
+  EXPECT_LT(truth["tre_mm"]["mean"].get<double>(), identity["tre_mm"]["mean"].get<double>());
+  EXPECT_EQ(truth["endpoint_error_mm"]["max"].get<double>(), 0.0);
+  EXPECT_GT(truth["endpoint_error_mm"]["count"].get<int>(), 10000);
+  ASSERT_EQ(truth["labels"].size(), 3u);
+  for (const auto& label : truth["labels"])
+    EXPECT_GE(label["dice"].get<double>(), 0.98) << label["name"];
+  EXPECT_EQ(truth["jacobian"]["folding_voxels"], 0);
+
+  // The ground truth's own warped labels (nearest neighbour): the same Dice as the field gives.
+  const fs::path def_labels = subject_folder() / "ses-def" / "anat" / "sub-01_ses-def_dseg.nii.gz";
+  const phantasm::DisplacementField field = phantasm::read_displacement_field(truth_field);
+  phantasm::ImageGrid def_grid;
+  const auto warped =
+      phantasm::warp_labels(phantasm::read_nifti_labels(def_labels, &def_grid), def_grid, field);
+  phantasm::write_nifti_labels(folder / "warped.nii.gz", field.grid, warped);
+  const nlohmann::json by_labels =
+      evaluate({"--labels", (folder / "warped.nii.gz").string()}, folder / "l.json");
+  EXPECT_TRUE(by_labels["tre_mm"].is_null());
+  EXPECT_EQ(by_labels["labels"], truth["labels"]);
+}
+
+// The convention cross-check: transformix writes the field of a known affine (LPS, x_moving =
+// A (x - c) + c + t); read as our fields are, it holds that displacement at every voxel, and
+// eval scores each landmark as the transform moves it. A sign or axis-order error fails both.
+TEST(EvalCommand, TransformixFieldOfAKnownAffineFollowsOurConvention) {
+  const fs::path folder = fresh_folder("eval-affine");
+  const phantasm::ImageGrid grid = reference_grid();
+  const double angle = 4.0 * M_PI / 180.0;
+  Eigen::Matrix3d a = Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+                      Eigen::Vector3d(1.02, 0.98, 1.0).asDiagonal();
+  const Eigen::Vector3d t(1.5, -2.5, 4.0), c(3.0, -7.0, 11.0);
+  std::ostringstream p;
+  p.precision(17);
+  p << "(Transform \"AffineTransform\")\n(NumberOfParameters 12)\n(TransformParameters";
+  for (int r = 0; r < 3; ++r)
+    for (int col = 0; col < 3; ++col)
+      p << ' ' << a(r, col);
+  p << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ")\n(CenterOfRotationPoint " << c.x() << ' ' << c.y()
+    << ' ' << c.z() << ")\n"
+    << transformix_grid_lines(grid);
+  write_text_file(folder / "affine.txt", p.str());
+  const CommandResult transformix = run_command({"/usr/bin/transformix", "-def", "all", "-tp",
+                                                 (folder / "affine.txt").string(), "-out", folder.string()});
+  ASSERT_EQ(transformix.exit_code, 0) << transformix.out << transformix.err;
+  const fs::path field_path = folder / "deformationField.nii.gz";
+  const phantasm::DisplacementField field = phantasm::read_displacement_field(field_path);
+  ASSERT_EQ(field.grid.dims, grid.dims);
+  ASSERT_TRUE(field.grid.world_from_voxel.isApprox(grid.world_from_voxel, 1e-6));
+  double worst = 0.0;
+  for (int k = 0; k < grid.dims.z(); ++k)
+    for (int j = 0; j < grid.dims.y(); ++j)
+      for (int i = 0; i < grid.dims.x(); ++i) {
+        const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k)).cwiseProduct(k_lps);
+        const Eigen::Vector3d expected = a * (x - c) + c + t - x;
+        const std::size_t v = (static_cast<std::size_t>(k) * grid.dims.y() + j) * grid.dims.x() + i;
+        worst = std::max(worst, (field.lps_mm[v] - expected).norm());
+      }
+  EXPECT_LT(worst, 1e-4);
+
+  const nlohmann::json scored = evaluate({"--field", field_path.string()}, folder / "affine.json");
+  const auto def = landmarks("def");
+  const auto ref = landmarks("ref");
+  for (const auto& landmark : scored["landmarks"]) {
+    const std::string name = landmark["name"];
+    const Eigen::Vector3d x = ref.at(name).cwiseProduct(k_lps);
+    const Eigen::Vector3d carried = (a * (x - c) + c + t).cwiseProduct(k_lps);
+    EXPECT_NEAR(landmark["tre_mm"].get<double>(), (carried - def.at(name)).norm(), 1e-3) << name;
+  }
+}
+
+TEST(EvalCommand, BadResultsGetClearMessages) {
+  const fs::path folder = fresh_folder("eval-bad");
+  const CommandResult make = run_command(
+      {PHANTASM_PYTHON, "-c",
+       "import nibabel as nib, numpy as np, sys\n"
+       "nib.Nifti1Image(np.zeros((4, 4, 4, 3), np.float32), np.eye(4)).to_filename(sys.argv[1])\n"
+       "nib.Nifti1Image(np.zeros((4, 4, 4, 1, 3), np.float32), np.eye(4)).to_filename(sys.argv[2])\n",
+       (folder / "four_d.nii.gz").string(), (folder / "small.nii.gz").string()});
+  ASSERT_EQ(make.exit_code, 0) << make.err;
+  CommandResult run = run_command(
+      {k_phantasm, "eval", small_dataset().string(), "--field", (folder / "four_d.nii.gz").string()});
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("four_d.nii.gz: expected a 5-D vector image (X, Y, Z, 1, 3) in the ITK convention, "
+                         "found a 4-D (X, Y, Z, 3) volume"),
+            std::string::npos)
+      << run.err;
+  run = run_command(
+      {k_phantasm, "eval", small_dataset().string(), "--field", (folder / "small.nii.gz").string()});
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("small.nii.gz: expected the fixed image's grid (48 x 56 x 52 voxels"),
+            std::string::npos)
+      << run.err;
+  run = run_command({k_phantasm, "eval", small_dataset().string(), "--identity", "--labels", "x.nii.gz"});
+  EXPECT_EQ(run.exit_code, 2);
+  run = run_command({k_phantasm, "eval", folder.string(), "--identity"});
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("expected a phantasm dataset (derivatives/phantasm/sub-<id>), found none"),
+            std::string::npos)
+      << run.err;
+}
+
+// The registration study on one magnitude with short optimizations: elastix (affine + B-spline,
+// the shipped parameter files) brings the landmarks closer than no registration does.
+TEST(RegistrationStudy, ElastixReducesTheTargetRegistrationError) {
+  const fs::path folder = fresh_folder("study");
+  const CommandResult study =
+      run_command({PHANTASM_PYTHON, (k_source_dir / "scripts" / "registration_study.py").string(), "-o",
+                   folder.string(), "--magnitudes", "6", "--iterations", "150", "--phantasm", k_phantasm});
+  ASSERT_EQ(study.exit_code, 0) << study.out << study.err;
+  const nlohmann::json result = nlohmann::json::parse(read_file(folder / "study.json"));
+  ASSERT_EQ(result["rows"].size(), 1u);
+  const auto& row = result["rows"][0];
+  EXPECT_GT(row["tre_mean_mm_none"].get<double>(), 1.0);
+  EXPECT_LT(row["tre_mean_mm_elastix"].get<double>(), 0.75 * row["tre_mean_mm_none"].get<double>());
+  EXPECT_GT(row["mean_dice_elastix"].get<double>(), row["mean_dice_none"].get<double>());
+  EXPECT_TRUE(fs::file_size(folder / "study.png") > 1000);
+  EXPECT_TRUE(fs::exists(folder / "study.csv"));
+}
