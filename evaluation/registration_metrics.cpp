@@ -90,6 +90,7 @@ std::vector<bool> label_surface(const std::vector<std::int32_t>& labels, const E
 
 /// 95th percentile of the distances from the voxels of `from` to the nearest voxel of `to`.
 double directed_p95(const std::vector<bool>& from, const std::vector<bool>& to, const ImageGrid& grid) {
+  if (std::find(to.begin(), to.end(), true) == to.end()) return std::numeric_limits<double>::infinity();
   const std::vector<double> distance = distance_to(to, grid);
   std::vector<double> values;
   for (std::size_t v = 0; v < from.size(); ++v)
