@@ -8,6 +8,7 @@
 #include <atomic>
 #include <cerrno>
 #include <chrono>
+#include <csignal>
 #include <cstring>
 #include <stdexcept>
 #include <thread>
@@ -96,6 +97,29 @@ bool is_temporary_file_name(const std::filesystem::path& path) {
   return !name.empty() && name[0] == '.' && name.find(k_temporary_marker) != std::string::npos;
 }
 
+namespace {
+
+/// True when the process that made a temporary file (the pid in its name) still runs: another
+/// run writing into the same dataset, e.g. a parallel batch job. Unknown owners count as gone.
+bool owner_is_alive(const std::filesystem::path& temporary) {
+  const std::string name = temporary.filename().string();
+  const std::size_t at = name.find(k_temporary_marker);
+  if (at == std::string::npos) return false;
+  const std::string rest = name.substr(at + std::string(k_temporary_marker).size());
+  const std::size_t dash = rest.find('-');
+  if (dash == 0 || dash == std::string::npos) return false;
+  long pid = 0;
+  try {
+    pid = std::stol(rest.substr(0, dash));
+  } catch (const std::exception&) {
+    return false;
+  }
+  if (pid <= 0) return false;
+  return ::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM;
+}
+
+} // namespace
+
 std::size_t remove_stale_temporaries(const std::filesystem::path& root) {
   std::size_t removed = 0;
   std::error_code error;
@@ -103,7 +127,7 @@ std::size_t remove_stale_temporaries(const std::filesystem::path& root) {
   for (auto it = std::filesystem::recursive_directory_iterator(root, error);
        it != std::filesystem::recursive_directory_iterator(); it.increment(error)) {
     if (error) break;
-    if (it->is_regular_file(error) && is_temporary_file_name(it->path())) {
+    if (it->is_regular_file(error) && is_temporary_file_name(it->path()) && !owner_is_alive(it->path())) {
       if (std::filesystem::remove(it->path(), error)) ++removed;
     }
   }

@@ -42,7 +42,8 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view b
 /// True for the name of a temporary file made by AtomicFileWriter.
 bool is_temporary_file_name(const std::filesystem::path& path);
 
-/// Removes the temporary files a killed run left under a folder; returns how many.
+/// Removes the temporary files a killed run left under a folder; returns how many. Temporary
+/// files of processes still running (named by their pid) are theirs and stay.
 std::size_t remove_stale_temporaries(const std::filesystem::path& root);
 
 /// Slows every chunk written by AtomicFileWriter (4 KiB while a delay is set) by this many

@@ -17,7 +17,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   pybind11-dev python3-dev python3-numpy python3-scipy python3-yaml python3-nibabel python3-h5py
   python3-matplotlib
-  elastix
+  elastix snakemake
   zlib1g-dev libpng-dev
 )
 

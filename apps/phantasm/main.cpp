@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   std::function<int()> action;
   add_run_command(app, action);
+  add_batch_command(app, action);
   add_validate_command(app, action);
   add_info_command(app, action);
   add_eval_command(app, action);

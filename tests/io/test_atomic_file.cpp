@@ -4,6 +4,8 @@
 #include "tests/support/files.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <fstream>
 #include <sstream>
@@ -68,10 +70,19 @@ TEST(AtomicFile, CancellationStopsAWriteAndRemovesTheTemporaryFile) {
 TEST(AtomicFile, StaleTemporariesOfAKilledRunAreFoundAndRemoved) {
   const fs::path folder = fresh_folder("stale");
   fs::create_directories(folder / "sub");
-  std::ofstream(folder / "sub" / ".x.nii.gz.phantasm-tmp-123-0") << "partial";
+  // A process that has ended: its temporary file is stale.
+  const pid_t ended = ::fork();
+  if (ended == 0) ::_exit(0);
+  ASSERT_GT(ended, 0);
+  ::waitpid(ended, nullptr, 0);
+  std::ofstream(folder / "sub" / (".x.nii.gz.phantasm-tmp-" + std::to_string(ended) + "-0")) << "partial";
+  // A running process (this one) may still be writing: its temporary file stays.
+  const std::string live = ".y.json.phantasm-tmp-" + std::to_string(::getpid()) + "-7";
+  std::ofstream(folder / "sub" / live) << "being written";
   std::ofstream(folder / "sub" / "keep.json") << "{}";
   std::ofstream(folder / ".hidden") << "not ours";
   EXPECT_EQ(remove_stale_temporaries(folder), 1u);
+  EXPECT_TRUE(fs::exists(folder / "sub" / live));
   EXPECT_TRUE(fs::exists(folder / "sub" / "keep.json"));
   EXPECT_TRUE(fs::exists(folder / ".hidden"));
 }

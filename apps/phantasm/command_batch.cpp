@@ -1,0 +1,66 @@
+#include "apps/phantasm/commands.hpp"
+#include "batch/run_batch.hpp"
+
+#include <chrono>
+#include <iostream>
+#include <memory>
+
+namespace phantasm::cli {
+
+void add_batch_command(CLI::App& app, std::function<int()>& action) {
+  struct Options {
+    std::string sweep;
+    std::string output = "out";
+    int jobs = 1;
+    std::string shard = "1/1";
+    bool quiet = false;
+    bool list = false;
+  };
+  auto options = std::make_shared<Options>();
+  CLI::App* command = app.add_subcommand(
+      "batch", "Run every subject of a sweep into one dataset; restart to finish an interrupted batch");
+  command->add_option("sweep", options->sweep, "Sweep file (YAML, docs/batch.md)")->required();
+  command->add_option("-o,--output", options->output, "Dataset folder")->capture_default_str();
+  command->add_option("-j,--jobs", options->jobs, "Subjects run at once on this machine")
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
+  command->add_option("--shard", options->shard, "Run the i-th of N disjoint slices of the sweep (i/N)")
+      ->capture_default_str();
+  command->add_flag("-q,--quiet", options->quiet, "Print nothing but errors");
+  command->add_flag("--list", options->list,
+                    "Print the sweep's subject labels, one per line in sweep order, and run nothing");
+  command->callback([options, &action] {
+    action = [options] {
+      const auto start = std::chrono::steady_clock::now();
+      const Shard shard = parse_shard(options->shard);
+      const Sweep sweep = load_sweep(options->sweep);
+      if (options->list) {
+        for (const auto& subject : sweep.subjects)
+          std::cout << subject.id << '\n';
+        return static_cast<int>(exit_ok);
+      }
+      const BatchSummary summary =
+          run_batch(sweep, BatchOptions{options->output, options->jobs, shard, options->quiet}, std::cerr);
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      if (summary.interrupted) {
+        std::cerr << "phantasm: batch interrupted; complete subjects stay, run the batch again to finish\n";
+        return static_cast<int>(exit_interrupted);
+      }
+      if (!options->quiet || !summary.failed.empty()) {
+        std::cerr << "[batch] " << summary.ran << " subjects made, " << summary.skipped
+                  << " already complete, " << summary.failed.size() << " failed, in "
+                  << static_cast<int>(seconds) << " s\n";
+      }
+      if (!summary.failed.empty()) {
+        std::string list;
+        for (const auto& id : summary.failed)
+          list += " sub-" + id;
+        std::cerr << "phantasm: failed:" << list << " (messages above); run the batch again to retry them\n";
+        return static_cast<int>(exit_failure);
+      }
+      return static_cast<int>(exit_ok);
+    };
+  });
+}
+
+} // namespace phantasm::cli

@@ -1,0 +1,154 @@
+#include "batch/run_batch.hpp"
+
+#include "core/cancellation.hpp"
+#include "core/error.hpp"
+#include "core/sha256.hpp"
+#include "io/atomic_file.hpp"
+#include "io/dataset_layout.hpp"
+#include "pipeline/run_pipeline.hpp"
+
+#include <nlohmann/json.hpp>
+#include <omp.h>
+#include <sys/prctl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <csignal>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <thread>
+
+namespace phantasm {
+namespace {
+
+/// The child's whole life: run one subject, exit with phantasm's exit codes.
+[[noreturn]] void run_subject_and_exit(const Sweep& sweep, const SweepSubject& subject,
+                                       const std::filesystem::path& output, int threads, pid_t parent) {
+  ::prctl(PR_SET_PDEATHSIG, SIGKILL); // a batch killed outright takes its subjects with it
+  if (::getppid() != parent) ::_exit(1);
+  omp_set_num_threads(threads);
+  int code = 0;
+  try {
+    const SceneLoadResult loaded = parse_scene(subject.scene_text, sweep.base_scene);
+    if (!loaded.scene) throw InputError(format_diagnostics(loaded.problems));
+    Reporter quiet = Reporter::silent();
+    run_scene(*loaded.scene, RunOptions{output, true}, quiet);
+  } catch (const Cancelled&) {
+    code = 130;
+  } catch (const InputError& error) {
+    std::cerr << "sub-" << subject.id << ": " << error.what() << '\n';
+    code = 2;
+  } catch (const std::exception& error) {
+    std::cerr << "sub-" << subject.id << ": error: " << error.what() << '\n';
+    code = 1;
+  }
+  std::cerr.flush();
+  ::_exit(code);
+}
+
+struct Running {
+  std::size_t subject;
+  std::chrono::steady_clock::time_point start;
+};
+
+} // namespace
+
+bool subject_is_complete(const std::filesystem::path& output, const SweepSubject& subject) {
+  const std::filesystem::path provenance = DatasetLayout(output, subject.id).provenance();
+  std::ifstream in(provenance);
+  if (!in) return false;
+  try {
+    const nlohmann::json json = nlohmann::json::parse(in);
+    return json.at("scene").at("sha256").get<std::string>() == sha256_hex(subject.scene_text);
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ostream& log) {
+  if (options.jobs < 1)
+    throw InputError("--jobs: expected at least 1, found " + std::to_string(options.jobs));
+  BatchSummary summary;
+  prepare_output_folder(options.output, true);
+  write_file_atomically(options.output / "participants.tsv", participants_tsv(sweep));
+
+  std::vector<std::size_t> pending;
+  for (std::size_t s = 0; s < sweep.subjects.size(); ++s) {
+    if (!options.shard.holds(s)) continue;
+    ++summary.in_shard;
+    if (subject_is_complete(options.output, sweep.subjects[s])) {
+      ++summary.skipped;
+    } else {
+      pending.push_back(s);
+    }
+  }
+  const unsigned hardware = std::max(1u, std::thread::hardware_concurrency());
+  int threads = std::max(1, static_cast<int>(hardware) / options.jobs);
+  if (const char* set = std::getenv("OMP_NUM_THREADS")) threads = std::max(1, std::atoi(set));
+  if (!options.quiet) {
+    log << "[batch] " << sweep.name << ": " << summary.in_shard << " of " << sweep.subjects.size()
+        << " subjects in shard " << options.shard.index << "/" << options.shard.count << ", "
+        << summary.skipped << " already complete, " << pending.size() << " to run, " << options.jobs
+        << " at a time with " << threads << " threads each\n";
+  }
+  std::map<pid_t, Running> running;
+  std::size_t next = 0;
+  const pid_t parent = ::getpid();
+  while (true) {
+    while (!cancellation_requested() && static_cast<int>(running.size()) < options.jobs &&
+           next < pending.size()) {
+      const std::size_t s = pending[next++];
+      log.flush();
+      std::cerr.flush();
+      const pid_t child = ::fork();
+      if (child < 0) throw std::runtime_error("cannot start a process for subject " + sweep.subjects[s].id);
+      if (child == 0) run_subject_and_exit(sweep, sweep.subjects[s], options.output, threads, parent);
+      running[child] = {s, std::chrono::steady_clock::now()};
+    }
+    if (running.empty()) break;
+    if (cancellation_requested()) {
+      for (const auto& [pid, job] : running)
+        ::kill(pid, SIGTERM);
+    }
+    int status = 0;
+    const pid_t done = ::waitpid(-1, &status, WNOHANG);
+    if (done <= 0) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      continue;
+    }
+    const auto found = running.find(done);
+    if (found == running.end()) continue;
+    const SweepSubject& subject = sweep.subjects[found->second.subject];
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - found->second.start).count();
+    running.erase(found);
+    const bool ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+    if (ok) {
+      ++summary.ran;
+      if (!options.quiet) {
+        log << "[batch] sub-" << subject.id << " done in " << static_cast<int>(seconds * 10) / 10.0 << " s ("
+            << summary.ran + summary.failed.size() << "/" << pending.size() << ")\n";
+      }
+    } else if (cancellation_requested()) {
+      summary.interrupted = true;
+    } else {
+      summary.failed.push_back(subject.id);
+      log << "[batch] sub-" << subject.id << " failed ("
+          << (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status))
+                                : "signal " + std::to_string(WTERMSIG(status)))
+          << ")\n";
+    }
+  }
+  if (cancellation_requested()) {
+    summary.interrupted = true;
+  } else {
+    // Processes of an earlier, killed batch may have ended only after this one started.
+    remove_stale_temporaries(options.output);
+  }
+  return summary;
+}
+
+} // namespace phantasm

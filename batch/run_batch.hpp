@@ -1,0 +1,38 @@
+#pragma once
+
+#include "batch/sweep.hpp"
+
+#include <filesystem>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace phantasm {
+
+struct BatchOptions {
+  std::filesystem::path output; ///< the dataset folder all subjects go into
+  int jobs = 1;                 ///< subjects run at once, each in its own process
+  Shard shard;                  ///< which slice of the sweep this batch makes
+  bool quiet = false;
+};
+
+struct BatchSummary {
+  std::size_t in_shard = 0, skipped = 0, ran = 0;
+  std::vector<std::string> failed; ///< subject ids
+  bool interrupted = false;
+};
+
+/// True when a subject is complete in `output`: its provenance.json (written last) exists and
+/// records the hash of this subject's scene.
+bool subject_is_complete(const std::filesystem::path& output, const SweepSubject& subject);
+
+/// Runs the sweep's subjects of one shard into one dataset: participants.tsv first (the same
+/// bytes from every shard), then each subject that is not complete yet in a child process
+/// (fork; the child dies with the batch), `jobs` at a time, each with hardware threads / jobs
+/// OpenMP threads (OMP_NUM_THREADS when set). Outputs do not depend on jobs, shard or thread count, so shards
+/// on several machines fill one dataset. A batch killed at any moment and started again skips the complete
+/// subjects and remakes the others (files are written atomically; a subject's temporary files from a killed
+/// process are removed). SIGINT/SIGTERM stop the children and return with `interrupted`.
+BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ostream& log);
+
+} // namespace phantasm

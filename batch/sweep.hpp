@@ -1,0 +1,50 @@
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace phantasm {
+
+/// One subject of a sweep: its BIDS label, the values it was given, and its scene.
+struct SweepSubject {
+  std::string id;                                          ///< zero-padded index, e.g. "007"
+  std::vector<std::pair<std::string, std::string>> values; ///< varied key -> value (YAML flow text)
+  std::string scene_text;                                  ///< the base scene with the values set
+};
+
+/// A sweep file (docs/batch.md): a base scene and what varies, expanded into subjects.
+/// Lists form a grid (every combination, the last key fastest), each combination `repeats`
+/// times; random ranges ({uniform: [a, b]}, {log_uniform: [a, b]}, {random_integer: [a, b]})
+/// are drawn per subject from the sweep's seed, the subject's index and the key, so a subject
+/// is the same whichever shard or job makes it.
+struct Sweep {
+  std::filesystem::path file;
+  std::filesystem::path base_scene; ///< anchors the subjects' relative paths
+  std::string name;
+  std::vector<std::string> varied_keys;
+  std::vector<SweepSubject> subjects;
+};
+
+/// Reads a sweep and checks every subject's scene (as `phantasm validate` would).
+/// @throws InputError naming the sweep file, line and key, or the subject and its scene problem
+Sweep load_sweep(const std::filesystem::path& file);
+
+/// The i-th of N disjoint slices of a sweep ("2/3"): subjects whose index modulo N is i - 1.
+struct Shard {
+  int index = 1;
+  int count = 1;
+  bool holds(std::size_t subject_index) const {
+    return static_cast<int>(subject_index % static_cast<std::size_t>(count)) == index - 1;
+  }
+};
+
+/// Parses "i/N" with 1 <= i <= N. @throws InputError otherwise
+Shard parse_shard(const std::string& text);
+
+/// participants.tsv of a sweep: one row per subject with its varied values.
+std::string participants_tsv(const Sweep& sweep);
+
+} // namespace phantasm

@@ -1,0 +1,138 @@
+// `phantasm batch` end to end on twenty small heads: jobs and shards give the same bytes, a
+// finished batch skips every subject, and a batch killed with SIGKILL at random moments and
+// restarted ends with exactly the dataset of an uninterrupted batch.
+
+#include "tests/apps/cli_fixtures.hpp"
+#include "tests/support/subprocess.hpp"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <csignal>
+#include <random>
+#include <thread>
+
+using namespace phantasm::testing;
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path k_sweep = k_source_dir / "tests" / "data" / "sweeps" / "small-sweep.yaml";
+
+struct ReferenceBatch {
+  fs::path folder;
+  std::map<std::string, std::string> files;
+  int milliseconds = 0;
+};
+
+/// The sweep made once with two jobs.
+const ReferenceBatch& reference() {
+  static const ReferenceBatch batch = [] {
+    ReferenceBatch b;
+    b.folder = fresh_folder("batch-reference") / "out";
+    const auto start = std::chrono::steady_clock::now();
+    const CommandResult run =
+        run_command({k_phantasm, "batch", k_sweep.string(), "-o", b.folder.string(), "-j", "2"});
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+    b.milliseconds = static_cast<int>(
+        std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - start)
+            .count());
+    b.files = folder_contents(b.folder);
+    return b;
+  }();
+  return batch;
+}
+
+std::size_t count_ending(const std::map<std::string, std::string>& files, const std::string& suffix) {
+  std::size_t n = 0;
+  for (const auto& [path, bytes] : files)
+    n +=
+        path.size() >= suffix.size() && path.compare(path.size() - suffix.size(), suffix.size(), suffix) == 0;
+  return n;
+}
+
+} // namespace
+
+// One test, so that the reference batch is made once: jobs, shards, a finished batch and a
+// killed one all end with the same bytes.
+TEST(BatchCommand, JobsShardsRestartsAndKillsEndWithTheSameTwentySubjects) {
+  const auto& a = reference();
+  EXPECT_EQ(count_ending(a.files, "provenance.json"), 20u);
+  EXPECT_EQ(count_ending(a.files, "_ses-def_T1w.nii.gz"), 20u);
+  const std::string participants = a.files.at("participants.tsv");
+  EXPECT_EQ(std::count(participants.begin(), participants.end(), '\n'), 21);
+  EXPECT_EQ(participants.rfind("participant_id\tseed\tdeformation.scale\tacquisition.noise_percent\n", 0),
+            0u);
+
+  // Three shards, one after the other, into one folder (as three machines would).
+  const fs::path sharded = fresh_folder("batch-shards") / "out";
+  for (const char* shard : {"1/3", "2/3", "3/3"}) {
+    const CommandResult run =
+        run_command({k_phantasm, "batch", k_sweep.string(), "-o", sharded.string(), "--shard", shard, "-q"});
+    ASSERT_EQ(run.exit_code, 0) << shard << run.err;
+  }
+  EXPECT_EQ(folder_contents(sharded), a.files);
+
+  // A finished batch makes nothing again.
+  const CommandResult again = run_command({k_phantasm, "batch", k_sweep.string(), "-o", a.folder.string()});
+  EXPECT_EQ(again.exit_code, 0);
+  EXPECT_NE(again.err.find("0 subjects made, 20 already complete, 0 failed"), std::string::npos) << again.err;
+  EXPECT_EQ(folder_contents(a.folder), a.files);
+
+  // Killed with SIGKILL at random moments and restarted: exactly the uninterrupted dataset.
+  const fs::path out = fresh_folder("batch-killed") / "out";
+  std::mt19937 random(20261122);
+  std::uniform_int_distribution<int> delay(100, std::max(200, a.milliseconds * 2 / 3));
+  int killed = 0;
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    BackgroundProcess batch({k_phantasm, "batch", k_sweep.string(), "-o", out.string(), "-j", "2", "-q"});
+    std::this_thread::sleep_for(std::chrono::milliseconds(delay(random)));
+    batch.send_signal(SIGKILL);
+    killed += batch.wait() == 128 + SIGKILL;
+  }
+  EXPECT_GE(killed, 2);
+  const CommandResult finish =
+      run_command({k_phantasm, "batch", k_sweep.string(), "-o", out.string(), "-j", "2"});
+  ASSERT_EQ(finish.exit_code, 0) << finish.err;
+  // Every file equals the uninterrupted batch's, and nothing else (no temporary file) is there.
+  EXPECT_EQ(folder_contents(out), a.files);
+}
+
+TEST(BatchCommand, BadSweepsAndShardsAreReportedClearly) {
+  const fs::path folder = fresh_folder("batch-bad");
+  write_text_file(folder / "sweep.yaml", "phantasm_sweep: 1\nbase_scene: " + k_small_scene.string() +
+                                             "\nvary:\n  acquisition.noise_percent: {uniform: [5, 1]}\n");
+  CommandResult run =
+      run_command({k_phantasm, "batch", (folder / "sweep.yaml").string(), "-o", folder.string()});
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(
+      run.err.find(
+          "sweep.yaml:4:30: vary.acquisition.noise_percent.uniform: expected low <= high, found [5, 1]"),
+      std::string::npos)
+      << run.err;
+  run = run_command({k_phantasm, "batch", k_sweep.string(), "-o", folder.string(), "--shard", "4/3"});
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("--shard: expected i/N with 1 <= i <= N (e.g. 2/3), found '4/3'"), std::string::npos)
+      << run.err;
+}
+
+// The Snakemake workflow of docs/batch.md (one job per subject) with Debian's snakemake makes the
+// same subjects, byte for byte, as `phantasm batch`.
+TEST(BatchCommand, SnakemakeWorkflowMakesTheSameSubjects) {
+  const fs::path sweep = k_source_dir / "tests" / "data" / "sweeps" / "three-subjects.yaml";
+  const fs::path root = fresh_folder("batch-snakemake");
+  const CommandResult batch =
+      run_command({k_phantasm, "batch", sweep.string(), "-o", (root / "batch").string(), "-q"});
+  ASSERT_EQ(batch.exit_code, 0) << batch.err;
+  const CommandResult snakemake =
+      run_command({"/usr/bin/snakemake", "-s", (k_source_dir / "scripts" / "Snakefile").string(), "--cores",
+                   "2", "--directory", root.string(), "--config", "sweep=" + sweep.string(),
+                   "out=" + (root / "snakemake").string(), "phantasm=" + k_phantasm});
+  ASSERT_EQ(snakemake.exit_code, 0) << snakemake.out << snakemake.err;
+  const auto made = folder_contents(root / "batch");
+  EXPECT_EQ(
+      std::count_if(made.begin(), made.end(),
+                    [](const auto& file) { return file.first.find("provenance.json") != std::string::npos; }),
+      3);
+  EXPECT_EQ(folder_contents(root / "snakemake"), made);
+}
