@@ -136,3 +136,26 @@ TEST(BatchCommand, SnakemakeWorkflowMakesTheSameSubjects) {
       3);
   EXPECT_EQ(folder_contents(root / "snakemake"), made);
 }
+
+// The HDF5 export of a batch, read by h5py: every array equals its NIfTI file (values, shape,
+// affine), chunked and compressed (tests/apps/check_hdf5.py).
+TEST(BatchCommand, Hdf5ExportHoldsEveryImageLabelMapAndField) {
+  const fs::path sweep = k_source_dir / "tests" / "data" / "sweeps" / "three-subjects.yaml";
+  const fs::path root = fresh_folder("batch-hdf5");
+  const CommandResult batch =
+      run_command({k_phantasm, "batch", sweep.string(), "-o", (root / "out").string(), "-j", "2", "-q"});
+  ASSERT_EQ(batch.exit_code, 0) << batch.err;
+  const CommandResult export_run =
+      run_command({k_phantasm, "hdf5", (root / "out").string(), "-o", (root / "sweep.h5").string()});
+  ASSERT_EQ(export_run.exit_code, 0) << export_run.err;
+  EXPECT_NE(export_run.err.find("arrays of 3 subjects"), std::string::npos) << export_run.err;
+  const CommandResult check =
+      run_command({PHANTASM_PYTHON, (k_source_dir / "tests" / "apps" / "check_hdf5.py").string(),
+                   (root / "sweep.h5").string(), (root / "out").string()});
+  EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
+  EXPECT_NE(check.out.find("checked 33 arrays"), std::string::npos) << check.out;
+  const CommandResult empty =
+      run_command({k_phantasm, "hdf5", root.string(), "-o", (root / "x.h5").string()});
+  EXPECT_EQ(empty.exit_code, 2);
+  EXPECT_FALSE(fs::exists(root / "x.h5"));
+}

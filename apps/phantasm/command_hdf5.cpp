@@ -1,0 +1,45 @@
+#include "apps/phantasm/commands.hpp"
+#include "io/hdf5_export.hpp"
+
+#include <iostream>
+#include <memory>
+
+namespace phantasm::cli {
+
+void add_hdf5_command(CLI::App& app, std::function<int()>& action) {
+  struct Options {
+    std::string dataset, output;
+    int compression = 4, chunk = 64;
+    bool quiet = false;
+  };
+  auto options = std::make_shared<Options>();
+  CLI::App* command = app.add_subcommand(
+      "hdf5", "Export a dataset's images, labels and fields into one HDF5 file for machine-learning loaders");
+  command->add_option("dataset", options->dataset, "Dataset folder written by phantasm run or batch")
+      ->required();
+  command->add_option("-o,--output", options->output, "HDF5 file to write")->required();
+  command->add_option("--compression", options->compression, "gzip level")
+      ->check(CLI::Range(0, 9))
+      ->capture_default_str();
+  command->add_option("--chunk", options->chunk, "Chunk edge in voxels")
+      ->check(CLI::Range(8, 1024))
+      ->capture_default_str();
+  command->add_flag("-q,--quiet", options->quiet, "Print nothing but errors");
+  command->callback([options, &action] {
+    action = [options] {
+      const Hdf5ExportSummary summary = export_hdf5(options->dataset, options->output,
+                                                    Hdf5ExportOptions{options->compression, options->chunk},
+                                                    [&](const std::string& subject) {
+                                                      if (!options->quiet)
+                                                        std::cerr << "[hdf5] " << subject << "\n";
+                                                    });
+      if (!options->quiet) {
+        std::cerr << "[hdf5] wrote " << summary.arrays << " arrays of " << summary.subjects << " subjects to "
+                  << options->output << "\n";
+      }
+      return static_cast<int>(exit_ok);
+    };
+  });
+}
+
+} // namespace phantasm::cli
