@@ -327,6 +327,25 @@ Sweep load_sweep(const std::filesystem::path& file) {
   return SweepReader(file).read();
 }
 
+std::string scene_text_with_value(const std::string& scene_text, const std::string& key,
+                                  const std::string& value_yaml) {
+  const SweepReader reader("scene value");
+  Variation v;
+  v.key = key;
+  v.mark = YAML::Mark::null_mark();
+  YAML::Node scene, value;
+  try {
+    scene = YAML::Load(scene_text);
+    value = YAML::Load(value_yaml);
+  } catch (const YAML::Exception& error) {
+    throw InputError(key + ": expected a YAML value, found '" + value_yaml + "' (" + error.msg + ")");
+  }
+  reader.assign(scene, v, value);
+  YAML::Emitter out;
+  out << scene;
+  return std::string(out.c_str()) + "\n";
+}
+
 Shard parse_shard(const std::string& text) {
   static const std::regex pattern(R"(([0-9]{1,6})/([0-9]{1,6}))");
   std::smatch match;

@@ -44,6 +44,12 @@ struct Shard {
 /// Parses "i/N" with 1 <= i <= N. @throws InputError otherwise
 Shard parse_shard(const std::string& text);
 
+/// A scene's text with one key path set to a value given as YAML text, exactly as a sweep sets
+/// it (docs/batch.md: dotted keys, [index], deformation.scale, sequences).
+/// @throws InputError naming the key when the path does not fit the scene
+std::string scene_text_with_value(const std::string& scene_text, const std::string& key,
+                                  const std::string& value_yaml);
+
 /// participants.tsv of a sweep: one row per subject with its varied values.
 std::string participants_tsv(const Sweep& sweep);
 

@@ -373,45 +373,60 @@ std::vector<StageReport> plan_stages(const Scene& scene) {
   return {plan_anatomy(scene), plan_sim(scene), plan_voxelize(scene), plan_mri(scene)};
 }
 
-RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& reporter) {
-  prepare_output_folder(options.output, options.force);
-  RunSummary summary;
-  summary.stages = plan_stages(scene);
-  for (const auto& stage : summary.stages) {
+Simulation simulate(const Scene& scene, Reporter& reporter, SimulationStage until) {
+  Simulation result;
+  result.stages = plan_stages(scene);
+  for (const auto& stage : result.stages) {
     for (const auto& line : stage.modelled)
       reporter.modelled(stage.stage, line);
     for (const auto& line : stage.skipped)
       reporter.skipped(stage.stage, line);
   }
+  result.phantom = build_anatomy(scene, result.stages[0], reporter);
+  if (until == SimulationStage::anatomy) return result;
 
-  const Phantom phantom = build_anatomy(scene, summary.stages[0], reporter);
-
-  StageReport& sim = summary.stages[1];
-  std::optional<PhantomDeformation> deformation;
-  std::optional<Phantom> deformed;
+  StageReport& sim = result.stages[1];
   if (scene.deformation.mode != DeformationMode::none) {
     const StageLines lines(sim);
-    deformation = deform_phantom(scene, phantom, sim, reporter);
+    result.deformation = deform_phantom(scene, result.phantom, sim, reporter);
     lines.print_new(sim, reporter);
-    deformed = deformed_phantom(phantom, *deformation);
+    result.deformed = deformed_phantom(result.phantom, *result.deformation);
   }
+  if (until == SimulationStage::deformation) return result;
 
-  StageReport& voxelize = summary.stages[2];
+  StageReport& voxelize = result.stages[2];
   const StageLines voxelize_lines(voxelize);
-  const VoxelizedPhantom volumes =
-      voxelize_phantom(scene, phantom, deformed ? &*deformed : nullptr, deformation ? &*deformation : nullptr,
-                       voxelize, reporter);
+  result.volumes = voxelize_phantom(scene, result.phantom, result.deformed ? &*result.deformed : nullptr,
+                                    result.deformation ? &*result.deformation : nullptr, voxelize, reporter);
   voxelize_lines.print_new(voxelize, reporter);
+  if (until == SimulationStage::voxelization) return result;
 
-  StageReport& mri = summary.stages[3];
-  MrImages images;
+  StageReport& mri = result.stages[3];
   if (scene.outputs.images && !scene.sequences.empty()) {
     const StageLines mri_lines(mri);
-    images = synthesize_images(scene, volumes, mri, reporter);
+    result.images = synthesize_images(scene, result.volumes, mri, reporter);
     mri_lines.print_new(mri, reporter);
   }
+  return result;
+}
 
-  const DatasetLayout layout(options.output, scene.outputs.subject);
+RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& reporter) {
+  prepare_output_folder(options.output, options.force);
+  const Simulation simulation = simulate(scene, reporter);
+  return write_dataset(scene, simulation, options.output, reporter);
+}
+
+RunSummary write_dataset(const Scene& scene, const Simulation& simulation,
+                         const std::filesystem::path& output, Reporter& reporter) {
+  RunSummary summary;
+  summary.stages = simulation.stages;
+  const Phantom& phantom = simulation.phantom;
+  const std::optional<Phantom>& deformed = simulation.deformed;
+  const std::optional<PhantomDeformation>& deformation = simulation.deformation;
+  const VoxelizedPhantom& volumes = simulation.volumes;
+  const MrImages& images = simulation.images;
+
+  const DatasetLayout layout(output, scene.outputs.subject);
   DatasetWriter writer(layout, reporter,
                        6 + organ_mesh_count(scene, phantom) * (deformed ? 2 : 1) +
                            volume_file_count(scene, volumes) + image_file_count(scene, images));
