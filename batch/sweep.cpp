@@ -323,6 +323,14 @@ private:
 
 } // namespace
 
+bool is_sweep_file(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind("phantasm_sweep:", 0) == 0) return true;
+  return false;
+}
+
 Sweep load_sweep(const std::filesystem::path& file) {
   return SweepReader(file).read();
 }

@@ -28,6 +28,9 @@ struct Sweep {
   std::vector<SweepSubject> subjects;
 };
 
+/// True when a YAML file is a sweep (its text has a top-level `phantasm_sweep:` key).
+bool is_sweep_file(const std::filesystem::path& file);
+
 /// Reads a sweep and checks every subject's scene (as `phantasm validate` would).
 /// @throws InputError naming the sweep file, line and key, or the subject and its scene problem
 Sweep load_sweep(const std::filesystem::path& file);

@@ -1,4 +1,6 @@
 #include "apps/phantasm/commands.hpp"
+#include "batch/sweep.hpp"
+#include "core/error.hpp"
 #include "scene/scene.hpp"
 
 #include <iostream>
@@ -9,12 +11,24 @@ namespace phantasm::cli {
 void add_validate_command(CLI::App& app, std::function<int()>& action) {
   auto files = std::make_shared<std::vector<std::string>>();
   CLI::App* command = app.add_subcommand(
-      "validate", "Check scene files and report every problem as file:line:column: key: expected, found");
-  command->add_option("scenes", *files, "Scene files (YAML)")->required();
+      "validate",
+      "Check scene and sweep files and report every problem as file:line:column: key: expected, found");
+  command->add_option("files", *files, "Scene or sweep files (YAML); a sweep's every subject is checked")
+      ->required();
   command->callback([files, &action] {
     action = [files] {
       int exit_code = exit_ok;
       for (const auto& file : *files) {
+        if (is_sweep_file(file)) {
+          try {
+            const Sweep sweep = load_sweep(file);
+            std::cout << file << ": valid sweep of " << sweep.subjects.size() << " subjects\n";
+          } catch (const InputError& error) {
+            std::cerr << error.what() << '\n';
+            exit_code = exit_bad_input;
+          }
+          continue;
+        }
         const SceneLoadResult result = load_scene(file);
         if (result.problems.empty()) {
           std::cout << file << ": valid\n";

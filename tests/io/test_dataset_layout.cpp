@@ -2,6 +2,8 @@
 #include "io/dataset_layout.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <fstream>
 
@@ -43,7 +45,12 @@ TEST(OutputFolder, IsCreatedWhenMissingAndRefusedWhenItHoldsFilesUnlessForced) {
   EXPECT_TRUE(fs::is_directory(folder));
   prepare_output_folder(folder, false); // empty: fine
   std::ofstream(folder / "keep.txt") << "user data";
-  std::ofstream(folder / ".keep.txt.phantasm-tmp-1-0") << "left by a killed run";
+  // A process that has ended left a temporary file (its pid names it).
+  const pid_t ended = ::fork();
+  if (ended == 0) ::_exit(0);
+  ::waitpid(ended, nullptr, 0);
+  const std::string stale = ".keep.txt.phantasm-tmp-" + std::to_string(ended) + "-0";
+  std::ofstream(folder / stale) << "left by a killed run";
   try {
     prepare_output_folder(folder, false);
     FAIL() << "expected an InputError";
@@ -52,6 +59,6 @@ TEST(OutputFolder, IsCreatedWhenMissingAndRefusedWhenItHoldsFilesUnlessForced) {
   }
   prepare_output_folder(folder, true);
   EXPECT_TRUE(fs::exists(folder / "keep.txt"));
-  EXPECT_FALSE(fs::exists(folder / ".keep.txt.phantasm-tmp-1-0"));
+  EXPECT_FALSE(fs::exists(folder / stale));
   EXPECT_THROW(prepare_output_folder(folder / "keep.txt", true), InputError);
 }
