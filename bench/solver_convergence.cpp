@@ -3,8 +3,10 @@
 //   energy    e_k = (E(p_k) - E*) / (E(p_0) - E*)
 //   position  r_k = |p_k - p*| / |p_0 - p*|
 // p_0 = s (the inertial target with the prescribed ends), p* from Newton run to a gradient
-// below 1e-9 N. Prints a Markdown table (the README's).
-// Usage: solver_convergence [threads]
+// below 1e-9 N. Prints a Markdown table (the README's); with a second argument, also writes
+// every iteration (solver, iteration, seconds, energy error, position error) as CSV there for
+// scripts/accuracy_plots.py.
+// Usage: solver_convergence [threads] [traces.csv]
 
 #include "sim/local_global.hpp"
 #include "sim/newton.hpp"
@@ -54,9 +56,19 @@ int main(int argc, char** argv) {
                newton_reference.iterations, newton_reference.residual_N, E_star);
 
   std::vector<Row> rows;
+  std::FILE* traces = argc > 2 ? std::fopen(argv[2], "w") : nullptr;
+  if (argc > 2 && !traces) {
+    std::fprintf(stderr, "solver_convergence: cannot write %s\n", argv[2]);
+    return 1;
+  }
+  if (traces) std::fprintf(traces, "solver,iteration,seconds,energy_error,position_error\n");
   auto track = [&](Row& row, const SolveReport& report, const std::vector<double>& position_errors) {
     for (std::size_t k = 0; k < report.energies_J.size(); ++k) {
       const double e = (report.energies_J[k] - E_star) / (E_0 - E_star);
+      if (traces) {
+        std::fprintf(traces, "\"%s\",%zu,%.6g,%.6g,%.6g\n", row.solver.c_str(), k, report.seconds[k], e,
+                     position_errors[k]);
+      }
       for (int level = 0; level < 3; ++level) {
         if (row.energy[level].iteration < 0 && e <= k_levels[level])
           row.energy[level] = {static_cast<int>(k), report.seconds[k]};
@@ -95,6 +107,7 @@ int main(int argc, char** argv) {
     track(row, report, position_errors);
     rows.push_back(row);
   }
+  if (traces) std::fclose(traces);
   std::printf("| solver | energy 1e-1 | energy 1e-2 | energy 1e-3 | position 1e-1 | position 1e-2 | position "
               "1e-3 |\n");
   std::printf("|---|---|---|---|---|---|---|\n");

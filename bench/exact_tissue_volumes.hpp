@@ -1,0 +1,38 @@
+#pragma once
+
+// Exact tissue volumes of a phantom from its patch surfaces (an organ's own tissue fills its
+// volume minus its children's), and the largest relative error of volumes from fractions.
+
+#include "voxelize/voxelize_phantom.hpp"
+
+#include <cmath>
+#include <map>
+#include <string>
+
+namespace phantasm::bench {
+
+inline std::map<std::string, double> exact_tissue_volumes(const Phantom& phantom) {
+  std::map<std::string, double> exact; // mm^3 per tissue
+  for (const Organ& organ : phantom.organs) {
+    if (!organ.surface) continue;
+    double own = organ.surface->volume();
+    for (const Organ& child : phantom.organs)
+      if (child.inside == organ.name && child.surface) own -= child.surface->volume();
+    exact[organ.tissue] += own;
+  }
+  return exact;
+}
+
+inline double largest_volume_error(const VoxelizedPhantom& v, const std::map<std::string, double>& exact) {
+  const double voxel = v.grid.spacing_mm.prod();
+  double worst = 0.0;
+  for (std::size_t t = 0; t < v.tissues.size(); ++t) {
+    double sum = 0.0;
+    for (float f : v.reference.fractions[t])
+      sum += f;
+    worst = std::max(worst, std::abs(sum * voxel / exact.at(v.tissues[t]) - 1.0));
+  }
+  return worst;
+}
+
+} // namespace phantasm::bench
