@@ -10,14 +10,7 @@
 
 int main(int argc, char** argv) {
   using namespace phantasm;
-  const std::string path =
-      argc > 1 ? argv[1] : std::string(PHANTASM_SOURCE_DIR) + "/data-synthetic/head.yaml";
-  SceneLoadResult loaded = load_scene(path);
-  if (!loaded.scene) {
-    std::fprintf(stderr, "%s", format_diagnostics(loaded.problems).c_str());
-    return 2;
-  }
-  Scene scene = *loaded.scene;
+  Scene scene = bench::scene_from_arguments(argc, argv);
   Reporter quiet = Reporter::silent();
   const Phantom phantom = build_phantom(scene, {}, quiet);
   const auto exact = bench::exact_tissue_volumes(phantom);
