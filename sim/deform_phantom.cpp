@@ -295,12 +295,14 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
   Eigen::MatrixX3d p = model.rest_positions_m;
   if (!bodies.empty()) {
     const SolverSettings& solver = scene.deformation.solver;
-    if (solver.method != SolverMethod::local_global && solver.method != SolverMethod::newton) {
+    const bool jacobi = solver.method == SolverMethod::jacobi_chebyshev;
+    if (solver.method != SolverMethod::local_global && solver.method != SolverMethod::newton && !jacobi) {
       const std::string key = "deformation.solver.method";
-      throw InputError(Diagnostic{scene.location_of(key), key,
-                                  "expected local_global or newton in this version, found " +
-                                      std::string(to_string(solver.method))}
-                           .format());
+      throw InputError(
+          Diagnostic{scene.location_of(key), key,
+                     "expected local_global, jacobi_chebyshev or newton in this version, found " +
+                         std::string(to_string(solver.method))}
+              .format());
     }
     StopCriteria stop;
     stop.max_iterations = solver.max_iterations;
@@ -311,7 +313,7 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
     const int frames = dynamic ? scene.deformation.frames : 1;
     std::unique_ptr<LocalGlobalSolver> local_global;
     try {
-      if (solver.method == SolverMethod::local_global)
+      if (solver.method == SolverMethod::local_global || jacobi)
         local_global =
             std::make_unique<LocalGlobalSolver>(model, dynamic ? 1.0 / (h * h) : 0.0, solver.threads);
     } catch (const std::runtime_error& error) {
@@ -336,8 +338,9 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
         inertia.target_m = p + h * velocity + h * h * acceleration;
       }
       const Eigen::MatrixX3d previous = p;
-      SolveReport solve = local_global ? local_global->solve(p, inertia.target_m, stop)
-                                       : newton_solve(model, inertia, p, stop);
+      SolveReport solve = jacobi         ? local_global->solve_jacobi_chebyshev(p, inertia.target_m, stop)
+                          : local_global ? local_global->solve(p, inertia.target_m, stop)
+                                         : newton_solve(model, inertia, p, stop);
       if (!p.allFinite()) throw InputError("deformation: the solver produced non-finite positions");
       if (dynamic) velocity = (p - previous) / h;
       result.solves.push_back(std::move(solve));

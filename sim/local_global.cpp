@@ -31,6 +31,24 @@ struct LocalGlobalSolver::Impl {
 
   Impl(const ElasticModel& m, double a, int t) : model(m), alpha(a), threads(t) {}
 
+  /// The start of every solve: the fixed vertices' pull (constant during the solve), the first
+  /// local step, and iteration 0 in the report and to the observer. Returns E(p).
+  double begin_solve(const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& target, SolveReport& report,
+                     bool record_energies, const IterationObserver& observer) {
+    coupling_rhs = K_coupling * p;
+    const auto start = std::chrono::steady_clock::now();
+    const double energy = local_step(p, target);
+    report.local_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    report.initial_energy_J = energy;
+    if (record_energies) {
+      report.energies_J.push_back(energy);
+      report.seconds.push_back(report.local_seconds);
+    }
+    if (observer) observer(0, p, energy);
+    report.stopped_by = "max_iterations";
+    return energy;
+  }
+
   void build_adjacency() {
     const auto n = static_cast<std::size_t>(model.vertex_count());
     auto build = [n](auto&& for_each_use, std::vector<int>& offsets, std::vector<int>& entries) {
@@ -241,17 +259,8 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
   };
   SolveReport report;
   report.solver = "local_global";
-  m->coupling_rhs = m->K_coupling * p; // the fixed vertices' pull, constant during the solve
+  double energy = m->begin_solve(p, target, report, record_energies, observer);
   auto start = Clock::now();
-  double energy = m->local_step(p, target);
-  report.local_seconds += seconds_since(start);
-  report.initial_energy_J = energy;
-  if (record_energies) {
-    report.energies_J.push_back(energy);
-    report.seconds.push_back(report.local_seconds);
-  }
-  if (observer) observer(0, p, energy);
-  report.stopped_by = "max_iterations";
   const auto nf = static_cast<Eigen::Index>(m->free_vertex.size());
   auto free_positions = [&] {
     Eigen::MatrixX3d x(nf, 3);
@@ -351,6 +360,100 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
     p_free.row(static_cast<Eigen::Index>(f)) = p.row(m->free_vertex[f]);
   const Eigen::MatrixX3d K_p = m->K_free.selfadjointView<Eigen::Lower>() * p_free;
   report.residual_N = p_free.rows() > 0 ? (K_p - m->rhs).rowwise().norm().maxCoeff() : 0.0;
+  return report;
+}
+
+double LocalGlobalSolver::jacobi_spectral_radius() {
+  const Eigen::Index nf = m->K_free.rows();
+  if (nf == 0) return 0.0;
+  const Eigen::VectorXd inverse_diagonal = m->K_free.diagonal().cwiseInverse();
+  Eigen::VectorXd v = Eigen::VectorXd::LinSpaced(nf, 1.0, 2.0); // deterministic start
+  v.normalize();
+  double rho = 0.0;
+  for (int k = 0; k < 300; ++k) {
+    const Eigen::VectorXd Kv = m->K_free.selfadjointView<Eigen::Lower>() * v;
+    Eigen::VectorXd w = v - inverse_diagonal.cwiseProduct(Kv);
+    const double norm = w.norm();
+    if (norm == 0.0) return 0.0;
+    rho = norm; // |J v| with |v| = 1 converges to the spectral radius for the dominant mode
+    v = w / norm;
+  }
+  return std::min(rho, 1.0 - 1e-12);
+}
+
+SolveReport LocalGlobalSolver::solve_jacobi_chebyshev(Eigen::MatrixX3d& p, const Eigen::MatrixX3d& target,
+                                                      const StopCriteria& stop, bool record_energies,
+                                                      const IterationObserver& observer,
+                                                      double under_relaxation, double rho_scale) {
+  using Clock = std::chrono::steady_clock;
+  auto seconds_since = [](Clock::time_point start) {
+    return std::chrono::duration<double>(Clock::now() - start).count();
+  };
+  SolveReport report;
+  report.solver = "jacobi_chebyshev";
+  const double rho = rho_scale * jacobi_spectral_radius();
+  double energy = m->begin_solve(p, target, report, record_energies, observer);
+  auto start = Clock::now();
+  const auto nf = static_cast<Eigen::Index>(m->free_vertex.size());
+  Eigen::MatrixX3d x(nf, 3);
+  for (Eigen::Index f = 0; f < nf; ++f)
+    x.row(f) = p.row(m->free_vertex[static_cast<std::size_t>(f)]);
+  Eigen::MatrixX3d x_previous = x, best = x;
+  double best_energy = energy;
+  const Eigen::VectorXd inverse_diagonal = m->K_free.diagonal().cwiseInverse();
+  double omega = 1.0;
+  int step = 0; // iterations since the acceleration (re)started
+  for (int iteration = 1; iteration <= stop.max_iterations; ++iteration) {
+    start = Clock::now();
+    m->gather_rhs(target);
+    report.local_seconds += seconds_since(start);
+    start = Clock::now();
+    const Eigen::MatrixX3d Kx = m->K_free.selfadjointView<Eigen::Lower>() * x;
+    const Eigen::MatrixX3d jacobi = x + inverse_diagonal.asDiagonal() * (m->rhs - Kx);
+    ++step;
+    omega = step == 1 ? 1.0 : step == 2 ? 2.0 / (2.0 - rho * rho) : 4.0 / (4.0 - rho * rho * omega);
+    const Eigen::MatrixX3d next = omega * (under_relaxation * (jacobi - x) + x - x_previous) + x_previous;
+    report.global_seconds += seconds_since(start);
+    start = Clock::now();
+    const double previous = energy;
+    for (Eigen::Index f = 0; f < nf; ++f)
+      p.row(m->free_vertex[static_cast<std::size_t>(f)]) = next.row(f);
+    energy = m->local_step(p, target);
+    const double change = nf > 0 ? (next - x).rowwise().norm().maxCoeff() : 0.0;
+    x_previous = x;
+    x = next;
+    if (!std::isfinite(energy) || energy > best_energy) {
+      // Restart the acceleration from the best point so far.
+      x = best;
+      x_previous = best;
+      step = 0;
+      for (Eigen::Index f = 0; f < nf; ++f)
+        p.row(m->free_vertex[static_cast<std::size_t>(f)]) = best.row(f);
+      energy = m->local_step(p, target);
+    } else {
+      best = x;
+      best_energy = energy;
+    }
+    report.local_seconds += seconds_since(start);
+    report.iterations = iteration;
+    if (record_energies) {
+      report.energies_J.push_back(energy);
+      report.seconds.push_back(report.local_seconds + report.global_seconds);
+    }
+    if (observer) observer(iteration, p, energy);
+    if (step > 0 && change <= stop.position_change_m) {
+      report.stopped_by = "position";
+      break;
+    }
+    if (step > 2 && std::abs(previous - energy) <= stop.relative_energy_decrease * std::abs(energy)) {
+      report.stopped_by = "energy";
+      break;
+    }
+  }
+  report.final_energy_J = energy;
+  m->gather_rhs(target);
+  const Eigen::MatrixX3d K_p = m->K_free.selfadjointView<Eigen::Lower>() * x;
+  report.residual_N = nf > 0 ? (K_p - m->rhs).rowwise().norm().maxCoeff() : 0.0;
   return report;
 }
 

@@ -36,6 +36,20 @@ public:
   SolveReport solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d& inertial_target, const StopCriteria& stop,
                     bool record_energies = false, const IterationObserver& observer = {});
 
+  /// The same iteration with the global solve replaced by one Jacobi sweep over the global
+  /// matrix, accelerated by Chebyshev's semi-iterative method (Wang 2015: x_k+1 = omega_k+1
+  /// (gamma (x^ - x_k) + x_k - x_k-1) + x_k-1, omega_1 = 1, omega_2 = 2 / (2 - rho^2),
+  /// omega_k+1 = 4 / (4 - rho^2 omega_k)), with rho the spectral radius of the Jacobi iteration
+  /// matrix estimated by power iteration (times `rho_scale`) and gamma = `under_relaxation`.
+  /// When an iteration raises the energy, the acceleration restarts from the better point.
+  /// Stops as solve() does, on the absolute energy change (the energy is not monotone here).
+  SolveReport solve_jacobi_chebyshev(Eigen::MatrixX3d& p, const Eigen::MatrixX3d& inertial_target,
+                                     const StopCriteria& stop, bool record_energies = false,
+                                     const IterationObserver& observer = {}, double under_relaxation = 0.9,
+                                     double rho_scale = 0.999);
+  /// The spectral radius of the Jacobi iteration matrix I - D^-1 K of the global system.
+  double jacobi_spectral_radius();
+
   /// One local step at p: the energy E(p), and (into the solver's buffers) the projections.
   double energy(const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& inertial_target);
 

@@ -112,7 +112,7 @@ TEST(DeformPhantom, AnUnavailableSolverIsAClearErrorAtItsSceneField) {
     const std::string message = error.what();
     EXPECT_NE(message.find("small-head.yaml"), std::string::npos) << message;
     EXPECT_NE(message.find(
-                  "deformation.solver.method: expected local_global or newton in this version, found xpbd"),
+                  "deformation.solver.method: expected local_global, jacobi_chebyshev or newton in this version, found xpbd"),
               std::string::npos)
         << message;
   }

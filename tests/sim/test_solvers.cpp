@@ -198,3 +198,39 @@ TEST(LocalGlobal, OneAndTwoThreadsGiveIdenticalResults) {
   EXPECT_EQ(a.energies_J, b.energies_J);
   EXPECT_EQ(one, two);
 }
+
+// Jacobi + Chebyshev on the same energy (a coarse twisting bar): it reaches Newton's minimizer
+// (energy within 1e-6 relative, positions within 1e-3 of the start's distance), stays finite,
+// and never ends above its start energy.
+TEST(JacobiChebyshev, CoarseTwistingBarReachesTheNewtonMinimizer) {
+  TwistingBarSettings settings;
+  settings.cells = {3, 3, 12};
+  settings.size_mm = {60, 60, 240};
+  const TwistingBarStep bar = twisting_bar_step(settings);
+  Eigen::MatrixX3d newton = bar.start_m;
+  StopCriteria tight;
+  tight.max_iterations = 40;
+  tight.gradient_norm_N = 1e-10;
+  const SolveReport reference = newton_solve(bar.model, bar.inertia, newton, tight);
+  const double E_0 =
+      LocalGlobalSolver(bar.model, bar.inertia.weight, 1).energy(bar.start_m, bar.inertia.target_m);
+
+  LocalGlobalSolver solver(bar.model, bar.inertia.weight, 1);
+  const double rho = solver.jacobi_spectral_radius();
+  EXPECT_GT(rho, 0.5);
+  EXPECT_LT(rho, 1.0);
+  Eigen::MatrixX3d p = bar.start_m;
+  StopCriteria stop;
+  stop.max_iterations = 4000;
+  stop.relative_energy_decrease = 0.0;
+  stop.position_change_m = 1e-12;
+  const SolveReport report = solver.solve_jacobi_chebyshev(p, bar.inertia.target_m, stop, true);
+  ASSERT_TRUE(p.allFinite());
+  std::printf("Jacobi + Chebyshev: rho %.5f, %d iterations, stopped by %s\n", rho, report.iterations,
+              report.stopped_by.c_str());
+  EXPECT_NEAR((report.final_energy_J - reference.final_energy_J) / (E_0 - reference.final_energy_J), 0.0,
+              1e-6);
+  EXPECT_LT((p - newton).norm(), 1e-3 * (bar.start_m - newton).norm());
+  for (double e : report.energies_J)
+    ASSERT_LE(e, E_0 * (1.0 + 1e-12));
+}
