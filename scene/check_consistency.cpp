@@ -133,6 +133,13 @@ public:
     if (d.mode == DeformationMode::none && !d.loads.empty()) {
       problem("deformation.mode", "expected quasi_static or dynamic when loads are given, found 'none'");
     }
+    if (d.solver.method == SolverMethod::gauss_seidel_pbd || d.solver.method == SolverMethod::xpbd) {
+      problem("deformation.solver.method",
+              std::string("expected local_global, jacobi_chebyshev or newton (") +
+                  to_string(d.solver.method) +
+                  " is part of the format but not available in this version), found " +
+                  to_string(d.solver.method));
+    }
   }
 
   void check_sequence_timing(std::size_t i, SequenceSettings& s) {

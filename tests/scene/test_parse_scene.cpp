@@ -251,3 +251,16 @@ TEST(ParseScene, AcquiredVoxelSizeIsOneWayAndNoFinerThanTheGrid) {
       std::string::npos)
       << message;
 }
+
+TEST(ParseScene, SolversNotAvailableInThisVersionAreRejectedAtTheirLine) {
+  const std::string message =
+      only_problem(k_minimal + "deformation: {mode: quasi_static, solver: {method: xpbd}}\n");
+  EXPECT_NE(message.find("scene.yaml:13:"), std::string::npos) << message;
+  EXPECT_NE(
+      message.find("deformation.solver.method: expected local_global, jacobi_chebyshev or newton (xpbd is "
+                   "part of the format but not available in this version), found xpbd"),
+      std::string::npos)
+      << message;
+  EXPECT_TRUE(
+      parse(k_minimal + "deformation: {mode: quasi_static, solver: {method: jacobi_chebyshev}}\n").scene);
+}
