@@ -16,7 +16,8 @@ namespace phantasm::bench {
 /// The scene named by the first argument (default: the head), or the program ends with its
 /// problems (exit 2).
 inline Scene scene_from_arguments(int argc, char** argv) {
-  const std::string path = argc > 1 ? argv[1] : std::string(PHANTASM_SOURCE_DIR) + "/data-synthetic/head.yaml";
+  const std::string path =
+      argc > 1 ? argv[1] : std::string(PHANTASM_SOURCE_DIR) + "/data-synthetic/head.yaml";
   SceneLoadResult loaded = load_scene(path);
   if (!loaded.scene) {
     std::fprintf(stderr, "%s", format_diagnostics(loaded.problems).c_str());

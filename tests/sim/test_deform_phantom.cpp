@@ -111,8 +111,8 @@ TEST(DeformPhantom, AnUnavailableSolverIsAClearErrorAtItsSceneField) {
   } catch (const InputError& error) {
     const std::string message = error.what();
     EXPECT_NE(message.find("small-head.yaml"), std::string::npos) << message;
-    EXPECT_NE(message.find(
-                  "deformation.solver.method: expected local_global, jacobi_chebyshev or newton in this version, found xpbd"),
+    EXPECT_NE(message.find("deformation.solver.method: expected local_global, jacobi_chebyshev or newton in "
+                           "this version, found xpbd"),
               std::string::npos)
         << message;
   }
