@@ -70,19 +70,10 @@ std::map<std::int32_t, std::string> read_label_names(const std::filesystem::path
 }
 
 std::string find_subject(const std::filesystem::path& dataset) {
-  const std::filesystem::path derivatives = dataset / "derivatives" / "phantasm";
-  std::vector<std::string> subjects;
-  std::error_code error;
-  if (std::filesystem::is_directory(derivatives, error)) {
-    for (const auto& entry : std::filesystem::directory_iterator(derivatives)) {
-      const std::string name = entry.path().filename().string();
-      if (entry.is_directory() && name.rfind("sub-", 0) == 0) subjects.push_back(name.substr(4));
-    }
-  }
-  std::sort(subjects.begin(), subjects.end());
+  const std::vector<std::string> subjects = complete_subjects(dataset);
   if (subjects.empty()) {
-    throw InputError(dataset.string() +
-                     ": expected a phantasm dataset (derivatives/phantasm/sub-<id>), found none");
+    throw InputError(dataset.string() + ": expected a phantasm dataset with a complete subject "
+                                        "(derivatives/phantasm/sub-<id>/provenance.json), found none");
   }
   if (subjects.size() > 1) {
     std::string list;

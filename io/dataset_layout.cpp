@@ -1,5 +1,7 @@
 #include "io/dataset_layout.hpp"
 
+#include <algorithm>
+
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
 
@@ -113,6 +115,20 @@ std::filesystem::path sidecar_path(const std::filesystem::path& image) {
     }
   }
   return image.parent_path() / (name + ".json");
+}
+
+std::vector<std::string> complete_subjects(const std::filesystem::path& dataset) {
+  const std::filesystem::path derivatives = dataset / "derivatives" / "phantasm";
+  std::vector<std::string> subjects;
+  std::error_code error;
+  if (!std::filesystem::is_directory(derivatives, error)) return subjects;
+  for (const auto& entry : std::filesystem::directory_iterator(derivatives)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("sub-", 0) == 0 && std::filesystem::exists(entry.path() / "provenance.json", error))
+      subjects.push_back(name.substr(4));
+  }
+  std::sort(subjects.begin(), subjects.end());
+  return subjects;
 }
 
 void prepare_output_folder(const std::filesystem::path& folder, bool force) {

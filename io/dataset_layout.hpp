@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace phantasm {
 
@@ -59,6 +60,10 @@ private:
   std::filesystem::path m_root;
   std::string m_subject;
 };
+
+/// Labels of the complete subjects of a dataset (derivatives/phantasm/sub-<id>/provenance.json
+/// present, since it is written last), sorted; empty when there are none.
+std::vector<std::string> complete_subjects(const std::filesystem::path& dataset);
 
 /// Replaces the .nii.gz (or other) extension of an image path by .json.
 std::filesystem::path sidecar_path(const std::filesystem::path& image);

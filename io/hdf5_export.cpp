@@ -163,16 +163,8 @@ Hdf5ExportSummary export_hdf5(const std::filesystem::path& dataset, const std::f
                               const std::function<void(const std::string&)>& progress) {
   const std::filesystem::path derivatives = dataset / "derivatives" / "phantasm";
   std::vector<std::string> subjects;
-  std::error_code error;
-  if (std::filesystem::is_directory(derivatives, error)) {
-    for (const auto& entry : std::filesystem::directory_iterator(derivatives)) {
-      const std::string name = entry.path().filename().string();
-      if (name.rfind("sub-", 0) == 0 && std::filesystem::exists(entry.path() / "provenance.json")) {
-        subjects.push_back(name);
-      }
-    }
-  }
-  std::sort(subjects.begin(), subjects.end());
+  for (const std::string& id : complete_subjects(dataset))
+    subjects.push_back("sub-" + id);
   if (subjects.empty()) {
     throw InputError(dataset.string() +
                      ": expected a phantasm dataset with complete subjects (derivatives/phantasm/sub-<id>/"
@@ -257,7 +249,8 @@ Hdf5ExportSummary export_hdf5(const std::filesystem::path& dataset, const std::f
     }
     check(H5Fflush(h5.get(), H5F_SCOPE_GLOBAL), "flush " + temporary.string());
   } catch (...) {
-    std::filesystem::remove(temporary, error);
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
     throw;
   }
   std::filesystem::rename(temporary, file);

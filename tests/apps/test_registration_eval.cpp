@@ -189,7 +189,8 @@ TEST(EvalCommand, BadResultsGetClearMessages) {
   EXPECT_EQ(run.exit_code, 2);
   run = run_command({k_phantasm, "eval", folder.string(), "--identity"});
   EXPECT_EQ(run.exit_code, 2);
-  EXPECT_NE(run.err.find("expected a phantasm dataset (derivatives/phantasm/sub-<id>), found none"),
+  EXPECT_NE(run.err.find("expected a phantasm dataset with a complete subject "
+                         "(derivatives/phantasm/sub-<id>/provenance.json), found none"),
             std::string::npos)
       << run.err;
 }
