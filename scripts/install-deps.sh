@@ -33,11 +33,13 @@ if [ "$(id -u)" -ne 0 ]; then sudo_cmd=(sudo); fi
 
 # CHOLMOD's supernodal factorization calls BLAS/LAPACK through Debian's alternatives. The
 # OpenMP build of OpenBLAS shares the OpenMP runtime with our local step instead of starting
-# its own pthread pool that competes for the same two cores.
+# its own pthread pool that competes for the same two cores. Its libblas.so.3 loads
+# libopenblas.so.0, a third alternative: left at the pthread build, that pool (and its
+# sched_yield spinning) comes back and the 10k-vertex global solve takes twice as long.
 select_openmp_blas() {
   local arch_dir=/usr/lib/x86_64-linux-gnu
   [ "$(uname -m)" = x86_64 ] || return 0
-  for lib in libblas.so.3 liblapack.so.3; do
+  for lib in libblas.so.3 liblapack.so.3 libopenblas.so.0; do
     local want="$arch_dir/openblas-openmp/$lib"
     [ -e "$want" ] || continue
     if [ "$(readlink -f "$arch_dir/$lib")" != "$(readlink -f "$want")" ]; then

@@ -124,7 +124,24 @@ SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, 
     Eigen::MatrixX3d trial = p;
     double trial_energy = energy;
     bool accepted = false;
-    for (int backtrack = 0; backtrack < 60; ++backtrack) {
+    Eigen::MatrixX3d trial_gradient;
+    // Near the minimizer the decrease a step promises falls below the round-off of E itself and
+    // Armijo's test becomes a coin toss: there, the full Newton step is taken when it lowers the
+    // gradient norm instead (the merit function of Newton's method for the equation grad E = 0).
+    const bool below_roundoff = -slope <= 1e-13 * std::abs(energy);
+    if (below_roundoff) {
+      for (Eigen::Index f = 0; f < nf; ++f)
+        trial.row(free_vertex[static_cast<std::size_t>(f)]) =
+            p.row(free_vertex[static_cast<std::size_t>(f)]) + direction.segment<3>(3 * f).transpose();
+      trial_gradient = model_gradient(model, inertia, trial);
+      if (free_gradient_norm(model, trial_gradient) < free_gradient_norm(model, gradient)) {
+        trial_energy = model_energy(model, inertia, trial);
+        accepted = true;
+      } else {
+        trial_gradient.resize(0, 3);
+      }
+    }
+    for (int backtrack = 0; backtrack < 60 && !accepted; ++backtrack) {
       for (Eigen::Index f = 0; f < nf; ++f)
         trial.row(free_vertex[static_cast<std::size_t>(f)]) =
             p.row(free_vertex[static_cast<std::size_t>(f)]) + step * direction.segment<3>(3 * f).transpose();
@@ -143,7 +160,7 @@ SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, 
     const double previous = energy;
     p = trial;
     energy = trial_energy;
-    gradient = model_gradient(model, inertia, p);
+    gradient = trial_gradient.rows() == p.rows() ? trial_gradient : model_gradient(model, inertia, p);
     if (record_energies) {
       report.energies_J.push_back(energy);
       report.seconds.push_back(elapsed());

@@ -50,6 +50,8 @@ TEST(LocalGlobal, TwistingBarFrameReachesTheNewtonMinimizer) {
   tight.gradient_norm_N = 1e-9;
   const SolveReport reference = newton_solve(bar.model, bar.inertia, newton, tight);
   EXPECT_LE(reference.residual_N, 1e-9) << reference.stopped_by << " after " << reference.iterations;
+  std::printf("newton residual %g after %d (%s)\n", reference.residual_N, reference.iterations,
+              reference.stopped_by.c_str());
   const double newton_to_start = (bar.start_m - newton).norm();
 
   LocalGlobalSolver solver(bar.model, bar.inertia.weight, 1);
