@@ -97,6 +97,11 @@ double model_energy(const ElasticModel& model, const StepInertia& inertia, const
   }
   for (const PointConstraint& c : model.points)
     energy += 0.5 * c.stiffness_N_m * (point_of(c, p) - c.target_m).squaredNorm();
+  if (!model.obstacles.empty()) {
+    for (Eigen::Index v = 0; v < p.rows(); ++v)
+      if (model.fixed.empty() || !model.fixed[static_cast<std::size_t>(v)])
+        energy += contact_energy(model.obstacles, model.contact_stiffness_N_m, p.row(v).transpose());
+  }
   return energy;
 }
 
@@ -117,6 +122,12 @@ Eigen::MatrixX3d model_gradient(const ElasticModel& model, const StepInertia& in
     const Eigen::Vector3d r = c.stiffness_N_m * (point_of(c, p) - c.target_m);
     for (int k = 0; k < c.count; ++k)
       g.row(c.vertices[static_cast<std::size_t>(k)]) += c.coefficients[k] * r.transpose();
+  }
+  if (!model.obstacles.empty()) {
+    for (Eigen::Index v = 0; v < p.rows(); ++v)
+      if (model.fixed.empty() || !model.fixed[static_cast<std::size_t>(v)])
+        g.row(v) +=
+            contact_gradient(model.obstacles, model.contact_stiffness_N_m, p.row(v).transpose()).transpose();
   }
   return g;
 }

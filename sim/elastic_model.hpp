@@ -1,5 +1,6 @@
 #pragma once
 
+#include "sim/obstacles.hpp"
 #include "sim/tet_constraints.hpp"
 
 #include <Eigen/Core>
@@ -35,7 +36,7 @@ struct PointConstraint {
 /// constraints, vertices held in place (Dirichlet: the solvers never move them), and external
 /// forces. The objective of one step (METHOD.md section 2) is
 ///   E(p) = a/2 (p - s)^T M (p - s) - f . p + sum_tets [ws/2 |F - P_strain(F)|^2 + wv/2 |F - P_volume(F)|^2]
-///          + sum_points k/2 |b . x - t|^2
+///          + sum_points k/2 |b . x - t|^2 + sum_free vertices sum_obstacles kc/2 dist(x, allowed)^2
 /// with a = 1/h^2 for a dynamic step (s the inertial target, gravity folded into s, f = 0) and
 /// a = 0 for quasi-static equilibrium (f the external forces).
 struct ElasticModel {
@@ -47,6 +48,8 @@ struct ElasticModel {
   std::vector<PointConstraint> points;
   std::vector<char> fixed;            ///< per vertex: held where the solver finds it
   Eigen::MatrixX3d external_forces_N; ///< per vertex; may be empty (no force)
+  std::vector<Obstacle> obstacles;    ///< rigid obstacles the free vertices may not enter
+  double contact_stiffness_N_m = 0.0; ///< kc of every vertex-obstacle contact
 
   Eigen::Index vertex_count() const { return rest_positions_m.rows(); }
 };

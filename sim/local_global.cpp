@@ -1,7 +1,8 @@
 #include "sim/local_global.hpp"
 
+#include "sim/sparse_cholesky.hpp"
+
 #include <Eigen/Cholesky>
-#include <Eigen/CholmodSupport>
 #include <Eigen/Sparse>
 #include <omp.h>
 
@@ -20,7 +21,13 @@ struct LocalGlobalSolver::Impl {
   std::vector<int> free_vertex;           ///< per free row: the vertex
   Eigen::SparseMatrix<double> K_free;     ///< free x free
   Eigen::SparseMatrix<double> K_coupling; ///< free x all vertices, columns of fixed vertices only
-  Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> factor;
+  std::unique_ptr<SparseCholesky> factor; ///< of K_free plus the contacts' diagonal
+  // Contacts with obstacles, per free row: obstacles the vertex is inside at the last local
+  // step, the sum of its projections onto them, its contact energy; and the count the factor
+  // holds (k per contact on the diagonal), brought up to date by rank updates.
+  std::vector<int> contact_count, factored_count;
+  Eigen::MatrixX3d contact_targets;
+  std::vector<double> contact_energies;
   // Per tet: warm-started rotation and the projection term w_s T_s^T + w_v T_v^T.
   std::vector<Eigen::Quaterniond> rotations, eigenvectors;
   std::vector<Eigen::Matrix3d> projections;
@@ -28,6 +35,20 @@ struct LocalGlobalSolver::Impl {
   // Per vertex (CSR): the tets (index, corner) and point constraints (index, corner) using it.
   std::vector<int> tet_offsets, tet_entries, point_offsets, point_entries;
   Eigen::MatrixX3d rhs, coupling_rhs, solution;
+
+  /// The residual (the gradient K x - b(x) of the free vertices, with b from the projections
+  /// at the result, which the last local step computed, and the contacts found there) and the
+  /// contact count into the report.
+  void finish_report(const Eigen::MatrixX3d& x_free, const Eigen::MatrixX3d& target, SolveReport& report) {
+    update_contacts();
+    gather_rhs(target);
+    const Eigen::MatrixX3d K_x = apply_matrix(x_free);
+    report.residual_N = x_free.rows() > 0 ? (K_x - rhs).rowwise().norm().maxCoeff() : 0.0;
+    report.contacts = 0;
+    for (int c : contact_count)
+      report.contacts += c > 0 ? 1 : 0;
+    report.rank_updates = factor->rank_changes();
+  }
 
   Impl(const ElasticModel& m, double a, int t) : model(m), alpha(a), threads(t) {}
 
@@ -121,13 +142,17 @@ struct LocalGlobalSolver::Impl {
     K_coupling.resize(nf, n);
     K_coupling.setFromTriplets(coupling.begin(), coupling.end());
     if (alpha == 0.0) check_held();
-    factor.setMode(Eigen::CholmodAuto);
-    factor.compute(K_free);
-    if (factor.info() != Eigen::Success) {
+    try {
+      factor = std::make_unique<SparseCholesky>(K_free, !model.obstacles.empty());
+    } catch (const std::runtime_error&) {
       throw std::runtime_error(
           "local/global: the global matrix is not positive definite (is anything holding "
           "the model? quasi-static solves need fixed vertices or attachments)");
     }
+    contact_count.assign(static_cast<std::size_t>(nf), 0);
+    factored_count.assign(static_cast<std::size_t>(nf), 0);
+    contact_targets.setZero(nf, 3);
+    contact_energies.assign(static_cast<std::size_t>(nf), 0.0);
     rhs.resize(nf, 3);
     coupling_rhs.setZero(nf, 3);
     solution.resize(nf, 3);
@@ -202,7 +227,74 @@ struct LocalGlobalSolver::Impl {
         x += c.coefficients[k] * p.row(c.vertices[static_cast<std::size_t>(k)]);
       energy += 0.5 * c.stiffness_N_m * (x - c.target_m.transpose()).squaredNorm();
     }
+    if (!model.obstacles.empty()) energy += find_contacts(p);
     return energy;
+  }
+
+  /// The contact part of the local step: for each free vertex, the obstacles it is inside and
+  /// its projections onto them. Returns the contact energy (summed in vertex order).
+  double find_contacts(const Eigen::MatrixX3d& p) {
+    const auto nf = static_cast<std::ptrdiff_t>(free_vertex.size());
+    const double k = model.contact_stiffness_N_m;
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (std::ptrdiff_t f = 0; f < nf; ++f) {
+      const Eigen::Vector3d x = p.row(free_vertex[static_cast<std::size_t>(f)]).transpose();
+      int count = 0;
+      double energy = 0.0;
+      Eigen::Vector3d targets = Eigen::Vector3d::Zero();
+      for (const Obstacle& o : model.obstacles) {
+        if (!(o.signed_distance(x) < 0.0)) continue;
+        const Eigen::Vector3d projection = o.project(x);
+        ++count;
+        targets += projection;
+        energy += 0.5 * k * (x - projection).squaredNorm();
+      }
+      contact_count[static_cast<std::size_t>(f)] = count;
+      contact_targets.row(f) = targets.transpose();
+      contact_energies[static_cast<std::size_t>(f)] = energy;
+    }
+    double energy = 0.0;
+    for (double e : contact_energies)
+      energy += e;
+    return energy;
+  }
+
+  /// Brings the factor's contacts up to those of the last local step by rank-one updates and
+  /// downdates of k e_f e_f^T. Returns how many free vertices changed.
+  int update_contacts() {
+    if (model.obstacles.empty()) return 0;
+    std::vector<std::pair<int, double>> changes;
+    for (std::size_t f = 0; f < contact_count.size(); ++f) {
+      if (contact_count[f] == factored_count[f]) continue;
+      changes.emplace_back(static_cast<int>(f),
+                           model.contact_stiffness_N_m * (contact_count[f] - factored_count[f]));
+      factored_count[f] = contact_count[f];
+    }
+    if (!changes.empty()) factor->update_diagonal(changes);
+    return static_cast<int>(changes.size());
+  }
+
+  /// Whether the last local step found contacts the factor does not hold yet.
+  bool contacts_pending() const {
+    return contact_count != factored_count;
+  }
+
+  /// K x over the free rows, with the contacts the factor holds.
+  Eigen::MatrixX3d apply_matrix(const Eigen::MatrixX3d& x) const {
+    Eigen::MatrixX3d Kx = K_free.selfadjointView<Eigen::Lower>() * x;
+    for (std::size_t f = 0; f < factored_count.size(); ++f)
+      if (factored_count[f] > 0)
+        Kx.row(static_cast<Eigen::Index>(f)) +=
+            (model.contact_stiffness_N_m * factored_count[f]) * x.row(static_cast<Eigen::Index>(f));
+    return Kx;
+  }
+
+  /// The diagonal of the matrix the factor holds.
+  Eigen::VectorXd matrix_diagonal() const {
+    Eigen::VectorXd d = K_free.diagonal();
+    for (std::size_t f = 0; f < factored_count.size(); ++f)
+      d[static_cast<Eigen::Index>(f)] += model.contact_stiffness_N_m * factored_count[f];
+    return d;
   }
 
   /// The right-hand side of the free vertices from the current projections.
@@ -227,6 +319,8 @@ struct LocalGlobalSolver::Impl {
         const int corner = point_entries[2 * static_cast<std::size_t>(i) + 1];
         r += c.stiffness_N_m * c.coefficients[corner] * c.target_m.transpose();
       }
+      if (!contact_energies.empty() && contact_count[static_cast<std::size_t>(f)] > 0)
+        r += model.contact_stiffness_N_m * contact_targets.row(f);
       rhs.row(f) = r - coupling_rhs.row(f);
     }
   }
@@ -286,7 +380,9 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
     m->gather_rhs(target);
     report.local_seconds += seconds_since(start);
     start = Clock::now();
-    m->solution = m->factor.solve(m->rhs);
+    const int contact_changes = m->update_contacts();
+    report.contact_changes += contact_changes;
+    m->factor->solve(m->rhs, m->solution);
     report.global_seconds += seconds_since(start);
     start = Clock::now();
     const double previous = energy;
@@ -346,20 +442,19 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
       report.stopped_by = "position";
       break;
     }
-    if ((previous - energy) <= stop.relative_energy_decrease * std::abs(energy)) {
+    // Contacts that came or went (in this step, or found at its result) make the energy of the
+    // step another function: no stop on its change then.
+    if (contact_changes == 0 && !m->contacts_pending() &&
+        (previous - energy) <= stop.relative_energy_decrease * std::abs(energy)) {
       report.stopped_by = "energy";
       break;
     }
   }
   report.final_energy_J = energy;
-  // The residual: the gradient K p - b(p) of the free vertices, with b from the projections at
-  // the result (the last local step computed them).
-  m->gather_rhs(target);
   Eigen::MatrixX3d p_free(static_cast<Eigen::Index>(m->free_vertex.size()), 3);
   for (std::size_t f = 0; f < m->free_vertex.size(); ++f)
     p_free.row(static_cast<Eigen::Index>(f)) = p.row(m->free_vertex[f]);
-  const Eigen::MatrixX3d K_p = m->K_free.selfadjointView<Eigen::Lower>() * p_free;
-  report.residual_N = p_free.rows() > 0 ? (K_p - m->rhs).rowwise().norm().maxCoeff() : 0.0;
+  m->finish_report(p_free, target, report);
   return report;
 }
 
@@ -400,7 +495,7 @@ SolveReport LocalGlobalSolver::solve_jacobi_chebyshev(Eigen::MatrixX3d& p, const
     x.row(f) = p.row(m->free_vertex[static_cast<std::size_t>(f)]);
   Eigen::MatrixX3d x_previous = x, best = x;
   double best_energy = energy;
-  const Eigen::VectorXd inverse_diagonal = m->K_free.diagonal().cwiseInverse();
+  Eigen::VectorXd inverse_diagonal = m->K_free.diagonal().cwiseInverse();
   double omega = 1.0;
   int step = 0; // iterations since the acceleration (re)started
   for (int iteration = 1; iteration <= stop.max_iterations; ++iteration) {
@@ -408,7 +503,8 @@ SolveReport LocalGlobalSolver::solve_jacobi_chebyshev(Eigen::MatrixX3d& p, const
     m->gather_rhs(target);
     report.local_seconds += seconds_since(start);
     start = Clock::now();
-    const Eigen::MatrixX3d Kx = m->K_free.selfadjointView<Eigen::Lower>() * x;
+    if (m->update_contacts() > 0) inverse_diagonal = m->matrix_diagonal().cwiseInverse();
+    const Eigen::MatrixX3d Kx = m->apply_matrix(x);
     const Eigen::MatrixX3d jacobi = x + inverse_diagonal.asDiagonal() * (m->rhs - Kx);
     ++step;
     omega = step == 1 ? 1.0 : step == 2 ? 2.0 / (2.0 - rho * rho) : 4.0 / (4.0 - rho * rho * omega);
@@ -422,7 +518,14 @@ SolveReport LocalGlobalSolver::solve_jacobi_chebyshev(Eigen::MatrixX3d& p, const
     const double change = nf > 0 ? (next - x).rowwise().norm().maxCoeff() : 0.0;
     x_previous = x;
     x = next;
-    if (!std::isfinite(energy) || energy > best_energy) {
+    if (std::isfinite(energy) && m->contacts_pending()) {
+      // New or released contacts: the energy is another function from here; restart the
+      // acceleration at this point rather than returning to one with the old contacts.
+      best = x;
+      best_energy = energy;
+      x_previous = x;
+      step = 0;
+    } else if (!std::isfinite(energy) || energy > best_energy) {
       // Restart the acceleration from the best point so far.
       x = best;
       x_previous = best;
@@ -445,15 +548,14 @@ SolveReport LocalGlobalSolver::solve_jacobi_chebyshev(Eigen::MatrixX3d& p, const
       report.stopped_by = "position";
       break;
     }
-    if (step > 2 && std::abs(previous - energy) <= stop.relative_energy_decrease * std::abs(energy)) {
+    if (step > 2 && !m->contacts_pending() &&
+        std::abs(previous - energy) <= stop.relative_energy_decrease * std::abs(energy)) {
       report.stopped_by = "energy";
       break;
     }
   }
   report.final_energy_J = energy;
-  m->gather_rhs(target);
-  const Eigen::MatrixX3d K_p = m->K_free.selfadjointView<Eigen::Lower>() * x;
-  report.residual_N = nf > 0 ? (K_p - m->rhs).rowwise().norm().maxCoeff() : 0.0;
+  m->finish_report(x, target, report);
   return report;
 }
 

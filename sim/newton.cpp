@@ -50,6 +50,11 @@ Eigen::SparseMatrix<double> assemble_hessian(const ElasticModel& model, const St
         add_block(e.vertices[static_cast<std::size_t>(a)], e.vertices[static_cast<std::size_t>(b)],
                   H.block<3, 3>(3 * a, 3 * b));
   }
+  if (!model.obstacles.empty()) {
+    for (Eigen::Index v = 0; v < model.vertex_count(); ++v)
+      add_block(static_cast<int>(v), static_cast<int>(v),
+                contact_hessian(model.obstacles, model.contact_stiffness_N_m, p.row(v).transpose()));
+  }
   for (const PointConstraint& c : model.points) {
     for (int a = 0; a < c.count; ++a)
       for (int b = 0; b < c.count; ++b)

@@ -28,6 +28,9 @@ struct SolveReport {
   std::vector<double> seconds;    ///< solver time after each iteration (when recorded; observers excluded)
   double local_seconds = 0.0;     ///< time in local steps (projections and right-hand side)
   double global_seconds = 0.0;    ///< time in global steps (triangular solves)
+  int contacts = 0;               ///< free vertices inside an obstacle at the result
+  long contact_changes = 0;       ///< vertices whose contacts came or went during the solve
+  long rank_updates = 0;          ///< rank-one updates/downdates of the factor so far
 };
 
 /// Called after every iteration with its number, the positions and E(p); its own time is not

@@ -1,0 +1,136 @@
+#include "sim/sparse_cholesky.hpp"
+
+#include <cholmod.h>
+
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+namespace phantasm {
+
+struct SparseCholesky::Impl {
+  cholmod_common common{};
+  cholmod_factor* factor = nullptr;
+  cholmod_dense* x = nullptr; // solve2's reusable workspaces
+  cholmod_dense* y = nullptr;
+  cholmod_dense* e = nullptr;
+  std::vector<int> position; ///< row of the permuted matrix for each row of A
+  bool updatable = false;
+  long rank_changes = 0;
+
+  Impl() { cholmod_start(&common); }
+  ~Impl() {
+    cholmod_free_dense(&x, &common);
+    cholmod_free_dense(&y, &common);
+    cholmod_free_dense(&e, &common);
+    cholmod_free_factor(&factor, &common);
+    cholmod_finish(&common);
+  }
+
+  /// A simplicial LDL^T factor exists for some indefinite matrices too: positive definite
+  /// exactly when every entry of D (the first entry of each column of L) is positive.
+  bool positive_pivots() const {
+    if (factor->is_super || factor->is_ll) return true; // LL^T factorization fails on a bad pivot
+    const auto* column_start = static_cast<const int*>(factor->p);
+    const auto* values = static_cast<const double*>(factor->x);
+    for (std::size_t j = 0; j < factor->n; ++j)
+      if (!(values[column_start[j]] > 0.0)) return false;
+    return true;
+  }
+
+  void check_positive_definite(const char* what) const {
+    if (common.status != CHOLMOD_OK || factor == nullptr || factor->minor < factor->n || !positive_pivots()) {
+      throw std::runtime_error(std::string("sparse Cholesky: ") + what +
+                               " is not positive definite (CHOLMOD status " + std::to_string(common.status) +
+                               ")");
+    }
+  }
+
+  /// One update (sign > 0) or downdate of A by the columns sqrt(|delta|) e_row.
+  void apply(const std::vector<std::pair<int, double>>& changes, int sign) {
+    std::vector<std::pair<int, double>> columns;
+    for (const auto& [row, delta] : changes)
+      if (delta * sign > 0.0)
+        columns.emplace_back(position[static_cast<std::size_t>(row)], std::sqrt(std::abs(delta)));
+    if (columns.empty()) return;
+    const auto count = columns.size();
+    cholmod_sparse* C = cholmod_allocate_sparse(factor->n, count, count, 1, 1, 0, CHOLMOD_REAL, &common);
+    if (C == nullptr) throw std::runtime_error("sparse Cholesky: out of memory for a rank update");
+    auto* p = static_cast<int*>(C->p);
+    auto* i = static_cast<int*>(C->i);
+    auto* v = static_cast<double*>(C->x);
+    for (std::size_t k = 0; k < count; ++k) {
+      p[k] = static_cast<int>(k);
+      i[k] = columns[k].first;
+      v[k] = columns[k].second;
+    }
+    p[count] = static_cast<int>(count);
+    const int ok = cholmod_updown(sign > 0 ? 1 : 0, C, factor, &common);
+    cholmod_free_sparse(&C, &common);
+    if (!ok) throw std::runtime_error("sparse Cholesky: the rank update failed");
+    check_positive_definite("the downdated matrix");
+    rank_changes += static_cast<long>(count);
+  }
+};
+
+SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& lower, bool updatable)
+    : m(std::make_unique<Impl>()) {
+  Eigen::SparseMatrix<double> A = lower;
+  A.makeCompressed();
+  cholmod_sparse view{};
+  view.nrow = static_cast<std::size_t>(A.rows());
+  view.ncol = static_cast<std::size_t>(A.cols());
+  view.nzmax = static_cast<std::size_t>(A.nonZeros());
+  view.p = A.outerIndexPtr();
+  view.i = A.innerIndexPtr();
+  view.x = A.valuePtr();
+  view.stype = -1; // the lower triangle of a symmetric matrix
+  view.itype = CHOLMOD_INT;
+  view.xtype = CHOLMOD_REAL;
+  view.dtype = CHOLMOD_DOUBLE;
+  view.sorted = 1;
+  view.packed = 1;
+  m->updatable = updatable;
+  if (updatable) {
+    m->common.supernodal = CHOLMOD_SIMPLICIAL;
+    m->common.final_ll = 0; // LDL^T: what cholmod_updown works on
+  }
+  m->factor = cholmod_analyze(&view, &m->common);
+  if (m->factor == nullptr) throw std::runtime_error("sparse Cholesky: the analysis failed");
+  cholmod_factorize(&view, m->factor, &m->common);
+  m->check_positive_definite("the matrix");
+  m->position.assign(static_cast<std::size_t>(A.rows()), 0);
+  const auto* permutation = static_cast<const int*>(m->factor->Perm);
+  for (int k = 0; k < static_cast<int>(A.rows()); ++k)
+    m->position[static_cast<std::size_t>(permutation[k])] = k;
+}
+
+SparseCholesky::~SparseCholesky() = default;
+
+void SparseCholesky::solve(const Eigen::MatrixX3d& b, Eigen::MatrixX3d& x) {
+  cholmod_dense view{};
+  view.nrow = static_cast<std::size_t>(b.rows());
+  view.ncol = 3;
+  view.nzmax = view.nrow * 3;
+  view.d = view.nrow;
+  view.x = const_cast<double*>(b.data()); // read only
+  view.xtype = CHOLMOD_REAL;
+  view.dtype = CHOLMOD_DOUBLE;
+  if (!cholmod_solve2(CHOLMOD_A, m->factor, &view, nullptr, &m->x, nullptr, &m->y, &m->e, &m->common))
+    throw std::runtime_error("sparse Cholesky: the solve failed");
+  x.resize(b.rows(), 3);
+  std::memcpy(x.data(), m->x->x, sizeof(double) * view.nzmax);
+}
+
+void SparseCholesky::update_diagonal(const std::vector<std::pair<int, double>>& changes) {
+  if (!m->updatable) throw std::logic_error("sparse Cholesky: this factor was not made updatable");
+  m->apply(changes, +1); // updates first: the matrix stays positive definite in between
+  m->apply(changes, -1);
+}
+
+long SparseCholesky::rank_changes() const {
+  return m->rank_changes;
+}
+
+} // namespace phantasm

@@ -1,0 +1,43 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+
+#include <memory>
+#include <utility>
+#include <vector>
+
+namespace phantasm {
+
+/// The sparse Cholesky factor of a symmetric positive definite matrix (CHOLMOD behind a small
+/// interface): solves with several right-hand sides in one pass over the factor, and changes of
+/// the matrix's diagonal applied by rank-one updates and downdates of the factor instead of a
+/// new factorization (contacts that come and go).
+class SparseCholesky {
+public:
+  /// Factors A, given by its lower triangle. `updatable`: a simplicial LDL^T factor that
+  /// update_diagonal() can change; otherwise CHOLMOD chooses (supernodal where it is faster).
+  /// @throws std::runtime_error when A is not positive definite
+  SparseCholesky(const Eigen::SparseMatrix<double>& lower, bool updatable);
+  ~SparseCholesky();
+  SparseCholesky(const SparseCholesky&) = delete;
+  SparseCholesky& operator=(const SparseCholesky&) = delete;
+
+  /// x = A^-1 b for the columns of b (no allocation once the sizes repeat).
+  void solve(const Eigen::MatrixX3d& b, Eigen::MatrixX3d& x);
+
+  /// A <- A + sum of delta e_row e_row^T over `changes` (row, delta): positive deltas by a
+  /// rank update, negative ones by a downdate, both in one call each.
+  /// @throws std::logic_error when the factor was not made updatable
+  /// @throws std::runtime_error when a downdate leaves A not positive definite
+  void update_diagonal(const std::vector<std::pair<int, double>>& changes);
+
+  /// Rank-one changes applied so far.
+  long rank_changes() const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> m;
+};
+
+} // namespace phantasm
