@@ -133,6 +133,9 @@ public:
     if (d.mode == DeformationMode::none && !d.loads.empty()) {
       problem("deformation.mode", "expected quasi_static or dynamic when loads are given, found 'none'");
     }
+    if (d.mode == DeformationMode::none && !d.obstacles.empty()) {
+      problem("deformation.mode", "expected quasi_static or dynamic when obstacles are given, found 'none'");
+    }
     if (d.solver.method == SolverMethod::gauss_seidel_pbd || d.solver.method == SolverMethod::xpbd) {
       problem("deformation.solver.method",
               std::string("expected local_global, jacobi_chebyshev or newton (") +

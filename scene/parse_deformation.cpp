@@ -19,15 +19,64 @@ void parse_solver(CheckedMap& map, SolverSettings& solver) {
   map.integer("threads", solver.threads, 0, 1024);
 }
 
-MotionProfile parse_motion(CheckedMap& map, LoadSettings& load) {
+void parse_motion(CheckedMap& map, MotionProfile& profile, double& period_s) {
   std::string motion;
   if (map.choice("motion", motion, {"constant", "ramp", "sine"})) {
-    load.motion = motion == "ramp"   ? MotionProfile::ramp
-                  : motion == "sine" ? MotionProfile::sine
-                                     : MotionProfile::constant;
+    profile = motion == "ramp"   ? MotionProfile::ramp
+              : motion == "sine" ? MotionProfile::sine
+                                 : MotionProfile::constant;
   }
-  map.number("period_s", load.period_s, positive("s"));
-  return load.motion;
+  map.number("period_s", period_s, positive("s"));
+}
+
+void parse_obstacle(CheckedMap& map, ObstacleSettings& obstacle) {
+  std::string shape;
+  if (!map.choice("type", shape, {"half_space", "sphere"}, true)) {
+    map.accept_remaining_keys();
+    return;
+  }
+  const NumberRule coordinate{-1e5, 1e5, false, false, "mm"};
+  if (shape == "half_space") {
+    obstacle.shape = ObstacleShape::half_space;
+    map.vec3("point_mm", obstacle.point_mm, coordinate, true);
+    if (map.vec3("normal", obstacle.normal, NumberRule{-1e6, 1e6, false, false, ""}, true)) {
+      if (!(obstacle.normal.norm() > 1e-12)) {
+        map.context().problem(
+            map.get("normal"), map.child_path("normal"),
+            "expected a non-zero normal (pointing out of the obstacle, towards the tissue), "
+            "found [0, 0, 0]");
+      } else {
+        obstacle.normal.normalize();
+      }
+    }
+  } else {
+    obstacle.shape = ObstacleShape::sphere;
+    map.vec3("center_mm", obstacle.point_mm, coordinate, true);
+    map.number("radius_mm", obstacle.radius_mm, positive("mm"), true);
+  }
+  map.vec3("displacement_mm", obstacle.displacement_mm, NumberRule{-1e3, 1e3, false, false, "mm"});
+  parse_motion(map, obstacle.motion, obstacle.period_s);
+}
+
+/// A list of mappings under `key`, each read by `parse` into a new element of `out`.
+template <typename Settings, typename Parse>
+void parse_list(CheckedMap& map, const std::string& key, const char* what, std::vector<Settings>& out,
+                Parse&& parse) {
+  const YAML::Node list = map.get(key);
+  if (!list.IsDefined()) return;
+  const std::string path = map.child_path(key);
+  if (!list.IsSequence()) {
+    map.context().problem(list, path,
+                          std::string("expected a list of ") + what + ", found " + describe(list));
+    return;
+  }
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    CheckedMap entry(map.context(), list[i], path + "[" + std::to_string(i) + "]");
+    if (!entry.valid()) continue;
+    Settings settings;
+    parse(entry, settings);
+    out.push_back(settings);
+  }
 }
 
 void parse_load(CheckedMap& map, LoadSettings& load) {
@@ -55,7 +104,7 @@ void parse_load(CheckedMap& map, LoadSettings& load) {
       map.missing("region", "a mapping with center_mm and radius_mm (the part of the surface moved)");
     }
   }
-  parse_motion(map, load);
+  parse_motion(map, load.motion, load.period_s);
 }
 
 } // namespace
@@ -74,20 +123,9 @@ void parse_deformation(CheckedMap& map, DeformationSettings& deformation) {
   map.number("time_step_s", deformation.time_step_s, between(1e-6, 10.0, "s"));
   map.integer("frames", deformation.frames, 1, 100000);
   map.string_list("fixed", deformation.fixed);
-  const YAML::Node loads = map.get("loads");
-  if (!loads.IsDefined()) return;
-  const std::string path = map.child_path("loads");
-  if (!loads.IsSequence()) {
-    map.context().problem(loads, path, "expected a list of loads, found " + describe(loads));
-    return;
-  }
-  for (std::size_t i = 0; i < loads.size(); ++i) {
-    CheckedMap entry(map.context(), loads[i], path + "[" + std::to_string(i) + "]");
-    if (!entry.valid()) continue;
-    LoadSettings load;
-    parse_load(entry, load);
-    deformation.loads.push_back(load);
-  }
+  map.integer("load_steps", deformation.load_steps, 1, 10000);
+  parse_list(map, "loads", "loads", deformation.loads, parse_load);
+  parse_list(map, "obstacles", "obstacles", deformation.obstacles, parse_obstacle);
 }
 
 } // namespace phantasm::scene_detail

@@ -71,6 +71,10 @@ const char* to_string(LoadKind kind) {
   return kind == LoadKind::gravity ? "gravity" : "displacement";
 }
 
+const char* to_string(ObstacleShape shape) {
+  return shape == ObstacleShape::sphere ? "sphere" : "half_space";
+}
+
 const char* to_string(MotionProfile motion) {
   switch (motion) {
   case MotionProfile::constant: return "constant";

@@ -99,6 +99,21 @@ struct LoadSettings {
   double period_s = 1.0;                          ///< ramp duration or sine period
 };
 
+enum class ObstacleShape { half_space, sphere };
+
+/// A rigid obstacle no simulated vertex may enter (a compression plate, a table, a probe tip),
+/// moved by displacement_mm: in quasi-static mode over the load steps, in dynamic mode by its
+/// motion profile.
+struct ObstacleSettings {
+  ObstacleShape shape = ObstacleShape::half_space;
+  Eigen::Vector3d point_mm{0, 0, 0}; ///< half_space: a point of the plane; sphere: the centre
+  Eigen::Vector3d normal{0, 0, 1};   ///< half_space: unit normal out of the obstacle
+  double radius_mm = 10.0;           ///< sphere
+  Eigen::Vector3d displacement_mm{0, 0, 0};
+  MotionProfile motion = MotionProfile::constant;
+  double period_s = 1.0;
+};
+
 struct DeformationSettings {
   DeformationMode mode = DeformationMode::none;
   SolverSettings solver;
@@ -106,6 +121,8 @@ struct DeformationSettings {
   int frames = 1;
   std::vector<std::string> fixed; ///< organs held in place
   std::vector<LoadSettings> loads;
+  std::vector<ObstacleSettings> obstacles;
+  int load_steps = 1; ///< quasi-static: loads and obstacles applied in this many equal increments
 };
 
 struct VoxelizationSettings {
@@ -199,6 +216,7 @@ const char* to_string(DeformationMode mode);
 const char* to_string(SolverMethod method);
 const char* to_string(LoadKind kind);
 const char* to_string(MotionProfile motion);
+const char* to_string(ObstacleShape shape);
 const char* to_string(SequenceKind kind);
 const char* to_string(Readout readout);
 

@@ -84,6 +84,21 @@ nlohmann::json scene_settings_json(const Scene& scene) {
   nlohmann::json loads = nlohmann::json::array();
   for (const auto& load : scene.deformation.loads)
     loads.push_back(load_json(load));
+  nlohmann::json obstacles = nlohmann::json::array();
+  for (const auto& o : scene.deformation.obstacles) {
+    nlohmann::json j = {{"type", to_string(o.shape)},
+                        {"displacement_mm", vec3(o.displacement_mm)},
+                        {"motion", to_string(o.motion)},
+                        {"period_s", o.period_s}};
+    if (o.shape == ObstacleShape::half_space) {
+      j["point_mm"] = vec3(o.point_mm);
+      j["normal"] = vec3(o.normal);
+    } else {
+      j["center_mm"] = vec3(o.point_mm);
+      j["radius_mm"] = o.radius_mm;
+    }
+    obstacles.push_back(j);
+  }
   nlohmann::json sequences = nlohmann::json::array();
   for (const auto& s : scene.sequences)
     sequences.push_back(sequence_json(s));
@@ -117,7 +132,9 @@ nlohmann::json scene_settings_json(const Scene& scene) {
         {"time_step_s", d.time_step_s},
         {"frames", d.frames},
         {"fixed", d.fixed},
-        {"loads", loads}}},
+        {"load_steps", d.load_steps},
+        {"loads", loads},
+        {"obstacles", obstacles}}},
       {"voxelization",
        {{"supersampling", scene.voxelization.supersampling},
         {"tessellation_tolerance_mm", scene.voxelization.tessellation_tolerance_mm}}},

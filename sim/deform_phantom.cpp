@@ -74,11 +74,11 @@ Eigen::Vector3d interpolate(const Embedding& e, const Eigen::MatrixX3d& p) {
 }
 
 /// How far a displacement load has come at time t (dynamic mode).
-double profile(const LoadSettings& load, double t) {
-  switch (load.motion) {
+double profile(MotionProfile motion, double period_s, double t) {
+  switch (motion) {
   case MotionProfile::constant: return 1.0;
-  case MotionProfile::ramp: return std::min(1.0, t / load.period_s);
-  case MotionProfile::sine: return 0.5 * (1.0 - std::cos(2.0 * M_PI * t / load.period_s));
+  case MotionProfile::ramp: return std::min(1.0, t / period_s);
+  case MotionProfile::sine: return 0.5 * (1.0 - std::cos(2.0 * M_PI * t / period_s));
   }
   return 1.0;
 }
@@ -292,6 +292,37 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
         " held boundary vertices released within 1.5 region radii of a displacement load");
   }
 
+  // Obstacles act on every free vertex of every body, by a penalty as stiff as the displacement
+  // loads' springs.
+  const auto place_obstacles = [&](auto&& amount_of) {
+    model.obstacles.clear();
+    for (const ObstacleSettings& obstacle : scene.deformation.obstacles) {
+      Obstacle o;
+      o.shape =
+          obstacle.shape == ObstacleShape::sphere ? Obstacle::Shape::sphere : Obstacle::Shape::half_space;
+      o.point_m = k_mm * (obstacle.point_mm + amount_of(obstacle) * obstacle.displacement_mm);
+      o.normal = obstacle.normal;
+      o.radius_m = k_mm * obstacle.radius_mm;
+      model.obstacles.push_back(o);
+    }
+  };
+  if (!scene.deformation.obstacles.empty() && !bodies.empty()) {
+    model.contact_stiffness_N_m = 1e4 * nominal_stiffness;
+    place_obstacles([](const ObstacleSettings&) { return 0.0; });
+    for (const ObstacleSettings& o : scene.deformation.obstacles) {
+      report.modelled.push_back(
+          std::string(to_string(o.shape)) + " obstacle " +
+          (o.shape == ObstacleShape::sphere
+               ? "centred at " + format_vector(o.point_mm) + " mm, radius " + format_number(o.radius_mm) +
+                     " mm"
+               : "through " + format_vector(o.point_mm) + " mm, normal " + format_vector(o.normal)) +
+          ", moved by " + format_vector(o.displacement_mm) + " mm; contacts by a penalty of " +
+          format_number(model.contact_stiffness_N_m) + " N/m (10^4 x the mean elastic stiffness)");
+    }
+  } else if (!scene.deformation.obstacles.empty()) {
+    report.skipped.push_back("obstacles: no organ is simulated, nothing can touch them");
+  }
+
   Eigen::MatrixX3d p = model.rest_positions_m;
   if (!bodies.empty()) {
     const SolverSettings& solver = scene.deformation.solver;
@@ -310,7 +341,9 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
     stop.position_change_m = k_mm * solver.position_tolerance_mm;
     const bool dynamic = scene.deformation.mode == DeformationMode::dynamic;
     const double h = scene.deformation.time_step_s;
-    const int frames = dynamic ? scene.deformation.frames : 1;
+    // Quasi-static solves apply the loads in load_steps equal increments, each starting from the
+    // last; dynamic mode makes one solve per frame.
+    const int frames = dynamic ? scene.deformation.frames : scene.deformation.load_steps;
     std::unique_ptr<LocalGlobalSolver> local_global;
     try {
       if (solver.method == SolverMethod::local_global || jacobi)
@@ -326,11 +359,17 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
     ProgressBar progress(reporter, "deform", static_cast<std::size_t>(frames));
     for (int frame = 0; frame < frames; ++frame) {
       const double t = (frame + 1) * h;
+      const double increment = static_cast<double>(frame + 1) / frames;
       for (PushedPoints& push : pushes) {
-        const double amount = dynamic ? profile(*push.load, t) : 1.0;
+        const double amount = dynamic ? profile(push.load->motion, push.load->period_s, t) : increment;
         for (std::size_t k = 0; k < push.constraints.size(); ++k)
           model.points[push.constraints[k]].target_m =
               push.rest_m[k] + amount * k_mm * push.load->displacement_mm;
+      }
+      if (!model.obstacles.empty()) {
+        place_obstacles([&](const ObstacleSettings& o) {
+          return dynamic ? profile(o.motion, o.period_s, t) : increment;
+        });
       }
       StepInertia inertia;
       if (dynamic) {
@@ -349,8 +388,9 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
     const SolveReport& last = result.solves.back();
     report.modelled.push_back(
         std::string(last.solver) + " " +
-        (dynamic ? "dynamic, " + std::to_string(frames) + " frames of " + format_number(h) + " s"
-                 : "quasi-static") +
+        (dynamic      ? "dynamic, " + std::to_string(frames) + " frames of " + format_number(h) + " s"
+         : frames > 1 ? "quasi-static in " + std::to_string(frames) + " load steps"
+                      : "quasi-static") +
         ": last solve " + std::to_string(last.iterations) + " iterations, stopped by " + last.stopped_by +
         ", residual " + format_number(last.residual_N) + " N");
     report.accuracy["solver residual N"] = last.residual_N;
@@ -362,6 +402,20 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
       result.attachment_error_mm = std::max(result.attachment_error_mm, (x - c.target_m).norm() / k_mm);
     }
     report.accuracy["displacement load error mm"] = result.attachment_error_mm;
+    if (!model.obstacles.empty()) {
+      double deepest = 0.0;
+      for (Eigen::Index v = 0; v < p.rows(); ++v) {
+        if (model.fixed[static_cast<std::size_t>(v)]) continue;
+        for (const Obstacle& o : model.obstacles)
+          deepest = std::max(deepest, -o.signed_distance(p.row(v).transpose()));
+      }
+      result.obstacle_penetration_mm = deepest / k_mm;
+      report.accuracy["obstacle penetration mm"] = result.obstacle_penetration_mm;
+      report.accuracy["vertices in contact"] = last.contacts;
+      report.modelled.push_back(
+          std::to_string(last.contacts) + " vertices in contact with obstacles at the end (" +
+          std::to_string(last.rank_updates) + " rank-one updates of the factor as contacts came and went)");
+    }
     report.status = "done";
   }
 

@@ -33,8 +33,9 @@ struct OrganDeformation {
 struct PhantomDeformation {
   std::vector<OrganDeformation> organs; ///< scene order
   std::vector<DeformedBody> bodies;
-  std::vector<SolveReport> solves;  ///< one per frame
-  double attachment_error_mm = 0.0; ///< largest distance of a pushed point from its target
+  std::vector<SolveReport> solves;      ///< one per frame
+  double attachment_error_mm = 0.0;     ///< largest distance of a pushed point from its target
+  double obstacle_penetration_mm = 0.0; ///< deepest free vertex inside an obstacle
 };
 
 /// Deforms the phantom as the scene says (METHOD.md sections 2-3) [choices documented in

@@ -264,3 +264,48 @@ TEST(ParseScene, SolversNotAvailableInThisVersionAreRejectedAtTheirLine) {
   EXPECT_TRUE(
       parse(k_minimal + "deformation: {mode: quasi_static, solver: {method: jacobi_chebyshev}}\n").scene);
 }
+
+TEST(ParseScene, ObstaclesAreReadWithTheirShapeKeysAndChecked) {
+  const std::string obstacles = R"(deformation:
+  mode: quasi_static
+  load_steps: 3
+  obstacles:
+    - {type: half_space, point_mm: [0, 0, 30], normal: [0, 0, -2], displacement_mm: [0, 0, -5]}
+    - {type: sphere, center_mm: [10, 0, 0], radius_mm: 4, motion: ramp, period_s: 0.5}
+)";
+  const SceneLoadResult result = parse(k_minimal + obstacles);
+  ASSERT_TRUE(result.scene) << format_diagnostics(result.problems);
+  const DeformationSettings& d = result.scene->deformation;
+  EXPECT_EQ(d.load_steps, 3);
+  ASSERT_EQ(d.obstacles.size(), 2u);
+  EXPECT_EQ(d.obstacles[0].shape, ObstacleShape::half_space);
+  EXPECT_EQ(d.obstacles[0].normal, Eigen::Vector3d(0, 0, -1)); // normalized
+  EXPECT_EQ(d.obstacles[0].displacement_mm, Eigen::Vector3d(0, 0, -5));
+  EXPECT_EQ(d.obstacles[1].shape, ObstacleShape::sphere);
+  EXPECT_EQ(d.obstacles[1].point_mm, Eigen::Vector3d(10, 0, 0));
+  EXPECT_EQ(d.obstacles[1].radius_mm, 4.0);
+  EXPECT_EQ(d.obstacles[1].motion, MotionProfile::ramp);
+  const nlohmann::json j = scene_settings_json(*result.scene);
+  EXPECT_EQ(j["deformation"]["obstacles"][1]["center_mm"], nlohmann::json::array({10.0, 0.0, 0.0}));
+
+  EXPECT_EQ(
+      only_problem(k_minimal + replaced(obstacles, "normal: [0, 0, -2]", "normal: [0, 0, 0]")),
+      "scene.yaml:17:56: deformation.obstacles[0].normal: expected a non-zero normal (pointing out of the "
+      "obstacle, towards the tissue), found [0, 0, 0]");
+  EXPECT_NE(
+      only_problem(k_minimal + replaced(obstacles, "radius_mm: 4", "radius_mm: -4"))
+          .find("deformation.obstacles[1].radius_mm: expected a number in mm greater than 0, found '-4'"),
+      std::string::npos);
+  EXPECT_NE(only_problem(k_minimal + replaced(obstacles, "type: sphere, center_mm", "type: box, center_mm"))
+                .find("deformation.obstacles[1].type: expected one of half_space, sphere, found 'box'"),
+            std::string::npos);
+  EXPECT_NE(
+      only_problem(k_minimal + replaced(obstacles, "{type: sphere, center_mm: [10, 0, 0], radius_mm: 4,",
+                                        "{type: sphere, radius_mm: 4,"))
+          .find("deformation.obstacles[1].center_mm: expected a list of 3 numbers"),
+      std::string::npos);
+  EXPECT_NE(
+      only_problem(k_minimal + replaced(obstacles, "mode: quasi_static", "mode: none"))
+          .find("deformation.mode: expected quasi_static or dynamic when obstacles are given, found 'none'"),
+      std::string::npos);
+}

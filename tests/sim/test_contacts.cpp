@@ -28,7 +28,7 @@ Obstacle plane(const Eigen::Vector3d& point, const Eigen::Vector3d& normal) {
 
 Obstacle ball(const Eigen::Vector3d& centre, double radius) {
   Obstacle o;
-  o.shape = Obstacle::Shape::ball;
+  o.shape = Obstacle::Shape::sphere;
   o.point_m = centre;
   o.radius_m = radius;
   return o;
