@@ -136,11 +136,12 @@ public:
     if (d.mode == DeformationMode::none && !d.obstacles.empty()) {
       problem("deformation.mode", "expected quasi_static or dynamic when obstacles are given, found 'none'");
     }
-    if (d.solver.method == SolverMethod::gauss_seidel_pbd || d.solver.method == SolverMethod::xpbd) {
+    const bool position_based =
+        d.solver.method == SolverMethod::gauss_seidel_pbd || d.solver.method == SolverMethod::xpbd;
+    if (position_based && d.mode == DeformationMode::quasi_static) {
       problem("deformation.solver.method",
-              std::string("expected local_global, jacobi_chebyshev or newton (") +
-                  to_string(d.solver.method) +
-                  " is part of the format but not available in this version), found " +
+              std::string("expected local_global, jacobi_chebyshev or newton for a quasi_static scene (") +
+                  to_string(d.solver.method) + " steps in time: it needs mode dynamic), found " +
                   to_string(d.solver.method));
     }
   }

@@ -5,6 +5,7 @@
 #include "sim/elastic_model.hpp"
 #include "sim/local_global.hpp"
 #include "sim/newton.hpp"
+#include "sim/position_based.hpp"
 #include "sim/sim_plan.hpp"
 
 #include <Eigen/LU>
@@ -327,19 +328,22 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
   if (!bodies.empty()) {
     const SolverSettings& solver = scene.deformation.solver;
     const bool jacobi = solver.method == SolverMethod::jacobi_chebyshev;
-    if (solver.method != SolverMethod::local_global && solver.method != SolverMethod::newton && !jacobi) {
+    const bool position_based =
+        solver.method == SolverMethod::xpbd || solver.method == SolverMethod::gauss_seidel_pbd;
+    const bool dynamic = scene.deformation.mode == DeformationMode::dynamic;
+    if (position_based && !dynamic) {
       const std::string key = "deformation.solver.method";
-      throw InputError(
-          Diagnostic{scene.location_of(key), key,
-                     "expected local_global, jacobi_chebyshev or newton in this version, found " +
-                         std::string(to_string(solver.method))}
-              .format());
+      throw InputError(Diagnostic{
+          scene.location_of(key), key,
+          "expected local_global, jacobi_chebyshev or newton for a quasi_static scene (" +
+              std::string(to_string(solver.method)) + " steps in time: it needs mode dynamic), found " +
+              std::string(to_string(solver.method))}
+                           .format());
     }
     StopCriteria stop;
     stop.max_iterations = solver.max_iterations;
     stop.relative_energy_decrease = solver.relative_energy_tolerance;
     stop.position_change_m = k_mm * solver.position_tolerance_mm;
-    const bool dynamic = scene.deformation.mode == DeformationMode::dynamic;
     const double h = scene.deformation.time_step_s;
     // Quasi-static solves apply the loads in load_steps equal increments, each starting from the
     // last; dynamic mode makes one solve per frame.
@@ -377,9 +381,18 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
         inertia.target_m = p + h * velocity + h * h * acceleration;
       }
       const Eigen::MatrixX3d previous = p;
+      if (position_based) { // they start from the prediction s (Macklin et al.)
+        for (Eigen::Index v = 0; v < p.rows(); ++v)
+          if (!model.fixed[static_cast<std::size_t>(v)]) p.row(v) = inertia.target_m.row(v);
+      }
       SolveReport solve = jacobi         ? local_global->solve_jacobi_chebyshev(p, inertia.target_m, stop)
                           : local_global ? local_global->solve(p, inertia.target_m, stop)
-                                         : newton_solve(model, inertia, p, stop);
+                          : position_based
+                              ? position_based_solve(solver.method == SolverMethod::xpbd
+                                                         ? PositionBasedVariant::xpbd
+                                                         : PositionBasedVariant::gauss_seidel_pbd,
+                                                     model, inertia, p, stop)
+                              : newton_solve(model, inertia, p, stop);
       if (!p.allFinite()) throw InputError("deformation: the solver produced non-finite positions");
       if (dynamic) velocity = (p - previous) / h;
       result.solves.push_back(std::move(solve));

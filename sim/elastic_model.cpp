@@ -52,14 +52,14 @@ int add_body(ElasticModel& model, const Eigen::MatrixX3d& rest_m, const Eigen::M
   return first_vertex;
 }
 
-namespace {
-
 Eigen::Matrix3d deformation_gradient(const TetElement& e, const Eigen::MatrixX3d& p) {
   Eigen::Matrix<double, 3, 4> X;
   for (int k = 0; k < 4; ++k)
     X.col(k) = p.row(e.vertices[static_cast<std::size_t>(k)]).transpose();
   return X * e.Q;
 }
+
+namespace {
 
 Eigen::Vector3d point_of(const PointConstraint& c, const Eigen::MatrixX3d& p) {
   Eigen::Vector3d x = Eigen::Vector3d::Zero();

@@ -88,6 +88,9 @@ struct StepInertia {
   Eigen::MatrixX3d target_m; ///< s; unused when weight is 0
 };
 
+/// The deformation gradient F = X Q of a tet at positions p (one row per vertex).
+Eigen::Matrix3d deformation_gradient(const TetElement& e, const Eigen::MatrixX3d& p);
+
 /// E(p) as above; p has one row per vertex, metres.
 double model_energy(const ElasticModel& model, const StepInertia& inertia, const Eigen::MatrixX3d& p);
 

@@ -143,7 +143,7 @@ struct LocalGlobalSolver::Impl {
     K_coupling.setFromTriplets(coupling.begin(), coupling.end());
     if (alpha == 0.0) check_held();
     try {
-      factor = std::make_unique<SparseCholesky>(K_free, !model.obstacles.empty());
+      factor = std::make_unique<SparseCholesky>(K_free);
     } catch (const std::runtime_error&) {
       throw std::runtime_error(
           "local/global: the global matrix is not positive definite (is anything holding "

@@ -11,10 +11,11 @@ namespace phantasm {
 
 /// The local/global solver of projective dynamics on an ElasticModel (METHOD.md section 2).
 /// The global matrix a M + sum w A^T A over the free vertices is factored once (CHOLMOD,
-/// supernodal) when the solver is made; each iteration projects every tet in parallel (OpenMP,
-/// signed SVD with warm-started rotations, no allocation), gathers the right-hand side per
-/// vertex, and solves the three coordinates in one pass over the factor. Fixed vertices stay
-/// where they are in the positions passed to solve().
+/// simplicial LDL^T) when the solver is made; each iteration projects every tet in parallel
+/// (OpenMP, signed SVD with warm-started rotations, no allocation), finds the vertices inside
+/// obstacles, gathers the right-hand side per vertex, brings the factor up to date with the
+/// contacts by rank-one updates/downdates, and solves the three coordinates in one pass over the
+/// factor. Fixed vertices stay where they are in the positions passed to solve().
 class LocalGlobalSolver {
 public:
   /// @param inertia_weight 1/h^2 of the steps to solve, or 0 for quasi-static solves (then the

@@ -16,7 +16,6 @@ struct SparseCholesky::Impl {
   cholmod_dense* y = nullptr;
   cholmod_dense* e = nullptr;
   std::vector<int> position; ///< row of the permuted matrix for each row of A
-  bool updatable = false;
   long rank_changes = 0;
 
   Impl() { cholmod_start(&common); }
@@ -28,10 +27,9 @@ struct SparseCholesky::Impl {
     cholmod_finish(&common);
   }
 
-  /// A simplicial LDL^T factor exists for some indefinite matrices too: positive definite
-  /// exactly when every entry of D (the first entry of each column of L) is positive.
+  /// An LDL^T factor exists for some indefinite matrices too: positive definite exactly when
+  /// every entry of D (the first entry of each column of L) is positive.
   bool positive_pivots() const {
-    if (factor->is_super || factor->is_ll) return true; // LL^T factorization fails on a bad pivot
     const auto* column_start = static_cast<const int*>(factor->p);
     const auto* values = static_cast<const double*>(factor->x);
     for (std::size_t j = 0; j < factor->n; ++j)
@@ -74,8 +72,7 @@ struct SparseCholesky::Impl {
   }
 };
 
-SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& lower, bool updatable)
-    : m(std::make_unique<Impl>()) {
+SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& lower) : m(std::make_unique<Impl>()) {
   Eigen::SparseMatrix<double> A = lower;
   A.makeCompressed();
   cholmod_sparse view{};
@@ -91,11 +88,8 @@ SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& lower, bool up
   view.dtype = CHOLMOD_DOUBLE;
   view.sorted = 1;
   view.packed = 1;
-  m->updatable = updatable;
-  if (updatable) {
-    m->common.supernodal = CHOLMOD_SIMPLICIAL;
-    m->common.final_ll = 0; // LDL^T: what cholmod_updown works on
-  }
+  m->common.supernodal = CHOLMOD_SIMPLICIAL;
+  m->common.final_ll = 0; // LDL^T: what cholmod_updown works on
   m->factor = cholmod_analyze(&view, &m->common);
   if (m->factor == nullptr) throw std::runtime_error("sparse Cholesky: the analysis failed");
   cholmod_factorize(&view, m->factor, &m->common);
@@ -124,7 +118,6 @@ void SparseCholesky::solve(const Eigen::MatrixX3d& b, Eigen::MatrixX3d& x) {
 }
 
 void SparseCholesky::update_diagonal(const std::vector<std::pair<int, double>>& changes) {
-  if (!m->updatable) throw std::logic_error("sparse Cholesky: this factor was not made updatable");
   m->apply(changes, +1); // updates first: the matrix stays positive definite in between
   m->apply(changes, -1);
 }

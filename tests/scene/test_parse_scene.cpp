@@ -252,17 +252,18 @@ TEST(ParseScene, AcquiredVoxelSizeIsOneWayAndNoFinerThanTheGrid) {
       << message;
 }
 
-TEST(ParseScene, SolversNotAvailableInThisVersionAreRejectedAtTheirLine) {
+TEST(ParseScene, PositionBasedSolversInAQuasiStaticSceneAreRejectedAtTheirLine) {
   const std::string message =
       only_problem(k_minimal + "deformation: {mode: quasi_static, solver: {method: xpbd}}\n");
   EXPECT_NE(message.find("scene.yaml:13:"), std::string::npos) << message;
-  EXPECT_NE(
-      message.find("deformation.solver.method: expected local_global, jacobi_chebyshev or newton (xpbd is "
-                   "part of the format but not available in this version), found xpbd"),
-      std::string::npos)
+  EXPECT_NE(message.find("deformation.solver.method: expected local_global, jacobi_chebyshev or newton for a "
+                         "quasi_static scene (xpbd steps in time: it needs mode dynamic), found xpbd"),
+            std::string::npos)
       << message;
   EXPECT_TRUE(
       parse(k_minimal + "deformation: {mode: quasi_static, solver: {method: jacobi_chebyshev}}\n").scene);
+  EXPECT_TRUE(parse(k_minimal + "deformation: {mode: dynamic, solver: {method: xpbd}}\n").scene);
+  EXPECT_TRUE(parse(k_minimal + "deformation: {mode: dynamic, solver: {method: gauss_seidel_pbd}}\n").scene);
 }
 
 TEST(ParseScene, ObstaclesAreReadWithTheirShapeKeysAndChecked) {

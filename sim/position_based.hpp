@@ -1,0 +1,35 @@
+#pragma once
+
+#include "sim/elastic_model.hpp"
+#include "sim/solve_report.hpp"
+
+namespace phantasm {
+
+/// Position-based solvers of one dynamic step (METHOD.md section 4) on the constraints of an
+/// ElasticModel: per tet its strain and volume constraints C = |F - P(F)| (the distance of the
+/// deformation gradient to its set, so w/2 C^2 is the model's energy term), per point constraint
+/// C = |b . x - t|, per free vertex and obstacle it is inside C = its depth. One iteration is one
+/// Gauss-Seidel sweep over them in a fixed order (deterministic, one thread), starting from p.
+enum class PositionBasedVariant {
+  /// XPBD (Macklin et al. 2016): compliance alpha = 1/w, dlambda = (-C - alpha~ lambda) /
+  /// (sum_k |grad_k C|^2 / m_k + alpha~), alpha~ = alpha / h^2. Its fixed point is the minimizer
+  /// of the step's energy, the one local/global and Newton reach.
+  xpbd,
+  /// Gauss-Seidel PBD: every constraint projected in turn, dx_k = -C grad_k C / m_k /
+  /// sum_j |grad_j C|^2 / m_j, whatever its stiffness (hard constraints). It converges to a
+  /// point of every set when they intersect, not to the minimizer of the energy.
+  gauss_seidel_pbd,
+};
+
+/// Iterates until a stop criterion holds (the position change of a sweep, the absolute change of
+/// E between sweeps relative to E (E is not monotone here), or the iteration limit); p is
+/// replaced by the result. E is evaluated after every sweep for the stop test and the report
+/// but, like an observer, not counted in the solver's time. External forces act through the
+/// inertial target (s + h^2 M^-1 f).
+/// @throws std::invalid_argument for a quasi-static step (inertia.weight 0): position-based
+///         methods step in time
+SolveReport position_based_solve(PositionBasedVariant variant, const ElasticModel& model,
+                                 const StepInertia& inertia, Eigen::MatrixX3d& p, const StopCriteria& stop,
+                                 bool record_energies = false, const IterationObserver& observer = {});
+
+} // namespace phantasm
