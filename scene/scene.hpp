@@ -63,6 +63,7 @@ struct OrganSettings {
   bool solid = true;           ///< true: tetrahedralized interior; false: surface (shell, sheet) only
   int base_mesh_triangles = 0; ///< this organ's patch base size; 0 = anatomy.base_mesh_triangles
   ShapeSettings shape;
+  double thickness_mm = 1.0; ///< surface organs (solid: false) simulated as shells: wall thickness
 };
 
 struct AnatomySettings {

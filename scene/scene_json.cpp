@@ -30,10 +30,14 @@ nlohmann::json organ_json(const OrganSettings& organ) {
     shape["file"] = organ.shape.file.string();
     if (organ.shape.kind == ShapeKind::label_volume) shape["label"] = organ.shape.label;
   }
-  return {
-      {"name", organ.name},     {"tissue", organ.tissue}, {"material", organ.material},
-      {"inside", organ.inside}, {"solid", organ.solid},   {"base_mesh_triangles", organ.base_mesh_triangles},
-      {"shape", shape}};
+  return {{"name", organ.name},
+          {"tissue", organ.tissue},
+          {"material", organ.material},
+          {"inside", organ.inside},
+          {"solid", organ.solid},
+          {"thickness_mm", organ.thickness_mm},
+          {"base_mesh_triangles", organ.base_mesh_triangles},
+          {"shape", shape}};
 }
 
 nlohmann::json load_json(const LoadSettings& load) {

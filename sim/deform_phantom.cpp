@@ -87,8 +87,17 @@ double profile(MotionProfile motion, double period_s, double t) {
 struct Body {
   int organ = -1;
   int first_vertex = 0;
-  std::unique_ptr<TetLocator> locator;
+  Eigen::Index vertex_count = 0;
+  std::unique_ptr<TetLocator> locator; ///< solids only
+  bool shell = false;                  ///< a surface organ: its triangles carry the load
 };
+
+/// The triangles a surface organ is simulated with: its sheet, or its patch base mesh.
+const TriangleMesh* shell_mesh(const Organ& organ) {
+  if (organ.sheet) return &*organ.sheet;
+  if (organ.surface) return &organ.surface->base_mesh();
+  return nullptr;
+}
 
 /// A displacement load's springs: which model point constraints, and their rest targets (m).
 struct PushedPoints {
@@ -119,13 +128,23 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
       if (j != static_cast<int>(i)) ++depth[i];
     }
   }
+  // A surface organ (no tet mesh) is simulated as a shell of its triangles; organs nested in it
+  // have nothing to follow (no interior) and stay in place.
   for (std::size_t b = 0; b < n; ++b) {
     if (body_of[b] != static_cast<int>(b) || phantom.organs[b].solid) continue;
-    report.skipped.push_back(settings[b].name +
-                             ": a load acts on it but it has no tet mesh (solid: false); it and the organs "
-                             "nested in it stay in place");
-    for (std::size_t i = 0; i < n; ++i)
-      if (body_of[i] == static_cast<int>(b)) body_of[i] = -1;
+    if (shell_mesh(phantom.organs[b]) == nullptr) {
+      report.skipped.push_back(settings[b].name +
+                               ": a load acts on it but it has neither tets nor triangles");
+      for (std::size_t i = 0; i < n; ++i)
+        if (body_of[i] == static_cast<int>(b)) body_of[i] = -1;
+      continue;
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      if (i == b || body_of[i] != static_cast<int>(b)) continue;
+      body_of[i] = -1;
+      report.skipped.push_back(settings[i].name + ": inside the shell " + settings[b].name +
+                               ", which has no interior to carry it; it stays in place");
+    }
   }
 
   ElasticModel model;
@@ -134,6 +153,27 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
   for (std::size_t b = 0; b < n; ++b) {
     if (body_of[b] != static_cast<int>(b)) continue;
     const Organ& organ = phantom.organs[b];
+    if (!organ.solid) {
+      const TriangleMesh& sheet = *shell_mesh(organ);
+      const MaterialSettings* material = scene.find_material(settings[b].material);
+      if (material == nullptr)
+        throw InputError(settings[b].name + ": material '" + settings[b].material + "' is not defined");
+      Body body;
+      body.organ = static_cast<int>(b);
+      body.shell = true;
+      body.vertex_count = sheet.vertices.rows();
+      body.first_vertex =
+          add_sheet(model, k_mm * sheet.vertices, sheet.faces, material->youngs_modulus_Pa,
+                    material->poisson_ratio, material->density_kg_m3, k_mm * settings[b].thickness_mm);
+      report.modelled.push_back(
+          settings[b].name + ": solved as a shell of " + std::to_string(sheet.vertices.rows()) +
+          " vertices and " + std::to_string(sheet.faces.rows()) + " triangles (" +
+          format_number(settings[b].thickness_mm) +
+          " mm thick: as-rigid-as-possible membrane per triangle, bending per interior edge "
+          "toward its rest curvature)");
+      bodies.push_back(std::move(body));
+      continue;
+    }
     const TetMesh& mesh = *organ.solid;
     // Each tet takes the material of the innermost organ of this body holding its centroid.
     std::vector<TetMaterial> materials;
@@ -161,6 +201,7 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
     Body body;
     body.organ = static_cast<int>(b);
     body.first_vertex = add_body(model, k_mm * mesh.vertices, mesh.tets, materials);
+    body.vertex_count = mesh.vertices.rows();
     body.locator = std::make_unique<TetLocator>(mesh.vertices, mesh.tets, body.first_vertex);
     std::ostringstream line;
     line << settings[b].name << ": solved as one body of " << mesh.vertices.rows() << " vertices and "
@@ -186,7 +227,7 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
   }
   PhantomDeformation result;
   if (bodies.empty()) {
-    report.skipped.push_back("the solve: no organ with a tet mesh is moved by a load");
+    report.skipped.push_back("the solve: no organ is moved by a load");
   }
 
   auto body_index = [&](int organ) {
@@ -198,6 +239,11 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
   auto embed = [&](std::size_t i, Eigen::Index surface_vertex, const Eigen::Vector3d& x_mm) {
     const Body& body = bodies[static_cast<std::size_t>(body_index(body_of[i]))];
     Embedding e;
+    if (body.shell) { // the shell's own vertices (nothing else is embedded in a shell)
+      e.vertices = {body.first_vertex + static_cast<int>(surface_vertex), 0, 0, 0};
+      e.coefficients = Eigen::Vector4d(1, 0, 0, 0);
+      return e;
+    }
     if (static_cast<int>(i) == body.organ &&
         phantom.organs[i].tet_vertex_of_surface_vertex.size() > surface_vertex) {
       e.vertices = {body.first_vertex + phantom.organs[i].tet_vertex_of_surface_vertex[surface_vertex], 0, 0,
@@ -215,6 +261,8 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
     double diagonal = 0.0;
     for (const TetElement& e : model.tets)
       diagonal += (e.strain_weight + e.volume_weight) * e.Q.squaredNorm();
+    for (const SurfaceElement& e : model.surfaces)
+      diagonal += e.weight * e.Q.squaredNorm();
     return model.vertex_count() > 0 ? diagonal / static_cast<double>(model.vertex_count()) : 0.0;
   }();
   for (const LoadSettings& load : scene.deformation.loads) {
@@ -226,23 +274,23 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
               std::find(load.organs.begin(), load.organs.end(), settings[i].name) != load.organs.end())
             acts = true;
         if (!acts) continue;
-        const Eigen::Index count =
-            phantom.organs[static_cast<std::size_t>(body.organ)].solid->vertices.rows();
-        acceleration.middleRows(body.first_vertex, count).rowwise() = load.acceleration_m_s2.transpose();
+        acceleration.middleRows(body.first_vertex, body.vertex_count).rowwise() =
+            load.acceleration_m_s2.transpose();
       }
       report.modelled.push_back("gravity " + format_vector(load.acceleration_m_s2) +
                                 " m/s^2 on the bodies' lumped masses");
       continue;
     }
     const std::size_t i = static_cast<std::size_t>(index.at(load.organ));
-    if (body_of[i] < 0 || !phantom.organs[i].surface) {
+    if (body_of[i] < 0 || (!phantom.organs[i].surface && !phantom.organs[i].sheet)) {
       report.skipped.push_back("displacement of " + load.organ +
                                ": the organ is not part of a simulated body");
       continue;
     }
     PushedPoints push;
     push.load = &load;
-    const Eigen::MatrixX3d& rest = phantom.organs[i].surface->rest_positions();
+    const Eigen::MatrixX3d& rest = phantom.organs[i].surface ? phantom.organs[i].surface->rest_positions()
+                                                             : phantom.organs[i].sheet->vertices;
     const double stiffness = 1e4 * nominal_stiffness;
     for (Eigen::Index v = 0; v < rest.rows(); ++v) {
       const Eigen::Vector3d x = rest.row(v).transpose();
@@ -435,6 +483,7 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
   // Every organ's vertices.
   const Eigen::MatrixX3d deformed_mm = p / k_mm;
   for (const Body& body : bodies) {
+    if (body.shell) continue; // the displacement fields come from solids' tets
     const TetMesh& mesh = *phantom.organs[static_cast<std::size_t>(body.organ)].solid;
     result.bodies.push_back({settings[static_cast<std::size_t>(body.organ)].name, mesh.vertices,
                              deformed_mm.middleRows(body.first_vertex, mesh.vertices.rows()), mesh.tets});

@@ -1,6 +1,9 @@
 #include "sim/elastic_model.hpp"
 
+#include <cmath>
+#include <map>
 #include <stdexcept>
+#include <vector>
 
 namespace phantasm {
 
@@ -15,10 +18,10 @@ int add_body(ElasticModel& model, const Eigen::MatrixX3d& rest_m, const Eigen::M
       std::vector<TetMaterial>(static_cast<std::size_t>(tets.rows()), TetMaterial{material, density_kg_m3}));
 }
 
-int add_body(ElasticModel& model, const Eigen::MatrixX3d& rest_m, const Eigen::MatrixX4i& tets,
-             const std::vector<TetMaterial>& materials) {
-  if (materials.size() != static_cast<std::size_t>(tets.rows()))
-    throw std::invalid_argument("add_body: expected one material per tet");
+namespace {
+
+/// Appends free vertices without mass; returns the index of the first.
+int append_vertices(ElasticModel& model, const Eigen::MatrixX3d& rest_m) {
   const auto first_vertex = static_cast<int>(model.rest_positions_m.rows());
   const Eigen::Index total = first_vertex + rest_m.rows();
   model.rest_positions_m.conservativeResize(total, 3);
@@ -26,6 +29,16 @@ int add_body(ElasticModel& model, const Eigen::MatrixX3d& rest_m, const Eigen::M
   model.masses_kg.conservativeResize(total);
   model.masses_kg.tail(rest_m.rows()).setZero();
   model.fixed.resize(static_cast<std::size_t>(total), 0);
+  return first_vertex;
+}
+
+} // namespace
+
+int add_body(ElasticModel& model, const Eigen::MatrixX3d& rest_m, const Eigen::MatrixX4i& tets,
+             const std::vector<TetMaterial>& materials) {
+  if (materials.size() != static_cast<std::size_t>(tets.rows()))
+    throw std::invalid_argument("add_body: expected one material per tet");
+  const int first_vertex = append_vertices(model, rest_m);
   Eigen::Matrix<double, 4, 3> selector;
   selector << -1, -1, -1, 1, 0, 0, 0, 1, 0, 0, 0, 1;
   for (Eigen::Index t = 0; t < tets.rows(); ++t) {
@@ -57,6 +70,34 @@ Eigen::Matrix3d deformation_gradient(const TetElement& e, const Eigen::MatrixX3d
   for (int k = 0; k < 4; ++k)
     X.col(k) = p.row(e.vertices[static_cast<std::size_t>(k)]).transpose();
   return X * e.Q;
+}
+
+int add_sheet(ElasticModel& model, const Eigen::MatrixX3d& rest_m, const Eigen::MatrixX3i& faces,
+              double youngs_modulus_Pa, double poisson_ratio, double density_kg_m3, double thickness_m) {
+  const int first_vertex = append_vertices(model, rest_m);
+  const LameParameters lame = lame_parameters(youngs_modulus_Pa, poisson_ratio);
+  const double bending_stiffness =
+      youngs_modulus_Pa * std::pow(thickness_m, 3) / (12.0 * (1.0 - poisson_ratio * poisson_ratio));
+  // Interior edges: the two triangles sharing each (sorted) edge, and their opposite vertices.
+  std::map<std::pair<int, int>, std::vector<std::pair<Eigen::Index, int>>> edges;
+  for (Eigen::Index f = 0; f < faces.rows(); ++f) {
+    const std::array<int, 3> v = {first_vertex + faces(f, 0), first_vertex + faces(f, 1),
+                                  first_vertex + faces(f, 2)};
+    SurfaceElement triangle = triangle_strain_element(v, model.rest_positions_m, lame.mu * thickness_m);
+    const double area = triangle.weight / (2.0 * lame.mu * thickness_m);
+    for (int k = 0; k < 3; ++k) {
+      model.masses_kg[v[static_cast<std::size_t>(k)]] += density_kg_m3 * thickness_m * area / 3.0;
+      const int a = v[static_cast<std::size_t>(k)], b = v[static_cast<std::size_t>((k + 1) % 3)];
+      edges[{std::min(a, b), std::max(a, b)}].emplace_back(f, v[static_cast<std::size_t>((k + 2) % 3)]);
+    }
+    model.surfaces.push_back(triangle);
+  }
+  for (const auto& [edge, sides] : edges) {
+    if (sides.size() != 2) continue; // a boundary (or non-manifold) edge does not bend
+    model.surfaces.push_back(bending_element({edge.first, edge.second, sides[0].second, sides[1].second},
+                                             model.rest_positions_m, bending_stiffness));
+  }
+  return first_vertex;
 }
 
 namespace {
@@ -95,6 +136,10 @@ double model_energy(const ElasticModel& model, const StepInertia& inertia, const
     tet_stress(model, e, deformation_gradient(e, p), &tet);
     energy += tet;
   }
+  for (const SurfaceElement& e : model.surfaces) {
+    const SurfaceMatrix F = surface_deformation(e, p);
+    energy += 0.5 * e.weight * (F - project_surface(e, F)).squaredNorm(); // unused columns are 0
+  }
   for (const PointConstraint& c : model.points)
     energy += 0.5 * c.stiffness_N_m * (point_of(c, p) - c.target_m).squaredNorm();
   if (!model.obstacles.empty()) {
@@ -117,6 +162,13 @@ Eigen::MatrixX3d model_gradient(const ElasticModel& model, const StepInertia& in
     const Eigen::Matrix<double, 3, 4> forces = P * e.Q.transpose();
     for (int k = 0; k < 4; ++k)
       g.row(e.vertices[static_cast<std::size_t>(k)]) += forces.col(k).transpose();
+  }
+  for (const SurfaceElement& e : model.surfaces) {
+    // d/dX w/2 |F - P(F)|^2 = w (F - P(F)) Q^T (the distance to a set: envelope theorem).
+    const SurfaceMatrix F = surface_deformation(e, p);
+    const SurfaceMatrix stress = e.weight * (F - project_surface(e, F));
+    for (int k = 0; k < e.count; ++k)
+      g.row(e.vertices[static_cast<std::size_t>(k)]) += (stress * e.Q.row(k).transpose()).transpose();
   }
   for (const PointConstraint& c : model.points) {
     const Eigen::Vector3d r = c.stiffness_N_m * (point_of(c, p) - c.target_m);

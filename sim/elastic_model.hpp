@@ -1,6 +1,7 @@
 #pragma once
 
 #include "sim/obstacles.hpp"
+#include "sim/surface_constraints.hpp"
 #include "sim/tet_constraints.hpp"
 
 #include <Eigen/Core>
@@ -36,15 +37,17 @@ struct PointConstraint {
 /// constraints, vertices held in place (Dirichlet: the solvers never move them), and external
 /// forces. The objective of one step (METHOD.md section 2) is
 ///   E(p) = a/2 (p - s)^T M (p - s) - f . p + sum_tets [ws/2 |F - P_strain(F)|^2 + wv/2 |F - P_volume(F)|^2]
-///          + sum_points k/2 |b . x - t|^2 + sum_free vertices sum_obstacles kc/2 dist(x, allowed)^2
+///          + sum_surfaces w/2 |F - P(F)|^2 + sum_points k/2 |b . x - t|^2
+///          + sum_free vertices sum_obstacles kc/2 dist(x, allowed)^2
 /// with a = 1/h^2 for a dynamic step (s the inertial target, gravity folded into s, f = 0) and
 /// a = 0 for quasi-static equilibrium (f the external forces).
 struct ElasticModel {
   Eigen::MatrixX3d rest_positions_m;
   Eigen::VectorXd masses_kg;
   std::vector<TetElement> tets;
-  SingularValueRange strain_range; ///< {1, 1}: as-rigid-as-possible
-  SingularValueRange volume_range; ///< {1, 1}: volume preserving
+  SingularValueRange strain_range;      ///< {1, 1}: as-rigid-as-possible
+  SingularValueRange volume_range;      ///< {1, 1}: volume preserving
+  std::vector<SurfaceElement> surfaces; ///< edge, triangle and bending constraints (sheets)
   std::vector<PointConstraint> points;
   std::vector<char> fixed;            ///< per vertex: held where the solver finds it
   Eigen::MatrixX3d external_forces_N; ///< per vertex; may be empty (no force)
@@ -71,6 +74,15 @@ LameParameters lame_parameters(double youngs_modulus_Pa, double poisson_ratio);
 /// @throws std::invalid_argument for a tet with non-positive rest volume
 int add_body(ElasticModel& model, const Eigen::MatrixX3d& rest_m, const Eigen::MatrixX4i& tets,
              const LameParameters& material, double density_kg_m3);
+
+/// Appends an open triangle sheet (a membrane of thickness t, e.g. fabric or a thin organ wall)
+/// as a body of its own: per triangle an as-rigid-as-possible strain constraint of weight
+/// 2 mu t A, per interior edge a bending constraint of stiffness E t^3 / (12 (1 - nu^2)) toward
+/// its rest curvature, and lumped masses (a third of each triangle's mass per vertex). Returns
+/// the model index of the sheet's first vertex.
+/// @throws std::invalid_argument for a degenerate triangle
+int add_sheet(ElasticModel& model, const Eigen::MatrixX3d& rest_m, const Eigen::MatrixX3i& faces,
+              double youngs_modulus_Pa, double poisson_ratio, double density_kg_m3, double thickness_m);
 
 /// The material of one tet.
 struct TetMaterial {

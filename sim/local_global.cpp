@@ -32,8 +32,11 @@ struct LocalGlobalSolver::Impl {
   std::vector<Eigen::Quaterniond> rotations, eigenvectors;
   std::vector<Eigen::Matrix3d> projections;
   std::vector<double> tet_energies;
-  // Per vertex (CSR): the tets (index, corner) and point constraints (index, corner) using it.
-  std::vector<int> tet_offsets, tet_entries, point_offsets, point_entries;
+  // Per surface element: w P(F), and its energy.
+  std::vector<SurfaceMatrix> surface_projections;
+  std::vector<double> surface_energies;
+  // Per vertex (CSR): the tets, surface elements and point constraints (index, corner) using it.
+  std::vector<int> tet_offsets, tet_entries, surface_offsets, surface_entries, point_offsets, point_entries;
   Eigen::MatrixX3d rhs, coupling_rhs, solution;
 
   /// The residual (the gradient K x - b(x) of the free vertices, with b from the projections
@@ -94,6 +97,13 @@ struct LocalGlobalSolver::Impl {
         tet_offsets, tet_entries);
     build(
         [&](auto&& use) {
+          for (std::size_t s = 0; s < model.surfaces.size(); ++s)
+            for (int k = 0; k < model.surfaces[s].count; ++k)
+              use(model.surfaces[s].vertices[static_cast<std::size_t>(k)], static_cast<int>(s), k);
+        },
+        surface_offsets, surface_entries);
+    build(
+        [&](auto&& use) {
           for (std::size_t c = 0; c < model.points.size(); ++c)
             for (int k = 0; k < model.points[c].count; ++k)
               use(model.points[c].vertices[static_cast<std::size_t>(k)], static_cast<int>(c), k);
@@ -129,6 +139,12 @@ struct LocalGlobalSolver::Impl {
       const Eigen::Matrix4d L = (e.strain_weight + e.volume_weight) * e.Q * e.Q.transpose();
       for (int a = 0; a < 4; ++a)
         for (int b = 0; b < 4; ++b)
+          add(e.vertices[static_cast<std::size_t>(a)], e.vertices[static_cast<std::size_t>(b)], L(a, b));
+    }
+    for (const SurfaceElement& e : model.surfaces) {
+      const Eigen::Matrix4d L = e.weight * e.Q * e.Q.transpose();
+      for (int a = 0; a < e.count; ++a)
+        for (int b = 0; b < e.count; ++b)
           add(e.vertices[static_cast<std::size_t>(a)], e.vertices[static_cast<std::size_t>(b)], L(a, b));
     }
     for (const PointConstraint& c : model.points) {
@@ -173,6 +189,9 @@ struct LocalGlobalSolver::Impl {
     for (const TetElement& e : model.tets)
       for (int k = 1; k < 4; ++k)
         parent[static_cast<std::size_t>(find(e.vertices[static_cast<std::size_t>(k)]))] = find(e.vertices[0]);
+    for (const SurfaceElement& e : model.surfaces)
+      for (int k = 1; k < e.count; ++k)
+        parent[static_cast<std::size_t>(find(e.vertices[static_cast<std::size_t>(k)]))] = find(e.vertices[0]);
     std::vector<char> held(parent.size(), 0);
     for (std::size_t v = 0; v < parent.size(); ++v)
       if (!model.fixed.empty() && model.fixed[v])
@@ -211,10 +230,21 @@ struct LocalGlobalSolver::Impl {
           0.5 * (e.strain_weight * (svd.sigma - strain).squaredNorm() +
                  e.volume_weight * (svd.sigma - volume).squaredNorm());
     }
-    // Summed in tet order, not by a parallel reduction: the energy, and so every stop decision,
-    // is the same for any number of threads.
+    const auto surface_count = static_cast<std::ptrdiff_t>(model.surfaces.size());
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 256)
+    for (std::ptrdiff_t s = 0; s < surface_count; ++s) {
+      const SurfaceElement& e = model.surfaces[static_cast<std::size_t>(s)];
+      const SurfaceMatrix F = surface_deformation(e, p);
+      const SurfaceMatrix T = project_surface(e, F);
+      surface_projections[static_cast<std::size_t>(s)] = e.weight * T;
+      surface_energies[static_cast<std::size_t>(s)] = 0.5 * e.weight * (F - T).squaredNorm();
+    }
+    // Summed in element order, not by a parallel reduction: the energy, and so every stop
+    // decision, is the same for any number of threads.
     double energy = 0.0;
     for (double e : tet_energies)
+      energy += e;
+    for (double e : surface_energies)
       energy += e;
     if (alpha > 0.0) { // over every vertex, as model_energy (fixed ones add a constant)
       for (Eigen::Index v = 0; v < p.rows(); ++v)
@@ -313,6 +343,11 @@ struct LocalGlobalSolver::Impl {
         const int corner = tet_entries[2 * static_cast<std::size_t>(i) + 1];
         r.noalias() += model.tets[t].Q.row(corner) * projections[t];
       }
+      for (int i = surface_offsets[v]; i < surface_offsets[v + 1]; ++i) {
+        const auto s = static_cast<std::size_t>(surface_entries[2 * static_cast<std::size_t>(i)]);
+        const int corner = surface_entries[2 * static_cast<std::size_t>(i) + 1];
+        r.noalias() += (surface_projections[s] * model.surfaces[s].Q.row(corner).transpose()).transpose();
+      }
       for (int i = point_offsets[v]; i < point_offsets[v + 1]; ++i) {
         const PointConstraint& c =
             model.points[static_cast<std::size_t>(point_entries[2 * static_cast<std::size_t>(i)])];
@@ -334,6 +369,8 @@ LocalGlobalSolver::LocalGlobalSolver(const ElasticModel& model, double inertia_w
   m->eigenvectors.assign(model.tets.size(), Eigen::Quaterniond::Identity());
   m->projections.assign(model.tets.size(), Eigen::Matrix3d::Zero());
   m->tet_energies.assign(model.tets.size(), 0.0);
+  m->surface_projections.assign(model.surfaces.size(), SurfaceMatrix::Zero());
+  m->surface_energies.assign(model.surfaces.size(), 0.0);
   m->build_adjacency();
   m->assemble_and_factor();
 }

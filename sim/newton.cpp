@@ -47,6 +47,16 @@ Eigen::SparseMatrix<double> assemble_hessian(const ElasticModel& model, const St
         add_block(e.vertices[static_cast<std::size_t>(a)], e.vertices[static_cast<std::size_t>(b)],
                   H.block<3, 3>(3 * a, 3 * b));
   }
+  // Surface elements: the Gauss-Newton matrix w Q Q^T (x) I, positive semi-definite (their
+  // exact Hessians, through the 3x2 SVD and the bending projection, are not formed): Newton
+  // then converges linearly on sheets, still to the same minimizer.
+  for (const SurfaceElement& e : model.surfaces) {
+    const Eigen::Matrix4d L = e.weight * e.Q * e.Q.transpose();
+    for (int a = 0; a < e.count; ++a)
+      for (int b = 0; b < e.count; ++b)
+        add_block(e.vertices[static_cast<std::size_t>(a)], e.vertices[static_cast<std::size_t>(b)],
+                  L(a, b) * Eigen::Matrix3d::Identity());
+  }
   if (!model.obstacles.empty()) {
     for (Eigen::Index v = 0; v < model.vertex_count(); ++v)
       add_block(static_cast<int>(v), static_cast<int>(v),

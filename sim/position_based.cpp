@@ -24,7 +24,8 @@ public:
       : m_variant(variant), m_model(model), m_alpha_scale(inertia_weight),
         m_rotations(2 * model.tets.size(), Eigen::Quaterniond::Identity()),
         m_eigenvectors(2 * model.tets.size(), Eigen::Quaterniond::Identity()),
-        m_tet_lambda(2 * model.tets.size(), 0.0), m_point_lambda(model.points.size(), 0.0),
+        m_tet_lambda(2 * model.tets.size(), 0.0), m_surface_lambda(model.surfaces.size(), 0.0),
+        m_point_lambda(model.points.size(), 0.0),
         m_inverse_mass(static_cast<std::size_t>(model.vertex_count()), 0.0) {
     for (Eigen::Index v = 0; v < model.vertex_count(); ++v) {
       const bool fixed = !model.fixed.empty() && model.fixed[static_cast<std::size_t>(v)];
@@ -45,6 +46,21 @@ public:
       if (e.volume_weight > 0.0)
         apply(tet_constraint(e, t, TetConstraintKind::volume, p), e.volume_weight, m_tet_lambda[2 * t + 1],
               p);
+    }
+    for (std::size_t s = 0; s < m_model.surfaces.size(); ++s) {
+      const SurfaceElement& e = m_model.surfaces[s];
+      const SurfaceMatrix F = surface_deformation(e, p);
+      const SurfaceMatrix d = F - project_surface(e, F);
+      Linearized l;
+      l.value = d.norm();
+      if (l.value > 0.0) {
+        l.count = e.count;
+        for (int k = 0; k < e.count; ++k) {
+          l.vertices[static_cast<std::size_t>(k)] = e.vertices[static_cast<std::size_t>(k)];
+          l.gradients[static_cast<std::size_t>(k)] = d * e.Q.row(k).transpose() / l.value;
+        }
+      }
+      apply(l, e.weight, m_surface_lambda[s], p);
     }
     for (std::size_t c = 0; c < m_model.points.size(); ++c) {
       const PointConstraint& point = m_model.points[c];
@@ -140,7 +156,7 @@ private:
   const ElasticModel& m_model;
   double m_alpha_scale; ///< 1/h^2
   std::vector<Eigen::Quaterniond> m_rotations, m_eigenvectors;
-  std::vector<double> m_tet_lambda, m_point_lambda, m_contact_lambda;
+  std::vector<double> m_tet_lambda, m_surface_lambda, m_point_lambda, m_contact_lambda;
   std::vector<double> m_inverse_mass;
 };
 

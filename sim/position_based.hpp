@@ -6,10 +6,11 @@
 namespace phantasm {
 
 /// Position-based solvers of one dynamic step (METHOD.md section 4) on the constraints of an
-/// ElasticModel: per tet its strain and volume constraints C = |F - P(F)| (the distance of the
-/// deformation gradient to its set, so w/2 C^2 is the model's energy term), per point constraint
-/// C = |b . x - t|, per free vertex and obstacle it is inside C = its depth. One iteration is one
-/// Gauss-Seidel sweep over them in a fixed order (deterministic, one thread), starting from p.
+/// ElasticModel: per tet its strain and volume constraints and per surface element its
+/// constraint as C = |F - P(F)| (the distance of F to its set, so w/2 C^2 is the model's energy
+/// term), per point constraint C = |b . x - t|, per free vertex and obstacle it is inside C = its depth. One
+/// iteration is one Gauss-Seidel sweep over them in a fixed order (deterministic, one thread), starting from
+/// p.
 enum class PositionBasedVariant {
   /// XPBD (Macklin et al. 2016): compliance alpha = 1/w, dlambda = (-C - alpha~ lambda) /
   /// (sum_k |grad_k C|^2 / m_k + alpha~), alpha~ = alpha / h^2. Its fixed point is the minimizer
