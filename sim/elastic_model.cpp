@@ -85,6 +85,12 @@ int add_sheet(ElasticModel& model, const Eigen::MatrixX3d& rest_m, const Eigen::
                                   first_vertex + faces(f, 2)};
     SurfaceElement triangle = triangle_strain_element(v, model.rest_positions_m, lame.mu * thickness_m);
     const double area = triangle.weight / (2.0 * lame.mu * thickness_m);
+    // Plane stress: lambda* = 2 lambda mu / (lambda + 2 mu); the distance of the singular values
+    // to product 1 is |tr e| / sqrt 2, so weight 2 lambda* t A gives lambda*/2 (tr e)^2 t A.
+    const double plane_lambda = 2.0 * lame.lambda * lame.mu / (lame.lambda + 2.0 * lame.mu);
+    if (plane_lambda > 0.0)
+      model.surfaces.push_back(
+          triangle_area_element(v, model.rest_positions_m, 2.0 * plane_lambda * thickness_m * area));
     for (int k = 0; k < 3; ++k) {
       model.masses_kg[v[static_cast<std::size_t>(k)]] += density_kg_m3 * thickness_m * area / 3.0;
       const int a = v[static_cast<std::size_t>(k)], b = v[static_cast<std::size_t>((k + 1) % 3)];

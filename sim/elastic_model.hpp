@@ -77,9 +77,10 @@ int add_body(ElasticModel& model, const Eigen::MatrixX3d& rest_m, const Eigen::M
 
 /// Appends an open triangle sheet (a membrane of thickness t, e.g. fabric or a thin organ wall)
 /// as a body of its own: per triangle an as-rigid-as-possible strain constraint of weight
-/// 2 mu t A, per interior edge a bending constraint of stiffness E t^3 / (12 (1 - nu^2)) toward
-/// its rest curvature, and lumped masses (a third of each triangle's mass per vertex). Returns
-/// the model index of the sheet's first vertex.
+/// 2 mu t A and an area constraint of weight 2 lambda* t A (lambda* = 2 lambda mu / (lambda +
+/// 2 mu), plane stress: together the linear membrane energy for small strains), per interior edge a bending
+/// constraint of stiffness E t^3 / (12 (1 - nu^2)) toward its rest curvature, and lumped masses (a third of
+/// each triangle's mass per vertex). Returns the model index of the sheet's first vertex.
 /// @throws std::invalid_argument for a degenerate triangle
 int add_sheet(ElasticModel& model, const Eigen::MatrixX3d& rest_m, const Eigen::MatrixX3i& faces,
               double youngs_modulus_Pa, double poisson_ratio, double density_kg_m3, double thickness_m);

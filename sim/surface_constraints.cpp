@@ -29,28 +29,33 @@ Eigen::Vector3d clamp_length(const Eigen::Vector3d& f, double reference, const S
   return target * direction;
 }
 
-/// Singular values of the 3x2 matrix F clamped to the range: T = sum_i s*_i u_i v_i^T from the
-/// closed-form eigen-decomposition of F^T F. Where a singular value vanishes its left vector
-/// is any unit vector perpendicular to the other, so T stays in the set.
-SurfaceMatrix clamp_singular_values(const SurfaceMatrix& F, const SingularValueRange& range) {
+/// The SVD of a 3x2 matrix, F = s1 u1 v1^T + s2 u2 v2^T (s1 >= s2 >= 0), from the closed-form
+/// eigen-decomposition of F^T F. Where a singular value vanishes its left vector is any unit
+/// vector perpendicular to the other, so targets built from it stay in their sets.
+struct ThinSvd {
+  Eigen::Vector3d u1, u2;
+  Eigen::Vector2d v1, v2, s;
+};
+
+ThinSvd thin_svd(const SurfaceMatrix& F) {
   const Eigen::Matrix2d C = F.transpose() * F;
   const double half_trace = 0.5 * (C(0, 0) + C(1, 1));
   const double half_difference = 0.5 * (C(0, 0) - C(1, 1));
   const double radius = std::hypot(half_difference, C(0, 1));
-  const double l1 = half_trace + radius, l2 = std::max(0.0, half_trace - radius);
   // Eigenvector of the larger eigenvalue: (cos t, sin t) with tan 2t = 2 C01 / (C00 - C11).
   const double angle = 0.5 * std::atan2(C(0, 1), half_difference);
-  const Eigen::Vector2d v1(std::cos(angle), std::sin(angle)), v2(-v1.y(), v1.x());
-  const double s1 = std::sqrt(std::max(l1, 0.0)), s2 = std::sqrt(l2);
-  const Eigen::Vector3d u1 = s1 > 0.0 ? Eigen::Vector3d(F * v1 / s1) : Eigen::Vector3d::UnitX();
-  Eigen::Vector3d u2;
-  if (s2 > 1e-8 * s1) {
-    u2 = F * v2 / s2;
-  } else {
-    u2 = perpendicular(u1);
-  }
-  const double t1 = std::clamp(s1, range.min, range.max), t2 = std::clamp(s2, range.min, range.max);
-  return t1 * u1 * v1.transpose() + t2 * u2 * v2.transpose();
+  ThinSvd svd;
+  svd.v1 = Eigen::Vector2d(std::cos(angle), std::sin(angle));
+  svd.v2 = Eigen::Vector2d(-svd.v1.y(), svd.v1.x());
+  svd.s = Eigen::Vector2d(std::sqrt(std::max(half_trace + radius, 0.0)),
+                          std::sqrt(std::max(half_trace - radius, 0.0)));
+  svd.u1 = svd.s[0] > 0.0 ? Eigen::Vector3d(F * svd.v1 / svd.s[0]) : Eigen::Vector3d::UnitX();
+  svd.u2 = svd.s[1] > 1e-8 * svd.s[0] ? Eigen::Vector3d(F * svd.v2 / svd.s[1]) : perpendicular(svd.u1);
+  return svd;
+}
+
+SurfaceMatrix compose(const ThinSvd& svd, const Eigen::Vector2d& values) {
+  return values[0] * svd.u1 * svd.v1.transpose() + values[1] * svd.u2 * svd.v2.transpose();
 }
 
 } // namespace
@@ -66,7 +71,16 @@ SurfaceMatrix project_surface(const SurfaceElement& e, const SurfaceMatrix& F) {
   SurfaceMatrix T = SurfaceMatrix::Zero();
   switch (e.kind) {
   case SurfaceConstraintKind::edge_strain: T.col(0) = clamp_length(F.col(0), 1.0, e.range, e.rest); break;
-  case SurfaceConstraintKind::triangle_strain: T = clamp_singular_values(F, e.range); break;
+  case SurfaceConstraintKind::triangle_strain: {
+    const ThinSvd svd = thin_svd(F);
+    T = compose(svd, svd.s.cwiseMax(e.range.min).cwiseMin(e.range.max));
+    break;
+  }
+  case SurfaceConstraintKind::triangle_area: {
+    const ThinSvd svd = thin_svd(F);
+    T = compose(svd, project_area(svd.s, e.range));
+    break;
+  }
   case SurfaceConstraintKind::bending: {
     const double rest_length = e.rest.norm();
     if (rest_length > 0.0) T.col(0) = clamp_length(F.col(0), rest_length, e.range, e.rest / rest_length);
@@ -118,6 +132,14 @@ SurfaceElement triangle_strain_element(const std::array<int, 3>& v, const Eigen:
   e.Q.row(2) = inverse.row(1);
   e.weight = 2.0 * mu_thickness * area;
   e.range = range;
+  return e;
+}
+
+SurfaceElement triangle_area_element(const std::array<int, 3>& v, const Eigen::MatrixX3d& rest_m,
+                                     double weight, const SingularValueRange& range) {
+  SurfaceElement e = triangle_strain_element(v, rest_m, 1.0, range);
+  e.kind = SurfaceConstraintKind::triangle_area;
+  e.weight = weight;
   return e;
 }
 

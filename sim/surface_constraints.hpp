@@ -13,6 +13,8 @@ namespace phantasm {
 enum class SurfaceConstraintKind {
   edge_strain,     ///< F = (xj - xi) / L0; P: the same direction, length clamped to the range
   triangle_strain, ///< F the 3x2 in-plane deformation gradient; P: singular values clamped
+  triangle_area,   ///< the same F; P: the closest point whose singular values' product (the area
+                   ///< ratio) lies in the range
   bending,         ///< F = e, the cotangent edge Laplacian of the edge's 4 vertices; P: e scaled
                    ///< to its rest length (times the range)
 };
@@ -49,6 +51,11 @@ SurfaceElement edge_strain_element(int i, int j, const Eigen::MatrixX3d& rest_m,
 /// @throws std::invalid_argument for a degenerate rest triangle
 SurfaceElement triangle_strain_element(const std::array<int, 3>& v, const Eigen::MatrixX3d& rest_m,
                                        double mu_thickness, const SingularValueRange& range = {});
+
+/// A triangle area element (range: area ratio limits; {1, 1} keeps the area) of the given weight.
+/// @throws std::invalid_argument for a degenerate rest triangle
+SurfaceElement triangle_area_element(const std::array<int, 3>& v, const Eigen::MatrixX3d& rest_m,
+                                     double weight, const SingularValueRange& range = {});
 
 /// A bending element of the edge (v0, v1) with opposite vertices v2 (triangle v0 v1 v2) and v3
 /// (triangle v1 v0 v3): e = sqrt(3 / (A0 + A1)) sum_k K_k x_k with K the cotangent weights of

@@ -32,27 +32,31 @@ double bracketed_root(Function&& f, double lo, double hi, double start) {
 }
 
 /// The multiplier of the linearized problem, s_i = sigma_i + lambda P / sigma_i: a start from
-/// which Newton needs one or two steps for the small volume changes of a running solve.
-double linear_start(const Eigen::Vector3d& sigma, double volume, double P) {
-  if (!(volume > 0.0)) return 0.0;
+/// which Newton needs one or two steps for the small changes of a running solve.
+template <int N>
+double linear_start(const Eigen::Matrix<double, N, 1>& sigma, double product, double P) {
+  if (!(product > 0.0)) return 0.0;
   const double curvature = P * sigma.cwiseAbs2().cwiseInverse().sum();
-  return curvature > 0.0 && std::isfinite(curvature) ? (std::log(P) - std::log(volume)) / curvature : 0.0;
+  return curvature > 0.0 && std::isfinite(curvature) ? (std::log(P) - std::log(product)) / curvature : 0.0;
 }
 
-} // namespace
-
-Eigen::Vector3d project_volume(const Eigen::Vector3d& sigma, const SingularValueRange& range) {
-  const double volume = sigma.prod();
-  if (volume >= range.min && volume <= range.max) return sigma;
-  const double P = volume < range.min ? range.min : range.max;
+/// The closest point to sigma whose product lies in [min, max] (N = 3: tet volume, N = 2:
+/// triangle area).
+template <int N>
+Eigen::Matrix<double, N, 1> project_product(const Eigen::Matrix<double, N, 1>& sigma,
+                                            const SingularValueRange& range) {
+  using Vector = Eigen::Matrix<double, N, 1>;
+  const double product = sigma.prod();
+  if (product >= range.min && product <= range.max) return sigma;
+  const double P = product < range.min ? range.min : range.max;
   // The closest point s with prod(s) = P satisfies s_i - sigma_i = lambda P / s_i, so each
   // s_i(lambda) = (sigma_i +- sqrt(sigma_i^2 + 4 lambda P)) / 2. The multiplier solves
   // prod s_i(lambda) = P.
   // `minus` selects the other root for one coordinate (see the shrinking case below).
   int minus = -1;
-  auto s_of = [&](double lambda, Eigen::Vector3d* ds) {
-    Eigen::Vector3d s;
-    for (int i = 0; i < 3; ++i) {
+  auto s_of = [&](double lambda, Vector* ds) {
+    Vector s;
+    for (int i = 0; i < N; ++i) {
       const double root = std::sqrt(std::max(0.0, sigma[i] * sigma[i] + 4.0 * lambda * P));
       const double sign = i == minus ? -1.0 : 1.0;
       s[i] = 0.5 * (sigma[i] + sign * root);
@@ -62,20 +66,20 @@ Eigen::Vector3d project_volume(const Eigen::Vector3d& sigma, const SingularValue
   };
   // prod s(lambda) / P - 1: increasing in lambda on the branches used, and free of logarithms.
   auto g = [&](double lambda, double* slope) {
-    Eigen::Vector3d ds;
-    const Eigen::Vector3d s = s_of(lambda, &ds);
-    const double product = s.prod() / P;
-    *slope = product * (ds[0] / s[0] + ds[1] / s[1] + ds[2] / s[2]);
-    return product - 1.0;
+    Vector ds;
+    const Vector s = s_of(lambda, &ds);
+    const double ratio = s.prod() / P;
+    *slope = ratio * ds.cwiseQuotient(s).sum();
+    return ratio - 1.0;
   };
-  if (volume < P) {
+  if (product < P) {
     // Growing (also inverted tets, whose negative value starts at 0): lambda > 0, g increases
     // from g(0) < 0 without bound.
     double hi = 1.0;
     double unused = 0.0;
     while (g(hi, &unused) < 0.0)
       hi *= 2.0;
-    return s_of(bracketed_root(g, 0.0, hi, linear_start(sigma, volume, P)), nullptr);
+    return s_of(bracketed_root(g, 0.0, hi, linear_start<N>(sigma, product, P)), nullptr);
   }
   // Shrinking (all values positive): lambda in [lo, 0] with lo = -min sigma^2 / 4P, where the
   // smallest value's two roots meet. If even g(lo) > 0, the closest point takes the smaller root
@@ -85,7 +89,8 @@ Eigen::Vector3d project_volume(const Eigen::Vector3d& sigma, const SingularValue
   sigma.minCoeff(&smallest);
   const double lo = -sigma[smallest] * sigma[smallest] / (4.0 * P);
   double unused = 0.0;
-  if (g(lo, &unused) <= 0.0) return s_of(bracketed_root(g, lo, 0.0, linear_start(sigma, volume, P)), nullptr);
+  if (g(lo, &unused) <= 0.0)
+    return s_of(bracketed_root(g, lo, 0.0, linear_start<N>(sigma, product, P)), nullptr);
   minus = smallest;
   auto falling = [&](double lambda, double* slope) {
     const double value = g(lambda, slope);
@@ -93,6 +98,16 @@ Eigen::Vector3d project_volume(const Eigen::Vector3d& sigma, const SingularValue
     return -value;
   };
   return s_of(bracketed_root(falling, lo, 0.0, 0.5 * lo), nullptr);
+}
+
+} // namespace
+
+Eigen::Vector3d project_volume(const Eigen::Vector3d& sigma, const SingularValueRange& range) {
+  return project_product<3>(sigma, range);
+}
+
+Eigen::Vector2d project_area(const Eigen::Vector2d& sigma, const SingularValueRange& range) {
+  return project_product<2>(sigma, range);
 }
 
 SingularValueEnergy singular_value_energy(TetConstraintKind kind, const SingularValueRange& range,

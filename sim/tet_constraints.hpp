@@ -23,6 +23,10 @@ Eigen::Vector3d project_strain(const Eigen::Vector3d& sigma, const SingularValue
 /// of positive values.
 Eigen::Vector3d project_volume(const Eigen::Vector3d& sigma, const SingularValueRange& range);
 
+/// Triangle area: the same for the two singular values of a triangle's 3x2 deformation
+/// gradient (their product, the area ratio, clamped to [min, max]).
+Eigen::Vector2d project_area(const Eigen::Vector2d& sigma, const SingularValueRange& range);
+
 /// Which set a tet constraint projects onto.
 enum class TetConstraintKind { strain, volume };
 

@@ -1,4 +1,4 @@
-// Surface constraints (edge strain, triangle strain, bending): projections land in their sets
+// Surface constraints (edge strain, triangle strain and area, bending): projections land in their sets
 // and are the closest points, the energy's gradient matches finite differences, bending
 // vanishes on rigid motions and grows with the square of a fold, and a hanging sheet solved by
 // local/global reaches Newton's minimizer.
@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <limits>
 #include <random>
 
 using namespace phantasm;
@@ -90,6 +91,31 @@ TEST(SurfaceConstraints, ProjectionsLandInTheirSetsAndAreTheClosestPoints) {
       const SurfaceMatrix other = turn * T; // same singular values: in the set
       EXPECT_LE((F - T).norm(), (F - other).norm() + 1e-12);
     }
+  }
+  // Triangle area: the product of the singular values clamped, at the closest such point
+  // (against a fine search along the hyperbola s1 s2 = P).
+  const SurfaceElement area = triangle_area_element({0, 1, 2}, rest, 3.0, limits);
+  for (int trial = 0; trial < 100; ++trial) {
+    SurfaceMatrix F;
+    for (int i = 0; i < 6; ++i)
+      F(i) = normal(random);
+    const SurfaceMatrix T = project_surface(area, F);
+    const Eigen::Vector2d sigma = Eigen::JacobiSVD<Eigen::Matrix<double, 3, 2>>(F).singularValues();
+    const Eigen::Vector2d values = Eigen::JacobiSVD<Eigen::Matrix<double, 3, 2>>(T).singularValues();
+    const double product = values.prod();
+    EXPECT_GE(product, 0.9 * (1 - 1e-9));
+    EXPECT_LE(product, 1.1 * (1 + 1e-9));
+    if (sigma.prod() >= 0.9 && sigma.prod() <= 1.1) {
+      EXPECT_LT((T - F).norm(), 1e-9);
+      continue;
+    }
+    const double P = sigma.prod() < 0.9 ? 0.9 : 1.1;
+    double best = std::numeric_limits<double>::infinity();
+    for (double t = -8.0; t <= 8.0; t += 1e-4) { // s = (sqrt(P) e^t, sqrt(P) e^-t)
+      best = std::min(
+          best, std::hypot(sigma[0] - std::sqrt(P) * std::exp(t), sigma[1] - std::sqrt(P) * std::exp(-t)));
+    }
+    EXPECT_NEAR((F - T).norm(), best, 1e-6) << sigma.transpose();
   }
   // A collapsed triangle (rank 1 or 0) still gets a target in the set.
   for (const SurfaceMatrix& F :
