@@ -164,12 +164,18 @@ void write_organ_meshes(const Scene& scene, const Phantom& phantom, PhantomState
 nlohmann::json solves_json(const std::vector<SolveReport>& solves) {
   nlohmann::json list = nlohmann::json::array();
   for (const SolveReport& s : solves) {
-    list.push_back({{"solver", s.solver},
-                    {"iterations", s.iterations},
-                    {"stopped_by", s.stopped_by},
-                    {"residual_N", s.residual_N},
-                    {"initial_energy_J", s.initial_energy_J},
-                    {"final_energy_J", s.final_energy_J}});
+    nlohmann::json solve = {{"solver", s.solver},
+                            {"iterations", s.iterations},
+                            {"stopped_by", s.stopped_by},
+                            {"residual_N", s.residual_N},
+                            {"initial_energy_J", s.initial_energy_J},
+                            {"final_energy_J", s.final_energy_J}};
+    if (s.rank_updates > 0 || s.contacts > 0) {
+      solve["vertices_in_contact"] = s.contacts;
+      solve["contact_changes"] = s.contact_changes;
+      solve["rank_updates"] = s.rank_updates;
+    }
+    list.push_back(std::move(solve));
   }
   return list;
 }
