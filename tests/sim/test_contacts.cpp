@@ -6,6 +6,7 @@
 #include "sim/local_global.hpp"
 #include "sim/newton.hpp"
 #include "sim/obstacles.hpp"
+#include "sim/position_based.hpp"
 #include "sim/sparse_cholesky.hpp"
 
 #include <Eigen/Eigenvalues>
@@ -272,4 +273,29 @@ TEST(LocalGlobalContacts, ContactsThatNoLongerPressAreReleased) {
   EXPECT_GT(lifted.report.contact_changes, 0);
   EXPECT_GT(lifted.report.rank_updates, 0);
   EXPECT_LT((lifted.p - reference.p).norm(), 1e-8 * (reference.p - start).norm());
+}
+
+// The position-based solvers see the obstacles too: one dynamic step of the cantilever with a
+// ball pushed into its top, by XPBD (contacts with compliance 1/kc) and hard PBD projections.
+TEST(PositionBasedContacts, XpbdAndPbdPushVerticesOutOfAnObstacle) {
+  ElasticModel model = cantilever(5e4);
+  model.external_forces_N.setZero();
+  model.obstacles = {ball(Eigen::Vector3d(0, 0.025, 0.09), 0.02)};
+  model.contact_stiffness_N_m = 1e5;
+  StepInertia step;
+  step.weight = 1.0 / (0.01 * 0.01);
+  step.target_m = model.rest_positions_m;
+  ASSERT_GT(deepest_penetration(model, model.rest_positions_m), 0.004);
+  for (const PositionBasedVariant variant :
+       {PositionBasedVariant::xpbd, PositionBasedVariant::gauss_seidel_pbd}) {
+    Eigen::MatrixX3d p = model.rest_positions_m;
+    StopCriteria stop;
+    stop.max_iterations = 300;
+    stop.relative_energy_decrease = 0.0;
+    stop.position_change_m = 0.0;
+    position_based_solve(variant, model, step, p, stop);
+    ASSERT_TRUE(p.allFinite());
+    EXPECT_LT(deepest_penetration(model, p), 5e-4)
+        << (variant == PositionBasedVariant::xpbd ? "xpbd" : "pbd");
+  }
 }
