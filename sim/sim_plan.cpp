@@ -35,6 +35,25 @@ std::vector<OrganMotion> classify_organ_motion(const Scene& scene) {
   return motion;
 }
 
+namespace {
+
+/// The nearest simulated organ containing organ i, or null when none does.
+const OrganSettings* simulated_container(const Scene& scene, const std::vector<OrganMotion>& motion,
+                                         std::size_t i) {
+  const auto& organs = scene.anatomy.organs;
+  for (std::string inside = organs[i].inside; !inside.empty();) {
+    std::size_t j = 0;
+    while (j < organs.size() && organs[j].name != inside)
+      ++j;
+    if (j == organs.size()) return nullptr;
+    if (motion[j] == OrganMotion::simulated) return &organs[j];
+    inside = organs[j].inside;
+  }
+  return nullptr;
+}
+
+} // namespace
+
 StageReport plan_sim(const Scene& scene) {
   StageReport report;
   report.stage = "sim";
@@ -59,6 +78,13 @@ StageReport plan_sim(const Scene& scene) {
       report.modelled.push_back(line.str());
     } else if (motion[i] == OrganMotion::fixed) {
       report.modelled.push_back(organs[i].name + ": held fixed (deformation.fixed)");
+    } else if (const OrganSettings* carrier = simulated_container(scene, motion, i);
+               carrier && carrier->solid) {
+      report.modelled.push_back(organs[i].name + ": no load of its own; inside the simulated " +
+                                carrier->name + ", it follows it (embedded in its tets)");
+    } else if (carrier) {
+      report.skipped.push_back(organs[i].name + ": inside the shell " + carrier->name +
+                               ", which has no interior to carry it; it stays in place");
     } else {
       report.skipped.push_back(organs[i].name + ": no load acts on it, carried rigidly");
     }
@@ -74,6 +100,18 @@ StageReport plan_sim(const Scene& scene) {
     if (d.mode == DeformationMode::dynamic) line << ", " << to_string(load.motion) << " motion";
     report.modelled.push_back(line.str());
   }
+  for (const ObstacleSettings& o : d.obstacles) {
+    std::ostringstream line;
+    if (o.shape == ObstacleShape::sphere) {
+      line << "sphere obstacle centred at " << format_vector(o.point_mm) << " mm, radius " << o.radius_mm
+           << " mm";
+    } else {
+      line << "half-space obstacle through " << format_vector(o.point_mm) << " mm, normal "
+           << format_vector(o.normal);
+    }
+    line << ", moved by " << format_vector(o.displacement_mm) << " mm (frictionless contact)";
+    report.modelled.push_back(line.str());
+  }
   std::ostringstream solver;
   solver << to_string(d.solver.method) << " solver, " << to_string(d.mode) << ", at most "
          << d.solver.max_iterations << " iterations, stop at relative energy decrease "
@@ -81,6 +119,8 @@ StageReport plan_sim(const Scene& scene) {
          << " mm";
   if (d.mode == DeformationMode::dynamic)
     solver << ", " << d.frames << " frames of " << d.time_step_s << " s";
+  else if (d.load_steps > 1)
+    solver << ", loads applied in " << d.load_steps << " steps";
   report.modelled.push_back(solver.str());
   return report;
 }

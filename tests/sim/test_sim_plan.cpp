@@ -43,3 +43,29 @@ TEST(OrganMotion, GravityWithoutAnOrganListActsOnEveryOrganThatIsNotFixed) {
   EXPECT_EQ(classify_organ_motion(scene),
             (std::vector<OrganMotion>{OrganMotion::fixed, OrganMotion::simulated, OrganMotion::simulated}));
 }
+
+TEST(OrganMotion, ThePlanNamesEmbeddedOrgansObstaclesAndLoadSteps) {
+  Scene scene = three_organs();
+  scene.deformation.mode = DeformationMode::quasi_static;
+  scene.deformation.load_steps = 3;
+  LoadSettings push;
+  push.kind = LoadKind::displacement;
+  push.organ = "skull";
+  scene.deformation.loads = {push};
+  ObstacleSettings paddle;
+  paddle.point_mm = {0, 0, 40};
+  paddle.normal = {0, 0, -1};
+  scene.deformation.obstacles = {paddle};
+  const StageReport report = plan_sim(scene);
+  auto modelled = [&](const std::string& text) {
+    for (const std::string& line : report.modelled)
+      if (line.find(text) != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_TRUE(modelled("brain: no load of its own; inside the simulated skull, it follows it"))
+      << report.modelled.size();
+  EXPECT_TRUE(modelled("half-space obstacle through (0, 0, 40) mm, normal (0, 0, -1)"));
+  EXPECT_TRUE(modelled("loads applied in 3 steps"));
+  ASSERT_EQ(report.skipped.size(), 1u); // the eye, outside
+  EXPECT_NE(report.skipped[0].find("eye"), std::string::npos);
+}
