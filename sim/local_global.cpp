@@ -1,6 +1,7 @@
 #include "sim/local_global.hpp"
 
 #include "sim/sparse_cholesky.hpp"
+#include "sim/tet_projection_batch.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Sparse>
@@ -29,7 +30,8 @@ struct LocalGlobalSolver::Impl {
   Eigen::MatrixX3d contact_targets;
   std::vector<double> contact_energies;
   // Per tet: warm-started rotation and the projection term w_s T_s^T + w_v T_v^T.
-  std::vector<Eigen::Quaterniond> rotations, eigenvectors;
+  std::vector<Eigen::Quaterniond> rotations;
+  std::vector<Eigen::Matrix3d> eigenvectors;
   std::vector<Eigen::Matrix3d> projections;
   std::vector<double> tet_energies;
   // Per surface element: w P(F), and its energy.
@@ -212,26 +214,27 @@ struct LocalGlobalSolver::Impl {
   /// The local step: projections of every tet at p; returns E(p).
   double local_step(const Eigen::MatrixX3d& p, const Eigen::MatrixX3d& target) {
     const auto count = static_cast<std::ptrdiff_t>(model.tets.size());
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 128)
-    for (std::ptrdiff_t t = 0; t < count; ++t) {
-      const TetElement& e = model.tets[static_cast<std::size_t>(t)];
-      Eigen::Matrix<double, 3, 4> X;
-      for (int k = 0; k < 4; ++k)
-        X.col(k) = p.row(e.vertices[static_cast<std::size_t>(k)]).transpose();
-      const Eigen::Matrix3d F = X * e.Q;
-      const SignedSvd svd =
-          signed_svd(F, rotations[static_cast<std::size_t>(t)], eigenvectors[static_cast<std::size_t>(t)]);
-      const Eigen::Vector3d strain = project_strain(svd.sigma, model.strain_range);
-      const Eigen::Vector3d volume = project_volume(svd.sigma, model.volume_range);
-      const Eigen::Vector3d combined = e.strain_weight * strain + e.volume_weight * volume;
-      // w_s T_s^T + w_v T_v^T = V diag(w_s s_s + w_v s_v) U^T
-      projections[static_cast<std::size_t>(t)].noalias() = svd.V * combined.asDiagonal() * svd.U.transpose();
-      tet_energies[static_cast<std::size_t>(t)] =
-          0.5 * (e.strain_weight * (svd.sigma - strain).squaredNorm() +
-                 e.volume_weight * (svd.sigma - volume).squaredNorm());
+    const std::ptrdiff_t batches = (count + tet_batch_size - 1) / tet_batch_size;
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 32)
+    for (std::ptrdiff_t b = 0; b < batches; ++b) {
+      TetBatch batch;
+      batch.count = static_cast<int>(std::min<std::ptrdiff_t>(tet_batch_size, count - b * tet_batch_size));
+      for (int l = 0; l < batch.count; ++l) {
+        const auto t = static_cast<std::size_t>(b * tet_batch_size + l);
+        const auto i = static_cast<std::size_t>(l);
+        const TetElement& e = model.tets[t];
+        batch.F[i] = deformation_gradient(e, p);
+        batch.strain_weight[i] = e.strain_weight;
+        batch.volume_weight[i] = e.volume_weight;
+        batch.rotation[i] = &rotations[t];
+        batch.eigenvectors[i] = &eigenvectors[t];
+        batch.projection[i] = &projections[t];
+        batch.energy[i] = &tet_energies[t];
+      }
+      project_tet_batch(batch, model.strain_range, model.volume_range);
     }
     const auto surface_count = static_cast<std::ptrdiff_t>(model.surfaces.size());
-#pragma omp parallel for num_threads(threads) schedule(dynamic, 256)
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 256) if (surface_count > 0)
     for (std::ptrdiff_t s = 0; s < surface_count; ++s) {
       const SurfaceElement& e = model.surfaces[static_cast<std::size_t>(s)];
       const SurfaceMatrix F = surface_deformation(e, p);
@@ -366,7 +369,7 @@ LocalGlobalSolver::LocalGlobalSolver(const ElasticModel& model, double inertia_w
     : m(std::make_unique<Impl>(model, inertia_weight, threads > 0 ? threads : omp_get_max_threads())) {
   m->anderson_history = std::max(0, anderson_history);
   m->rotations.assign(model.tets.size(), Eigen::Quaterniond::Identity());
-  m->eigenvectors.assign(model.tets.size(), Eigen::Quaterniond::Identity());
+  m->eigenvectors.assign(model.tets.size(), Eigen::Matrix3d::Identity());
   m->projections.assign(model.tets.size(), Eigen::Matrix3d::Zero());
   m->tet_energies.assign(model.tets.size(), 0.0);
   m->surface_projections.assign(model.surfaces.size(), SurfaceMatrix::Zero());

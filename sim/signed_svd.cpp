@@ -97,6 +97,27 @@ void jacobi_eigen(const Eigen::Matrix3d& S, Eigen::Matrix3d& V, Eigen::Vector3d&
 
 } // namespace
 
+bool turn_to_positive_pairs(Eigen::Matrix3d& R, const Eigen::Matrix3d& V, Eigen::Vector3d& lambda) {
+  bool turned = false;
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (int a = 0; a < 3 && !changed; ++a) {
+      for (int b = a + 1; b < 3 && !changed; ++b) {
+        if (lambda[a] + lambda[b] < 0.0) {
+          Eigen::Vector3d flip = Eigen::Vector3d::Ones();
+          flip[a] = flip[b] = -1.0;
+          R = (R * V * flip.asDiagonal() * V.transpose()).eval();
+          lambda[a] = -lambda[a];
+          lambda[b] = -lambda[b];
+          changed = true;
+          turned = true;
+        }
+      }
+    }
+  }
+  return turned;
+}
+
 SignedSvd signed_svd(const Eigen::Matrix3d& F, Eigen::Quaterniond& rotation, int max_iterations) {
   Eigen::Quaterniond eigenvectors = Eigen::Quaterniond::Identity();
   return signed_svd(F, rotation, eigenvectors, max_iterations);
@@ -110,27 +131,7 @@ SignedSvd signed_svd(const Eigen::Matrix3d& F, Eigen::Quaterniond& rotation, Eig
   Eigen::Matrix3d V = eigenvectors.toRotationMatrix();
   Eigen::Vector3d lambda;
   jacobi_eigen(S, V, lambda);
-  bool flipped = false;
-  // At the optimum rotation at most one eigenvalue is negative, and it is the one of smallest
-  // magnitude. A stationary point of the iteration can miss that (e.g. a start 180 degrees
-  // away): flipping the signs of two eigenvalues is a 180-degree turn of R about the third
-  // eigenvector, and raises tr(R^T F) whenever it makes the sum of the two larger.
-  for (bool changed = true; changed;) {
-    changed = false;
-    for (int a = 0; a < 3 && !changed; ++a) {
-      for (int b = a + 1; b < 3 && !changed; ++b) {
-        if (lambda[a] + lambda[b] < 0.0) {
-          Eigen::Vector3d flip = Eigen::Vector3d::Ones();
-          flip[a] = flip[b] = -1.0;
-          R = R * V * flip.asDiagonal() * V.transpose();
-          lambda[a] = -lambda[a];
-          lambda[b] = -lambda[b];
-          changed = true;
-          flipped = true;
-        }
-      }
-    }
-  }
+  const bool flipped = turn_to_positive_pairs(R, V, lambda);
   // Order by decreasing value (the negative one, if any, last); V stays a rotation.
   SignedSvd svd;
   int order[3] = {0, 1, 2};

@@ -28,4 +28,11 @@ SignedSvd signed_svd(const Eigen::Matrix3d& F, Eigen::Quaterniond& rotation, int
 SignedSvd signed_svd(const Eigen::Matrix3d& F, Eigen::Quaterniond& rotation, Eigen::Quaterniond& eigenvectors,
                      int max_iterations = 40);
 
+/// The last step of the rotation's search: at the optimum rotation R (with R^T F = V
+/// diag(lambda) V^T) no two eigenvalues sum to a negative number, but a stationary point of the
+/// iteration can miss that (e.g. a start 180 degrees away). Flipping the signs of two
+/// eigenvalues is a half turn of R about the third eigenvector and raises tr(R^T F) whenever it
+/// makes their sum larger: done until no pair sums below zero. Returns whether R turned.
+bool turn_to_positive_pairs(Eigen::Matrix3d& R, const Eigen::Matrix3d& V, Eigen::Vector3d& lambda);
+
 } // namespace phantasm
