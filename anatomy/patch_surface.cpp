@@ -225,17 +225,21 @@ bool PatchSurface::in_wedge(Eigen::Index t, const Eigen::Vector3d& x, double tol
   return true;
 }
 
+double PatchSurface::mean_bump_height(Eigen::Index triangle) const {
+  // A bump's height a (1 - r^2)^3 integrates to a / 4 times its ellipse's area, which is its
+  // (u, v) area times |e1 x e2| = 2 A.
+  double height = 0.0;
+  for (const PatchBump& bump : m_bumps[static_cast<std::size_t>(triangle)])
+    height += bump.amplitude_mm * bump.uv_area() / 2.0;
+  return height;
+}
+
 double PatchSurface::volume() const {
   double six_volume = 0.0, bumps = 0.0;
   for (Eigen::Index t = 0; t < m_base.face_count(); ++t) {
     const Eigen::Vector3d a = corner(m_base, t, 0), b = corner(m_base, t, 1), c = corner(m_base, t, 2);
     six_volume += a.dot(b.cross(c));
-    // A bump's height a (1 - r^2)^3 integrates to a / 4 times its ellipse's area, which is its
-    // (u, v) area times the current |e1 x e2|.
-    const double jacobian = (b - a).cross(c - a).norm();
-    for (const PatchBump& bump : m_bumps[static_cast<std::size_t>(t)]) {
-      bumps += bump.amplitude_mm * jacobian * bump.uv_area() / 4.0;
-    }
+    bumps += mean_bump_height(t) * 0.5 * (b - a).cross(c - a).norm();
   }
   return six_volume / 6.0 + bumps;
 }

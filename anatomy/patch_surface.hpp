@@ -103,6 +103,10 @@ public:
 
   /// Enclosed volume in mm^3: base polyhedron plus each bump's exact volume.
   double volume() const;
+  /// A patch's bump volume over its base triangle's area, mm: constant while the triangle
+  /// deforms (the bumps ride in its frame), so an organ's volume is its base polyhedron's plus
+  /// the sum of mean_bump_height(t) times each base triangle's area.
+  double mean_bump_height(Eigen::Index triangle) const;
   /// Surface area in mm^2, from a tessellation within `max_deviation_mm`.
   double area(double max_deviation_mm) const;
   /// A triangle mesh within `max_deviation_mm` of the surface (estimated at sub-triangle edge

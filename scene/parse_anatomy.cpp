@@ -112,6 +112,11 @@ void parse_anatomy(CheckedMap& map, const std::filesystem::path& scene_folder, A
     entry.boolean("solid", organ.solid);
     entry.integer("base_mesh_triangles", organ.base_mesh_triangles, 20, 200000);
     entry.number("thickness_mm", organ.thickness_mm, NumberRule{0.0, 1e3, true, false, "mm"});
+    if (entry.has("enclosed_volume_tolerance")) {
+      double tolerance = 0.0;
+      if (entry.number("enclosed_volume_tolerance", tolerance, NumberRule{0.0, 0.5, false, false, ""}))
+        organ.enclosed_volume_tolerance = tolerance;
+    }
     if (entry.has("shape")) {
       CheckedMap shape(map.context(), entry.get("shape"), entry.child_path("shape"));
       if (shape.valid()) parse_shape(shape, scene_folder, organ.shape);

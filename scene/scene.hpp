@@ -64,6 +64,9 @@ struct OrganSettings {
   int base_mesh_triangles = 0; ///< this organ's patch base size; 0 = anatomy.base_mesh_triangles
   ShapeSettings shape;
   double thickness_mm = 1.0; ///< surface organs (solid: false) simulated as shells: wall thickness
+  /// closed surface organs simulated as shells: their enclosed volume is kept within this
+  /// fraction of rest (a fluid-filled organ); unset: free
+  std::optional<double> enclosed_volume_tolerance;
 };
 
 struct AnatomySettings {

@@ -36,6 +36,9 @@ nlohmann::json organ_json(const OrganSettings& organ) {
           {"inside", organ.inside},
           {"solid", organ.solid},
           {"thickness_mm", organ.thickness_mm},
+          {"enclosed_volume_tolerance", organ.enclosed_volume_tolerance
+                                            ? nlohmann::json(*organ.enclosed_volume_tolerance)
+                                            : nlohmann::json(nullptr)},
           {"base_mesh_triangles", organ.base_mesh_triangles},
           {"shape", shape}};
 }

@@ -99,6 +99,26 @@ const TriangleMesh* shell_mesh(const Organ& organ) {
   return nullptr;
 }
 
+/// The patch volume constraint of a closed shell (its base mesh's vertices from first_vertex),
+/// with the weight of the material's bulk modulus E / (3 (1 - 2 nu)).
+void add_enclosed_volume(ElasticModel& model, const PatchSurface& surface, int first_vertex,
+                         const MaterialSettings& material, double tolerance) {
+  const TriangleMesh& base = surface.base_mesh();
+  std::vector<int> vertices(static_cast<std::size_t>(base.vertices.rows()));
+  for (std::size_t v = 0; v < vertices.size(); ++v)
+    vertices[v] = first_vertex + static_cast<int>(v);
+  std::vector<std::array<int, 3>> triangles;
+  std::vector<double> heights;
+  for (Eigen::Index t = 0; t < base.face_count(); ++t) {
+    triangles.push_back({base.faces(t, 0), base.faces(t, 1), base.faces(t, 2)});
+    heights.push_back(k_mm * surface.mean_bump_height(t));
+  }
+  const double bulk_modulus = material.youngs_modulus_Pa / (3.0 * (1.0 - 2.0 * material.poisson_ratio));
+  model.volumes.push_back(enclosed_volume_constraint(std::move(vertices), std::move(triangles),
+                                                     std::move(heights), model.rest_positions_m, bulk_modulus,
+                                                     SingularValueRange{1.0 - tolerance, 1.0 + tolerance}));
+}
+
 /// A displacement load's springs: which model point constraints, and their rest targets (m).
 struct PushedPoints {
   const LoadSettings* load = nullptr;
@@ -171,6 +191,18 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
           format_number(settings[b].thickness_mm) +
           " mm thick: as-rigid-as-possible membrane per triangle, bending per interior edge "
           "toward its rest curvature)");
+      if (settings[b].enclosed_volume_tolerance) {
+        if (!organ.surface) {
+          throw InputError(
+              settings[b].name +
+              ": enclosed_volume_tolerance needs a closed surface, but this organ is an open sheet");
+        }
+        const double tolerance = *settings[b].enclosed_volume_tolerance;
+        add_enclosed_volume(model, *organ.surface, body.first_vertex, *material, tolerance);
+        report.modelled.push_back(
+            settings[b].name + ": enclosed volume kept within " + format_number(100.0 * tolerance) +
+            " % of rest (patch volume constraint, bulk modulus of " + settings[b].material + ")");
+      }
       bodies.push_back(std::move(body));
       continue;
     }

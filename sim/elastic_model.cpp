@@ -146,6 +146,10 @@ double model_energy(const ElasticModel& model, const StepInertia& inertia, const
     const SurfaceMatrix F = surface_deformation(e, p);
     energy += 0.5 * e.weight * (F - project_surface(e, F)).squaredNorm(); // unused columns are 0
   }
+  for (const EnclosedVolume& c : model.volumes) {
+    const Eigen::MatrixX3d X = gather_vertices(c, p);
+    energy += 0.5 * c.weight * (X - project_enclosed_volume(c, X)).squaredNorm();
+  }
   for (const PointConstraint& c : model.points)
     energy += 0.5 * c.stiffness_N_m * (point_of(c, p) - c.target_m).squaredNorm();
   if (!model.obstacles.empty()) {
@@ -175,6 +179,13 @@ Eigen::MatrixX3d model_gradient(const ElasticModel& model, const StepInertia& in
     const SurfaceMatrix stress = e.weight * (F - project_surface(e, F));
     for (int k = 0; k < e.count; ++k)
       g.row(e.vertices[static_cast<std::size_t>(k)]) += (stress * e.Q.row(k).transpose()).transpose();
+  }
+  for (const EnclosedVolume& c : model.volumes) {
+    // w (X - P(X)), by the envelope theorem as for the other constraints.
+    const Eigen::MatrixX3d X = gather_vertices(c, p);
+    const Eigen::MatrixX3d stress = c.weight * (X - project_enclosed_volume(c, X));
+    for (std::size_t i = 0; i < c.vertices.size(); ++i)
+      g.row(c.vertices[i]) += stress.row(static_cast<Eigen::Index>(i));
   }
   for (const PointConstraint& c : model.points) {
     const Eigen::Vector3d r = c.stiffness_N_m * (point_of(c, p) - c.target_m);

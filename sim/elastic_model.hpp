@@ -1,5 +1,6 @@
 #pragma once
 
+#include "sim/enclosed_volume.hpp"
 #include "sim/obstacles.hpp"
 #include "sim/surface_constraints.hpp"
 #include "sim/tet_constraints.hpp"
@@ -37,7 +38,7 @@ struct PointConstraint {
 /// constraints, vertices held in place (Dirichlet: the solvers never move them), and external
 /// forces. The objective of one step (METHOD.md section 2) is
 ///   E(p) = a/2 (p - s)^T M (p - s) - f . p + sum_tets [ws/2 |F - P_strain(F)|^2 + wv/2 |F - P_volume(F)|^2]
-///          + sum_surfaces w/2 |F - P(F)|^2 + sum_points k/2 |b . x - t|^2
+///          + sum_surfaces w/2 |F - P(F)|^2 + sum_volumes w/2 |X - P(X)|^2 + sum_points k/2 |b . x - t|^2
 ///          + sum_free vertices sum_obstacles kc/2 dist(x, allowed)^2
 /// with a = 1/h^2 for a dynamic step (s the inertial target, gravity folded into s, f = 0) and
 /// a = 0 for quasi-static equilibrium (f the external forces).
@@ -48,6 +49,7 @@ struct ElasticModel {
   SingularValueRange strain_range;      ///< {1, 1}: as-rigid-as-possible
   SingularValueRange volume_range;      ///< {1, 1}: volume preserving
   std::vector<SurfaceElement> surfaces; ///< edge, triangle and bending constraints (sheets)
+  std::vector<EnclosedVolume> volumes;  ///< volumes enclosed by closed shells (patch volume)
   std::vector<PointConstraint> points;
   std::vector<char> fixed;            ///< per vertex: held where the solver finds it
   Eigen::MatrixX3d external_forces_N; ///< per vertex; may be empty (no force)

@@ -37,8 +37,12 @@ struct LocalGlobalSolver::Impl {
   // Per surface element: w P(F), and its energy.
   std::vector<SurfaceMatrix> surface_projections;
   std::vector<double> surface_energies;
+  // Per enclosed volume: w P(X) (one row per surface vertex), and its energy.
+  std::vector<Eigen::MatrixX3d> volume_projections;
+  std::vector<double> volume_energies;
   // Per vertex (CSR): the tets, surface elements and point constraints (index, corner) using it.
-  std::vector<int> tet_offsets, tet_entries, surface_offsets, surface_entries, point_offsets, point_entries;
+  std::vector<int> tet_offsets, tet_entries, surface_offsets, surface_entries, point_offsets, point_entries,
+      volume_offsets, volume_entries;
   Eigen::MatrixX3d rhs, coupling_rhs, solution;
 
   /// The residual (the gradient K x - b(x) of the free vertices, with b from the projections
@@ -106,6 +110,13 @@ struct LocalGlobalSolver::Impl {
         surface_offsets, surface_entries);
     build(
         [&](auto&& use) {
+          for (std::size_t c = 0; c < model.volumes.size(); ++c)
+            for (std::size_t k = 0; k < model.volumes[c].vertices.size(); ++k)
+              use(model.volumes[c].vertices[k], static_cast<int>(c), static_cast<int>(k));
+        },
+        volume_offsets, volume_entries);
+    build(
+        [&](auto&& use) {
           for (std::size_t c = 0; c < model.points.size(); ++c)
             for (int k = 0; k < model.points[c].count; ++k)
               use(model.points[c].vertices[static_cast<std::size_t>(k)], static_cast<int>(c), k);
@@ -155,6 +166,9 @@ struct LocalGlobalSolver::Impl {
           add(c.vertices[static_cast<std::size_t>(a)], c.vertices[static_cast<std::size_t>(b)],
               c.stiffness_N_m * c.coefficients[a] * c.coefficients[b]);
     }
+    for (const EnclosedVolume& c : model.volumes)
+      for (int v : c.vertices)
+        add(v, v, c.weight);
     K_free.resize(nf, nf);
     K_free.setFromTriplets(inner.begin(), inner.end());
     K_coupling.resize(nf, n);
@@ -242,9 +256,21 @@ struct LocalGlobalSolver::Impl {
       surface_projections[static_cast<std::size_t>(s)] = e.weight * T;
       surface_energies[static_cast<std::size_t>(s)] = 0.5 * e.weight * (F - T).squaredNorm();
     }
+    // An enclosed volume's projection couples all its vertices: one task per volume.
+    const auto volume_count = static_cast<std::ptrdiff_t>(model.volumes.size());
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 1) if (volume_count > 1)
+    for (std::ptrdiff_t c = 0; c < volume_count; ++c) {
+      const EnclosedVolume& e = model.volumes[static_cast<std::size_t>(c)];
+      const Eigen::MatrixX3d X = gather_vertices(e, p);
+      const Eigen::MatrixX3d Y = project_enclosed_volume(e, X);
+      volume_projections[static_cast<std::size_t>(c)] = e.weight * Y;
+      volume_energies[static_cast<std::size_t>(c)] = 0.5 * e.weight * (X - Y).squaredNorm();
+    }
     // Summed in element order, not by a parallel reduction: the energy, and so every stop
     // decision, is the same for any number of threads.
     double energy = 0.0;
+    for (double e : volume_energies)
+      energy += e;
     for (double e : tet_energies)
       energy += e;
     for (double e : surface_energies)
@@ -351,6 +377,10 @@ struct LocalGlobalSolver::Impl {
         const int corner = surface_entries[2 * static_cast<std::size_t>(i) + 1];
         r.noalias() += (surface_projections[s] * model.surfaces[s].Q.row(corner).transpose()).transpose();
       }
+      for (int i = volume_offsets[v]; i < volume_offsets[v + 1]; ++i) {
+        const auto c = static_cast<std::size_t>(volume_entries[2 * static_cast<std::size_t>(i)]);
+        r += volume_projections[c].row(volume_entries[2 * static_cast<std::size_t>(i) + 1]);
+      }
       for (int i = point_offsets[v]; i < point_offsets[v + 1]; ++i) {
         const PointConstraint& c =
             model.points[static_cast<std::size_t>(point_entries[2 * static_cast<std::size_t>(i)])];
@@ -374,6 +404,8 @@ LocalGlobalSolver::LocalGlobalSolver(const ElasticModel& model, double inertia_w
   m->tet_energies.assign(model.tets.size(), 0.0);
   m->surface_projections.assign(model.surfaces.size(), SurfaceMatrix::Zero());
   m->surface_energies.assign(model.surfaces.size(), 0.0);
+  m->volume_projections.resize(model.volumes.size());
+  m->volume_energies.assign(model.volumes.size(), 0.0);
   m->build_adjacency();
   m->assemble_and_factor();
 }

@@ -57,6 +57,10 @@ Eigen::SparseMatrix<double> assemble_hessian(const ElasticModel& model, const St
         add_block(e.vertices[static_cast<std::size_t>(a)], e.vertices[static_cast<std::size_t>(b)],
                   L(a, b) * Eigen::Matrix3d::Identity());
   }
+  // Enclosed volumes: w I on their vertices (Gauss-Newton, as for surface elements).
+  for (const EnclosedVolume& c : model.volumes)
+    for (int v : c.vertices)
+      add_block(v, v, c.weight * Eigen::Matrix3d::Identity());
   if (!model.obstacles.empty()) {
     for (Eigen::Index v = 0; v < model.vertex_count(); ++v)
       add_block(static_cast<int>(v), static_cast<int>(v),

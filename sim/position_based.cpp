@@ -18,6 +18,14 @@ struct Linearized {
   std::array<Eigen::Vector3d, 4> gradients;
 };
 
+/// The same for a constraint over many vertices (an enclosed volume).
+struct LinearizedMany {
+  double value = 0.0;
+  int count = 0;
+  std::vector<int> vertices;
+  std::vector<Eigen::Vector3d> gradients;
+};
+
 class Sweeper {
 public:
   Sweeper(PositionBasedVariant variant, const ElasticModel& model, double inertia_weight)
@@ -25,7 +33,7 @@ public:
         m_rotations(2 * model.tets.size(), Eigen::Quaterniond::Identity()),
         m_eigenvectors(2 * model.tets.size(), Eigen::Quaterniond::Identity()),
         m_tet_lambda(2 * model.tets.size(), 0.0), m_surface_lambda(model.surfaces.size(), 0.0),
-        m_point_lambda(model.points.size(), 0.0),
+        m_point_lambda(model.points.size(), 0.0), m_volume_lambda(model.volumes.size(), 0.0),
         m_inverse_mass(static_cast<std::size_t>(model.vertex_count()), 0.0) {
     for (Eigen::Index v = 0; v < model.vertex_count(); ++v) {
       const bool fixed = !model.fixed.empty() && model.fixed[static_cast<std::size_t>(v)];
@@ -61,6 +69,21 @@ public:
         }
       }
       apply(l, e.weight, m_surface_lambda[s], p);
+    }
+    for (std::size_t c = 0; c < m_model.volumes.size(); ++c) {
+      // C = |X - P(X)|, dC/dX = (X - P(X)) / C, as for the element constraints.
+      const EnclosedVolume& volume = m_model.volumes[c];
+      const Eigen::MatrixX3d X = gather_vertices(volume, p);
+      const Eigen::MatrixX3d d = X - project_enclosed_volume(volume, X);
+      LinearizedMany l;
+      l.value = d.norm();
+      if (l.value > 0.0) {
+        l.count = static_cast<int>(volume.vertices.size());
+        l.vertices = volume.vertices;
+        for (Eigen::Index k = 0; k < d.rows(); ++k)
+          l.gradients.push_back(d.row(k).transpose() / l.value);
+      }
+      apply(l, volume.weight, m_volume_lambda[c], p);
     }
     for (std::size_t c = 0; c < m_model.points.size(); ++c) {
       const PointConstraint& point = m_model.points[c];
@@ -124,7 +147,8 @@ private:
   }
 
   /// The XPBD or PBD update of one linearized constraint with stiffness w.
-  void apply(const Linearized& l, double stiffness, double& lambda, Eigen::MatrixX3d& p) const {
+  template <typename Constraint>
+  void apply(const Constraint& l, double stiffness, double& lambda, Eigen::MatrixX3d& p) const {
     if (l.count == 0 && m_variant == PositionBasedVariant::xpbd) {
       // At C = 0 the gradient is undefined; the multiplier's own relaxation still applies
       // (dlambda = -lambda alpha~ / alpha~), which needs no position update.
@@ -156,7 +180,7 @@ private:
   const ElasticModel& m_model;
   double m_alpha_scale; ///< 1/h^2
   std::vector<Eigen::Quaterniond> m_rotations, m_eigenvectors;
-  std::vector<double> m_tet_lambda, m_surface_lambda, m_point_lambda, m_contact_lambda;
+  std::vector<double> m_tet_lambda, m_surface_lambda, m_point_lambda, m_volume_lambda, m_contact_lambda;
   std::vector<double> m_inverse_mass;
 };
 

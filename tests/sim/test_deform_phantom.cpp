@@ -3,10 +3,12 @@
 
 #include "core/error.hpp"
 #include "sim/deform_phantom.hpp"
+#include "sim/enclosed_volume.hpp"
 #include "sim/newton.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 
 using namespace phantasm;
@@ -207,4 +209,82 @@ TEST(DeformPhantom, ClothHangsFromItsCornersAsAShell) {
   EXPECT_GT(moved.col(2).minCoeff(), -1100.0); // never longer than the sheet
   EXPECT_LT(mean, 0.005);
   EXPECT_LT(worst, 0.1);
+}
+
+// The breast's skin alone, as a closed shell 2 mm thick holding its volume (a fluid-filled
+// organ): the paddles flatten it without losing volume. The constraint's volume is the patch
+// surface's own (base polyhedron plus bumps), at rest and deformed.
+TEST(DeformPhantom, AClosedShellKeepsTheVolumeItEnclosesUnderThePaddles) {
+  Scene scene = load("data-synthetic/breast.yaml");
+  scene.anatomy.organs.resize(1);
+  scene.anatomy.organs[0].solid = false;
+  scene.anatomy.organs[0].thickness_mm = 2.0;
+  scene.anatomy.organs[0].enclosed_volume_tolerance = 0.002;
+  Reporter quiet = Reporter::silent();
+  const Phantom phantom = build_phantom(scene, {}, quiet);
+  ASSERT_TRUE(phantom.organs[0].surface);
+  const PatchSurface& surface = *phantom.organs[0].surface;
+
+  std::vector<int> vertices;
+  std::vector<std::array<int, 3>> triangles;
+  std::vector<double> heights;
+  const TriangleMesh& base = surface.base_mesh();
+  for (Eigen::Index v = 0; v < base.vertices.rows(); ++v)
+    vertices.push_back(static_cast<int>(v));
+  for (Eigen::Index t = 0; t < base.face_count(); ++t) {
+    triangles.push_back({base.faces(t, 0), base.faces(t, 1), base.faces(t, 2)});
+    heights.push_back(surface.mean_bump_height(t));
+  }
+  ASSERT_GT(*std::max_element(heights.begin(), heights.end()), 0.0); // the fit made bumps
+  const EnclosedVolume c = enclosed_volume_constraint(vertices, triangles, heights, base.vertices, 1.0);
+  EXPECT_NEAR(c.rest_volume_m3, surface.volume(), 1e-9 * surface.volume());
+  PatchSurface sheared = surface;
+  Eigen::MatrixX3d moved = base.vertices;
+  moved.col(0) += 0.3 * moved.col(2);
+  moved.col(1) *= 0.8;
+  sheared.set_positions(moved);
+  EXPECT_NEAR(enclosed_volume(c, moved), sheared.volume(), 1e-9 * surface.volume());
+
+  StageReport report;
+  const PhantomDeformation d = deform_phantom(scene, phantom, report, quiet);
+  EXPECT_EQ(report.status, "done");
+  bool mentioned = false;
+  for (const std::string& line : report.modelled)
+    mentioned = mentioned || line.find("enclosed volume kept within 0.2 %") != std::string::npos;
+  EXPECT_TRUE(mentioned);
+  const Phantom deformed = deformed_phantom(phantom, d);
+  const Eigen::MatrixX3d& after = deformed.organs[0].surface->base_mesh().vertices;
+  EXPECT_LT(after.col(2).maxCoeff(), 43.5); // flattened to the paddles (patches may rise above)
+  EXPECT_GT(after.col(0).maxCoeff() - after.col(0).minCoeff(),
+            base.vertices.col(0).maxCoeff() - base.vertices.col(0).minCoeff() + 1.0);
+  std::printf("shell: volume ratio %.5f, x %.2f -> %.2f, y %.2f -> %.2f, z %.2f -> %.2f mm, %d iterations\n",
+              deformed.organs[0].surface->volume() / surface.volume(),
+              base.vertices.col(0).maxCoeff() - base.vertices.col(0).minCoeff(),
+              after.col(0).maxCoeff() - after.col(0).minCoeff(), base.vertices.col(1).maxCoeff(),
+              after.col(1).maxCoeff(), base.vertices.col(2).maxCoeff(), after.col(2).maxCoeff(),
+              d.solves.back().iterations);
+  EXPECT_NEAR(deformed.organs[0].surface->volume() / surface.volume(), 1.0, 0.005);
+  // Without the constraint the shell gives up volume under the same paddles.
+  scene.anatomy.organs[0].enclosed_volume_tolerance.reset();
+  StageReport free_report;
+  const Phantom empty = deformed_phantom(phantom, deform_phantom(scene, phantom, free_report, quiet));
+  std::printf("empty shell: volume ratio %.5f\n", empty.organs[0].surface->volume() / surface.volume());
+  EXPECT_LT(empty.organs[0].surface->volume() / surface.volume(), 0.99);
+}
+
+TEST(DeformPhantom, AnEnclosedVolumeOnAnOpenSheetIsAClearError) {
+  Scene scene = load("data-synthetic/cloth.yaml");
+  scene.anatomy.organs[0].shape.cells = Eigen::Vector3i(4, 4, 1);
+  scene.anatomy.organs[0].enclosed_volume_tolerance = 0.01;
+  Reporter quiet = Reporter::silent();
+  const Phantom phantom = build_phantom(scene, {}, quiet);
+  StageReport report;
+  try {
+    deform_phantom(scene, phantom, report, quiet);
+    FAIL() << "expected an error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cloth: enclosed_volume_tolerance needs a closed surface"),
+              std::string::npos)
+        << e.what();
+  }
 }
