@@ -133,6 +133,15 @@ public:
     if (d.mode == DeformationMode::none && !d.loads.empty()) {
       problem("deformation.mode", "expected quasi_static or dynamic when loads are given, found 'none'");
     }
+    for (std::size_t i = 0; i < d.collisions.size(); ++i) {
+      const auto& organs = d.collisions[i].organs;
+      for (std::size_t j = 0; j < organs.size(); ++j)
+        check_organ_reference(indexed("deformation.collisions", i, "organs") + "[" + std::to_string(j) + "]",
+                              organs[j]);
+      if (organs.size() == 2 && organs[0] == organs[1])
+        problem(indexed("deformation.collisions", i, "organs"),
+                "expected two different organs, found '" + organs[0] + "' twice");
+    }
     if (d.mode == DeformationMode::none && !d.obstacles.empty()) {
       problem("deformation.mode", "expected quasi_static or dynamic when obstacles are given, found 'none'");
     }

@@ -126,6 +126,13 @@ void parse_deformation(CheckedMap& map, DeformationSettings& deformation) {
   map.integer("load_steps", deformation.load_steps, 1, 10000);
   parse_list(map, "loads", "loads", deformation.loads, parse_load);
   parse_list(map, "obstacles", "obstacles", deformation.obstacles, parse_obstacle);
+  parse_list(
+      map, "collisions", "collisions", deformation.collisions, [](CheckedMap& entry, CollisionSettings& c) {
+        if (entry.string_list("organs", c.organs, true) && c.organs.size() != 2) {
+          entry.context().problem(entry.get("organs"), entry.child_path("organs"),
+                                  "expected two organ names, found " + std::to_string(c.organs.size()));
+        }
+      });
 }
 
 } // namespace phantasm::scene_detail

@@ -118,6 +118,11 @@ struct ObstacleSettings {
   double period_s = 1.0;
 };
 
+/// Two simulated organs whose surfaces may not pass through each other.
+struct CollisionSettings {
+  std::vector<std::string> organs; ///< two organ names
+};
+
 struct DeformationSettings {
   DeformationMode mode = DeformationMode::none;
   SolverSettings solver;
@@ -126,6 +131,7 @@ struct DeformationSettings {
   std::vector<std::string> fixed; ///< organs held in place
   std::vector<LoadSettings> loads;
   std::vector<ObstacleSettings> obstacles;
+  std::vector<CollisionSettings> collisions;
   int load_steps = 1; ///< quasi-static: loads and obstacles applied in this many equal increments
 };
 

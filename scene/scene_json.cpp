@@ -91,6 +91,9 @@ nlohmann::json scene_settings_json(const Scene& scene) {
   nlohmann::json loads = nlohmann::json::array();
   for (const auto& load : scene.deformation.loads)
     loads.push_back(load_json(load));
+  nlohmann::json collisions = nlohmann::json::array();
+  for (const auto& c : scene.deformation.collisions)
+    collisions.push_back({{"organs", c.organs}});
   nlohmann::json obstacles = nlohmann::json::array();
   for (const auto& o : scene.deformation.obstacles) {
     nlohmann::json j = {{"type", to_string(o.shape)},
@@ -141,7 +144,8 @@ nlohmann::json scene_settings_json(const Scene& scene) {
         {"fixed", d.fixed},
         {"load_steps", d.load_steps},
         {"loads", loads},
-        {"obstacles", obstacles}}},
+        {"obstacles", obstacles},
+        {"collisions", collisions}}},
       {"voxelization",
        {{"supersampling", scene.voxelization.supersampling},
         {"tessellation_tolerance_mm", scene.voxelization.tessellation_tolerance_mm}}},

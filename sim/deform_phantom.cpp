@@ -1,5 +1,6 @@
 #include "sim/deform_phantom.hpp"
 
+#include "anatomy/structured_mesh.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
 #include "sim/elastic_model.hpp"
@@ -117,6 +118,69 @@ void add_enclosed_volume(ElasticModel& model, const PatchSurface& surface, int f
   model.volumes.push_back(enclosed_volume_constraint(std::move(vertices), std::move(triangles),
                                                      std::move(heights), model.rest_positions_m, bulk_modulus,
                                                      SingularValueRange{1.0 - tolerance, 1.0 + tolerance}));
+}
+
+/// The contact surfaces of the scene's collisions (each organ's closed surface: a solid body's
+/// boundary faces, a closed shell's triangles) and their pairs.
+/// @throws InputError naming the scene field when an organ of a pair is not simulated as a body
+/// of its own or has no closed surface
+void add_collisions(const Scene& scene, const Phantom& phantom, const std::vector<Body>& bodies,
+                    double nominal_stiffness, ElasticModel& model, StageReport& report) {
+  std::map<int, int> surface_of_body;
+  for (std::size_t i = 0; i < scene.deformation.collisions.size(); ++i) {
+    const std::vector<std::string>& names = scene.deformation.collisions[i].organs;
+    const std::string key = "deformation.collisions[" + std::to_string(i) + "].organs";
+    std::array<int, 2> pair{};
+    for (std::size_t k = 0; k < 2 && k < names.size(); ++k) {
+      const auto body = std::find_if(bodies.begin(), bodies.end(), [&](const Body& b) {
+        return scene.anatomy.organs[static_cast<std::size_t>(b.organ)].name == names[k];
+      });
+      if (body == bodies.end()) {
+        throw InputError(
+            Diagnostic{scene.location_of(key), key,
+                       "expected organs simulated as bodies of their own (loaded, not fixed, not "
+                       "inside another simulated organ), found '" +
+                           names[k] + "'"}
+                .format());
+      }
+      const auto b = static_cast<int>(body - bodies.begin());
+      if (!surface_of_body.count(b)) {
+        const Organ& organ = phantom.organs[static_cast<std::size_t>(body->organ)];
+        Eigen::MatrixX3i faces;
+        if (organ.solid)
+          faces = boundary_faces_of(organ.solid->vertices, organ.solid->tets);
+        else if (organ.surface)
+          faces = organ.surface->base_mesh().faces;
+        else
+          throw InputError(
+              Diagnostic{scene.location_of(key), key,
+                         "expected organs with a closed surface, found the open sheet '" + names[k] + "'"}
+                  .format());
+        ContactSurface surface;
+        for (Eigen::Index f = 0; f < faces.rows(); ++f) {
+          surface.triangles.push_back({body->first_vertex + faces(f, 0), body->first_vertex + faces(f, 1),
+                                       body->first_vertex + faces(f, 2)});
+          for (int c = 0; c < 3; ++c)
+            surface.vertices.push_back(body->first_vertex + faces(f, c));
+        }
+        std::sort(surface.vertices.begin(), surface.vertices.end());
+        surface.vertices.erase(std::unique(surface.vertices.begin(), surface.vertices.end()),
+                               surface.vertices.end());
+        surface_of_body[b] = static_cast<int>(model.contact_surfaces.size());
+        model.contact_surfaces.push_back(std::move(surface));
+      }
+      pair[k] = surface_of_body[b];
+    }
+    model.contact_pairs.push_back(pair);
+  }
+  if (model.contact_pairs.empty()) return;
+  if (model.contact_stiffness_N_m == 0.0) model.contact_stiffness_N_m = 1e4 * nominal_stiffness;
+  for (const CollisionSettings& c : scene.deformation.collisions) {
+    report.modelled.push_back("collision of " + c.organs[0] + " and " + c.organs[1] +
+                              ": a vertex of either inside the other's surface is pushed out to the closest "
+                              "point there, the triangle it lies on pushed back (penalty " +
+                              format_number(model.contact_stiffness_N_m) + " N/m)");
+  }
 }
 
 /// A displacement load's springs: which model point constraints, and their rest targets (m).
@@ -403,6 +467,8 @@ PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, St
   } else if (!scene.deformation.obstacles.empty()) {
     report.skipped.push_back("obstacles: no organ is simulated, nothing can touch them");
   }
+
+  add_collisions(scene, phantom, bodies, nominal_stiffness, model, report);
 
   Eigen::MatrixX3d p = model.rest_positions_m;
   if (!bodies.empty()) {

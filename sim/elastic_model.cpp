@@ -106,6 +106,24 @@ int add_sheet(ElasticModel& model, const Eigen::MatrixX3d& rest_m, const Eigen::
   return first_vertex;
 }
 
+namespace {} // namespace
+
+std::vector<SurfaceContact> surface_contacts(const ElasticModel& model, const Eigen::MatrixX3d& p) {
+  std::vector<SurfaceContact> contacts;
+  if (model.contact_pairs.empty()) return contacts;
+  ContactGeometry geometry(model.contact_surfaces);
+  geometry.update(p);
+  const auto opposing = opposing_surfaces(model.contact_surfaces, model.contact_pairs, p.rows());
+  for (Eigen::Index v = 0; v < p.rows(); ++v) {
+    if (!model.fixed.empty() && model.fixed[static_cast<std::size_t>(v)]) continue;
+    for (int s : opposing[static_cast<std::size_t>(v)]) {
+      const SurfaceQuery q = geometry.query(s, p.row(v).transpose());
+      if (q.inside) contacts.push_back({v, q});
+    }
+  }
+  return contacts;
+}
+
 namespace {
 
 Eigen::Vector3d point_of(const PointConstraint& c, const Eigen::MatrixX3d& p) {
@@ -157,6 +175,8 @@ double model_energy(const ElasticModel& model, const StepInertia& inertia, const
       if (model.fixed.empty() || !model.fixed[static_cast<std::size_t>(v)])
         energy += contact_energy(model.obstacles, model.contact_stiffness_N_m, p.row(v).transpose());
   }
+  for (const SurfaceContact& c : surface_contacts(model, p))
+    energy += 0.5 * model.contact_stiffness_N_m * c.query.distance * c.query.distance;
   return energy;
 }
 
@@ -197,6 +217,14 @@ Eigen::MatrixX3d model_gradient(const ElasticModel& model, const StepInertia& in
       if (model.fixed.empty() || !model.fixed[static_cast<std::size_t>(v)])
         g.row(v) +=
             contact_gradient(model.obstacles, model.contact_stiffness_N_m, p.row(v).transpose()).transpose();
+  }
+  // kc/2 |x_v - y|^2 with y = sum b_k x_k the closest point (fixed b: the envelope theorem).
+  for (const SurfaceContact& c : surface_contacts(model, p)) {
+    const Eigen::RowVector3d force =
+        model.contact_stiffness_N_m * (p.row(c.vertex) - c.query.closest.transpose());
+    g.row(c.vertex) += force;
+    for (int k = 0; k < 3; ++k)
+      g.row(c.query.triangle[static_cast<std::size_t>(k)]) -= c.query.barycentric[k] * force;
   }
   return g;
 }

@@ -3,6 +3,7 @@
 #include "sim/enclosed_volume.hpp"
 #include "sim/obstacles.hpp"
 #include "sim/surface_constraints.hpp"
+#include "sim/surface_contacts.hpp"
 #include "sim/tet_constraints.hpp"
 
 #include <Eigen/Core>
@@ -40,6 +41,7 @@ struct PointConstraint {
 ///   E(p) = a/2 (p - s)^T M (p - s) - f . p + sum_tets [ws/2 |F - P_strain(F)|^2 + wv/2 |F - P_volume(F)|^2]
 ///          + sum_surfaces w/2 |F - P(F)|^2 + sum_volumes w/2 |X - P(X)|^2 + sum_points k/2 |b . x - t|^2
 ///          + sum_free vertices sum_obstacles kc/2 dist(x, allowed)^2
+///          + sum_free vertices sum_surfaces it may not enter kc/2 dist(x, outside)^2
 /// with a = 1/h^2 for a dynamic step (s the inertial target, gravity folded into s, f = 0) and
 /// a = 0 for quasi-static equilibrium (f the external forces).
 struct ElasticModel {
@@ -54,7 +56,14 @@ struct ElasticModel {
   std::vector<char> fixed;            ///< per vertex: held where the solver finds it
   Eigen::MatrixX3d external_forces_N; ///< per vertex; may be empty (no force)
   std::vector<Obstacle> obstacles;    ///< rigid obstacles the free vertices may not enter
-  double contact_stiffness_N_m = 0.0; ///< kc of every vertex-obstacle contact
+  double contact_stiffness_N_m = 0.0; ///< kc of every vertex-obstacle and vertex-surface contact
+  /// Closed surfaces of bodies, and the pairs of them that may not interpenetrate: a free vertex
+  /// of one inside the other costs kc/2 |x - y|^2 with y = sum b_k x_k the closest point of the
+  /// other's surface (METHOD.md section 3: projected onto the contact plane there), found anew at
+  /// each step; the force acts on the vertex and, shared by b, on the triangle's vertices. The
+  /// pairing is tested both ways.
+  std::vector<ContactSurface> contact_surfaces;
+  std::vector<std::array<int, 2>> contact_pairs;
 
   Eigen::Index vertex_count() const { return rest_positions_m.rows(); }
 };
@@ -112,6 +121,15 @@ double model_energy(const ElasticModel& model, const StepInertia& inertia, const
 /// The gradient of E with respect to every vertex (rows of fixed vertices included).
 Eigen::MatrixX3d model_gradient(const ElasticModel& model, const StepInertia& inertia,
                                 const Eigen::MatrixX3d& p);
+
+/// A free vertex inside a contact surface it may not enter, and the closest point there.
+struct SurfaceContact {
+  Eigen::Index vertex = 0;
+  SurfaceQuery query;
+};
+
+/// The surface contacts of the model (model.contact_pairs) at positions p.
+std::vector<SurfaceContact> surface_contacts(const ElasticModel& model, const Eigen::MatrixX3d& p);
 
 /// Largest gradient row norm over the free vertices (the residual the solvers report), N.
 double free_gradient_norm(const ElasticModel& model, const Eigen::MatrixX3d& gradient);

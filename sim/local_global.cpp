@@ -29,6 +29,50 @@ struct LocalGlobalSolver::Impl {
   std::vector<int> contact_count, factored_count;
   Eigen::MatrixX3d contact_targets;
   std::vector<double> contact_energies;
+  // Contacts with other bodies' surfaces: one slot per (free vertex, surface it may not enter),
+  // and the surfaces' geometry at the last local step. A contact is the PD constraint
+  // d = x_v - sum b_k x_k (the closest point of the surface's triangle, barycentric b), projected
+  // onto the contact plane's allowed side; in the factor it is kc c c^T with
+  // c = (1, -b_0, -b_1, -b_2) over (v, triangle), brought in by rank-one updates.
+  struct SurfaceSlot {
+    int vertex = 0, surface = 0;
+    bool inside = false; ///< at the last local step, with:
+    std::array<int, 3> triangle{};
+    Eigen::Vector3d barycentric = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::Zero();
+    double energy = 0.0;
+    Eigen::Matrix<double, 3, 4> positions; ///< of v and the triangle's vertices
+    bool factored = false;                 ///< the factor holds c c^T of:
+    std::array<int, 3> factored_triangle{};
+    Eigen::Vector3d factored_barycentric = Eigen::Vector3d::Zero();
+  };
+  std::vector<SurfaceSlot> slots;
+  std::unique_ptr<ContactGeometry> geometry;
+
+  /// Whether the factor's column of a slot is out of date (the barycentric coordinates are
+  /// refreshed once they drift by 1e-6: for a face contact they only share out the reaction).
+  static bool slot_changed(const SurfaceSlot& s) {
+    if (s.inside != s.factored) return true;
+    return s.inside && (s.triangle != s.factored_triangle ||
+                        (s.barycentric - s.factored_barycentric).cwiseAbs().maxCoeff() > 1e-6);
+  }
+
+  /// sqrt(kc) c over the free rows: (row, value), and (vertex, value) of the fixed ones.
+  void slot_column(const SurfaceSlot& s, SparseCholesky::Column& free_part,
+                   std::vector<std::pair<int, double>>* fixed_part = nullptr) const {
+    const double root = std::sqrt(model.contact_stiffness_N_m);
+    free_part.clear();
+    auto put = [&](int vertex, double value) {
+      if (value == 0.0) return;
+      const int f = free_index[static_cast<std::size_t>(vertex)];
+      if (f >= 0)
+        free_part.emplace_back(f, root * value);
+      else if (fixed_part)
+        fixed_part->emplace_back(vertex, root * value);
+    };
+    put(s.vertex, 1.0);
+    for (int k = 0; k < 3; ++k)
+      put(s.factored_triangle[static_cast<std::size_t>(k)], -s.factored_barycentric[k]);
+  }
   // Per tet: warm-started rotation and the projection term w_s T_s^T + w_v T_v^T.
   std::vector<Eigen::Quaterniond> rotations;
   std::vector<Eigen::Matrix3d> eigenvectors;
@@ -56,6 +100,8 @@ struct LocalGlobalSolver::Impl {
     report.contacts = 0;
     for (int c : contact_count)
       report.contacts += c > 0 ? 1 : 0;
+    for (const SurfaceSlot& slot : slots)
+      report.contacts += slot.factored ? 1 : 0;
     report.rank_updates = factor->rank_changes();
   }
 
@@ -286,13 +332,14 @@ struct LocalGlobalSolver::Impl {
         x += c.coefficients[k] * p.row(c.vertices[static_cast<std::size_t>(k)]);
       energy += 0.5 * c.stiffness_N_m * (x - c.target_m.transpose()).squaredNorm();
     }
-    if (!model.obstacles.empty()) energy += find_contacts(p);
+    if (!model.obstacles.empty() || !model.contact_pairs.empty()) energy += find_contacts(p);
     return energy;
   }
 
   /// The contact part of the local step: for each free vertex, the obstacles it is inside and
   /// its projections onto them. Returns the contact energy (summed in vertex order).
   double find_contacts(const Eigen::MatrixX3d& p) {
+    if (geometry) geometry->update(p);
     const auto nf = static_cast<std::ptrdiff_t>(free_vertex.size());
     const double k = model.contact_stiffness_N_m;
 #pragma omp parallel for num_threads(threads) schedule(static)
@@ -312,30 +359,70 @@ struct LocalGlobalSolver::Impl {
       contact_targets.row(f) = targets.transpose();
       contact_energies[static_cast<std::size_t>(f)] = energy;
     }
+    const auto slot_count = static_cast<std::ptrdiff_t>(slots.size());
+#pragma omp parallel for num_threads(threads) schedule(static) if (slot_count > 0)
+    for (std::ptrdiff_t i = 0; i < slot_count; ++i) {
+      SurfaceSlot& slot = slots[static_cast<std::size_t>(i)];
+      const SurfaceQuery q = geometry->query(slot.surface, p.row(slot.vertex).transpose());
+      slot.inside = q.inside;
+      slot.energy = q.inside ? 0.5 * k * q.distance * q.distance : 0.0;
+      if (!q.inside) continue;
+      slot.triangle = q.triangle;
+      slot.barycentric = q.barycentric;
+      slot.normal = q.normal;
+      slot.positions.col(0) = p.row(slot.vertex).transpose();
+      for (int c = 0; c < 3; ++c)
+        slot.positions.col(c + 1) = p.row(q.triangle[static_cast<std::size_t>(c)]).transpose();
+    }
     double energy = 0.0;
     for (double e : contact_energies)
       energy += e;
+    for (const SurfaceSlot& slot : slots)
+      energy += slot.energy;
     return energy;
   }
 
   /// Brings the factor's contacts up to those of the last local step by rank-one updates and
   /// downdates of k e_f e_f^T. Returns how many free vertices changed.
   int update_contacts() {
-    if (model.obstacles.empty()) return 0;
-    std::vector<std::pair<int, double>> changes;
+    if (model.obstacles.empty() && model.contact_pairs.empty()) return 0;
+    std::vector<SparseCholesky::Column> add, remove;
+    const double root = std::sqrt(model.contact_stiffness_N_m);
+    int changes = 0;
     for (std::size_t f = 0; f < contact_count.size(); ++f) {
       if (contact_count[f] == factored_count[f]) continue;
-      changes.emplace_back(static_cast<int>(f),
-                           model.contact_stiffness_N_m * (contact_count[f] - factored_count[f]));
+      const int delta = contact_count[f] - factored_count[f];
+      for (int k = 0; k < std::abs(delta); ++k)
+        (delta > 0 ? add : remove).push_back({{static_cast<int>(f), root}});
       factored_count[f] = contact_count[f];
+      ++changes;
     }
-    if (!changes.empty()) factor->update_diagonal(changes);
-    return static_cast<int>(changes.size());
+    SparseCholesky::Column column;
+    for (SurfaceSlot& slot : slots) {
+      if (!slot_changed(slot)) continue;
+      if (slot.factored) {
+        slot_column(slot, column);
+        if (!column.empty()) remove.push_back(column);
+      }
+      slot.factored = slot.inside;
+      slot.factored_triangle = slot.triangle;
+      slot.factored_barycentric = slot.barycentric;
+      if (slot.factored) {
+        slot_column(slot, column);
+        if (!column.empty()) add.push_back(column);
+      }
+      ++changes;
+    }
+    if (!add.empty() || !remove.empty()) factor->update_columns(add, remove);
+    return changes;
   }
 
   /// Whether the last local step found contacts the factor does not hold yet.
   bool contacts_pending() const {
-    return contact_count != factored_count;
+    if (contact_count != factored_count) return true;
+    for (const SurfaceSlot& slot : slots)
+      if (slot_changed(slot)) return true;
+    return false;
   }
 
   /// K x over the free rows, with the contacts the factor holds.
@@ -345,6 +432,16 @@ struct LocalGlobalSolver::Impl {
       if (factored_count[f] > 0)
         Kx.row(static_cast<Eigen::Index>(f)) +=
             (model.contact_stiffness_N_m * factored_count[f]) * x.row(static_cast<Eigen::Index>(f));
+    SparseCholesky::Column column;
+    for (const SurfaceSlot& slot : slots) {
+      if (!slot.factored) continue;
+      slot_column(slot, column);
+      Eigen::RowVector3d cx = Eigen::RowVector3d::Zero();
+      for (const auto& [row, value] : column)
+        cx += value * x.row(row);
+      for (const auto& [row, value] : column)
+        Kx.row(row) += value * cx;
+    }
     return Kx;
   }
 
@@ -353,6 +450,13 @@ struct LocalGlobalSolver::Impl {
     Eigen::VectorXd d = K_free.diagonal();
     for (std::size_t f = 0; f < factored_count.size(); ++f)
       d[static_cast<Eigen::Index>(f)] += model.contact_stiffness_N_m * factored_count[f];
+    SparseCholesky::Column column;
+    for (const SurfaceSlot& slot : slots) {
+      if (!slot.factored) continue;
+      slot_column(slot, column);
+      for (const auto& [row, value] : column)
+        d[row] += value * value;
+    }
     return d;
   }
 
@@ -391,6 +495,29 @@ struct LocalGlobalSolver::Impl {
         r += model.contact_stiffness_N_m * contact_targets.row(f);
       rhs.row(f) = r - coupling_rhs.row(f);
     }
+    // Contacts with other surfaces, as the factor holds them (update_contacts runs first):
+    // kc c_j P(d) for the free vertices j of each, d = c . X at the last local step and P(d) its
+    // part on the allowed side of the contact plane; fixed vertices' terms kc c_j c_k x_k move
+    // to the right-hand side.
+    const double k = model.contact_stiffness_N_m;
+    for (const SurfaceSlot& slot : slots) {
+      if (!slot.factored) continue;
+      Eigen::Vector4d c;
+      c << 1.0, -slot.factored_barycentric;
+      const Eigen::Vector3d d = slot.positions * c;
+      const Eigen::Vector3d projected = d - std::min(0.0, d.dot(slot.normal)) * slot.normal;
+      const std::array<int, 4> vertices = {slot.vertex, slot.factored_triangle[0], slot.factored_triangle[1],
+                                           slot.factored_triangle[2]};
+      for (int j = 0; j < 4; ++j) {
+        const int row = free_index[static_cast<std::size_t>(vertices[static_cast<std::size_t>(j)])];
+        if (row < 0 || c[j] == 0.0) continue;
+        Eigen::Vector3d r = k * c[j] * projected;
+        for (int i = 0; i < 4; ++i)
+          if (free_index[static_cast<std::size_t>(vertices[static_cast<std::size_t>(i)])] < 0)
+            r -= k * c[j] * c[i] * slot.positions.col(i);
+        rhs.row(row) += r.transpose();
+      }
+    }
   }
 };
 
@@ -408,6 +535,19 @@ LocalGlobalSolver::LocalGlobalSolver(const ElasticModel& model, double inertia_w
   m->volume_energies.assign(model.volumes.size(), 0.0);
   m->build_adjacency();
   m->assemble_and_factor();
+  if (!model.contact_pairs.empty()) {
+    const auto opposing =
+        opposing_surfaces(model.contact_surfaces, model.contact_pairs, model.vertex_count());
+    for (int v : m->free_vertex) {
+      for (int surface : opposing[static_cast<std::size_t>(v)]) {
+        Impl::SurfaceSlot slot;
+        slot.vertex = v;
+        slot.surface = surface;
+        m->slots.push_back(slot);
+      }
+    }
+    m->geometry = std::make_unique<ContactGeometry>(model.contact_surfaces);
+  }
 }
 
 LocalGlobalSolver::~LocalGlobalSolver() = default;
@@ -449,11 +589,11 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
   Eigen::MatrixX3d x = free_positions();
   for (int iteration = 1; iteration <= stop.max_iterations; ++iteration) {
     start = Clock::now();
+    const int contact_changes = m->update_contacts(); // (timed with the local step: the
+    report.contact_changes += contact_changes;        // right-hand side depends on it)
     m->gather_rhs(target);
     report.local_seconds += seconds_since(start);
     start = Clock::now();
-    const int contact_changes = m->update_contacts();
-    report.contact_changes += contact_changes;
     m->factor->solve(m->rhs, m->solution);
     report.global_seconds += seconds_since(start);
     start = Clock::now();
@@ -572,10 +712,11 @@ SolveReport LocalGlobalSolver::solve_jacobi_chebyshev(Eigen::MatrixX3d& p, const
   int step = 0; // iterations since the acceleration (re)started
   for (int iteration = 1; iteration <= stop.max_iterations; ++iteration) {
     start = Clock::now();
+    const bool contacts_changed = m->update_contacts() > 0;
     m->gather_rhs(target);
     report.local_seconds += seconds_since(start);
     start = Clock::now();
-    if (m->update_contacts() > 0) inverse_diagonal = m->matrix_diagonal().cwiseInverse();
+    if (contacts_changed) inverse_diagonal = m->matrix_diagonal().cwiseInverse();
     const Eigen::MatrixX3d Kx = m->apply_matrix(x);
     const Eigen::MatrixX3d jacobi = x + inverse_diagonal.asDiagonal() * (m->rhs - Kx);
     ++step;

@@ -57,6 +57,22 @@ Eigen::SparseMatrix<double> assemble_hessian(const ElasticModel& model, const St
         add_block(e.vertices[static_cast<std::size_t>(a)], e.vertices[static_cast<std::size_t>(b)],
                   L(a, b) * Eigen::Matrix3d::Identity());
   }
+  // Surface contacts: kc (c c^T) (x) (n n^T), c = (1, -b) over the vertex and the closest
+  // point's triangle (Gauss-Newton: exact for a face contact, without the surface's curvature
+  // at edges and corners).
+  for (const SurfaceContact& contact : surface_contacts(model, p)) {
+    const std::array<int, 4> vertices = {static_cast<int>(contact.vertex), contact.query.triangle[0],
+                                         contact.query.triangle[1], contact.query.triangle[2]};
+    Eigen::Vector4d c;
+    c << 1.0, -contact.query.barycentric;
+    const Eigen::Matrix3d nn =
+        model.contact_stiffness_N_m * contact.query.normal * contact.query.normal.transpose();
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b)
+        if (c[a] != 0.0 && c[b] != 0.0)
+          add_block(vertices[static_cast<std::size_t>(a)], vertices[static_cast<std::size_t>(b)],
+                    c[a] * c[b] * nn);
+  }
   // Enclosed volumes: w I on their vertices (Gauss-Newton, as for surface elements).
   for (const EnclosedVolume& c : model.volumes)
     for (int v : c.vertices)

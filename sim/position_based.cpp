@@ -5,6 +5,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 
 namespace phantasm {
@@ -42,6 +43,10 @@ public:
     }
     if (!model.obstacles.empty())
       m_contact_lambda.assign(static_cast<std::size_t>(model.vertex_count()) * model.obstacles.size(), 0.0);
+    if (!model.contact_pairs.empty()) {
+      m_opposing = opposing_surfaces(model.contact_surfaces, model.contact_pairs, model.vertex_count());
+      m_geometry = std::make_unique<ContactGeometry>(model.contact_surfaces);
+    }
   }
 
   /// One sweep over every constraint; returns the largest distance a vertex moved.
@@ -121,6 +126,29 @@ public:
         apply(l, m_model.contact_stiffness_N_m, lambda, p);
       }
     }
+    if (m_geometry) {
+      // Other bodies' surfaces as they are at this point of the sweep.
+      m_geometry->update(p);
+      for (Eigen::Index v = 0; v < p.rows(); ++v) {
+        if (m_inverse_mass[static_cast<std::size_t>(v)] == 0.0) continue;
+        for (int s : m_opposing[static_cast<std::size_t>(v)]) {
+          const SurfaceQuery q = m_geometry->query(s, p.row(v).transpose());
+          double lambda = 0.0; // contacts change from sweep to sweep: no multiplier carried over
+          if (!q.inside) continue;
+          // C = depth: the vertex moves out along n, the triangle's vertices (by b) back.
+          Linearized l;
+          l.value = q.distance;
+          l.count = 4;
+          l.vertices[0] = static_cast<int>(v);
+          l.gradients[0] = -q.normal;
+          for (int k = 0; k < 3; ++k) {
+            l.vertices[static_cast<std::size_t>(k + 1)] = q.triangle[static_cast<std::size_t>(k)];
+            l.gradients[static_cast<std::size_t>(k + 1)] = q.barycentric[k] * q.normal;
+          }
+          apply(l, m_model.contact_stiffness_N_m, lambda, p);
+        }
+      }
+    }
     return (p - before).rowwise().norm().maxCoeff();
   }
 
@@ -182,6 +210,8 @@ private:
   std::vector<Eigen::Quaterniond> m_rotations, m_eigenvectors;
   std::vector<double> m_tet_lambda, m_surface_lambda, m_point_lambda, m_volume_lambda, m_contact_lambda;
   std::vector<double> m_inverse_mass;
+  std::vector<std::vector<int>> m_opposing;
+  std::unique_ptr<ContactGeometry> m_geometry;
 };
 
 } // namespace

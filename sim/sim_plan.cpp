@@ -112,6 +112,11 @@ StageReport plan_sim(const Scene& scene) {
     line << ", moved by " << format_vector(o.displacement_mm) << " mm (frictionless contact)";
     report.modelled.push_back(line.str());
   }
+  for (const CollisionSettings& c : d.collisions) {
+    if (c.organs.size() == 2)
+      report.modelled.push_back("collision of " + c.organs[0] + " and " + c.organs[1] +
+                                " (frictionless contact of their surfaces)");
+  }
   std::ostringstream solver;
   solver << to_string(d.solver.method) << " solver, " << to_string(d.mode) << ", at most "
          << d.solver.max_iterations << " iterations, stop at relative energy decrease "

@@ -2,6 +2,7 @@
 
 #include <cholmod.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
@@ -45,25 +46,33 @@ struct SparseCholesky::Impl {
     }
   }
 
-  /// One update (sign > 0) or downdate of A by the columns sqrt(|delta|) e_row.
-  void apply(const std::vector<std::pair<int, double>>& changes, int sign) {
-    std::vector<std::pair<int, double>> columns;
-    for (const auto& [row, delta] : changes)
-      if (delta * sign > 0.0)
-        columns.emplace_back(position[static_cast<std::size_t>(row)], std::sqrt(std::abs(delta)));
+  /// One update (sign > 0) or downdate of A by the columns (rows of A, values).
+  void apply(const std::vector<SparseCholesky::Column>& columns, int sign) {
     if (columns.empty()) return;
     const auto count = columns.size();
-    cholmod_sparse* C = cholmod_allocate_sparse(factor->n, count, count, 1, 1, 0, CHOLMOD_REAL, &common);
+    std::size_t entries = 0;
+    for (const auto& c : columns)
+      entries += c.size();
+    cholmod_sparse* C = cholmod_allocate_sparse(factor->n, count, entries, 1, 1, 0, CHOLMOD_REAL, &common);
     if (C == nullptr) throw std::runtime_error("sparse Cholesky: out of memory for a rank update");
     auto* p = static_cast<int*>(C->p);
     auto* i = static_cast<int*>(C->i);
     auto* v = static_cast<double*>(C->x);
+    std::size_t at = 0;
     for (std::size_t k = 0; k < count; ++k) {
-      p[k] = static_cast<int>(k);
-      i[k] = columns[k].first;
-      v[k] = columns[k].second;
+      p[k] = static_cast<int>(at);
+      // In the factor's (permuted) row order, sorted as CHOLMOD expects.
+      std::vector<std::pair<int, double>> permuted;
+      for (const auto& [row, value] : columns[k])
+        permuted.emplace_back(position[static_cast<std::size_t>(row)], value);
+      std::sort(permuted.begin(), permuted.end());
+      for (const auto& [row, value] : permuted) {
+        i[at] = row;
+        v[at] = value;
+        ++at;
+      }
     }
-    p[count] = static_cast<int>(count);
+    p[count] = static_cast<int>(at);
     const int ok = cholmod_updown(sign > 0 ? 1 : 0, C, factor, &common);
     cholmod_free_sparse(&C, &common);
     if (!ok) throw std::runtime_error("sparse Cholesky: the rank update failed");
@@ -118,8 +127,17 @@ void SparseCholesky::solve(const Eigen::MatrixX3d& b, Eigen::MatrixX3d& x) {
 }
 
 void SparseCholesky::update_diagonal(const std::vector<std::pair<int, double>>& changes) {
-  m->apply(changes, +1); // updates first: the matrix stays positive definite in between
-  m->apply(changes, -1);
+  std::vector<Column> add, remove;
+  for (const auto& [row, delta] : changes) {
+    if (delta == 0.0) continue;
+    (delta > 0.0 ? add : remove).push_back({{row, std::sqrt(std::abs(delta))}});
+  }
+  update_columns(add, remove);
+}
+
+void SparseCholesky::update_columns(const std::vector<Column>& add, const std::vector<Column>& remove) {
+  m->apply(add, +1); // updates first: the matrix stays positive definite in between
+  m->apply(remove, -1);
 }
 
 long SparseCholesky::rank_changes() const {

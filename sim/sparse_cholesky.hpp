@@ -33,6 +33,15 @@ public:
   /// @throws std::runtime_error when a downdate leaves A not positive definite
   void update_diagonal(const std::vector<std::pair<int, double>>& changes);
 
+  /// A column of a rank-one change c c^T: (row, value) entries.
+  using Column = std::vector<std::pair<int, double>>;
+
+  /// A <- A + sum over `add` of c c^T - sum over `remove` of c c^T (updates first, so the
+  /// matrix stays positive definite in between; the factor's pattern grows where c c^T fills
+  /// in, e.g. a contact between two bodies).
+  /// @throws std::runtime_error when a downdate leaves A not positive definite
+  void update_columns(const std::vector<Column>& add, const std::vector<Column>& remove);
+
   /// Rank-one changes applied so far.
   long rank_changes() const;
 

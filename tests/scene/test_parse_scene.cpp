@@ -310,3 +310,32 @@ TEST(ParseScene, ObstaclesAreReadWithTheirShapeKeysAndChecked) {
           .find("deformation.mode: expected quasi_static or dynamic when obstacles are given, found 'none'"),
       std::string::npos);
 }
+
+TEST(ParseScene, CollisionsNameTwoDifferentOrgansOfTheScene) {
+  const std::string collisions = R"(deformation:
+  mode: quasi_static
+  collisions:
+    - {organs: [ball, ball]}
+)";
+  EXPECT_NE(only_problem(k_minimal + collisions)
+                .find("deformation.collisions[0].organs: expected two different organs, found 'ball' twice"),
+            std::string::npos);
+  EXPECT_NE(
+      only_problem(k_minimal + replaced(collisions, "[ball, ball]", "[ball, liver]"))
+          .find("deformation.collisions[0].organs[1]: expected the name of an organ in this scene, found "
+                "'liver'"),
+      std::string::npos);
+  EXPECT_NE(only_problem(k_minimal + replaced(collisions, "[ball, ball]", "[ball]"))
+                .find("deformation.collisions[0].organs: expected two organ names, found 1"),
+            std::string::npos);
+  const std::string two =
+      replaced(k_minimal, "      shape: {type: ellipsoid, center_mm: [0, 0, 0], radii_mm: 20}\n",
+               "      shape: {type: ellipsoid, center_mm: [0, 0, 0], radii_mm: 20}\n"
+               "    - {name: cube, tissue: white_matter, shape: {type: box, center_mm: [40, 0, "
+               "0], size_mm: [10, 10, 10], cells: [2, 2, 2]}}\n");
+  const SceneLoadResult result = parse(two + replaced(collisions, "[ball, ball]", "[ball, cube]"));
+  ASSERT_TRUE(result.scene) << format_diagnostics(result.problems);
+  ASSERT_EQ(result.scene->deformation.collisions.size(), 1u);
+  EXPECT_EQ(result.scene->deformation.collisions[0].organs, (std::vector<std::string>{"ball", "cube"}));
+  EXPECT_EQ(scene_settings_json(*result.scene)["deformation"]["collisions"][0]["organs"][1], "cube");
+}

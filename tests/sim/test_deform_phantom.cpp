@@ -1,10 +1,12 @@
 // The deformation stage on whole scenes: bodies, embedded organs, held boundaries, loads, and
 // the dynamic mode against the closed form of implicit Euler.
 
+#include "anatomy/structured_mesh.hpp"
 #include "core/error.hpp"
 #include "sim/deform_phantom.hpp"
 #include "sim/enclosed_volume.hpp"
 #include "sim/newton.hpp"
+#include "sim/surface_contacts.hpp"
 
 #include <gtest/gtest.h>
 
@@ -286,5 +288,74 @@ TEST(DeformPhantom, AnEnclosedVolumeOnAnOpenSheetIsAClearError) {
     EXPECT_NE(std::string(e.what()).find("cloth: enclosed_volume_tolerance needs a closed surface"),
               std::string::npos)
         << e.what();
+  }
+}
+
+// Two balls pressed together (tests/data/scenes/two-balls.yaml): with the collision listed
+// neither enters the other and the right one is pushed; without it the left one passes in.
+TEST(DeformPhantom, CollidingOrgansPressOnEachOtherInsteadOfPassingThrough) {
+  Scene scene = load("tests/data/scenes/two-balls.yaml");
+  ASSERT_EQ(scene.deformation.collisions.size(), 1u);
+  Reporter quiet = Reporter::silent();
+  const Phantom phantom = build_phantom(scene, {}, quiet);
+  ASSERT_TRUE(phantom.organs[0].solid && phantom.organs[1].solid);
+  for (const bool collide : {true, false}) {
+    if (!collide) scene.deformation.collisions.clear();
+    StageReport report;
+    const PhantomDeformation d = deform_phantom(scene, phantom, report, quiet);
+    EXPECT_EQ(report.status, "done");
+    ASSERT_EQ(d.bodies.size(), 2u);
+    // How deep the left ball's boundary vertices lie inside the right ball's surface, and back.
+    ElasticModel probe;
+    std::vector<int> first;
+    for (const DeformedBody& body : d.bodies) {
+      first.push_back(static_cast<int>(probe.rest_positions_m.rows()));
+      probe.rest_positions_m.conservativeResize(probe.rest_positions_m.rows() + body.deformed_mm.rows(), 3);
+      probe.rest_positions_m.bottomRows(body.deformed_mm.rows()) = body.deformed_mm;
+      const Eigen::MatrixX3i faces = boundary_faces_of(body.rest_mm, body.tets);
+      ContactSurface surface;
+      for (Eigen::Index f = 0; f < faces.rows(); ++f) {
+        surface.triangles.push_back(
+            {first.back() + faces(f, 0), first.back() + faces(f, 1), first.back() + faces(f, 2)});
+        for (int c = 0; c < 3; ++c)
+          surface.vertices.push_back(first.back() + faces(f, c));
+      }
+      probe.contact_surfaces.push_back(surface);
+    }
+    ContactGeometry geometry(probe.contact_surfaces);
+    geometry.update(probe.rest_positions_m);
+    double deepest = 0.0;
+    for (int s = 0; s < 2; ++s)
+      for (int v : probe.contact_surfaces[static_cast<std::size_t>(s)].vertices) {
+        const SurfaceQuery q = geometry.query(1 - s, probe.rest_positions_m.row(v).transpose());
+        if (q.inside) deepest = std::max(deepest, q.distance);
+      }
+    const double right_leftmost = d.bodies[1].deformed_mm.col(0).minCoeff();
+    std::printf("two balls %s: deepest %.4f mm, right ball's leftmost point %.2f mm (rest %.2f)\n",
+                collide ? "colliding" : "passing", deepest, right_leftmost,
+                d.bodies[1].rest_mm.col(0).minCoeff());
+    if (collide) {
+      EXPECT_LT(deepest, 0.05);
+      EXPECT_GT(right_leftmost, d.bodies[1].rest_mm.col(0).minCoeff() + 2.0);
+      EXPECT_GT(d.solves.back().contacts, 3);
+    } else {
+      EXPECT_GT(deepest, 4.0);
+      EXPECT_NEAR(right_leftmost, d.bodies[1].rest_mm.col(0).minCoeff(), 0.5);
+    }
+  }
+  // Without its load the right ball is not simulated: a collision with it is a clear error.
+  scene.deformation.collisions.push_back({{"left", "right"}});
+  scene.deformation.loads.pop_back();
+  StageReport report;
+  try {
+    deform_phantom(scene, phantom, report, quiet);
+    FAIL() << "expected an error";
+  } catch (const InputError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(
+        message.find("deformation.collisions[0].organs: expected organs simulated as bodies of their own"),
+        std::string::npos)
+        << message;
+    EXPECT_NE(message.find("found 'right'"), std::string::npos) << message;
   }
 }
