@@ -594,7 +594,7 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
     m->gather_rhs(target);
     report.local_seconds += seconds_since(start);
     start = Clock::now();
-    m->factor->solve(m->rhs, m->solution);
+    m->factor->solve(m->rhs, m->solution, m->threads);
     report.global_seconds += seconds_since(start);
     start = Clock::now();
     const double previous = energy;

@@ -5,25 +5,53 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <exception>
 #include <stdexcept>
 #include <string>
 
 namespace phantasm {
 
+/// cholmod_solve2's reusable workspaces of one solve, with the common block it runs with.
+struct SolveWorkspace {
+  cholmod_common common{};
+  cholmod_dense* x = nullptr;
+  cholmod_dense* y = nullptr;
+  cholmod_dense* e = nullptr;
+  SolveWorkspace() { cholmod_start(&common); }
+  ~SolveWorkspace() {
+    cholmod_free_dense(&x, &common);
+    cholmod_free_dense(&y, &common);
+    cholmod_free_dense(&e, &common);
+    cholmod_finish(&common);
+  }
+  SolveWorkspace(const SolveWorkspace&) = delete;
+  SolveWorkspace& operator=(const SolveWorkspace&) = delete;
+
+  /// x = A^-1 b for `columns` columns of b (column-major, n rows) into out.
+  void solve(cholmod_factor* factor, const double* b, std::size_t n, std::size_t columns, double* out) {
+    cholmod_dense view{};
+    view.nrow = n;
+    view.ncol = columns;
+    view.nzmax = n * columns;
+    view.d = n;
+    view.x = const_cast<double*>(b); // read only
+    view.xtype = CHOLMOD_REAL;
+    view.dtype = CHOLMOD_DOUBLE;
+    if (!cholmod_solve2(CHOLMOD_A, factor, &view, nullptr, &x, nullptr, &y, &e, &common))
+      throw std::runtime_error("sparse Cholesky: the solve failed");
+    std::memcpy(out, x->x, sizeof(double) * view.nzmax);
+  }
+};
+
 struct SparseCholesky::Impl {
   cholmod_common common{};
   cholmod_factor* factor = nullptr;
-  cholmod_dense* x = nullptr; // solve2's reusable workspaces
-  cholmod_dense* y = nullptr;
-  cholmod_dense* e = nullptr;
-  std::vector<int> position; ///< row of the permuted matrix for each row of A
+  SolveWorkspace first, second; ///< of the two halves of a solve split between threads
+  std::vector<int> position;    ///< row of the permuted matrix for each row of A
   long rank_changes = 0;
 
   Impl() { cholmod_start(&common); }
   ~Impl() {
-    cholmod_free_dense(&x, &common);
-    cholmod_free_dense(&y, &common);
-    cholmod_free_dense(&e, &common);
     cholmod_free_factor(&factor, &common);
     cholmod_finish(&common);
   }
@@ -111,19 +139,29 @@ SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& lower) : m(std
 
 SparseCholesky::~SparseCholesky() = default;
 
-void SparseCholesky::solve(const Eigen::MatrixX3d& b, Eigen::MatrixX3d& x) {
-  cholmod_dense view{};
-  view.nrow = static_cast<std::size_t>(b.rows());
-  view.ncol = 3;
-  view.nzmax = view.nrow * 3;
-  view.d = view.nrow;
-  view.x = const_cast<double*>(b.data()); // read only
-  view.xtype = CHOLMOD_REAL;
-  view.dtype = CHOLMOD_DOUBLE;
-  if (!cholmod_solve2(CHOLMOD_A, m->factor, &view, nullptr, &m->x, nullptr, &m->y, &m->e, &m->common))
-    throw std::runtime_error("sparse Cholesky: the solve failed");
+void SparseCholesky::solve(const Eigen::MatrixX3d& b, Eigen::MatrixX3d& x, int threads) {
+  const auto n = static_cast<std::size_t>(b.rows());
   x.resize(b.rows(), 3);
-  std::memcpy(x.data(), m->x->x, sizeof(double) * view.nzmax);
+  if (threads < 2 || n < k_split_rows) {
+    m->first.solve(m->factor, b.data(), n, 3, x.data());
+    return;
+  }
+  // Two columns on one thread, the third on another: each pass over the factor is shared by
+  // fewer columns, but the two run at once (the factor is only read).
+  std::exception_ptr failure;
+#pragma omp parallel num_threads(2)
+  {
+    try {
+#pragma omp single nowait
+      m->first.solve(m->factor, b.data(), n, 2, x.data());
+#pragma omp single nowait
+      m->second.solve(m->factor, b.data() + 2 * n, n, 1, x.data() + 2 * n);
+    } catch (...) {
+#pragma omp critical
+      failure = std::current_exception();
+    }
+  }
+  if (failure) std::rethrow_exception(failure);
 }
 
 void SparseCholesky::update_diagonal(const std::vector<std::pair<int, double>>& changes) {

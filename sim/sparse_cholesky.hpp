@@ -15,7 +15,8 @@ namespace phantasm {
 /// new factorization (contacts that come and go). The factor is simplicial LDL^T, what
 /// cholmod_updown works on; its solves are also faster here than the supernodal factor's, whose
 /// many small BLAS calls cost more than they save at these sizes (the bar's three-column solve
-/// 0.045 vs 0.13 ms, the 43k-tet solid's 1.4 vs 2.0 ms: bench_sim).
+/// 0.045 vs 0.13 ms, the 43k-tet solid's 1.4 vs 2.0 ms: bench_sim). Rank-one changes may fill in
+/// the factor's pattern (cholmod_updown handles it).
 class SparseCholesky {
 public:
   /// Factors A, given by its lower triangle (fill-reducing ordering by CHOLMOD).
@@ -25,8 +26,13 @@ public:
   SparseCholesky(const SparseCholesky&) = delete;
   SparseCholesky& operator=(const SparseCholesky&) = delete;
 
-  /// x = A^-1 b for the columns of b (no allocation once the sizes repeat).
-  void solve(const Eigen::MatrixX3d& b, Eigen::MatrixX3d& x);
+  /// Systems from this many rows up are solved on two threads when asked.
+  static constexpr std::size_t k_split_rows = 4000;
+
+  /// x = A^-1 b for the columns of b (no allocation once the sizes repeat). With threads >= 2
+  /// and at least k_split_rows rows, two columns are solved on one thread and the third on
+  /// another (the same results: each column's solve is independent).
+  void solve(const Eigen::MatrixX3d& b, Eigen::MatrixX3d& x, int threads = 1);
 
   /// A <- A + sum of delta e_row e_row^T over `changes` (row, delta): positive deltas by a
   /// rank update, negative ones by a downdate, both in one call each.

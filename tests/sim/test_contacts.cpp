@@ -12,6 +12,8 @@
 #include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include <cstdio>
 #include <random>
 
@@ -145,9 +147,10 @@ TEST(Obstacles, ContactGradientMatchesFiniteDifferences) {
   EXPECT_GT(inside, 50);
 }
 
-TEST(SparseCholesky, DiagonalRankUpdatesAndDowndatesEqualANewFactorization) {
-  // The 1-D Laplacian plus a small diagonal, 200 rows.
-  const int n = 200;
+namespace {
+
+/// The lower triangle of the 1-D Laplacian plus a small diagonal, n rows.
+Eigen::SparseMatrix<double> laplacian(int n) {
   std::vector<Eigen::Triplet<double>> entries;
   for (int i = 0; i < n; ++i) {
     entries.emplace_back(i, i, 2.01);
@@ -155,6 +158,14 @@ TEST(SparseCholesky, DiagonalRankUpdatesAndDowndatesEqualANewFactorization) {
   }
   Eigen::SparseMatrix<double> A(n, n);
   A.setFromTriplets(entries.begin(), entries.end());
+  return A;
+}
+
+} // namespace
+
+TEST(SparseCholesky, DiagonalRankUpdatesAndDowndatesEqualANewFactorization) {
+  const int n = 200;
+  const Eigen::SparseMatrix<double> A = laplacian(n);
   Eigen::MatrixX3d b = Eigen::MatrixX3d::Random(n, 3);
   SparseCholesky factor(A);
   Eigen::MatrixX3d before, x, reference;
@@ -185,6 +196,39 @@ TEST(SparseCholesky, DiagonalRankUpdatesAndDowndatesEqualANewFactorization) {
   Eigen::SparseMatrix<double> indefinite = A;
   indefinite.coeffRef(5, 5) = -1.0;
   EXPECT_THROW(SparseCholesky{indefinite}, std::runtime_error);
+}
+
+TEST(SparseCholesky, ColumnUpdatesThatFillInAndTheTwoThreadSolveAreExact) {
+  // 5000 rows (enough for the split solve), changed by c c^T with c coupling far-apart rows (a
+  // contact between two bodies): new entries of L.
+  const int n = 5000;
+  const Eigen::SparseMatrix<double> A = laplacian(n);
+  const Eigen::MatrixX3d b = Eigen::MatrixX3d::Random(n, 3);
+  SparseCholesky factor(A);
+  const SparseCholesky::Column c = {{10, 30.0}, {2000, -12.0}, {4500, -18.0}};
+  factor.update_columns({c}, {});
+  Eigen::MatrixXd dense_c = Eigen::MatrixXd::Zero(n, 1);
+  for (const auto& [row, value] : c)
+    dense_c(row, 0) = value;
+  const Eigen::SparseMatrix<double> cc = (dense_c * dense_c.transpose()).sparseView();
+  const Eigen::SparseMatrix<double> changed =
+      Eigen::SparseMatrix<double>(A + Eigen::SparseMatrix<double>(cc.triangularView<Eigen::Lower>()));
+  SparseCholesky fresh(changed);
+  Eigen::MatrixX3d x, reference;
+  factor.solve(b, x);
+  fresh.solve(b, reference);
+  EXPECT_LT((x - reference).norm(), 1e-10 * reference.norm());
+  // Two threads: the same bits.
+  Eigen::MatrixX3d split;
+  factor.solve(b, split, 2);
+  EXPECT_EQ(std::memcmp(x.data(), split.data(), sizeof(double) * static_cast<std::size_t>(x.size())), 0);
+  // And back.
+  factor.update_columns({}, {c});
+  SparseCholesky original(A);
+  factor.solve(b, x);
+  original.solve(b, reference);
+  EXPECT_LT((x - reference).norm(), 1e-10 * reference.norm());
+  EXPECT_EQ(factor.rank_changes(), 2);
 }
 
 // A cantilever sagging onto a table (a half-space) below its free half: local/global with
