@@ -56,18 +56,14 @@ struct LocalGlobalSolver::Impl {
                         (s.barycentric - s.factored_barycentric).cwiseAbs().maxCoeff() > 1e-6);
   }
 
-  /// sqrt(kc) c over the free rows: (row, value), and (vertex, value) of the fixed ones.
-  void slot_column(const SurfaceSlot& s, SparseCholesky::Column& free_part,
-                   std::vector<std::pair<int, double>>* fixed_part = nullptr) const {
+  /// sqrt(kc) c over the free rows of the factored contact: (row, value). (Fixed vertices'
+  /// terms go to the right-hand side, in gather_rhs.)
+  void slot_column(const SurfaceSlot& s, SparseCholesky::Column& column) const {
     const double root = std::sqrt(model.contact_stiffness_N_m);
-    free_part.clear();
+    column.clear();
     auto put = [&](int vertex, double value) {
-      if (value == 0.0) return;
       const int f = free_index[static_cast<std::size_t>(vertex)];
-      if (f >= 0)
-        free_part.emplace_back(f, root * value);
-      else if (fixed_part)
-        fixed_part->emplace_back(vertex, root * value);
+      if (value != 0.0 && f >= 0) column.emplace_back(f, root * value);
     };
     put(s.vertex, 1.0);
     for (int k = 0; k < 3; ++k)
@@ -383,7 +379,8 @@ struct LocalGlobalSolver::Impl {
   }
 
   /// Brings the factor's contacts up to those of the last local step by rank-one updates and
-  /// downdates of k e_f e_f^T. Returns how many free vertices changed.
+  /// downdates: k e_f e_f^T per obstacle contact, k c c^T per surface contact. Returns how many
+  /// free vertices and surface-contact slots changed.
   int update_contacts() {
     if (model.obstacles.empty() && model.contact_pairs.empty()) return 0;
     std::vector<SparseCholesky::Column> add, remove;
