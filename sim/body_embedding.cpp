@@ -1,0 +1,163 @@
+// Bodies of the deformation stage: the assignment of organs to bodies, the embedding of nested
+// organs in a body's tets, and the organs' deformed vertices interpolated from the solve.
+#include "sim/body_embedding.hpp"
+
+#include <Eigen/LU>
+
+#include <limits>
+
+namespace phantasm::sim_detail {
+
+TetLocator::TetLocator(const Eigen::MatrixX3d& rest_mm, const Eigen::MatrixX4i& tets, int first_vertex)
+    : m_tets(tets), m_first(first_vertex) {
+  for (Eigen::Index t = 0; t < tets.rows(); ++t) {
+    Eigen::Matrix3d D;
+    for (int k = 0; k < 3; ++k)
+      D.col(k) = (rest_mm.row(tets(t, k + 1)) - rest_mm.row(tets(t, 0))).transpose();
+    m_origin.push_back(rest_mm.row(tets(t, 0)).transpose());
+    m_inverse.push_back(D.inverse());
+  }
+}
+
+Embedding TetLocator::locate(const Eigen::Vector3d& x) const {
+  double best = -std::numeric_limits<double>::infinity();
+  Embedding result;
+  for (std::size_t t = 0; t < m_inverse.size(); ++t) {
+    const Eigen::Vector3d b = m_inverse[t] * (x - m_origin[t]);
+    const Eigen::Vector4d w(1.0 - b.sum(), b[0], b[1], b[2]);
+    const double smallest = w.minCoeff();
+    if (smallest > best) {
+      best = smallest;
+      for (int k = 0; k < 4; ++k)
+        result.vertices[static_cast<std::size_t>(k)] = m_first + m_tets(static_cast<Eigen::Index>(t), k);
+      result.coefficients = w;
+      if (smallest >= 0.0) break;
+    }
+  }
+  return result;
+}
+
+Eigen::Vector3d interpolate(const Embedding& e, const Eigen::MatrixX3d& p) {
+  Eigen::Vector3d x = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 4; ++k)
+    x += e.coefficients[k] * p.row(e.vertices[static_cast<std::size_t>(k)]).transpose();
+  return x;
+}
+
+const TriangleMesh* shell_mesh(const Organ& organ) {
+  if (organ.sheet) return &*organ.sheet;
+  if (organ.surface) return &organ.surface->base_mesh();
+  return nullptr;
+}
+
+BodyAssignment assign_bodies(const Scene& scene, const Phantom& phantom, StageReport& report) {
+  const auto& settings = scene.anatomy.organs;
+  const std::size_t n = settings.size();
+  std::vector<OrganMotion> motion = classify_organ_motion(scene);
+  std::map<std::string, int> index;
+  for (std::size_t i = 0; i < n; ++i)
+    index[settings[i].name] = static_cast<int>(i);
+  std::vector<int> parent(n, -1), depth(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!settings[i].inside.empty()) parent[i] = index.at(settings[i].inside);
+  }
+  // The body of each organ: its topmost simulated ancestor-or-self (-1: none).
+  std::vector<int> body_of(n, -1);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int j = static_cast<int>(i); j >= 0; j = parent[static_cast<std::size_t>(j)]) {
+      if (motion[static_cast<std::size_t>(j)] == OrganMotion::simulated) body_of[i] = j;
+      if (j != static_cast<int>(i)) ++depth[i];
+    }
+  }
+  // A surface organ (no tet mesh) is simulated as a shell of its triangles; organs nested in it
+  // have nothing to follow (no interior) and stay in place.
+  for (std::size_t b = 0; b < n; ++b) {
+    if (body_of[b] != static_cast<int>(b) || phantom.organs[b].solid) continue;
+    if (shell_mesh(phantom.organs[b]) == nullptr) {
+      report.skipped.push_back(settings[b].name +
+                               ": a load acts on it but it has neither tets nor triangles");
+      for (std::size_t i = 0; i < n; ++i)
+        if (body_of[i] == static_cast<int>(b)) body_of[i] = -1;
+      continue;
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      if (i == b || body_of[i] != static_cast<int>(b)) continue;
+      body_of[i] = -1;
+      report.skipped.push_back(settings[i].name + ": inside the shell " + settings[b].name +
+                               ", which has no interior to carry it; it stays in place");
+    }
+  }
+  return {std::move(motion), std::move(index), std::move(parent), std::move(depth), std::move(body_of)};
+}
+
+int body_index(const std::vector<Body>& bodies, int organ) {
+  for (std::size_t k = 0; k < bodies.size(); ++k)
+    if (bodies[k].organ == organ) return static_cast<int>(k);
+  return -1;
+}
+
+Embedding embed(const Phantom& phantom, const BodyAssignment& assignment, const std::vector<Body>& bodies,
+                std::size_t i, Eigen::Index surface_vertex, const Eigen::Vector3d& x_mm) {
+  const Body& body = bodies[static_cast<std::size_t>(body_index(bodies, assignment.body_of[i]))];
+  Embedding e;
+  if (body.shell) { // the shell's own vertices (nothing else is embedded in a shell)
+    e.vertices = {body.first_vertex + static_cast<int>(surface_vertex), 0, 0, 0};
+    e.coefficients = Eigen::Vector4d(1, 0, 0, 0);
+    return e;
+  }
+  if (static_cast<int>(i) == body.organ &&
+      phantom.organs[i].tet_vertex_of_surface_vertex.size() > surface_vertex) {
+    e.vertices = {body.first_vertex + phantom.organs[i].tet_vertex_of_surface_vertex[surface_vertex], 0, 0,
+                  0};
+    e.coefficients = Eigen::Vector4d(1, 0, 0, 0);
+    return e;
+  }
+  return body.locator->locate(x_mm);
+}
+
+void collect_deformations(const Scene& scene, const Phantom& phantom, const BodyAssignment& assignment,
+                          const std::vector<Body>& bodies, const Eigen::MatrixX3d& deformed_mm,
+                          PhantomDeformation& result) {
+  const auto& settings = scene.anatomy.organs;
+  const std::size_t n = settings.size();
+  for (const Body& body : bodies) {
+    if (body.shell) continue; // the displacement fields come from solids' tets
+    const TetMesh& mesh = *phantom.organs[static_cast<std::size_t>(body.organ)].solid;
+    result.bodies.push_back({settings[static_cast<std::size_t>(body.organ)].name, mesh.vertices,
+                             deformed_mm.middleRows(body.first_vertex, mesh.vertices.rows()), mesh.tets});
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const Organ& organ = phantom.organs[i];
+    OrganDeformation d;
+    d.organ = settings[i].name;
+    const Eigen::MatrixX3d surface = organ.surface ? organ.surface->rest_positions()
+                                     : organ.sheet ? organ.sheet->vertices
+                                                   : Eigen::MatrixX3d();
+    d.surface_mm = surface;
+    if (organ.solid) d.solid_mm = organ.solid->vertices;
+    if (assignment.body_of[i] < 0) {
+      d.moved_by = assignment.motion[i] == OrganMotion::fixed ? "fixed" : "rigid";
+    } else {
+      const Body& body = bodies[static_cast<std::size_t>(body_index(bodies, assignment.body_of[i]))];
+      const bool is_body = body.organ == static_cast<int>(i);
+      d.moved_by = is_body ? "solver" : "embedded in " + settings[static_cast<std::size_t>(body.organ)].name;
+      for (Eigen::Index v = 0; v < surface.rows(); ++v)
+        d.surface_mm.row(v) =
+            interpolate(embed(phantom, assignment, bodies, i, v, surface.row(v).transpose()), deformed_mm)
+                .transpose();
+      if (organ.solid) {
+        if (is_body) {
+          d.solid_mm = deformed_mm.middleRows(body.first_vertex, organ.solid->vertices.rows());
+        } else {
+          for (Eigen::Index v = 0; v < d.solid_mm.rows(); ++v)
+            d.solid_mm.row(v) =
+                interpolate(body.locator->locate(organ.solid->vertices.row(v).transpose()), deformed_mm)
+                    .transpose();
+        }
+      }
+    }
+    result.organs.push_back(std::move(d));
+  }
+}
+
+} // namespace phantasm::sim_detail

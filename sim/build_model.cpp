@@ -1,0 +1,219 @@
+// The ElasticModel of the deformation stage: bodies from solid organs (materials by tet) and
+// shells from surface organs, enclosed volumes, held boundaries, and collisions.
+#include "sim/build_model.hpp"
+
+#include "anatomy/structured_mesh.hpp"
+#include "core/error.hpp"
+#include "core/format.hpp"
+
+#include <algorithm>
+#include <map>
+#include <sstream>
+
+namespace phantasm::sim_detail {
+namespace {
+
+/// The patch volume constraint of a closed shell (its base mesh's vertices from first_vertex),
+/// with the weight of the material's bulk modulus E / (3 (1 - 2 nu)).
+void add_enclosed_volume(ElasticModel& model, const PatchSurface& surface, int first_vertex,
+                         const MaterialSettings& material, double tolerance) {
+  const TriangleMesh& base = surface.base_mesh();
+  std::vector<int> vertices(static_cast<std::size_t>(base.vertices.rows()));
+  for (std::size_t v = 0; v < vertices.size(); ++v)
+    vertices[v] = first_vertex + static_cast<int>(v);
+  std::vector<std::array<int, 3>> triangles;
+  std::vector<double> heights;
+  for (Eigen::Index t = 0; t < base.face_count(); ++t) {
+    triangles.push_back({base.faces(t, 0), base.faces(t, 1), base.faces(t, 2)});
+    heights.push_back(k_mm * surface.mean_bump_height(t));
+  }
+  const double bulk_modulus = material.youngs_modulus_Pa / (3.0 * (1.0 - 2.0 * material.poisson_ratio));
+  model.volumes.push_back(enclosed_volume_constraint(std::move(vertices), std::move(triangles),
+                                                     std::move(heights), model.rest_positions_m, bulk_modulus,
+                                                     SingularValueRange{1.0 - tolerance, 1.0 + tolerance}));
+}
+
+/// A surface organ b as a shell of its triangles (and its enclosed volume when asked).
+Body add_shell_body(const Scene& scene, const Organ& organ, std::size_t b, ElasticModel& model,
+                    StageReport& report) {
+  const auto& settings = scene.anatomy.organs;
+  const TriangleMesh& sheet = *shell_mesh(organ);
+  const MaterialSettings* material = scene.find_material(settings[b].material);
+  if (material == nullptr)
+    throw InputError(settings[b].name + ": material '" + settings[b].material + "' is not defined");
+  Body body;
+  body.organ = static_cast<int>(b);
+  body.shell = true;
+  body.vertex_count = sheet.vertices.rows();
+  body.first_vertex =
+      add_sheet(model, k_mm * sheet.vertices, sheet.faces, material->youngs_modulus_Pa,
+                material->poisson_ratio, material->density_kg_m3, k_mm * settings[b].thickness_mm);
+  report.modelled.push_back(
+      settings[b].name + ": solved as a shell of " + std::to_string(sheet.vertices.rows()) +
+      " vertices and " + std::to_string(sheet.faces.rows()) + " triangles (" +
+      format_number(settings[b].thickness_mm) +
+      " mm thick: as-rigid-as-possible membrane per triangle, bending per interior edge "
+      "toward its rest curvature)");
+  if (settings[b].enclosed_volume_tolerance) {
+    if (!organ.surface) {
+      throw InputError(settings[b].name +
+                       ": enclosed_volume_tolerance needs a closed surface, but this organ is an open sheet");
+    }
+    const double tolerance = *settings[b].enclosed_volume_tolerance;
+    add_enclosed_volume(model, *organ.surface, body.first_vertex, *material, tolerance);
+    report.modelled.push_back(
+        settings[b].name + ": enclosed volume kept within " + format_number(100.0 * tolerance) +
+        " % of rest (patch volume constraint, bulk modulus of " + settings[b].material + ")");
+  }
+  return body;
+}
+
+/// A solid organ b as a body of its tets, each with the material of the innermost organ of the
+/// body holding its centroid; its boundary is held when it lies inside another organ.
+Body add_solid_body(const Scene& scene, const Phantom& phantom, const BodyAssignment& assignment,
+                    std::size_t b, BodyModel& built, StageReport& report) {
+  const auto& settings = scene.anatomy.organs;
+  const std::size_t n = settings.size();
+  const std::vector<int>& body_of = assignment.body_of;
+  const std::vector<int>& depth = assignment.depth;
+  const std::vector<int>& parent = assignment.parent;
+  ElasticModel& model = built.model;
+  const Organ& organ = phantom.organs[b];
+  const TetMesh& mesh = *organ.solid;
+  // Each tet takes the material of the innermost organ of this body holding its centroid.
+  std::vector<TetMaterial> materials;
+  std::map<std::string, int> tets_per_organ;
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 4; ++k)
+      centroid += 0.25 * mesh.vertices.row(mesh.tets(t, k)).transpose();
+    std::size_t holder = b;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (body_of[i] == static_cast<int>(b) && depth[i] > depth[holder] &&
+          phantom.organs[i].target->value(centroid) > 0.0) {
+        holder = i;
+      }
+    }
+    const MaterialSettings* material = scene.find_material(settings[holder].material);
+    if (material == nullptr) {
+      throw InputError(settings[holder].name + ": material '" + settings[holder].material +
+                       "' is not defined");
+    }
+    materials.push_back(
+        {lame_parameters(material->youngs_modulus_Pa, material->poisson_ratio), material->density_kg_m3});
+    ++tets_per_organ[settings[holder].name];
+  }
+  Body body;
+  body.organ = static_cast<int>(b);
+  body.first_vertex = add_body(model, k_mm * mesh.vertices, mesh.tets, materials);
+  body.vertex_count = mesh.vertices.rows();
+  body.locator = std::make_unique<TetLocator>(mesh.vertices, mesh.tets, body.first_vertex);
+  std::ostringstream line;
+  line << settings[b].name << ": solved as one body of " << mesh.vertices.rows() << " vertices and "
+       << mesh.tets.rows() << " tets (materials by tet:";
+  for (const auto& [name, count] : tets_per_organ)
+    line << ' ' << name << ' ' << count;
+  line << ")";
+  report.modelled.push_back(line.str());
+  if (parent[b] >= 0) {
+    for (Eigen::Index f = 0; f < mesh.boundary_faces.rows(); ++f)
+      for (int k = 0; k < 3; ++k)
+        built.held.push_back(body.first_vertex + mesh.boundary_faces(f, k));
+    report.modelled.push_back(settings[b].name + ": boundary held by " +
+                              settings[static_cast<std::size_t>(parent[b])].name +
+                              " (it does not move; no slip)");
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (body_of[i] == static_cast<int>(b) && i != b)
+      report.modelled.push_back(settings[i].name + ": embedded in " + settings[b].name +
+                                ", follows its tets");
+  }
+  return body;
+}
+
+} // namespace
+
+BodyModel build_body_model(const Scene& scene, const Phantom& phantom, const BodyAssignment& assignment,
+                           StageReport& report) {
+  BodyModel built;
+  for (std::size_t b = 0; b < assignment.body_of.size(); ++b) {
+    if (assignment.body_of[b] != static_cast<int>(b)) continue;
+    const Organ& organ = phantom.organs[b];
+    if (!organ.solid) {
+      built.bodies.push_back(add_shell_body(scene, organ, b, built.model, report));
+    } else {
+      built.bodies.push_back(add_solid_body(scene, phantom, assignment, b, built, report));
+    }
+  }
+  return built;
+}
+
+double nominal_stiffness(const ElasticModel& model) {
+  double diagonal = 0.0;
+  for (const TetElement& e : model.tets)
+    diagonal += (e.strain_weight + e.volume_weight) * e.Q.squaredNorm();
+  for (const SurfaceElement& e : model.surfaces)
+    diagonal += e.weight * e.Q.squaredNorm();
+  return model.vertex_count() > 0 ? diagonal / static_cast<double>(model.vertex_count()) : 0.0;
+}
+
+void add_collisions(const Scene& scene, const Phantom& phantom, const std::vector<Body>& bodies,
+                    double nominal_stiffness, ElasticModel& model, StageReport& report) {
+  std::map<int, int> surface_of_body;
+  for (std::size_t i = 0; i < scene.deformation.collisions.size(); ++i) {
+    const std::vector<std::string>& names = scene.deformation.collisions[i].organs;
+    const std::string key = "deformation.collisions[" + std::to_string(i) + "].organs";
+    std::array<int, 2> pair{};
+    for (std::size_t k = 0; k < 2 && k < names.size(); ++k) {
+      const auto body = std::find_if(bodies.begin(), bodies.end(), [&](const Body& b) {
+        return scene.anatomy.organs[static_cast<std::size_t>(b.organ)].name == names[k];
+      });
+      if (body == bodies.end()) {
+        throw InputError(
+            Diagnostic{scene.location_of(key), key,
+                       "expected organs simulated as bodies of their own (loaded, not fixed, not "
+                       "inside another simulated organ), found '" +
+                           names[k] + "'"}
+                .format());
+      }
+      const auto b = static_cast<int>(body - bodies.begin());
+      if (!surface_of_body.count(b)) {
+        const Organ& organ = phantom.organs[static_cast<std::size_t>(body->organ)];
+        Eigen::MatrixX3i faces;
+        if (organ.solid)
+          faces = boundary_faces_of(organ.solid->vertices, organ.solid->tets);
+        else if (organ.surface)
+          faces = organ.surface->base_mesh().faces;
+        else
+          throw InputError(
+              Diagnostic{scene.location_of(key), key,
+                         "expected organs with a closed surface, found the open sheet '" + names[k] + "'"}
+                  .format());
+        ContactSurface surface;
+        for (Eigen::Index f = 0; f < faces.rows(); ++f) {
+          surface.triangles.push_back({body->first_vertex + faces(f, 0), body->first_vertex + faces(f, 1),
+                                       body->first_vertex + faces(f, 2)});
+          for (int c = 0; c < 3; ++c)
+            surface.vertices.push_back(body->first_vertex + faces(f, c));
+        }
+        std::sort(surface.vertices.begin(), surface.vertices.end());
+        surface.vertices.erase(std::unique(surface.vertices.begin(), surface.vertices.end()),
+                               surface.vertices.end());
+        surface_of_body[b] = static_cast<int>(model.contact_surfaces.size());
+        model.contact_surfaces.push_back(std::move(surface));
+      }
+      pair[k] = surface_of_body[b];
+    }
+    model.contact_pairs.push_back(pair);
+  }
+  if (model.contact_pairs.empty()) return;
+  if (model.contact_stiffness_N_m == 0.0) model.contact_stiffness_N_m = 1e4 * nominal_stiffness;
+  for (const CollisionSettings& c : scene.deformation.collisions) {
+    report.modelled.push_back("collision of " + c.organs[0] + " and " + c.organs[1] +
+                              ": a vertex of either inside the other's surface is pushed out to the closest "
+                              "point there, the triangle it lies on pushed back (penalty " +
+                              format_number(model.contact_stiffness_N_m) + " N/m)");
+  }
+}
+
+} // namespace phantasm::sim_detail

@@ -1,0 +1,38 @@
+// Building the ElasticModel of the deformation stage from the scene's bodies: materials, shells,
+// enclosed volumes, held boundaries, and collisions between organs' surfaces. Internal to sim.
+#pragma once
+
+#include "sim/body_embedding.hpp"
+#include "sim/elastic_model.hpp"
+
+#include <vector>
+
+namespace phantasm::sim_detail {
+
+/// The model of the bodies, before loads.
+struct BodyModel {
+  ElasticModel model;
+  std::vector<Body> bodies; ///< in scene order of their organs
+  std::vector<int> held;    ///< boundary vertices of bodies inside an organ that does not move
+};
+
+/// The model of every body of `assignment` [choices documented in docs/deformation.md]: a solid
+/// organ's tet mesh, each tet with the material of the innermost organ of the body holding its
+/// centroid; a surface organ as a shell of its triangles (with its enclosed volume kept when the
+/// scene asks). What was modelled goes into `report`.
+/// @throws InputError for an undefined material, or an enclosed volume asked of an open sheet
+BodyModel build_body_model(const Scene& scene, const Phantom& phantom, const BodyAssignment& assignment,
+                           StageReport& report);
+
+/// The mean diagonal of the model's elastic matrix per vertex (N/m): the scale of the stiff
+/// penalties (displacement springs, contacts), 10^4 times this.
+double nominal_stiffness(const ElasticModel& model);
+
+/// The contact surfaces of the scene's collisions (each organ's closed surface: a solid body's
+/// boundary faces, a closed shell's triangles) and their pairs.
+/// @throws InputError naming the scene field when an organ of a pair is not simulated as a body
+/// of its own or has no closed surface
+void add_collisions(const Scene& scene, const Phantom& phantom, const std::vector<Body>& bodies,
+                    double nominal_stiffness, ElasticModel& model, StageReport& report);
+
+} // namespace phantasm::sim_detail

@@ -1,0 +1,174 @@
+// The frame loop of the deformation stage: the solver the scene asks for, the loads and obstacles
+// moved per frame (load increments or motion profiles), the solves, and their report.
+#include "sim/load_schedule.hpp"
+
+#include "core/error.hpp"
+#include "core/format.hpp"
+#include "sim/local_global.hpp"
+#include "sim/newton.hpp"
+#include "sim/position_based.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+namespace phantasm::sim_detail {
+namespace {
+
+/// The solver of the scene, and what kind of stepping it does.
+struct FrameSolver {
+  const SolverSettings* settings = nullptr;
+  bool jacobi = false;
+  bool position_based = false;
+  bool dynamic = false;
+  double h = 0.0; ///< time step, s
+  int frames = 0; ///< dynamic frames, or quasi-static load steps
+  StopCriteria stop;
+  std::unique_ptr<LocalGlobalSolver> local_global; ///< local_global and jacobi_chebyshev
+};
+
+/// @throws InputError for a position-based solver in quasi-static mode, or a local/global
+/// matrix nothing holds
+FrameSolver make_frame_solver(const Scene& scene, const ElasticModel& model) {
+  FrameSolver s;
+  const SolverSettings& solver = scene.deformation.solver;
+  s.settings = &solver;
+  s.jacobi = solver.method == SolverMethod::jacobi_chebyshev;
+  s.position_based = solver.method == SolverMethod::xpbd || solver.method == SolverMethod::gauss_seidel_pbd;
+  s.dynamic = scene.deformation.mode == DeformationMode::dynamic;
+  if (s.position_based && !s.dynamic) {
+    const std::string key = "deformation.solver.method";
+    throw InputError(Diagnostic{
+        scene.location_of(key), key,
+        "expected local_global, jacobi_chebyshev or newton for a quasi_static scene (" +
+            std::string(to_string(solver.method)) + " steps in time: it needs mode dynamic), found " +
+            std::string(to_string(solver.method))}
+                         .format());
+  }
+  s.stop.max_iterations = solver.max_iterations;
+  s.stop.relative_energy_decrease = solver.relative_energy_tolerance;
+  s.stop.position_change_m = k_mm * solver.position_tolerance_mm;
+  s.h = scene.deformation.time_step_s;
+  // Quasi-static solves apply the loads in load_steps equal increments, each starting from the
+  // last; dynamic mode makes one solve per frame.
+  s.frames = s.dynamic ? scene.deformation.frames : scene.deformation.load_steps;
+  try {
+    if (solver.method == SolverMethod::local_global || s.jacobi)
+      s.local_global =
+          std::make_unique<LocalGlobalSolver>(model, s.dynamic ? 1.0 / (s.h * s.h) : 0.0, solver.threads);
+  } catch (const std::runtime_error& error) {
+    throw InputError(std::string("deformation: ") + error.what() +
+                     "; in quasi-static mode put each loaded organ inside a fixed organ or list it in "
+                     "deformation.fixed");
+  }
+  return s;
+}
+
+/// The displacement loads' targets and the obstacles where they are at frame `frame`.
+void move_loads(const Scene& scene, const FrameSolver& s, int frame, Loads& loads, ElasticModel& model) {
+  const double t = (frame + 1) * s.h;
+  const double increment = static_cast<double>(frame + 1) / s.frames;
+  for (PushedPoints& push : loads.pushes) {
+    const double amount = s.dynamic ? profile(push.load->motion, push.load->period_s, t) : increment;
+    for (std::size_t k = 0; k < push.constraints.size(); ++k)
+      model.points[push.constraints[k]].target_m =
+          push.rest_m[k] + amount * k_mm * push.load->displacement_mm;
+  }
+  if (!model.obstacles.empty()) {
+    place_obstacles(
+        scene,
+        [&](const ObstacleSettings& o) { return s.dynamic ? profile(o.motion, o.period_s, t) : increment; },
+        model);
+  }
+}
+
+/// One frame's solve from p (replaced by its result).
+SolveReport solve_frame(FrameSolver& s, const ElasticModel& model, const StepInertia& inertia,
+                        Eigen::MatrixX3d& p) {
+  if (s.position_based) { // they start from the prediction s (Macklin et al.)
+    for (Eigen::Index v = 0; v < p.rows(); ++v)
+      if (!model.fixed[static_cast<std::size_t>(v)]) p.row(v) = inertia.target_m.row(v);
+  }
+  return s.jacobi           ? s.local_global->solve_jacobi_chebyshev(p, inertia.target_m, s.stop)
+         : s.local_global   ? s.local_global->solve(p, inertia.target_m, s.stop)
+         : s.position_based ? position_based_solve(s.settings->method == SolverMethod::xpbd
+                                                       ? PositionBasedVariant::xpbd
+                                                       : PositionBasedVariant::gauss_seidel_pbd,
+                                                   model, inertia, p, s.stop)
+                            : newton_solve(model, inertia, p, s.stop);
+}
+
+/// The last solve, the displacement loads' error and the obstacles' penetration into `report`.
+void report_solves(const FrameSolver& s, const ElasticModel& model, const Eigen::MatrixX3d& p,
+                   PhantomDeformation& result, StageReport& report) {
+  const SolveReport& last = result.solves.back();
+  report.modelled.push_back(
+      std::string(last.solver) + " " +
+      (s.dynamic      ? "dynamic, " + std::to_string(s.frames) + " frames of " + format_number(s.h) + " s"
+       : s.frames > 1 ? "quasi-static in " + std::to_string(s.frames) + " load steps"
+                      : "quasi-static") +
+      ": last solve " + std::to_string(last.iterations) + " iterations, stopped by " + last.stopped_by +
+      ", residual " + format_number(last.residual_N) + " N");
+  report.accuracy["solver residual N"] = last.residual_N;
+  report.accuracy["solver iterations"] = last.iterations;
+  for (const PointConstraint& c : model.points) {
+    Eigen::Vector3d x = Eigen::Vector3d::Zero();
+    for (int k = 0; k < c.count; ++k)
+      x += c.coefficients[k] * p.row(c.vertices[static_cast<std::size_t>(k)]).transpose();
+    result.attachment_error_mm = std::max(result.attachment_error_mm, (x - c.target_m).norm() / k_mm);
+  }
+  report.accuracy["displacement load error mm"] = result.attachment_error_mm;
+  if (!model.obstacles.empty()) {
+    double deepest = 0.0;
+    for (Eigen::Index v = 0; v < p.rows(); ++v) {
+      if (model.fixed[static_cast<std::size_t>(v)]) continue;
+      for (const Obstacle& o : model.obstacles)
+        deepest = std::max(deepest, -o.signed_distance(p.row(v).transpose()));
+    }
+    result.obstacle_penetration_mm = deepest / k_mm;
+    report.accuracy["obstacle penetration mm"] = result.obstacle_penetration_mm;
+    report.accuracy["vertices in contact"] = last.contacts;
+    report.modelled.push_back(
+        std::to_string(last.contacts) + " vertices in contact with obstacles at the end (" +
+        std::to_string(last.rank_updates) + " rank-one updates of the factor as contacts came and went)");
+  }
+}
+
+} // namespace
+
+double profile(MotionProfile motion, double period_s, double t) {
+  switch (motion) {
+  case MotionProfile::constant: return 1.0;
+  case MotionProfile::ramp: return std::min(1.0, t / period_s);
+  case MotionProfile::sine: return 0.5 * (1.0 - std::cos(2.0 * M_PI * t / period_s));
+  }
+  return 1.0;
+}
+
+void solve_frames(const Scene& scene, ElasticModel& model, Loads& loads, Eigen::MatrixX3d& p,
+                  PhantomDeformation& result, StageReport& report, Reporter& reporter) {
+  FrameSolver s = make_frame_solver(scene, model);
+  const double h = s.h;
+  const Eigen::MatrixX3d& acceleration = loads.acceleration;
+  if (!s.dynamic) model.external_forces_N = model.masses_kg.asDiagonal() * acceleration;
+  Eigen::MatrixX3d velocity = Eigen::MatrixX3d::Zero(p.rows(), 3);
+  ProgressBar progress(reporter, "deform", static_cast<std::size_t>(s.frames));
+  for (int frame = 0; frame < s.frames; ++frame) {
+    move_loads(scene, s, frame, loads, model);
+    StepInertia inertia;
+    if (s.dynamic) {
+      inertia.weight = 1.0 / (h * h);
+      inertia.target_m = p + h * velocity + h * h * acceleration;
+    }
+    const Eigen::MatrixX3d previous = p;
+    SolveReport solve = solve_frame(s, model, inertia, p);
+    if (!p.allFinite()) throw InputError("deformation: the solver produced non-finite positions");
+    if (s.dynamic) velocity = (p - previous) / h;
+    result.solves.push_back(std::move(solve));
+    progress.advance();
+  }
+  report_solves(s, model, p, result, report);
+  report.status = "done";
+}
+
+} // namespace phantasm::sim_detail

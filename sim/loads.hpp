@@ -1,0 +1,48 @@
+// The scene's loads as terms of the model: gravity on the bodies' masses, displacement loads as
+// stiff springs, the release of held boundary near them, and obstacles. Internal to sim.
+#pragma once
+
+#include "sim/build_model.hpp"
+
+#include <Eigen/Core>
+
+#include <functional>
+#include <vector>
+
+namespace phantasm::sim_detail {
+
+/// A displacement load's springs: which model point constraints, and their rest targets (m).
+struct PushedPoints {
+  const LoadSettings* load = nullptr;
+  std::vector<std::size_t> constraints;
+  std::vector<Eigen::Vector3d> rest_m;
+};
+
+/// The loads of the scene on the model.
+struct Loads {
+  Eigen::MatrixX3d acceleration;    ///< per model vertex, m/s^2 (gravity)
+  std::vector<PushedPoints> pushes; ///< one per displacement load that reaches a body
+};
+
+/// Gravity on the bodies it acts on, and every displacement load as springs of 10^4 x
+/// `nominal_stiffness` from the organ's surface points in its region (embedded in their body) to
+/// their displaced places, added to `built.model.points` at full displacement. Loads that reach
+/// no body go into `report` as skipped.
+Loads add_loads(const Scene& scene, const Phantom& phantom, const BodyAssignment& assignment,
+                BodyModel& built, double nominal_stiffness, StageReport& report);
+
+/// Fixes the held boundary vertices (`built.held`) in the model, except those within 1.5 region
+/// radii of a displacement load's centre.
+void hold_boundaries(const std::vector<PushedPoints>& pushes, BodyModel& built, StageReport& report);
+
+/// The scene's obstacles at rest in the model, with a contact penalty of 10^4 x
+/// `nominal_stiffness` (none without bodies: then they go into `report` as skipped).
+void add_obstacles(const Scene& scene, const std::vector<Body>& bodies, double nominal_stiffness,
+                   ElasticModel& model, StageReport& report);
+
+/// Replaces the model's obstacles by the scene's, each moved by `amount_of` it times its
+/// displacement.
+void place_obstacles(const Scene& scene, const std::function<double(const ObstacleSettings&)>& amount_of,
+                     ElasticModel& model);
+
+} // namespace phantasm::sim_detail
