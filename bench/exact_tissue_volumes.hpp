@@ -3,6 +3,7 @@
 // Exact tissue volumes of a phantom from its patch surfaces (an organ's own tissue fills its
 // volume minus its children's), and the largest relative error of volumes from fractions.
 
+#include "anatomy/phantom.hpp"
 #include "voxelize/voxelize_phantom.hpp"
 
 #include <cmath>

@@ -1,6 +1,6 @@
 #pragma once
 
-#include "anatomy/phantom.hpp"
+#include "anatomy/organ.hpp"
 #include "scene/scene.hpp"
 
 #include <map>

@@ -42,12 +42,10 @@ typename GridType::Ptr sparse_grid(const ImageGrid& grid, const std::vector<Valu
 void write_vdb(const std::filesystem::path& path, const VdbContents& contents) {
   openvdb::initialize();
   openvdb::GridPtrVec grids;
-  if (contents.level_sets) {
-    for (const auto& [organ, level_set] : *contents.level_sets) {
-      auto copy = static_cast<const openvdb::FloatGrid*>(level_set.grid())->deepCopy();
-      copy->setName(organ + "_sdf");
-      grids.push_back(copy);
-    }
+  for (const auto& [organ, level_set] : contents.level_sets) {
+    auto copy = static_cast<const openvdb::FloatGrid*>(level_set)->deepCopy();
+    copy->setName(organ + "_sdf");
+    grids.push_back(copy);
   }
   if (contents.grid && contents.labels)
     grids.push_back(sparse_grid<openvdb::Int32Grid>(*contents.grid, *contents.labels, "labels"));

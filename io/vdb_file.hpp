@@ -1,7 +1,6 @@
 #pragma once
 
 #include "core/grid.hpp"
-#include "voxelize/level_set.hpp"
 
 #include <cstdint>
 #include <filesystem>
@@ -13,10 +12,12 @@ namespace phantasm {
 
 /// The grids of one state, for a .vdb file.
 struct VdbContents {
-  const std::vector<std::pair<std::string, LevelSet>>* level_sets = nullptr; ///< "<organ>_sdf"
-  const ImageGrid* grid = nullptr;                                           ///< of the dense volumes
-  const std::vector<std::int32_t>* labels = nullptr;                         ///< "labels" (Int32Grid)
-  std::vector<std::pair<std::string, const std::vector<float>*>> fractions;  ///< "fraction_<tissue>"
+  /// By organ name: an openvdb::FloatGrid (LevelSet::grid()), written as "<organ>_sdf". Opaque,
+  /// so that io writes level sets without linking the voxelizer that makes them.
+  std::vector<std::pair<std::string, const void*>> level_sets;
+  const ImageGrid* grid = nullptr;                                          ///< of the dense volumes
+  const std::vector<std::int32_t>* labels = nullptr;                        ///< "labels" (Int32Grid)
+  std::vector<std::pair<std::string, const std::vector<float>*>> fractions; ///< "fraction_<tissue>"
 };
 
 /// Writes an OpenVDB file (atomically: a temporary file, then rename): every organ's level set

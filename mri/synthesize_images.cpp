@@ -2,6 +2,7 @@
 
 #include "core/format.hpp"
 #include "mri/kspace.hpp"
+#include "mri/parameter_maps.hpp"
 #include "mri/receive_coils.hpp"
 #include "mri/signal_equations.hpp"
 #include "mri/tissue_parameters.hpp"

@@ -2,31 +2,11 @@
 
 #include "core/progress.hpp"
 #include "core/stage_report.hpp"
-#include "mri/kspace.hpp"
-#include "mri/parameter_maps.hpp"
+#include "mri/mr_images.hpp"
 #include "scene/scene.hpp"
-#include "voxelize/voxelize_phantom.hpp"
-
-#include <optional>
-#include <string>
-#include <vector>
+#include "voxelize/voxelized_phantom.hpp"
 
 namespace phantasm {
-
-/// One magnitude image of one sequence in one state.
-struct MrImage {
-  const SequenceSettings* sequence = nullptr;
-  std::vector<float> magnitude; ///< grid voxel count
-  double noise_sigma = 0.0;     ///< std of each of the real and imaginary noise parts
-};
-
-struct MrImages {
-  std::vector<MrImage> reference;       ///< one per scene sequence
-  std::vector<MrImage> deformed;        ///< when the phantom was deformed
-  std::optional<KspaceSampling> kspace; ///< how the images were acquired, when in k-space
-  int coils = 1;                        ///< receive coils combined by sum of squares
-  std::optional<ParameterMaps> reference_maps, deformed_maps; ///< when outputs.parameter_maps
-};
 
 /// MR images of every sequence of the scene, for each state the volumes hold: each voxel's
 /// signal is the fraction-weighted sum of its tissues' signed closed-form signals (so partial

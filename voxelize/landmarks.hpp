@@ -1,23 +1,14 @@
 #pragma once
 
-#include "anatomy/phantom.hpp"
-#include "sim/deform_phantom.hpp"
+#include "anatomy/organ.hpp"
+#include "sim/phantom_deformation.hpp"
 #include "voxelize/motion_fields.hpp"
-
-#include <Eigen/Core>
+#include "voxelize/voxelized_phantom.hpp"
 
 #include <string>
 #include <vector>
 
 namespace phantasm {
-
-/// A named anatomical point of an organ, in both states (RAS mm).
-struct Landmark {
-  std::string name; ///< e.g. "grey_matter_superior"
-  std::string organ;
-  Eigen::Vector3d reference_mm = Eigen::Vector3d::Zero();
-  Eigen::Vector3d deformed_mm = Eigen::Vector3d::Zero();
-};
 
 /// Seven landmarks per closed organ: its centroid and its extreme surface points towards
 /// left, right, posterior, anterior, inferior and superior (patch base vertices, so both

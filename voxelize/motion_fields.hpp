@@ -1,7 +1,8 @@
 #pragma once
 
 #include "core/grid.hpp"
-#include "sim/deform_phantom.hpp"
+#include "sim/phantom_deformation.hpp"
+#include "voxelize/voxelized_phantom.hpp"
 
 #include <array>
 #include <cstdint>
@@ -73,17 +74,7 @@ private:
   std::vector<TetCache> m_rest, m_deformed;
 };
 
-/// Dense displacement fields both ways on one grid (RAS mm, x_to = x + u(x)), their exact-masks,
-/// and the Jacobian determinant of the reference-to-deformed map.
-struct MotionFields {
-  std::vector<float> ref_to_def; ///< 3 * voxel_count: component-major (all x, then all y, then all z)
-  std::vector<float> def_to_ref;
-  std::vector<std::uint8_t> ref_to_def_exact, def_to_ref_exact;
-  std::vector<float> jacobian; ///< det(I + grad u) of ref_to_def, central differences
-  double max_displacement_mm = 0.0;
-  double min_jacobian = 1.0;
-};
-
+/// The fields of `map` on every voxel of `grid`.
 MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& map);
 
 } // namespace phantasm

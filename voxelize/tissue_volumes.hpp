@@ -2,9 +2,8 @@
 
 #include "core/grid.hpp"
 #include "voxelize/level_set.hpp"
+#include "voxelize/voxelized_phantom.hpp"
 
-#include <cstdint>
-#include <string>
 #include <vector>
 
 namespace phantasm {
@@ -15,15 +14,6 @@ struct VoxelizedOrgan {
   int depth = 0;  ///< nesting depth: a point inside several organs belongs to the deepest
   int label = 0;  ///< dseg index (1..)
   int tissue = 0; ///< index into the tissue list
-};
-
-/// Labels and partial-volume fractions on an image grid.
-struct TissueVolumes {
-  std::vector<std::int32_t>
-      labels; ///< voxel_count(): the organ (dseg index) of the largest fraction, 0 background
-  std::vector<std::vector<float>> fractions; ///< per tissue, voxel_count(); with background they sum to 1
-  std::vector<float> background;             ///< voxel_count()
-  std::size_t supersampled_voxels = 0;       ///< voxels near a surface, where samples were taken
 };
 
 /// Each voxel's fraction of every tissue: voxels whose centre is farther than half a voxel

@@ -1,9 +1,14 @@
 #include "voxelize/voxelize_phantom.hpp"
 
 #include "core/format.hpp"
+#include "voxelize/landmarks.hpp"
+#include "voxelize/level_set.hpp"
+#include "voxelize/motion_fields.hpp"
+#include "voxelize/tissue_volumes.hpp"
 #include "voxelize/voxelize_plan.hpp"
 
 #include <algorithm>
+#include <memory>
 
 namespace phantasm {
 namespace {
@@ -63,10 +68,10 @@ StateLevelSets level_sets_of(const Scene& scene, const Phantom& phantom,
 }
 
 void keep_level_sets(const Phantom& phantom, StateLevelSets&& sets,
-                     std::vector<std::pair<std::string, LevelSet>>& kept) {
+                     std::vector<std::pair<std::string, std::shared_ptr<const LevelSet>>>& kept) {
   for (std::size_t k = 0; k < sets.organs.size(); ++k) {
     const auto organ = static_cast<std::size_t>(sets.organs[k].label - 1);
-    kept.emplace_back(phantom.organs[organ].name, std::move(sets.level_sets[k]));
+    kept.emplace_back(phantom.organs[organ].name, std::make_shared<LevelSet>(std::move(sets.level_sets[k])));
   }
 }
 

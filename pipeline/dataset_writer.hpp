@@ -1,0 +1,26 @@
+#pragma once
+
+#include "core/progress.hpp"
+#include "core/stage_report.hpp"
+#include "pipeline/simulation.hpp"
+#include "scene/scene.hpp"
+
+#include <filesystem>
+#include <vector>
+
+namespace phantasm {
+
+struct RunSummary {
+  std::vector<StageReport> stages;
+  std::vector<std::filesystem::path> files; ///< written, relative to the dataset folder
+};
+
+/// Writes a complete simulation (every stage run) as the dataset (README.md, Output) into `output`,
+/// provenance.json last. The folder must have been prepared (prepare_output_folder). The files
+/// are first listed (path and how to make its bytes), then written in list order: the progress
+/// bar counts the list, and what is written is exactly what was listed.
+/// @throws Cancelled when cancellation was requested; files already written stay complete
+RunSummary write_dataset(const Scene& scene, const Simulation& simulation,
+                         const std::filesystem::path& output, Reporter& reporter);
+
+} // namespace phantasm

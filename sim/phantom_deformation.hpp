@@ -1,0 +1,40 @@
+#pragma once
+
+#include "sim/solve_report.hpp"
+
+#include <Eigen/Core>
+
+#include <string>
+#include <vector>
+
+// The deformation stage's result types, apart from the solver (sim/deform_phantom.hpp), so that
+// the voxelizer and the writers include only what they read.
+
+namespace phantasm {
+
+/// A piece of the phantom the solver moved: the tet mesh of a simulated organ whose container
+/// does not move, with the organs nested in it embedded (they follow its tets barycentrically).
+struct DeformedBody {
+  std::string organ;
+  Eigen::MatrixX3d rest_mm;
+  Eigen::MatrixX3d deformed_mm;
+  Eigen::MatrixX4i tets;
+};
+
+/// Where every organ's vertices went.
+struct OrganDeformation {
+  std::string organ;
+  std::string moved_by;        ///< "solver" (a body), "embedded in <organ>", "fixed", "rigid"
+  Eigen::MatrixX3d surface_mm; ///< patch base vertices, or sheet vertices
+  Eigen::MatrixX3d solid_mm;   ///< tet vertices (solid organs)
+};
+
+struct PhantomDeformation {
+  std::vector<OrganDeformation> organs; ///< scene order
+  std::vector<DeformedBody> bodies;
+  std::vector<SolveReport> solves;      ///< one per frame
+  double attachment_error_mm = 0.0;     ///< largest distance of a pushed point from its target
+  double obstacle_penetration_mm = 0.0; ///< deepest free vertex inside an obstacle
+};
+
+} // namespace phantasm
