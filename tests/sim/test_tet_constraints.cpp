@@ -4,6 +4,7 @@
 #include "sim/elastic_model.hpp"
 #include "sim/signed_svd.hpp"
 #include "sim/tet_constraints.hpp"
+#include "tests/support/finite_difference.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,6 +13,7 @@
 #include <random>
 
 using namespace phantasm;
+using namespace phantasm::testing;
 
 namespace {
 
@@ -112,18 +114,10 @@ TEST(TetEnergy, GradientAndHessianMatchFiniteDifferences) {
       p += 0.001 *
            Eigen::MatrixX3d::NullaryExpr(4, 3, [&] { return std::normal_distribution<double>()(random); });
       const StepInertia none;
-      const Eigen::MatrixX3d g = model_gradient(model, none, p);
-      const double h = 1e-8;
-      for (int v = 0; v < 4; ++v) {
-        for (int c = 0; c < 3; ++c) {
-          Eigen::MatrixX3d plus = p, minus = p;
-          plus(v, c) += h;
-          minus(v, c) -= h;
-          const double numeric =
-              (model_energy(model, none, plus) - model_energy(model, none, minus)) / (2 * h);
-          EXPECT_NEAR(g(v, c), numeric, 1e-5 * g.norm() + 1e-9) << "vertex " << v << " axis " << c;
-        }
-      }
+      const Eigen::MatrixX3d numeric = central_difference_gradient(
+          [&](const Eigen::MatrixX3d& x) { return model_energy(model, none, x); }, p, 1e-8);
+      EXPECT_TRUE(matches_finite_differences(model_gradient(model, none, p), numeric, 1e-5))
+          << "strain range " << strain.min << " to " << strain.max << ", trial " << trial;
     }
   }
 }
@@ -155,16 +149,9 @@ TEST(TetEnergy, HessianMatchesFiniteDifferencesAndItsProjectionIsPositive) {
       if (kind == TetConstraintKind::strain) {
         EXPECT_LT((projected - H).norm(), 1e-9 * H.norm());
       }
-      Eigen::Matrix<double, 9, 9> numeric;
-      const double h = 1e-6;
-      for (int i = 0; i < 9; ++i) {
-        Eigen::Matrix3d plus = F, minus = F;
-        plus.data()[i] += h;
-        minus.data()[i] -= h;
-        const Eigen::Matrix3d column = (stress(plus) - stress(minus)) / (2 * h);
-        numeric.col(i) = Eigen::Map<const Eigen::Matrix<double, 9, 1>>(column.data());
-      }
-      EXPECT_LT((H - numeric).norm(), 1e-4 * numeric.norm()) << "kind " << static_cast<int>(kind);
+      // The Hessian in column-major order of F is the Jacobian of the stress d E / d F.
+      const Eigen::MatrixXd numeric = central_difference_jacobian(stress, F, 1e-6);
+      EXPECT_TRUE(matches_finite_differences(H, numeric, 1e-4)) << "kind " << static_cast<int>(kind);
     }
   }
 }
