@@ -6,7 +6,11 @@
 #include <openvdb/io/File.h>
 #include <openvdb/openvdb.h>
 
+#include <algorithm>
 #include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
 
 using namespace phantasm::testing;
 namespace fs = std::filesystem;
@@ -30,6 +34,42 @@ Expectation expectation_of(const fs::path& scene) {
     return {};
   }
   return {match[1], match[2]};
+}
+
+/// The subcommand names of the top-level help: the first word of each line indented by two
+/// spaces in its "Subcommands:" section (deeper lines continue a description), sorted.
+std::vector<std::string> subcommands_in_help(const std::string& help) {
+  std::vector<std::string> names;
+  std::istringstream lines(help);
+  std::string line;
+  bool in_section = false;
+  const std::regex entry(R"(^  (\S+)( .*)?$)");
+  while (std::getline(lines, line)) {
+    if (line == "Subcommands:") {
+      in_section = true;
+    } else if (in_section && line.rfind("   ", 0) != 0) {
+      std::smatch match;
+      if (!std::regex_match(line, match, entry)) break; // the end of the section
+      names.push_back(match[1]);
+    }
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+/// The names passed to CLI11's add_subcommand in the command's sources, sorted.
+std::vector<std::string> subcommands_in_sources(const fs::path& folder) {
+  std::vector<std::string> names;
+  const std::regex call(R"re(add_subcommand\(\s*"([^"]+)")re");
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    if (entry.path().extension() != ".cpp") continue;
+    const std::string source = read_file(entry.path());
+    for (auto it = std::sregex_iterator(source.begin(), source.end(), call); it != std::sregex_iterator();
+         ++it)
+      names.push_back((*it)[1]);
+  }
+  std::sort(names.begin(), names.end());
+  return names;
 }
 
 } // namespace
@@ -75,16 +115,20 @@ TEST(ValidateCommand, AMissingSceneFileIsABadInput) {
   EXPECT_EQ(result.err, "/no/such/scene.yaml: expected a scene file, found no such file\n");
 }
 
+// The subcommands the top-level help lists must be every subcommand the sources add (CLI11 leaves
+// a subcommand put in no group out of the list), and each must answer --help with its usage.
 TEST(Cli, EverySubcommandHasHelp) {
-  for (const char* command : {"run", "validate", "info"}) {
-    const CommandResult result = run_command({k_phantasm, command, "--help"});
-    EXPECT_EQ(result.exit_code, 0) << command;
-    EXPECT_NE(result.out.find("Usage"), std::string::npos) << command << ": " << result.out;
-  }
   const CommandResult top = run_command({k_phantasm, "--help"});
-  EXPECT_EQ(top.exit_code, 0);
-  for (const char* command : {"run", "validate", "info"})
-    EXPECT_NE(top.out.find(command), std::string::npos);
+  ASSERT_EQ(top.exit_code, 0);
+  const std::vector<std::string> listed = subcommands_in_help(top.out);
+  EXPECT_EQ(listed, subcommands_in_sources(k_source_dir / "apps" / "phantasm")) << top.out;
+  EXPECT_GE(listed.size(), 6u) << top.out; // run, batch, hdf5, validate, info, eval at least
+  for (const std::string& command : listed) {
+    SCOPED_TRACE(command);
+    const CommandResult result = run_command({k_phantasm, command, "--help"});
+    EXPECT_EQ(result.exit_code, 0) << result.err;
+    EXPECT_NE(result.out.find("Usage: phantasm " + command + " "), std::string::npos) << result.out;
+  }
 }
 
 TEST(Cli, UnknownOptionsAreBadInput) {
