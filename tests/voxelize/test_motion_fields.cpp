@@ -1,0 +1,166 @@
+// The map between the reference and deformed phantom on one cube of six tets under an affine
+// motion y = A x + b, where every answer is known in closed form: inside the body both ways the
+// affine map and its inverse, exactly; outside, within extension_mm of the moved boundary, the
+// smoothstep fade-out of the boundary's displacement (not exact); beyond, the identity (exact).
+
+#include "voxelize/motion_fields.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/LU>
+
+#include <cmath>
+#include <random>
+
+using namespace phantasm;
+
+namespace {
+
+const double k_side_mm = 20.0;
+const double k_extension_mm = 5.0;
+
+/// The affine motion: a mild shear and stretch (det 1.04) and a 1 mm shift along x.
+Eigen::Matrix3d motion_matrix() {
+  Eigen::Matrix3d A;
+  A << 1.1, 0.05, 0.0, 0.0, 0.95, 0.02, 0.03, 0.0, 1.0;
+  return A;
+}
+const Eigen::Vector3d k_shift(1.0, -0.5, 0.3);
+
+Eigen::Vector3d moved(const Eigen::Vector3d& x) {
+  return motion_matrix() * x + k_shift;
+}
+
+/// The cube [0, side]^3 cut into six tets around its diagonal from corner 0 to corner 7
+/// (corner k at (k & 1, k & 2, k & 4) * side), its vertices moved by the affine motion.
+DeformedBody affine_cube() {
+  DeformedBody body;
+  body.organ = "cube";
+  body.rest_mm.resize(8, 3);
+  for (int k = 0; k < 8; ++k)
+    body.rest_mm.row(k) = k_side_mm * Eigen::RowVector3d(k & 1, (k >> 1) & 1, (k >> 2) & 1);
+  body.deformed_mm.resize(8, 3);
+  for (int k = 0; k < 8; ++k)
+    body.deformed_mm.row(k) = moved(body.rest_mm.row(k).transpose()).transpose();
+  // One tet per order in which the axes are walked from corner 0 to corner 7.
+  const int axes[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  body.tets.resize(6, 4);
+  for (int t = 0; t < 6; ++t) {
+    const int first = 1 << axes[t][0], second = first | (1 << axes[t][1]);
+    body.tets.row(t) << 0, first, second, 7;
+  }
+  return body;
+}
+
+/// The fade-out of the extension: 1 on the boundary, 0 at extension_mm (a smoothstep).
+double fade(double distance_mm) {
+  const double s = 1.0 - distance_mm / k_extension_mm;
+  return s <= 0.0 ? 0.0 : s * s * (3.0 - 2.0 * s);
+}
+
+} // namespace
+
+TEST(DeformationMap, InsideTheBodyForwardIsTheMotionAndInverseTakesItBackExactly) {
+  const DeformationMap map({affine_cube()}, k_extension_mm);
+  std::mt19937 random(5);
+  std::uniform_real_distribution<double> coordinate(0.0, k_side_mm);
+  std::vector<Eigen::Vector3d> points = {
+      Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(k_side_mm),
+      Eigen::Vector3d(k_side_mm, 0.0, 0.5 * k_side_mm)}; // corners, an edge
+  for (int n = 0; n < 200; ++n)
+    points.emplace_back(coordinate(random), coordinate(random), coordinate(random));
+  for (const Eigen::Vector3d& x : points) {
+    SCOPED_TRACE(x.transpose());
+    bool exact = false;
+    const Eigen::Vector3d y = map.forward(x, &exact);
+    EXPECT_TRUE(exact);
+    EXPECT_LT((y - moved(x)).norm(), 1e-9);
+    bool back_exact = false;
+    EXPECT_LT((map.inverse(y, &back_exact) - x).norm(), 1e-9);
+    EXPECT_TRUE(back_exact);
+  }
+}
+
+TEST(DeformationMap, OutsideTheBodyTheBoundaryMotionFadesOutOverTheExtensionAndIsNotExact) {
+  const DeformationMap map({affine_cube()}, k_extension_mm);
+  // In front of the centre of the face x = 0 at distance d: the closest boundary point is the
+  // face centre, which moves by u = A c + b - c; the map moves x by fade(d) u.
+  const Eigen::Vector3d centre(0.0, 0.5 * k_side_mm, 0.5 * k_side_mm);
+  const Eigen::Vector3d u = moved(centre) - centre;
+  for (double d : {0.5, 1.0, 2.5, 4.0}) {
+    SCOPED_TRACE(d);
+    const Eigen::Vector3d x = centre - Eigen::Vector3d(d, 0.0, 0.0);
+    bool exact = true;
+    const Eigen::Vector3d y = map.forward(x, &exact);
+    EXPECT_FALSE(exact);
+    EXPECT_LT((y - (x + fade(d) * u)).norm(), 1e-9);
+    // The way back: the fixed-point inverse of the extension returns to x, still not exact
+    // (y lies outside the deformed cube, whose face moved away by about 1 mm).
+    bool back_exact = true;
+    EXPECT_LT((map.inverse(y, &back_exact) - x).norm(), 1e-6);
+    EXPECT_FALSE(back_exact);
+  }
+  // The gap the moved face leaves: inside the reference cube but outside the deformed one, the
+  // way back has no exact answer.
+  const Eigen::Vector3d gap(0.3, 0.5 * k_side_mm, 0.5 * k_side_mm);
+  ASSERT_LT(gap.x(), moved(Eigen::Vector3d(0.0, gap.y(), gap.z())).x()); // left of the moved face
+  bool gap_exact = true;
+  map.inverse(gap, &gap_exact);
+  EXPECT_FALSE(gap_exact);
+  // Beyond extension_mm of the boundary in both states: tissue that does not move, exactly.
+  for (const Eigen::Vector3d& far :
+       {Eigen::Vector3d(-12.0, 10.0, 10.0), Eigen::Vector3d(40.0, 40.0, -15.0)}) {
+    SCOPED_TRACE(far.transpose());
+    bool exact = false;
+    EXPECT_EQ(map.forward(far, &exact), far);
+    EXPECT_TRUE(exact);
+    exact = false;
+    EXPECT_EQ(map.inverse(far, &exact), far);
+    EXPECT_TRUE(exact);
+  }
+}
+
+// The dense fields on a grid: the motion inside the cube, its Jacobian determinant det A (central
+// differences of an affine field are exact), zero and exact far away.
+TEST(DeformationMap, MotionFieldsHoldTheMotionAndItsJacobianInsideAndNothingFarAway) {
+  const DeformationMap map({affine_cube()}, k_extension_mm);
+  ImageGrid grid;
+  grid.dims = {24, 24, 24}; // 2 mm voxels from -13 mm to 33 mm
+  grid.spacing_mm = Eigen::Vector3d::Constant(2.0);
+  grid.world_from_voxel.topLeftCorner<3, 3>() = 2.0 * Eigen::Matrix3d::Identity();
+  grid.world_from_voxel.topRightCorner<3, 1>() = Eigen::Vector3d::Constant(-13.0);
+  const MotionFields fields = compute_motion_fields(grid, map);
+  const auto count = static_cast<std::size_t>(grid.voxel_count());
+  const double det = motion_matrix().determinant();
+  int inside = 0, far = 0;
+  for (int k = 0; k < grid.dims.z(); ++k) {
+    for (int j = 0; j < grid.dims.y(); ++j) {
+      for (int i = 0; i < grid.dims.x(); ++i) {
+        const std::size_t v = static_cast<std::size_t>(i + grid.dims.x() * (j + grid.dims.y() * k));
+        const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
+        const Eigen::Vector3d u(fields.ref_to_def[v], fields.ref_to_def[count + v],
+                                fields.ref_to_def[2 * count + v]);
+        // Voxels whose neighbours are inside the cube too: the motion and det A.
+        if ((x.array() >= 2.0).all() && (x.array() <= k_side_mm - 2.0).all()) {
+          ++inside;
+          EXPECT_LT((u - (moved(x) - x)).norm(), 1e-5) << x.transpose();
+          EXPECT_TRUE(fields.ref_to_def_exact[v]);
+          EXPECT_NEAR(fields.jacobian[v], det, 1e-5) << x.transpose();
+        }
+        // More than extension_mm from the cube in both states: nothing moves.
+        const Eigen::Vector3d low = Eigen::Vector3d::Constant(-k_extension_mm - 3.0);
+        const Eigen::Vector3d high = Eigen::Vector3d::Constant(k_side_mm + k_extension_mm + 4.0);
+        if ((x.array() < low.array()).any() || (x.array() > high.array()).any()) {
+          ++far;
+          EXPECT_EQ(u, Eigen::Vector3d::Zero()) << x.transpose();
+          EXPECT_TRUE(fields.ref_to_def_exact[v] && fields.def_to_ref_exact[v]) << x.transpose();
+          EXPECT_EQ(fields.jacobian[v], 1.0f) << x.transpose();
+        }
+      }
+    }
+  }
+  // Both kinds of voxel were there to check (x = 3, 5, ..., 17 mm inside; -13 to -9 and 31 to
+  // 33 mm far along each axis).
+  EXPECT_GT(inside, 100);
+  EXPECT_GT(far, 100);
+}
