@@ -1,0 +1,33 @@
+# Labels the tests of one gtest executable one by one, after gtest_discover_tests added them.
+# ctest includes it (through the file phantasm_add_test writes, see tests/CMakeLists.txt) right
+# after the executable's discovered tests, with:
+#   phantasm_relabel_target  the executable; ${phantasm_relabel_target}_TESTS lists its tests
+#   phantasm_relabel_default the label of the tests not named below
+#   phantasm_relabel_fast, _slow, _heavy  names Suite.Test to label fast, slow or heavy (a
+#     parameterized test's name covers all its instances, Prefix/Suite.Test/parameter)
+#   phantasm_relabel_cmake   the cmake program
+# ctest appends labels rather than replacing them, so each test gets its label here only.
+# A listed name that matches no test becomes a failing test, so that renaming or removing a
+# test cannot leave its label behind unnoticed.
+
+if(DEFINED ${phantasm_relabel_target}_TESTS) # else the executable is not built yet
+  set(phantasm_relabel_unmatched ${phantasm_relabel_fast} ${phantasm_relabel_slow} ${phantasm_relabel_heavy})
+  foreach(phantasm_relabel_test IN LISTS ${phantasm_relabel_target}_TESTS)
+    string(REGEX REPLACE "^([^/]*/)?([^./]+[.][^./]+)(/.*)?$" "\\2" phantasm_relabel_name
+                         "${phantasm_relabel_test}")
+    set(phantasm_relabel_label ${phantasm_relabel_default})
+    foreach(phantasm_relabel_kind fast slow heavy)
+      list(FIND phantasm_relabel_${phantasm_relabel_kind} "${phantasm_relabel_name}" phantasm_relabel_at)
+      if(NOT phantasm_relabel_at EQUAL -1)
+        set(phantasm_relabel_label ${phantasm_relabel_kind})
+        list(REMOVE_ITEM phantasm_relabel_unmatched "${phantasm_relabel_name}")
+      endif()
+    endforeach()
+    set_tests_properties("${phantasm_relabel_test}" PROPERTIES LABELS ${phantasm_relabel_label})
+  endforeach()
+  if(phantasm_relabel_unmatched)
+    add_test("${phantasm_relabel_target}.LabelledTestsExist" "${phantasm_relabel_cmake}" -E echo
+             "tests/CMakeLists.txt labels tests ${phantasm_relabel_target} does not have: ${phantasm_relabel_unmatched}")
+    set_tests_properties("${phantasm_relabel_target}.LabelledTestsExist" PROPERTIES WILL_FAIL TRUE LABELS fast)
+  endif()
+endif()
