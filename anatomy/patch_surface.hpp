@@ -58,7 +58,7 @@ struct TessellationStats {
   double max_deviation_mm = 0.0; ///< largest estimated deviation from the patch surface
 };
 
-/// A closed surface made of free-form patches (METHOD.md section 1): each triangle of a closed,
+/// A closed surface made of free-form patches (docs/method.md section 1): each triangle of a closed,
 /// oriented base mesh carries perturbations F_t(x) = q(x) + sum_i a_i Q_i(x)^3 [Q_i >= 0] with
 /// q(x) = -n . (x - x0); inside is F >= 0. Only the base vertices move in a simulation; the
 /// patches follow their triangles.

@@ -67,7 +67,8 @@ bool disjoint(const ImplicitShape& a, const ImplicitShape& b) {
   return true;
 }
 
-/// The quality bound of solid organs' tet meshes (DESIGN: every tet positive, >= 10 degrees).
+/// The quality bound of solid organs' tet meshes: every tet positive, no dihedral angle below 10
+/// degrees, so no tet is near-degenerate.
 constexpr double k_min_dihedral_deg = 10.0;
 
 bool analytic(ShapeKind kind) {

@@ -1,5 +1,5 @@
 // Iterations and solver time to reach relative errors 1e-1, 1e-2, 1e-3 on one frame of the
-// twisting bar, for each solver, with both definitions of METHOD.md section 6:
+// twisting bar, for each solver, with both definitions of docs/method.md section 6:
 //   energy    e_k = (E(p_k) - E*) / (E(p_0) - E*)
 //   position  r_k = |p_k - p*| / |p_0 - p*|
 // p_0 = s (the inertial target with the prescribed ends), p* from Newton run to a gradient

@@ -8,8 +8,9 @@
 
 namespace phantasm {
 
-/// A displacement field in the ITK/elastix convention (DESIGN.md): on a fixed grid, components
-/// in world LPS mm, a fixed point x lands at x + u(x) in the moving image.
+/// A displacement field in the ITK/elastix convention (docs/architecture.md, units and frames):
+/// on a fixed grid, components in world LPS mm, a fixed point x lands at x + u(x) in the moving
+/// image.
 struct DisplacementField {
   ImageGrid grid;
   std::vector<Eigen::Vector3d> lps_mm; ///< grid.voxel_count(), i fastest

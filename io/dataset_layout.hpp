@@ -12,7 +12,7 @@ enum class PhantomState { reference, deformed };
 /// "ref" or "def".
 const char* session_label(PhantomState state);
 
-/// Where each output of one subject goes, in the BIDS-like layout of DESIGN.md.
+/// Where each output of one subject goes, in the BIDS-like layout of docs/architecture.md.
 class DatasetLayout {
 public:
   /// @param root the dataset folder (phantasm run -o)
@@ -34,7 +34,7 @@ public:
   std::filesystem::path probseg(PhantomState state, const std::string& tissue) const;
   /// A ground-truth quantitative map next to the labels, suffix e.g. "T1map" (BIDS qMRI names).
   std::filesystem::path parameter_map(PhantomState state, const std::string& suffix) const;
-  /// The field that maps `from` positions to `to` positions (see DESIGN.md, Conventions).
+  /// The field that maps `from` positions to `to` positions (see docs/architecture.md, units and frames).
   std::filesystem::path transform(PhantomState from, PhantomState to) const;
   /// Where the field is the solved motion (1) and where it is the smooth extension (0).
   std::filesystem::path transform_mask(PhantomState from, PhantomState to) const;

@@ -12,7 +12,7 @@ struct Relaxation {
   double T2star_ms = 50.0;
 };
 
-/// The closed-form steady-state signal of a sequence for one tissue (DESIGN.md, MR signal),
+/// The closed-form steady-state signal of a sequence for one tissue (docs/volumes-and-images.md, MR images),
 /// signed: inversion-recovery and MPRAGE signals keep the sign of the longitudinal
 /// magnetization at readout, so partial-volume mixing can cancel; images take the magnitude.
 /// * spin echo: PD (1 - 2 exp(-(TR - TE/2)/T1) + E1) exp(-TE/T2) (ideal 90-180, spoiled before

@@ -25,7 +25,7 @@ enum class SimulationStage { anatomy, deformation, voxelization, mri };
 /// Runs a scene's stages in data-flow order up to `until`, writing nothing.
 Simulation simulate(const Scene& scene, Reporter& reporter, SimulationStage until = SimulationStage::mri);
 
-/// Runs a scene through every stage and writes the dataset (DESIGN.md, output layout).
+/// Runs a scene through every stage and writes the dataset (docs/architecture.md, dataset layout).
 /// provenance.json is written last: its presence marks a complete subject.
 /// @throws InputError for an output folder that may not be written into
 /// @throws Cancelled when cancellation was requested; files already written stay complete

@@ -194,7 +194,7 @@ public:
     }
   }
 
-  /// The quantities a sequence's signal equation reads (DESIGN.md, MR signal).
+  /// The quantities a sequence's signal equation reads (docs/volumes-and-images.md, MR images).
   static std::vector<std::string> needed_values(const SequenceSettings& s) {
     switch (s.kind) {
     case SequenceKind::spin_echo:

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """The plots to look at before choosing settings, as PNG: solver relative error against
-iterations and against time (energy and position definitions, METHOD.md section 6; the paper's
+iterations and against time (energy and position definitions, docs/method.md section 6; the paper's
 Fig. 5 and 6), tissue volume error against voxel size and voxelization time, and patch fit error
 against base mesh size. Runs the benchmark programs of a Release build, keeps their CSV next to
 the plots, and prints what it wrote.

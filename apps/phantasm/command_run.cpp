@@ -21,7 +21,7 @@ void add_run_command(CLI::App& app, std::function<int()>& action) {
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
-      "run", "Run a scene through every stage and write the dataset (BIDS-like, see DESIGN.md)");
+      "run", "Run a scene through every stage and write the dataset (BIDS-like, see docs/architecture.md)");
   command->add_option("scene", options->scene, "Scene file (YAML)")->required();
   command->add_option("-o,--output", options->output, "Dataset folder to write")->capture_default_str();
   command->add_flag("--force", options->force, "Write into a folder that already holds files");

@@ -103,7 +103,7 @@ TEST(NiftiFile, BadFilesGetMessagesNamingFileAndProblem) {
 }
 
 // nibabel, the reader most users load our images with, sees the affine, shape, datatype and
-// intent DESIGN.md specifies.
+// intent docs/architecture.md specifies.
 TEST(NiftiFile, NibabelReadsAffineShapeDatatypeAndIntent) {
   const fs::path folder = fresh_folder("nifti-nibabel");
   const ImageGrid grid = oblique_grid();
