@@ -224,7 +224,7 @@ void plan_images(const ImageGrid& grid, const Scene& scene, const MrImages& imag
   }
 }
 
-/// A field in the ITK/elastix convention (README.md, Output): 5-D, components in LPS mm.
+/// A field in the ITK/elastix convention (docs/architecture.md): 5-D, components in LPS mm.
 std::vector<float> lps_components(const std::vector<float>& ras) {
   std::vector<float> lps = ras;
   const std::size_t count = ras.size() / 3;

@@ -15,7 +15,7 @@ struct RunSummary {
   std::vector<std::filesystem::path> files; ///< written, relative to the dataset folder
 };
 
-/// Writes a complete simulation (every stage run) as the dataset (README.md, Output) into `output`,
+/// Writes a complete simulation (every stage run) as the dataset (docs/architecture.md) into `output`,
 /// provenance.json last. The folder must have been prepared (prepare_output_folder). The files
 /// are first listed (path and how to make its bytes), then written in list order: the progress
 /// bar counts the list, and what is written is exactly what was listed.

@@ -37,7 +37,7 @@ struct PointConstraint {
 
 /// An elastic solid: vertices with lumped masses, tet strain and volume constraints, point
 /// constraints, vertices held in place (Dirichlet: the solvers never move them), and external
-/// forces. The objective of one step (METHOD.md section 2) is
+/// forces. The objective of one step (docs/method.md section 2.1) is
 ///   E(p) = a/2 (p - s)^T M (p - s) - f . p + sum_tets [ws/2 |F - P_strain(F)|^2 + wv/2 |F - P_volume(F)|^2]
 ///          + sum_surfaces w/2 |F - P(F)|^2 + sum_volumes w/2 |X - P(X)|^2 + sum_points k/2 |b . x - t|^2
 ///          + sum_free vertices sum_obstacles kc/2 dist(x, allowed)^2
@@ -59,7 +59,7 @@ struct ElasticModel {
   double contact_stiffness_N_m = 0.0; ///< kc of every vertex-obstacle and vertex-surface contact
   /// Closed surfaces of bodies, and the pairs of them that may not interpenetrate: a free vertex
   /// of one inside the other costs kc/2 |x - y|^2 with y = sum b_k x_k the closest point of the
-  /// other's surface (METHOD.md section 3: projected onto the contact plane there), found anew at
+  /// other's surface (docs/method.md section 3.8: projected onto the contact plane there), found anew at
   /// each step; the force acts on the vertex and, shared by b, on the triangle's vertices. The
   /// pairing is tested both ways.
   std::vector<ContactSurface> contact_surfaces;
@@ -77,7 +77,7 @@ LameParameters lame_parameters(double youngs_modulus_Pa, double poisson_ratio);
 
 /// Appends a tet mesh (positions in metres, tets positively oriented) as a body of its own:
 /// its vertices (free), its tets with the material's weights and lumped masses (a quarter of
-/// each tet's mass per vertex). Weights [choice, METHOD.md section 3]: strain 2 mu V and volume
+/// each tet's mass per vertex). Weights [choice, docs/method.md section 3]: strain 2 mu V and volume
 /// 3 lambda V. For small principal strains e_i the strain term is mu V |e|^2 and the volume
 /// term (its distance to det = 1 is |tr e| / sqrt 3) lambda V (tr e)^2 / 2: together exactly
 /// the linear-elastic energy, so E and nu mean what they mean in linear elasticity.

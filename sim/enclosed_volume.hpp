@@ -9,15 +9,15 @@
 
 namespace phantasm {
 
-/// The patch volume constraint (METHOD.md sections 1 and 3): the volume enclosed by a closed
+/// The patch volume constraint (docs/method.md sections 1.5 and 3.6): the volume enclosed by a closed
 /// surface of patches, kept within [min, max] times its rest volume, e.g. a fluid-filled organ
 /// simulated as a shell. A patch's volume is the signed volume of the tet (origin, x0, x1, x2)
 /// plus its bumps' volume; the bumps ride in the base triangle's frame with heights in a fixed
 /// length, so their volume is the base area times a constant mean height h:
 ///   V(X) = sum_t [ x0 . (x1 x x2) / 6 + h_t A_t(X) ].
 /// The constraint's set is {Y : V(Y) / V0 in [min, max]} over the surface's vertices X; its
-/// energy w/2 |X - P(X)|^2 with P the closest point of the set (A = B = identity in METHOD.md's
-/// terms: the global matrix gains w on the diagonal of each vertex).
+/// energy w/2 |X - P(X)|^2 with P the closest point of the set (F = X and Q the identity in the terms of
+/// docs/method.md section 2.1: the global matrix gains w on the diagonal of each vertex).
 struct EnclosedVolume {
   std::vector<int> vertices; ///< model vertices of the surface
   std::vector<std::array<int, 3>>

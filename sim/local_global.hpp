@@ -9,7 +9,7 @@
 
 namespace phantasm {
 
-/// The local/global solver of projective dynamics on an ElasticModel (METHOD.md section 2).
+/// The local/global solver of projective dynamics on an ElasticModel (docs/method.md section 2).
 /// The global matrix a M + sum w A^T A over the free vertices is factored once (CHOLMOD,
 /// simplicial LDL^T) when the solver is made; each iteration projects every tet in parallel
 /// (OpenMP, signed SVD with warm-started rotations, no allocation), finds the vertices inside

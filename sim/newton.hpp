@@ -5,7 +5,7 @@
 
 namespace phantasm {
 
-/// The Newton reference on the same objective (METHOD.md section 5): per-tet Hessians from the
+/// The Newton reference on the same objective (docs/method.md section 5): per-tet Hessians from the
 /// closed-form eigensystem of the isotropic constraint energies, projected to positive
 /// semi-definite; sparse Cholesky (CHOLMOD) every iteration; Armijo backtracking. Fixed vertices
 /// stay where they are in p. Stops on the gradient norm (stop.gradient_norm_N), the energy

@@ -6,7 +6,7 @@
 
 namespace phantasm {
 
-/// A rigid obstacle the model's free vertices may not enter (METHOD.md section 3, collision): a
+/// A rigid obstacle the model's free vertices may not enter (docs/method.md section 3.8, collision): a
 /// half-space (a compression plate, a table) or a solid sphere (a probe tip, a finger). A vertex inside
 /// costs contact_stiffness / 2 times its squared distance to the allowed region; its projection
 /// is the closest allowed point, on the obstacle's boundary. The penalty is C1 and acts along

@@ -5,7 +5,7 @@
 
 namespace phantasm {
 
-/// Position-based solvers of one dynamic step (METHOD.md section 4) on the constraints of an
+/// Position-based solvers of one dynamic step (docs/method.md section 4) on the constraints of an
 /// ElasticModel: per tet its strain and volume constraints and per surface element its
 /// constraint as C = |F - P(F)| (the distance of F to its set, so w/2 C^2 is the model's energy
 /// term), per point constraint C = |b . x - t|, per free vertex and obstacle it is inside C = its depth. One

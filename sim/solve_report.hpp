@@ -8,7 +8,7 @@
 
 namespace phantasm {
 
-/// When a solve stops (METHOD.md section 2; all three are explicit in the scene).
+/// When a solve stops (docs/method.md section 2.5; all three are explicit in the scene).
 struct StopCriteria {
   int max_iterations = 100;
   double relative_energy_decrease = 1e-6; ///< stop when (E_k-1 - E_k) / |E_k| falls below this

@@ -8,7 +8,7 @@
 
 namespace phantasm {
 
-/// Constraints of surfaces and strings (METHOD.md section 3), each of the form
+/// Constraints of surfaces and strings (docs/method.md sections 3.1-3.5), each of the form
 /// w/2 |F - P(F)|^2 with F = X Q a 3 x columns matrix linear in the positions X of its vertices.
 enum class SurfaceConstraintKind {
   edge_strain,     ///< F = (xj - xi) / L0; P: the same direction, length clamped to the range

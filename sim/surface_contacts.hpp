@@ -8,8 +8,8 @@
 namespace phantasm {
 
 /// A closed, outward triangle surface of the model (a solid body's boundary, or a closed shell)
-/// whose interior the vertices of the surfaces it is paired with may not enter (METHOD.md
-/// section 3, collision with another organ's surface).
+/// whose interior the vertices of the surfaces it is paired with may not enter (docs/method.md
+/// section 3.8, collision with another organ's surface).
 struct ContactSurface {
   std::vector<int> vertices;                 ///< model vertices on the surface
   std::vector<std::array<int, 3>> triangles; ///< model vertex indices, outward

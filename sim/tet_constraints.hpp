@@ -7,7 +7,7 @@
 namespace phantasm {
 
 /// The constraint sets of tet elements, in terms of the deformation gradient's signed singular
-/// values (METHOD.md section 3). Both keep U and V and change only the singular values.
+/// values (docs/method.md sections 3.3-3.4). Both keep U and V and change only the singular values.
 struct SingularValueRange {
   double min = 1.0;
   double max = 1.0;

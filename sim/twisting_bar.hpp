@@ -4,7 +4,7 @@
 
 namespace phantasm {
 
-/// The twisting bar of METHOD.md section 6, the benchmark problem of the solvers: a box of
+/// The twisting bar of docs/method.md section 6, the benchmark problem of the solvers: a box of
 /// size_mm meshed with cells (5 tets per cell), one end (z min) clamped, the other end (z max)
 /// turned by twist_deg about the bar's axis, gravity along -y. One dynamic step of h from rest.
 struct TwistingBarSettings {
