@@ -18,10 +18,11 @@ TEST(TissueTable, BuiltinValuesKeepTheirSources) {
   const TissueRecord* wm = TissueTable::builtin().find("white_matter", 3.0);
   ASSERT_NE(wm, nullptr);
   EXPECT_DOUBLE_EQ(*wm->T1_ms, 810.0);
-  EXPECT_DOUBLE_EQ(*wm->T2_ms, 71.0);
+  EXPECT_DOUBLE_EQ(*wm->T2_ms, 80.0);
   EXPECT_DOUBLE_EQ(*wm->T2star_ms, 53.2);
   EXPECT_DOUBLE_EQ(*wm->PD, 0.7);
   EXPECT_NE(wm->T1_source.find("Marques"), std::string::npos);
+  EXPECT_NE(wm->T2_source.find("Wansapura"), std::string::npos);
   // A quoted field with commas inside stays one field.
   const TissueRecord* liver = TissueTable::builtin().find("liver", 1.5);
   ASSERT_NE(liver, nullptr);

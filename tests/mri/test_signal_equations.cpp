@@ -1,11 +1,16 @@
 // Each closed-form signal against a Bloch propagation of the magnetization (hard pulses, exact
 // relaxation, cycle after cycle to the steady state), over TR, TE, TI and flip angle including
-// the extremes; and the contrasts a reader expects of the head at 1.5 T and 3 T.
+// the extremes; and the contrasts a reader expects of the head at 1.5 T and 3 T, with the shipped
+// head's own T2w and FLAIR.
 
 #include "mri/signal_equations.hpp"
 #include "mri/tissue_parameters.hpp"
 
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
 
 using namespace phantasm;
 
@@ -22,7 +27,7 @@ SequenceSettings sequence(SequenceKind kind, double TR, double TE, double flip =
 }
 
 const Relaxation k_tissues[] = {
-    {0.7, 810, 71, 53},      // white matter, 3 T
+    {0.7, 810, 80, 53},      // white matter, 3 T
     {1.0, 4300, 2000, 100},  // CSF
     {0.05, 302, 0.25, 0.29}, // cortical bone: T2 -> 0
     {0.9, 200, 150, 100},    // T2 close to T1
@@ -110,5 +115,38 @@ TEST(SignalEquations, HeadContrastsAtOnePointFiveAndThreeTesla) {
     EXPECT_GT(signal(t1, "gray_matter"), signal(t1, "csf"));
     EXPECT_GT(signal(t2, "csf"), signal(t2, "gray_matter"));
     EXPECT_GT(signal(t2, "gray_matter"), signal(t2, "white_matter"));
+  }
+}
+
+// The shipped head's T2w and FLAIR (data-synthetic/head.yaml) with the tissue table, at both
+// field strengths: FLAIR shows grey matter brighter than white matter and nulls CSF below both,
+// and T2w's white/grey ratio is in the range of real images (about 0.6-0.75; grey matter's T2 is
+// about 1.3 times white matter's in vivo).
+TEST(SignalEquations, ShippedHeadT2wAndFlairShowGreyWhiteContrast) {
+  SceneLoadResult loaded = load_scene(std::string(PHANTASM_SOURCE_DIR) + "/data-synthetic/head.yaml");
+  ASSERT_TRUE(loaded.scene);
+  Scene& scene = *loaded.scene;
+  auto find = [&](const char* name) -> const SequenceSettings& {
+    for (const SequenceSettings& s : scene.sequences)
+      if (s.name == name) return s;
+    throw std::runtime_error(std::string("head.yaml has no sequence ") + name);
+  };
+  const SequenceSettings& t2 = find("T2w");
+  const SequenceSettings& flair = find("FLAIR");
+  ASSERT_EQ(t2.kind, SequenceKind::spin_echo);
+  ASSERT_EQ(flair.kind, SequenceKind::inversion_recovery);
+  for (double field : {1.5, 3.0}) {
+    SCOPED_TRACE(field);
+    scene.field_strength_T = field;
+    const auto parameters = resolve_tissue_parameters(scene);
+    auto signal = [&](const SequenceSettings& s, const char* tissue) {
+      const TissueParameters& p = parameters.at(tissue);
+      return std::abs(sequence_signal(s, {*p.PD, *p.T1_ms, *p.T2_ms, *p.T2_ms}));
+    };
+    const double white_over_grey = signal(t2, "white_matter") / signal(t2, "gray_matter");
+    EXPECT_GT(white_over_grey, 0.6);
+    EXPECT_LT(white_over_grey, 0.75);
+    EXPECT_GT(signal(flair, "gray_matter"), 1.2 * signal(flair, "white_matter"));
+    EXPECT_LT(signal(flair, "csf"), 0.5 * signal(flair, "white_matter"));
   }
 }

@@ -77,7 +77,7 @@ TEST(SynthesizeImages, BackgroundNoiseHasRayleighMeanAndSpread) {
   EXPECT_NEAR(mean / (sigma * std::sqrt(M_PI / 2.0)), 1.0, 0.02);
   EXPECT_NEAR(deviation / (sigma * std::sqrt(2.0 - M_PI / 2.0)), 1.0, 0.02);
   // sigma is 5 % of white matter's signal.
-  const double white = sequence_signal(scene.sequences[0], {0.7, 810, 71, 53.2});
+  const double white = sequence_signal(scene.sequences[0], {0.7, 810, 80, 53.2});
   EXPECT_NEAR(sigma, 0.05 * white, 1e-3 * white);
 }
 
@@ -85,7 +85,7 @@ TEST(SynthesizeImages, TissueSignalBiasSpanAndSeededRepeatability) {
   StageReport report;
   Reporter quiet = Reporter::silent();
   const MrImages plain = synthesize_images(noisy_scene(0.0, 0.0), volumes(64), report, quiet);
-  const double white = sequence_signal(noisy_scene(0, 0).sequences[0], {0.7, 810, 71, 53.2});
+  const double white = sequence_signal(noisy_scene(0, 0).sequences[0], {0.7, 810, 80, 53.2});
   for (float x : plain.reference[0].magnitude)
     ASSERT_NEAR(x, white, 1e-6 * white);
   // A 20 % bias spans 0.9 to 1.1 over the object.
