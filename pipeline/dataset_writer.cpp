@@ -164,9 +164,16 @@ nlohmann::json image_sidecar(const Scene& scene, const MrImages& images, const M
   } else {
     j["KspaceTruncation"] = "none (images sampled directly on the grid)";
   }
+  if (s.kind == SequenceKind::inversion_recovery) j["InversionRecoveryReadout"] = to_string(s.readout);
   if (s.kind == SequenceKind::mprage) {
+    // The timing the signal model assumes (docs/volumes-and-images.md, MPRAGE timing).
+    j["InversionRecoveryReadout"] = "gradient_echo";
     j["EchoSpacing"] = s.echo_spacing_ms / 1000.0;
     j["TurboFactor"] = s.turbo_factor;
+    j["RepetitionTimePreparation"] = s.TR_ms / 1000.0;
+    j["RepetitionTimeExcitation"] = s.echo_spacing_ms / 1000.0;
+    j["InversionTimeMeasuredTo"] =
+        "excitation of the centre echo of the train (echo TurboFactor/2, counted from 0)";
   }
   return j;
 }

@@ -247,6 +247,41 @@ TEST(RunCommand, VdbFilesHoldLevelSetsLabelsAndFractions) {
   }
 }
 
+// An inversion-recovery sidecar says which readout made the image; an MPRAGE sidecar also gives
+// the echo train (spacing, length) and what TI is measured to, the timing the signal model assumes.
+TEST(RunCommand, InversionRecoverySidecarsRecordTheReadoutAndTheTrainTiming) {
+  const fs::path root = fresh_folder("ir-sidecars");
+  std::string scene = read_file(k_small_scene);
+  const std::string sequences = "  - {name: T1w, type: spoiled_gre, TR_ms: 20, TE_ms: 4, flip_deg: 25}\n"
+                                "  - {name: T2w, type: spin_echo, TR_ms: 4000, TE_ms: 100}\n";
+  ASSERT_NE(scene.find(sequences), std::string::npos);
+  scene.replace(scene.find(sequences), sequences.size(),
+                "  - {name: FLAIR, type: inversion_recovery, readout: spin_echo, TR_ms: 9000, TI_ms: 2500, "
+                "TE_ms: 120}\n"
+                "  - {name: IRT1, type: inversion_recovery, readout: gradient_echo, TR_ms: 3000, TI_ms: 800, "
+                "TE_ms: 4}\n"
+                "  - {name: T1w, type: mprage, TR_ms: 2300, TI_ms: 900, TE_ms: 2.98, flip_deg: 9, "
+                "echo_spacing_ms: 7.1, turbo_factor: 64}\n");
+  write_text_file(root / "scene.yaml", scene);
+  const CommandResult run =
+      run_command({k_phantasm, "run", (root / "scene.yaml").string(), "-o", (root / "out").string(), "-q"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const fs::path anat = root / "out" / "sub-01" / "ses-ref" / "anat";
+  auto sidecar = [&](const std::string& suffix) {
+    return nlohmann::json::parse(read_file(anat / ("sub-01_ses-ref_" + suffix + ".json")));
+  };
+  const nlohmann::json flair = sidecar("FLAIR"), ir = sidecar("IRT1"), mprage = sidecar("T1w");
+  EXPECT_EQ(flair["InversionRecoveryReadout"], "spin_echo");
+  EXPECT_DOUBLE_EQ(flair["InversionTime"].get<double>(), 2.5);
+  EXPECT_EQ(ir["InversionRecoveryReadout"], "gradient_echo");
+  EXPECT_EQ(mprage["InversionRecoveryReadout"], "gradient_echo");
+  EXPECT_DOUBLE_EQ(mprage["EchoSpacing"].get<double>(), 0.0071);
+  EXPECT_EQ(mprage["TurboFactor"], 64);
+  EXPECT_DOUBLE_EQ(mprage["RepetitionTimePreparation"].get<double>(), 2.3);
+  EXPECT_NE(mprage["InversionTimeMeasuredTo"].get<std::string>().find("centre echo"), std::string::npos);
+  EXPECT_FALSE(sidecar("FLAIR").contains("EchoSpacing"));
+}
+
 TEST(RunCommand, AnInvalidSceneWritesNothing) {
   const fs::path out = fresh_folder("invalid") / "out";
   const fs::path scene = k_source_dir / "tests" / "data" / "bad-scenes" / "unknown-tissue.yaml";
