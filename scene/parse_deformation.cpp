@@ -93,7 +93,24 @@ void parse_load(CheckedMap& map, LoadSettings& load) {
   } else {
     load.kind = LoadKind::displacement;
     map.string("organ", load.organ, true);
-    map.vec3("displacement_mm", load.displacement_mm, NumberRule{-1e3, 1e3, false, false, "mm"}, true);
+    // A turn alone (a clamp twisting a bar's end) needs no displacement.
+    const bool turned = map.has("rotation");
+    map.vec3("displacement_mm", load.displacement_mm, NumberRule{-1e3, 1e3, false, false, "mm"}, !turned);
+    if (turned) {
+      CheckedMap rotation(map.context(), map.get("rotation"), map.child_path("rotation"));
+      if (rotation.valid()) {
+        rotation.number("angle_deg", load.rotation_deg, between(-360.0, 360.0, "degrees"), true);
+        rotation.vec3("center_mm", load.rotation_center_mm, coordinate, true);
+        if (rotation.vec3("axis", load.rotation_axis, NumberRule{-1e6, 1e6, false, false, ""}, true)) {
+          if (!(load.rotation_axis.norm() > 1e-12)) {
+            map.context().problem(rotation.get("axis"), rotation.child_path("axis"),
+                                  "expected a non-zero axis, found [0, 0, 0]");
+          } else {
+            load.rotation_axis.normalize();
+          }
+        }
+      }
+    }
     if (map.has("region")) {
       CheckedMap region(map.context(), map.get("region"), map.child_path("region"));
       if (region.valid()) {

@@ -90,7 +90,10 @@ enum class LoadKind { gravity, displacement };
 enum class MotionProfile { constant, ramp, sine };
 
 /// An external load: gravity on organs, or a prescribed displacement of the part of an organ's
-/// surface inside a sphere (a retractor, a probe, a compression paddle).
+/// surface inside a sphere (a retractor, a probe, a compression paddle, a clamp that holds or
+/// twists the end of a bar): each point x of the region goes to
+/// c + R (x - c) + displacement_mm, R the turn by rotation_deg about rotation_axis through c =
+/// rotation_center_mm (right-handed; 0 degrees: a pure translation).
 struct LoadSettings {
   LoadKind kind = LoadKind::gravity;
   std::vector<std::string> organs; ///< gravity: organs it acts on (empty = all moving)
@@ -99,6 +102,9 @@ struct LoadSettings {
   Eigen::Vector3d displacement_mm{0, 0, 0};
   Eigen::Vector3d region_center_mm{0, 0, 0};
   double region_radius_mm = 10.0;
+  double rotation_deg = 0.0;                      ///< displacement: turn of the region's points
+  Eigen::Vector3d rotation_axis{0, 0, 1};         ///< unit axis of the turn
+  Eigen::Vector3d rotation_center_mm{0, 0, 0};    ///< a point of the axis
   MotionProfile motion = MotionProfile::constant; ///< how the load evolves in dynamic mode
   double period_s = 1.0;                          ///< ramp duration or sine period
 };

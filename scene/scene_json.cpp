@@ -53,6 +53,9 @@ nlohmann::json load_json(const LoadSettings& load) {
     j["organ"] = load.organ;
     j["displacement_mm"] = vec3(load.displacement_mm);
     j["region"] = {{"center_mm", vec3(load.region_center_mm)}, {"radius_mm", load.region_radius_mm}};
+    j["rotation"] = {{"angle_deg", load.rotation_deg},
+                     {"axis", vec3(load.rotation_axis)},
+                     {"center_mm", vec3(load.rotation_center_mm)}};
   }
   return j;
 }

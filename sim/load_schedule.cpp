@@ -71,8 +71,7 @@ void move_loads(const Scene& scene, const FrameSolver& s, int frame, Loads& load
   for (PushedPoints& push : loads.pushes) {
     const double amount = s.dynamic ? profile(push.load->motion, push.load->period_s, t) : increment;
     for (std::size_t k = 0; k < push.constraints.size(); ++k)
-      model.points[push.constraints[k]].target_m =
-          push.rest_m[k] + amount * k_mm * push.load->displacement_mm;
+      model.points[push.constraints[k]].target_m = loaded_position_m(*push.load, push.rest_m[k], amount);
   }
   if (!model.obstacles.empty()) {
     place_obstacles(

@@ -4,9 +4,18 @@
 
 #include "core/format.hpp"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
+#include <cmath>
 
 namespace phantasm::sim_detail {
+
+Eigen::Vector3d loaded_position_m(const LoadSettings& load, const Eigen::Vector3d& rest_m, double amount) {
+  const Eigen::Vector3d centre_m = k_mm * load.rotation_center_mm;
+  const Eigen::AngleAxisd turn(amount * load.rotation_deg * M_PI / 180.0, load.rotation_axis);
+  return centre_m + turn * (rest_m - centre_m) + amount * k_mm * load.displacement_mm;
+}
 
 Loads add_loads(const Scene& scene, const Phantom& phantom, const BodyAssignment& assignment,
                 BodyModel& built, double nominal_stiffness, StageReport& report) {
@@ -56,7 +65,7 @@ Loads add_loads(const Scene& scene, const Phantom& phantom, const BodyAssignment
       c.count = e.coefficients.tail<3>().isZero() ? 1 : 4;
       c.stiffness_N_m = stiffness;
       push.rest_m.push_back(interpolate(e, model.rest_positions_m));
-      c.target_m = push.rest_m.back() + k_mm * load.displacement_mm;
+      c.target_m = loaded_position_m(load, push.rest_m.back(), 1.0);
       push.constraints.push_back(model.points.size());
       model.points.push_back(c);
     }
@@ -66,10 +75,14 @@ Loads add_loads(const Scene& scene, const Phantom& phantom, const BodyAssignment
                                format_vector(load.region_center_mm));
       continue;
     }
-    report.modelled.push_back("displacement " + format_vector(load.displacement_mm) + " mm of " +
-                              std::to_string(push.constraints.size()) + " surface points of " + load.organ +
-                              ", by springs of " + format_number(stiffness) +
-                              " N/m (10^4 x the mean elastic stiffness)");
+    report.modelled.push_back(
+        "displacement " + format_vector(load.displacement_mm) + " mm" +
+        (load.rotation_deg != 0.0 ? " and turn of " + format_number(load.rotation_deg) + " degrees about " +
+                                        format_vector(load.rotation_axis) + " through " +
+                                        format_vector(load.rotation_center_mm) + " mm"
+                                  : std::string()) +
+        " of " + std::to_string(push.constraints.size()) + " surface points of " + load.organ +
+        ", by springs of " + format_number(stiffness) + " N/m (10^4 x the mean elastic stiffness)");
     pushes.push_back(std::move(push));
   }
   return loads;

@@ -18,6 +18,10 @@ struct PushedPoints {
   std::vector<Eigen::Vector3d> rest_m;
 };
 
+/// Where a displacement load takes a rest point (m) when the fraction `amount` of it applies:
+/// turned by amount x rotation_deg about the load's axis, then moved by amount x displacement.
+Eigen::Vector3d loaded_position_m(const LoadSettings& load, const Eigen::Vector3d& rest_m, double amount);
+
 /// The loads of the scene on the model.
 struct Loads {
   Eigen::MatrixX3d acceleration;    ///< per model vertex, m/s^2 (gravity)

@@ -94,8 +94,12 @@ StageReport plan_sim(const Scene& scene) {
     if (load.kind == LoadKind::gravity) {
       line << "gravity " << format_vector(load.acceleration_m_s2) << " m/s^2";
     } else {
-      line << "displacement " << format_vector(load.displacement_mm) << " mm of " << load.organ << " within "
-           << load.region_radius_mm << " mm of " << format_vector(load.region_center_mm);
+      line << "displacement " << format_vector(load.displacement_mm) << " mm";
+      if (load.rotation_deg != 0.0)
+        line << " and turn of " << load.rotation_deg << " degrees about " << format_vector(load.rotation_axis)
+             << " through " << format_vector(load.rotation_center_mm) << " mm";
+      line << " of " << load.organ << " within " << load.region_radius_mm << " mm of "
+           << format_vector(load.region_center_mm);
     }
     if (d.mode == DeformationMode::dynamic) line << ", " << to_string(load.motion) << " motion";
     report.modelled.push_back(line.str());

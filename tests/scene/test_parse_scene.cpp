@@ -311,6 +311,39 @@ TEST(ParseScene, ObstaclesAreReadWithTheirShapeKeysAndChecked) {
       std::string::npos);
 }
 
+// A displacement load may turn its region about an axis (a clamp twisting a bar's end); a turn
+// alone needs no displacement_mm, and a zero axis is an error at its key.
+TEST(ParseScene, DisplacementLoadsMayTurnTheirRegionAboutAnAxis) {
+  const std::string loads = R"(deformation:
+  mode: quasi_static
+  loads:
+    - {type: displacement, organ: ball, region: {center_mm: [0, 0, 20], radius_mm: 5},
+       rotation: {angle_deg: 30, axis: [0, 0, 2], center_mm: [0, 0, 20]}}
+    - {type: displacement, organ: ball, displacement_mm: [0, 0, 0], region: {center_mm: [0, 0, -20], radius_mm: 5}}
+)";
+  const SceneLoadResult result = parse(k_minimal + loads);
+  ASSERT_TRUE(result.scene) << format_diagnostics(result.problems);
+  const DeformationSettings& d = result.scene->deformation;
+  ASSERT_EQ(d.loads.size(), 2u);
+  EXPECT_EQ(d.loads[0].rotation_deg, 30.0);
+  EXPECT_EQ(d.loads[0].rotation_axis, Eigen::Vector3d(0, 0, 1)); // normalized
+  EXPECT_EQ(d.loads[0].rotation_center_mm, Eigen::Vector3d(0, 0, 20));
+  EXPECT_EQ(d.loads[0].displacement_mm, Eigen::Vector3d::Zero());
+  EXPECT_EQ(d.loads[1].rotation_deg, 0.0);
+  const nlohmann::json j = scene_settings_json(*result.scene);
+  EXPECT_EQ(j["deformation"]["loads"][0]["rotation"]["angle_deg"], 30.0);
+
+  EXPECT_EQ(
+      only_problem(k_minimal + replaced(loads, "axis: [0, 0, 2]", "axis: [0, 0, 0]")),
+      "scene.yaml:17:40: deformation.loads[0].rotation.axis: expected a non-zero axis, found [0, 0, 0]");
+  EXPECT_NE(only_problem(k_minimal + replaced(loads, "angle_deg: 30, ", ""))
+                .find("deformation.loads[0].rotation.angle_deg: expected"),
+            std::string::npos);
+  EXPECT_NE(only_problem(k_minimal + replaced(loads, "displacement_mm: [0, 0, 0], ", ""))
+                .find("deformation.loads[1].displacement_mm: expected"),
+            std::string::npos);
+}
+
 TEST(ParseScene, CollisionsNameTwoDifferentOrgansOfTheScene) {
   const std::string collisions = R"(deformation:
   mode: quasi_static
