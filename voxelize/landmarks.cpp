@@ -1,9 +1,164 @@
 #include "voxelize/landmarks.hpp"
 
+#include "anatomy/mesh_distance.hpp"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <memory>
+#include <numeric>
 
 namespace phantasm {
+namespace {
+
+/// How far a point is inside an organ's own material: the distance to the organ's surface or to
+/// the nearest organ nested in it, whichever is closer (mm; negative outside that material).
+class OwnMaterial {
+public:
+  OwnMaterial(const Phantom& phantom, std::size_t o) {
+    const PatchSurface& surface = *phantom.organs[o].surface;
+    // Within 0.5 mm of the patch surface: the point's depth needs no more, and distance queries
+    // deep inside a finer tessellation visit many more empty cells.
+    m_own = std::make_unique<MeshDistance>(surface.tessellate(0.5));
+    for (const Organ& nested : phantom.organs) {
+      if (nested.inside == phantom.organs[o].name && nested.surface)
+        m_nested.push_back(std::make_unique<MeshDistance>(nested.surface->tessellate(0.5)));
+    }
+  }
+
+  double clearance(const Eigen::Vector3d& x) const {
+    double c = -m_own->signed_distance(x);
+    for (const auto& nested : m_nested)
+      c = std::min(c, nested->signed_distance(x));
+    return c;
+  }
+
+private:
+  std::unique_ptr<MeshDistance> m_own;
+  std::vector<std::unique_ptr<MeshDistance>> m_nested;
+};
+
+struct Candidate {
+  Eigen::Vector3d x;
+  double clearance;
+};
+
+/// Candidate points of an organ's own material: a grid over its bounds (12 steps along the
+/// longest side) and, for shells thinner than that grid, points stepped inward from every base
+/// vertex along its normal until they leave the material again.
+std::vector<Candidate> candidates(const PatchSurface& surface, const OwnMaterial& material) {
+  const Eigen::MatrixX3d& rest = surface.rest_positions();
+  const Eigen::Vector3d low = rest.colwise().minCoeff().transpose(),
+                        high = rest.colwise().maxCoeff().transpose();
+  const double step = (high - low).maxCoeff() / 12.0;
+  std::vector<Candidate> out;
+  const Eigen::Vector3i cells = ((high - low) / step).array().ceil().cast<int>();
+  for (int k = 0; k <= cells.z(); ++k)
+    for (int j = 0; j <= cells.y(); ++j)
+      for (int i = 0; i <= cells.x(); ++i) {
+        const Eigen::Vector3d x = low + step * Eigen::Vector3d(i, j, k);
+        const double c = material.clearance(x);
+        if (c > 0.0) out.push_back({x, c});
+      }
+  // Area-weighted vertex normals of the base mesh (outward).
+  const Eigen::MatrixX3i& faces = surface.base_mesh().faces;
+  Eigen::MatrixX3d normals = Eigen::MatrixX3d::Zero(rest.rows(), 3);
+  for (Eigen::Index f = 0; f < faces.rows(); ++f) {
+    const Eigen::Vector3d a = rest.row(faces(f, 0)), b = rest.row(faces(f, 1)), c = rest.row(faces(f, 2));
+    const Eigen::RowVector3d n = (b - a).cross(c - a).transpose();
+    for (int k = 0; k < 3; ++k)
+      normals.row(faces(f, k)) += n;
+  }
+  const double ray_step = step / 10.0;
+  for (Eigen::Index v = 0; v < rest.rows(); ++v) {
+    if (!(normals.row(v).norm() > 0.0)) continue;
+    const Eigen::Vector3d origin = rest.row(v).transpose(), inward = -normals.row(v).normalized().transpose();
+    double best = 0.0;
+    for (int s = 1; s * ray_step < (high - low).norm(); ++s) {
+      const Eigen::Vector3d x = origin + s * ray_step * inward;
+      const double c = material.clearance(x);
+      if (c > 0.0) out.push_back({x, c});
+      best = std::max(best, c);
+      if (best > 0.0 && c < 0.5 * best) break; // past the deepest point of this ray
+    }
+  }
+  return out;
+}
+
+/// Moves x uphill in clearance by a compass search (steps halved down to 0.01 mm), so the point
+/// is the local deepest point whatever the candidate spacing was.
+Candidate refine(Candidate best, const OwnMaterial& material, double step) {
+  while (step > 0.01) {
+    bool improved = false;
+    for (int axis = 0; axis < 3 && !improved; ++axis) {
+      for (const double sign : {1.0, -1.0}) {
+        Eigen::Vector3d x = best.x;
+        x[axis] += sign * step;
+        const double c = material.clearance(x);
+        if (c > best.clearance) {
+          best = {x, c};
+          improved = true;
+          break;
+        }
+      }
+    }
+    if (!improved) step *= 0.5;
+  }
+  return best;
+}
+
+/// True when the ground-truth map around x (the 8 corners of a cube of half the map's extension,
+/// two voxels wide, which holds every voxel a trilinear lookup at x reads) is the exact motion of
+/// x's material: solved tets for an organ the solver moved, no motion at all for one it did not.
+bool exact_around(const DeformationMap& map, const Eigen::Vector3d& x, bool moved) {
+  const double half = 0.5 * map.extension_mm();
+  for (int corner = 0; corner < 9; ++corner) {
+    Eigen::Vector3d q = x;
+    if (corner < 8) {
+      for (int axis = 0; axis < 3; ++axis)
+        q[axis] += (corner >> axis & 1) ? half : -half;
+    }
+    bool exact = false;
+    const Eigen::Vector3d y = map.forward(q, &exact);
+    if (!exact || (!moved && y != q)) return false;
+  }
+  return true;
+}
+
+/// The deepest point of an organ's own material (inside it, outside the organs nested in it):
+/// the candidate of largest clearance, refined; with a map, the deepest whose surroundings the
+/// map moves exactly with the organ (else the deepest of all).
+Eigen::Vector3d deepest_point(const Phantom& phantom, std::size_t o, const DeformationMap* map, bool moved) {
+  const PatchSurface& surface = *phantom.organs[o].surface;
+  const OwnMaterial material(phantom, o);
+  std::vector<Candidate> list = candidates(surface, material);
+  if (list.empty()) return surface.rest_positions().colwise().mean().transpose();
+  std::vector<std::size_t> order(list.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return list[a].clearance > list[b].clearance; });
+  const Eigen::MatrixX3d& rest = surface.rest_positions();
+  const double step = (rest.colwise().maxCoeff() - rest.colwise().minCoeff()).maxCoeff() / 40.0;
+  const Candidate deepest = refine(list[order[0]], material, step);
+  if (!map || exact_around(*map, deepest.x, moved)) return deepest.x;
+  // Try the next candidates, each from a different neighbourhood (one candidate spacing apart).
+  std::vector<Eigen::Vector3d> tried;
+  for (std::size_t n = 1; n < order.size() && tried.size() < 64; ++n) {
+    const Candidate& c = list[order[n]];
+    bool near = false;
+    for (const Eigen::Vector3d& t : tried)
+      near |= (t - c.x).norm() < step;
+    if (near) continue;
+    tried.push_back(c.x);
+    const Candidate refined = refine(c, material, 0.25 * step);
+    if (exact_around(*map, refined.x, moved)) return refined.x;
+  }
+  return deepest.x;
+}
+
+} // namespace
 
 std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDeformation* deformation,
                                       const DeformationMap* map) {
@@ -15,13 +170,14 @@ std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDef
     if (!organ.surface) continue;
     const Eigen::MatrixX3d& rest = organ.surface->rest_positions();
     const Eigen::MatrixX3d& moved = deformation ? deformation->organs[o].surface_mm : rest;
-    Landmark centroid{organ.name + "_centroid", organ.name, rest.colwise().mean().transpose(),
-                      Eigen::Vector3d::Zero()};
-    // Organs the solver moved carry their centroid through the map; the others did not move.
+    // Organs the solver moved carry their deepest point through the map (exact inside the
+    // solved tets); the others did not move.
     const bool moved_organ = deformation && (deformation->organs[o].moved_by == "solver" ||
                                              deformation->organs[o].moved_by.rfind("embedded", 0) == 0);
-    centroid.deformed_mm = moved_organ && map ? map->forward(centroid.reference_mm) : centroid.reference_mm;
-    out.push_back(centroid);
+    Landmark deepest{organ.name + "_deepest", organ.name, deepest_point(reference, o, map, moved_organ),
+                     Eigen::Vector3d::Zero()};
+    deepest.deformed_mm = moved_organ && map ? map->forward(deepest.reference_mm) : deepest.reference_mm;
+    out.push_back(deepest);
     for (int d = 0; d < 6; ++d) {
       // RAS: left is -x, posterior -y, inferior -z.
       const int axis = d / 2;

@@ -10,10 +10,14 @@
 
 namespace phantasm {
 
-/// Seven landmarks per closed organ: its centroid and its extreme surface points towards
-/// left, right, posterior, anterior, inferior and superior (patch base vertices, so both
-/// states are exact: the deformed point is that vertex's solved position; the centroid goes
-/// through the deformation map).
+/// Seven landmarks per closed organ, each a material point of that organ: the deepest point of
+/// its own material ("<organ>_deepest": inside it and outside the organs nested in it, farthest
+/// from both; with a map, the deepest around which the map is exact for the organ's motion) and
+/// its extreme surface points towards left, right, posterior, anterior, inferior and superior
+/// (patch base vertices). Both states are exact: an extreme point's deformed position is its
+/// vertex's solved one; the deepest point of an organ the solver moved goes through the map
+/// (barycentric in the solved tets), that of an organ that did not move stays.
+/// @param map the reference-to-deformed map (nullptr without a deformation)
 std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDeformation* deformation,
                                       const DeformationMap* map);
 
