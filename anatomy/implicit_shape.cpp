@@ -67,6 +67,7 @@ public:
     return m_rotation * (-2.0 * l.cwiseQuotient(m_radii.cwiseProduct(m_radii)));
   }
   double volume() const override { return 4.0 / 3.0 * M_PI * m_radii.prod(); }
+  bool star_shaped() const override { return true; }
 };
 
 class Superquadric final : public FramedShape {
@@ -96,6 +97,7 @@ public:
     return m_rotation * (outer * df.cwiseQuotient(m_radii));
   }
 
+  bool star_shaped() const override { return true; }
   double volume() const override {
     // Jaklic, Leonardis, Solina (2000): V = 2 a b c e1 e2 B(e1/2 + 1, e1) B(e2/2, e2/2).
     return 2.0 * m_radii.prod() * m_e1 * m_e2 * std::beta(0.5 * m_e1 + 1.0, m_e1) *
@@ -131,9 +133,127 @@ public:
   }
   double bounding_radius() const override { return m_radii.norm(); }
   double volume() const override { return 8.0 * m_radii.prod(); }
+  bool star_shaped() const override { return true; }
+};
+
+/// Central differences of value(); for shapes whose gradient has no short closed form.
+class NumericGradientShape : public ImplicitShape {
+public:
+  explicit NumericGradientShape(double step_mm) : m_step(step_mm) {}
+  Eigen::Vector3d gradient(const Eigen::Vector3d& x) const override {
+    Eigen::Vector3d g;
+    for (int a = 0; a < 3; ++a) {
+      Eigen::Vector3d d = Eigen::Vector3d::Zero();
+      d[a] = m_step;
+      g[a] = (value(x + d) - value(x - d)) / (2.0 * m_step);
+    }
+    return g;
+  }
+
+private:
+  double m_step;
+};
+
+class Torus final : public NumericGradientShape {
+public:
+  Torus(const Eigen::Vector3d& c, double major, double tube)
+      : NumericGradientShape(1e-6 * (major + tube)), m_center(c), m_major(major), m_tube(tube) {}
+  double value(const Eigen::Vector3d& x) const override {
+    const Eigen::Vector3d l = x - m_center;
+    return m_tube - Eigen::Vector2d(l.head<2>().norm() - m_major, l.z()).norm();
+  }
+  Eigen::Vector3d center() const override { return m_center; }
+  double bounding_radius() const override { return m_major + m_tube; }
+  double volume() const override { return 2.0 * M_PI * M_PI * m_major * m_tube * m_tube; }
+
+private:
+  Eigen::Vector3d m_center;
+  double m_major, m_tube;
+};
+
+class Horseshoe final : public NumericGradientShape {
+public:
+  Horseshoe(double major, double tube)
+      : NumericGradientShape(1e-6 * (major + tube)), m_major(major), m_tube(tube) {}
+  double value(const Eigen::Vector3d& x) const override {
+    if (x.y() >= 0.0) return m_tube - Eigen::Vector2d(x.head<2>().norm() - m_major, x.z()).norm();
+    const double to_end =
+        std::min((x - Eigen::Vector3d(m_major, 0, 0)).norm(), (x - Eigen::Vector3d(-m_major, 0, 0)).norm());
+    return m_tube - to_end;
+  }
+  // The middle of the bounding box, which lies outside the shape (in the horseshoe's gap).
+  Eigen::Vector3d center() const override { return Eigen::Vector3d(0.0, 0.5 * m_major, 0.0); }
+  double bounding_radius() const override { return std::hypot(m_major + m_tube, 0.5 * m_major + m_tube); }
+  double volume() const override {
+    return M_PI * m_tube * m_tube * M_PI * m_major + 4.0 / 3.0 * M_PI * std::pow(m_tube, 3);
+  }
+
+private:
+  double m_major, m_tube;
+};
+
+class FoldedSpheroid final : public NumericGradientShape {
+public:
+  FoldedSpheroid(double radius, double depth, int lobes, double half_height, double twist)
+      : NumericGradientShape(1e-6 * radius), m_radius(radius), m_depth(depth), m_lobes(lobes),
+        m_half_height(half_height), m_twist(twist) {}
+  double value(const Eigen::Vector3d& x) const override {
+    const double rho = x.head<2>().norm();
+    const double phi = std::atan2(x.y(), x.x()) - m_twist * rho; // undo the twist
+    const double g = m_radius * (1.0 + m_depth * std::cos(m_lobes * phi));
+    const double q = (rho / g) * (rho / g) + (x.z() / m_half_height) * (x.z() / m_half_height);
+    // 1 - sqrt(q), scaled to mm near the surface (the zero set is exact).
+    return std::min(m_radius, m_half_height) * (1.0 - std::sqrt(q));
+  }
+  Eigen::Vector3d center() const override { return Eigen::Vector3d::Zero(); }
+  double bounding_radius() const override { return std::max(m_radius * (1.0 + m_depth), m_half_height); }
+  double volume() const override {
+    return 4.0 * M_PI / 3.0 * m_half_height * m_radius * m_radius * (1.0 + 0.5 * m_depth * m_depth);
+  }
+
+private:
+  double m_radius, m_depth;
+  int m_lobes;
+  double m_half_height, m_twist;
+};
+
+class EllipsoidShell final : public NumericGradientShape {
+public:
+  EllipsoidShell(const Eigen::Vector3d& radii, double thickness)
+      : NumericGradientShape(1e-6 * radii.maxCoeff()), m_outer(radii),
+        m_inner(radii - Eigen::Vector3d::Constant(thickness)) {}
+  double value(const Eigen::Vector3d& x) const override {
+    // (1 - |x / r|) min(r): zero on each ellipsoid, about the distance near it.
+    const double outer = (1.0 - x.cwiseQuotient(m_outer).norm()) * m_outer.minCoeff();
+    const double inner = (1.0 - x.cwiseQuotient(m_inner).norm()) * m_inner.minCoeff();
+    return std::min(outer, -inner);
+  }
+  Eigen::Vector3d center() const override { return Eigen::Vector3d::Zero(); }
+  double bounding_radius() const override { return m_outer.maxCoeff(); }
+  double volume() const override { return 4.0 / 3.0 * M_PI * (m_outer.prod() - m_inner.prod()); }
+
+private:
+  Eigen::Vector3d m_outer, m_inner;
 };
 
 } // namespace
+
+std::unique_ptr<ImplicitShape> make_torus(const Eigen::Vector3d& center_mm, double major_mm, double tube_mm) {
+  return std::make_unique<Torus>(center_mm, major_mm, tube_mm);
+}
+
+std::unique_ptr<ImplicitShape> make_horseshoe(double major_mm, double tube_mm) {
+  return std::make_unique<Horseshoe>(major_mm, tube_mm);
+}
+
+std::unique_ptr<ImplicitShape> make_folded_spheroid(double radius_mm, double lobe_depth, int lobes,
+                                                    double half_height_mm, double twist_per_mm) {
+  return std::make_unique<FoldedSpheroid>(radius_mm, lobe_depth, lobes, half_height_mm, twist_per_mm);
+}
+
+std::unique_ptr<ImplicitShape> make_ellipsoid_shell(const Eigen::Vector3d& radii_mm, double thickness_mm) {
+  return std::make_unique<EllipsoidShell>(radii_mm, thickness_mm);
+}
 
 std::unique_ptr<ImplicitShape> make_box(const Eigen::Vector3d& center_mm, const Eigen::Vector3d& size_mm,
                                         const Eigen::Matrix3d& rotation) {

@@ -7,8 +7,10 @@
 namespace phantasm {
 
 /// A closed target surface given implicitly: value(x) > 0 inside, < 0 outside, 0 on the surface
-/// (the sign convention of patch functions). Positions are RAS mm. Shapes are star-shaped about
-/// center(), which the fit uses to place base vertices along rays.
+/// (the sign convention of patch functions). Positions are RAS mm. Shapes that say they are
+/// star_shaped() about center() can be sampled by rays from it (the icosphere base mesh of the
+/// patch fit); any other closed shape, of any genus, is sampled through its extracted surface
+/// (anatomy/surface_extraction.hpp).
 class ImplicitShape {
 public:
   virtual ~ImplicitShape() = default;
@@ -20,6 +22,9 @@ public:
   virtual double bounding_radius() const = 0;
   /// Enclosed volume in mm^3, exact where a closed form exists.
   virtual double volume() const = 0;
+  /// True when every ray from center() crosses the surface once (ellipsoids, superquadrics,
+  /// boxes): only then may ray_from_center() stand for the surface.
+  virtual bool star_shaped() const { return false; }
 
   /// The surface point on the ray center() + t d (d unit, t > 0), by bisection, to 1e-12 mm.
   Eigen::Vector3d ray_from_center(const Eigen::Vector3d& direction) const;
@@ -43,6 +48,26 @@ std::unique_ptr<ImplicitShape> make_superquadric(const Eigen::Vector3d& center_m
 /// the signed distance inside (exact there) and its lower bound outside.
 std::unique_ptr<ImplicitShape> make_box(const Eigen::Vector3d& center_mm, const Eigen::Vector3d& size_mm,
                                         const Eigen::Matrix3d& rotation);
+
+/// Torus about the z axis through `center_mm`: tube radius `tube_mm` about a circle of radius
+/// `major_mm` (genus 1; value is minus the exact signed distance). V = 2 pi^2 R r^2.
+std::unique_ptr<ImplicitShape> make_torus(const Eigen::Vector3d& center_mm, double major_mm, double tube_mm);
+
+/// Horseshoe: a tube of radius `tube_mm` along the half circle of radius `major_mm` in the xy plane
+/// with y >= 0, capped by half balls at (+-major_mm, 0, 0) (a bent capsule, like a lateral
+/// ventricle; value is minus the exact signed distance). V = pi^2 R r^2 + 4/3 pi r^3.
+std::unique_ptr<ImplicitShape> make_horseshoe(double major_mm, double tube_mm);
+
+/// A folded spheroid: the lobed spheroid (rho / g(phi))^2 + (z / c)^2 < 1 in cylindrical
+/// coordinates, g(phi) = R (1 + b cos(m phi)), twisted about z by `twist_per_mm` * rho radians
+/// (a volume-preserving map), so its lobes become spiral folds that rays from the centre cross
+/// several times when R b m twist > 1. V = (4 pi / 3) c R^2 (1 + b^2 / 2), exactly.
+std::unique_ptr<ImplicitShape> make_folded_spheroid(double radius_mm, double lobe_depth, int lobes,
+                                                    double half_height_mm, double twist_per_mm);
+
+/// Ellipsoidal shell: inside the ellipsoid of semi-axes `radii_mm` and outside the one of semi-axes
+/// `radii_mm` - `thickness_mm`, both centred at the origin (two surface components).
+std::unique_ptr<ImplicitShape> make_ellipsoid_shell(const Eigen::Vector3d& radii_mm, double thickness_mm);
 
 /// Rotation about x, then y, then z, by angles in degrees (the scene's rotation_deg).
 Eigen::Matrix3d rotation_from_degrees(const Eigen::Vector3d& rotation_deg);

@@ -1,6 +1,7 @@
 #include "anatomy/patch_fit.hpp"
 
 #include "anatomy/mesh_distance.hpp"
+#include "anatomy/surface_extraction.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
@@ -149,19 +150,41 @@ TriangleMesh target_base_mesh(const ImplicitShape& target, int base_triangles,
   return mesh;
 }
 
+TriangleMesh surface_base_mesh(const ImplicitShape& target, int base_triangles, std::uint32_t seed) {
+  return extract_surface_of_size(target, base_triangles, seed);
+}
+
+TriangleMesh fit_base_mesh(const ImplicitShape& target, const PatchFitOptions& options,
+                           const Eigen::Vector3d& radii_hint, const Eigen::Matrix3d& rotation) {
+  const bool icosphere = options.base_mesh == BaseMeshSource::icosphere ||
+                         (options.base_mesh == BaseMeshSource::automatic && target.star_shaped());
+  return icosphere ? target_base_mesh(target, options.base_triangles, radii_hint, rotation)
+                   : surface_base_mesh(target, options.base_triangles, options.seed);
+}
+
 Eigen::MatrixX3d straddle_vertices(const TriangleMesh& base, const ImplicitShape& target, double factor) {
   Eigen::VectorXd sag_sum = Eigen::VectorXd::Zero(base.vertex_count());
   Eigen::VectorXd count = Eigen::VectorXd::Zero(base.vertex_count());
+  const bool radial_depth = target.star_shaped();
   for (Eigen::Index t = 0; t < base.face_count(); ++t) {
     for (int k = 0; k < 3; ++k) {
       const int a = base.faces(t, k), b = base.faces(t, (k + 1) % 3);
       if (a > b) continue; // each edge once (its other triangle has it as b > a)
       const Eigen::Vector3d mid = 0.5 * (base.vertex(a) + base.vertex(b));
-      // Depth of the chord midpoint below the surface along the ray from the centre (positive
-      // inside); radial, so it stays robust on flat-sided superquadrics.
-      const Eigen::Vector3d radial = mid - target.center();
-      const double sag =
-          (target.ray_from_center(radial.normalized()) - target.center()).norm() - radial.norm();
+      double sag = 0.0;
+      if (radial_depth) {
+        // Depth of the chord midpoint below the surface along the ray from the centre (positive
+        // inside); radial, so it stays robust on flat-sided superquadrics.
+        const Eigen::Vector3d radial = mid - target.center();
+        sag = (target.ray_from_center(radial.normalized()) - target.center()).norm() - radial.norm();
+      } else {
+        // Along the mean normal of the edge's ends, the nearest crossing within half an edge:
+        // the local feature size of a fold bounds how far its other sheet can be.
+        const Eigen::Vector3d normal =
+            (target.outward_normal(base.vertex(a)) + target.outward_normal(base.vertex(b))).normalized();
+        const double h = target_height(target, mid, normal, 0.5 * (base.vertex(b) - base.vertex(a)).norm());
+        sag = std::isnan(h) ? 0.0 : h;
+      }
       sag_sum[a] += sag, sag_sum[b] += sag;
       count[a] += 1.0, count[b] += 1.0;
     }
@@ -210,6 +233,10 @@ void fit_bumps(PatchSurface& surface, const ImplicitShape& target, const PatchFi
     const double lambda = options.regularization * std::max(1e-300, normal.diagonal().mean());
     normal.diagonal().array() += lambda;
     const Eigen::VectorXd amplitudes = normal.ldlt().solve(A.transpose() * b);
+    // Off star shapes a coarse patch over a fold may see another sheet within its search
+    // distance; amplitudes beyond half the patch's size are such misreadings, and the flat patch
+    // is the better surface (the volume correction still applies to its neighbours).
+    if (!target.star_shaped() && amplitudes.cwiseAbs().maxCoeff() > 0.5 * frame.length_scale) continue;
     for (Eigen::Index c = 0; c < k; ++c)
       bumps[static_cast<std::size_t>(c)].amplitude_mm = amplitudes[c];
     surface.set_bumps(t, bumps);
@@ -219,7 +246,7 @@ void fit_bumps(PatchSurface& surface, const ImplicitShape& target, const PatchFi
 PatchSurface fit_patch_surface(const ImplicitShape& target, const Eigen::Vector3d& radii_hint,
                                const Eigen::Matrix3d& rotation, const PatchFitOptions& options,
                                const std::string& what, PatchFitReport* report) {
-  const TriangleMesh on_target = target_base_mesh(target, options.base_triangles, radii_hint, rotation);
+  const TriangleMesh on_target = fit_base_mesh(target, options, radii_hint, rotation);
   TriangleMesh base = on_target;
   if (options.vertex_offset_factor != 0.0) {
     base.vertices = straddle_vertices(on_target, target, options.vertex_offset_factor);
@@ -228,7 +255,12 @@ PatchSurface fit_patch_surface(const ImplicitShape& target, const Eigen::Vector3
   fit_bumps(surface, target, options);
   if (options.match_volume) match_volume(surface, target.volume());
   if (report) {
-    *report = measure_fit(surface, target, 1e-3 * target.bounding_radius());
+    // Star shapes: within a thousandth of the size, on an icosphere of level 6. Others: the
+    // extracted surface of level 5's size, tessellated within a tenth of edge^2 / size (a
+    // fixed fraction of the chord sag, so the cost stays proportional to the patch count).
+    const double edge = mean_edge_length(surface.base_mesh()), size = target.bounding_radius();
+    *report = target.star_shaped() ? measure_fit(surface, target, 1e-3 * size)
+                                   : measure_fit(surface, target, 0.1 * edge * edge / size, 5);
     report->vertex_offset_factor = options.vertex_offset_factor;
   }
   return surface;
@@ -238,12 +270,21 @@ PatchFitReport measure_fit(const PatchSurface& surface, const ImplicitShape& tar
                            int target_sample_level) {
   PatchFitReport report;
   report.base_triangles = static_cast<int>(surface.patch_count());
-  // The target as a dense mesh: an icosphere of target_sample_level cast onto it from its centre.
-  TriangleMesh target_mesh = unit_icosphere(target_sample_level);
+  // The target as a dense mesh with vertices on it: an icosphere of target_sample_level cast
+  // onto it from its centre, or, when rays from the centre may cross it more than once, its
+  // extracted surface of as many triangles.
+  TriangleMesh target_mesh;
   std::vector<Eigen::Vector3d> samples;
-  for (Eigen::Index v = 0; v < target_mesh.vertex_count(); ++v) {
-    samples.push_back(target.ray_from_center(target_mesh.vertex(v)));
-    target_mesh.vertices.row(v) = samples.back().transpose();
+  if (target.star_shaped()) {
+    target_mesh = unit_icosphere(target_sample_level);
+    for (Eigen::Index v = 0; v < target_mesh.vertex_count(); ++v) {
+      samples.push_back(target.ray_from_center(target_mesh.vertex(v)));
+      target_mesh.vertices.row(v) = samples.back().transpose();
+    }
+  } else {
+    target_mesh = extract_surface_of_size(target, 20 * (1 << (2 * target_sample_level)), 0);
+    for (Eigen::Index v = 0; v < target_mesh.vertex_count(); ++v)
+      samples.push_back(target_mesh.vertex(v));
   }
   // Surface to target: exact surface points on every patch's level-4 grid (1/16 of an edge).
   const MeshDistance to_target_mesh(target_mesh);

@@ -3,11 +3,24 @@
 #include "anatomy/implicit_shape.hpp"
 #include "anatomy/patch_surface.hpp"
 
+#include <cstdint>
+
 namespace phantasm {
+
+/// Where a patch fit's base mesh comes from.
+enum class BaseMeshSource {
+  automatic, ///< icosphere for star-shaped targets (ImplicitShape::star_shaped()), surface otherwise
+  icosphere, ///< an icosphere cast onto the target along rays from its centre (star shapes only)
+  surface,   ///< the target's own surface, extracted and meshed to the requested size (any shape)
+};
 
 /// Settings of a patch fit: the anatomy's speed/accuracy knob is the base mesh size.
 struct PatchFitOptions {
-  int base_triangles = 320;     ///< requested base size; an icosphere of 20 * 4^k <= this (at least 20)
+  /// Requested base size: an icosphere of 20 * 4^k <= this (at least 20), or an extracted
+  /// surface of about this many triangles.
+  int base_triangles = 320;
+  BaseMeshSource base_mesh = BaseMeshSource::automatic;
+  std::uint32_t seed = 0;       ///< seed of the surface extraction (any fixed value is repeatable)
   int bump_levels = 2;          ///< bumps on the incircles of subdivision levels 0..bump_levels (1 + 4 + 16)
   int sample_level = 5;         ///< least-squares samples on this level's interior grid points per patch
   double regularization = 1e-6; ///< Tikhonov weight relative to the normal matrix's mean diagonal
@@ -34,6 +47,14 @@ struct PatchFitReport {
 TriangleMesh target_base_mesh(const ImplicitShape& target, int base_triangles,
                               const Eigen::Vector3d& radii_hint, const Eigen::Matrix3d& rotation);
 
+/// The base mesh of any closed target: its surface extracted and meshed with about
+/// `base_triangles` triangles, vertices on the target (anatomy/surface_extraction.hpp).
+TriangleMesh surface_base_mesh(const ImplicitShape& target, int base_triangles, std::uint32_t seed);
+
+/// The base mesh a fit with these options uses (BaseMeshSource::automatic resolved).
+TriangleMesh fit_base_mesh(const ImplicitShape& target, const PatchFitOptions& options,
+                           const Eigen::Vector3d& radii_hint, const Eigen::Matrix3d& rotation);
+
 /// Fits the bump amplitudes of every patch to the target by linear least squares (heights of the
 /// target along each patch's normal at interior sample points).
 void fit_bumps(PatchSurface& surface, const ImplicitShape& target, const PatchFitOptions& options);
@@ -43,18 +64,24 @@ void fit_bumps(PatchSurface& surface, const ImplicitShape& target, const PatchFi
 void match_volume(PatchSurface& surface, double target_volume);
 
 /// Moves base vertices outward along the target normal by `factor` times the mean depth of their
-/// edges' chord midpoints below the target, so that chords straddle a convex target.
+/// edges' chord midpoints below the target, so that chords straddle a convex target (and sink
+/// into a concave one). The depth is taken along the ray from the centre on star-shaped
+/// targets, and along the mean of the two end points' normals, within half the edge's length, on
+/// others (so a fold's other sheet is not taken for the edge's own).
 Eigen::MatrixX3d straddle_vertices(const TriangleMesh& base, const ImplicitShape& target, double factor);
 
 /// Builds a fitted patch surface: base mesh, vertex placement, bumps, and a volume correction
-/// spread over the central bump of every patch.
+/// spread over the central bump of every patch. The report measures star-shaped targets
+/// within 1e-3 bounding_radius() on 20 * 4^6 target samples, others within
+/// 0.1 edge^2 / bounding_radius() on 20 * 4^5 (see measure_fit).
 PatchSurface fit_patch_surface(const ImplicitShape& target, const Eigen::Vector3d& radii_hint,
                                const Eigen::Matrix3d& rotation, const PatchFitOptions& options,
                                const std::string& what, PatchFitReport* report = nullptr);
 
 /// Measures a surface against its target: Hausdorff and mean distance between exact surface
-/// points (each patch's level-4 grid) and the target (as an icosphere of `target_sample_level`
-/// cast onto it from its centre), and from those target points to a tessellation within
+/// points (each patch's level-4 grid) and the target (as a dense mesh of 20 * 4^target_sample_level
+/// triangles with vertices on it: an icosphere cast from the centre of a star-shaped target, the
+/// extracted surface of any other), and from those target points to a tessellation within
 /// `tessellation_mm`; and the volume error.
 PatchFitReport measure_fit(const PatchSurface& surface, const ImplicitShape& target, double tessellation_mm,
                            int target_sample_level = 6);

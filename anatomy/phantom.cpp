@@ -92,8 +92,10 @@ int base_triangles(const Scene& scene, std::size_t organ) {
 /// straddle the target, bumps fitted.
 void build_solid(Organ& organ, const Scene& scene, std::size_t index) {
   const ImplicitShape& target = *organ.target;
-  // The surface area of a fine plain mesh of the target sets the facet size for the base size.
+  // The surface area of a fine plain mesh of the target sets the facet size for the base size:
+  // an icosphere cast from the centre of a star-shaped target, the extracted surface of another.
   const TriangleMesh probe = [&] {
+    if (!target.star_shaped()) return surface_base_mesh(target, 5120, organ_seed(scene.seed, index));
     TriangleMesh m = unit_icosphere(4);
     for (Eigen::Index v = 0; v < m.vertex_count(); ++v)
       m.vertices.row(v) = target.ray_from_center(m.vertex(v)).transpose();

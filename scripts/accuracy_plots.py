@@ -92,6 +92,7 @@ def voxel_plot(rows, out):
 
 
 def fit_plot(rows, out):
+    rows = [r for r in rows if r["shape"] == "ellipsoid" and r["base_mesh"] == "icosphere"]
     triangles = [int(r["base_triangles"]) for r in rows]
     figure, axis = plt.subplots(figsize=(5.5, 4))
     axis.loglog(triangles, [float(r["plain_hausdorff_mm"]) for r in rows], "s--", label="plain base mesh")

@@ -1,9 +1,13 @@
 #include "anatomy/patch_fit.hpp"
+#include "anatomy/surface_extraction.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
+#include <set>
+#include <utility>
+#include <vector>
 
 using namespace phantasm;
 
@@ -71,4 +75,101 @@ TEST(PatchFit, FitErrorFallsWithBaseMeshSize) {
     EXPECT_LT(report.hausdorff_mm, plain.hausdorff_mm);
     previous = report.hausdorff_mm;
   }
+}
+
+namespace {
+
+/// V - E + F of a closed triangle mesh (2 - 2 genus per component).
+long euler_characteristic(const TriangleMesh& mesh) {
+  std::set<std::pair<int, int>> edges;
+  for (Eigen::Index t = 0; t < mesh.face_count(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const int a = mesh.faces(t, k), b = mesh.faces(t, (k + 1) % 3);
+      edges.emplace(std::min(a, b), std::max(a, b));
+    }
+  }
+  return static_cast<long>(mesh.vertex_count()) - static_cast<long>(edges.size()) +
+         static_cast<long>(mesh.face_count());
+}
+
+/// Fits a target on the extracted-surface base mesh at several sizes; returns the log-log slope
+/// of the fitted Hausdorff distance against the mean base edge (least squares over the sizes).
+double hausdorff_order(const ImplicitShape& target, const std::vector<int>& sizes, const char* name) {
+  std::vector<double> log_edge, log_hausdorff;
+  for (int triangles : sizes) {
+    PatchFitOptions options;
+    options.base_triangles = triangles;
+    PatchFitReport report;
+    const PatchSurface surface = fit_patch_surface(target, Eigen::Vector3d::Ones(),
+                                                   Eigen::Matrix3d::Identity(), options, name, &report);
+    const double edge = mean_edge_length(surface.base_mesh());
+    std::printf("%s, %5d patches (edge %.2f mm): fitted Hausdorff %.4f mm, mean %.5f mm, volume error %.2e\n",
+                name, report.base_triangles, edge, report.hausdorff_mm, report.mean_distance_mm,
+                report.volume_error);
+    EXPECT_LT(std::abs(report.volume_error), 1e-9) << name << " " << triangles;
+    log_edge.push_back(std::log(edge));
+    log_hausdorff.push_back(std::log(report.hausdorff_mm));
+  }
+  const Eigen::Index n = static_cast<Eigen::Index>(sizes.size());
+  const Eigen::Map<const Eigen::VectorXd> x(log_edge.data(), n), y(log_hausdorff.data(), n);
+  const Eigen::VectorXd xc = x.array() - x.mean(), yc = y.array() - y.mean();
+  const double order = xc.dot(yc) / xc.dot(xc);
+  std::printf("%s: Hausdorff order %.2f in the base edge length\n", name, order);
+  return order;
+}
+
+} // namespace
+
+// Shapes rays from a centre cannot sample, on base meshes extracted from their own surfaces: the
+// fitted error falls at least as edge^1.5 (measured orders are printed).
+TEST(PatchFit, TorusFitConvergesWithOrderAtLeastOneAndAHalf) {
+  const auto torus = make_torus({0, 0, 0}, 30, 10);
+  EXPECT_GE(hausdorff_order(*torus, {160, 320, 640, 1280}, "torus"), 1.5);
+}
+
+TEST(PatchFit, FoldedSpheroidFitConvergesWithOrderAtLeastOneAndAHalf) {
+  const auto folded = make_folded_spheroid(40, 0.3, 5, 30, 0.04);
+  EXPECT_GE(hausdorff_order(*folded, {320, 640, 1280, 2560}, "folded spheroid"), 1.5);
+}
+
+TEST(PatchFit, HorseshoeFitConvergesWithOrderAtLeastOneAndAHalf) {
+  const auto horseshoe = make_horseshoe(30, 8);
+  EXPECT_GE(hausdorff_order(*horseshoe, {160, 320, 640, 1280}, "horseshoe"), 1.5);
+}
+
+TEST(PatchFit, AFittedTorusKeepsItsGenusAndVolumeAndBeatsThePlainMesh) {
+  const auto torus = make_torus({0, 0, 0}, 30, 10);
+  PatchFitOptions options;
+  options.base_triangles = 320;
+  PatchFitReport fitted;
+  const PatchSurface surface = fit_patch_surface(*torus, Eigen::Vector3d::Ones(), Eigen::Matrix3d::Identity(),
+                                                 options, "torus", &fitted);
+  const PatchSurface plain(surface_base_mesh(*torus, 320, 0), "plain");
+  const double edge = mean_edge_length(plain.base_mesh());
+  const PatchFitReport plain_fit = measure_fit(plain, *torus, 0.1 * edge * edge / 40.0, 5);
+  std::printf("torus, %ld patches: plain Hausdorff %.3f mm; fitted Hausdorff %.3f mm, mean %.4f mm, volume "
+              "error %.2e\n",
+              static_cast<long>(surface.patch_count()), plain_fit.hausdorff_mm, fitted.hausdorff_mm,
+              fitted.mean_distance_mm, fitted.volume_error);
+  EXPECT_EQ(euler_characteristic(surface.base_mesh()), 0);
+  EXPECT_LT(std::abs(fitted.volume_error), 1e-9);
+  // Straight chords around the 10 mm tube bound both (edges of about 11 mm sag 1.6 mm).
+  EXPECT_LT(fitted.hausdorff_mm, plain_fit.hausdorff_mm);
+  EXPECT_LT(fitted.mean_distance_mm, 0.5 * plain_fit.mean_distance_mm);
+}
+
+TEST(PatchFit, AThreeMillimetreShellFitsAsTwoClosedManifoldWalls) {
+  const auto shell = make_ellipsoid_shell({40, 30, 25}, 3.0);
+  PatchFitOptions options;
+  options.base_triangles = 1280;
+  PatchFitReport fitted;
+  const PatchSurface surface = fit_patch_surface(*shell, Eigen::Vector3d::Ones(), Eigen::Matrix3d::Identity(),
+                                                 options, "shell", &fitted);
+  std::printf("shell, %ld patches: fitted Hausdorff %.3f mm, mean %.4f mm, volume error %.2e\n",
+              static_cast<long>(surface.patch_count()), fitted.hausdorff_mm, fitted.mean_distance_mm,
+              fitted.volume_error);
+  EXPECT_NO_THROW(check_closed_manifold(surface.base_mesh(), "shell"));
+  EXPECT_EQ(euler_characteristic(surface.base_mesh()), 4); // two spheres
+  EXPECT_LT(std::abs(fitted.volume_error), 1e-9);
+  EXPECT_LT(fitted.hausdorff_mm, 1.0);
 }
