@@ -4,6 +4,7 @@
 #include "anatomy/phantom.hpp"
 #include "core/error.hpp"
 
+#include <Eigen/Geometry>
 #include <Eigen/LU>
 
 #include <cmath>
@@ -30,7 +31,16 @@ public:
     m_radius = (mesh.vertices.rowwise() - m_center.transpose()).rowwise().norm().maxCoeff();
     m_volume = enclosed_volume(mesh);
     m_step = 1e-4 * m_radius;
+    // A closed mesh is star-shaped about a point exactly when the point lies on the inner side
+    // of every face's plane (it is then in the mesh's kernel).
+    m_star_shaped = true;
+    for (Eigen::Index f = 0; f < mesh.face_count() && m_star_shaped; ++f) {
+      const Eigen::Vector3d a = mesh.vertex(mesh.faces(f, 0)), b = mesh.vertex(mesh.faces(f, 1)),
+                            c = mesh.vertex(mesh.faces(f, 2));
+      m_star_shaped = (b - a).cross(c - a).dot(m_center - a) < 0.0;
+    }
   }
+  bool star_shaped() const override { return m_star_shaped; }
   double value(const Eigen::Vector3d& x) const override { return -m_distance.signed_distance(x); }
   Eigen::Vector3d gradient(const Eigen::Vector3d& x) const override {
     return numeric_gradient(*this, x, m_step);
@@ -43,6 +53,7 @@ private:
   MeshDistance m_distance;
   Eigen::Vector3d m_center;
   double m_radius = 0.0, m_volume = 0.0, m_step = 1e-3;
+  bool m_star_shaped = false;
 };
 
 class LabelShape final : public ImplicitShape {
@@ -78,7 +89,21 @@ public:
       m_radius = std::max(m_radius, (c - m_center).norm());
     m_radius += grid.spacing_mm.norm();
     m_step = 0.05 * grid.spacing_mm.minCoeff();
+    // Star-shaped when every ray from the centre (icosphere directions, steps of a quarter
+    // voxel) leaves the label once and never comes back.
+    const TriangleMesh directions = unit_icosphere(3);
+    const double step = 0.25 * grid.spacing_mm.minCoeff();
+    m_star_shaped = value(m_center) > 0.0;
+    for (Eigen::Index v = 0; v < directions.vertex_count() && m_star_shaped; ++v) {
+      bool inside = true;
+      for (double t = step; t < m_radius && m_star_shaped; t += step) {
+        const bool now = value(m_center + t * directions.vertex(v)) > 0.0;
+        m_star_shaped = inside || !now;
+        inside = now;
+      }
+    }
   }
+  bool star_shaped() const override { return m_star_shaped; }
 
   double value(const Eigen::Vector3d& x) const override {
     const Eigen::Vector3d ijk = m_grid.index_from_world(x);
@@ -111,6 +136,7 @@ private:
   std::vector<float> m_inside;
   Eigen::Vector3d m_center;
   double m_radius = 0.0, m_volume = 0.0, m_step = 0.05;
+  bool m_star_shaped = false;
 };
 
 } // namespace
