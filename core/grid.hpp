@@ -2,6 +2,7 @@
 
 #include <Eigen/Core>
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -22,6 +23,16 @@ struct ImageGrid {
   /// Number of voxels, dims.prod() without overflow.
   std::int64_t voxel_count() const;
 };
+
+/// Linear index of voxel (i, j, k) in an array stored with i fastest, then j, then k (NIfTI's
+/// order, the layout of every volume here): i + dims.x (j + dims.y k).
+/// @param dims voxels along i, j, k
+/// @param i, j, k voxel index, each in [0, dims)
+inline std::size_t voxel_index(const Eigen::Vector3i& dims, int i, int j, int k) {
+  return static_cast<std::size_t>(i) +
+         static_cast<std::size_t>(dims.x()) *
+             (static_cast<std::size_t>(j) + static_cast<std::size_t>(dims.y()) * static_cast<std::size_t>(k));
+}
 
 /// Direction cosines for a three-letter axis code such as "RAS" or "LPI". Each letter names the
 /// world direction in which its voxel index increases (nibabel's convention): "RAS" is the

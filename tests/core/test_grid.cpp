@@ -58,3 +58,12 @@ TEST(CenteredGrid, VoxelCountDoesNotOverflowForLargeGrids) {
   grid.dims = {4096, 4096, 4096};
   EXPECT_EQ(grid.voxel_count(), std::int64_t{4096} * 4096 * 4096);
 }
+
+TEST(VoxelIndex, IRunsFastestThenJThenK) {
+  const Eigen::Vector3i dims(4, 3, 5);
+  std::size_t expected = 0;
+  for (int k = 0; k < dims.z(); ++k)
+    for (int j = 0; j < dims.y(); ++j)
+      for (int i = 0; i < dims.x(); ++i)
+        EXPECT_EQ(voxel_index(dims, i, j, k), expected++);
+}

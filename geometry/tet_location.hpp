@@ -1,0 +1,70 @@
+// Barycentric coordinates of points in tetrahedra, and the tet of a tet mesh that holds a point
+// (box-culled search) or, outside the mesh, the tet to extrapolate from.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <optional>
+#include <vector>
+
+namespace phantasm {
+
+/// Barycentric coordinates of x in tet (a, b, c, d): weights w with x = w0 a + w1 b + w2 c + w3 d
+/// and sum 1. All are >= 0 exactly when x lies in the tet. The tet must not be flat.
+/// @param x, a, b, c, d points, mm
+/// @return (4) weights of a, b, c, d
+Eigen::Vector4d tet_barycentric(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                const Eigen::Vector3d& c, const Eigen::Vector3d& d);
+
+/// A tet of a mesh and the barycentric coordinates of a point in it.
+struct TetLocation {
+  Eigen::Index tet = -1;                             ///< row of the tet list
+  Eigen::Vector4d weights = Eigen::Vector4d::Zero(); ///< of the tet's corners, sum 1
+};
+
+/// Point location in a tet mesh at fixed vertex positions: per tet the inverse of its edge matrix
+/// (so barycentric coordinates cost one 3x3 product) and its bounding box.
+class TetMeshLocator {
+public:
+  TetMeshLocator() = default;
+  /// @param vertices (#V x 3) positions, mm
+  /// @param tets (#T x 4) vertex indices; no tet may be flat
+  TetMeshLocator(const Eigen::MatrixX3d& vertices, const Eigen::MatrixX4i& tets);
+
+  Eigen::Index tet_count() const { return static_cast<Eigen::Index>(m_inverse.size()); }
+
+  /// Barycentric coordinates of x (mm) in tet t, (4) weights of its corners in the order of the tet list.
+  Eigen::Vector4d barycentric(Eigen::Index t, const Eigen::Vector3d& x) const {
+    const auto i = static_cast<std::size_t>(t);
+    const Eigen::Vector3d l = m_inverse[i] * (x - m_origin[i]);
+    return {1.0 - l.sum(), l[0], l[1], l[2]};
+  }
+
+  /// The first tet (in the order of the list) that holds x: its bounding box, widened by
+  /// box_tolerance_mm, holds x and its smallest weight is >= -weight_tolerance. Nothing when no
+  /// tet does (x outside the mesh).
+  /// @param x point, mm
+  /// @param weight_tolerance how far below zero a weight may be (dimensionless)
+  /// @param box_tolerance_mm how far outside a tet's box x may be, mm
+  std::optional<TetLocation> find(const Eigen::Vector3d& x, double weight_tolerance = 1e-12,
+                                  double box_tolerance_mm = 1e-9) const;
+
+  /// The tet whose smallest weight at x is largest: the first tet holding x (smallest weight >= 0)
+  /// when there is one, else the tet x is least outside of, to extrapolate from (continuous
+  /// across the faceted boundary). Tries every tet in list order. The tet is -1 for an empty mesh.
+  TetLocation nearest(const Eigen::Vector3d& x) const;
+
+  /// Bounding box of the mesh, mm.
+  const Eigen::Vector3d& low() const { return m_low; }
+  const Eigen::Vector3d& high() const { return m_high; }
+  /// Bounding box of tet t, mm.
+  const Eigen::Vector3d& tet_low(Eigen::Index t) const { return m_tet_low[static_cast<std::size_t>(t)]; }
+  const Eigen::Vector3d& tet_high(Eigen::Index t) const { return m_tet_high[static_cast<std::size_t>(t)]; }
+
+private:
+  std::vector<Eigen::Matrix3d> m_inverse;
+  std::vector<Eigen::Vector3d> m_origin, m_tet_low, m_tet_high;
+  Eigen::Vector3d m_low = Eigen::Vector3d::Constant(1e300), m_high = Eigen::Vector3d::Constant(-1e300);
+};
+
+} // namespace phantasm

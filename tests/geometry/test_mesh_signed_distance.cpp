@@ -1,0 +1,199 @@
+// Signed distance to a closed triangle mesh: a sphere mesh against the analytic distance to the
+// sphere within the chord sagitta, its sign, and the unit gradient away from the medial axis.
+#include "geometry/mesh_signed_distance.hpp"
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <map>
+#include <random>
+#include <utility>
+#include <vector>
+
+using namespace phantasm;
+
+namespace {
+
+struct Mesh {
+  Eigen::MatrixX3d vertices;
+  Eigen::MatrixX3i faces;
+};
+
+/// An icosahedron subdivided `levels` times, vertices on the sphere of radius r about the origin,
+/// faces counter-clockwise seen from outside.
+Mesh icosphere(int levels, double r) {
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<Eigen::Vector3d> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
+                                    {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
+                                    {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<std::array<int, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                                       {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                                       {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                                       {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  for (auto& x : v)
+    x.normalize();
+  for (int level = 0; level < levels; ++level) {
+    std::map<std::pair<int, int>, int> middle;
+    auto mid = [&](int a, int b) {
+      const auto key = std::minmax(a, b);
+      const auto found = middle.find(key);
+      if (found != middle.end()) return found->second;
+      v.push_back((v[static_cast<std::size_t>(a)] + v[static_cast<std::size_t>(b)]).normalized());
+      return middle[key] = static_cast<int>(v.size()) - 1;
+    };
+    std::vector<std::array<int, 3>> finer;
+    for (const auto& [a, b, c] : f) {
+      const int ab = mid(a, b), bc = mid(b, c), ca = mid(c, a);
+      finer.insert(finer.end(), {{a, ab, ca}, {b, bc, ab}, {c, ca, bc}, {ab, bc, ca}});
+    }
+    f = std::move(finer);
+  }
+  Mesh m;
+  m.vertices.resize(static_cast<Eigen::Index>(v.size()), 3);
+  for (std::size_t i = 0; i < v.size(); ++i)
+    m.vertices.row(static_cast<Eigen::Index>(i)) = r * v[i].transpose();
+  m.faces.resize(static_cast<Eigen::Index>(f.size()), 3);
+  for (std::size_t i = 0; i < f.size(); ++i)
+    m.faces.row(static_cast<Eigen::Index>(i)) << f[i][0], f[i][1], f[i][2];
+  return m;
+}
+
+/// The largest gap between the sphere and the flat faces: R - sqrt(R^2 - rho^2), rho the largest
+/// circumradius of a face.
+double sagitta(const Mesh& m, double r) {
+  double rho = 0.0;
+  for (Eigen::Index f = 0; f < m.faces.rows(); ++f) {
+    const Eigen::Vector3d a = m.vertices.row(m.faces(f, 0)).transpose(),
+                          b = m.vertices.row(m.faces(f, 1)).transpose(),
+                          c = m.vertices.row(m.faces(f, 2)).transpose();
+    const double area2 = (b - a).cross(c - a).norm();
+    rho = std::max(rho, (b - a).norm() * (c - b).norm() * (a - c).norm() / (2.0 * area2));
+  }
+  return r - std::sqrt(r * r - rho * rho);
+}
+
+Eigen::Vector3d random_direction(std::mt19937& random) {
+  std::normal_distribution<double> normal;
+  return Eigen::Vector3d(normal(random), normal(random), normal(random)).normalized();
+}
+
+} // namespace
+
+TEST(MeshSignedDistance, SphereMeshMatchesTheSphereWithinTheSagittaWithTheRightSign) {
+  const double r = 20.0;
+  const Mesh sphere = icosphere(3, r);
+  const double s = sagitta(sphere, r);
+  ASSERT_GT(s, 0.0);
+  ASSERT_LT(s, 0.02 * r);
+  SignedDistanceMesh scanned(sphere.faces);
+  scanned.update(sphere.vertices);
+  SignedDistanceMesh gridded(sphere.faces);
+  gridded.update(sphere.vertices);
+  gridded.build_search_grid();
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> radius(0.0, 2.5 * r);
+  int inside = 0, outside = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const Eigen::Vector3d x = radius(random) * random_direction(random);
+    const double exact = x.norm() - r;
+    for (const SignedDistanceMesh* mesh : {&scanned, &gridded}) {
+      const double d = mesh->signed_distance(x);
+      EXPECT_NEAR(d, exact, s * (1 + 1e-9)) << x.transpose();
+      EXPECT_NEAR(std::abs(d), mesh->distance(x), 1e-12);
+      if (std::abs(exact) > s) {
+        EXPECT_EQ(d < 0.0, exact < 0.0) << x.transpose();
+        EXPECT_EQ(mesh->inside(x, mesh->closest(x)), exact < 0.0);
+      }
+    }
+    // The two searches find the same distance.
+    EXPECT_NEAR(scanned.closest(x).distance_squared, gridded.closest(x).distance_squared, 1e-9);
+    (exact < 0 ? inside : outside) += 1;
+  }
+  EXPECT_GT(inside, 100);
+  EXPECT_GT(outside, 100);
+}
+
+TEST(MeshSignedDistance, SignIsRightAtVerticesEdgesAndFacesJustOffTheSurface) {
+  // Points a small step along the outward direction from vertices, edge midpoints and face
+  // centroids: closest features of every kind, where only the pseudonormals decide the sign.
+  const Mesh sphere = icosphere(2, 5.0);
+  SignedDistanceMesh mesh(sphere.faces);
+  mesh.update(sphere.vertices);
+  int features[3] = {0, 0, 0};
+  for (Eigen::Index f = 0; f < sphere.faces.rows(); ++f) {
+    const Eigen::Vector3d a = sphere.vertices.row(sphere.faces(f, 0)).transpose(),
+                          b = sphere.vertices.row(sphere.faces(f, 1)).transpose(),
+                          c = sphere.vertices.row(sphere.faces(f, 2)).transpose();
+    for (const Eigen::Vector3d& p : {a, Eigen::Vector3d((a + b) / 2), Eigen::Vector3d((a + b + c) / 3)}) {
+      for (double step : {-1e-6, 1e-6}) {
+        const Eigen::Vector3d x = p + step * p.normalized();
+        const MeshClosestPoint closest = mesh.closest(x);
+        ++features[static_cast<int>(closest.on_triangle.feature)];
+        EXPECT_EQ(mesh.signed_distance(x) < 0.0, step < 0.0) << x.transpose();
+        EXPECT_NEAR(std::abs(mesh.signed_distance(x)), 1e-6, 1e-7);
+      }
+    }
+  }
+  EXPECT_GT(features[static_cast<int>(TriangleFeature::face)], 0);
+  EXPECT_GT(features[static_cast<int>(TriangleFeature::edge)], 0);
+  EXPECT_GT(features[static_cast<int>(TriangleFeature::vertex)], 0);
+}
+
+TEST(MeshSignedDistance, GradientHasUnitLengthAwayFromTheMedialAxis) {
+  const double r = 10.0;
+  const Mesh sphere = icosphere(2, r);
+  SignedDistanceMesh mesh(sphere.faces);
+  mesh.update(sphere.vertices);
+  mesh.build_search_grid();
+  const double h = 1e-5;
+  auto gradient = [&](const Eigen::Vector3d& x) {
+    Eigen::Vector3d g;
+    for (int a = 0; a < 3; ++a) {
+      const Eigen::Vector3d e = h * Eigen::Vector3d::Unit(a);
+      g[a] = (mesh.signed_distance(x + e) - mesh.signed_distance(x - e)) / (2 * h);
+    }
+    return g;
+  };
+  std::mt19937 random(5);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  // Outside a convex mesh the distance is smooth everywhere.
+  for (int i = 0; i < 300; ++i) {
+    const Eigen::Vector3d x = (r * (1.05 + unit(random))) * random_direction(random);
+    EXPECT_NEAR(gradient(x).norm(), 1.0, 1e-6) << x.transpose();
+  }
+  // Inside, the medial axis reaches up to every edge: stay below face centres, shallower than a
+  // tenth of the face's inradius.
+  for (Eigen::Index f = 0; f < sphere.faces.rows(); f += 7) {
+    const Eigen::Vector3d a = sphere.vertices.row(sphere.faces(f, 0)).transpose(),
+                          b = sphere.vertices.row(sphere.faces(f, 1)).transpose(),
+                          c = sphere.vertices.row(sphere.faces(f, 2)).transpose();
+    const double perimeter = (b - a).norm() + (c - b).norm() + (a - c).norm();
+    const double inradius = (b - a).cross(c - a).norm() / perimeter;
+    const Eigen::Vector3d n = (b - a).cross(c - a).normalized();
+    const Eigen::Vector3d x = (a + b + c) / 3 - 0.1 * inradius * unit(random) * n - 1e-3 * inradius * n;
+    const Eigen::Vector3d g = gradient(x);
+    EXPECT_NEAR(g.norm(), 1.0, 1e-6);
+    EXPECT_NEAR(g.dot(n), 1.0, 1e-6); // along the outward face normal
+  }
+}
+
+TEST(MeshSignedDistance, UpdateFollowsMovedPositionsAndSurfacesOfALargerModel) {
+  // A surface whose vertices are rows 10.. of a larger position matrix, moved between queries.
+  const Mesh sphere = icosphere(1, 1.0);
+  std::vector<std::array<int, 3>> triangles;
+  for (Eigen::Index f = 0; f < sphere.faces.rows(); ++f)
+    triangles.push_back({10 + sphere.faces(f, 0), 10 + sphere.faces(f, 1), 10 + sphere.faces(f, 2)});
+  Eigen::MatrixX3d positions = Eigen::MatrixX3d::Constant(10 + sphere.vertices.rows(), 3, 1e3);
+  positions.bottomRows(sphere.vertices.rows()) = sphere.vertices;
+  SignedDistanceMesh mesh(triangles);
+  mesh.update(positions);
+  EXPECT_LT(mesh.signed_distance(Eigen::Vector3d::Zero()), 0.0);
+  EXPECT_TRUE(mesh.in_bounds(Eigen::Vector3d::Zero()));
+  positions.bottomRows(sphere.vertices.rows()).rowwise() += Eigen::RowVector3d(5, 0, 0);
+  mesh.update(positions);
+  EXPECT_GT(mesh.signed_distance(Eigen::Vector3d::Zero()), 3.0);
+  EXPECT_FALSE(mesh.in_bounds(Eigen::Vector3d::Zero()));
+  EXPECT_LT(mesh.signed_distance(Eigen::Vector3d(5, 0, 0)), -0.5);
+}
