@@ -1,43 +1,28 @@
 #pragma once
 
 #include "anatomy/triangle_mesh.hpp"
+#include "geometry/mesh_signed_distance.hpp"
 
 #include <Eigen/Core>
 
-#include <array>
 #include <vector>
 
 namespace phantasm {
 
-/// Closest points on a triangle mesh, with a uniform grid of buckets for speed, and the sign of
-/// the distance from angle-weighted pseudonormals (Baerentzen and Aanaes 2005), so points inside
-/// a closed outward mesh get negative distances.
+/// Distances to a triangle mesh, with a uniform grid of buckets for speed, and the sign of the
+/// distance from angle-weighted pseudonormals (Baerentzen and Aanaes 2005), so points inside a
+/// closed outward mesh get negative distances (geometry/mesh_signed_distance.hpp).
 class MeshDistance {
 public:
   explicit MeshDistance(const TriangleMesh& mesh);
 
   /// Unsigned distance from x to the mesh, mm.
-  double distance(const Eigen::Vector3d& x) const;
+  double distance(const Eigen::Vector3d& x) const { return m_mesh.distance(x); }
   /// Signed distance: negative inside a closed, outward-oriented mesh, mm.
-  double signed_distance(const Eigen::Vector3d& x) const;
+  double signed_distance(const Eigen::Vector3d& x) const { return m_mesh.signed_distance(x); }
 
 private:
-  struct Closest {
-    double distance_squared;
-    Eigen::Vector3d point;
-    Eigen::Index triangle;
-    int feature; ///< 0: face interior, 1..3: vertex k-1, 4..6: edge (k-4, k-3)
-  };
-  Closest closest(const Eigen::Vector3d& x) const;
-  Eigen::Vector3i cell_of(const Eigen::Vector3d& x) const;
-  const std::vector<Eigen::Index>& bucket(const Eigen::Vector3i& cell) const;
-
-  TriangleMesh m_mesh;
-  Eigen::Vector3d m_min, m_cell_size;
-  Eigen::Vector3i m_cells;
-  std::vector<std::vector<Eigen::Index>> m_buckets;
-  Eigen::MatrixX3d m_face_normals, m_vertex_normals;
-  std::vector<std::array<Eigen::Vector3d, 3>> m_edge_normals; ///< per face, per edge k (k, k+1)
+  SignedDistanceMesh m_mesh;
 };
 
 /// Distances between two surfaces, in mm.
