@@ -1,5 +1,7 @@
 #pragma once
 
+#include "geometry/mesh_signed_distance.hpp"
+
 #include <Eigen/Core>
 
 #include <array>
@@ -47,18 +49,7 @@ public:
   SurfaceQuery query(int s, const Eigen::Vector3d& x) const;
 
 private:
-  struct Cache {
-    std::vector<Eigen::Vector3d> face_normals;                ///< unit
-    std::vector<std::array<Eigen::Vector3d, 3>> edge_normals; ///< per face, edge k = (corner k, corner k+1)
-    std::vector<Eigen::Vector3d> vertex_normals; ///< per model vertex of the surface (by position in `local`)
-    std::vector<Eigen::Vector3d> face_min, face_max; ///< per face bounds
-    Eigen::Vector3d min = Eigen::Vector3d::Zero(), max = Eigen::Vector3d::Zero();
-  };
-  const std::vector<ContactSurface>& m_surfaces;
-  std::vector<std::vector<int>>
-      m_local; ///< per surface: model vertex -> index in vertex_normals (sparse map)
-  std::vector<Cache> m_cache;
-  Eigen::MatrixX3d m_positions;
+  std::vector<SignedDistanceMesh> m_meshes; ///< per surface
 };
 
 } // namespace phantasm
