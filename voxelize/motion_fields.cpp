@@ -1,36 +1,28 @@
 #include "voxelize/motion_fields.hpp"
 
-#include <Eigen/LU>
+#include "geometry/closest_point_triangle.hpp"
+#include "geometry/tet_boundary.hpp"
 
-#include <array>
-#include <limits>
-#include <map>
+#include <Eigen/LU>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
 
 namespace phantasm {
 
 DeformationMap::DeformationMap(std::vector<DeformedBody> bodies, double extension_mm)
     : m_bodies(std::move(bodies)), m_extension(extension_mm) {
   for (const DeformedBody& body : m_bodies) {
-    // Boundary faces: those used by one tet. Faces with a moved vertex drive the extension.
-    std::map<std::array<int, 3>, int> faces;
-    for (Eigen::Index t = 0; t < body.tets.rows(); ++t) {
-      for (int k = 0; k < 4; ++k) {
-        std::array<int, 3> f = {body.tets(t, (k + 1) % 4), body.tets(t, (k + 2) % 4),
-                                body.tets(t, (k + 3) % 4)};
-        std::sort(f.begin(), f.end());
-        ++faces[f];
-      }
-    }
-    for (const auto& [f, count] : faces) {
-      if (count != 1) continue;
+    // Boundary faces with a moved vertex drive the extension.
+    const Eigen::MatrixX3i faces = tet_boundary_faces(body.rest_mm, body.tets);
+    for (Eigen::Index f = 0; f < faces.rows(); ++f) {
       MovedFace face;
       bool moved = false;
       for (int k = 0; k < 3; ++k) {
-        face.rest[k] = body.rest_mm.row(f[static_cast<std::size_t>(k)]).transpose();
-        face.deformed[k] = body.deformed_mm.row(f[static_cast<std::size_t>(k)]).transpose();
+        face.rest[k] = body.rest_mm.row(faces(f, k)).transpose();
+        face.deformed[k] = body.deformed_mm.row(faces(f, k)).transpose();
         moved |= (face.deformed[k] - face.rest[k]).norm() > 1e-9;
       }
       if (moved) {
@@ -43,95 +35,31 @@ DeformationMap::DeformationMap(std::vector<DeformedBody> bodies, double extensio
         }
       }
     }
-    for (bool deformed : {false, true}) {
-      const Eigen::MatrixX3d& x = deformed ? body.deformed_mm : body.rest_mm;
-      TetCache cache;
-      for (Eigen::Index t = 0; t < body.tets.rows(); ++t) {
-        Eigen::Matrix3d D;
-        Eigen::Vector3d low = x.row(body.tets(t, 0)).transpose(), high = low;
-        for (int k = 0; k < 3; ++k) {
-          D.col(k) = (x.row(body.tets(t, k + 1)) - x.row(body.tets(t, 0))).transpose();
-          low = low.cwiseMin(x.row(body.tets(t, k + 1)).transpose());
-          high = high.cwiseMax(x.row(body.tets(t, k + 1)).transpose());
-        }
-        cache.inverse.push_back(D.inverse());
-        cache.origin.push_back(x.row(body.tets(t, 0)).transpose());
-        cache.low.push_back(low);
-        cache.high.push_back(high);
-        cache.body_low = cache.body_low.cwiseMin(low);
-        cache.body_high = cache.body_high.cwiseMax(high);
-      }
-      (deformed ? m_deformed : m_rest).push_back(std::move(cache));
-    }
+    m_rest.emplace_back(body.rest_mm, body.tets);
+    m_deformed.emplace_back(body.deformed_mm, body.tets);
   }
 }
 
 bool DeformationMap::locate(const Eigen::Vector3d& x, bool deformed, std::size_t* body, Eigen::Index* tet,
                             Eigen::Vector4d* weights) const {
-  const auto& caches = deformed ? m_deformed : m_rest;
-  for (std::size_t b = 0; b < caches.size(); ++b) {
-    const TetCache& c = caches[b];
-    if ((x.array() < c.body_low.array() - 1e-9).any() || (x.array() > c.body_high.array() + 1e-9).any())
-      continue;
-    for (std::size_t t = 0; t < c.inverse.size(); ++t) {
-      if ((x.array() < c.low[t].array() - 1e-9).any() || (x.array() > c.high[t].array() + 1e-9).any())
-        continue;
-      const Eigen::Vector3d l = c.inverse[t] * (x - c.origin[t]);
-      const Eigen::Vector4d w(1.0 - l.sum(), l[0], l[1], l[2]);
-      if (w.minCoeff() >= -1e-12) {
-        *body = b;
-        *tet = static_cast<Eigen::Index>(t);
-        *weights = w;
-        return true;
-      }
+  const auto& locators = deformed ? m_deformed : m_rest;
+  for (std::size_t b = 0; b < locators.size(); ++b) {
+    if (const std::optional<TetLocation> found = locators[b].find(x)) {
+      *body = b;
+      *tet = found->tet;
+      *weights = found->weights;
+      return true;
     }
   }
   return false;
 }
-
-namespace {
-
-/// The point of triangle (a, b, c) closest to p, as barycentric weights (Ericson, Real-Time
-/// Collision Detection, 5.1.5).
-Eigen::Vector3d closest_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                                    const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
-  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return {1, 0, 0};
-  const Eigen::Vector3d bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return {0, 1, 0};
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-    const double v = d1 / (d1 - d3);
-    return {1 - v, v, 0};
-  }
-  const Eigen::Vector3d cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return {0, 0, 1};
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-    const double w = d2 / (d2 - d6);
-    return {1 - w, 0, w};
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
-    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    return {0, 1 - w, w};
-  }
-  const double denominator = 1.0 / (va + vb + vc);
-  const double v = vb * denominator, w = vc * denominator;
-  return {1 - v - w, v, w};
-}
-
-} // namespace
 
 double DeformationMap::moved_boundary_distance(const Eigen::Vector3d& x, bool deformed,
                                                Eigen::Vector3d* displacement) const {
   double best = std::numeric_limits<double>::infinity();
   for (const MovedFace& f : m_moved_faces) {
     const auto& v = deformed ? f.deformed : f.rest;
-    const Eigen::Vector3d w = closest_on_triangle(x, v[0], v[1], v[2]);
+    const Eigen::Vector3d w = closest_point_on_triangle(x, v[0], v[1], v[2]).barycentric;
     const double d = (x - (w[0] * v[0] + w[1] * v[1] + w[2] * v[2])).norm();
     if (d < best) {
       best = d;
@@ -209,7 +137,7 @@ Eigen::Vector3d DeformationMap::inverse_outside(const Eigen::Vector3d& x, bool* 
 void DeformationMap::rasterize(const ImageGrid& grid, bool deformed, std::vector<float>& field,
                                std::vector<std::uint8_t>& inside) const {
   const auto count = static_cast<std::size_t>(grid.voxel_count());
-  const auto& caches = deformed ? m_deformed : m_rest;
+  const auto& locators = deformed ? m_deformed : m_rest;
   for (std::size_t b = 0; b < m_bodies.size(); ++b) {
     const DeformedBody& body = m_bodies[b];
     const Eigen::MatrixX3d& from = deformed ? body.deformed_mm : body.rest_mm;
@@ -226,19 +154,13 @@ void DeformationMap::rasterize(const ImageGrid& grid, bool deformed, std::vector
         lo[a] = std::max(0, static_cast<int>(std::ceil(low[a] - 1e-9)));
         hi[a] = std::min(grid.dims[a] - 1, static_cast<int>(std::floor(high[a] + 1e-9)));
       }
-      const Eigen::Matrix3d& inverse = caches[b].inverse[static_cast<std::size_t>(t)];
-      const Eigen::Vector3d& origin = caches[b].origin[static_cast<std::size_t>(t)];
       for (int k = lo[2]; k <= hi[2]; ++k) {
         for (int j = lo[1]; j <= hi[1]; ++j) {
           for (int i = lo[0]; i <= hi[0]; ++i) {
-            const std::size_t v = static_cast<std::size_t>(i) +
-                                  static_cast<std::size_t>(grid.dims.x()) *
-                                      (static_cast<std::size_t>(j) +
-                                       static_cast<std::size_t>(grid.dims.y()) * static_cast<std::size_t>(k));
+            const std::size_t v = voxel_index(grid.dims, i, j, k);
             if (inside[v]) continue;
             const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
-            const Eigen::Vector3d l = inverse * (x - origin);
-            const Eigen::Vector4d w(1.0 - l.sum(), l[0], l[1], l[2]);
+            const Eigen::Vector4d w = locators[b].barycentric(t, x);
             if (w.minCoeff() < -1e-12) continue;
             Eigen::Vector3d y = Eigen::Vector3d::Zero();
             for (int c = 0; c < 4; ++c)
@@ -262,11 +184,7 @@ MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& 
   f.def_to_ref_exact.assign(count, 1);
   f.jacobian.assign(count, 1.0f);
   const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
-  auto at = [&](int i, int j, int k) {
-    return static_cast<std::size_t>(i) +
-           static_cast<std::size_t>(nx) *
-               (static_cast<std::size_t>(j) + static_cast<std::size_t>(ny) * static_cast<std::size_t>(k));
-  };
+  auto at = [&](int i, int j, int k) { return voxel_index(grid.dims, i, j, k); };
   if (map.bodies().empty()) return f;
   // Inside the bodies: tet by tet. Outside: the extension, voxel by voxel in parallel (each
   // voxel's value depends on nothing else, so the result does not depend on the threads).

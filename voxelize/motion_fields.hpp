@@ -1,6 +1,7 @@
 #pragma once
 
 #include "core/grid.hpp"
+#include "geometry/tet_location.hpp"
 #include "sim/phantom_deformation.hpp"
 #include "voxelize/voxelized_phantom.hpp"
 
@@ -64,14 +65,8 @@ private:
   /// Bounding boxes of the moved faces, rest [0] and deformed [1].
   Eigen::Vector3d m_moved_low[2] = {Eigen::Vector3d::Constant(1e300), Eigen::Vector3d::Constant(1e300)};
   Eigen::Vector3d m_moved_high[2] = {Eigen::Vector3d::Constant(-1e300), Eigen::Vector3d::Constant(-1e300)};
-  // Per body and state: inverse edge matrices of each tet, and its bounding box.
-  struct TetCache {
-    std::vector<Eigen::Matrix3d> inverse;
-    std::vector<Eigen::Vector3d> origin, low, high;
-    Eigen::Vector3d body_low = Eigen::Vector3d::Constant(1e300),
-                    body_high = Eigen::Vector3d::Constant(-1e300);
-  };
-  std::vector<TetCache> m_rest, m_deformed;
+  /// Per body: point location in its rest and deformed tets.
+  std::vector<TetMeshLocator> m_rest, m_deformed;
 };
 
 /// The fields of `map` on every voxel of `grid`.

@@ -29,10 +29,7 @@ TissueVolumes voxelize_tissues(const ImageGrid& grid, const std::vector<Voxelize
     for (int k = 0; k < nz; ++k) {
       for (int j = 0; j < ny; ++j) {
         for (int i = 0; i < nx; ++i) {
-          const std::size_t index =
-              static_cast<std::size_t>(i) +
-              static_cast<std::size_t>(nx) *
-                  (static_cast<std::size_t>(j) + static_cast<std::size_t>(ny) * static_cast<std::size_t>(k));
+          const std::size_t index = voxel_index(grid.dims, i, j, k);
           const Eigen::Vector3d centre = grid.world_from_index(Eigen::Vector3d(i, j, k));
           bool decided = true;
           for (std::size_t o = 0; o < organs.size(); ++o) {
