@@ -1,5 +1,6 @@
 #include "evaluation/registration_metrics.hpp"
 
+#include "geometry/ras_lps.hpp"
 #include "io/nifti_file.hpp"
 
 #include <Eigen/Dense>
@@ -11,14 +12,6 @@
 
 namespace phantasm {
 namespace {
-
-const Eigen::Vector3d k_lps_sign(-1.0, -1.0, 1.0); ///< RAS <-> LPS: negate x and y
-
-std::size_t voxel_index(const Eigen::Vector3i& dims, int i, int j, int k) {
-  return (static_cast<std::size_t>(k) * static_cast<std::size_t>(dims.y()) + static_cast<std::size_t>(j)) *
-             static_cast<std::size_t>(dims.x()) +
-         static_cast<std::size_t>(i);
-}
 
 /// Squared distances along one line: d(p) = min_q (spacing (p - q))^2 + f(q) (lower envelope of
 /// parabolas). `f` holds the input and receives the output; v, z are scratch.
@@ -125,7 +118,7 @@ Eigen::Vector3d DisplacementField::at(const Eigen::Vector3d& ras_mm) const {
 }
 
 Eigen::Vector3d DisplacementField::moved(const Eigen::Vector3d& ras_mm) const {
-  return ras_mm + at(ras_mm).cwiseProduct(k_lps_sign);
+  return ras_mm + ras_from_lps(at(ras_mm));
 }
 
 DisplacementField read_displacement_field(const std::filesystem::path& path) {
@@ -176,8 +169,7 @@ std::vector<std::int32_t> warp_labels(const std::vector<std::int32_t>& moving, c
       for (int i = 0; i < grid.dims.x(); ++i) {
         const std::size_t v = voxel_index(grid.dims, i, j, k);
         const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
-        const Eigen::Vector3d target =
-            moving_grid.index_from_world(x + field.lps_mm[v].cwiseProduct(k_lps_sign));
+        const Eigen::Vector3d target = moving_grid.index_from_world(x + ras_from_lps(field.lps_mm[v]));
         const Eigen::Vector3i nearest(static_cast<int>(std::lround(target.x())),
                                       static_cast<int>(std::lround(target.y())),
                                       static_cast<int>(std::lround(target.z())));
@@ -243,8 +235,7 @@ JacobianStatistics jacobian_statistics(const DisplacementField& field, const std
   const ImageGrid& grid = field.grid;
   const Eigen::Vector3i& dims = grid.dims;
   // d(LPS position) / d(index), inverted: index derivatives of u become world derivatives.
-  const Eigen::Matrix3d lps_from_index =
-      k_lps_sign.asDiagonal() * grid.world_from_voxel.topLeftCorner<3, 3>();
+  const Eigen::Matrix3d lps_from_index = ras_lps_flip() * grid.world_from_voxel.topLeftCorner<3, 3>();
   const Eigen::Matrix3d index_from_lps = lps_from_index.inverse();
   std::vector<double> determinants;
   JacobianStatistics stats;

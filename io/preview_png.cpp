@@ -23,12 +23,7 @@ void write_preview_png(const std::filesystem::path& path, const ImageGrid& grid,
   const std::size_t rank = static_cast<std::size_t>(0.995 * static_cast<double>(sorted.size() - 1));
   std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(rank), sorted.end());
   const double top = std::max(1e-30, static_cast<double>(sorted[rank]));
-  auto at = [&](int i, int j, int k) {
-    return values[static_cast<std::size_t>(i) +
-                  static_cast<std::size_t>(nx) *
-                      (static_cast<std::size_t>(j) +
-                       static_cast<std::size_t>(ny) * static_cast<std::size_t>(k))];
-  };
+  auto at = [&](int i, int j, int k) { return values[voxel_index(grid.dims, i, j, k)]; };
   // Panels: k = nz/2 (i across, j up), j = ny/2 (i across, k up), i = nx/2 (j across, k up).
   const int width = nx + nx + ny, height = std::max(ny, nz);
   std::vector<unsigned char> pixels(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), 0);

@@ -50,7 +50,7 @@ std::vector<double> bias_field(double bias_percent, std::mt19937_64& random, con
   for (int k = 0; k < nz; ++k)
     for (int j = 0; j < ny; ++j)
       for (int i = 0; i < nx; ++i) {
-        const std::size_t v = (static_cast<std::size_t>(k) * ny + j) * nx + i;
+        const std::size_t v = voxel_index(grid.dims, i, j, k);
         if (volumes.background[v] >= 0.5f) continue;
         const double along = a.x() * i + a.y() * j + a.z() * k + offset;
         low = std::min(low, along);
@@ -63,7 +63,7 @@ std::vector<double> bias_field(double bias_percent, std::mt19937_64& random, con
       for (int j = 0; j < ny; ++j)
         for (int i = 0; i < nx; ++i) {
           const double along = a.x() * i + a.y() * j + a.z() * k + offset;
-          bias[(static_cast<std::size_t>(k) * ny + j) * nx + i] =
+          bias[voxel_index(grid.dims, i, j, k)] =
               1.0 + half_span * (2.0 * (along - low) / (high - low) - 1.0);
         }
   }

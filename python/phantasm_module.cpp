@@ -5,6 +5,7 @@
 #include "batch/sweep.hpp"
 #include "core/error.hpp"
 #include "core/progress.hpp"
+#include "geometry/ras_lps.hpp"
 #include "io/dataset_layout.hpp"
 #include "pipeline/run_pipeline.hpp"
 #include "scene/scene_json.hpp"
@@ -210,11 +211,9 @@ PYBIND11_MODULE(phantasm, m) {
               throw py::value_error("the scene does not deform: there is no field");
             if (direction != "ref_to_def" && direction != "def_to_ref")
               throw py::value_error("direction: expected 'ref_to_def' or 'def_to_ref'");
-            std::vector<float> lps = direction == "ref_to_def" ? s.result.volumes.motion->ref_to_def
-                                                               : s.result.volumes.motion->def_to_ref;
-            const std::size_t count = lps.size() / 3;
-            for (std::size_t v = 0; v < 2 * count; ++v)
-              lps[v] = -lps[v]; // RAS -> LPS: negate x and y
+            const std::vector<float> lps =
+                lps_from_ras_components(direction == "ref_to_def" ? s.result.volumes.motion->ref_to_def
+                                                                  : s.result.volumes.motion->def_to_ref);
             return volume_array<float>(s.result.volumes.grid, lps, 3);
           },
           py::arg("direction") = "ref_to_def",
