@@ -2,7 +2,6 @@
 
 #include "anatomy/tet_mesh.hpp"
 #include "anatomy/triangle_mesh.hpp"
-#include "geometry/tet_boundary.hpp"
 
 #include <Eigen/Core>
 
@@ -18,11 +17,5 @@ TetMesh structured_box(const Eigen::Vector3d& size_mm, const Eigen::Vector3i& ce
 /// (an open surface; normal along local +z).
 TriangleMesh structured_sheet(const Eigen::Vector2d& size_mm, const Eigen::Vector2i& cells,
                               const Eigen::Matrix3d& rotation, const Eigen::Vector3d& center_mm);
-
-/// The triangles that belong to exactly one tet, oriented outward (tet_boundary_faces(), kept
-/// under this name for its callers).
-inline Eigen::MatrixX3i boundary_faces_of(const Eigen::MatrixX3d& vertices, const Eigen::MatrixX4i& tets) {
-  return tet_boundary_faces(vertices, tets);
-}
 
 } // namespace phantasm

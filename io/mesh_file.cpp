@@ -2,8 +2,8 @@
 
 #include "io/mesh_file.hpp"
 
-#include "anatomy/structured_mesh.hpp"
 #include "core/error.hpp"
+#include "geometry/tet_boundary.hpp"
 #include "io/atomic_file.hpp"
 
 #include <vtkCellArray.h>
@@ -232,7 +232,7 @@ TetMesh read_vtu(const std::filesystem::path& path) {
     for (int k = 0; k < 4; ++k)
       mesh.tets(c, k) = static_cast<int>(ids->GetId(k));
   }
-  mesh.boundary_faces = boundary_faces_of(mesh.vertices, mesh.tets);
+  mesh.boundary_faces = tet_boundary_faces(mesh.vertices, mesh.tets);
   return mesh;
 }
 

@@ -2,38 +2,15 @@
 // organs in a body's tets, and the organs' deformed vertices interpolated from the solve.
 #include "sim/body_embedding.hpp"
 
-#include <Eigen/LU>
-
-#include <limits>
-
 namespace phantasm::sim_detail {
 
-TetLocator::TetLocator(const Eigen::MatrixX3d& rest_mm, const Eigen::MatrixX4i& tets, int first_vertex)
-    : m_tets(tets), m_first(first_vertex) {
-  for (Eigen::Index t = 0; t < tets.rows(); ++t) {
-    Eigen::Matrix3d D;
-    for (int k = 0; k < 3; ++k)
-      D.col(k) = (rest_mm.row(tets(t, k + 1)) - rest_mm.row(tets(t, 0))).transpose();
-    m_origin.push_back(rest_mm.row(tets(t, 0)).transpose());
-    m_inverse.push_back(D.inverse());
-  }
-}
-
 Embedding TetLocator::locate(const Eigen::Vector3d& x) const {
-  double best = -std::numeric_limits<double>::infinity();
   Embedding result;
-  for (std::size_t t = 0; t < m_inverse.size(); ++t) {
-    const Eigen::Vector3d b = m_inverse[t] * (x - m_origin[t]);
-    const Eigen::Vector4d w(1.0 - b.sum(), b[0], b[1], b[2]);
-    const double smallest = w.minCoeff();
-    if (smallest > best) {
-      best = smallest;
-      for (int k = 0; k < 4; ++k)
-        result.vertices[static_cast<std::size_t>(k)] = m_first + m_tets(static_cast<Eigen::Index>(t), k);
-      result.coefficients = w;
-      if (smallest >= 0.0) break;
-    }
-  }
+  const TetLocation location = m_locator.nearest(x);
+  if (location.tet < 0) return result;
+  for (int k = 0; k < 4; ++k)
+    result.vertices[static_cast<std::size_t>(k)] = m_first + m_tets(location.tet, k);
+  result.coefficients = location.weights;
   return result;
 }
 

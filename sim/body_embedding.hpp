@@ -4,6 +4,7 @@
 
 #include "anatomy/phantom.hpp"
 #include "core/stage_report.hpp"
+#include "geometry/tet_location.hpp"
 #include "scene/scene.hpp"
 #include "sim/deform_phantom.hpp"
 #include "sim/sim_plan.hpp"
@@ -27,13 +28,14 @@ struct Embedding {
 };
 
 /// Locates points in a body's rest tets: the tet where the smallest barycentric coordinate is
-/// largest (inside when it is >= 0; a point just outside the mesh extrapolates from the nearest
-/// tet, which keeps the map smooth across the faceted boundary).
+/// largest (TetMeshLocator::nearest: inside when it is >= 0; a point just outside the mesh
+/// extrapolates from the nearest tet, which keeps the map smooth across the faceted boundary).
 class TetLocator {
 public:
   /// @param rest_mm tet vertices (mm); @param tets their tets, which must outlive the locator
   /// @param first_vertex the model vertex of the mesh's vertex 0
-  TetLocator(const Eigen::MatrixX3d& rest_mm, const Eigen::MatrixX4i& tets, int first_vertex);
+  TetLocator(const Eigen::MatrixX3d& rest_mm, const Eigen::MatrixX4i& tets, int first_vertex)
+      : m_tets(tets), m_first(first_vertex), m_locator(rest_mm, tets) {}
 
   /// The embedding of x (mm) over model vertices.
   Embedding locate(const Eigen::Vector3d& x) const;
@@ -41,8 +43,7 @@ public:
 private:
   const Eigen::MatrixX4i& m_tets;
   int m_first = 0;
-  std::vector<Eigen::Vector3d> m_origin;
-  std::vector<Eigen::Matrix3d> m_inverse;
+  TetMeshLocator m_locator;
 };
 
 /// The point an embedding gives at positions p (one row per model vertex).

@@ -2,9 +2,9 @@
 // shells from surface organs, enclosed volumes, held boundaries, and collisions.
 #include "sim/build_model.hpp"
 
-#include "anatomy/structured_mesh.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
+#include "geometry/tet_boundary.hpp"
 
 #include <algorithm>
 #include <map>
@@ -181,7 +181,7 @@ void add_collisions(const Scene& scene, const Phantom& phantom, const std::vecto
         const Organ& organ = phantom.organs[static_cast<std::size_t>(body->organ)];
         Eigen::MatrixX3i faces;
         if (organ.solid)
-          faces = boundary_faces_of(organ.solid->vertices, organ.solid->tets);
+          faces = tet_boundary_faces(organ.solid->vertices, organ.solid->tets);
         else if (organ.surface)
           faces = organ.surface->base_mesh().faces;
         else

@@ -1,8 +1,8 @@
 // The deformation stage on whole scenes: bodies, embedded organs, held boundaries, loads, and
 // the dynamic mode against the closed form of implicit Euler.
 
-#include "anatomy/structured_mesh.hpp"
 #include "core/error.hpp"
+#include "geometry/tet_boundary.hpp"
 #include "sim/deform_phantom.hpp"
 #include "sim/enclosed_volume.hpp"
 #include "sim/newton.hpp"
@@ -361,7 +361,7 @@ TEST(DeformPhantom, CollidingOrgansPressOnEachOtherInsteadOfPassingThrough) {
       first.push_back(static_cast<int>(probe.rest_positions_m.rows()));
       probe.rest_positions_m.conservativeResize(probe.rest_positions_m.rows() + body.deformed_mm.rows(), 3);
       probe.rest_positions_m.bottomRows(body.deformed_mm.rows()) = body.deformed_mm;
-      const Eigen::MatrixX3i faces = boundary_faces_of(body.rest_mm, body.tets);
+      const Eigen::MatrixX3i faces = tet_boundary_faces(body.rest_mm, body.tets);
       ContactSurface surface;
       for (Eigen::Index f = 0; f < faces.rows(); ++f) {
         surface.triangles.push_back(

@@ -3,6 +3,7 @@
 
 #include "anatomy/structured_mesh.hpp"
 #include "anatomy/triangle_mesh.hpp"
+#include "geometry/tet_boundary.hpp"
 #include "sim/elastic_model.hpp"
 #include "sim/local_global.hpp"
 #include "sim/newton.hpp"
@@ -88,7 +89,7 @@ TwoCubes two_cubes(bool contacts) {
                                                    Eigen::Vector3d(10.5, 0, 0));
     const Eigen::MatrixX3d rest = 1e-3 * cube.vertices;
     const int first = add_body(t.model, rest, cube.tets, lame_parameters(1e4, 0.3), 1000.0);
-    t.model.contact_surfaces.push_back(surface_of(boundary_faces_of(cube.vertices, cube.tets), first));
+    t.model.contact_surfaces.push_back(surface_of(tet_boundary_faces(cube.vertices, cube.tets), first));
   }
   if (contacts) t.model.contact_pairs.push_back({0, 1});
   t.model.contact_stiffness_N_m = 1e5;
