@@ -3,6 +3,7 @@
 #include "core/cancellation.hpp"
 #include "core/format.hpp"
 #include "core/version.hpp"
+#include "geometry/ras_lps.hpp"
 #include "io/atomic_file.hpp"
 #include "io/dataset_layout.hpp"
 #include "io/json_file.hpp"
@@ -231,15 +232,6 @@ void plan_images(const ImageGrid& grid, const Scene& scene, const MrImages& imag
   }
 }
 
-/// A field in the ITK/elastix convention (docs/architecture.md): 5-D, components in LPS mm.
-std::vector<float> lps_components(const std::vector<float>& ras) {
-  std::vector<float> lps = ras;
-  const std::size_t count = ras.size() / 3;
-  for (std::size_t i = 0; i < 2 * count; ++i)
-    lps[i] = -lps[i];
-  return lps;
-}
-
 nlohmann::json field_sidecar(PhantomState from, PhantomState to, const std::string& mask) {
   const std::string f = session_label(from), t = session_label(to);
   return {{"Description", "Displacement field from the " + f + " state to the " + t +
@@ -310,7 +302,8 @@ void plan_volumes(const Scene& scene, const VoxelizedPhantom& v, const DatasetLa
       const bool forward = from == PhantomState::reference;
       const std::filesystem::path field = layout.transform(from, to);
       plan.file(field, [&v, forward](const std::filesystem::path& p) {
-        write_nifti(p, v.grid, lps_components(forward ? v.motion->ref_to_def : v.motion->def_to_ref),
+        // The ITK/elastix convention (README.md, Output): 5-D, components in LPS mm.
+        write_nifti(p, v.grid, lps_from_ras_components(forward ? v.motion->ref_to_def : v.motion->def_to_ref),
                     {NiftiIntent::displacement, 3, "phantasm displacement, LPS mm"});
       });
       const std::filesystem::path mask = layout.transform_mask(from, to);
