@@ -21,15 +21,15 @@ struct Variation {
   std::vector<Eigen::Vector3d> per_organ;
 };
 
-Variation draw_variation(const Scene& scene) {
+Variation draw_variation(const AnatomySettings& anatomy) {
   Variation variation;
-  const double v = scene.anatomy.variation;
-  std::mt19937_64 random(scene.seed);
+  const double v = anatomy.variation;
+  std::mt19937_64 random(anatomy.seed);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   const double scale = 1.0 + v * unit(random);
   for (int a = 0; a < 3; ++a)
     variation.global[a] = scale * (1.0 + 0.3 * v * unit(random));
-  for (std::size_t o = 0; o < scene.anatomy.organs.size(); ++o) {
+  for (std::size_t o = 0; o < anatomy.organs.size(); ++o) {
     Eigen::Vector3d jitter;
     for (int a = 0; a < 3; ++a)
       jitter[a] = 1.0 + 0.2 * v * unit(random);
@@ -83,14 +83,14 @@ std::uint32_t organ_seed(std::uint64_t scene_seed, std::size_t organ_index) {
   return seed;
 }
 
-int base_triangles(const Scene& scene, std::size_t organ) {
-  const int own = scene.anatomy.organs[organ].base_mesh_triangles;
-  return own > 0 ? own : scene.anatomy.base_mesh_triangles;
+int base_triangles(const AnatomySettings& anatomy, std::size_t organ) {
+  const int own = anatomy.organs[organ].base_mesh_triangles;
+  return own > 0 ? own : anatomy.base_mesh_triangles;
 }
 
 /// A closed solid: CGAL tets whose boundary becomes the patch base mesh, vertices placed to
 /// straddle the target, bumps fitted.
-void build_solid(Organ& organ, const Scene& scene, std::size_t index) {
+void build_solid(Organ& organ, const AnatomySettings& anatomy, std::size_t index) {
   const ImplicitShape& target = *organ.target;
   // The surface area of a fine plain mesh of the target sets the facet size for the base size:
   // an icosphere cast from the centre of a star-shaped target, the extracted surface of another.
@@ -102,7 +102,7 @@ void build_solid(Organ& organ, const Scene& scene, std::size_t index) {
     return m;
   }();
   const TetMeshCriteria criteria =
-      criteria_for_boundary_size(surface_area(probe), base_triangles(scene, index));
+      criteria_for_boundary_size(surface_area(probe), base_triangles(anatomy, index));
   // Mesh_3's sliver removal usually clears the quality bound; when it does not, mesh again from
   // another seed (deterministic: the attempts follow the scene seed).
   TetMesh tets;
@@ -110,7 +110,7 @@ void build_solid(Organ& organ, const Scene& scene, std::size_t index) {
   // since that move changes the boundary tets' angles a little.
   TriangleMesh base;
   for (std::uint32_t attempt = 0; attempt < 8; ++attempt) {
-    tets = mesh_implicit_solid(target, criteria, organ_seed(scene.seed, index) + attempt);
+    tets = mesh_implicit_solid(target, criteria, organ_seed(anatomy.seed, index) + attempt);
     base = boundary_surface(tets, &organ.tet_vertex_of_surface_vertex);
     base.vertices = straddle_vertices(base, target, PatchFitOptions{}.vertex_offset_factor);
     for (Eigen::Index v = 0; v < base.vertex_count(); ++v) {
@@ -155,9 +155,10 @@ std::unique_ptr<ImplicitShape> target_shape(const ShapeSettings& shape, const Sh
   return nullptr;
 }
 
-Phantom build_phantom(const Scene& scene, const std::map<std::string, ShapeData>& files, Reporter& reporter) {
-  const auto& settings = scene.anatomy.organs;
-  Variation variation = draw_variation(scene);
+Phantom build_phantom(const AnatomySettings& anatomy, const std::map<std::string, ShapeData>& files,
+                      Reporter& reporter) {
+  const auto& settings = anatomy.organs;
+  Variation variation = draw_variation(anatomy);
   // Shapes with variation; a jitter that would break nesting or touch a sibling is dropped.
   std::vector<ShapeSettings> shapes;
   std::vector<std::shared_ptr<const ImplicitShape>> targets;
@@ -215,11 +216,11 @@ Phantom build_phantom(const Scene& scene, const std::map<std::string, ShapeData>
       if (s.solid) organ.solid = std::move(tets);
       organ.fit = measure_fit(*organ.surface, *organ.target, 1e-3 * organ.target->bounding_radius(), 4);
     } else if (s.solid) {
-      build_solid(organ, scene, o);
+      build_solid(organ, anatomy, o);
       organ.fit = measure_fit(*organ.surface, *organ.target, 5e-3 * organ.target->bounding_radius(), 4);
     } else {
       PatchFitOptions options;
-      options.base_triangles = base_triangles(scene, o);
+      options.base_triangles = base_triangles(anatomy, o);
       const Eigen::Vector3d hint = shape.kind == ShapeKind::mesh || shape.kind == ShapeKind::label_volume
                                        ? Eigen::Vector3d::Ones()
                                        : Eigen::Vector3d(shape.radii_mm);

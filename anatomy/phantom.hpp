@@ -1,10 +1,10 @@
 #pragma once
 
+#include "anatomy/anatomy_settings.hpp"
 #include "anatomy/implicit_shape.hpp"
 #include "anatomy/organ.hpp"
 #include "core/grid.hpp"
 #include "core/progress.hpp"
-#include "scene/scene.hpp"
 
 #include <map>
 #include <memory>
@@ -14,11 +14,14 @@
 
 namespace phantasm {
 
-/// Builds every organ of the scene: seeded size variation (nesting is kept), target shapes,
-/// CGAL tet meshes for solid organs, fitted patch surfaces. Deterministic for a given scene.
+/// Builds every organ of the anatomy settings: seeded size variation (nesting is kept), target
+/// shapes, CGAL tet meshes for solid organs, fitted patch surfaces. Deterministic for given
+/// settings (anatomy.seed included).
+/// @param anatomy the organs, their shapes and the base mesh sizes
 /// @param files shape data of organs whose shape is a mesh or label volume, by organ name
 /// @throws InputError for shapes that cannot be built (invalid meshes, empty labels)
-Phantom build_phantom(const Scene& scene, const std::map<std::string, ShapeData>& files, Reporter& reporter);
+Phantom build_phantom(const AnatomySettings& anatomy, const std::map<std::string, ShapeData>& files,
+                      Reporter& reporter);
 
 /// The implicit shape of an organ's settings (before variation); files supply mesh and label shapes.
 std::unique_ptr<ImplicitShape> target_shape(const ShapeSettings& shape, const ShapeData* file,

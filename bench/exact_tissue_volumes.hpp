@@ -4,6 +4,7 @@
 // volume minus its children's), and the largest relative error of volumes from fractions.
 
 #include "anatomy/phantom.hpp"
+#include "scene/scene.hpp"
 #include "voxelize/voxelize_phantom.hpp"
 
 #include <cmath>

@@ -50,16 +50,17 @@ VoxelizedPhantom nested_ellipsoids(int size) {
   return v;
 }
 
-Scene three_contrasts() {
-  Scene scene;
+OrganTable three_organs() {
+  std::vector<OrganNesting> organs;
+  for (const char* tissue : {"csf", "grey_matter", "white_matter"})
+    organs.push_back({tissue, tissue, ""});
+  return OrganTable(organs);
+}
+
+MriSettings three_contrasts() {
+  MriSettings scene;
   scene.seed = 1;
   scene.field_strength_T = 3.0;
-  for (const char* tissue : {"csf", "grey_matter", "white_matter"}) {
-    OrganSettings organ;
-    organ.name = tissue;
-    organ.tissue = tissue;
-    scene.anatomy.organs.push_back(organ);
-  }
   SequenceSettings t1;
   t1.name = "T1w";
   t1.kind = SequenceKind::mprage;
@@ -84,7 +85,7 @@ Scene three_contrasts() {
   scene.sequences = {t1, t2, flair};
   scene.acquisition.noise_percent = 3;
   scene.acquisition.bias_percent = 20;
-  scene.outputs.parameter_maps = false;
+  scene.parameter_maps = false;
   return scene;
 }
 
@@ -102,14 +103,14 @@ int main(int argc, char** argv) {
   };
   for (const Case& c : {Case{"sampled directly", false, 1}, Case{"k-space (acquired 1.25x coarser)", true, 1},
                         Case{"k-space, 8 coils", true, 8}}) {
-    Scene scene = three_contrasts();
+    MriSettings scene = three_contrasts();
     scene.acquisition.kspace = c.kspace;
     scene.acquisition.acquired_voxel_mm = Eigen::Vector3d::Constant(1.25 * 256.0 / size);
     scene.acquisition.coils = c.coils;
     StageReport report;
     Reporter quiet = Reporter::silent();
     const auto start = std::chrono::steady_clock::now();
-    const MrImages images = synthesize_images(scene, volumes, report, quiet);
+    const MrImages images = synthesize_images(scene, three_organs(), volumes, report, quiet);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::printf("%-34s %6.2f s (%zu images)\n", c.name, seconds, images.reference.size());
   }

@@ -15,7 +15,7 @@ int main(int argc, char** argv) {
   using namespace phantasm;
   Scene scene = bench::scene_from_arguments(argc, argv);
   Reporter quiet = Reporter::silent();
-  const Phantom phantom = build_phantom(scene, {}, quiet);
+  const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
   const auto exact = bench::exact_tissue_volumes(phantom);
   std::printf("| tessellation tolerance | voxelize (reference, 1 mm) | largest tissue volume error "
               "|\n|---|---|---|\n");
@@ -23,7 +23,8 @@ int main(int argc, char** argv) {
     scene.voxelization.tessellation_tolerance_mm = tolerance;
     StageReport report;
     const auto start = std::chrono::steady_clock::now();
-    const VoxelizedPhantom v = voxelize_phantom(scene, phantom, nullptr, nullptr, report, quiet);
+    const VoxelizedPhantom v = voxelize_phantom(scene.voxelization, scene.organs, scene.grid.grid(), phantom,
+                                                nullptr, nullptr, report, quiet);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const double worst = bench::largest_volume_error(v, exact);
     std::printf("| %.2f mm | %.1f s | %.3f %% |\n", tolerance, seconds, 100.0 * worst);

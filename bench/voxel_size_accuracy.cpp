@@ -12,14 +12,15 @@ int main(int argc, char** argv) {
   using namespace phantasm;
   Scene scene = bench::scene_from_arguments(argc, argv);
   Reporter quiet = Reporter::silent();
-  const Phantom phantom = build_phantom(scene, {}, quiet);
+  const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
   const auto exact = bench::exact_tissue_volumes(phantom);
   std::printf("voxel_mm,seconds,largest_volume_error\n");
   for (double voxel : {3.0, 2.0, 1.5, 1.0, 0.75}) {
     scene.grid.voxel_size_mm = Eigen::Vector3d::Constant(voxel);
     StageReport report;
     const auto start = std::chrono::steady_clock::now();
-    const VoxelizedPhantom v = voxelize_phantom(scene, phantom, nullptr, nullptr, report, quiet);
+    const VoxelizedPhantom v = voxelize_phantom(scene.voxelization, scene.organs, scene.grid.grid(), phantom,
+                                                nullptr, nullptr, report, quiet);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::printf("%g,%.3f,%.6g\n", voxel, seconds, bench::largest_volume_error(v, exact));
     std::fflush(stdout);

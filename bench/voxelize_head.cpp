@@ -3,6 +3,7 @@
 // the peak resident memory it prints is that run's.
 // Usage: voxelize_head VOXEL_MM [SCENE]
 
+#include "scene/scene.hpp"
 #include "sim/deform_phantom.hpp"
 #include "voxelize/voxelize_phantom.hpp"
 
@@ -29,13 +30,14 @@ int main(int argc, char** argv) {
   Scene scene = *loaded.scene;
   scene.grid.voxel_size_mm = Eigen::Vector3d::Constant(std::atof(argv[1]));
   Reporter quiet = Reporter::silent();
-  const Phantom phantom = build_phantom(scene, {}, quiet);
+  const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
   StageReport sim;
   const PhantomDeformation deformation = deform_phantom(scene, phantom, sim, quiet);
   const Phantom deformed = deformed_phantom(phantom, deformation);
   StageReport report;
   const auto start = std::chrono::steady_clock::now();
-  const VoxelizedPhantom volumes = voxelize_phantom(scene, phantom, &deformed, &deformation, report, quiet);
+  const VoxelizedPhantom volumes = voxelize_phantom(scene.voxelization, scene.organs, scene.grid.grid(),
+                                                    phantom, &deformed, &deformation, report, quiet);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);

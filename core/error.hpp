@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace phantasm {
 
@@ -11,6 +12,25 @@ namespace phantasm {
 class InputError : public std::runtime_error {
 public:
   explicit InputError(const std::string& message) : std::runtime_error(message) {}
+};
+
+/// A setting a stage cannot carry out, named by its key path in the scene ("deformation.loads[1].organ").
+/// Stages know settings, not files: the pipeline, which holds the scene, turns the key path into
+/// the file, line and column the user wrote it at (Scene::location_of).
+class SettingError : public InputError {
+public:
+  /// @param key_path the setting's path in the scene, e.g. "deformation.collisions[0].organs"
+  /// @param message what was expected and what was found, without the key path
+  SettingError(std::string key_path, std::string message)
+      : InputError(key_path + ": " + message), m_key_path(std::move(key_path)),
+        m_message(std::move(message)) {}
+
+  const std::string& key_path() const { return m_key_path; }
+  const std::string& message() const { return m_message; }
+
+private:
+  std::string m_key_path;
+  std::string m_message;
 };
 
 /// The run was asked to stop (SIGINT or SIGTERM) and stopped at a safe point.

@@ -69,4 +69,10 @@ ImageGrid make_centered_grid(const Eigen::Vector3d& field_of_view_mm, const Eige
   return grid;
 }
 
+ImageGrid GridSettings::grid() const {
+  const auto direction = direction_from_axis_code(orientation);
+  return make_centered_grid(field_of_view_mm, voxel_size_mm, center_mm,
+                            direction ? *direction : Eigen::Matrix3d::Identity());
+}
+
 } // namespace phantasm

@@ -9,15 +9,14 @@
 
 namespace phantasm {
 
-std::map<std::string, ShapeData> read_shape_files(const Scene& scene) {
+std::map<std::string, ShapeData> read_shape_files(const AnatomySettings& anatomy) {
   std::map<std::string, ShapeData> files;
   std::map<std::filesystem::path, std::shared_ptr<const ShapeData>> volumes;
-  for (std::size_t i = 0; i < scene.anatomy.organs.size(); ++i) {
-    const OrganSettings& organ = scene.anatomy.organs[i];
+  for (std::size_t i = 0; i < anatomy.organs.size(); ++i) {
+    const OrganSettings& organ = anatomy.organs[i];
     const ShapeSettings& shape = organ.shape;
     if (shape.kind != ShapeKind::mesh && shape.kind != ShapeKind::label_volume) continue;
     const std::string key = "anatomy.organs[" + std::to_string(i) + "].shape.file";
-    Diagnostic where{scene.location_of(key), key, ""};
     try {
       if (shape.kind == ShapeKind::mesh) {
         files[organ.name].mesh = read_triangle_mesh(shape.file);
@@ -36,8 +35,7 @@ std::map<std::string, ShapeData> read_shape_files(const Scene& scene) {
       }
       files[organ.name] = *volume;
     } catch (const InputError& error) {
-      where.message = error.what();
-      throw InputError(where.format());
+      throw SettingError(key, error.what());
     }
   }
   return files;

@@ -1,7 +1,7 @@
 #pragma once
 
 #include "mri/kspace.hpp"
-#include "scene/scene.hpp"
+#include "mri/mri_settings.hpp"
 
 #include <optional>
 #include <vector>
@@ -26,7 +26,7 @@ struct MrImage {
 };
 
 struct MrImages {
-  std::vector<MrImage> reference;       ///< one per scene sequence
+  std::vector<MrImage> reference;       ///< one per sequence of the settings
   std::vector<MrImage> deformed;        ///< when the phantom was deformed
   std::optional<KspaceSampling> kspace; ///< how the images were acquired, when in k-space
   int coils = 1;                        ///< receive coils combined by sum of squares

@@ -14,16 +14,16 @@ std::string value_text(const std::optional<double>& value) {
 
 } // namespace
 
-StageReport plan_mri(const Scene& scene) {
+StageReport plan_mri(const MriSettings& settings, const OrganTable& organs) {
   StageReport report;
   report.stage = "mri";
-  if (!scene.outputs.images || scene.sequences.empty()) {
+  if (!settings.images || settings.sequences.empty()) {
     report.status = "skipped";
-    report.skipped.push_back(scene.sequences.empty() ? "MR images (the scene lists no sequences)"
-                                                     : "MR images (outputs.images is false)");
+    report.skipped.push_back(settings.sequences.empty() ? "MR images (the scene lists no sequences)"
+                                                        : "MR images (outputs.images is false)");
     return report;
   }
-  for (const auto& s : scene.sequences) {
+  for (const auto& s : settings.sequences) {
     std::ostringstream line;
     line << s.name << ": " << to_string(s.kind) << ", TR " << s.TR_ms << " ms, TE " << s.TE_ms << " ms";
     if (s.kind != SequenceKind::spin_echo) line << ", flip " << s.flip_deg << " deg";
@@ -32,12 +32,12 @@ StageReport plan_mri(const Scene& scene) {
     line << "; reference and deformed";
     report.modelled.push_back(line.str());
   }
-  for (const auto& [name, p] : resolve_tissue_parameters(scene)) {
-    report.modelled.push_back("tissue " + name + " at " + value_text(scene.field_strength_T) + " T: T1 " +
+  for (const auto& [name, p] : resolve_tissue_parameters(settings, organs)) {
+    report.modelled.push_back("tissue " + name + " at " + value_text(settings.field_strength_T) + " T: T1 " +
                               value_text(p.T1_ms) + " ms, T2 " + value_text(p.T2_ms) + " ms, T2* " +
                               value_text(p.T2star_ms) + " ms, PD " + value_text(p.PD));
   }
-  const AcquisitionSettings& a = scene.acquisition;
+  const AcquisitionSettings& a = settings.acquisition;
   if (a.kspace) {
     const std::string acquired =
         a.acquired_voxel_mm ? "acquired voxel " + format_number((*a.acquired_voxel_mm).x()) + " x " +
@@ -57,7 +57,7 @@ StageReport plan_mri(const Scene& scene) {
     report.skipped.push_back("bias field (acquisition.bias_percent is 0)");
   }
   if (a.coils > 1) report.modelled.push_back(std::to_string(a.coils) + " coils, sum of squares");
-  if (scene.outputs.parameter_maps) {
+  if (settings.parameter_maps) {
     report.modelled.push_back("parameter maps PD, T1, T2, T2* of each state");
   } else {
     report.skipped.push_back("parameter maps (outputs.parameter_maps is false)");

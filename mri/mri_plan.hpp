@@ -1,12 +1,13 @@
 #pragma once
 
+#include "core/organ_table.hpp"
 #include "core/stage_report.hpp"
-#include "scene/scene.hpp"
+#include "mri/mri_settings.hpp"
 
 namespace phantasm {
 
-/// What the MR stage will make: one image per sequence and state, the tissue values used, and
-/// the acquisition effects the scene asks for (k-space, bias, coils, noise).
-StageReport plan_mri(const Scene& scene);
+/// What the MR stage will make: one image per sequence and state, the tissue values used for the
+/// organs' tissues, and the acquisition effects the settings ask for (k-space, bias, coils, noise).
+StageReport plan_mri(const MriSettings& settings, const OrganTable& organs);
 
 } // namespace phantasm

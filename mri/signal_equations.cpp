@@ -10,10 +10,6 @@ namespace {
 
 constexpr double k_degree = M_PI / 180.0;
 
-double echo_time(const SequenceSettings& s) {
-  return s.kind == SequenceKind::bssfp && s.TE_ms < 0 ? 0.5 * s.TR_ms : s.TE_ms;
-}
-
 /// exp(-t / T), with T -> 0 giving 0 for t > 0 and 1 for t = 0.
 double decay(double t_ms, double T_ms) {
   if (t_ms <= 0.0) return 1.0;
@@ -42,7 +38,7 @@ MprageTiming mprage_timing(const SequenceSettings& s) {
 } // namespace
 
 double sequence_signal(const SequenceSettings& s, const Relaxation& r) {
-  const double TE = echo_time(s);
+  const double TE = s.TE_ms; // bSSFP: TR / 2 unless given, set by the scene
   const double a = s.flip_deg * k_degree;
   const double E1 = decay(s.TR_ms, r.T1_ms);
   switch (s.kind) {
@@ -131,7 +127,7 @@ double steady_state(Cycle&& cycle) {
 } // namespace
 
 double bloch_signal(const SequenceSettings& s, const Relaxation& r) {
-  const double TE = echo_time(s);
+  const double TE = s.TE_ms; // bSSFP: TR / 2 unless given, set by the scene
   const double a = s.flip_deg * k_degree;
   auto transverse = [](const Magnetization& m) { return std::hypot(m.x(), m.y()); };
   switch (s.kind) {

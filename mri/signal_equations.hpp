@@ -1,6 +1,6 @@
 #pragma once
 
-#include "scene/scene.hpp"
+#include "mri/mri_settings.hpp"
 
 namespace phantasm {
 

@@ -151,10 +151,10 @@ std::optional<KspaceSampling> kspace_sampling(const AcquisitionSettings& a, cons
 
 } // namespace
 
-MrImages synthesize_images(const Scene& scene, const VoxelizedPhantom& volumes, StageReport& report,
-                           Reporter& reporter) {
+MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, const VoxelizedPhantom& volumes,
+                           StageReport& report, Reporter& reporter) {
   MrImages images;
-  const auto parameters = resolve_tissue_parameters(scene);
+  const auto parameters = resolve_tissue_parameters(mri, organs);
   auto relaxation_of = [&](const std::string& tissue) {
     const TissueParameters& p = parameters.at(tissue);
     // The scene's validation made sure every value a sequence needs is there; others may be empty.
@@ -162,7 +162,7 @@ MrImages synthesize_images(const Scene& scene, const VoxelizedPhantom& volumes, 
                       p.T2star_ms.value_or(p.T2_ms.value_or(0.0))};
   };
   const ImageGrid& grid = volumes.grid;
-  const AcquisitionSettings& settings = scene.acquisition;
+  const AcquisitionSettings& settings = mri.acquisition;
   std::vector<bool> object_mask(volumes.reference.background.size());
   for (std::size_t v = 0; v < object_mask.size(); ++v)
     object_mask[v] = volumes.reference.background[v] < 0.5f;
@@ -192,9 +192,9 @@ MrImages synthesize_images(const Scene& scene, const VoxelizedPhantom& volumes, 
         std::to_string(coils.count()) +
         " receive coils on a ring (sensitivity ~ 1/distance), noise per coil, sum of squares");
   }
-  ProgressBar progress(reporter, "mri", scene.sequences.size() * (volumes.deformed ? 2 : 1));
-  for (std::size_t q = 0; q < scene.sequences.size(); ++q) {
-    const SequenceSettings& sequence = scene.sequences[q];
+  ProgressBar progress(reporter, "mri", mri.sequences.size() * (volumes.deformed ? 2 : 1));
+  for (std::size_t q = 0; q < mri.sequences.size(); ++q) {
+    const SequenceSettings& sequence = mri.sequences[q];
     std::vector<double> tissue_signal;
     std::string line = sequence.name + " tissue signals (x PD units):";
     for (const std::string& tissue : volumes.tissues) {
@@ -212,16 +212,16 @@ MrImages synthesize_images(const Scene& scene, const VoxelizedPhantom& volumes, 
     }
     const double sigma = settings.noise_percent / 100.0 * std::abs(reference_signal);
     // One seed per image (sequence and state): images differ, and every run repeats them.
-    images.reference.push_back(image_of(acquisition, sequence, mix_seed(scene.seed, 2 * q), volumes.reference,
-                                        tissue_signal, sigma));
+    images.reference.push_back(
+        image_of(acquisition, sequence, mix_seed(mri.seed, 2 * q), volumes.reference, tissue_signal, sigma));
     progress.advance();
     if (volumes.deformed) {
-      images.deformed.push_back(image_of(acquisition, sequence, mix_seed(scene.seed, 2 * q + 1),
+      images.deformed.push_back(image_of(acquisition, sequence, mix_seed(mri.seed, 2 * q + 1),
                                          *volumes.deformed, tissue_signal, sigma));
       progress.advance();
     }
   }
-  if (scene.outputs.parameter_maps) {
+  if (mri.parameter_maps) {
     images.reference_maps = parameter_maps(volumes.reference, volumes.tissues, parameters);
     if (volumes.deformed)
       images.deformed_maps = parameter_maps(*volumes.deformed, volumes.tissues, parameters);

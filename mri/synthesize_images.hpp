@@ -1,14 +1,15 @@
 #pragma once
 
+#include "core/organ_table.hpp"
 #include "core/progress.hpp"
 #include "core/stage_report.hpp"
 #include "mri/mr_images.hpp"
-#include "scene/scene.hpp"
+#include "mri/mri_settings.hpp"
 #include "voxelize/voxelized_phantom.hpp"
 
 namespace phantasm {
 
-/// MR images of every sequence of the scene, for each state the volumes hold: each voxel's
+/// MR images of every sequence of the settings, for each state the volumes hold: each voxel's
 /// signal is the fraction-weighted sum of its tissues' signed closed-form signals (so partial
 /// volume can cancel at an inversion null), times a smooth multiplicative bias field (a seeded
 /// linear ramp spanning bias_percent peak to peak over the object), times each receive coil's
@@ -16,9 +17,12 @@ namespace phantasm {
 /// acquired matrix (and slice profile) and reconstructed on the grid by zero filling; complex
 /// Gaussian noise of sigma = noise_percent / 100 x the reference tissue's signal per coil (in
 /// k-space when it is simulated); the image is the magnitude (Rician), or the sum of squares of
-/// several coils. Noise and bias are seeded from the scene's seed, the sequence and the state;
+/// several coils. Noise and bias are seeded from settings.seed, the sequence and the state;
 /// the result does not depend on the number of threads. Parameter maps come with the images.
-MrImages synthesize_images(const Scene& scene, const VoxelizedPhantom& volumes, StageReport& report,
-                           Reporter& reporter);
+/// The images point at settings.sequences: keep the settings alive.
+/// @param settings field strength, tissue values, sequences, acquisition, seed, parameter maps
+/// @param organs the organ table (the tissues whose parameters are resolved)
+MrImages synthesize_images(const MriSettings& settings, const OrganTable& organs,
+                           const VoxelizedPhantom& volumes, StageReport& report, Reporter& reporter);
 
 } // namespace phantasm

@@ -1,6 +1,7 @@
 #pragma once
 
-#include "scene/scene.hpp"
+#include "core/organ_table.hpp"
+#include "mri/mri_settings.hpp"
 
 #include <map>
 #include <optional>
@@ -15,9 +16,12 @@ struct TissueParameters {
   std::string T1_source, T2_source, T2star_source, PD_source; ///< "scene" or the table's source
 };
 
-/// The parameters of every tissue the scene's organs use, at the scene's field strength:
-/// scene values first, then the built-in table. Values neither provides stay empty (the scene's
+/// The parameters of every tissue the organs use, at the settings' field strength: the scene's
+/// tissue values first, then the built-in table. Values neither provides stay empty (the scene's
 /// validation has already made sure that its sequences need none of those).
-std::map<std::string, TissueParameters> resolve_tissue_parameters(const Scene& scene);
+/// @param settings field strength and the scene's tissue values
+/// @param organs the organ table (its tissues)
+std::map<std::string, TissueParameters> resolve_tissue_parameters(const MriSettings& settings,
+                                                                  const OrganTable& organs);
 
 } // namespace phantasm

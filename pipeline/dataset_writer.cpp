@@ -140,20 +140,19 @@ nlohmann::json solves_json(const std::vector<SolveReport>& solves) {
 /// noise and bias were modelled.
 nlohmann::json image_sidecar(const Scene& scene, const MrImages& images, const MrImage& image) {
   const SequenceSettings& s = *image.sequence;
-  nlohmann::json j = {
-      {"MagneticFieldStrength", scene.field_strength_T},
-      {"PulseSequenceType", to_string(s.kind)},
-      {"RepetitionTime", s.TR_ms / 1000.0},
-      {"EchoTime", (s.kind == SequenceKind::bssfp && s.TE_ms < 0 ? 0.5 * s.TR_ms : s.TE_ms) / 1000.0},
-      {"FlipAngle", s.kind == SequenceKind::spin_echo ? 90.0 : s.flip_deg},
-      {"NoiseSigma", image.noise_sigma},
-      {"NoisePercent", scene.acquisition.noise_percent},
-      {"NoiseReferenceTissue", scene.acquisition.noise_reference_tissue},
-      {"BiasPercent", scene.acquisition.bias_percent},
-      {"ReceiveCoils", images.coils},
-      {"CoilCombinationMethod", images.coils > 1 ? "sum of squares" : "single uniform coil"},
-      {"Units", "arbitrary (proton density 1 = 1)"},
-      {"GeneratedBy", "phantasm " + std::string(version)}};
+  nlohmann::json j = {{"MagneticFieldStrength", scene.mri.field_strength_T},
+                      {"PulseSequenceType", to_string(s.kind)},
+                      {"RepetitionTime", s.TR_ms / 1000.0},
+                      {"EchoTime", s.TE_ms / 1000.0},
+                      {"FlipAngle", s.kind == SequenceKind::spin_echo ? 90.0 : s.flip_deg},
+                      {"NoiseSigma", image.noise_sigma},
+                      {"NoisePercent", scene.mri.acquisition.noise_percent},
+                      {"NoiseReferenceTissue", scene.mri.acquisition.noise_reference_tissue},
+                      {"BiasPercent", scene.mri.acquisition.bias_percent},
+                      {"ReceiveCoils", images.coils},
+                      {"CoilCombinationMethod", images.coils > 1 ? "sum of squares" : "single uniform coil"},
+                      {"Units", "arbitrary (proton density 1 = 1)"},
+                      {"GeneratedBy", "phantasm " + std::string(version)}};
   if (s.kind == SequenceKind::inversion_recovery || s.kind == SequenceKind::mprage)
     j["InversionTime"] = s.TI_ms / 1000.0;
   if (images.kspace) {
@@ -161,7 +160,7 @@ nlohmann::json image_sidecar(const Scene& scene, const MrImages& images, const M
     j["AcquisitionMatrix"] = {k.acquired.x(), k.acquired.y(), k.acquired.z()};
     j["ReconstructionMatrix"] = {k.dims.x(), k.dims.y(), k.dims.z()};
     j["KspaceTruncation"] = "central samples kept, no filter (Gibbs ringing); zero-filled reconstruction";
-    if (k.slice_thickness_voxels > 0.0) j["SliceThickness"] = scene.acquisition.slice_thickness_mm;
+    if (k.slice_thickness_voxels > 0.0) j["SliceThickness"] = scene.mri.acquisition.slice_thickness_mm;
   } else {
     j["KspaceTruncation"] = "none (images sampled directly on the grid)";
   }

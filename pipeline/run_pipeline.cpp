@@ -2,6 +2,7 @@
 
 #include "anatomy/anatomy_plan.hpp"
 #include "anatomy/phantom.hpp"
+#include "core/error.hpp"
 #include "io/dataset_layout.hpp"
 #include "io/shape_files.hpp"
 #include "mri/mri_plan.hpp"
@@ -35,8 +36,8 @@ private:
 
 /// The anatomy stage: reads the scene's shape files and builds every organ; records fit errors.
 Phantom build_anatomy(const Scene& scene, StageReport& report, Reporter& reporter) {
-  const std::map<std::string, ShapeData> files = read_shape_files(scene);
-  Phantom phantom = build_phantom(scene, files, reporter);
+  const std::map<std::string, ShapeData> files = read_shape_files(scene.anatomy);
+  Phantom phantom = build_phantom(scene.anatomy, files, reporter);
   for (const Organ& organ : phantom.organs) {
     if (!organ.surface) continue;
     report.accuracy[organ.name + " fit Hausdorff mm"] = organ.fit.hausdorff_mm;
@@ -50,11 +51,14 @@ Phantom build_anatomy(const Scene& scene, StageReport& report, Reporter& reporte
 } // namespace
 
 std::vector<StageReport> plan_stages(const Scene& scene) {
-  return {plan_anatomy(scene), plan_sim(scene), plan_voxelize(scene), plan_mri(scene)};
+  return {plan_anatomy(scene.anatomy, scene.organs), plan_sim(scene.deformation, scene.organs),
+          plan_voxelize(scene.voxelization, scene.organs, scene.grid), plan_mri(scene.mri, scene.organs)};
 }
 
-Simulation simulate(const Scene& scene, Reporter& reporter, SimulationStage until) {
-  Simulation result;
+namespace {
+
+/// Runs the stages; what they reject is named by its key path (SettingError).
+void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until, Simulation& result) {
   result.stages = plan_stages(scene);
   for (const auto& stage : result.stages) {
     for (const auto& line : stage.modelled)
@@ -63,7 +67,7 @@ Simulation simulate(const Scene& scene, Reporter& reporter, SimulationStage unti
       reporter.skipped(stage.stage, line);
   }
   result.phantom = build_anatomy(scene, result.stages[0], reporter);
-  if (until == SimulationStage::anatomy) return result;
+  if (until == SimulationStage::anatomy) return;
 
   StageReport& sim = result.stages[1];
   if (scene.deformation.mode != DeformationMode::none) {
@@ -72,20 +76,34 @@ Simulation simulate(const Scene& scene, Reporter& reporter, SimulationStage unti
     lines.print_new(sim, reporter);
     result.deformed = deformed_phantom(result.phantom, *result.deformation);
   }
-  if (until == SimulationStage::deformation) return result;
+  if (until == SimulationStage::deformation) return;
 
   StageReport& voxelize = result.stages[2];
   const StageLines voxelize_lines(voxelize);
-  result.volumes = voxelize_phantom(scene, result.phantom, result.deformed ? &*result.deformed : nullptr,
+  result.volumes = voxelize_phantom(scene.voxelization, scene.organs, scene.grid.grid(), result.phantom,
+                                    result.deformed ? &*result.deformed : nullptr,
                                     result.deformation ? &*result.deformation : nullptr, voxelize, reporter);
   voxelize_lines.print_new(voxelize, reporter);
-  if (until == SimulationStage::voxelization) return result;
+  if (until == SimulationStage::voxelization) return;
 
   StageReport& mri = result.stages[3];
-  if (scene.outputs.images && !scene.sequences.empty()) {
+  if (scene.mri.images && !scene.mri.sequences.empty()) {
     const StageLines mri_lines(mri);
-    result.images = synthesize_images(scene, result.volumes, mri, reporter);
+    result.images = synthesize_images(scene.mri, scene.organs, result.volumes, mri, reporter);
     mri_lines.print_new(mri, reporter);
+  }
+}
+
+} // namespace
+
+Simulation simulate(const Scene& scene, Reporter& reporter, SimulationStage until) {
+  Simulation result;
+  try {
+    run_stages(scene, reporter, until, result);
+  } catch (const SettingError& error) {
+    // Stages name the setting; the scene knows where it was written.
+    throw InputError(
+        Diagnostic{scene.location_of(error.key_path()), error.key_path(), error.message()}.format());
   }
   return result;
 }

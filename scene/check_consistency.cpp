@@ -15,7 +15,7 @@ std::string indexed(const std::string& list, std::size_t i, const std::string& k
 
 class ConsistencyChecker {
 public:
-  ConsistencyChecker(YamlContext& context, Scene& scene) : m_context(context), m_scene(scene) {}
+  ConsistencyChecker(YamlContext& context, const Scene& scene) : m_context(context), m_scene(scene) {}
 
   void problem(const std::string& key_path, const std::string& message) {
     m_context.problem(m_scene.location_of(key_path), key_path, message);
@@ -46,7 +46,7 @@ public:
 
   bool tissue_known(const std::string& tissue) const {
     if (TissueTable::builtin().has_tissue(tissue)) return true;
-    for (const auto& t : m_scene.tissues) {
+    for (const auto& t : m_scene.mri.tissues) {
       if (t.tissue == tissue) return true;
     }
     return false;
@@ -72,7 +72,7 @@ public:
         problem(indexed("anatomy.organs", i, "shape.type"),
                 "a sheet has no interior: expected 'solid: false' on this organ, found solid (the default)");
       }
-      if (!organ.material.empty() && m_scene.find_material(organ.material) == nullptr) {
+      if (!organ.material.empty() && m_scene.deformation.find_material(organ.material) == nullptr) {
         problem(indexed("anatomy.organs", i, "material"),
                 "expected a material defined under materials, found '" + organ.material + "'");
       }
@@ -109,7 +109,7 @@ public:
   }
 
   void check_deformation() {
-    DeformationSettings& d = m_scene.deformation;
+    const DeformationSettings& d = m_scene.deformation;
     for (std::size_t i = 0; i < d.fixed.size(); ++i) {
       check_organ_reference(indexed("deformation.fixed", i, ""), d.fixed[i]);
     }
@@ -155,12 +155,11 @@ public:
     }
   }
 
-  void check_sequence_timing(std::size_t i, SequenceSettings& s) {
+  void check_sequence_timing(std::size_t i, const SequenceSettings& s) {
     const std::string base = indexed("sequences", i, "");
     if (s.kind == SequenceKind::bssfp) {
-      if (s.TE_ms < 0.0) {
-        s.TE_ms = 0.5 * s.TR_ms;
-      } else if (std::abs(s.TE_ms - 0.5 * s.TR_ms) > 1e-9 * s.TR_ms) {
+      // A negative TE was not given: resolve_stage_settings() makes it TR / 2.
+      if (s.TE_ms >= 0.0 && std::abs(s.TE_ms - 0.5 * s.TR_ms) > 1e-9 * s.TR_ms) {
         problem(base + ".TE_ms", "expected TE_ms = TR_ms / 2 = " + format_number(0.5 * s.TR_ms) +
                                      " (on-resonance bSSFP), found " + format_number(s.TE_ms));
       }
@@ -208,14 +207,14 @@ public:
   }
 
   bool has_value(const std::string& tissue, const std::string& quantity) const {
-    for (const auto& t : m_scene.tissues) {
+    for (const auto& t : m_scene.mri.tissues) {
       if (t.tissue != tissue) continue;
       if (quantity == "T1_ms" && t.T1_ms) return true;
       if (quantity == "T2_ms" && t.T2_ms) return true;
       if (quantity == "T2star_ms" && t.T2star_ms) return true;
       if (quantity == "PD" && t.PD) return true;
     }
-    const TissueRecord* record = TissueTable::builtin().find(tissue, m_scene.field_strength_T);
+    const TissueRecord* record = TissueTable::builtin().find(tissue, m_scene.mri.field_strength_T);
     if (record == nullptr) return false;
     if (quantity == "T1_ms") return record->T1_ms.has_value();
     if (quantity == "T2_ms") return record->T2_ms.has_value();
@@ -233,8 +232,8 @@ public:
         tissues.push_back(organ.tissue);
       }
     }
-    for (std::size_t i = 0; i < m_scene.sequences.size(); ++i) {
-      SequenceSettings& s = m_scene.sequences[i];
+    for (std::size_t i = 0; i < m_scene.mri.sequences.size(); ++i) {
+      const SequenceSettings& s = m_scene.mri.sequences[i];
       if (!names.insert(s.name).second) {
         problem(indexed("sequences", i, "name"),
                 "expected a unique sequence name, found '" + s.name + "' again");
@@ -245,14 +244,14 @@ public:
           if (has_value(tissue, quantity) || !reported.insert(tissue + "." + quantity).second) continue;
           problem(indexed("sequences", i, "type"),
                   "this sequence needs " + quantity + " of tissue '" + tissue + "' at " +
-                      format_number(m_scene.field_strength_T) +
+                      format_number(m_scene.mri.field_strength_T) +
                       " T, which the built-in table lacks; expected tissues." + tissue + "." + quantity +
                       " in the scene, found none");
         }
       }
     }
-    const AcquisitionSettings& a = m_scene.acquisition;
-    if (a.noise_percent > 0.0 && !m_scene.sequences.empty() &&
+    const AcquisitionSettings& a = m_scene.mri.acquisition;
+    if (a.noise_percent > 0.0 && !m_scene.mri.sequences.empty() &&
         std::find(tissues.begin(), tissues.end(), a.noise_reference_tissue) == tissues.end()) {
       problem("acquisition.noise_reference_tissue",
               "expected the tissue of an organ in this scene (noise is relative to its signal), found '" +
@@ -274,12 +273,12 @@ public:
 
 private:
   YamlContext& m_context;
-  Scene& m_scene;
+  const Scene& m_scene;
 };
 
 } // namespace
 
-void check_consistency(YamlContext& context, Scene& scene) {
+void check_consistency(YamlContext& context, const Scene& scene) {
   ConsistencyChecker checker(context, scene);
   checker.check_grid();
   checker.check_organs();

@@ -135,7 +135,7 @@ SceneLoadResult parse_scene(const std::string& text, const std::filesystem::path
                       "expected a name without spaces or slashes, found '" + scene.name + "'");
     }
     top.unsigned_integer("seed", scene.seed, true);
-    top.number("field_strength_T", scene.field_strength_T, NumberRule{0.0, 11.7, true, false, "T"}, true);
+    top.number("field_strength_T", scene.mri.field_strength_T, NumberRule{0.0, 11.7, true, false, "T"}, true);
 
     if (top.has("grid")) {
       CheckedMap grid(context, top.get("grid"), "grid");
@@ -145,11 +145,11 @@ SceneLoadResult parse_scene(const std::string& text, const std::filesystem::path
     }
     if (top.has("materials")) {
       CheckedMap materials(context, top.get("materials"), "materials");
-      parse_materials(materials, scene.materials);
+      parse_materials(materials, scene.deformation.materials);
     }
     if (top.has("tissues")) {
       CheckedMap tissues(context, top.get("tissues"), "tissues");
-      parse_tissues(tissues, scene.tissues);
+      parse_tissues(tissues, scene.mri.tissues);
     }
     if (top.has("anatomy")) {
       CheckedMap anatomy(context, top.get("anatomy"), "anatomy");
@@ -165,10 +165,10 @@ SceneLoadResult parse_scene(const std::string& text, const std::filesystem::path
       CheckedMap voxelization(context, top.get("voxelization"), "voxelization");
       if (voxelization.valid()) parse_voxelization(voxelization, scene.voxelization);
     }
-    if (top.has("sequences")) parse_sequences(context, top.get("sequences"), scene.sequences);
+    if (top.has("sequences")) parse_sequences(context, top.get("sequences"), scene.mri.sequences);
     if (top.has("acquisition")) {
       CheckedMap acquisition(context, top.get("acquisition"), "acquisition");
-      if (acquisition.valid()) parse_acquisition(acquisition, scene.acquisition);
+      if (acquisition.valid()) parse_acquisition(acquisition, scene.mri.acquisition);
     }
     if (top.has("outputs")) {
       CheckedMap outputs(context, top.get("outputs"), "outputs");
@@ -178,7 +178,9 @@ SceneLoadResult parse_scene(const std::string& text, const std::filesystem::path
 
   if (!result.problems.empty()) return result;
   check_consistency(context, scene);
-  if (result.problems.empty()) result.scene = std::move(scene);
+  if (!result.problems.empty()) return result;
+  resolve_stage_settings(scene);
+  result.scene = std::move(scene);
   return result;
 }
 

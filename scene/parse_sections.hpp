@@ -19,7 +19,7 @@ void parse_outputs(CheckedMap& map, OutputSettings& outputs);
 
 /// Checks that need more than one section: references between sections, tissue values the
 /// sequences need, consistent timings. Runs only on a scene whose sections parsed cleanly.
-void check_consistency(YamlContext& context, Scene& scene);
+void check_consistency(YamlContext& context, const Scene& scene);
 
 /// True for a BIDS label: letters and digits only.
 bool is_bids_label(const std::string& text);

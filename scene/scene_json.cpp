@@ -76,13 +76,13 @@ nlohmann::json sequence_json(const SequenceSettings& s) {
 
 nlohmann::json scene_settings_json(const Scene& scene) {
   nlohmann::json materials = nlohmann::json::object();
-  for (const auto& m : scene.materials) {
+  for (const auto& m : scene.deformation.materials) {
     materials[m.name] = {{"youngs_modulus_Pa", m.youngs_modulus_Pa},
                          {"poisson_ratio", m.poisson_ratio},
                          {"density_kg_m3", m.density_kg_m3}};
   }
   nlohmann::json tissues = nlohmann::json::object();
-  for (const auto& t : scene.tissues) {
+  for (const auto& t : scene.mri.tissues) {
     tissues[t.tissue] = {{"T1_ms", optional_value(t.T1_ms)},
                          {"T2_ms", optional_value(t.T2_ms)},
                          {"T2star_ms", optional_value(t.T2star_ms)},
@@ -113,16 +113,16 @@ nlohmann::json scene_settings_json(const Scene& scene) {
     obstacles.push_back(j);
   }
   nlohmann::json sequences = nlohmann::json::array();
-  for (const auto& s : scene.sequences)
+  for (const auto& s : scene.mri.sequences)
     sequences.push_back(sequence_json(s));
 
   const DeformationSettings& d = scene.deformation;
-  const AcquisitionSettings& a = scene.acquisition;
+  const AcquisitionSettings& a = scene.mri.acquisition;
   const OutputSettings& o = scene.outputs;
   return {
       {"name", scene.name},
       {"seed", scene.seed},
-      {"field_strength_T", scene.field_strength_T},
+      {"field_strength_T", scene.mri.field_strength_T},
       {"grid",
        {{"field_of_view_mm", vec3(scene.grid.field_of_view_mm)},
         {"voxel_size_mm", vec3(scene.grid.voxel_size_mm)},

@@ -30,7 +30,7 @@ const TriangleMesh* shell_mesh(const Organ& organ) {
 BodyAssignment assign_bodies(const Scene& scene, const Phantom& phantom, StageReport& report) {
   const auto& settings = scene.anatomy.organs;
   const std::size_t n = settings.size();
-  std::vector<OrganMotion> motion = classify_organ_motion(scene);
+  std::vector<OrganMotion> motion = classify_organ_motion(scene.deformation, scene.organs);
   std::map<std::string, int> index;
   for (std::size_t i = 0; i < n; ++i)
     index[settings[i].name] = static_cast<int>(i);

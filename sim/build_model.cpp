@@ -38,7 +38,7 @@ Body add_shell_body(const Scene& scene, const Organ& organ, std::size_t b, Elast
                     StageReport& report) {
   const auto& settings = scene.anatomy.organs;
   const TriangleMesh& sheet = *shell_mesh(organ);
-  const MaterialSettings* material = scene.find_material(settings[b].material);
+  const MaterialSettings* material = scene.deformation.find_material(settings[b].material);
   if (material == nullptr)
     throw InputError(settings[b].name + ": material '" + settings[b].material + "' is not defined");
   Body body;
@@ -94,7 +94,7 @@ Body add_solid_body(const Scene& scene, const Phantom& phantom, const BodyAssign
         holder = i;
       }
     }
-    const MaterialSettings* material = scene.find_material(settings[holder].material);
+    const MaterialSettings* material = scene.deformation.find_material(settings[holder].material);
     if (material == nullptr) {
       throw InputError(settings[holder].name + ": material '" + settings[holder].material +
                        "' is not defined");

@@ -14,9 +14,7 @@ bool contains(const std::vector<std::string>& names, const std::string& name) {
 
 } // namespace
 
-std::vector<OrganMotion> classify_organ_motion(const Scene& scene) {
-  const auto& organs = scene.anatomy.organs;
-  const DeformationSettings& d = scene.deformation;
+std::vector<OrganMotion> classify_organ_motion(const DeformationSettings& d, const OrganTable& organs) {
   std::vector<OrganMotion> motion(organs.size(), OrganMotion::rigid);
   if (d.mode == DeformationMode::none) return motion;
   for (std::size_t i = 0; i < organs.size(); ++i) {
@@ -37,38 +35,38 @@ std::vector<OrganMotion> classify_organ_motion(const Scene& scene) {
 
 namespace {
 
-/// The nearest simulated organ containing organ i, or null when none does.
-const OrganSettings* simulated_container(const Scene& scene, const std::vector<OrganMotion>& motion,
-                                         std::size_t i) {
-  const auto& organs = scene.anatomy.organs;
-  for (std::string inside = organs[i].inside; !inside.empty();) {
-    std::size_t j = 0;
-    while (j < organs.size() && organs[j].name != inside)
-      ++j;
-    if (j == organs.size()) return nullptr;
-    if (motion[j] == OrganMotion::simulated) return &organs[j];
-    inside = organs[j].inside;
+/// The nearest simulated organ containing organ i, or -1 when none does.
+int simulated_container(const OrganTable& organs, const std::vector<OrganMotion>& motion, std::size_t i) {
+  // The bound guards against a cycle, which the scene's validation rejects.
+  std::size_t steps = 0;
+  for (int j = organs[i].parent; j >= 0 && steps <= organs.size();
+       j = organs[static_cast<std::size_t>(j)].parent, ++steps) {
+    if (motion[static_cast<std::size_t>(j)] == OrganMotion::simulated) return j;
   }
-  return nullptr;
+  return -1;
+}
+
+/// Whether organ i has a tet mesh (organs without mechanics settings count as solid, the default).
+bool solid(const DeformationSettings& d, int i) {
+  return static_cast<std::size_t>(i) >= d.organs.size() || d.organs[static_cast<std::size_t>(i)].solid;
 }
 
 } // namespace
 
-StageReport plan_sim(const Scene& scene) {
+StageReport plan_sim(const DeformationSettings& d, const OrganTable& organs) {
   StageReport report;
   report.stage = "sim";
-  const DeformationSettings& d = scene.deformation;
   if (d.mode == DeformationMode::none) {
     report.status = "skipped";
     report.skipped.push_back(
         "deformation (deformation.mode is none): the deformed state equals the reference");
     return report;
   }
-  const auto motion = classify_organ_motion(scene);
-  const auto& organs = scene.anatomy.organs;
+  const auto motion = classify_organ_motion(d, organs);
   for (std::size_t i = 0; i < organs.size(); ++i) {
     if (motion[i] == OrganMotion::simulated) {
-      const MaterialSettings* material = scene.find_material(organs[i].material);
+      const MaterialSettings* material =
+          i < d.organs.size() ? d.find_material(d.organs[i].material) : nullptr;
       std::ostringstream line;
       line << organs[i].name << ": simulated";
       if (material != nullptr) {
@@ -78,12 +76,14 @@ StageReport plan_sim(const Scene& scene) {
       report.modelled.push_back(line.str());
     } else if (motion[i] == OrganMotion::fixed) {
       report.modelled.push_back(organs[i].name + ": held fixed (deformation.fixed)");
-    } else if (const OrganSettings* carrier = simulated_container(scene, motion, i);
-               carrier && carrier->solid) {
+    } else if (const int carrier = simulated_container(organs, motion, i);
+               carrier >= 0 && solid(d, carrier)) {
       report.modelled.push_back(organs[i].name + ": no load of its own; inside the simulated " +
-                                carrier->name + ", it follows it (embedded in its tets)");
-    } else if (carrier) {
-      report.skipped.push_back(organs[i].name + ": inside the shell " + carrier->name +
+                                organs[static_cast<std::size_t>(carrier)].name +
+                                ", it follows it (embedded in its tets)");
+    } else if (carrier >= 0) {
+      report.skipped.push_back(organs[i].name + ": inside the shell " +
+                               organs[static_cast<std::size_t>(carrier)].name +
                                ", which has no interior to carry it; it stays in place");
     } else {
       report.skipped.push_back(organs[i].name + ": no load acts on it, carried rigidly");

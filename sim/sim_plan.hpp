@@ -1,7 +1,8 @@
 #pragma once
 
+#include "core/organ_table.hpp"
 #include "core/stage_report.hpp"
-#include "scene/scene.hpp"
+#include "sim/sim_settings.hpp"
 
 #include <string>
 #include <vector>
@@ -15,11 +16,15 @@ enum class OrganMotion {
   rigid,     ///< nothing moves it: carried along rigidly, not simulated
 };
 
-/// The motion class of every organ, in scene order. With no deformation every organ is rigid.
-std::vector<OrganMotion> classify_organ_motion(const Scene& scene);
+/// The motion class of every organ of the table, in its order. With no deformation every organ
+/// is rigid.
+std::vector<OrganMotion> classify_organ_motion(const DeformationSettings& deformation,
+                                               const OrganTable& organs);
 
 /// What the deformation stage will solve: which organs, which loads, which solver and its stop
 /// criteria; and what it leaves out (organs nothing moves, the whole stage for mode none).
-StageReport plan_sim(const Scene& scene);
+/// @param deformation the deformation settings, with the organs' materials and mechanics
+/// @param organs the organ table (names and nesting)
+StageReport plan_sim(const DeformationSettings& deformation, const OrganTable& organs);
 
 } // namespace phantasm

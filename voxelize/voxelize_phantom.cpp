@@ -13,17 +13,6 @@
 namespace phantasm {
 namespace {
 
-int nesting_depth_of(const Scene& scene, std::size_t organ) {
-  int depth = 0;
-  const OrganSettings* current = &scene.anatomy.organs[organ];
-  while (!current->inside.empty() && depth <= static_cast<int>(scene.anatomy.organs.size())) {
-    current = scene.find_organ(current->inside);
-    if (!current) break;
-    ++depth;
-  }
-  return depth;
-}
-
 /// Level sets of every organ of one state that the grid needs, and the organs as the voxelizer
 /// sees them.
 struct StateLevelSets {
@@ -31,13 +20,15 @@ struct StateLevelSets {
   std::vector<VoxelizedOrgan> organs;
 };
 
-StateLevelSets level_sets_of(const Scene& scene, const Phantom& phantom,
+StateLevelSets level_sets_of(const VoxelizationSettings& settings, const OrganTable& organs,
+                             const ImageGrid& grid, const Phantom& phantom,
                              const std::vector<std::string>& tissues, double voxel_size,
                              ProgressBar& progress) {
   std::vector<std::size_t> chosen;
   for (std::size_t o = 0; o < phantom.organs.size(); ++o) {
-    if (phantom.organs[o].surface && organ_in_field_of_view(scene, scene.anatomy.organs[o]))
-      chosen.push_back(o);
+    const auto bounds =
+        o < settings.organ_bounds_mm.size() ? settings.organ_bounds_mm[o] : std::optional<WorldBox>();
+    if (phantom.organs[o].surface && organ_in_field_of_view(bounds, grid)) chosen.push_back(o);
   }
   // Tessellations in parallel (each organ's is independent and deterministic), then the level
   // sets one after the other (OpenVDB parallelizes each with TBB).
@@ -47,7 +38,7 @@ StateLevelSets level_sets_of(const Scene& scene, const Phantom& phantom,
   for (std::ptrdiff_t k = 0; k < count; ++k) {
     meshes[static_cast<std::size_t>(k)] =
         phantom.organs[chosen[static_cast<std::size_t>(k)]].surface->tessellate(
-            scene.voxelization.tessellation_tolerance_mm);
+            settings.tessellation_tolerance_mm);
   }
   StateLevelSets out;
   out.level_sets.reserve(chosen.size());
@@ -57,7 +48,7 @@ StateLevelSets level_sets_of(const Scene& scene, const Phantom& phantom,
     meshes[k] = TriangleMesh();
     VoxelizedOrgan v;
     v.level_set = &out.level_sets.back();
-    v.depth = nesting_depth_of(scene, o);
+    v.depth = organs[o].depth;
     v.label = static_cast<int>(o) + 1;
     v.tissue = static_cast<int>(std::find(tissues.begin(), tissues.end(), phantom.organs[o].tissue) -
                                 tissues.begin());
@@ -77,11 +68,12 @@ void keep_level_sets(const Phantom& phantom, StateLevelSets&& sets,
 
 } // namespace
 
-VoxelizedPhantom voxelize_phantom(const Scene& scene, const Phantom& reference, const Phantom* deformed,
+VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const OrganTable& organs,
+                                  const ImageGrid& grid, const Phantom& reference, const Phantom* deformed,
                                   const PhantomDeformation* deformation, StageReport& report,
                                   Reporter& reporter) {
   VoxelizedPhantom out;
-  out.grid = scene.grid.grid();
+  out.grid = grid;
   for (const Organ& organ : reference.organs)
     if (std::find(out.tissues.begin(), out.tissues.end(), organ.tissue) == out.tissues.end())
       out.tissues.push_back(organ.tissue);
@@ -94,27 +86,27 @@ VoxelizedPhantom voxelize_phantom(const Scene& scene, const Phantom& reference, 
       report.skipped.push_back(reference.organs[o].name + ": an open sheet has no inside; it fills no voxel");
   }
   {
-    StateLevelSets sets = level_sets_of(scene, reference, out.tissues, voxel_size, progress);
+    StateLevelSets sets = level_sets_of(settings, organs, grid, reference, out.tissues, voxel_size, progress);
     std::size_t band = 0;
     for (const LevelSet& l : sets.level_sets)
       band += l.active_voxel_count();
     report.modelled.push_back("reference: " + std::to_string(sets.level_sets.size()) + " level sets, " +
                               std::to_string(band) + " narrow-band voxels of " + format_number(voxel_size) +
                               " mm, surfaces tessellated within " +
-                              format_number(scene.voxelization.tessellation_tolerance_mm) + " mm");
-    out.reference = voxelize_tissues(out.grid, sets.organs, static_cast<int>(out.tissues.size()),
-                                     scene.voxelization.supersampling);
+                              format_number(settings.tessellation_tolerance_mm) + " mm");
+    out.reference =
+        voxelize_tissues(out.grid, sets.organs, static_cast<int>(out.tissues.size()), settings.supersampling);
     progress.advance();
-    if (scene.outputs.vdb) keep_level_sets(reference, std::move(sets), out.reference_level_sets);
+    if (settings.keep_level_sets) keep_level_sets(reference, std::move(sets), out.reference_level_sets);
   }
   if (deformed) {
-    StateLevelSets sets = level_sets_of(scene, *deformed, out.tissues, voxel_size, progress);
-    out.deformed = voxelize_tissues(out.grid, sets.organs, static_cast<int>(out.tissues.size()),
-                                    scene.voxelization.supersampling);
+    StateLevelSets sets = level_sets_of(settings, organs, grid, *deformed, out.tissues, voxel_size, progress);
+    out.deformed =
+        voxelize_tissues(out.grid, sets.organs, static_cast<int>(out.tissues.size()), settings.supersampling);
     progress.advance();
-    if (scene.outputs.vdb) keep_level_sets(*deformed, std::move(sets), out.deformed_level_sets);
+    if (settings.keep_level_sets) keep_level_sets(*deformed, std::move(sets), out.deformed_level_sets);
   }
-  report.modelled.push_back("fractions from " + std::to_string(scene.voxelization.supersampling) +
+  report.modelled.push_back("fractions from " + std::to_string(settings.supersampling) +
                             "^3 samples in the " + std::to_string(out.reference.supersampled_voxels) +
                             " voxels within half a voxel diagonal of a surface");
   if (deformation) {

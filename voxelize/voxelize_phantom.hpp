@@ -1,19 +1,26 @@
 #pragma once
 
 #include "anatomy/organ.hpp"
+#include "core/grid.hpp"
+#include "core/organ_table.hpp"
 #include "core/progress.hpp"
 #include "core/stage_report.hpp"
-#include "scene/scene.hpp"
 #include "sim/phantom_deformation.hpp"
+#include "voxelize/voxelize_settings.hpp"
 #include "voxelize/voxelized_phantom.hpp"
 
 namespace phantasm {
 
 /// Voxelizes the reference phantom (and the deformed one with the motion fields when given) on
-/// the scene's grid: each closed organ in the field of view becomes a level set of its patch
-/// surface tessellated within voxelization.tessellation_tolerance_mm, at the grid's smallest
-/// voxel size; open sheets (zero thickness) fill no voxel. What was done goes into `report`.
-VoxelizedPhantom voxelize_phantom(const Scene& scene, const Phantom& reference, const Phantom* deformed,
+/// the grid: each closed organ in the field of view becomes a level set of its patch surface
+/// tessellated within settings.tessellation_tolerance_mm, at the grid's smallest voxel size;
+/// where organs overlap the deepest in the organ table's nesting wins; open sheets (zero
+/// thickness) fill no voxel. What was done goes into `report`.
+/// @param settings sampling, tolerance, the organs' nominal bounds, whether to keep level sets
+/// @param organs the organ table, in the phantom's organ order
+/// @param grid the imaging grid (RAS mm)
+VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const OrganTable& organs,
+                                  const ImageGrid& grid, const Phantom& reference, const Phantom* deformed,
                                   const PhantomDeformation* deformation, StageReport& report,
                                   Reporter& reporter);
 

@@ -1,7 +1,5 @@
 #include "voxelize/voxelize_plan.hpp"
 
-#include "anatomy/anatomy_plan.hpp"
-
 #include <sstream>
 
 namespace phantasm {
@@ -23,29 +21,32 @@ WorldBox field_of_view_box(const ImageGrid& grid) {
 
 } // namespace
 
-bool organ_in_field_of_view(const Scene& scene, const OrganSettings& organ) {
-  const auto bounds = analytic_shape_bounds(organ.shape);
-  return !bounds || bounds->intersects(field_of_view_box(scene.grid.grid()));
+bool organ_in_field_of_view(const std::optional<WorldBox>& bounds, const ImageGrid& grid) {
+  return !bounds || bounds->intersects(field_of_view_box(grid));
 }
 
-StageReport plan_voxelize(const Scene& scene) {
+StageReport plan_voxelize(const VoxelizationSettings& settings, const OrganTable& organs,
+                          const GridSettings& grid_settings) {
   StageReport report;
   report.stage = "voxelize";
-  const ImageGrid grid = scene.grid.grid();
+  const ImageGrid grid = grid_settings.grid();
   std::ostringstream line;
   line << "grid " << grid.dims.x() << " x " << grid.dims.y() << " x " << grid.dims.z() << " voxels of "
        << grid.spacing_mm.x() << " x " << grid.spacing_mm.y() << " x " << grid.spacing_mm.z() << " mm, "
-       << scene.grid.orientation << ", narrow-band level sets until dense output";
+       << grid_settings.orientation << ", narrow-band level sets until dense output";
   report.modelled.push_back(line.str());
-  for (const auto& organ : scene.anatomy.organs) {
-    if (organ_in_field_of_view(scene, organ)) {
+  for (std::size_t i = 0; i < organs.size(); ++i) {
+    const OrganEntry& organ = organs[i];
+    const auto bounds =
+        i < settings.organ_bounds_mm.size() ? settings.organ_bounds_mm[i] : std::optional<WorldBox>();
+    if (organ_in_field_of_view(bounds, grid)) {
       report.modelled.push_back(organ.name + ": level set, reference and deformed");
     } else {
       report.skipped.push_back(organ.name + ": outside the field of view");
     }
   }
-  const OutputSettings& o = scene.outputs;
-  const bool deformed = scene.deformation.mode != DeformationMode::none;
+  const VoxelizationSettings& o = settings;
+  const bool deformed = settings.deformed;
   auto want = [&](bool asked, const std::string& what, const std::string& why_not) {
     if (asked) {
       report.modelled.push_back(what);
@@ -55,15 +56,14 @@ StageReport plan_voxelize(const Scene& scene) {
   };
   want(o.labels, "label maps", "outputs.labels is false");
   std::ostringstream fractions;
-  fractions << "partial-volume fractions, " << scene.voxelization.supersampling << "^3 samples per voxel";
-  want(o.fractions || o.images, fractions.str(),
-       "neither outputs.fractions nor outputs.images asks for them");
+  fractions << "partial-volume fractions, " << settings.supersampling << "^3 samples per voxel";
+  want(o.fractions, fractions.str(), "neither outputs.fractions nor outputs.images asks for them");
   want(o.displacement_fields && deformed, "displacement fields both ways",
        deformed ? "outputs.displacement_fields is false" : "nothing deforms");
   want(o.jacobian && deformed, "Jacobian determinant map",
        deformed ? "outputs.jacobian is false" : "nothing deforms");
   want(o.landmarks, "anatomical landmarks", "outputs.landmarks is false");
-  want(o.vdb, ".vdb grids", "outputs.vdb is false");
+  want(o.keep_level_sets, ".vdb grids", "outputs.vdb is false");
   return report;
 }
 

@@ -1,16 +1,22 @@
 #pragma once
 
+#include "core/grid.hpp"
+#include "core/organ_table.hpp"
 #include "core/stage_report.hpp"
-#include "scene/scene.hpp"
+#include "voxelize/voxelize_settings.hpp"
+
+#include <optional>
 
 namespace phantasm {
 
-/// True unless the organ's analytic bounds lie wholly outside the scene's field of view (an
-/// organ whose bounds are known only from its file counts as inside until it is read).
-bool organ_in_field_of_view(const Scene& scene, const OrganSettings& organ);
+/// True unless an organ's bounds lie wholly outside the grid's field of view (an organ whose
+/// bounds are known only from its file counts as inside until it is read).
+/// @param bounds the organ's shape bounds in RAS mm (VoxelizationSettings::organ_bounds_mm)
+bool organ_in_field_of_view(const std::optional<WorldBox>& bounds, const ImageGrid& grid);
 
 /// What the voxelization stage will make: the grid, the organs it voxelizes (those in the field
 /// of view), and the derived volumes the outputs ask for.
-StageReport plan_voxelize(const Scene& scene);
+StageReport plan_voxelize(const VoxelizationSettings& settings, const OrganTable& organs,
+                          const GridSettings& grid);
 
 } // namespace phantasm

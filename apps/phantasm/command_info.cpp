@@ -31,9 +31,9 @@ void add_info_command(CLI::App& app, std::function<int()>& action) {
       }
       const ImageGrid grid = scene.grid.grid();
       std::cout << "scene " << scene.name << " (" << scene.file.string() << ", sha256 "
-                << scene.sha256.substr(0, 12) << ")\nseed " << scene.seed << ", " << scene.field_strength_T
-                << " T, grid " << grid.dims.x() << " x " << grid.dims.y() << " x " << grid.dims.z() << " ("
-                << grid.voxel_count() << " voxels)\n";
+                << scene.sha256.substr(0, 12) << ")\nseed " << scene.seed << ", "
+                << scene.mri.field_strength_T << " T, grid " << grid.dims.x() << " x " << grid.dims.y()
+                << " x " << grid.dims.z() << " (" << grid.voxel_count() << " voxels)\n";
       for (const auto& stage : plan_stages(scene)) {
         std::cout << "\n" << stage.stage << (stage.status == "skipped" ? " (skipped)" : "") << ":\n";
         for (const auto& line : stage.modelled)

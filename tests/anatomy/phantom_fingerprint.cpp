@@ -5,6 +5,7 @@
 
 #include "anatomy/phantom.hpp"
 #include "core/sha256.hpp"
+#include "scene/scene.hpp"
 
 #include <cstdlib>
 #include <iostream>
@@ -27,8 +28,9 @@ int main(int argc, char** argv) {
     for (auto& organ : scene.anatomy.organs)
       organ.solid = false;
   }
+  resolve_stage_settings(scene);
   Reporter quiet = Reporter::silent();
-  const Phantom phantom = build_phantom(scene, {}, quiet);
+  const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
   std::string bytes;
   auto add = [&](const double* data, Eigen::Index count) {
     bytes.append(reinterpret_cast<const char*>(data), static_cast<std::size_t>(count) * sizeof(double));

@@ -26,12 +26,19 @@ TEST(AnalyticShapeBounds, FileShapesHaveNoBoundsUntilRead) {
   EXPECT_FALSE(analytic_shape_bounds(shape));
 }
 
-TEST(NestingDepth, CountsContainingOrgans) {
-  Scene scene;
-  scene.anatomy.organs = {{"scalp", "skin", "", "", true, 0, {}},
-                          {"skull", "bone_cortical", "", "scalp", true, 0, {}},
-                          {"brain", "white_matter", "", "skull", true, 0, {}}};
-  EXPECT_EQ(nesting_depth(scene, scene.anatomy.organs[0]), 0);
-  EXPECT_EQ(nesting_depth(scene, scene.anatomy.organs[2]), 2);
-  EXPECT_EQ(plan_anatomy(scene).modelled.size(), 3u);
+TEST(OrganTable, ResolvesParentsAndCountsContainingOrgans) {
+  AnatomySettings anatomy;
+  anatomy.organs = {{"scalp", "skin", "", "", true, 0, {}},
+                    {"skull", "bone_cortical", "", "scalp", true, 0, {}},
+                    {"brain", "white_matter", "", "skull", true, 0, {}}};
+  const OrganTable organs = organ_table(anatomy);
+  EXPECT_EQ(organs[0].depth, 0);
+  EXPECT_EQ(organs[0].parent, -1);
+  EXPECT_EQ(organs[2].depth, 2);
+  EXPECT_EQ(organs[2].parent, 1);
+  EXPECT_EQ(organs.index_of("skull"), 1);
+  EXPECT_EQ(organs.index_of("liver"), -1);
+  const StageReport report = plan_anatomy(anatomy, organs);
+  ASSERT_EQ(report.modelled.size(), 3u);
+  EXPECT_NE(report.modelled[2].find("inside skull (depth 2)"), std::string::npos) << report.modelled[2];
 }

@@ -1,5 +1,6 @@
 #include "anatomy/mesh_distance.hpp"
 #include "anatomy/phantom.hpp"
+#include "scene/scene.hpp"
 
 #include <gtest/gtest.h>
 
@@ -15,13 +16,16 @@ Scene scene_of(const std::string& name, std::uint64_t seed = 0, bool keep_seed =
   SceneLoadResult result = load_scene(k_scenes + name + ".yaml");
   EXPECT_TRUE(result.scene) << format_diagnostics(result.problems);
   Scene scene = *result.scene;
-  if (!keep_seed) scene.seed = seed;
+  if (!keep_seed) {
+    scene.seed = seed;
+    resolve_stage_settings(scene);
+  }
   return scene;
 }
 
 Phantom build(const Scene& scene) {
   Reporter quiet = Reporter::silent();
-  return build_phantom(scene, {}, quiet);
+  return build_phantom(scene.anatomy, {}, quiet);
 }
 
 /// Every solid organ: positive tets, dihedral angles of at least 10 degrees; every closed

@@ -289,3 +289,43 @@ TEST(RunCommand, AnInvalidSceneWritesNothing) {
   EXPECT_EQ(result.exit_code, 2);
   EXPECT_FALSE(fs::exists(out));
 }
+
+// A setting the scene's validation accepts but a stage cannot carry out (here a collision with
+// an organ that no load moves, so it is not simulated) stops the run with the stage's message at
+// the file, line and column the setting was written at, with its key path.
+TEST(RunCommand, AStageErrorIsReportedAtItsSceneLocation) {
+  const fs::path folder = fresh_folder("stage-error");
+  const fs::path scene = folder / "scene.yaml";
+  write_text_file(scene, R"(phantasm: 1
+name: stage-error
+seed: 1
+grid: {field_of_view_mm: [120, 80, 80], voxel_size_mm: 4.0}
+materials:
+  soft: {youngs_modulus_Pa: 5000, poisson_ratio: 0.45}
+anatomy:
+  base_mesh_triangles: 80
+  organs:
+    - {name: left, tissue: muscle_skeletal, material: soft,
+       shape: {type: ellipsoid, center_mm: [-21, 0, 0], radii_mm: [20, 20, 20]}}
+    - {name: right, tissue: muscle_skeletal, material: soft,
+       shape: {type: ellipsoid, center_mm: [21, 0, 0], radii_mm: [20, 20, 20]}}
+deformation:
+  mode: quasi_static
+  loads:
+    - {type: displacement, organ: left, displacement_mm: [10, 0, 0], region: {center_mm: [-41, 0, 0], radius_mm: 10}}
+  collisions:
+    - {organs: [left, right]}
+outputs:
+  images: false
+)");
+  const CommandResult validated = run_command({k_phantasm, "validate", scene.string()});
+  ASSERT_EQ(validated.exit_code, 0) << validated.err;
+  const CommandResult result =
+      run_command({k_phantasm, "run", "--quiet", scene.string(), "-o", (folder / "out").string()});
+  EXPECT_EQ(result.exit_code, 2);
+  const std::string expected =
+      scene.string() + ":19:16: deformation.collisions[0].organs: expected organs simulated as bodies "
+                       "of their own (loaded, not fixed, not inside another simulated organ), found "
+                       "'right'\n";
+  EXPECT_EQ(result.err, expected);
+}

@@ -46,8 +46,8 @@ TEST(Sweep, ListsFormAGridWithTheLastKeyFastestAndRepeats) {
   const double expected_bias[] = {0, 0, 10, 10, 0, 0, 10, 10, 0, 0, 10, 10};
   for (std::size_t s = 0; s < 12; ++s) {
     const Scene scene = scene_of(sweep.subjects[s]);
-    EXPECT_EQ(scene.acquisition.noise_percent, expected_noise[s]) << s;
-    EXPECT_EQ(scene.acquisition.bias_percent, expected_bias[s]) << s;
+    EXPECT_EQ(scene.mri.acquisition.noise_percent, expected_noise[s]) << s;
+    EXPECT_EQ(scene.mri.acquisition.bias_percent, expected_bias[s]) << s;
     EXPECT_EQ(scene.outputs.subject, sweep.subjects[s].id);
   }
   EXPECT_EQ(
@@ -71,7 +71,7 @@ TEST(Sweep, RandomDrawsAreSeededPerSubjectAndInRange) {
     EXPECT_LE(scene.seed, 1000u);
     seeds.insert(scene.seed);
     double e = 0.0;
-    for (const auto& material : scene.materials)
+    for (const auto& material : scene.deformation.materials)
       if (material.name == "brain") e = material.youngs_modulus_Pa;
     EXPECT_GE(e, 1000.0);
     EXPECT_LE(e, 10000.0);
@@ -91,9 +91,9 @@ TEST(Sweep, KeyPathsReachListsAndTheSpecialKeysScaleAndSelect) {
   ASSERT_EQ(scene.deformation.loads.size(), 1u);
   EXPECT_EQ(scene.deformation.loads[0].region_radius_mm, 20.0);
   EXPECT_TRUE(scene.deformation.loads[0].displacement_mm.isApprox(Eigen::Vector3d(-4, 0, -6)));
-  ASSERT_EQ(scene.sequences.size(), 1u);
-  EXPECT_EQ(scene.sequences[0].name, "T2w");
-  EXPECT_EQ(scene.acquisition.coils, 4);
+  ASSERT_EQ(scene.mri.sequences.size(), 1u);
+  EXPECT_EQ(scene.mri.sequences[0].name, "T2w");
+  EXPECT_EQ(scene.mri.acquisition.coils, 4);
 }
 
 TEST(Sweep, ShardsSplitTheSubjectsDisjointly) {

@@ -6,6 +6,7 @@
 #include "io/mesh_file.hpp"
 #include "io/nifti_file.hpp"
 #include "io/shape_files.hpp"
+#include "scene/scene.hpp"
 #include "tests/support/files.hpp"
 
 #include <gtest/gtest.h>
@@ -61,13 +62,13 @@ TEST(ShapeFiles, MeshAndLabelVolumeOrgansBecomePatchSurfacesOfTheirVolume) {
     - {name: left, tissue: gray_matter, solid: false, shape: {type: label_volume, file: labels.nii.gz, label: 1}}
     - {name: right, tissue: csf, shape: {type: label_volume, file: labels.nii.gz, label: 2}}
 )");
-  const std::map<std::string, ShapeData> files = read_shape_files(scene);
+  const std::map<std::string, ShapeData> files = read_shape_files(scene.anatomy);
   ASSERT_EQ(files.size(), 3u);
   EXPECT_EQ(files.at("ball").mesh->face_count(), 1280);
   EXPECT_EQ(files.at("left").labels.size(), 64u * 40u * 40u);
 
   Reporter quiet = Reporter::silent();
-  const Phantom phantom = build_phantom(scene, files, quiet);
+  const Phantom phantom = build_phantom(scene.anatomy, files, quiet);
   // The mesh organ follows its dense mesh; the label organs the balls the voxels sample (the
   // 1/2-level of trilinear interpolated indicators lies within about half a voxel of the sphere).
   EXPECT_NEAR(phantom.find("ball")->surface->volume() / enclosed_volume(ball), 1.0, 1e-3);
@@ -86,14 +87,16 @@ TEST(ShapeFiles, ALabelMissingFromItsVolumeIsReportedAtItsSceneField) {
       folder,
       "    - {name: gone, tissue: csf, shape: {type: label_volume, file: labels.nii.gz, label: 7}}\n");
   try {
-    read_shape_files(scene);
+    read_shape_files(scene.anatomy);
     FAIL() << "no error";
-  } catch (const InputError& error) {
-    const std::string message = error.what();
-    EXPECT_NE(message.find("scene.yaml:"), std::string::npos) << message;
-    EXPECT_NE(message.find("anatomy.organs[0].shape.file: "), std::string::npos) << message;
-    EXPECT_NE(message.find("expected voxels of label 7 (organ gone), found none"), std::string::npos)
-        << message;
+  } catch (const SettingError& error) {
+    // The stage names the setting; the scene knows where it was written.
+    EXPECT_EQ(error.key_path(), "anatomy.organs[0].shape.file");
+    EXPECT_NE(error.message().find("expected voxels of label 7 (organ gone), found none"), std::string::npos)
+        << error.message();
+    const SourceLocation where = scene.location_of(error.key_path());
+    EXPECT_NE(where.file.find("scene.yaml"), std::string::npos) << where.file;
+    EXPECT_EQ(where.line, 9); // the organ's line
   }
 }
 
@@ -108,7 +111,7 @@ TEST(ShapeFiles, AnOpenMeshIsRejectedWithTheDefectNamed) {
       scene_in(folder, "    - {name: cup, tissue: csf, shape: {type: mesh, file: open.vtp}}\n");
   Reporter quiet = Reporter::silent();
   try {
-    build_phantom(scene, read_shape_files(scene), quiet);
+    build_phantom(scene.anatomy, read_shape_files(scene.anatomy), quiet);
     FAIL() << "no error";
   } catch (const InputError& error) {
     EXPECT_NE(std::string(error.what()).find("open edge"), std::string::npos) << error.what();

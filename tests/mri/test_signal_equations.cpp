@@ -91,15 +91,12 @@ TEST(SignalEquations, MprageMatchesBloch) {
 TEST(SignalEquations, HeadContrastsAtOnePointFiveAndThreeTesla) {
   for (double field : {1.5, 3.0}) {
     SCOPED_TRACE(field);
-    Scene scene;
-    scene.field_strength_T = field;
-    for (const char* tissue : {"white_matter", "gray_matter", "csf"}) {
-      OrganSettings organ;
-      organ.name = tissue;
-      organ.tissue = tissue;
-      scene.anatomy.organs.push_back(organ);
-    }
-    const auto parameters = resolve_tissue_parameters(scene);
+    MriSettings mri;
+    mri.field_strength_T = field;
+    std::vector<OrganNesting> organs;
+    for (const char* tissue : {"white_matter", "gray_matter", "csf"})
+      organs.push_back({tissue, tissue, ""});
+    const auto parameters = resolve_tissue_parameters(mri, OrganTable(organs));
     auto relaxation = [&](const char* tissue) {
       const TissueParameters& p = parameters.at(tissue);
       return Relaxation{*p.PD, *p.T1_ms, *p.T2_ms, p.T2star_ms ? *p.T2star_ms : *p.T2_ms};

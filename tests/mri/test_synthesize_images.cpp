@@ -15,14 +15,15 @@ using namespace phantasm;
 
 namespace {
 
-Scene noisy_scene(double noise_percent, double bias_percent) {
-  Scene scene;
+/// One organ of white matter.
+OrganTable block() {
+  return OrganTable({{"block", "white_matter", ""}});
+}
+
+MriSettings noisy_scene(double noise_percent, double bias_percent) {
+  MriSettings scene;
   scene.seed = 5;
   scene.field_strength_T = 3.0;
-  OrganSettings organ;
-  organ.name = "block";
-  organ.tissue = "white_matter";
-  scene.anatomy.organs.push_back(organ);
   SequenceSettings t1;
   t1.name = "T1w";
   t1.kind = SequenceKind::spoiled_gre;
@@ -59,10 +60,10 @@ VoxelizedPhantom volumes(int filled_columns) {
 // Background of pure noise: magnitude of complex Gaussian noise (Rayleigh), mean
 // sigma sqrt(pi/2) and standard deviation sigma sqrt(2 - pi/2).
 TEST(SynthesizeImages, BackgroundNoiseHasRayleighMeanAndSpread) {
-  const Scene scene = noisy_scene(5.0, 0.0);
+  const MriSettings scene = noisy_scene(5.0, 0.0);
   StageReport report;
   Reporter quiet = Reporter::silent();
-  const MrImages images = synthesize_images(scene, volumes(0), report, quiet);
+  const MrImages images = synthesize_images(scene, block(), volumes(0), report, quiet);
   const std::vector<float>& m = images.reference[0].magnitude;
   const double sigma = images.reference[0].noise_sigma;
   EXPECT_GT(sigma, 0.0);
@@ -84,23 +85,23 @@ TEST(SynthesizeImages, BackgroundNoiseHasRayleighMeanAndSpread) {
 TEST(SynthesizeImages, TissueSignalBiasSpanAndSeededRepeatability) {
   StageReport report;
   Reporter quiet = Reporter::silent();
-  const MrImages plain = synthesize_images(noisy_scene(0.0, 0.0), volumes(64), report, quiet);
+  const MrImages plain = synthesize_images(noisy_scene(0.0, 0.0), block(), volumes(64), report, quiet);
   const double white = sequence_signal(noisy_scene(0, 0).sequences[0], {0.7, 810, 80, 53.2});
   for (float x : plain.reference[0].magnitude)
     ASSERT_NEAR(x, white, 1e-6 * white);
   // A 20 % bias spans 0.9 to 1.1 over the object.
-  const MrImages biased = synthesize_images(noisy_scene(0.0, 20.0), volumes(64), report, quiet);
+  const MrImages biased = synthesize_images(noisy_scene(0.0, 20.0), block(), volumes(64), report, quiet);
   const auto [low, high] =
       std::minmax_element(biased.reference[0].magnitude.begin(), biased.reference[0].magnitude.end());
   EXPECT_NEAR(*low / white, 0.9, 1e-5);
   EXPECT_NEAR(*high / white, 1.1, 1e-5);
   // Same seed, same bytes; another seed, other noise.
-  Scene scene = noisy_scene(3.0, 20.0);
-  const MrImages a = synthesize_images(scene, volumes(32), report, quiet);
-  const MrImages b = synthesize_images(scene, volumes(32), report, quiet);
+  MriSettings scene = noisy_scene(3.0, 20.0);
+  const MrImages a = synthesize_images(scene, block(), volumes(32), report, quiet);
+  const MrImages b = synthesize_images(scene, block(), volumes(32), report, quiet);
   EXPECT_EQ(a.reference[0].magnitude, b.reference[0].magnitude);
   scene.seed = 6;
-  EXPECT_NE(synthesize_images(scene, volumes(32), report, quiet).reference[0].magnitude,
+  EXPECT_NE(synthesize_images(scene, block(), volumes(32), report, quiet).reference[0].magnitude,
             a.reference[0].magnitude);
 }
 
@@ -119,10 +120,10 @@ TEST(SynthesizeImages, CoilsCombineBySumOfSquares) {
       object.reference.background[v] = 0.0f;
     }
   }
-  const MrImages one = synthesize_images(noisy_scene(0.0, 0.0), object, report, quiet);
-  Scene scene = noisy_scene(0.0, 0.0);
+  const MrImages one = synthesize_images(noisy_scene(0.0, 0.0), block(), object, report, quiet);
+  MriSettings scene = noisy_scene(0.0, 0.0);
   scene.acquisition.coils = 8;
-  const MrImages eight = synthesize_images(scene, object, report, quiet);
+  const MrImages eight = synthesize_images(scene, block(), object, report, quiet);
   EXPECT_EQ(eight.coils, 8);
   std::vector<bool> mask(object.reference.background.size());
   for (std::size_t v = 0; v < mask.size(); ++v)
@@ -144,10 +145,10 @@ TEST(SynthesizeImages, CoilsCombineBySumOfSquares) {
   EXPECT_GT(high / low, 1.2); // receive arrays are brighter near their elements
   EXPECT_LT(high / low, 4.0);
 
-  Scene noisy = noisy_scene(5.0, 0.0);
+  MriSettings noisy = noisy_scene(5.0, 0.0);
   const int n = 4;
   noisy.acquisition.coils = n;
-  const MrImages background = synthesize_images(noisy, volumes(0), report, quiet);
+  const MrImages background = synthesize_images(noisy, block(), volumes(0), report, quiet);
   const std::vector<float>& m = background.reference[0].magnitude;
   double mean = 0.0;
   for (float x : m)
@@ -165,11 +166,11 @@ TEST(SynthesizeImages, KspaceAcquisitionOnTheGrid) {
   StageReport report;
   Reporter quiet = Reporter::silent();
   const VoxelizedPhantom object = volumes(20);
-  const MrImages direct = synthesize_images(noisy_scene(0.0, 10.0), object, report, quiet);
-  Scene scene = noisy_scene(0.0, 10.0);
+  const MrImages direct = synthesize_images(noisy_scene(0.0, 10.0), block(), object, report, quiet);
+  MriSettings scene = noisy_scene(0.0, 10.0);
   scene.acquisition.kspace = true;
   scene.acquisition.kspace_oversampling = 1;
-  const MrImages full = synthesize_images(scene, object, report, quiet);
+  const MrImages full = synthesize_images(scene, block(), object, report, quiet);
   ASSERT_TRUE(full.kspace);
   EXPECT_TRUE(full.kspace->keeps_everything());
   for (std::size_t v = 0; v < direct.reference[0].magnitude.size(); ++v)
@@ -178,7 +179,7 @@ TEST(SynthesizeImages, KspaceAcquisitionOnTheGrid) {
   scene.acquisition.acquired_voxel_mm = Eigen::Vector3d(2.0, 1.0, 4.0);
   scene.acquisition.noise_percent = 5.0;
   StageReport truncated_report;
-  const MrImages truncated = synthesize_images(scene, volumes(0), truncated_report, quiet);
+  const MrImages truncated = synthesize_images(scene, block(), volumes(0), truncated_report, quiet);
   EXPECT_EQ(truncated.kspace->acquired, Eigen::Vector3i(32, 64, 16));
   const std::vector<float>& m = truncated.reference[0].magnitude;
   double mean = 0.0;

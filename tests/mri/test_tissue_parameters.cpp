@@ -6,17 +6,15 @@
 using namespace phantasm;
 
 TEST(TissueParameters, SceneValuesWinAndTheTableFillsTheRest) {
-  Scene scene;
-  scene.field_strength_T = 3.0;
-  scene.anatomy.organs = {{"a", "csf", "", "", true, 0, {}},
-                          {"b", "white_matter", "", "", true, 0, {}},
-                          {"c", "csf", "", "a", true, 0, {}}};
+  MriSettings mri;
+  mri.field_strength_T = 3.0;
+  const OrganTable organs({{"a", "csf", ""}, {"b", "white_matter", ""}, {"c", "csf", "a"}});
   TissueOverride csf;
   csf.tissue = "csf";
   csf.T2star_ms = 100.0;
   csf.T1_ms = 4000.0;
-  scene.tissues = {csf};
-  const auto resolved = resolve_tissue_parameters(scene);
+  mri.tissues = {csf};
+  const auto resolved = resolve_tissue_parameters(mri, organs);
   ASSERT_EQ(resolved.size(), 2u);
   const TissueParameters& p = resolved.at("csf");
   EXPECT_DOUBLE_EQ(*p.T1_ms, 4000.0);
@@ -28,6 +26,5 @@ TEST(TissueParameters, SceneValuesWinAndTheTableFillsTheRest) {
 }
 
 TEST(MriPlan, NoSequencesMeansNoImages) {
-  Scene scene;
-  EXPECT_EQ(plan_mri(scene).status, "skipped");
+  EXPECT_EQ(plan_mri(MriSettings{}, OrganTable{}).status, "skipped");
 }

@@ -53,7 +53,7 @@ TEST(ParseScene, MinimalSceneGetsDocumentedDefaults) {
   EXPECT_EQ(s.anatomy.organs.at(0).shape.radii_mm, Eigen::Vector3d(20, 20, 20));
   EXPECT_EQ(s.deformation.mode, DeformationMode::none);
   EXPECT_EQ(s.outputs.subject, "01");
-  EXPECT_TRUE(s.sequences.empty());
+  EXPECT_TRUE(s.mri.sequences.empty());
   EXPECT_EQ(s.sha256.size(), 64u);
 }
 
@@ -175,7 +175,7 @@ TEST(ParseScene, SequenceTimingsAreCheckedAgainstEachOther) {
 TEST(ParseScene, BssfpEchoTimeDefaultsToHalfTheRepetitionTime) {
   const Scene s =
       *parse(k_minimal + "sequences:\n  - {name: bSSFP, type: bssfp, TR_ms: 5, flip_deg: 50}\n").scene;
-  EXPECT_DOUBLE_EQ(s.sequences.at(0).TE_ms, 2.5);
+  EXPECT_DOUBLE_EQ(s.mri.sequences.at(0).TE_ms, 2.5);
 }
 
 TEST(ParseScene, OrganReferencesAndNestingAreChecked) {
@@ -233,8 +233,8 @@ TEST(LoadScene, AMissingFileIsOneClearProblem) {
 TEST(ParseScene, AcquiredVoxelSizeIsOneWayAndNoFinerThanTheGrid) {
   const SceneLoadResult ok = parse(k_minimal + "acquisition: {kspace: true, acquired_voxel_mm: [3, 2, 4]}\n");
   ASSERT_TRUE(ok.scene) << format_diagnostics(ok.problems);
-  EXPECT_EQ(*ok.scene->acquisition.acquired_voxel_mm, Eigen::Vector3d(3, 2, 4));
-  EXPECT_FALSE(parse(k_minimal).scene->acquisition.acquired_voxel_mm);
+  EXPECT_EQ(*ok.scene->mri.acquisition.acquired_voxel_mm, Eigen::Vector3d(3, 2, 4));
+  EXPECT_FALSE(parse(k_minimal).scene->mri.acquisition.acquired_voxel_mm);
 
   std::string message =
       only_problem(k_minimal + "acquisition: {kspace: true, kspace_oversampling: 2, acquired_voxel_mm: 3}\n");

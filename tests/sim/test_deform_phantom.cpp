@@ -50,7 +50,7 @@ void expect_no_inversion_and_volume_kept(const DeformedBody& body, double tolera
 TEST(DeformPhantom, PushedSurfaceReachesItsTargetAndEmbeddedOrgansFollow) {
   const Scene scene = load("tests/data/scenes/small-head.yaml");
   Reporter quiet = Reporter::silent();
-  const Phantom phantom = build_phantom(scene, {}, quiet);
+  const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
   StageReport report;
   const PhantomDeformation d = deform_phantom(scene, phantom, report, quiet);
   ASSERT_EQ(d.organs.size(), 3u);
@@ -133,7 +133,7 @@ TEST(DeformPhantom, DynamicFreeFallMatchesImplicitEulerInClosedForm) {
   Scene scene = free_bar();
   scene.deformation.frames = 10;
   Reporter quiet = Reporter::silent();
-  const Phantom phantom = build_phantom(scene, {}, quiet);
+  const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
   for (const SolverMethod method :
        {SolverMethod::local_global, SolverMethod::xpbd, SolverMethod::gauss_seidel_pbd}) {
     SCOPED_TRACE(to_string(method));
@@ -155,7 +155,7 @@ TEST(DeformPhantom, AQuasiStaticBodyThatNothingHoldsIsAClearError) {
   Scene scene = free_bar();
   scene.deformation.mode = DeformationMode::quasi_static;
   Reporter quiet = Reporter::silent();
-  const Phantom phantom = build_phantom(scene, {}, quiet);
+  const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
   StageReport report;
   try {
     deform_phantom(scene, phantom, report, quiet);
@@ -170,7 +170,7 @@ TEST(DeformPhantom, AnUnavailableSolverIsAClearErrorAtItsSceneField) {
   Scene scene = load("tests/data/scenes/small-head.yaml");
   scene.deformation.solver.method = SolverMethod::xpbd;
   Reporter quiet = Reporter::silent();
-  const Phantom phantom = build_phantom(scene, {}, quiet);
+  const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
   StageReport report;
   try {
     deform_phantom(scene, phantom, report, quiet);
@@ -193,7 +193,7 @@ TEST(DeformPhantom, PaddlesCompressTheBreastWithoutPassingThroughIt) {
   const Scene scene = load("data-synthetic/breast.yaml");
   ASSERT_EQ(scene.deformation.obstacles.size(), 2u);
   Reporter quiet = Reporter::silent();
-  const Phantom phantom = build_phantom(scene, {}, quiet);
+  const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
   StageReport report;
   const PhantomDeformation d = deform_phantom(scene, phantom, report, quiet);
   EXPECT_EQ(report.status, "done");
@@ -229,7 +229,7 @@ TEST(DeformPhantom, ClothHangsFromItsCornersAsAShell) {
   scene.deformation.frames = 24;
   scene.anatomy.organs[0].shape.cells = Eigen::Vector3i(20, 20, 1);
   Reporter quiet = Reporter::silent();
-  const Phantom phantom = build_phantom(scene, {}, quiet);
+  const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
   ASSERT_TRUE(phantom.organs[0].sheet);
   StageReport report;
   const PhantomDeformation d = deform_phantom(scene, phantom, report, quiet);
@@ -272,7 +272,7 @@ TEST(DeformPhantom, AClosedShellKeepsTheVolumeItEnclosesUnderThePaddles) {
   scene.anatomy.organs[0].thickness_mm = 2.0;
   scene.anatomy.organs[0].enclosed_volume_tolerance = 0.002;
   Reporter quiet = Reporter::silent();
-  const Phantom phantom = build_phantom(scene, {}, quiet);
+  const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
   ASSERT_TRUE(phantom.organs[0].surface);
   const PatchSurface& surface = *phantom.organs[0].surface;
 
@@ -328,7 +328,7 @@ TEST(DeformPhantom, AnEnclosedVolumeOnAnOpenSheetIsAClearError) {
   scene.anatomy.organs[0].shape.cells = Eigen::Vector3i(4, 4, 1);
   scene.anatomy.organs[0].enclosed_volume_tolerance = 0.01;
   Reporter quiet = Reporter::silent();
-  const Phantom phantom = build_phantom(scene, {}, quiet);
+  const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
   StageReport report;
   try {
     deform_phantom(scene, phantom, report, quiet);
@@ -346,7 +346,7 @@ TEST(DeformPhantom, CollidingOrgansPressOnEachOtherInsteadOfPassingThrough) {
   Scene scene = load("tests/data/scenes/two-balls.yaml");
   ASSERT_EQ(scene.deformation.collisions.size(), 1u);
   Reporter quiet = Reporter::silent();
-  const Phantom phantom = build_phantom(scene, {}, quiet);
+  const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
   ASSERT_TRUE(phantom.organs[0].solid && phantom.organs[1].solid);
   for (const bool collide : {true, false}) {
     if (!collide) scene.deformation.collisions.clear();

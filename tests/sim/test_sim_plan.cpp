@@ -5,58 +5,53 @@
 using namespace phantasm;
 
 namespace {
-Scene three_organs() {
-  Scene scene;
-  scene.anatomy.organs = {{"skull", "bone_cortical", "", "", true, 0, {}},
-                          {"brain", "white_matter", "", "skull", true, 0, {}},
-                          {"eye", "csf", "", "", true, 0, {}}};
-  return scene;
-}
+const OrganTable
+    k_organs({{"skull", "bone_cortical", ""}, {"brain", "white_matter", "skull"}, {"eye", "csf", ""}});
 } // namespace
 
 TEST(OrganMotion, NothingIsSimulatedWithoutDeformation) {
-  const Scene scene = three_organs();
-  EXPECT_EQ(classify_organ_motion(scene), std::vector<OrganMotion>(3, OrganMotion::rigid));
-  EXPECT_EQ(plan_sim(scene).status, "skipped");
+  const DeformationSettings deformation;
+  EXPECT_EQ(classify_organ_motion(deformation, k_organs), std::vector<OrganMotion>(3, OrganMotion::rigid));
+  EXPECT_EQ(plan_sim(deformation, k_organs).status, "skipped");
 }
 
 TEST(OrganMotion, LoadedOrgansAreSimulatedFixedOnesHeldAndTheRestCarriedRigidly) {
-  Scene scene = three_organs();
-  scene.deformation.mode = DeformationMode::quasi_static;
-  scene.deformation.fixed = {"skull"};
+  DeformationSettings deformation;
+  deformation.mode = DeformationMode::quasi_static;
+  deformation.fixed = {"skull"};
   LoadSettings push;
   push.kind = LoadKind::displacement;
   push.organ = "brain";
-  scene.deformation.loads = {push};
-  EXPECT_EQ(classify_organ_motion(scene),
+  deformation.loads = {push};
+  EXPECT_EQ(classify_organ_motion(deformation, k_organs),
             (std::vector<OrganMotion>{OrganMotion::fixed, OrganMotion::simulated, OrganMotion::rigid}));
-  const StageReport report = plan_sim(scene);
+  const StageReport report = plan_sim(deformation, k_organs);
   ASSERT_EQ(report.skipped.size(), 1u);
   EXPECT_NE(report.skipped[0].find("eye"), std::string::npos);
 }
 
 TEST(OrganMotion, GravityWithoutAnOrganListActsOnEveryOrganThatIsNotFixed) {
-  Scene scene = three_organs();
-  scene.deformation.mode = DeformationMode::dynamic;
-  scene.deformation.fixed = {"skull"};
-  scene.deformation.loads = {LoadSettings{}};
-  EXPECT_EQ(classify_organ_motion(scene),
+  DeformationSettings deformation;
+  deformation.mode = DeformationMode::dynamic;
+  deformation.fixed = {"skull"};
+  deformation.loads = {LoadSettings{}};
+  EXPECT_EQ(classify_organ_motion(deformation, k_organs),
             (std::vector<OrganMotion>{OrganMotion::fixed, OrganMotion::simulated, OrganMotion::simulated}));
 }
 
 TEST(OrganMotion, ThePlanNamesEmbeddedOrgansObstaclesAndLoadSteps) {
-  Scene scene = three_organs();
-  scene.deformation.mode = DeformationMode::quasi_static;
-  scene.deformation.load_steps = 3;
+  DeformationSettings deformation;
+  deformation.mode = DeformationMode::quasi_static;
+  deformation.load_steps = 3;
   LoadSettings push;
   push.kind = LoadKind::displacement;
   push.organ = "skull";
-  scene.deformation.loads = {push};
+  deformation.loads = {push};
   ObstacleSettings paddle;
   paddle.point_mm = {0, 0, 40};
   paddle.normal = {0, 0, -1};
-  scene.deformation.obstacles = {paddle};
-  const StageReport report = plan_sim(scene);
+  deformation.obstacles = {paddle};
+  const StageReport report = plan_sim(deformation, k_organs);
   auto modelled = [&](const std::string& text) {
     for (const std::string& line : report.modelled)
       if (line.find(text) != std::string::npos) return true;

@@ -1,0 +1,65 @@
+#pragma once
+
+// The settings the MR stage reads (docs/scene-format.md, sections field_strength_T, tissues,
+// sequences and acquisition), and what it reads of other sections, filled by the scene parser.
+// Light on purpose: Eigen and the standard library only.
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace phantasm {
+
+/// A scene-supplied tissue value that replaces or completes the built-in table.
+struct TissueOverride {
+  std::string tissue;
+  std::optional<double> T1_ms, T2_ms, T2star_ms, PD;
+};
+
+enum class SequenceKind { spin_echo, spoiled_gre, inversion_recovery, bssfp, mprage };
+enum class Readout { gradient_echo, spin_echo };
+
+/// One MR image to make, named by its BIDS suffix.
+struct SequenceSettings {
+  std::string name; ///< BIDS suffix, e.g. T1w, T2w, PDw, FLAIR, T2starw, UNIT1
+  SequenceKind kind = SequenceKind::spin_echo;
+  double TR_ms = 0.0;
+  double TE_ms = 0.0; ///< bSSFP: TR_ms / 2 unless the scene gives it (set by the scene parser)
+  double flip_deg = 90.0;
+  double TI_ms = 0.0;                       ///< inversion recovery and MPRAGE
+  Readout readout = Readout::gradient_echo; ///< inversion recovery
+  double echo_spacing_ms = 0.0;             ///< MPRAGE: gradient-echo spacing in the train
+  int turbo_factor = 0;                     ///< MPRAGE: echoes per inversion
+};
+
+struct AcquisitionSettings {
+  bool kspace = false;         ///< simulate k-space truncation (Gibbs ringing)
+  int kspace_oversampling = 2; ///< object samples per acquired sample along each axis
+  /// Acquired voxel size along i, j, k (replaces kspace_oversampling; anisotropic allowed).
+  std::optional<Eigen::Vector3d> acquired_voxel_mm;
+  double slice_thickness_mm = 0.0; ///< rectangular slice profile along k; 0 = none (3-D acquisition)
+  double noise_percent = 0.0;      ///< 100 sigma / signal of the reference tissue (BrainWeb)
+  std::string noise_reference_tissue = "white_matter";
+  double bias_percent = 0.0; ///< peak-to-peak multiplicative bias field, percent
+  int coils = 1;             ///< receive coils combined by sum of squares
+};
+
+struct MriSettings {
+  double field_strength_T = 3.0;
+  std::vector<TissueOverride> tissues;
+  std::vector<SequenceSettings> sequences;
+  AcquisitionSettings acquisition;
+
+  // Set by the scene from other sections.
+  std::uint64_t seed = 0;     ///< the scene's seed (noise, bias field)
+  bool images = true;         ///< outputs.images
+  bool parameter_maps = true; ///< outputs.parameter_maps: PD, T1, T2, T2* maps of each state
+};
+
+const char* to_string(SequenceKind kind);
+const char* to_string(Readout readout);
+
+} // namespace phantasm

@@ -1,0 +1,109 @@
+#pragma once
+
+// The settings the deformation stage reads (docs/scene-format.md, sections materials and
+// deformation), filled by the scene parser. Light on purpose: Eigen and the standard library
+// only, so that the scene can fill them without linking the solver.
+
+#include <Eigen/Core>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace phantasm {
+
+/// A named elastic material.
+struct MaterialSettings {
+  std::string name;
+  double youngs_modulus_Pa = 3000.0;
+  double poisson_ratio = 0.45;
+  double density_kg_m3 = 1000.0;
+};
+
+enum class DeformationMode { none, quasi_static, dynamic };
+enum class SolverMethod { local_global, newton, gauss_seidel_pbd, jacobi_chebyshev, xpbd };
+
+struct SolverSettings {
+  SolverMethod method = SolverMethod::local_global;
+  int max_iterations = 100;
+  double relative_energy_tolerance = 1e-6; ///< stop when (E_k-1 - E_k) / E_k falls below this
+  double position_tolerance_mm = 1e-4;     ///< stop when no vertex moves further in one iteration
+  int threads = 0;                         ///< 0 = all cores
+};
+
+enum class LoadKind { gravity, displacement };
+enum class MotionProfile { constant, ramp, sine };
+
+/// An external load: gravity on organs, or a prescribed displacement of the part of an organ's
+/// surface inside a sphere (a retractor, a probe, a compression paddle, a clamp that holds or
+/// twists the end of a bar): each point x of the region goes to
+/// c + R (x - c) + displacement_mm, R the turn by rotation_deg about rotation_axis through c =
+/// rotation_center_mm (right-handed; 0 degrees: a pure translation).
+struct LoadSettings {
+  LoadKind kind = LoadKind::gravity;
+  std::vector<std::string> organs; ///< gravity: organs it acts on (empty = all moving)
+  Eigen::Vector3d acceleration_m_s2{0, 0, -9.81};
+  std::string organ; ///< displacement: the organ pushed
+  Eigen::Vector3d displacement_mm{0, 0, 0};
+  Eigen::Vector3d region_center_mm{0, 0, 0};
+  double region_radius_mm = 10.0;
+  double rotation_deg = 0.0;                      ///< displacement: turn of the region's points
+  Eigen::Vector3d rotation_axis{0, 0, 1};         ///< unit axis of the turn
+  Eigen::Vector3d rotation_center_mm{0, 0, 0};    ///< a point of the axis
+  MotionProfile motion = MotionProfile::constant; ///< how the load evolves in dynamic mode
+  double period_s = 1.0;                          ///< ramp duration or sine period
+};
+
+enum class ObstacleShape { half_space, sphere };
+
+/// A rigid obstacle no simulated vertex may enter (a compression plate, a table, a probe tip),
+/// moved by displacement_mm: in quasi-static mode over the load steps, in dynamic mode by its
+/// motion profile.
+struct ObstacleSettings {
+  ObstacleShape shape = ObstacleShape::half_space;
+  Eigen::Vector3d point_mm{0, 0, 0}; ///< half_space: a point of the plane; sphere: the centre
+  Eigen::Vector3d normal{0, 0, 1};   ///< half_space: unit normal out of the obstacle
+  double radius_mm = 10.0;           ///< sphere
+  Eigen::Vector3d displacement_mm{0, 0, 0};
+  MotionProfile motion = MotionProfile::constant;
+  double period_s = 1.0;
+};
+
+/// Two simulated organs whose surfaces may not pass through each other.
+struct CollisionSettings {
+  std::vector<std::string> organs; ///< two organ names
+};
+
+/// What the deformation stage reads of one organ (written under anatomy.organs in the scene).
+struct OrganMechanics {
+  std::string material;      ///< a name from the materials
+  bool solid = true;         ///< false: a surface organ, simulated as a shell
+  double thickness_mm = 1.0; ///< shells: wall thickness
+  /// closed shells: their enclosed volume is kept within this fraction of rest; unset: free
+  std::optional<double> enclosed_volume_tolerance;
+};
+
+struct DeformationSettings {
+  DeformationMode mode = DeformationMode::none;
+  SolverSettings solver;
+  double time_step_s = 1.0 / 30.0;
+  int frames = 1;
+  std::vector<std::string> fixed; ///< organs held in place
+  std::vector<LoadSettings> loads;
+  std::vector<ObstacleSettings> obstacles;
+  std::vector<CollisionSettings> collisions;
+  int load_steps = 1; ///< quasi-static: loads and obstacles applied in this many equal increments
+  std::vector<MaterialSettings> materials; ///< the scene's materials section
+  /// Per organ in scene order, set by the scene from anatomy.organs.
+  std::vector<OrganMechanics> organs;
+
+  const MaterialSettings* find_material(const std::string& name) const;
+};
+
+const char* to_string(DeformationMode mode);
+const char* to_string(SolverMethod method);
+const char* to_string(LoadKind kind);
+const char* to_string(MotionProfile motion);
+const char* to_string(ObstacleShape shape);
+
+} // namespace phantasm
