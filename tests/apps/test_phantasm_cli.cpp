@@ -299,6 +299,7 @@ TEST(RunCommand, AStageErrorIsReportedAtItsSceneLocation) {
   write_text_file(scene, R"(phantasm: 1
 name: stage-error
 seed: 1
+field_strength_T: 3.0
 grid: {field_of_view_mm: [120, 80, 80], voxel_size_mm: 4.0}
 materials:
   soft: {youngs_modulus_Pa: 5000, poisson_ratio: 0.45}
@@ -324,7 +325,7 @@ outputs:
       run_command({k_phantasm, "run", "--quiet", scene.string(), "-o", (folder / "out").string()});
   EXPECT_EQ(result.exit_code, 2);
   const std::string expected =
-      scene.string() + ":19:16: deformation.collisions[0].organs: expected organs simulated as bodies "
+      scene.string() + ":20:16: deformation.collisions[0].organs: expected organs simulated as bodies "
                        "of their own (loaded, not fixed, not inside another simulated organ), found "
                        "'right'\n";
   EXPECT_EQ(result.err, expected);
