@@ -32,7 +32,7 @@ int main(int argc, char** argv) {
   Reporter quiet = Reporter::silent();
   const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
   StageReport sim;
-  const PhantomDeformation deformation = deform_phantom(scene, phantom, sim, quiet);
+  const PhantomDeformation deformation = deform_phantom(scene.deformation, scene.organs, phantom, sim, quiet);
   const Phantom deformed = deformed_phantom(phantom, deformation);
   StageReport report;
   const auto start = std::chrono::steady_clock::now();

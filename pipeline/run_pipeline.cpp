@@ -72,7 +72,7 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until, S
   StageReport& sim = result.stages[1];
   if (scene.deformation.mode != DeformationMode::none) {
     const StageLines lines(sim);
-    result.deformation = deform_phantom(scene, result.phantom, sim, reporter);
+    result.deformation = deform_phantom(scene.deformation, scene.organs, result.phantom, sim, reporter);
     lines.print_new(sim, reporter);
     result.deformed = deformed_phantom(result.phantom, *result.deformation);
   }

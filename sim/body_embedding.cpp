@@ -27,23 +27,15 @@ const TriangleMesh* shell_mesh(const Organ& organ) {
   return nullptr;
 }
 
-BodyAssignment assign_bodies(const Scene& scene, const Phantom& phantom, StageReport& report) {
-  const auto& settings = scene.anatomy.organs;
-  const std::size_t n = settings.size();
-  std::vector<OrganMotion> motion = classify_organ_motion(scene.deformation, scene.organs);
-  std::map<std::string, int> index;
-  for (std::size_t i = 0; i < n; ++i)
-    index[settings[i].name] = static_cast<int>(i);
-  std::vector<int> parent(n, -1), depth(n, 0);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!settings[i].inside.empty()) parent[i] = index.at(settings[i].inside);
-  }
+BodyAssignment assign_bodies(const DeformationSettings& deformation, const OrganTable& organs,
+                             const Phantom& phantom, StageReport& report) {
+  const std::size_t n = organs.size();
+  std::vector<OrganMotion> motion = classify_organ_motion(deformation, organs);
   // The body of each organ: its topmost simulated ancestor-or-self (-1: none).
   std::vector<int> body_of(n, -1);
   for (std::size_t i = 0; i < n; ++i) {
-    for (int j = static_cast<int>(i); j >= 0; j = parent[static_cast<std::size_t>(j)]) {
+    for (int j = static_cast<int>(i); j >= 0; j = organs[static_cast<std::size_t>(j)].parent) {
       if (motion[static_cast<std::size_t>(j)] == OrganMotion::simulated) body_of[i] = j;
-      if (j != static_cast<int>(i)) ++depth[i];
     }
   }
   // A surface organ (no tet mesh) is simulated as a shell of its triangles; organs nested in it
@@ -51,8 +43,7 @@ BodyAssignment assign_bodies(const Scene& scene, const Phantom& phantom, StageRe
   for (std::size_t b = 0; b < n; ++b) {
     if (body_of[b] != static_cast<int>(b) || phantom.organs[b].solid) continue;
     if (shell_mesh(phantom.organs[b]) == nullptr) {
-      report.skipped.push_back(settings[b].name +
-                               ": a load acts on it but it has neither tets nor triangles");
+      report.skipped.push_back(organs[b].name + ": a load acts on it but it has neither tets nor triangles");
       for (std::size_t i = 0; i < n; ++i)
         if (body_of[i] == static_cast<int>(b)) body_of[i] = -1;
       continue;
@@ -60,11 +51,11 @@ BodyAssignment assign_bodies(const Scene& scene, const Phantom& phantom, StageRe
     for (std::size_t i = 0; i < n; ++i) {
       if (i == b || body_of[i] != static_cast<int>(b)) continue;
       body_of[i] = -1;
-      report.skipped.push_back(settings[i].name + ": inside the shell " + settings[b].name +
+      report.skipped.push_back(organs[i].name + ": inside the shell " + organs[b].name +
                                ", which has no interior to carry it; it stays in place");
     }
   }
-  return {std::move(motion), std::move(index), std::move(parent), std::move(depth), std::move(body_of)};
+  return {std::move(motion), std::move(body_of)};
 }
 
 int body_index(const std::vector<Body>& bodies, int organ) {
@@ -92,21 +83,20 @@ Embedding embed(const Phantom& phantom, const BodyAssignment& assignment, const 
   return body.locator->locate(x_mm);
 }
 
-void collect_deformations(const Scene& scene, const Phantom& phantom, const BodyAssignment& assignment,
+void collect_deformations(const OrganTable& organs, const Phantom& phantom, const BodyAssignment& assignment,
                           const std::vector<Body>& bodies, const Eigen::MatrixX3d& deformed_mm,
                           PhantomDeformation& result) {
-  const auto& settings = scene.anatomy.organs;
-  const std::size_t n = settings.size();
+  const std::size_t n = organs.size();
   for (const Body& body : bodies) {
     if (body.shell) continue; // the displacement fields come from solids' tets
     const TetMesh& mesh = *phantom.organs[static_cast<std::size_t>(body.organ)].solid;
-    result.bodies.push_back({settings[static_cast<std::size_t>(body.organ)].name, mesh.vertices,
+    result.bodies.push_back({organs[static_cast<std::size_t>(body.organ)].name, mesh.vertices,
                              deformed_mm.middleRows(body.first_vertex, mesh.vertices.rows()), mesh.tets});
   }
   for (std::size_t i = 0; i < n; ++i) {
     const Organ& organ = phantom.organs[i];
     OrganDeformation d;
-    d.organ = settings[i].name;
+    d.organ = organs[i].name;
     const Eigen::MatrixX3d surface = organ.surface ? organ.surface->rest_positions()
                                      : organ.sheet ? organ.sheet->vertices
                                                    : Eigen::MatrixX3d();
@@ -117,7 +107,7 @@ void collect_deformations(const Scene& scene, const Phantom& phantom, const Body
     } else {
       const Body& body = bodies[static_cast<std::size_t>(body_index(bodies, assignment.body_of[i]))];
       const bool is_body = body.organ == static_cast<int>(i);
-      d.moved_by = is_body ? "solver" : "embedded in " + settings[static_cast<std::size_t>(body.organ)].name;
+      d.moved_by = is_body ? "solver" : "embedded in " + organs[static_cast<std::size_t>(body.organ)].name;
       for (Eigen::Index v = 0; v < surface.rows(); ++v)
         d.surface_mm.row(v) =
             interpolate(embed(phantom, assignment, bodies, i, v, surface.row(v).transpose()), deformed_mm)

@@ -3,11 +3,12 @@
 #pragma once
 
 #include "anatomy/phantom.hpp"
+#include "core/organ_table.hpp"
 #include "core/stage_report.hpp"
 #include "geometry/tet_location.hpp"
-#include "scene/scene.hpp"
 #include "sim/deform_phantom.hpp"
 #include "sim/sim_plan.hpp"
+#include "sim/sim_settings.hpp"
 
 #include <Eigen/Core>
 
@@ -61,19 +62,18 @@ struct Body {
 /// The triangles a surface organ is simulated with: its sheet, or its patch base mesh.
 const TriangleMesh* shell_mesh(const Organ& organ);
 
-/// How the organs of the scene relate to the bodies (all per organ, scene order).
+/// How the organs relate to the bodies (all per organ, in the organ table's order; the nesting
+/// is the table's).
 struct BodyAssignment {
   std::vector<OrganMotion> motion;
-  std::map<std::string, int> index; ///< organ name -> index
-  std::vector<int> parent;          ///< the containing organ, -1 for an outermost organ
-  std::vector<int> depth;           ///< how many organs contain it
-  std::vector<int> body_of;         ///< the organ whose body moves it, -1 when no body does
+  std::vector<int> body_of; ///< the organ whose body moves it, -1 when no body does
 };
 
 /// The body of each organ: its topmost simulated ancestor-or-self. A surface organ (no tet
 /// mesh) is simulated as a shell of its triangles; organs nested in it have nothing to follow
 /// (no interior) and stay in place, which goes into `report` as skipped.
-BodyAssignment assign_bodies(const Scene& scene, const Phantom& phantom, StageReport& report);
+BodyAssignment assign_bodies(const DeformationSettings& deformation, const OrganTable& organs,
+                             const Phantom& phantom, StageReport& report);
 
 /// The index in `bodies` of the body of `organ` (-1: none).
 int body_index(const std::vector<Body>& bodies, int organ);
@@ -85,7 +85,7 @@ Embedding embed(const Phantom& phantom, const BodyAssignment& assignment, const 
 
 /// Every organ's vertices, and the solid bodies' tet meshes, at the solved positions `deformed_mm`
 /// (one row per model vertex) into `result`.
-void collect_deformations(const Scene& scene, const Phantom& phantom, const BodyAssignment& assignment,
+void collect_deformations(const OrganTable& organs, const Phantom& phantom, const BodyAssignment& assignment,
                           const std::vector<Body>& bodies, const Eigen::MatrixX3d& deformed_mm,
                           PhantomDeformation& result);
 

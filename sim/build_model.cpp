@@ -34,49 +34,45 @@ void add_enclosed_volume(ElasticModel& model, const PatchSurface& surface, int f
 }
 
 /// A surface organ b as a shell of its triangles (and its enclosed volume when asked).
-Body add_shell_body(const Scene& scene, const Organ& organ, std::size_t b, ElasticModel& model,
-                    StageReport& report) {
-  const auto& settings = scene.anatomy.organs;
+Body add_shell_body(const DeformationSettings& deformation, const OrganTable& organs, const Organ& organ,
+                    std::size_t b, ElasticModel& model, StageReport& report) {
   const TriangleMesh& sheet = *shell_mesh(organ);
-  const MaterialSettings* material = scene.deformation.find_material(settings[b].material);
+  const MaterialSettings* material = deformation.find_material(deformation.organs[b].material);
   if (material == nullptr)
-    throw InputError(settings[b].name + ": material '" + settings[b].material + "' is not defined");
+    throw InputError(organs[b].name + ": material '" + deformation.organs[b].material + "' is not defined");
   Body body;
   body.organ = static_cast<int>(b);
   body.shell = true;
   body.vertex_count = sheet.vertices.rows();
   body.first_vertex =
       add_sheet(model, k_mm * sheet.vertices, sheet.faces, material->youngs_modulus_Pa,
-                material->poisson_ratio, material->density_kg_m3, k_mm * settings[b].thickness_mm);
+                material->poisson_ratio, material->density_kg_m3, k_mm * deformation.organs[b].thickness_mm);
   report.modelled.push_back(
-      settings[b].name + ": solved as a shell of " + std::to_string(sheet.vertices.rows()) +
-      " vertices and " + std::to_string(sheet.faces.rows()) + " triangles (" +
-      format_number(settings[b].thickness_mm) +
+      organs[b].name + ": solved as a shell of " + std::to_string(sheet.vertices.rows()) + " vertices and " +
+      std::to_string(sheet.faces.rows()) + " triangles (" +
+      format_number(deformation.organs[b].thickness_mm) +
       " mm thick: as-rigid-as-possible membrane per triangle, bending per interior edge "
       "toward its rest curvature)");
-  if (settings[b].enclosed_volume_tolerance) {
+  if (deformation.organs[b].enclosed_volume_tolerance) {
     if (!organ.surface) {
-      throw InputError(settings[b].name +
+      throw InputError(organs[b].name +
                        ": enclosed_volume_tolerance needs a closed surface, but this organ is an open sheet");
     }
-    const double tolerance = *settings[b].enclosed_volume_tolerance;
+    const double tolerance = *deformation.organs[b].enclosed_volume_tolerance;
     add_enclosed_volume(model, *organ.surface, body.first_vertex, *material, tolerance);
     report.modelled.push_back(
-        settings[b].name + ": enclosed volume kept within " + format_number(100.0 * tolerance) +
-        " % of rest (patch volume constraint, bulk modulus of " + settings[b].material + ")");
+        organs[b].name + ": enclosed volume kept within " + format_number(100.0 * tolerance) +
+        " % of rest (patch volume constraint, bulk modulus of " + deformation.organs[b].material + ")");
   }
   return body;
 }
 
 /// A solid organ b as a body of its tets, each with the material of the innermost organ of the
 /// body holding its centroid; its boundary is held when it lies inside another organ.
-Body add_solid_body(const Scene& scene, const Phantom& phantom, const BodyAssignment& assignment,
-                    std::size_t b, BodyModel& built, StageReport& report) {
-  const auto& settings = scene.anatomy.organs;
-  const std::size_t n = settings.size();
+Body add_solid_body(const DeformationSettings& deformation, const OrganTable& organs, const Phantom& phantom,
+                    const BodyAssignment& assignment, std::size_t b, BodyModel& built, StageReport& report) {
+  const std::size_t n = organs.size();
   const std::vector<int>& body_of = assignment.body_of;
-  const std::vector<int>& depth = assignment.depth;
-  const std::vector<int>& parent = assignment.parent;
   ElasticModel& model = built.model;
   const Organ& organ = phantom.organs[b];
   const TetMesh& mesh = *organ.solid;
@@ -89,19 +85,19 @@ Body add_solid_body(const Scene& scene, const Phantom& phantom, const BodyAssign
       centroid += 0.25 * mesh.vertices.row(mesh.tets(t, k)).transpose();
     std::size_t holder = b;
     for (std::size_t i = 0; i < n; ++i) {
-      if (body_of[i] == static_cast<int>(b) && depth[i] > depth[holder] &&
+      if (body_of[i] == static_cast<int>(b) && organs[i].depth > organs[holder].depth &&
           phantom.organs[i].target->value(centroid) > 0.0) {
         holder = i;
       }
     }
-    const MaterialSettings* material = scene.deformation.find_material(settings[holder].material);
+    const MaterialSettings* material = deformation.find_material(deformation.organs[holder].material);
     if (material == nullptr) {
-      throw InputError(settings[holder].name + ": material '" + settings[holder].material +
+      throw InputError(organs[holder].name + ": material '" + deformation.organs[holder].material +
                        "' is not defined");
     }
     materials.push_back(
         {lame_parameters(material->youngs_modulus_Pa, material->poisson_ratio), material->density_kg_m3});
-    ++tets_per_organ[settings[holder].name];
+    ++tets_per_organ[organs[holder].name];
   }
   Body body;
   body.organ = static_cast<int>(b);
@@ -109,40 +105,39 @@ Body add_solid_body(const Scene& scene, const Phantom& phantom, const BodyAssign
   body.vertex_count = mesh.vertices.rows();
   body.locator = std::make_unique<TetLocator>(mesh.vertices, mesh.tets, body.first_vertex);
   std::ostringstream line;
-  line << settings[b].name << ": solved as one body of " << mesh.vertices.rows() << " vertices and "
+  line << organs[b].name << ": solved as one body of " << mesh.vertices.rows() << " vertices and "
        << mesh.tets.rows() << " tets (materials by tet:";
   for (const auto& [name, count] : tets_per_organ)
     line << ' ' << name << ' ' << count;
   line << ")";
   report.modelled.push_back(line.str());
-  if (parent[b] >= 0) {
+  if (organs[b].parent >= 0) {
     for (Eigen::Index f = 0; f < mesh.boundary_faces.rows(); ++f)
       for (int k = 0; k < 3; ++k)
         built.held.push_back(body.first_vertex + mesh.boundary_faces(f, k));
-    report.modelled.push_back(settings[b].name + ": boundary held by " +
-                              settings[static_cast<std::size_t>(parent[b])].name +
+    report.modelled.push_back(organs[b].name + ": boundary held by " +
+                              organs[static_cast<std::size_t>(organs[b].parent)].name +
                               " (it does not move; no slip)");
   }
   for (std::size_t i = 0; i < n; ++i) {
     if (body_of[i] == static_cast<int>(b) && i != b)
-      report.modelled.push_back(settings[i].name + ": embedded in " + settings[b].name +
-                                ", follows its tets");
+      report.modelled.push_back(organs[i].name + ": embedded in " + organs[b].name + ", follows its tets");
   }
   return body;
 }
 
 } // namespace
 
-BodyModel build_body_model(const Scene& scene, const Phantom& phantom, const BodyAssignment& assignment,
-                           StageReport& report) {
+BodyModel build_body_model(const DeformationSettings& deformation, const OrganTable& organs,
+                           const Phantom& phantom, const BodyAssignment& assignment, StageReport& report) {
   BodyModel built;
   for (std::size_t b = 0; b < assignment.body_of.size(); ++b) {
     if (assignment.body_of[b] != static_cast<int>(b)) continue;
     const Organ& organ = phantom.organs[b];
     if (!organ.solid) {
-      built.bodies.push_back(add_shell_body(scene, organ, b, built.model, report));
+      built.bodies.push_back(add_shell_body(deformation, organs, organ, b, built.model, report));
     } else {
-      built.bodies.push_back(add_solid_body(scene, phantom, assignment, b, built, report));
+      built.bodies.push_back(add_solid_body(deformation, organs, phantom, assignment, b, built, report));
     }
   }
   return built;
@@ -157,24 +152,22 @@ double nominal_stiffness(const ElasticModel& model) {
   return model.vertex_count() > 0 ? diagonal / static_cast<double>(model.vertex_count()) : 0.0;
 }
 
-void add_collisions(const Scene& scene, const Phantom& phantom, const std::vector<Body>& bodies,
-                    double nominal_stiffness, ElasticModel& model, StageReport& report) {
+void add_collisions(const std::vector<CollisionSettings>& collisions, const OrganTable& organs,
+                    const Phantom& phantom, const std::vector<Body>& bodies, double nominal_stiffness,
+                    ElasticModel& model, StageReport& report) {
   std::map<int, int> surface_of_body;
-  for (std::size_t i = 0; i < scene.deformation.collisions.size(); ++i) {
-    const std::vector<std::string>& names = scene.deformation.collisions[i].organs;
+  for (std::size_t i = 0; i < collisions.size(); ++i) {
+    const std::vector<std::string>& names = collisions[i].organs;
     const std::string key = "deformation.collisions[" + std::to_string(i) + "].organs";
     std::array<int, 2> pair{};
     for (std::size_t k = 0; k < 2 && k < names.size(); ++k) {
       const auto body = std::find_if(bodies.begin(), bodies.end(), [&](const Body& b) {
-        return scene.anatomy.organs[static_cast<std::size_t>(b.organ)].name == names[k];
+        return organs[static_cast<std::size_t>(b.organ)].name == names[k];
       });
       if (body == bodies.end()) {
-        throw InputError(
-            Diagnostic{scene.location_of(key), key,
-                       "expected organs simulated as bodies of their own (loaded, not fixed, not "
-                       "inside another simulated organ), found '" +
-                           names[k] + "'"}
-                .format());
+        throw SettingError(key, "expected organs simulated as bodies of their own (loaded, not fixed, not "
+                                "inside another simulated organ), found '" +
+                                    names[k] + "'");
       }
       const auto b = static_cast<int>(body - bodies.begin());
       if (!surface_of_body.count(b)) {
@@ -185,10 +178,8 @@ void add_collisions(const Scene& scene, const Phantom& phantom, const std::vecto
         else if (organ.surface)
           faces = organ.surface->base_mesh().faces;
         else
-          throw InputError(
-              Diagnostic{scene.location_of(key), key,
-                         "expected organs with a closed surface, found the open sheet '" + names[k] + "'"}
-                  .format());
+          throw SettingError(key, "expected organs with a closed surface, found the open sheet '" + names[k] +
+                                      "'");
         ContactSurface surface;
         for (Eigen::Index f = 0; f < faces.rows(); ++f) {
           surface.triangles.push_back({body->first_vertex + faces(f, 0), body->first_vertex + faces(f, 1),
@@ -208,7 +199,7 @@ void add_collisions(const Scene& scene, const Phantom& phantom, const std::vecto
   }
   if (model.contact_pairs.empty()) return;
   if (model.contact_stiffness_N_m == 0.0) model.contact_stiffness_N_m = 1e4 * nominal_stiffness;
-  for (const CollisionSettings& c : scene.deformation.collisions) {
+  for (const CollisionSettings& c : collisions) {
     report.modelled.push_back("collision of " + c.organs[0] + " and " + c.organs[1] +
                               ": a vertex of either inside the other's surface is pushed out to the closest "
                               "point there, the triangle it lies on pushed back (penalty " +

@@ -21,8 +21,8 @@ struct BodyModel {
 /// centroid; a surface organ as a shell of its triangles (with its enclosed volume kept when the
 /// scene asks). What was modelled goes into `report`.
 /// @throws InputError for an undefined material, or an enclosed volume asked of an open sheet
-BodyModel build_body_model(const Scene& scene, const Phantom& phantom, const BodyAssignment& assignment,
-                           StageReport& report);
+BodyModel build_body_model(const DeformationSettings& deformation, const OrganTable& organs,
+                           const Phantom& phantom, const BodyAssignment& assignment, StageReport& report);
 
 /// The mean diagonal of the model's elastic matrix per vertex (N/m): the scale of the stiff
 /// penalties (displacement springs, contacts), 10^4 times this.
@@ -30,9 +30,10 @@ double nominal_stiffness(const ElasticModel& model);
 
 /// The contact surfaces of the scene's collisions (each organ's closed surface: a solid body's
 /// boundary faces, a closed shell's triangles) and their pairs.
-/// @throws InputError naming the scene field when an organ of a pair is not simulated as a body
-/// of its own or has no closed surface
-void add_collisions(const Scene& scene, const Phantom& phantom, const std::vector<Body>& bodies,
-                    double nominal_stiffness, ElasticModel& model, StageReport& report);
+/// @throws SettingError naming the pair's key path when an organ of a pair is not simulated as a
+/// body of its own or has no closed surface
+void add_collisions(const std::vector<CollisionSettings>& collisions, const OrganTable& organs,
+                    const Phantom& phantom, const std::vector<Body>& bodies, double nominal_stiffness,
+                    ElasticModel& model, StageReport& report);
 
 } // namespace phantasm::sim_detail

@@ -7,25 +7,25 @@
 
 namespace phantasm {
 
-PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, StageReport& report,
-                                  Reporter& reporter) {
+PhantomDeformation deform_phantom(const DeformationSettings& deformation, const OrganTable& organs,
+                                  const Phantom& phantom, StageReport& report, Reporter& reporter) {
   using namespace sim_detail;
-  const BodyAssignment assignment = assign_bodies(scene, phantom, report);
-  BodyModel built = build_body_model(scene, phantom, assignment, report);
+  const BodyAssignment assignment = assign_bodies(deformation, organs, phantom, report);
+  BodyModel built = build_body_model(deformation, organs, phantom, assignment, report);
   ElasticModel& model = built.model;
   PhantomDeformation result;
   if (built.bodies.empty()) {
     report.skipped.push_back("the solve: no organ is moved by a load");
   }
   const double stiffness = nominal_stiffness(model);
-  Loads loads = add_loads(scene, phantom, assignment, built, stiffness, report);
+  Loads loads = add_loads(deformation.loads, organs, phantom, assignment, built, stiffness, report);
   hold_boundaries(loads.pushes, built, report);
-  add_obstacles(scene, built.bodies, stiffness, model, report);
-  add_collisions(scene, phantom, built.bodies, stiffness, model, report);
+  add_obstacles(deformation.obstacles, built.bodies, stiffness, model, report);
+  add_collisions(deformation.collisions, organs, phantom, built.bodies, stiffness, model, report);
 
   Eigen::MatrixX3d p = model.rest_positions_m;
-  if (!built.bodies.empty()) solve_frames(scene, model, loads, p, result, report, reporter);
-  collect_deformations(scene, phantom, assignment, built.bodies, p / k_mm, result);
+  if (!built.bodies.empty()) solve_frames(deformation, model, loads, p, result, report, reporter);
+  collect_deformations(organs, phantom, assignment, built.bodies, p / k_mm, result);
   return result;
 }
 

@@ -1,14 +1,15 @@
 #pragma once
 
 #include "anatomy/phantom.hpp"
+#include "core/organ_table.hpp"
 #include "core/progress.hpp"
 #include "core/stage_report.hpp"
-#include "scene/scene.hpp"
 #include "sim/phantom_deformation.hpp"
+#include "sim/sim_settings.hpp"
 
 namespace phantasm {
 
-/// Deforms the phantom as the scene says (docs/method.md sections 2-3) [choices documented in
+/// Deforms the phantom as the settings say (docs/method.md sections 2-3) [choices documented in
 /// docs/deformation.md]: each simulated organ whose container does not move becomes a body
 /// (its tet mesh; each tet takes the material of the innermost organ holding its centroid);
 /// organs nested in a body are embedded in its tets; a body inside a fixed or unmoving organ
@@ -16,12 +17,15 @@ namespace phantasm {
 /// the organ's surface points in its region to their displaced places by stiff springs.
 /// Quasi-static mode solves for equilibrium (in `load_steps` increments); dynamic mode steps
 /// `frames` times and keeps the last frame. What was modelled goes into `report`.
-/// @throws InputError when a body is held by nothing in quasi-static mode, a position-based
-/// solver (xpbd, gauss_seidel_pbd) is asked for in quasi-static mode, a material is not
-/// defined, an enclosed volume is asked of an open sheet, an organ of a collision pair is not a
-/// body of its own with a closed surface, or a solve goes non-finite
-PhantomDeformation deform_phantom(const Scene& scene, const Phantom& phantom, StageReport& report,
-                                  Reporter& reporter);
+/// @param deformation mode, solver, loads, obstacles, collisions, materials, organs' mechanics
+/// @param organs the organ table, in the phantom's organ order
+/// @throws SettingError naming the setting (a collision of organs that are not bodies of their
+/// own with a closed surface, a displacement load on an organ that is not simulated, a
+/// position-based solver in quasi-static mode)
+/// @throws InputError when a body is held by nothing in quasi-static mode, a material is not
+/// defined, an enclosed volume is asked of an open sheet, or a solve goes non-finite
+PhantomDeformation deform_phantom(const DeformationSettings& deformation, const OrganTable& organs,
+                                  const Phantom& phantom, StageReport& report, Reporter& reporter);
 
 /// The phantom with every organ moved to its deformed place (patches follow their base).
 Phantom deformed_phantom(const Phantom& phantom, const PhantomDeformation& deformation);

@@ -27,31 +27,28 @@ struct FrameSolver {
   std::unique_ptr<LocalGlobalSolver> local_global; ///< local_global and jacobi_chebyshev
 };
 
-/// @throws InputError for a position-based solver in quasi-static mode, or a local/global
-/// matrix nothing holds
-FrameSolver make_frame_solver(const Scene& scene, const ElasticModel& model) {
+/// @throws SettingError for a position-based solver in quasi-static mode (which the scene's
+/// validation rejects first)
+/// @throws InputError for a local/global matrix nothing holds
+FrameSolver make_frame_solver(const DeformationSettings& deformation, const ElasticModel& model) {
   FrameSolver s;
-  const SolverSettings& solver = scene.deformation.solver;
+  const SolverSettings& solver = deformation.solver;
   s.settings = &solver;
   s.jacobi = solver.method == SolverMethod::jacobi_chebyshev;
   s.position_based = solver.method == SolverMethod::xpbd || solver.method == SolverMethod::gauss_seidel_pbd;
-  s.dynamic = scene.deformation.mode == DeformationMode::dynamic;
+  s.dynamic = deformation.mode == DeformationMode::dynamic;
   if (s.position_based && !s.dynamic) {
-    const std::string key = "deformation.solver.method";
-    throw InputError(Diagnostic{
-        scene.location_of(key), key,
-        "expected local_global, jacobi_chebyshev or newton for a quasi_static scene (" +
-            std::string(to_string(solver.method)) + " steps in time: it needs mode dynamic), found " +
-            std::string(to_string(solver.method))}
-                         .format());
+    throw SettingError("deformation.solver.method",
+                       std::string(to_string(solver.method)) +
+                           " steps in time; it cannot solve for a static equilibrium");
   }
   s.stop.max_iterations = solver.max_iterations;
   s.stop.relative_energy_decrease = solver.relative_energy_tolerance;
   s.stop.position_change_m = k_mm * solver.position_tolerance_mm;
-  s.h = scene.deformation.time_step_s;
+  s.h = deformation.time_step_s;
   // Quasi-static solves apply the loads in load_steps equal increments, each starting from the
   // last; dynamic mode makes one solve per frame.
-  s.frames = s.dynamic ? scene.deformation.frames : scene.deformation.load_steps;
+  s.frames = s.dynamic ? deformation.frames : deformation.load_steps;
   try {
     if (solver.method == SolverMethod::local_global || s.jacobi)
       s.local_global =
@@ -65,7 +62,8 @@ FrameSolver make_frame_solver(const Scene& scene, const ElasticModel& model) {
 }
 
 /// The displacement loads' targets and the obstacles where they are at frame `frame`.
-void move_loads(const Scene& scene, const FrameSolver& s, int frame, Loads& loads, ElasticModel& model) {
+void move_loads(const DeformationSettings& deformation, const FrameSolver& s, int frame, Loads& loads,
+                ElasticModel& model) {
   const double t = (frame + 1) * s.h;
   const double increment = static_cast<double>(frame + 1) / s.frames;
   for (PushedPoints& push : loads.pushes) {
@@ -75,7 +73,7 @@ void move_loads(const Scene& scene, const FrameSolver& s, int frame, Loads& load
   }
   if (!model.obstacles.empty()) {
     place_obstacles(
-        scene,
+        deformation.obstacles,
         [&](const ObstacleSettings& o) { return s.dynamic ? profile(o.motion, o.period_s, t) : increment; },
         model);
   }
@@ -144,16 +142,16 @@ double profile(MotionProfile motion, double period_s, double t) {
   return 1.0;
 }
 
-void solve_frames(const Scene& scene, ElasticModel& model, Loads& loads, Eigen::MatrixX3d& p,
-                  PhantomDeformation& result, StageReport& report, Reporter& reporter) {
-  FrameSolver s = make_frame_solver(scene, model);
+void solve_frames(const DeformationSettings& deformation, ElasticModel& model, Loads& loads,
+                  Eigen::MatrixX3d& p, PhantomDeformation& result, StageReport& report, Reporter& reporter) {
+  FrameSolver s = make_frame_solver(deformation, model);
   const double h = s.h;
   const Eigen::MatrixX3d& acceleration = loads.acceleration;
   if (!s.dynamic) model.external_forces_N = model.masses_kg.asDiagonal() * acceleration;
   Eigen::MatrixX3d velocity = Eigen::MatrixX3d::Zero(p.rows(), 3);
   ProgressBar progress(reporter, "deform", static_cast<std::size_t>(s.frames));
   for (int frame = 0; frame < s.frames; ++frame) {
-    move_loads(scene, s, frame, loads, model);
+    move_loads(deformation, s, frame, loads, model);
     StepInertia inertia;
     if (s.dynamic) {
       inertia.weight = 1.0 / (h * h);

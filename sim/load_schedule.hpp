@@ -12,14 +12,14 @@ namespace phantasm::sim_detail {
 /// How far a displacement load or an obstacle has come at time t (dynamic mode), 0..1.
 double profile(MotionProfile motion, double period_s, double t);
 
-/// Solves the model frame by frame as the scene says: quasi-static mode applies the loads in
+/// Solves the model frame by frame as the settings say: quasi-static mode applies the loads in
 /// load_steps equal increments, each solve starting from the last; dynamic mode steps `frames`
 /// times with the loads and obstacles on their motion profiles. p (metres, one row per model
 /// vertex) goes from rest to the last frame's positions; every frame's SolveReport, the load
 /// and obstacle errors go into `result`, what was solved into `report`.
-/// @throws InputError when the scene asks for a position-based solver in quasi-static mode,
-/// when nothing holds the model in quasi-static mode, or when a solve goes non-finite
-void solve_frames(const Scene& scene, ElasticModel& model, Loads& loads, Eigen::MatrixX3d& p,
-                  PhantomDeformation& result, StageReport& report, Reporter& reporter);
+/// @throws SettingError for a position-based solver in quasi-static mode
+/// @throws InputError when nothing holds the model in quasi-static mode, or when a solve goes non-finite
+void solve_frames(const DeformationSettings& deformation, ElasticModel& model, Loads& loads,
+                  Eigen::MatrixX3d& p, PhantomDeformation& result, StageReport& report, Reporter& reporter);
 
 } // namespace phantasm::sim_detail

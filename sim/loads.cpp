@@ -2,6 +2,7 @@
 // the held boundary released near them, and obstacles placed at rest or moved.
 #include "sim/loads.hpp"
 
+#include "core/error.hpp"
 #include "core/format.hpp"
 
 #include <Eigen/Geometry>
@@ -17,10 +18,10 @@ Eigen::Vector3d loaded_position_m(const LoadSettings& load, const Eigen::Vector3
   return centre_m + turn * (rest_m - centre_m) + amount * k_mm * load.displacement_mm;
 }
 
-Loads add_loads(const Scene& scene, const Phantom& phantom, const BodyAssignment& assignment,
-                BodyModel& built, double nominal_stiffness, StageReport& report) {
-  const auto& settings = scene.anatomy.organs;
-  const std::size_t n = settings.size();
+Loads add_loads(const std::vector<LoadSettings>& load_settings, const OrganTable& organs,
+                const Phantom& phantom, const BodyAssignment& assignment, BodyModel& built,
+                double nominal_stiffness, StageReport& report) {
+  const std::size_t n = organs.size();
   const std::vector<int>& body_of = assignment.body_of;
   const std::vector<Body>& bodies = built.bodies;
   ElasticModel& model = built.model;
@@ -28,13 +29,14 @@ Loads add_loads(const Scene& scene, const Phantom& phantom, const BodyAssignment
   Eigen::MatrixX3d& acceleration = loads.acceleration;
   std::vector<PushedPoints>& pushes = loads.pushes;
   acceleration = Eigen::MatrixX3d::Zero(model.vertex_count(), 3);
-  for (const LoadSettings& load : scene.deformation.loads) {
+  for (std::size_t k = 0; k < load_settings.size(); ++k) {
+    const LoadSettings& load = load_settings[k];
     if (load.kind == LoadKind::gravity) {
       for (const Body& body : bodies) {
         bool acts = load.organs.empty();
         for (std::size_t i = 0; i < n; ++i)
           if (body_of[i] == body.organ &&
-              std::find(load.organs.begin(), load.organs.end(), settings[i].name) != load.organs.end())
+              std::find(load.organs.begin(), load.organs.end(), organs[i].name) != load.organs.end())
             acts = true;
         if (!acts) continue;
         acceleration.middleRows(body.first_vertex, body.vertex_count).rowwise() =
@@ -44,7 +46,12 @@ Loads add_loads(const Scene& scene, const Phantom& phantom, const BodyAssignment
                                 " m/s^2 on the bodies' lumped masses");
       continue;
     }
-    const std::size_t i = static_cast<std::size_t>(assignment.index.at(load.organ));
+    const int organ = organs.index_of(load.organ);
+    if (organ < 0) {
+      throw SettingError("deformation.loads[" + std::to_string(k) + "].organ",
+                         "expected an organ of the phantom, found '" + load.organ + "'");
+    }
+    const std::size_t i = static_cast<std::size_t>(organ);
     if (body_of[i] < 0 || (!phantom.organs[i].surface && !phantom.organs[i].sheet)) {
       report.skipped.push_back("displacement of " + load.organ +
                                ": the organ is not part of a simulated body");
@@ -113,15 +120,15 @@ void hold_boundaries(const std::vector<PushedPoints>& pushes, BodyModel& built, 
   }
 }
 
-void add_obstacles(const Scene& scene, const std::vector<Body>& bodies, double nominal_stiffness,
-                   ElasticModel& model, StageReport& report) {
+void add_obstacles(const std::vector<ObstacleSettings>& obstacles, const std::vector<Body>& bodies,
+                   double nominal_stiffness, ElasticModel& model, StageReport& report) {
   // Obstacles act on every free vertex of every body, by a penalty as stiff as the displacement
   // loads' springs.
-  if (!scene.deformation.obstacles.empty() && !bodies.empty()) {
+  if (!obstacles.empty() && !bodies.empty()) {
     model.contact_stiffness_N_m = 1e4 * nominal_stiffness;
     place_obstacles(
-        scene, [](const ObstacleSettings&) { return 0.0; }, model);
-    for (const ObstacleSettings& o : scene.deformation.obstacles) {
+        obstacles, [](const ObstacleSettings&) { return 0.0; }, model);
+    for (const ObstacleSettings& o : obstacles) {
       report.modelled.push_back(
           std::string(to_string(o.shape)) + " obstacle " +
           (o.shape == ObstacleShape::sphere
@@ -131,15 +138,15 @@ void add_obstacles(const Scene& scene, const std::vector<Body>& bodies, double n
           ", moved by " + format_vector(o.displacement_mm) + " mm; contacts by a penalty of " +
           format_number(model.contact_stiffness_N_m) + " N/m (10^4 x the mean elastic stiffness)");
     }
-  } else if (!scene.deformation.obstacles.empty()) {
+  } else if (!obstacles.empty()) {
     report.skipped.push_back("obstacles: no organ is simulated, nothing can touch them");
   }
 }
 
-void place_obstacles(const Scene& scene, const std::function<double(const ObstacleSettings&)>& amount_of,
-                     ElasticModel& model) {
+void place_obstacles(const std::vector<ObstacleSettings>& obstacles,
+                     const std::function<double(const ObstacleSettings&)>& amount_of, ElasticModel& model) {
   model.obstacles.clear();
-  for (const ObstacleSettings& obstacle : scene.deformation.obstacles) {
+  for (const ObstacleSettings& obstacle : obstacles) {
     Obstacle o;
     o.shape = obstacle.shape == ObstacleShape::sphere ? Obstacle::Shape::sphere : Obstacle::Shape::half_space;
     o.point_m = k_mm * (obstacle.point_mm + amount_of(obstacle) * obstacle.displacement_mm);

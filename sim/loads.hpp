@@ -32,8 +32,9 @@ struct Loads {
 /// `nominal_stiffness` from the organ's surface points in its region (embedded in their body) to
 /// their displaced places, added to `built.model.points` at full displacement. Loads that reach
 /// no body go into `report` as skipped.
-Loads add_loads(const Scene& scene, const Phantom& phantom, const BodyAssignment& assignment,
-                BodyModel& built, double nominal_stiffness, StageReport& report);
+Loads add_loads(const std::vector<LoadSettings>& load_settings, const OrganTable& organs,
+                const Phantom& phantom, const BodyAssignment& assignment, BodyModel& built,
+                double nominal_stiffness, StageReport& report);
 
 /// Fixes the held boundary vertices (`built.held`) in the model, except those within 1.5 region
 /// radii of a displacement load's centre.
@@ -41,12 +42,12 @@ void hold_boundaries(const std::vector<PushedPoints>& pushes, BodyModel& built, 
 
 /// The scene's obstacles at rest in the model, with a contact penalty of 10^4 x
 /// `nominal_stiffness` (none without bodies: then they go into `report` as skipped).
-void add_obstacles(const Scene& scene, const std::vector<Body>& bodies, double nominal_stiffness,
-                   ElasticModel& model, StageReport& report);
+void add_obstacles(const std::vector<ObstacleSettings>& obstacles, const std::vector<Body>& bodies,
+                   double nominal_stiffness, ElasticModel& model, StageReport& report);
 
 /// Replaces the model's obstacles by the scene's, each moved by `amount_of` it times its
 /// displacement.
-void place_obstacles(const Scene& scene, const std::function<double(const ObstacleSettings&)>& amount_of,
-                     ElasticModel& model);
+void place_obstacles(const std::vector<ObstacleSettings>& obstacles,
+                     const std::function<double(const ObstacleSettings&)>& amount_of, ElasticModel& model);
 
 } // namespace phantasm::sim_detail
