@@ -95,7 +95,7 @@ void build_solid(Organ& organ, const AnatomySettings& anatomy, std::size_t index
   // The surface area of a fine plain mesh of the target sets the facet size for the base size:
   // an icosphere cast from the centre of a star-shaped target, the extracted surface of another.
   const TriangleMesh probe = [&] {
-    if (!target.star_shaped()) return surface_base_mesh(target, 5120, organ_seed(scene.seed, index));
+    if (!target.star_shaped()) return surface_base_mesh(target, 5120, organ_seed(anatomy.seed, index));
     TriangleMesh m = unit_icosphere(4);
     for (Eigen::Index v = 0; v < m.vertex_count(); ++v)
       m.vertices.row(v) = target.ray_from_center(m.vertex(v)).transpose();

@@ -4,6 +4,7 @@
 #include "anatomy/patch_fit.hpp"
 #include "anatomy/phantom.hpp"
 #include "anatomy/surface_extraction.hpp"
+#include "scene/scene.hpp"
 #include "tests/support/files.hpp"
 
 #include <gtest/gtest.h>
@@ -124,7 +125,7 @@ TEST(SurfaceBaseMesh, ATorusFromALabelVolumeBecomesAnOrganOfGenusOne) {
   files["ring"].label_grid = grid;
   files["ring"].labels = labels;
   Reporter quiet = Reporter::silent();
-  const Phantom phantom = build_phantom(*loaded.scene, files, quiet);
+  const Phantom phantom = build_phantom(loaded.scene->anatomy, files, quiet);
   const Organ& organ = *phantom.find("ring");
   std::printf("ring: %ld patches, fit Hausdorff %.3f mm, volume %.1f ml (torus %.1f ml)\n",
               static_cast<long>(organ.surface->patch_count()), organ.fit.hausdorff_mm,

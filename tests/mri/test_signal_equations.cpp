@@ -5,6 +5,7 @@
 
 #include "mri/signal_equations.hpp"
 #include "mri/tissue_parameters.hpp"
+#include "scene/scene.hpp"
 
 #include <gtest/gtest.h>
 
@@ -124,7 +125,7 @@ TEST(SignalEquations, ShippedHeadT2wAndFlairShowGreyWhiteContrast) {
   ASSERT_TRUE(loaded.scene);
   Scene& scene = *loaded.scene;
   auto find = [&](const char* name) -> const SequenceSettings& {
-    for (const SequenceSettings& s : scene.sequences)
+    for (const SequenceSettings& s : scene.mri.sequences)
       if (s.name == name) return s;
     throw std::runtime_error(std::string("head.yaml has no sequence ") + name);
   };
@@ -134,8 +135,8 @@ TEST(SignalEquations, ShippedHeadT2wAndFlairShowGreyWhiteContrast) {
   ASSERT_EQ(flair.kind, SequenceKind::inversion_recovery);
   for (double field : {1.5, 3.0}) {
     SCOPED_TRACE(field);
-    scene.field_strength_T = field;
-    const auto parameters = resolve_tissue_parameters(scene);
+    scene.mri.field_strength_T = field;
+    const auto parameters = resolve_tissue_parameters(scene.mri, scene.organs);
     auto signal = [&](const SequenceSettings& s, const char* tissue) {
       const TissueParameters& p = parameters.at(tissue);
       return std::abs(sequence_signal(s, {*p.PD, *p.T1_ms, *p.T2_ms, *p.T2_ms}));

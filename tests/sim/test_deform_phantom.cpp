@@ -97,9 +97,9 @@ Scene free_bar() {
 TEST(DeformPhantom, TheBarSceneHoldsOneEndAndTwistsTheOther) {
   const Scene scene = load("data-synthetic/bar.yaml");
   Reporter quiet = Reporter::silent();
-  const Phantom phantom = build_phantom(scene, {}, quiet);
+  const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
   StageReport report;
-  const PhantomDeformation d = deform_phantom(scene, phantom, report, quiet);
+  const PhantomDeformation d = deform_phantom(scene.deformation, scene.organs, phantom, report, quiet);
   EXPECT_EQ(d.organs[0].moved_by, "solver");
   EXPECT_LT(d.attachment_error_mm, 0.05);
   const Eigen::MatrixX3d& rest = phantom.organs[0].solid->vertices;

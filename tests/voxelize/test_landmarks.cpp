@@ -38,9 +38,9 @@ double clearance(const Phantom& phantom, const std::string& organ, const Eigen::
 TEST(OrganLandmarks, DeepestPointsLieInTheirOrgansOwnMaterialInBothStates) {
   const Scene scene = load("tests/data/scenes/small-head.yaml");
   Reporter quiet = Reporter::silent();
-  const Phantom phantom = build_phantom(scene, {}, quiet);
+  const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
   StageReport report;
-  const PhantomDeformation d = deform_phantom(scene, phantom, report, quiet);
+  const PhantomDeformation d = deform_phantom(scene.deformation, scene.organs, phantom, report, quiet);
   const Phantom moved = deformed_phantom(phantom, d);
   const DeformationMap map(d.bodies, 4.0);
   const std::vector<Landmark> landmarks = organ_landmarks(phantom, &d, &map);
