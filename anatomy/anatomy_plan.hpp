@@ -1,3 +1,5 @@
+// The anatomy stage's plan: what it will build for a scene, the analytic bounds of shapes and
+// organs' nesting depth, which the pipeline's plan and the voxelizer's field-of-view test read.
 #pragma once
 
 #include "anatomy/anatomy_settings.hpp"

@@ -1,3 +1,5 @@
+// Target shapes given implicitly (positive inside, RAS mm): ellipsoid, superquadric, box, torus,
+// horseshoe, folded spheroid, ellipsoidal shell. The patch fit and tet mesher sample them.
 #pragma once
 
 #include <Eigen/Core>

@@ -1,3 +1,5 @@
+// Signed and unsigned distances to a triangle mesh, and the symmetric Hausdorff and mean distance
+// between two surfaces, with which patch fits are measured against their targets.
 #pragma once
 
 #include "anatomy/triangle_mesh.hpp"

@@ -1,3 +1,5 @@
+// The anatomy's result: Organ (target shape, patch surface or sheet, tet mesh), ShapeData read
+// from files, and Phantom, the list of organs every later stage reads.
 #pragma once
 
 #include "anatomy/implicit_shape.hpp"

@@ -1,3 +1,5 @@
+// Fitting a patch surface to an implicit target: base mesh (icosphere or extracted surface),
+// vertex placement, least-squares bumps, volume correction, and the fit's measured accuracy.
 #pragma once
 
 #include "anatomy/implicit_shape.hpp"

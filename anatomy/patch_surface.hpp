@@ -1,3 +1,5 @@
+// PatchSurface, the free-form surface of a closed organ: each base triangle carries bumps in its
+// own frame, so the surface follows its base vertices, the only thing the simulation moves.
 #pragma once
 
 #include "anatomy/triangle_mesh.hpp"

@@ -1,3 +1,5 @@
+// Building the anatomy of a scene (build_phantom): seeded variation, target shapes from settings,
+// meshes and label volumes, tet meshes and fitted patch surfaces. Entry point of the stage.
 #pragma once
 
 #include "anatomy/anatomy_settings.hpp"

@@ -1,3 +1,5 @@
+// Structured meshes of simple shapes: a box of hexahedra split into tets and a rectangular
+// sheet of triangles (the simulator's benchmark bar and scene boxes and sheets).
 #pragma once
 
 #include "anatomy/tet_mesh.hpp"

@@ -1,3 +1,5 @@
+// The surface of any closed implicit shape as a closed, manifold triangle mesh with vertices on
+// it (CGAL Mesh_3, seeded): the base mesh of shapes that are not star-shaped.
 #pragma once
 
 #include "anatomy/implicit_shape.hpp"

@@ -1,3 +1,5 @@
+// TetMesh, the tetrahedral mesh of a solid organ, and its tetrahedralization from an implicit
+// shape with CGAL Mesh_3 (seeded, repeatable). The deformation stage's bodies are made of them.
 #pragma once
 
 #include "anatomy/implicit_shape.hpp"

@@ -1,3 +1,5 @@
+// TriangleMesh (RAS mm vertices, outward triangles) and the checks that a mesh is a closed,
+// oriented 2-manifold, as a patch surface's base mesh and a scene's mesh files must be.
 #pragma once
 
 #include <Eigen/Core>

@@ -1,3 +1,5 @@
+// Running a sweep's subjects into one dataset: shards, parallel child processes, and the skip of
+// subjects already complete, so a killed batch resumes where it stopped.
 #pragma once
 
 #include "batch/sweep.hpp"

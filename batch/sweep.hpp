@@ -1,3 +1,5 @@
+// Sweep files: a base scene and what varies (grids of values, seeded random ranges), expanded
+// into subjects with their BIDS labels and scenes, and split into shards.
 #pragma once
 
 #include <cstdint>

@@ -1,3 +1,5 @@
+// Helpers of the benchmark programs: the scene from the command line and the exact tissue
+// volumes of a phantom from its patch surfaces, to measure voxelized fractions against.
 #pragma once
 
 // Exact tissue volumes of a phantom from its patch surfaces (an organ's own tissue fills its

@@ -1,3 +1,5 @@
+// Cooperative cancellation: a signal handler requests it, and stages check for it between units
+// of work so that SIGINT or SIGTERM stops a run with nothing left half-written.
 #pragma once
 
 namespace phantasm {

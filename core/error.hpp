@@ -1,3 +1,5 @@
+// The exceptions phantasm throws on purpose: InputError for a fault in what the user gave (exit
+// code 2) and Cancelled for a run asked to stop.
 #pragma once
 
 #include <stdexcept>

@@ -1,3 +1,5 @@
+// Short text forms of numbers and vectors (up to 6 significant digits) for log lines and
+// error messages.
 #pragma once
 
 #include <Eigen/Core>

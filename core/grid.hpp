@@ -1,3 +1,5 @@
+// ImageGrid, a voxel grid placed in world space (RAS mm, NIfTI's voxel order), and the linear
+// index of a voxel: the grid every volume, image and field of a run lives on.
 #pragma once
 
 #include <Eigen/Core>

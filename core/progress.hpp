@@ -1,3 +1,5 @@
+// Reporter, the record of what each stage modelled or skipped (screen and run log), and
+// ProgressBar, the progress of one long stage, which several threads may advance at once.
 #pragma once
 
 #include <atomic>

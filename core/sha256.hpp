@@ -1,3 +1,5 @@
+// SHA-256 of a byte string as hex, for the scene hashes of provenance records and of a batch's
+// complete subjects.
 #pragma once
 
 #include <string>

@@ -1,3 +1,5 @@
+// StageReport: what a pipeline stage modelled, what it skipped and the accuracy it achieved,
+// from each stage's plan and run into the run log and provenance.json.
 #pragma once
 
 #include <map>

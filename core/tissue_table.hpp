@@ -1,3 +1,5 @@
+// The tissue parameter table: relaxation times and proton density per tissue and field
+// strength, each with its source; the scene's checks and the MR stage read it.
 #pragma once
 
 #include <optional>

@@ -1,3 +1,5 @@
+// Evaluating a registration result against a phantasm dataset's ground truth (landmark TRE,
+// Dice and HD95, endpoint error, Jacobian), as `phantasm eval` reports it in JSON.
 #pragma once
 
 #include <nlohmann/json.hpp>

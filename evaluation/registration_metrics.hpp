@@ -1,3 +1,5 @@
+// The metrics of a registration evaluation: displacement fields in the ITK/elastix
+// convention, warping of labels and points, Dice, Hausdorff distances and Jacobian statistics.
 #pragma once
 
 #include "core/grid.hpp"

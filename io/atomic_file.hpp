@@ -1,3 +1,5 @@
+// AtomicFileWriter: every output file is written to a temporary file and renamed, so a final
+// name only ever holds a complete file; also the removal of a killed run's temporaries.
 #pragma once
 
 #include <cstddef>

@@ -1,3 +1,5 @@
+// Where each output of a subject goes in the BIDS-like dataset (sessions ses-ref and ses-def,
+// derivatives/phantasm), and the preparation of an output folder. Writers and readers share it.
 #pragma once
 
 #include <filesystem>

@@ -1,3 +1,5 @@
+// Export of a dataset's complete subjects (images, labels, fields and their metadata) into one
+// HDF5 file for machine-learning loaders (`phantasm hdf5`).
 #pragma once
 
 #include <filesystem>

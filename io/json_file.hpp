@@ -1,3 +1,5 @@
+// Writing a JSON file atomically with sorted keys and fixed indentation, so the same content
+// always gives the same bytes (sidecars, provenance.json, evaluation reports).
 #pragma once
 
 #include <nlohmann/json.hpp>

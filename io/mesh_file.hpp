@@ -1,3 +1,5 @@
+// Triangle and tet mesh files: reading .stl, .obj, .ply and .vtp surfaces, and writing surfaces
+// (.vtp) and tet meshes (.vtu) with per-vertex arrays, atomically.
 #pragma once
 
 #include "anatomy/tet_mesh.hpp"

@@ -1,3 +1,5 @@
+// NIfTI files: writing float images, label maps and displacement fields (RAS mm, atomically),
+// and reading scalar, vector and label volumes with their grids.
 #pragma once
 
 #include "core/grid.hpp"

@@ -1,3 +1,5 @@
+// PNG previews of a volume: its three orthogonal middle slices side by side, for a quick look
+// at a run's images.
 #pragma once
 
 #include "core/grid.hpp"

@@ -1,3 +1,5 @@
+// Reading the mesh and label-volume files a scene's organs are made of, by organ name, before
+// the anatomy stage builds them.
 #pragma once
 
 #include "anatomy/anatomy_settings.hpp"

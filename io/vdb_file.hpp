@@ -1,3 +1,5 @@
+// Writing one state's grids to an OpenVDB file: every organ's level set and the label and
+// fraction volumes as sparse grids.
 #pragma once
 
 #include "core/grid.hpp"

@@ -1,3 +1,5 @@
+// Simulated acquisition in k-space: the central samples an acquisition keeps, the slice profile,
+// complex noise per k-space line and zero-filled reconstruction (FFTW), thread-count independent.
 #pragma once
 
 #include "core/grid.hpp"

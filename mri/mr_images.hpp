@@ -1,3 +1,5 @@
+// The MR stage's result: one magnitude image per sequence and state, how they were acquired,
+// and the ground-truth parameter maps; the dataset writer reads them.
 #pragma once
 
 #include "mri/kspace.hpp"

@@ -1,3 +1,5 @@
+// The MR stage's plan: the images it will make for a scene, the tissue values used and the
+// acquisition effects asked for.
 #pragma once
 
 #include "core/organ_table.hpp"

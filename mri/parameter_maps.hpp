@@ -1,3 +1,5 @@
+// Ground-truth quantitative maps (PD, T1, T2, T2*) of a state from its tissue fractions and
+// the tissues' parameters.
 #pragma once
 
 #include "mri/mr_images.hpp"

@@ -1,3 +1,5 @@
+// Receive coil sensitivities: a ring of coils around the object with a Biot-Savart falloff and
+// smooth phase, normalized so a sum-of-squares image keeps the one-coil scale.
 #pragma once
 
 #include "core/grid.hpp"

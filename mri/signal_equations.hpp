@@ -1,3 +1,5 @@
+// The closed-form steady-state signals of the scene's sequences (spin echo, spoiled gradient
+// echo, inversion recovery, bSSFP, MPRAGE) for one tissue's relaxation parameters, signed.
 #pragma once
 
 #include "mri/mri_settings.hpp"

@@ -1,3 +1,5 @@
+// Synthesis of the MR images of every sequence and state from the voxelized tissue fractions:
+// signal equations, bias field, receive coils, k-space acquisition and noise. Entry of the stage.
 #pragma once
 
 #include "core/organ_table.hpp"

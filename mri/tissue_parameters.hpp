@@ -1,3 +1,5 @@
+// The MR parameters of every tissue a scene uses at its field strength, scene values first and
+// then the built-in tissue table, each with where it came from.
 #pragma once
 
 #include "core/organ_table.hpp"

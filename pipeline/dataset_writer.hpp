@@ -1,3 +1,5 @@
+// Writing a complete simulation as the dataset: the files are listed first, then written in
+// list order, provenance.json last.
 #pragma once
 
 #include "core/progress.hpp"

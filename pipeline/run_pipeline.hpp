@@ -1,3 +1,5 @@
+// Running a scene through the stages in data-flow order (anatomy, sim, voxelize, mri): their
+// plans, the simulation without writing, and a whole run that writes the dataset.
 #pragma once
 
 #include "core/progress.hpp"

@@ -1,3 +1,5 @@
+// Simulation: every stage's result of a run before anything is written (types only), the data
+// passed from the stages to the dataset writer.
 #pragma once
 
 #include "anatomy/organ.hpp"

@@ -1,3 +1,5 @@
+// Diagnostics of input files: where a problem is (file, line, column), what it is, and their
+// formatting for the user.
 #pragma once
 
 #include <string>

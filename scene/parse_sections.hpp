@@ -1,3 +1,5 @@
+// The parsers of the scene file's sections, each filling its settings from a checked YAML map.
+// Internal to the scene target.
 #pragma once
 
 // The parsers of each scene section. Internal to the scene target.

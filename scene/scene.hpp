@@ -1,3 +1,5 @@
+// The scene: every setting of a run (grid, materials, tissues, anatomy, deformation,
+// voxelization, sequences, acquisition, outputs) as checked values, and loading it from YAML.
 #pragma once
 
 #include "anatomy/anatomy_settings.hpp"

@@ -1,3 +1,5 @@
+// Every setting of a scene, defaults filled in, as JSON for provenance.json and the Python
+// module.
 #pragma once
 
 #include "scene/scene.hpp"

@@ -1,3 +1,5 @@
+// Checked reading of YAML: typed values with ranges and units, unknown and missing keys, each
+// mistake a diagnostic with its location. Internal to the scene target.
 #pragma once
 
 // Reading YAML with a diagnostic for every mistake. Internal to the scene target: yaml-cpp

@@ -1,3 +1,5 @@
+// The deformation stage (deform_phantom): bodies from the simulated organs, loads and obstacles,
+// quasi-static or dynamic solves, giving the PhantomDeformation the voxelizer reads.
 #pragma once
 
 #include "anatomy/phantom.hpp"

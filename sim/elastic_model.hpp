@@ -1,3 +1,5 @@
+// ElasticModel, the objective every solver minimizes: masses, tet, surface, volume and point
+// constraints, obstacles and surface contacts; its building blocks, energy and gradient.
 #pragma once
 
 #include "sim/enclosed_volume.hpp"

@@ -1,3 +1,5 @@
+// The patch volume constraint: the volume a closed patch surface encloses kept within a range of
+// its rest volume (a fluid-filled organ simulated as a shell), and its projection.
 #pragma once
 
 #include "sim/tet_constraints.hpp"

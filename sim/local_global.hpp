@@ -1,3 +1,5 @@
+// LocalGlobalSolver, the projective-dynamics solver of the deformation stage: a prefactored
+// global matrix, parallel per-tet projections, contacts by rank-one updates of the factor.
 #pragma once
 
 #include "sim/elastic_model.hpp"

@@ -1,3 +1,5 @@
+// The Newton solver on the same objective as the local/global solver, with projected per-tet
+// Hessians and line search: the reference the other solvers are measured against.
 #pragma once
 
 #include "sim/elastic_model.hpp"

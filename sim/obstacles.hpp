@@ -1,3 +1,5 @@
+// Rigid obstacles the model's free vertices may not enter (half-spaces and spheres), with their
+// frictionless penalty and projection.
 #pragma once
 
 #include <Eigen/Core>

@@ -1,3 +1,5 @@
+// The deformation stage's result: the bodies the solver moved and where every organ's
+// vertices went, which the voxelizer and the writers read.
 #pragma once
 
 #include "sim/solve_report.hpp"

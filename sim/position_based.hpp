@@ -1,3 +1,5 @@
+// Position-based solvers (XPBD and Gauss-Seidel PBD) of one dynamic step on an ElasticModel's
+// constraints: deterministic sweeps, compared with the local/global solver.
 #pragma once
 
 #include "sim/elastic_model.hpp"

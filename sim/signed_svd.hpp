@@ -1,3 +1,5 @@
+// The signed (rotation-variant) SVD of a 3x3 deformation gradient, warm-started from the last
+// rotation: the core of every tet projection in the local step.
 #pragma once
 
 #include <Eigen/Core>

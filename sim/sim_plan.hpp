@@ -1,3 +1,5 @@
+// The deformation stage's plan: how each organ moves (simulated, fixed, rigid) and what the
+// stage will solve for a scene and what it leaves out.
 #pragma once
 
 #include "core/organ_table.hpp"

@@ -1,3 +1,5 @@
+// Stop criteria of a solve, the report every solver returns (into provenance.json), and the
+// per-iteration observer convergence studies use.
 #pragma once
 
 #include <Eigen/Core>

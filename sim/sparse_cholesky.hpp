@@ -1,3 +1,5 @@
+// SparseCholesky: CHOLMOD's simplicial LDL^T factor behind a small interface, with multi-column
+// solves and rank-one updates of the diagonal for contacts that come and go.
 #pragma once
 
 #include <Eigen/Core>

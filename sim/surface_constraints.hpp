@@ -1,3 +1,5 @@
+// Constraints of surfaces and strings (edge and triangle strain, triangle area, bending) of the
+// form w/2 |F - P(F)|^2, and their projections: the shells and sheets of the elastic model.
 #pragma once
 
 #include "sim/tet_constraints.hpp"

@@ -1,3 +1,5 @@
+// Contacts between organs' surfaces: closed surfaces whose interior paired surfaces' vertices
+// may not enter, and where a point is against them.
 #pragma once
 
 #include "geometry/mesh_signed_distance.hpp"

@@ -1,3 +1,5 @@
+// The strain and volume constraint sets of tet elements on the deformation gradient's signed
+// singular values, and their projections.
 #pragma once
 
 #include "sim/signed_svd.hpp"

@@ -1,3 +1,5 @@
+// The local step for several tets at once in SIMD lanes (AVX2 or SSE2): signed SVD, strain and
+// volume projections and right-hand-side terms, the same per lane as one tet alone.
 #pragma once
 
 #include "sim/tet_constraints.hpp"

@@ -1,3 +1,5 @@
+// The twisting bar, the solvers' benchmark problem: a clamped box turned at one end under
+// gravity, as one dynamic step for the benchmarks and tests.
 #pragma once
 
 #include "sim/elastic_model.hpp"

@@ -1,3 +1,5 @@
+// Landmarks of the phantom: seven material points per closed organ (deepest point and extreme
+// surface points), exact in both states.
 #pragma once
 
 #include "anatomy/organ.hpp"

@@ -1,3 +1,5 @@
+// LevelSet: a narrow-band signed distance grid (OpenVDB) of a closed surface, sampled by
+// per-thread probes in the tissue voxelization and written to .vdb files.
 #pragma once
 
 #include "anatomy/triangle_mesh.hpp"

@@ -1,3 +1,5 @@
+// DeformationMap between the reference and deformed phantom (exact in the solved bodies, a
+// fading extension outside) and the dense displacement fields, masks and Jacobian from it.
 #pragma once
 
 #include "core/grid.hpp"

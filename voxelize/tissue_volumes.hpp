@@ -1,3 +1,5 @@
+// Tissue labels and fractions of every voxel from the organs' level sets and nesting: whole
+// voxels far from surfaces, supersampled near them; independent of the thread count.
 #pragma once
 
 #include "core/grid.hpp"

@@ -1,3 +1,5 @@
+// The voxelization stage (voxelize_phantom): level sets of the organs' patch surfaces, tissue
+// labels and fractions on the scene's grid, and motion fields when the phantom was deformed.
 #pragma once
 
 #include "anatomy/organ.hpp"

@@ -1,3 +1,5 @@
+// The voxelization stage's plan: which organs lie in the field of view and what volumes the
+// stage will make.
 #pragma once
 
 #include "core/grid.hpp"

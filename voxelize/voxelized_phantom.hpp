@@ -1,3 +1,5 @@
+// The voxelization's result: labels and tissue fractions on the image grid, the motion
+// fields and landmarks, read by the MR stage and the writers without OpenVDB.
 #pragma once
 
 #include "core/grid.hpp"

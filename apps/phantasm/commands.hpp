@@ -1,3 +1,5 @@
+// The phantasm command's exit codes and its subcommands (run, validate, info, eval, batch,
+// hdf5), each registered on the CLI11 app by its own file.
 #pragma once
 
 #include <CLI/CLI.hpp>
