@@ -1,8 +1,6 @@
-#pragma once
-
 // The settings the anatomy stage reads (docs/scene-format.md, section anatomy), filled by the
-// scene parser. Light on purpose: Eigen and the standard library only, so that the scene can
-// fill them without linking the anatomy stage.
+// scene parser; Eigen and the standard library only, so the scene fills them without CGAL.
+#pragma once
 
 #include "core/organ_table.hpp"
 

@@ -1,3 +1,5 @@
+// The organ table every stage shares: each organ's name, tissue, container and nesting depth,
+// built once by the scene parser from the anatomy section.
 #pragma once
 
 #include <string>

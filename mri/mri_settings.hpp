@@ -1,8 +1,6 @@
+// The settings the MR stage reads (field strength, tissues, sequences, acquisition), filled and
+// resolved by the scene parser; Eigen and the standard library only.
 #pragma once
-
-// The settings the MR stage reads (docs/scene-format.md, sections field_strength_T, tissues,
-// sequences and acquisition), and what it reads of other sections, filled by the scene parser.
-// Light on purpose: Eigen and the standard library only.
 
 #include <Eigen/Core>
 

@@ -1,8 +1,6 @@
+// The settings the deformation stage reads (materials, solver, loads, obstacles, collisions),
+// filled by the scene parser; Eigen and the standard library only, so the scene needs no solver.
 #pragma once
-
-// The settings the deformation stage reads (docs/scene-format.md, sections materials and
-// deformation), filled by the scene parser. Light on purpose: Eigen and the standard library
-// only, so that the scene can fill them without linking the solver.
 
 #include <Eigen/Core>
 

@@ -1,8 +1,6 @@
+// The settings the voxelization stage reads, and what it needs of other sections (outputs,
+// deformation, organ bounds), filled by the scene parser; Eigen and the standard library only.
 #pragma once
-
-// The settings the voxelization stage reads (docs/scene-format.md, section voxelization), and
-// what it reads of other sections, filled by the scene parser. Light on purpose: Eigen and the
-// standard library only.
 
 #include "anatomy/anatomy_settings.hpp"
 
