@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
   add_run_command(app, action);
   add_batch_command(app, action);
   add_hdf5_command(app, action);
+  add_atlas_command(app, action);
   add_validate_command(app, action);
   add_info_command(app, action);
   add_eval_command(app, action);

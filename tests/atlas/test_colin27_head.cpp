@@ -1,0 +1,174 @@
+#include "atlas/colin27_head.hpp"
+#include "io/nifti_file.hpp"
+#include "tests/support/subprocess.hpp"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <memory>
+
+namespace phantasm {
+namespace {
+
+using testing::CommandResult;
+using testing::run_command;
+
+const std::filesystem::path templates = default_colin27_templates_dir();
+
+/// Skips when the templates are absent, except under CI, where scripts/install-deps.sh
+/// installs them and their absence is a failure.
+bool templates_missing() {
+  if (std::filesystem::is_directory(templates))
+    return false;
+  const char* ci = std::getenv("CI");
+  if (ci != nullptr && std::strcmp(ci, "true") == 0)
+    ADD_FAILURE() << templates << " is missing: install the Debian package mricron-data";
+  return true;
+}
+
+/// One derivation shared by the tests (it takes a few seconds).
+const HeadLabels& derived() {
+  static const std::unique_ptr<HeadLabels> head = [] {
+    const auto start = std::chrono::steady_clock::now();
+    auto h = std::make_unique<HeadLabels>(derive_colin27_head(templates));
+    std::cout << "derive_colin27_head: "
+              << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() << " s\n";
+    return h;
+  }();
+  return *head;
+}
+
+#define SKIP_WITHOUT_TEMPLATES()                                                                            \
+  if (templates_missing())                                                                                  \
+  GTEST_SKIP() << templates << " is absent (Debian package mricron-data)"
+
+TEST(Colin27Head, EveryLabelIsPresentWithPlausibleVolumes) {
+  SKIP_WITHOUT_TEMPLATES();
+  const HeadLabels& head = derived();
+  EXPECT_EQ(head.grid.dims, Eigen::Vector3i(181, 217, 181));
+  const std::vector<double> ml = label_volumes_ml(head);
+  ASSERT_EQ(ml.size(), 13U);
+  for (const HeadLabelInfo& info : head.table) {
+    std::cout << info.label << ' ' << info.name << ' ' << ml[info.label] << " ml\n";
+    EXPECT_GT(ml[info.label], 0.0) << info.name;
+  }
+  const double gm = ml[colin27_cortical_gm] + ml[colin27_caudate] + ml[colin27_putamen] + ml[colin27_pallidum] +
+                    ml[colin27_thalamus];
+  EXPECT_GE(gm, 500.0);
+  EXPECT_LE(gm, 900.0);
+  EXPECT_GE(ml[colin27_white_matter], 350.0);
+  EXPECT_LE(ml[colin27_white_matter], 650.0);
+  EXPECT_GE(ml[colin27_ventricles], 5.0);
+  EXPECT_LE(ml[colin27_ventricles], 60.0);
+  double intracranial = 0.0;
+  for (int l = colin27_csf; l <= colin27_brainstem; ++l)
+    intracranial += ml[l];
+  std::cout << "grey matter " << gm << " ml, intracranial " << intracranial << " ml\n";
+  EXPECT_GE(intracranial, 1200.0);
+  EXPECT_LE(intracranial, 1900.0);
+}
+
+TEST(Colin27Head, NestingIsSane) {
+  SKIP_WITHOUT_TEMPLATES();
+  const HeadLabels& head = derived();
+  const NiftiVolume bet = read_nifti(templates / "ch2bet.nii.gz");
+  ASSERT_TRUE(bet.grid.world_from_voxel.isApprox(head.grid.world_from_voxel));
+  const Eigen::Vector3i d = head.grid.dims;
+  auto at = [&](int i, int j, int k) { return i + std::int64_t(d.x()) * (j + std::int64_t(d.y()) * k); };
+  std::int64_t wm_touching_background = 0, ventricles_outside = 0;
+  for (int k = 1; k < d.z() - 1; ++k)
+    for (int j = 1; j < d.y() - 1; ++j)
+      for (int i = 1; i < d.x() - 1; ++i) {
+        const std::int64_t n = at(i, j, k);
+        if (head.labels[n] == colin27_ventricles && bet.values[n] <= 0.0)
+          ++ventricles_outside; // the brain mask is ch2bet > 0 with its holes filled
+        if (head.labels[n] != colin27_white_matter)
+          continue;
+        for (const std::int64_t m : {at(i + 1, j, k), at(i - 1, j, k), at(i, j + 1, k), at(i, j - 1, k),
+                                     at(i, j, k + 1), at(i, j, k - 1)})
+          wm_touching_background += head.labels[m] == colin27_background;
+      }
+  EXPECT_EQ(wm_touching_background, 0);
+  EXPECT_LE(ventricles_outside, 100) << "ventricle voxels outside ch2bet's support";
+}
+
+TEST(Colin27Head, DeepNucleiMatchAal) {
+  SKIP_WITHOUT_TEMPLATES();
+  const HeadLabels& head = derived();
+  ImageGrid aal_grid;
+  const std::vector<std::int32_t> aal = read_nifti_labels(templates / "aal.nii.gz", &aal_grid);
+  const NiftiVolume bet = read_nifti(templates / "ch2bet.nii.gz");
+  ASSERT_TRUE(aal_grid.world_from_voxel.isApprox(head.grid.world_from_voxel));
+  const struct {
+    Colin27Label label;
+    int first, last;
+  } regions[] = {{colin27_caudate, 71, 72}, {colin27_putamen, 73, 74}, {colin27_thalamus, 77, 78}};
+  for (const auto& r : regions) {
+    std::int64_t both = 0, ours = 0, theirs = 0;
+    for (std::size_t n = 0; n < aal.size(); ++n) {
+      const bool a = head.labels[n] == r.label;
+      const bool b = aal[n] >= r.first && aal[n] <= r.last && bet.values[n] > 0.0;
+      both += a && b;
+      ours += a;
+      theirs += b;
+    }
+    const double dice = 2.0 * double(both) / double(ours + theirs);
+    std::cout << "label " << r.label << " Dice " << dice << "\n";
+    EXPECT_GE(dice, 0.9) << "label " << r.label;
+  }
+}
+
+TEST(Colin27Head, IsDeterministic) {
+  SKIP_WITHOUT_TEMPLATES();
+  const HeadLabels again = derive_colin27_head(templates);
+  EXPECT_TRUE(again.labels == derived().labels);
+}
+
+TEST(Colin27Head, AMissingTemplateIsNamed) {
+  const std::filesystem::path empty = std::filesystem::temp_directory_path() / "phantasm_colin27_empty";
+  std::filesystem::create_directories(empty);
+  try {
+    (void)derive_colin27_head(empty);
+    FAIL() << "no error";
+  } catch (const std::exception& error) {
+    EXPECT_NE(std::string(error.what()).find("ch2.nii.gz"), std::string::npos) << error.what();
+    EXPECT_NE(std::string(error.what()).find("mricron-data"), std::string::npos) << error.what();
+  }
+}
+
+TEST(AtlasCommand, WritesALabelVolumeNibabelReads) {
+  SKIP_WITHOUT_TEMPLATES();
+  const std::filesystem::path folder = std::filesystem::temp_directory_path() / "phantasm_atlas_command";
+  std::filesystem::remove_all(folder);
+  std::filesystem::create_directories(folder);
+  const std::filesystem::path out = folder / "labels.nii.gz";
+  const CommandResult run = run_command({PHANTASM_EXECUTABLE, "atlas", "colin27", "-o", out.string(), "-q"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(std::filesystem::exists(folder / "labels.tsv"));
+  std::ofstream(folder / "check.py") << "import sys, nibabel, numpy\n"
+                                        "img = nibabel.load(sys.argv[1])\n"
+                                        "ref = nibabel.load(sys.argv[2])\n"
+                                        "d = numpy.asarray(img.dataobj)\n"
+                                        "assert d.shape == (181, 217, 181), d.shape\n"
+                                        "assert numpy.allclose(img.affine, ref.affine), img.affine\n"
+                                        "assert set(numpy.unique(d)) == set(range(13)), numpy.unique(d)\n"
+                                        "print('ok')\n";
+  const CommandResult check = run_command(
+      {PHANTASM_PYTHON, (folder / "check.py").string(), out.string(), (templates / "ch2.nii.gz").string()});
+  EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
+  EXPECT_EQ(check.out, "ok\n") << check.err;
+}
+
+TEST(AtlasCommand, AMissingTemplatesFolderIsABadInput) {
+  const CommandResult run = run_command(
+      {PHANTASM_EXECUTABLE, "atlas", "colin27", "-o", "/tmp/phantasm_never.nii.gz", "--templates", "/nonexistent"});
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("mricron-data"), std::string::npos) << run.err;
+}
+
+} // namespace
+} // namespace phantasm
