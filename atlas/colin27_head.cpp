@@ -8,9 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <fstream>
 #include <limits>
-#include <sstream>
 
 namespace phantasm {
 namespace {
@@ -49,8 +47,7 @@ std::vector<double> resample_nearest(const NiftiVolume& source, const ImageGrid&
       for (int i = 0; i < dst.nx; ++i) {
         const Eigen::Vector4d s = source_from_target * Eigen::Vector4d(i, j, k, 1.0);
         const long si = std::lround(s.x()), sj = std::lround(s.y()), sk = std::lround(s.z());
-        if (si < 0 || sj < 0 || sk < 0 || si >= sdims.x() || sj >= sdims.y() || sk >= sdims.z())
-          continue;
+        if (si < 0 || sj < 0 || sk < 0 || si >= sdims.x() || sj >= sdims.y() || sk >= sdims.z()) continue;
         out[static_cast<std::size_t>(dst.at(i, j, k))] =
             source.values[static_cast<std::size_t>(si + sdims.x() * (sj + std::int64_t(sdims.y()) * sk))];
       }
@@ -66,8 +63,7 @@ void distance_transform_1d(const std::vector<double>& f, std::vector<double>& d,
   constexpr double inf = std::numeric_limits<double>::infinity();
   int k = -1;
   for (int q = 0; q < n; ++q) {
-    if (f[q] == inf)
-      continue;
+    if (f[q] == inf) continue;
     const double xq = q * spacing;
     while (k >= 0) {
       const double xv = v[k] * spacing;
@@ -80,8 +76,9 @@ void distance_transform_1d(const std::vector<double>& f, std::vector<double>& d,
     }
     ++k;
     v[k] = q;
-    z[k] = k == 0 ? -inf : ((f[q] + xq * xq) - (f[v[k - 1]] + std::pow(v[k - 1] * spacing, 2))) /
-                               (2.0 * (xq - v[k - 1] * spacing));
+    z[k] = k == 0 ? -inf
+                  : ((f[q] + xq * xq) - (f[v[k - 1]] + std::pow(v[k - 1] * spacing, 2))) /
+                        (2.0 * (xq - v[k - 1] * spacing));
     z[k + 1] = inf;
   }
   if (k < 0) {
@@ -135,8 +132,7 @@ std::vector<std::int32_t> connected_components(const Mask& mask, const ImageGrid
   std::vector<std::int64_t> stack;
   std::int32_t next = 0;
   for (std::int64_t seed = 0; seed < vol.size(); ++seed) {
-    if (!mask[seed] || component[seed])
-      continue;
+    if (!mask[seed] || component[seed]) continue;
     component[seed] = ++next;
     stack.assign(1, seed);
     while (!stack.empty()) {
@@ -144,11 +140,11 @@ std::vector<std::int32_t> connected_components(const Mask& mask, const ImageGrid
       stack.pop_back();
       const int i = static_cast<int>(n % vol.nx), j = static_cast<int>((n / vol.nx) % vol.ny),
                 k = static_cast<int>(n / (std::int64_t(vol.nx) * vol.ny));
-      const std::array<std::array<int, 3>, 6> steps{{{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}}};
+      const std::array<std::array<int, 3>, 6> steps{
+          {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}}};
       for (const auto& s : steps) {
         const int a = i + s[0], b = j + s[1], c = k + s[2];
-        if (a < 0 || b < 0 || c < 0 || a >= vol.nx || b >= vol.ny || c >= vol.nz)
-          continue;
+        if (a < 0 || b < 0 || c < 0 || a >= vol.nx || b >= vol.ny || c >= vol.nz) continue;
         const std::int64_t m = vol.at(a, b, c);
         if (mask[m] && !component[m]) {
           component[m] = next;
@@ -182,6 +178,49 @@ Mask fill_holes(const Mask& mask, const ImageGrid& grid) {
   return filled;
 }
 
+/// The mask with its holes filled in every axial (k) slice: 4-connected background reachable
+/// from the slice's border stays background. Where the head is cut open at the neck, the dark
+/// bone layer connects to the outside in 3-D, yet each axial slice through the skull shows a
+/// closed ring of scalp.
+Mask fill_holes_axial(const Mask& mask, const ImageGrid& grid) {
+  const Volume vol(grid);
+  Mask filled = mask;
+  std::vector<std::uint8_t> reached(static_cast<std::size_t>(vol.nx) * vol.ny);
+  std::vector<std::int64_t> stack;
+  for (int k = 0; k < vol.nz; ++k) {
+    std::fill(reached.begin(), reached.end(), 0);
+    stack.clear();
+    auto push = [&](int i, int j) {
+      const std::size_t p = static_cast<std::size_t>(i + std::int64_t(vol.nx) * j);
+      if (!reached[p] && !mask[vol.at(i, j, k)]) {
+        reached[p] = 1;
+        stack.push_back(static_cast<std::int64_t>(p));
+      }
+    };
+    for (int i = 0; i < vol.nx; ++i) {
+      push(i, 0);
+      push(i, vol.ny - 1);
+    }
+    for (int j = 0; j < vol.ny; ++j) {
+      push(0, j);
+      push(vol.nx - 1, j);
+    }
+    while (!stack.empty()) {
+      const std::int64_t p = stack.back();
+      stack.pop_back();
+      const int i = static_cast<int>(p % vol.nx), j = static_cast<int>(p / vol.nx);
+      if (i > 0) push(i - 1, j);
+      if (i < vol.nx - 1) push(i + 1, j);
+      if (j > 0) push(i, j - 1);
+      if (j < vol.ny - 1) push(i, j + 1);
+    }
+    for (int j = 0; j < vol.ny; ++j)
+      for (int i = 0; i < vol.nx; ++i)
+        if (!reached[static_cast<std::size_t>(i + std::int64_t(vol.nx) * j)]) filled[vol.at(i, j, k)] = 1;
+  }
+  return filled;
+}
+
 /// The largest 6-connected component of a mask (the first in scan order on a tie).
 Mask largest_component(const Mask& mask, const ImageGrid& grid) {
   std::int32_t count = 0;
@@ -191,8 +230,7 @@ Mask largest_component(const Mask& mask, const ImageGrid& grid) {
     ++size[c];
   std::int32_t best = 0;
   for (std::int32_t c = 1; c <= count; ++c)
-    if (size[c] > size[best] || best == 0)
-      best = c;
+    if (size[c] > size[best] || best == 0) best = c;
   Mask out(mask.size());
   for (std::size_t n = 0; n < mask.size(); ++n)
     out[n] = count > 0 && component[n] == best;
@@ -213,8 +251,7 @@ int otsu_threshold(const std::array<std::int64_t, 256>& histogram) {
     weight_low += static_cast<double>(histogram[b]);
     sum_low += b * static_cast<double>(histogram[b]);
     const double weight_high = total - weight_low;
-    if (weight_low <= 0.0 || weight_high <= 0.0)
-      continue;
+    if (weight_low <= 0.0 || weight_high <= 0.0) continue;
     const double mean_low = sum_low / weight_low, mean_high = (sum - sum_low) / weight_high;
     const double between = weight_low * weight_high * (mean_low - mean_high) * (mean_low - mean_high);
     if (between > best) {
@@ -251,10 +288,8 @@ std::array<double, 2> three_class_thresholds(const std::array<std::int64_t, 256>
     }
     std::array<double, 3> updated = mean;
     for (int k = 0; k < 3; ++k)
-      if (weight[k] > 0.0)
-        updated[k] = sum[k] / weight[k];
-    if (updated == mean)
-      break;
+      if (weight[k] > 0.0) updated[k] = sum[k] / weight[k];
+    if (updated == mean) break;
     mean = updated;
   }
   return {0.5 * (mean[0] + mean[1]), 0.5 * (mean[1] + mean[2])};
@@ -263,27 +298,25 @@ std::array<double, 2> three_class_thresholds(const std::array<std::int64_t, 256>
 /// One pass of a 3x3x3 majority filter over the classes 1..3 inside the mask: each voxel
 /// takes the class most frequent among its in-mask neighbours (itself included), keeping its
 /// own class on a tie. Reads the previous pass only, so the order of the scan does not matter.
-std::vector<std::int8_t> majority_filter(const std::vector<std::int8_t>& cls, const Mask& mask, const ImageGrid& grid) {
+std::vector<std::int8_t> majority_filter(const std::vector<std::int8_t>& cls, const Mask& mask,
+                                         const ImageGrid& grid) {
   const Volume vol(grid);
   std::vector<std::int8_t> out = cls;
   for (int k = 1; k < vol.nz - 1; ++k) {
     for (int j = 1; j < vol.ny - 1; ++j) {
       for (int i = 1; i < vol.nx - 1; ++i) {
         const std::int64_t n = vol.at(i, j, k);
-        if (!mask[n])
-          continue;
+        if (!mask[n]) continue;
         std::array<int, 4> votes{};
         for (int c = -1; c <= 1; ++c)
           for (int b = -1; b <= 1; ++b)
             for (int a = -1; a <= 1; ++a) {
               const std::int64_t m = vol.at(i + a, j + b, k + c);
-              if (mask[m])
-                ++votes[cls[m]];
+              if (mask[m]) ++votes[cls[m]];
             }
         int best = cls[n];
         for (int v = 1; v <= 3; ++v)
-          if (votes[v] > votes[best])
-            best = v;
+          if (votes[v] > votes[best]) best = v;
         out[n] = static_cast<std::int8_t>(best);
       }
     }
@@ -292,11 +325,15 @@ std::vector<std::int8_t> majority_filter(const std::vector<std::int8_t>& cls, co
 }
 
 /// AAL index ranges (aal.nii.txt: "index name code").
-bool aal_is(int index, int first, int last) { return index >= first && index <= last; }
+bool aal_is(int index, int first, int last) {
+  return index >= first && index <= last;
+}
 
 } // namespace
 
-std::filesystem::path default_colin27_templates_dir() { return "/usr/share/mricron/templates"; }
+std::filesystem::path default_colin27_templates_dir() {
+  return "/usr/share/mricron/templates";
+}
 
 HeadLabels derive_colin27_head(const std::filesystem::path& templates_dir, const Colin27Options& options) {
   if (!std::filesystem::is_directory(templates_dir)) {
@@ -331,8 +368,7 @@ HeadLabels derive_colin27_head(const std::filesystem::path& templates_dir, const
   // Tissue classes inside the brain: 1 CSF, 2 GM, 3 WM (T1: CSF darkest, WM brightest).
   std::array<std::int64_t, 256> brain_histogram{};
   for (std::size_t n = 0; n < count; ++n)
-    if (brain[n])
-      ++brain_histogram[intensity[n]];
+    if (brain[n]) ++brain_histogram[intensity[n]];
   const std::array<double, 2> cut = three_class_thresholds(brain_histogram);
   std::vector<std::int8_t> cls(count, 0);
   for (std::size_t n = 0; n < count; ++n)
@@ -341,26 +377,6 @@ HeadLabels derive_colin27_head(const std::filesystem::path& templates_dir, const
   for (int pass = 0; pass < options.majority_filter_passes; ++pass)
     cls = majority_filter(cls, brain, grid);
 
-  // Lateral ventricles: CSF-class components deep inside the brain (never touching the
-  // brain's outer rim, where sulcal CSF is), at least the minimum volume.
-  Mask not_brain(count);
-  for (std::size_t n = 0; n < count; ++n)
-    not_brain[n] = !brain[n];
-  const std::vector<float> depth = distance_to(not_brain, grid);
-  Mask deep_csf(count);
-  for (std::size_t n = 0; n < count; ++n)
-    deep_csf[n] = cls[n] == 1 && depth[n] >= options.ventricle_depth_mm;
-  std::int32_t csf_components = 0;
-  const std::vector<std::int32_t> csf_component = connected_components(deep_csf, grid, &csf_components);
-  std::vector<std::int64_t> csf_size(static_cast<std::size_t>(csf_components) + 1, 0);
-  for (const std::int32_t c : csf_component)
-    ++csf_size[c];
-  const double voxel_ml = grid.spacing_mm.prod() / 1000.0;
-
-  // Brainstem: the unlabelled part of the brain below the thalamus near the midline. AAL
-  // labels grey matter only, so its zero inside the brain is white matter or brainstem; below
-  // the thalamus's lowest point and within a slab around the midline, the largest connected
-  // piece of it (CSF excluded) is the brainstem.
   double thalamus_min_z = std::numeric_limits<double>::infinity(), midline_x_sum = 0.0;
   std::int64_t thalamus_voxels = 0;
   for (int k = 0; k < vol.nz; ++k)
@@ -375,15 +391,57 @@ HeadLabels derive_colin27_head(const std::filesystem::path& templates_dir, const
         }
       }
   const double midline_x = thalamus_voxels > 0 ? midline_x_sum / double(thalamus_voxels) : 0.0;
+  // Lateral ventricles: CSF-class voxels deep inside the brain (never near the brain's outer
+  // rim, where sulcal CSF is), off a thin midline slab (which cuts the interhemispheric
+  // fissure's CSF from them, as the septum pellucidum does), then on each side of the
+  // midline the largest connected piece, if at least the minimum volume.
+  Mask not_brain(count);
+  for (std::size_t n = 0; n < count; ++n)
+    not_brain[n] = !brain[n];
+  const std::vector<float> depth = distance_to(not_brain, grid);
+  Mask deep_csf(count);
+  for (int k = 0; k < vol.nz; ++k)
+    for (int j = 0; j < vol.ny; ++j)
+      for (int i = 0; i < vol.nx; ++i) {
+        const std::int64_t n = vol.at(i, j, k);
+        if (cls[n] != 1 || depth[n] < options.ventricle_depth_mm) continue;
+        const double x = grid.world_from_index(Eigen::Vector3d(i, j, k)).x();
+        deep_csf[n] = std::abs(x - midline_x) >= options.ventricle_midline_gap_mm;
+      }
+  std::int32_t csf_components = 0;
+  const std::vector<std::int32_t> csf_component = connected_components(deep_csf, grid, &csf_components);
+  std::vector<std::int64_t> csf_size(static_cast<std::size_t>(csf_components) + 1, 0);
+  std::vector<double> csf_x(static_cast<std::size_t>(csf_components) + 1, 0.0);
+  for (int k = 0; k < vol.nz; ++k)
+    for (int j = 0; j < vol.ny; ++j)
+      for (int i = 0; i < vol.nx; ++i) {
+        const std::int32_t c = csf_component[vol.at(i, j, k)];
+        ++csf_size[c];
+        csf_x[c] += grid.world_from_index(Eigen::Vector3d(i, j, k)).x();
+      }
+  const double voxel_ml = grid.spacing_mm.prod() / 1000.0;
+  std::array<std::int32_t, 2> largest{0, 0}; // left (x < midline), right
+  for (std::int32_t c = 1; c <= csf_components; ++c) {
+    const int side = csf_x[c] / double(csf_size[c]) < midline_x ? 0 : 1;
+    if (largest[side] == 0 || csf_size[c] > csf_size[largest[side]]) largest[side] = c;
+  }
+  std::vector<std::uint8_t> is_ventricle(static_cast<std::size_t>(csf_components) + 1, 0);
+  for (const std::int32_t c : largest)
+    if (c != 0 && double(csf_size[c]) * voxel_ml >= options.ventricle_min_volume_ml) is_ventricle[c] = 1;
+
+  // Brainstem: the unlabelled part of the brain below the thalamus near the midline. AAL
+  // labels grey matter only, so its zero inside the brain is white matter or brainstem; below
+  // the thalamus's lowest point and within a slab around the midline, the largest connected
+  // piece of it (CSF excluded) is the brainstem.
   Mask stem_candidate(count);
   for (int k = 0; k < vol.nz; ++k)
     for (int j = 0; j < vol.ny; ++j)
       for (int i = 0; i < vol.nx; ++i) {
         const std::int64_t n = vol.at(i, j, k);
-        if (!brain[n] || aal[n] != 0 || cls[n] == 1)
-          continue;
+        if (!brain[n] || aal[n] != 0 || cls[n] == 1) continue;
         const Eigen::Vector3d p = grid.world_from_index(Eigen::Vector3d(i, j, k));
-        stem_candidate[n] = p.z() < thalamus_min_z && std::abs(p.x() - midline_x) <= options.brainstem_half_width_mm;
+        stem_candidate[n] =
+            p.z() < thalamus_min_z && std::abs(p.x() - midline_x) <= options.brainstem_half_width_mm;
       }
   const Mask brainstem = largest_component(stem_candidate, grid);
 
@@ -391,11 +449,9 @@ HeadLabels derive_colin27_head(const std::filesystem::path& templates_dir, const
   std::vector<std::int32_t>& labels = head.labels;
   labels.assign(count, colin27_background);
   for (std::size_t n = 0; n < count; ++n) {
-    if (!brain[n])
-      continue;
+    if (!brain[n]) continue;
     const int a = aal[n];
-    const bool ventricle = cls[n] == 1 && csf_component[n] != 0 &&
-                           double(csf_size[csf_component[n]]) * voxel_ml >= options.ventricle_min_volume_ml;
+    const bool ventricle = is_ventricle[csf_component[n]] != 0;
     // The atlas's deep nuclei win over the ventricles they border (CSF partial volume at
     // their edges is the atlas's call).
     if (aal_is(a, 71, 72))
@@ -427,7 +483,7 @@ HeadLabels derive_colin27_head(const std::filesystem::path& templates_dir, const
   Mask head_mask(count);
   for (std::size_t n = 0; n < count; ++n)
     head_mask[n] = intensity[n] > head_threshold || brain[n];
-  head_mask = fill_holes(largest_component(head_mask, grid), grid);
+  head_mask = fill_holes_axial(fill_holes(largest_component(head_mask, grid), grid), grid);
 
   // Outer CSF: the brain mask dilated by the CSF thickness. Skull: from there, at least the
   // minimum thickness, and further out every dark (bone) voxel. Scalp: the outer layer of the
@@ -439,15 +495,13 @@ HeadLabels derive_colin27_head(const std::filesystem::path& templates_dir, const
   const std::vector<float> from_outside = distance_to(not_head, grid);
   const double bone_level = options.bone_intensity_fraction * head_threshold;
   for (std::size_t n = 0; n < count; ++n) {
-    if (brain[n])
-      continue;
+    if (brain[n]) continue;
     const double d = from_brain[n];
     if (d <= options.outer_csf_thickness_mm) {
       labels[n] = colin27_csf;
       continue;
     }
-    if (!head_mask[n])
-      continue;
+    if (!head_mask[n]) continue;
     const bool in_scalp = from_outside[n] <= options.scalp_thickness_mm;
     const bool in_min_skull = d <= options.outer_csf_thickness_mm + options.skull_min_thickness_mm;
     if (in_min_skull && !in_scalp)
@@ -482,8 +536,7 @@ std::vector<double> label_volumes_ml(const HeadLabels& head) {
     max_label = std::max(max_label, l);
   std::vector<std::int64_t> counts(static_cast<std::size_t>(max_label) + 1, 0);
   for (const std::int32_t l : head.labels)
-    if (l >= 0)
-      ++counts[static_cast<std::size_t>(l)];
+    if (l >= 0) ++counts[static_cast<std::size_t>(l)];
   const double voxel_ml = head.grid.spacing_mm.prod() / 1000.0;
   std::vector<double> volumes(counts.size());
   for (std::size_t l = 0; l < counts.size(); ++l)

@@ -12,12 +12,12 @@ namespace phantasm {
 /// Labels of the Colin 27 head volume (docs/anatomy-colin27.md).
 enum Colin27Label : std::int32_t {
   colin27_background = 0,
-  colin27_scalp = 1,            ///< soft tissue outside the skull: skin, fat, muscle
-  colin27_skull = 2,            ///< bone between the outer CSF and the scalp
-  colin27_csf = 3,              ///< outer (subarachnoid) and sulcal CSF
-  colin27_cortical_gm = 4,      ///< cerebral grey matter outside the deep nuclei
-  colin27_white_matter = 5,     ///< cerebral white matter
-  colin27_ventricles = 6,       ///< lateral ventricles (with the third ventricle when connected)
+  colin27_scalp = 1,        ///< soft tissue outside the skull: skin, fat, muscle
+  colin27_skull = 2,        ///< bone between the outer CSF and the scalp
+  colin27_csf = 3,          ///< outer (subarachnoid) and sulcal CSF
+  colin27_cortical_gm = 4,  ///< cerebral grey matter outside the deep nuclei
+  colin27_white_matter = 5, ///< cerebral white matter
+  colin27_ventricles = 6,   ///< lateral ventricles (the largest deep CSF piece on each side)
   colin27_caudate = 7,
   colin27_putamen = 8,
   colin27_pallidum = 9,
@@ -35,21 +35,22 @@ struct HeadLabelInfo {
 
 /// A labelled head on a voxel grid.
 struct HeadLabels {
-  ImageGrid grid;                    ///< the grid of ch2.nii.gz (1 mm, 181 x 217 x 181)
-  std::vector<std::int32_t> labels;  ///< grid.voxel_count() labels, i fastest
-  std::vector<HeadLabelInfo> table;  ///< every label, background first, in label order
+  ImageGrid grid;                   ///< the grid of ch2.nii.gz (1 mm, 181 x 217 x 181)
+  std::vector<std::int32_t> labels; ///< grid.voxel_count() labels, i fastest
+  std::vector<HeadLabelInfo> table; ///< every label, background first, in label order
 };
 
 /// Parameters of the derivation; every length is in mm (world units), whatever the voxel size.
 struct Colin27Options {
-  int majority_filter_passes = 1;          ///< 3x3x3 majority passes over the tissue classes
-  double outer_csf_thickness_mm = 1.5;     ///< outer CSF = brain mask dilated by this, minus the brain
-  double scalp_thickness_mm = 5.0;         ///< scalp = head voxels this close to the head's surface
-  double skull_min_thickness_mm = 3.0;     ///< skull voxels at least this far beyond the outer CSF
-  double bone_intensity_fraction = 0.6;    ///< outside the brain, T1 below this times the head threshold is bone
-  double ventricle_depth_mm = 12.0;        ///< ventricles lie at least this deep inside the brain mask
-  double ventricle_min_volume_ml = 1.0;    ///< smaller deep CSF components are sulcal CSF
-  double brainstem_half_width_mm = 20.0;   ///< brainstem candidates lie this close to the midline (x)
+  int majority_filter_passes = 1;       ///< 3x3x3 majority passes over the tissue classes
+  double outer_csf_thickness_mm = 1.5;  ///< outer CSF = brain mask dilated by this, minus the brain
+  double scalp_thickness_mm = 5.0;      ///< scalp = head voxels this close to the head's surface
+  double skull_min_thickness_mm = 3.0;  ///< skull voxels at least this far beyond the outer CSF
+  double bone_intensity_fraction = 0.6; ///< outside the brain, T1 below this times the head threshold is bone
+  double ventricle_depth_mm = 12.0;     ///< ventricles lie at least this deep inside the brain mask
+  double ventricle_min_volume_ml = 1.0; ///< smaller deep CSF components are sulcal CSF
+  double ventricle_midline_gap_mm = 2.0; ///< deep CSF this close to the midline (x) is not ventricle
+  double brainstem_half_width_mm = 20.0; ///< brainstem candidates lie this close to the midline (x)
 };
 
 /// Derives the labelled Colin 27 head from the templates of Debian's mricron-data package
@@ -58,7 +59,8 @@ struct Colin27Options {
 /// @param templates_dir folder holding the templates (/usr/share/mricron/templates on Debian)
 /// @param options parameters of the derivation
 /// @throws InputError naming the missing or unreadable file and the Debian package
-HeadLabels derive_colin27_head(const std::filesystem::path& templates_dir, const Colin27Options& options = {});
+HeadLabels derive_colin27_head(const std::filesystem::path& templates_dir,
+                               const Colin27Options& options = {});
 
 /// The folder where Debian's mricron-data installs the templates.
 std::filesystem::path default_colin27_templates_dir();

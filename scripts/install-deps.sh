@@ -19,6 +19,7 @@ packages=(
   python3-matplotlib
   elastix snakemake
   zlib1g-dev libpng-dev
+  mricron-data
 )
 
 missing=()

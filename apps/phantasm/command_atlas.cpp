@@ -36,13 +36,17 @@ void add_atlas_command(CLI::App& app, std::function<int()>& action) {
   CLI::App* atlas = app.add_subcommand("atlas", "Write labelled anatomy derived from published atlases");
   atlas->require_subcommand(1);
   CLI::App* colin = atlas->add_subcommand(
-      "colin27", "Label the Colin 27 head (scalp, skull, CSF, grey and white matter, ventricles, deep nuclei, "
-                 "cerebellum, brainstem) on its 1 mm grid; see docs/anatomy-colin27.md");
-  colin->add_option("-o,--output", options->output, "NIfTI label volume to write (.nii or .nii.gz); the label "
-                                                    "table goes next to it as .tsv")
+      "colin27",
+      "Label the Colin 27 head (scalp, skull, CSF, grey and white matter, ventricles, deep nuclei, "
+      "cerebellum, brainstem) on its 1 mm grid; see docs/anatomy-colin27.md");
+  colin
+      ->add_option("-o,--output", options->output,
+                   "NIfTI label volume to write (.nii or .nii.gz); the label "
+                   "table goes next to it as .tsv")
       ->required();
-  colin->add_option("--templates", options->templates,
-                    "Folder with ch2.nii.gz, ch2bet.nii.gz and aal.nii.gz (Debian package mricron-data)")
+  colin
+      ->add_option("--templates", options->templates,
+                   "Folder with ch2.nii.gz, ch2bet.nii.gz and aal.nii.gz (Debian package mricron-data)")
       ->capture_default_str();
   colin->add_flag("-q,--quiet", options->quiet, "Print nothing but errors");
   colin->callback([options, &action] {
@@ -63,7 +67,8 @@ void add_atlas_command(CLI::App& app, std::function<int()>& action) {
       const std::filesystem::path tsv = table_path(options->output);
       write_file_atomically(tsv, table.str());
       if (!options->quiet) {
-        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        const double seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         std::cerr << "[atlas] wrote " << options->output << " and " << tsv.string() << " in " << std::fixed
                   << std::setprecision(1) << seconds << " s\n";
       }

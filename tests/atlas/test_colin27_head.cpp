@@ -22,8 +22,7 @@ const std::filesystem::path templates = default_colin27_templates_dir();
 /// Skips when the templates are absent, except under CI, where scripts/install-deps.sh
 /// installs them and their absence is a failure.
 bool templates_missing() {
-  if (std::filesystem::is_directory(templates))
-    return false;
+  if (std::filesystem::is_directory(templates)) return false;
   const char* ci = std::getenv("CI");
   if (ci != nullptr && std::strcmp(ci, "true") == 0)
     ADD_FAILURE() << templates << " is missing: install the Debian package mricron-data";
@@ -42,9 +41,8 @@ const HeadLabels& derived() {
   return *head;
 }
 
-#define SKIP_WITHOUT_TEMPLATES()                                                                            \
-  if (templates_missing())                                                                                  \
-  GTEST_SKIP() << templates << " is absent (Debian package mricron-data)"
+#define SKIP_WITHOUT_TEMPLATES()                                                                             \
+  if (templates_missing()) GTEST_SKIP() << templates << " is absent (Debian package mricron-data)"
 
 TEST(Colin27Head, EveryLabelIsPresentWithPlausibleVolumes) {
   SKIP_WITHOUT_TEMPLATES();
@@ -56,8 +54,8 @@ TEST(Colin27Head, EveryLabelIsPresentWithPlausibleVolumes) {
     std::cout << info.label << ' ' << info.name << ' ' << ml[info.label] << " ml\n";
     EXPECT_GT(ml[info.label], 0.0) << info.name;
   }
-  const double gm = ml[colin27_cortical_gm] + ml[colin27_caudate] + ml[colin27_putamen] + ml[colin27_pallidum] +
-                    ml[colin27_thalamus];
+  const double gm = ml[colin27_cortical_gm] + ml[colin27_caudate] + ml[colin27_putamen] +
+                    ml[colin27_pallidum] + ml[colin27_thalamus];
   EXPECT_GE(gm, 500.0);
   EXPECT_LE(gm, 900.0);
   EXPECT_GE(ml[colin27_white_matter], 350.0);
@@ -86,8 +84,7 @@ TEST(Colin27Head, NestingIsSane) {
         const std::int64_t n = at(i, j, k);
         if (head.labels[n] == colin27_ventricles && bet.values[n] <= 0.0)
           ++ventricles_outside; // the brain mask is ch2bet > 0 with its holes filled
-        if (head.labels[n] != colin27_white_matter)
-          continue;
+        if (head.labels[n] != colin27_white_matter) continue;
         for (const std::int64_t m : {at(i + 1, j, k), at(i - 1, j, k), at(i, j + 1, k), at(i, j - 1, k),
                                      at(i, j, k + 1), at(i, j, k - 1)})
           wm_touching_background += head.labels[m] == colin27_background;
@@ -164,8 +161,8 @@ TEST(AtlasCommand, WritesALabelVolumeNibabelReads) {
 }
 
 TEST(AtlasCommand, AMissingTemplatesFolderIsABadInput) {
-  const CommandResult run = run_command(
-      {PHANTASM_EXECUTABLE, "atlas", "colin27", "-o", "/tmp/phantasm_never.nii.gz", "--templates", "/nonexistent"});
+  const CommandResult run = run_command({PHANTASM_EXECUTABLE, "atlas", "colin27", "-o",
+                                         "/tmp/phantasm_never.nii.gz", "--templates", "/nonexistent"});
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.err.find("mricron-data"), std::string::npos) << run.err;
 }
