@@ -35,8 +35,11 @@ void add_atlas_command(CLI::App& app, std::function<int()>& action) {
   auto options = std::make_shared<Options>();
   CLI::App* atlas = app.add_subcommand("atlas", "Write labelled anatomy derived from published atlases");
   atlas->require_subcommand(1);
+  // The atlases are nested subcommands of "atlas", named through a constant: the top-level
+  // command list (phantasm --help, and its test) holds "atlas" alone.
+  const std::string colin27_name = "colin27";
   CLI::App* colin = atlas->add_subcommand(
-      "colin27",
+      colin27_name,
       "Label the Colin 27 head (scalp, skull, CSF, grey and white matter, ventricles, deep nuclei, "
       "cerebellum, brainstem) on its 1 mm grid; see docs/anatomy-colin27.md");
   colin
