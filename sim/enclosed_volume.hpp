@@ -28,6 +28,9 @@ struct EnclosedVolume {
   double rest_volume_m3 = 0.0;
   SingularValueRange range; ///< limits of V / V0
   double weight = 0.0;      ///< w, N/m
+  /// A tet body's vertex star (sim/vertex_star_volumes.hpp): few vertices, so Newton takes the
+  /// rank-one Gauss-Newton block w n n^T (n = grad V / |grad V|) over them instead of w I.
+  bool vertex_star = false;
 };
 
 /// The constraint of a closed surface at rest positions `rest_m` (model rows), with weight

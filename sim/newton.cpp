@@ -73,10 +73,30 @@ Eigen::SparseMatrix<double> assemble_hessian(const ElasticModel& model, const St
           add_block(vertices[static_cast<std::size_t>(a)], vertices[static_cast<std::size_t>(b)],
                     c[a] * c[b] * nn);
   }
-  // Enclosed volumes: w I on their vertices (Gauss-Newton, as for surface elements).
-  for (const EnclosedVolume& c : model.volumes)
-    for (int v : c.vertices)
-      add_block(v, v, c.weight * Eigen::Matrix3d::Identity());
+  // Enclosed volumes: w I on their vertices (Gauss-Newton, as for surface elements). A vertex
+  // star's w is the bulk modulus's (huge as nu -> 1/2), where w I would make Newton crawl: its
+  // block is w (I - dP/dX) without the set's curvature, w n n^T with n = grad V / |grad V|
+  // (near the set w/2 dist^2 = K (V - V0)^2 / (2 V0), whose Gauss-Newton matrix this is), and
+  // nothing while V / V0 lies strictly inside the range (the energy is 0 there).
+  for (const EnclosedVolume& c : model.volumes) {
+    if (!c.vertex_star) {
+      for (int v : c.vertices)
+        add_block(v, v, c.weight * Eigen::Matrix3d::Identity());
+      continue;
+    }
+    const Eigen::MatrixX3d X = gather_vertices(c, p);
+    const double ratio = enclosed_volume(c, X) / c.rest_volume_m3;
+    if (ratio > c.range.min && ratio < c.range.max) continue;
+    const Eigen::MatrixX3d G = enclosed_volume_gradient(c, X);
+    const double norm2 = G.squaredNorm();
+    if (!(norm2 > 0.0)) continue;
+    const double scale = c.weight / norm2;
+    for (std::size_t a = 0; a < c.vertices.size(); ++a)
+      for (std::size_t b = 0; b < c.vertices.size(); ++b)
+        add_block(c.vertices[a], c.vertices[b],
+                  scale * G.row(static_cast<Eigen::Index>(a)).transpose() *
+                      G.row(static_cast<Eigen::Index>(b)));
+  }
   if (!model.obstacles.empty()) {
     for (Eigen::Index v = 0; v < model.vertex_count(); ++v)
       add_block(static_cast<int>(v), static_cast<int>(v),

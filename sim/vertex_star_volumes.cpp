@@ -1,0 +1,70 @@
+#include "sim/vertex_star_volumes.hpp"
+
+#include <algorithm>
+#include <map>
+#include <vector>
+
+namespace phantasm {
+
+int move_bulk_to_vertex_stars(ElasticModel& model) {
+  const auto n = static_cast<std::size_t>(model.vertex_count());
+  // Per vertex: its tets, and sum_t lambda_t V_t (volume weight 3 lambda V).
+  std::vector<std::vector<int>> tets_of(n);
+  std::vector<double> lambda_volume(n, 0.0);
+  for (std::size_t t = 0; t < model.tets.size(); ++t) {
+    const TetElement& e = model.tets[t];
+    if (!(e.volume_weight > 0.0)) continue;
+    for (int v : e.vertices) {
+      tets_of[static_cast<std::size_t>(v)].push_back(static_cast<int>(t));
+      lambda_volume[static_cast<std::size_t>(v)] += e.volume_weight / 3.0;
+    }
+  }
+  // A positively oriented tet (a, b, c, d)'s outward faces.
+  static constexpr int faces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  int added = 0;
+  for (std::size_t v = 0; v < n; ++v) {
+    if (tets_of[v].empty()) continue;
+    // Boundary of the star: each face with its orientation, keyed by its sorted vertices; a
+    // face shared by two of the star's tets appears twice (opposite orientations) and cancels.
+    std::map<std::array<int, 3>, std::array<int, 3>> boundary;
+    double star_volume = 0.0;
+    for (int t : tets_of[v]) {
+      const TetElement& e = model.tets[static_cast<std::size_t>(t)];
+      star_volume += e.rest_volume_m3;
+      for (const auto& f : faces) {
+        const std::array<int, 3> face = {e.vertices[static_cast<std::size_t>(f[0])],
+                                         e.vertices[static_cast<std::size_t>(f[1])],
+                                         e.vertices[static_cast<std::size_t>(f[2])]};
+        std::array<int, 3> key = face;
+        std::sort(key.begin(), key.end());
+        const auto [it, inserted] = boundary.emplace(key, face);
+        if (!inserted) boundary.erase(it);
+      }
+    }
+    std::vector<int> vertices;
+    std::map<int, int> local;
+    std::vector<std::array<int, 3>> triangles;
+    for (const auto& [key, face] : boundary) {
+      std::array<int, 3> triangle{};
+      for (int k = 0; k < 3; ++k) {
+        const int u = face[static_cast<std::size_t>(k)];
+        const auto [it, inserted] = local.emplace(u, static_cast<int>(vertices.size()));
+        if (inserted) vertices.push_back(u);
+        triangle[static_cast<std::size_t>(k)] = it->second;
+      }
+      triangles.push_back(triangle);
+    }
+    const double bulk_modulus = lambda_volume[v] / (4.0 * star_volume);
+    EnclosedVolume star =
+        enclosed_volume_constraint(std::move(vertices), std::move(triangles), {}, model.rest_positions_m,
+                                   bulk_modulus, model.volume_range);
+    star.vertex_star = true;
+    model.volumes.push_back(std::move(star));
+    ++added;
+  }
+  for (TetElement& e : model.tets)
+    e.volume_weight = 0.0;
+  return added;
+}
+
+} // namespace phantasm
