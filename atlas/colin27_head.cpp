@@ -329,6 +329,120 @@ bool aal_is(int index, int first, int last) {
   return index >= first && index <= last;
 }
 
+/// The lateral ventricles: per CSF component of the deep, off-midline CSF-class voxels, whether
+/// it is one (the largest piece on each side of the midline, if at least the minimum volume).
+/// `csf_component` receives each voxel's component (0: none).
+std::vector<std::uint8_t> lateral_ventricles(const ImageGrid& grid, const Volume& vol, const Mask& brain,
+                                             const std::vector<std::int8_t>& cls, double midline_x,
+                                             const Colin27Options& options,
+                                             std::vector<std::int32_t>& csf_component) {
+  const std::size_t count = static_cast<std::size_t>(vol.size());
+  // Lateral ventricles: CSF-class voxels deep inside the brain (never near the brain's outer
+  // rim, where sulcal CSF is), off a thin midline slab (which cuts the interhemispheric
+  // fissure's CSF from them, as the septum pellucidum does), then on each side of the
+  // midline the largest connected piece, if at least the minimum volume.
+  Mask not_brain(count);
+  for (std::size_t n = 0; n < count; ++n)
+    not_brain[n] = !brain[n];
+  const std::vector<float> depth = distance_to(not_brain, grid);
+  Mask deep_csf(count);
+  for (int k = 0; k < vol.nz; ++k)
+    for (int j = 0; j < vol.ny; ++j)
+      for (int i = 0; i < vol.nx; ++i) {
+        const std::int64_t n = vol.at(i, j, k);
+        if (cls[n] != 1 || depth[n] < options.ventricle_depth_mm) continue;
+        const double x = grid.world_from_index(Eigen::Vector3d(i, j, k)).x();
+        deep_csf[n] = std::abs(x - midline_x) >= options.ventricle_midline_gap_mm;
+      }
+  std::int32_t csf_components = 0;
+  csf_component = connected_components(deep_csf, grid, &csf_components);
+  std::vector<std::int64_t> csf_size(static_cast<std::size_t>(csf_components) + 1, 0);
+  std::vector<double> csf_x(static_cast<std::size_t>(csf_components) + 1, 0.0);
+  for (int k = 0; k < vol.nz; ++k)
+    for (int j = 0; j < vol.ny; ++j)
+      for (int i = 0; i < vol.nx; ++i) {
+        const std::int32_t c = csf_component[vol.at(i, j, k)];
+        ++csf_size[c];
+        csf_x[c] += grid.world_from_index(Eigen::Vector3d(i, j, k)).x();
+      }
+  const double voxel_ml = grid.spacing_mm.prod() / 1000.0;
+  std::array<std::int32_t, 2> largest{0, 0}; // left (x < midline), right
+  for (std::int32_t c = 1; c <= csf_components; ++c) {
+    const int side = csf_x[c] / double(csf_size[c]) < midline_x ? 0 : 1;
+    if (largest[side] == 0 || csf_size[c] > csf_size[largest[side]]) largest[side] = c;
+  }
+  std::vector<std::uint8_t> is_ventricle(static_cast<std::size_t>(csf_components) + 1, 0);
+  for (const std::int32_t c : largest)
+    if (c != 0 && double(csf_size[c]) * voxel_ml >= options.ventricle_min_volume_ml) is_ventricle[c] = 1;
+
+  return is_ventricle;
+}
+
+/// The brainstem (see the comment inside).
+Mask brainstem_mask(const ImageGrid& grid, const Volume& vol, const Mask& brain, const std::vector<int>& aal,
+                    const std::vector<std::int8_t>& cls, double midline_x, double thalamus_min_z,
+                    const Colin27Options& options) {
+  const std::size_t count = static_cast<std::size_t>(vol.size());
+  // Brainstem: the unlabelled part of the brain below the thalamus near the midline. AAL
+  // labels grey matter only, so its zero inside the brain is white matter or brainstem; below
+  // the thalamus's lowest point and within a slab around the midline, the largest connected
+  // piece of it (CSF excluded) is the brainstem.
+  Mask stem_candidate(count);
+  for (int k = 0; k < vol.nz; ++k)
+    for (int j = 0; j < vol.ny; ++j)
+      for (int i = 0; i < vol.nx; ++i) {
+        const std::int64_t n = vol.at(i, j, k);
+        if (!brain[n] || aal[n] != 0 || cls[n] == 1) continue;
+        const Eigen::Vector3d p = grid.world_from_index(Eigen::Vector3d(i, j, k));
+        stem_candidate[n] =
+            p.z() < thalamus_min_z && std::abs(p.x() - midline_x) <= options.brainstem_half_width_mm;
+      }
+  return largest_component(stem_candidate, grid);
+}
+
+/// Labels the voxels outside the brain: outer CSF, skull and scalp (see the comments inside).
+void label_outside_brain(const ImageGrid& grid, const Mask& brain, const std::vector<int>& intensity,
+                         const Colin27Options& options, std::vector<std::int32_t>& labels) {
+  const std::size_t count = labels.size();
+  // Outside the brain. Head: T1 above Otsu's threshold of the whole volume, its largest
+  // piece, holes filled (dark bone and sinuses are inside the head).
+  std::array<std::int64_t, 256> histogram{};
+  for (std::size_t n = 0; n < count; ++n)
+    ++histogram[intensity[n]];
+  const int head_threshold = otsu_threshold(histogram);
+  Mask head_mask(count);
+  for (std::size_t n = 0; n < count; ++n)
+    head_mask[n] = intensity[n] > head_threshold || brain[n];
+  head_mask = fill_holes_axial(fill_holes(largest_component(head_mask, grid), grid), grid);
+
+  // Outer CSF: the brain mask dilated by the CSF thickness. Skull: from there, at least the
+  // minimum thickness, and further out every dark (bone) voxel. Scalp: the outer layer of the
+  // head and every other non-bone voxel outside the skull.
+  const std::vector<float> from_brain = distance_to(brain, grid);
+  Mask not_head(count);
+  for (std::size_t n = 0; n < count; ++n)
+    not_head[n] = !head_mask[n];
+  const std::vector<float> from_outside = distance_to(not_head, grid);
+  const double bone_level = options.bone_intensity_fraction * head_threshold;
+  for (std::size_t n = 0; n < count; ++n) {
+    if (brain[n]) continue;
+    const double d = from_brain[n];
+    if (d <= options.outer_csf_thickness_mm) {
+      labels[n] = colin27_csf;
+      continue;
+    }
+    if (!head_mask[n]) continue;
+    const bool in_scalp = from_outside[n] <= options.scalp_thickness_mm;
+    const bool in_min_skull = d <= options.outer_csf_thickness_mm + options.skull_min_thickness_mm;
+    if (in_min_skull && !in_scalp)
+      labels[n] = colin27_skull;
+    else if (!in_scalp && intensity[n] < bone_level)
+      labels[n] = colin27_skull;
+    else
+      labels[n] = colin27_scalp;
+  }
+}
+
 } // namespace
 
 std::filesystem::path default_colin27_templates_dir() {
@@ -391,59 +505,10 @@ HeadLabels derive_colin27_head(const std::filesystem::path& templates_dir, const
         }
       }
   const double midline_x = thalamus_voxels > 0 ? midline_x_sum / double(thalamus_voxels) : 0.0;
-  // Lateral ventricles: CSF-class voxels deep inside the brain (never near the brain's outer
-  // rim, where sulcal CSF is), off a thin midline slab (which cuts the interhemispheric
-  // fissure's CSF from them, as the septum pellucidum does), then on each side of the
-  // midline the largest connected piece, if at least the minimum volume.
-  Mask not_brain(count);
-  for (std::size_t n = 0; n < count; ++n)
-    not_brain[n] = !brain[n];
-  const std::vector<float> depth = distance_to(not_brain, grid);
-  Mask deep_csf(count);
-  for (int k = 0; k < vol.nz; ++k)
-    for (int j = 0; j < vol.ny; ++j)
-      for (int i = 0; i < vol.nx; ++i) {
-        const std::int64_t n = vol.at(i, j, k);
-        if (cls[n] != 1 || depth[n] < options.ventricle_depth_mm) continue;
-        const double x = grid.world_from_index(Eigen::Vector3d(i, j, k)).x();
-        deep_csf[n] = std::abs(x - midline_x) >= options.ventricle_midline_gap_mm;
-      }
-  std::int32_t csf_components = 0;
-  const std::vector<std::int32_t> csf_component = connected_components(deep_csf, grid, &csf_components);
-  std::vector<std::int64_t> csf_size(static_cast<std::size_t>(csf_components) + 1, 0);
-  std::vector<double> csf_x(static_cast<std::size_t>(csf_components) + 1, 0.0);
-  for (int k = 0; k < vol.nz; ++k)
-    for (int j = 0; j < vol.ny; ++j)
-      for (int i = 0; i < vol.nx; ++i) {
-        const std::int32_t c = csf_component[vol.at(i, j, k)];
-        ++csf_size[c];
-        csf_x[c] += grid.world_from_index(Eigen::Vector3d(i, j, k)).x();
-      }
-  const double voxel_ml = grid.spacing_mm.prod() / 1000.0;
-  std::array<std::int32_t, 2> largest{0, 0}; // left (x < midline), right
-  for (std::int32_t c = 1; c <= csf_components; ++c) {
-    const int side = csf_x[c] / double(csf_size[c]) < midline_x ? 0 : 1;
-    if (largest[side] == 0 || csf_size[c] > csf_size[largest[side]]) largest[side] = c;
-  }
-  std::vector<std::uint8_t> is_ventricle(static_cast<std::size_t>(csf_components) + 1, 0);
-  for (const std::int32_t c : largest)
-    if (c != 0 && double(csf_size[c]) * voxel_ml >= options.ventricle_min_volume_ml) is_ventricle[c] = 1;
-
-  // Brainstem: the unlabelled part of the brain below the thalamus near the midline. AAL
-  // labels grey matter only, so its zero inside the brain is white matter or brainstem; below
-  // the thalamus's lowest point and within a slab around the midline, the largest connected
-  // piece of it (CSF excluded) is the brainstem.
-  Mask stem_candidate(count);
-  for (int k = 0; k < vol.nz; ++k)
-    for (int j = 0; j < vol.ny; ++j)
-      for (int i = 0; i < vol.nx; ++i) {
-        const std::int64_t n = vol.at(i, j, k);
-        if (!brain[n] || aal[n] != 0 || cls[n] == 1) continue;
-        const Eigen::Vector3d p = grid.world_from_index(Eigen::Vector3d(i, j, k));
-        stem_candidate[n] =
-            p.z() < thalamus_min_z && std::abs(p.x() - midline_x) <= options.brainstem_half_width_mm;
-      }
-  const Mask brainstem = largest_component(stem_candidate, grid);
+  std::vector<std::int32_t> csf_component;
+  const std::vector<std::uint8_t> is_ventricle =
+      lateral_ventricles(grid, vol, brain, cls, midline_x, options, csf_component);
+  const Mask brainstem = brainstem_mask(grid, vol, brain, aal, cls, midline_x, thalamus_min_z, options);
 
   // Labels inside the brain.
   std::vector<std::int32_t>& labels = head.labels;
@@ -474,43 +539,7 @@ HeadLabels derive_colin27_head(const std::filesystem::path& templates_dir, const
       labels[n] = cls[n] == 3 ? colin27_white_matter : colin27_cortical_gm;
   }
 
-  // Outside the brain. Head: T1 above Otsu's threshold of the whole volume, its largest
-  // piece, holes filled (dark bone and sinuses are inside the head).
-  std::array<std::int64_t, 256> histogram{};
-  for (std::size_t n = 0; n < count; ++n)
-    ++histogram[intensity[n]];
-  const int head_threshold = otsu_threshold(histogram);
-  Mask head_mask(count);
-  for (std::size_t n = 0; n < count; ++n)
-    head_mask[n] = intensity[n] > head_threshold || brain[n];
-  head_mask = fill_holes_axial(fill_holes(largest_component(head_mask, grid), grid), grid);
-
-  // Outer CSF: the brain mask dilated by the CSF thickness. Skull: from there, at least the
-  // minimum thickness, and further out every dark (bone) voxel. Scalp: the outer layer of the
-  // head and every other non-bone voxel outside the skull.
-  const std::vector<float> from_brain = distance_to(brain, grid);
-  Mask not_head(count);
-  for (std::size_t n = 0; n < count; ++n)
-    not_head[n] = !head_mask[n];
-  const std::vector<float> from_outside = distance_to(not_head, grid);
-  const double bone_level = options.bone_intensity_fraction * head_threshold;
-  for (std::size_t n = 0; n < count; ++n) {
-    if (brain[n]) continue;
-    const double d = from_brain[n];
-    if (d <= options.outer_csf_thickness_mm) {
-      labels[n] = colin27_csf;
-      continue;
-    }
-    if (!head_mask[n]) continue;
-    const bool in_scalp = from_outside[n] <= options.scalp_thickness_mm;
-    const bool in_min_skull = d <= options.outer_csf_thickness_mm + options.skull_min_thickness_mm;
-    if (in_min_skull && !in_scalp)
-      labels[n] = colin27_skull;
-    else if (!in_scalp && intensity[n] < bone_level)
-      labels[n] = colin27_skull;
-    else
-      labels[n] = colin27_scalp;
-  }
+  label_outside_brain(grid, brain, intensity, options, labels);
 
   head.table = {{colin27_background, "background", ""},
                 {colin27_scalp, "scalp", "skin"},

@@ -145,24 +145,3 @@ TEST(VertexStarVolumes, LocalGlobalGivesIdenticalResultsOnOneAndTwoThreads) {
   EXPECT_EQ(a.energies_J, b.energies_J);
   EXPECT_EQ(one, two);
 }
-
-// Measurement, not run by default: local/global's tip and time after 200 iterations, per tet
-// and with stars.
-TEST(VertexStarVolumes, DISABLED_LocalGlobalCantileverTip) {
-  for (double nu : {0.45, 0.499}) {
-    for (VolumeFormulation formulation : {VolumeFormulation::tet, VolumeFormulation::vertex_star}) {
-      const ElasticModel model = cantilever({20, 20, 100}, {4, 4, 20}, 2.5e5, nu, formulation);
-      Eigen::MatrixX3d p = model.rest_positions_m;
-      StopCriteria stop;
-      stop.max_iterations = 200;
-      stop.relative_energy_decrease = 0.0;
-      stop.position_change_m = 0.0;
-      LocalGlobalSolver solver(model, 0.0, 1);
-      const SolveReport report = solver.solve(p, p, stop, true);
-      std::printf("nu %.3f %s local/global %d iterations in %.2f s: tip %.3f mm, residual %.3g N\n", nu,
-                  formulation == VolumeFormulation::tet ? "tet" : "star", report.iterations,
-                  report.seconds.back(), tip_deflection_mm(model, p), report.residual_N);
-      std::fflush(stdout);
-    }
-  }
-}
