@@ -118,7 +118,7 @@ def main():
     run_to_csv([os.path.join(bench, "solver_convergence"), args.threads, traces], None)
     solver_plots(read_csv(traces), args.output)
     fit = os.path.join(args.output, "fit_error.csv")
-    run_to_csv([os.path.join(bench, "fit_error_curve")], fit)
+    run_to_csv([os.path.join(bench, "fit_error_curve"), "ellipsoid"], fit)
     fit_plot(read_csv(fit), args.output)
     if not args.skip_voxel:
         voxel = os.path.join(args.output, "volume_error.csv")
