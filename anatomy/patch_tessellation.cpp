@@ -21,10 +21,12 @@ int grid_index(int i, int j, int n) {
 int PatchSurface::level_for(Eigen::Index t, double max_deviation_mm, double* deviation) const {
   *deviation = 0.0;
   if (m_perturbations[static_cast<std::size_t>(t)].empty()) return 0;
+  // The grid of one level is the corner grid of the next: each level evaluates its points once.
+  auto corners = patch_grid_points(t, 0);
   for (int level = 0; level <= k_max_level; ++level) {
     // Deviation of the level-`level` interpolation, measured at the midpoints of its edges.
     const int fine = 2 << level;
-    const auto points = patch_grid_points(t, level + 1);
+    auto points = patch_grid_points(t, level + 1);
     double worst = 0.0;
     for (int j = 0; j <= fine; ++j) {
       for (int i = 0; i + j <= fine; ++i) {
@@ -45,7 +47,6 @@ int PatchSurface::level_for(Eigen::Index t, double max_deviation_mm, double* dev
     // Edge midpoints miss bumps that sit inside a sub-triangle (all of them at level 0, where
     // the midpoints lie on the base edges): check the centroids too.
     const int n = 1 << level;
-    const auto corners = patch_grid_points(t, level);
     auto check_centroid = [&](int ai, int aj, int bi, int bj, int ci, int cj) {
       const Eigen::Vector3d mean = (corners[static_cast<std::size_t>(grid_index(ai, aj, n))] +
                                     corners[static_cast<std::size_t>(grid_index(bi, bj, n))] +
@@ -62,6 +63,7 @@ int PatchSurface::level_for(Eigen::Index t, double max_deviation_mm, double* dev
     }
     *deviation = worst;
     if (worst <= max_deviation_mm) return level;
+    corners = std::move(points);
   }
   return k_max_level; // the finest level; *deviation tells how far it still is
 }

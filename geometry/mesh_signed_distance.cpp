@@ -146,7 +146,14 @@ MeshClosestPoint SignedDistanceMesh::search_grid(const Eigen::Vector3d& x) const
   const Eigen::Vector3i centre = cell_of(x);
   auto visit = [&](int cx, int cy, int cz) {
     if (cz < 0 || cy < 0 || cx < 0 || cz >= m_cells.z() || cy >= m_cells.y() || cx >= m_cells.x()) return;
+    // A cell, or a triangle's box, no closer than the best so far cannot hold a closer point
+    // (a tie keeps the first found either way, so the answer is the unpruned search's).
+    const Eigen::Vector3d lo = m_grid_min + Eigen::Vector3d(cx, cy, cz).cwiseProduct(m_cell_size);
+    if (box_distance_squared(x, lo, lo + m_cell_size) >= best.distance_squared) return;
     for (int t : m_buckets[voxel_index(m_cells, cx, cy, cz)]) {
+      if (box_distance_squared(x, m_face_min[static_cast<std::size_t>(t)],
+                               m_face_max[static_cast<std::size_t>(t)]) >= best.distance_squared)
+        continue;
       const auto& v = m_corners[static_cast<std::size_t>(t)];
       const TriangleClosestPoint c = closest_point_on_triangle(x, v[0], v[1], v[2]);
       const double d = (c.point - x).squaredNorm();

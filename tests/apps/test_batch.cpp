@@ -1,4 +1,4 @@
-// `phantasm batch` end to end on twelve small heads: jobs and shards give the same bytes, a
+// `phantasm batch` end to end on six small heads: jobs and shards give the same bytes, a
 // finished batch skips every subject, and a batch killed with SIGKILL at random moments and
 // restarted ends with exactly the dataset of an uninterrupted batch.
 
@@ -57,10 +57,10 @@ std::size_t count_ending(const std::map<std::string, std::string>& files, const 
 // killed one all end with the same bytes.
 TEST(BatchCommand, JobsShardsRestartsAndKillsEndWithTheSameSubjects) {
   const auto& a = reference();
-  EXPECT_EQ(count_ending(a.files, "provenance.json"), 12u);
-  EXPECT_EQ(count_ending(a.files, "_ses-def_T1w.nii.gz"), 12u);
+  EXPECT_EQ(count_ending(a.files, "provenance.json"), 6u);
+  EXPECT_EQ(count_ending(a.files, "_ses-def_T1w.nii.gz"), 6u);
   const std::string participants = a.files.at("participants.tsv");
-  EXPECT_EQ(std::count(participants.begin(), participants.end(), '\n'), 13);
+  EXPECT_EQ(std::count(participants.begin(), participants.end(), '\n'), 7);
   EXPECT_EQ(participants.rfind("participant_id\tseed\tdeformation.scale\tacquisition.noise_percent\n", 0),
             0u);
 
@@ -76,7 +76,7 @@ TEST(BatchCommand, JobsShardsRestartsAndKillsEndWithTheSameSubjects) {
   // A finished batch makes nothing again.
   const CommandResult again = run_command({k_phantasm, "batch", k_sweep.string(), "-o", a.folder.string()});
   EXPECT_EQ(again.exit_code, 0);
-  EXPECT_NE(again.err.find("0 subjects made, 12 already complete, 0 failed"), std::string::npos) << again.err;
+  EXPECT_NE(again.err.find("0 subjects made, 6 already complete, 0 failed"), std::string::npos) << again.err;
   EXPECT_EQ(folder_contents(a.folder), a.files);
 
   // Killed with SIGKILL at random moments and restarted: exactly the uninterrupted dataset.
