@@ -47,6 +47,10 @@ struct ShapeData {
 /// The anatomy of a scene.
 struct Phantom {
   std::vector<Organ> organs; ///< in scene order
+  /// anatomy.tet_size_mm: the element size of the tet meshes of bodies that hold nested organs,
+  /// made when the deformation stage knows its bodies (tet_mesh.hpp, mesh_nested_solid)
+  double tet_size_mm = 0.0;
+  std::uint64_t seed = 0; ///< the scene's seed, for those meshes
 
   const Organ* find(const std::string& name) const;
 };

@@ -190,6 +190,8 @@ Phantom build_phantom(const AnatomySettings& anatomy, const std::map<std::string
   }
 
   Phantom phantom;
+  phantom.tet_size_mm = anatomy.tet_size_mm;
+  phantom.seed = anatomy.seed;
   ProgressBar progress(reporter, "anatomy", settings.size());
   for (std::size_t o = 0; o < settings.size(); ++o) {
     throw_if_cancelled();

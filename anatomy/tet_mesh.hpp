@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <vector>
 
 namespace phantasm {
 
@@ -18,6 +19,19 @@ struct TetMesh {
   Eigen::MatrixX4i tets;     ///< #T by 4 vertex indices, positively oriented
   /// #B by 3 boundary triangles (indices into vertices), counter-clockwise seen from outside.
   Eigen::MatrixX3i boundary_faces;
+  /// Meshes of nested shapes (mesh_nested_solid): #T, per tet the index of the innermost shape
+  /// holding it (into NestedShapes::shapes); empty for a mesh of one shape.
+  Eigen::VectorXi subdomains;
+};
+
+/// Shapes nested in one solid: shapes[0] the outermost, parent[k] (< k) the shape that holds
+/// shape k (parent[0] = -1). Siblings are disjoint; every shape lies inside its parent.
+struct NestedShapes {
+  std::vector<const ImplicitShape*> shapes;
+  std::vector<int> parent;
+
+  /// The innermost shape holding x (RAS mm), -1 outside shapes[0]: the shapes' own inside tests.
+  int innermost(const Eigen::Vector3d& x) const;
 };
 
 /// Quality criteria of a tetrahedralization (CGAL Mesh_3), lengths in mm.
@@ -34,11 +48,31 @@ struct TetMeshCriteria {
 /// `surface_area_mm2`, with interior cells of the same size.
 TetMeshCriteria criteria_for_boundary_size(double surface_area_mm2, int boundary_triangles);
 
+/// Criteria of element size `tet_size_mm` (the scene's anatomy.tet_size_mm): tet circumradii and
+/// surface Delaunay ball radii at most tet_size_mm, surface approximation error at most a tenth of it.
+TetMeshCriteria criteria_for_tet_size(double tet_size_mm);
+
 /// Tetrahedralizes the inside of an implicit shape with CGAL Mesh_3 (sequential, seeded, so the
 /// same seed gives the same mesh). Every tet is oriented positively; the boundary triangles are
 /// the surface facets of the complex, oriented outward.
 /// @throws InputError when the mesher produces no cells (shape smaller than the criteria)
 TetMesh mesh_implicit_solid(const ImplicitShape& shape, const TetMeshCriteria& criteria, std::uint32_t seed);
+
+/// Tetrahedralizes the inside of shapes[0] as one conforming mesh of the nested shapes (CGAL
+/// Mesh_3 on a labeled domain whose label at x is innermost(x)): every tet lies in one shape's
+/// own region (its subdomain, in `subdomains`), and the surfaces between shapes are meshed as
+/// triangles of the tets (within facet_distance_mm of them), so a layer thinner than a tet still
+/// gets tets of its own. Sequential and repeatable like mesh_implicit_solid; refinement starts
+/// from points on every shape's surface (so that small inner shapes are found), which makes the
+/// result independent of the seed in practice. Mesh_3's perturbation and exudation remove slivers
+/// but cannot always where a layer is thinner than the tets: measure with min_dihedral_angle_deg.
+/// The boundary triangles are the outer surface's only.
+/// @throws InputError when the mesher produces no cells
+TetMesh mesh_nested_solid(const NestedShapes& nested, const TetMeshCriteria& criteria, std::uint32_t seed);
+
+/// The triangles between tets of different subdomains (each once, oriented outward of the tet
+/// of the smaller subdomain index) of a mesh with `subdomains`.
+Eigen::MatrixX3i subdomain_interface_faces(const TetMesh& mesh);
 
 /// Signed volume of tet t, mm^3 (positive for the orientation phantasm uses).
 double tet_volume(const TetMesh& mesh, Eigen::Index t);
@@ -46,6 +80,8 @@ double tet_volume(const TetMesh& mesh, Eigen::Index t);
 std::array<double, 6> tet_dihedral_angles_deg(const TetMesh& mesh, Eigen::Index t);
 /// Smallest dihedral angle over all tets, degrees.
 double min_dihedral_angle_deg(const TetMesh& mesh);
+/// Mean length of the tets' edges (each edge once), mm.
+double mean_edge_length(const TetMesh& mesh);
 
 /// The boundary as a closed triangle mesh of its own (the patch base mesh), and for each of its
 /// vertices the index of the tet-mesh vertex it is, so that both move together.

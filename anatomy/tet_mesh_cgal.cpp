@@ -14,6 +14,7 @@
 #include <CGAL/Mesh_criteria_3.h>
 #include <CGAL/Mesh_triangulation_3.h>
 #include <CGAL/make_mesh_3.h>
+#include <CGAL/refine_mesh_3.h>
 
 #include <Eigen/Geometry>
 
@@ -53,7 +54,9 @@ void canonicalize(TetMesh& mesh) {
     sorted.row(i) = mesh.vertices.row(order[static_cast<std::size_t>(i)]);
   }
   mesh.vertices = sorted;
-  std::vector<std::array<int, 4>> tets;
+  // Each tet with its subdomain as a fifth entry (tets are distinct, so it never decides the order).
+  const bool labeled = mesh.subdomains.size() == mesh.tets.rows();
+  std::vector<std::array<int, 5>> tets;
   for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
     std::array<int, 4> v;
     for (int k = 0; k < 4; ++k)
@@ -61,19 +64,21 @@ void canonicalize(TetMesh& mesh) {
     // Even permutations keep the orientation: bring the smallest index first with one.
     const auto smallest = static_cast<std::size_t>(std::min_element(v.begin(), v.end()) - v.begin());
     static const int even[4][4] = {{0, 1, 2, 3}, {1, 0, 3, 2}, {2, 3, 0, 1}, {3, 2, 1, 0}};
-    std::array<int, 4> rotated;
+    std::array<int, 5> rotated;
     for (int k = 0; k < 4; ++k)
       rotated[static_cast<std::size_t>(k)] = v[static_cast<std::size_t>(even[smallest][k])];
     // Then order the last three cyclically so the second is the smallest of them.
     while (rotated[1] > rotated[2] || rotated[1] > rotated[3]) {
-      std::rotate(rotated.begin() + 1, rotated.begin() + 2, rotated.end());
+      std::rotate(rotated.begin() + 1, rotated.begin() + 2, rotated.begin() + 4);
     }
+    rotated[4] = labeled ? mesh.subdomains[t] : 0;
     tets.push_back(rotated);
   }
   std::sort(tets.begin(), tets.end());
   for (std::size_t t = 0; t < tets.size(); ++t) {
     for (int k = 0; k < 4; ++k)
       mesh.tets(static_cast<Eigen::Index>(t), k) = tets[t][static_cast<std::size_t>(k)];
+    if (labeled) mesh.subdomains[static_cast<Eigen::Index>(t)] = tets[t][4];
   }
   std::vector<std::array<int, 3>> faces;
   for (Eigen::Index f = 0; f < mesh.boundary_faces.rows(); ++f) {
@@ -90,31 +95,10 @@ void canonicalize(TetMesh& mesh) {
   }
 }
 
-} // namespace
-
-TetMesh mesh_implicit_solid(const ImplicitShape& shape, const TetMeshCriteria& c, std::uint32_t seed) {
-  namespace p = CGAL::parameters;
-  // CGAL's implicit domains are negative inside; ours are positive inside.
-  std::function<double(const Point&)> inside_negative = [&shape](const Point& x) {
-    return -shape.value(Eigen::Vector3d(x.x(), x.y(), x.z()));
-  };
-  const Eigen::Vector3d centre = shape.center();
-  const double radius = 1.05 * shape.bounding_radius();
-  CGAL::Random random(seed);
-  const Domain domain = Domain::create_implicit_mesh_domain(
-      inside_negative, Kernel::Sphere_3(Point(centre.x(), centre.y(), centre.z()), radius * radius),
-      p::relative_error_bound = 1e-6, p::p_rng = &random);
-  const Criteria criteria(p::facet_angle = c.facet_angle_deg, p::facet_size = c.facet_size_mm,
-                          p::facet_distance = c.facet_distance_mm,
-                          p::cell_radius_edge_ratio = c.cell_radius_edge_ratio,
-                          p::cell_size = c.cell_size_mm);
-  // Mesh_3 draws from CGAL's default generator too: reseed it for repeatable meshes.
-  CGAL::get_default_random() = CGAL::Random(seed);
-  const Complex complex = CGAL::make_mesh_3<Complex>(
-      domain, criteria, p::no_lloyd(), p::odt(p::max_iteration_number = 20, p::time_limit = 0),
-      p::perturb(p::sliver_bound = c.sliver_bound_deg, p::time_limit = 0),
-      p::exude(p::sliver_bound = c.sliver_bound_deg, p::time_limit = 0));
-
+/// The complex's cells as a TetMesh in canonical order: tets oriented positively, boundary
+/// faces (between the domain and its outside) oriented outward, and with `labeled` each tet's
+/// subdomain index minus one (the shape index of NestedShapes).
+TetMesh to_tet_mesh(const Complex& complex, bool labeled, double cell_size_mm) {
   TetMesh mesh;
   std::map<Triangulation::Vertex_handle, int> index;
   std::vector<Eigen::Vector3d> points;
@@ -128,17 +112,19 @@ TetMesh mesh_implicit_solid(const ImplicitShape& shape, const TetMeshCriteria& c
     return i;
   };
   std::vector<Eigen::Vector4i> tets;
+  std::vector<int> subdomains;
   for (auto cell = complex.cells_in_complex_begin(); cell != complex.cells_in_complex_end(); ++cell) {
     Eigen::Vector4i t;
     for (int k = 0; k < 4; ++k)
       t[k] = index_of(cell->vertex(k));
     tets.push_back(t);
+    subdomains.push_back(static_cast<int>(complex.subdomain_index(cell)) - 1);
   }
   if (tets.empty()) {
     throw InputError(
         "tetrahedral mesh: expected cells inside the shape, found none (the shape is smaller than the "
         "cell size " +
-        std::to_string(c.cell_size_mm) + " mm)");
+        std::to_string(cell_size_mm) + " mm)");
   }
   std::vector<Eigen::Vector3i> faces;
   std::vector<int> inside_vertex; // the fourth vertex of the tet each boundary face belongs to
@@ -146,8 +132,10 @@ TetMesh mesh_implicit_solid(const ImplicitShape& shape, const TetMeshCriteria& c
     // Of the two cells sharing the facet, one is in the complex: orient away from its fourth vertex.
     auto cell = facet->first;
     int opposite = facet->second;
+    const auto mirror = complex.triangulation().mirror_facet(*facet);
+    // A facet between two subdomains is an interface, not boundary.
+    if (complex.is_in_complex(cell) && complex.is_in_complex(mirror.first)) continue;
     if (!complex.is_in_complex(cell)) {
-      const auto mirror = complex.triangulation().mirror_facet(*facet);
       cell = mirror.first;
       opposite = mirror.second;
     }
@@ -177,8 +165,109 @@ TetMesh mesh_implicit_solid(const ImplicitShape& shape, const TetMeshCriteria& c
     if (normal.dot(points[static_cast<std::size_t>(inside_vertex[i])] - a) > 0.0) std::swap(f[1], f[2]);
     mesh.boundary_faces.row(static_cast<Eigen::Index>(i)) = f.transpose();
   }
+  if (labeled) {
+    mesh.subdomains =
+        Eigen::Map<const Eigen::VectorXi>(subdomains.data(), static_cast<Eigen::Index>(subdomains.size()));
+  }
   canonicalize(mesh);
   return mesh;
+}
+
+} // namespace
+
+TetMesh mesh_implicit_solid(const ImplicitShape& shape, const TetMeshCriteria& c, std::uint32_t seed) {
+  namespace p = CGAL::parameters;
+  // CGAL's implicit domains are negative inside; ours are positive inside.
+  std::function<double(const Point&)> inside_negative = [&shape](const Point& x) {
+    return -shape.value(Eigen::Vector3d(x.x(), x.y(), x.z()));
+  };
+  const Eigen::Vector3d centre = shape.center();
+  const double radius = 1.05 * shape.bounding_radius();
+  CGAL::Random random(seed);
+  const Domain domain = Domain::create_implicit_mesh_domain(
+      inside_negative, Kernel::Sphere_3(Point(centre.x(), centre.y(), centre.z()), radius * radius),
+      p::relative_error_bound = 1e-6, p::p_rng = &random);
+  const Criteria criteria(p::facet_angle = c.facet_angle_deg, p::facet_size = c.facet_size_mm,
+                          p::facet_distance = c.facet_distance_mm,
+                          p::cell_radius_edge_ratio = c.cell_radius_edge_ratio,
+                          p::cell_size = c.cell_size_mm);
+  // Mesh_3 draws from CGAL's default generator too: reseed it for repeatable meshes.
+  CGAL::get_default_random() = CGAL::Random(seed);
+  const Complex complex = CGAL::make_mesh_3<Complex>(
+      domain, criteria, p::no_lloyd(), p::odt(p::max_iteration_number = 20, p::time_limit = 0),
+      p::perturb(p::sliver_bound = c.sliver_bound_deg, p::time_limit = 0),
+      p::exude(p::sliver_bound = c.sliver_bound_deg, p::time_limit = 0));
+  return to_tet_mesh(complex, false, c.cell_size_mm);
+}
+
+TetMesh mesh_nested_solid(const NestedShapes& nested, const TetMeshCriteria& c, std::uint32_t seed) {
+  namespace p = CGAL::parameters;
+  // Label 0 is outside; shape k is subdomain k + 1.
+  std::function<int(const Point&)> label = [&nested](const Point& x) {
+    return nested.innermost(Eigen::Vector3d(x.x(), x.y(), x.z())) + 1;
+  };
+  const ImplicitShape& outer = *nested.shapes.at(0);
+  const Eigen::Vector3d centre = outer.center();
+  const double radius = 1.05 * outer.bounding_radius();
+  CGAL::Random random(seed);
+  const Domain domain(label, Kernel::Sphere_3(Point(centre.x(), centre.y(), centre.z()), radius * radius),
+                      1e-6, CGAL::Null_subdomain_index(), &random);
+  const Criteria criteria(p::facet_angle = c.facet_angle_deg, p::facet_size = c.facet_size_mm,
+                          p::facet_distance = c.facet_distance_mm,
+                          p::cell_radius_edge_ratio = c.cell_radius_edge_ratio,
+                          p::cell_size = c.cell_size_mm,
+                          // No facet may join two surfaces (across a thin layer): each facet's
+                          // vertices lie on the one surface it approximates.
+                          p::facet_topology = CGAL::FACET_VERTICES_ON_SAME_SURFACE_PATCH);
+  CGAL::get_default_random() = CGAL::Random(seed);
+  // Mesh_3's own initial points lie on whichever surface random rays from the centre cross first,
+  // so a small inner shape could be missed: start instead from points on every shape's surface,
+  // where rays from its centre (42 directions) first leave it.
+  Complex complex;
+  Triangulation& triangulation = complex.triangulation();
+  const auto weighted = triangulation.geom_traits().construct_weighted_point_3_object();
+  const auto crosses = domain.do_intersect_surface_object();
+  const auto intersection = domain.construct_intersection_object();
+  const TriangleMesh directions = unit_icosphere(1);
+  const double step_across = 0.01 * c.facet_distance_mm;
+  for (const ImplicitShape* shape : nested.shapes) {
+    const Eigen::Vector3d from = shape->center();
+    if (shape->value(from) <= 0.0) continue;
+    const double reach = 1.05 * shape->bounding_radius();
+    for (Eigen::Index d = 0; d < directions.vertex_count(); ++d) {
+      const Eigen::Vector3d direction = directions.vertex(d);
+      // The first sign change along the ray (64 steps), then bisection.
+      constexpr int steps = 64;
+      double inside = 0.0, outside = -1.0;
+      for (int i = 1; i <= steps; ++i) {
+        const double t = reach * i / steps;
+        if (shape->value(from + t * direction) <= 0.0) {
+          outside = t;
+          break;
+        }
+        inside = t;
+      }
+      if (outside < 0.0) continue;
+      for (int i = 0; i < 60; ++i) {
+        const double t = 0.5 * (inside + outside);
+        (shape->value(from + t * direction) > 0.0 ? inside : outside) = t;
+      }
+      const Eigen::Vector3d a = from + (inside - step_across) * direction;
+      const Eigen::Vector3d b = from + (outside + step_across) * direction;
+      const Kernel::Segment_3 segment(Point(a.x(), a.y(), a.z()), Point(b.x(), b.y(), b.z()));
+      if (!crosses(segment)) continue;
+      const auto crossing = intersection(segment);
+      const auto vertex = triangulation.insert(weighted(std::get<0>(crossing)));
+      if (vertex == Triangulation::Vertex_handle()) continue; // hidden
+      complex.set_dimension(vertex, 2);
+      complex.set_index(vertex, std::get<1>(crossing));
+    }
+  }
+  CGAL::refine_mesh_3(complex, domain, criteria, p::no_lloyd(),
+                      p::odt(p::max_iteration_number = 20, p::time_limit = 0),
+                      p::perturb(p::sliver_bound = c.sliver_bound_deg, p::time_limit = 0),
+                      p::exude(p::sliver_bound = c.sliver_bound_deg, p::time_limit = 0));
+  return to_tet_mesh(complex, true, c.cell_size_mm);
 }
 
 } // namespace phantasm

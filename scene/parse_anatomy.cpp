@@ -91,6 +91,7 @@ void parse_shape(CheckedMap& map, const std::filesystem::path& scene_folder, Sha
 void parse_anatomy(CheckedMap& map, const std::filesystem::path& scene_folder, AnatomySettings& anatomy) {
   map.number("variation", anatomy.variation, between(0.0, 0.3, "relative size"));
   map.integer("base_mesh_triangles", anatomy.base_mesh_triangles, 20, 200000);
+  map.number("tet_size_mm", anatomy.tet_size_mm, between(0.5, 500.0, "mm"));
   const YAML::Node organs = map.get("organs");
   const std::string path = map.child_path("organs");
   if (!organs.IsDefined()) {

@@ -133,6 +133,7 @@ nlohmann::json scene_settings_json(const Scene& scene) {
       {"anatomy",
        {{"variation", scene.anatomy.variation},
         {"base_mesh_triangles", scene.anatomy.base_mesh_triangles},
+        {"tet_size_mm", scene.anatomy.tet_size_mm},
         {"organs", organs}}},
       {"deformation",
        {{"mode", to_string(d.mode)},

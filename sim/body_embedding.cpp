@@ -73,7 +73,8 @@ Embedding embed(const Phantom& phantom, const BodyAssignment& assignment, const 
     e.coefficients = Eigen::Vector4d(1, 0, 0, 0);
     return e;
   }
-  if (static_cast<int>(i) == body.organ &&
+  if (static_cast<int>(i) == body.organ && phantom.organs[i].solid &&
+      body.mesh.get() == &*phantom.organs[i].solid &&
       phantom.organs[i].tet_vertex_of_surface_vertex.size() > surface_vertex) {
     e.vertices = {body.first_vertex + phantom.organs[i].tet_vertex_of_surface_vertex[surface_vertex], 0, 0,
                   0};
@@ -89,7 +90,7 @@ void collect_deformations(const OrganTable& organs, const Phantom& phantom, cons
   const std::size_t n = organs.size();
   for (const Body& body : bodies) {
     if (body.shell) continue; // the displacement fields come from solids' tets
-    const TetMesh& mesh = *phantom.organs[static_cast<std::size_t>(body.organ)].solid;
+    const TetMesh& mesh = *body.mesh;
     result.bodies.push_back({organs[static_cast<std::size_t>(body.organ)].name, mesh.vertices,
                              deformed_mm.middleRows(body.first_vertex, mesh.vertices.rows()), mesh.tets});
   }
@@ -113,7 +114,7 @@ void collect_deformations(const OrganTable& organs, const Phantom& phantom, cons
             interpolate(embed(phantom, assignment, bodies, i, v, surface.row(v).transpose()), deformed_mm)
                 .transpose();
       if (organ.solid) {
-        if (is_body) {
+        if (is_body && body.mesh.get() == &*organ.solid) {
           d.solid_mm = deformed_mm.middleRows(body.first_vertex, organ.solid->vertices.rows());
         } else {
           for (Eigen::Index v = 0; v < d.solid_mm.rows(); ++v)

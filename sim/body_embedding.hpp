@@ -56,7 +56,10 @@ struct Body {
   int first_vertex = 0;
   Eigen::Index vertex_count = 0;
   std::unique_ptr<TetLocator> locator; ///< solids only
-  bool shell = false;                  ///< a surface organ: its triangles carry the load
+  /// solids: the tets solved, the organ's own mesh or, when organs are nested in it, the mesh of
+  /// all of them (tissue interfaces as faces)
+  std::shared_ptr<const TetMesh> mesh;
+  bool shell = false; ///< a surface organ: its triangles carry the load
 };
 
 /// The triangles a surface organ is simulated with: its sheet, or its patch base mesh.

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <map>
+#include <random>
 #include <sstream>
 
 namespace phantasm::sim_detail {
@@ -67,29 +68,73 @@ Body add_shell_body(const DeformationSettings& deformation, const OrganTable& or
   return body;
 }
 
-/// A solid organ b as a body of its tets, each with the material of the innermost organ of the
-/// body holding its centroid; its boundary is held when it lies inside another organ.
+/// The seed of body b's tet mesh: the scene's seed and the organ's index.
+std::uint32_t body_mesh_seed(std::uint64_t scene_seed, std::size_t b) {
+  std::seed_seq sequence{static_cast<std::uint32_t>(scene_seed), static_cast<std::uint32_t>(scene_seed >> 32),
+                         static_cast<std::uint32_t>(b), 0x7e7u};
+  std::uint32_t seed = 0;
+  sequence.generate(&seed, &seed + 1);
+  return seed;
+}
+
+/// The tet mesh body b is solved on, and for each of its tets the organ whose material it takes.
+/// Alone, the organ's own mesh; with organs nested in it (closed shapes carried by b), one mesh of
+/// all of them at anatomy.tet_size_mm whose tets each lie in one organ's own region (the innermost
+/// holding it), interfaces meshed as faces [docs/deformation.md, What is simulated].
+std::shared_ptr<const TetMesh> body_mesh(const OrganTable& organs, const Phantom& phantom,
+                                         const std::vector<int>& body_of, std::size_t b,
+                                         std::vector<std::size_t>& organ_of_tet, StageReport& report) {
+  const Organ& organ = phantom.organs[b];
+  // Nested organs ordered by depth, so that each one's container comes before it.
+  std::vector<std::size_t> carried{b};
+  for (std::size_t i = 0; i < organs.size(); ++i) {
+    if (i != b && body_of[i] == static_cast<int>(b) && phantom.organs[i].target) carried.push_back(i);
+  }
+  std::stable_sort(carried.begin() + 1, carried.end(),
+                   [&](std::size_t x, std::size_t y) { return organs[x].depth < organs[y].depth; });
+  if (carried.size() == 1) {
+    organ_of_tet.assign(static_cast<std::size_t>(organ.solid->tets.rows()), b);
+    return std::shared_ptr<const TetMesh>(std::shared_ptr<const TetMesh>(), &*organ.solid); // not owned
+  }
+  NestedShapes nested;
+  for (std::size_t k = 0; k < carried.size(); ++k) {
+    nested.shapes.push_back(phantom.organs[carried[k]].target.get());
+    int parent = -1;
+    for (int j = organs[carried[k]].parent; k > 0 && parent < 0 && j >= 0;
+         j = organs[static_cast<std::size_t>(j)].parent) {
+      const auto found = std::find(carried.begin(), carried.end(), static_cast<std::size_t>(j));
+      if (found != carried.end()) parent = static_cast<int>(found - carried.begin());
+    }
+    nested.parent.push_back(parent);
+  }
+  const TetMeshCriteria criteria = criteria_for_tet_size(phantom.tet_size_mm);
+  auto mesh = std::make_shared<TetMesh>(mesh_nested_solid(nested, criteria, body_mesh_seed(phantom.seed, b)));
+  organ_of_tet.clear();
+  for (Eigen::Index t = 0; t < mesh->tets.rows(); ++t)
+    organ_of_tet.push_back(carried[static_cast<std::size_t>(mesh->subdomains[t])]);
+  std::ostringstream line;
+  line << organs[b].name << ": one tet mesh of it and the " << carried.size() - 1
+       << " organs nested in it (tet size " << format_number(phantom.tet_size_mm) << " mm, mean edge "
+       << format_number(mean_edge_length(*mesh)) << " mm, min dihedral "
+       << format_number(min_dihedral_angle_deg(*mesh)) << " deg; tissue interfaces are faces)";
+  report.modelled.push_back(line.str());
+  return mesh;
+}
+
+/// A solid organ b as a body of its tets (body_mesh), each with the material of its organ; its
+/// boundary is held when it lies inside another organ.
 Body add_solid_body(const DeformationSettings& deformation, const OrganTable& organs, const Phantom& phantom,
                     const BodyAssignment& assignment, std::size_t b, BodyModel& built, StageReport& report) {
   const std::size_t n = organs.size();
   const std::vector<int>& body_of = assignment.body_of;
   ElasticModel& model = built.model;
-  const Organ& organ = phantom.organs[b];
-  const TetMesh& mesh = *organ.solid;
-  // Each tet takes the material of the innermost organ of this body holding its centroid.
+  std::vector<std::size_t> organ_of_tet;
+  std::shared_ptr<const TetMesh> shared = body_mesh(organs, phantom, body_of, b, organ_of_tet, report);
+  const TetMesh& mesh = *shared;
   std::vector<TetMaterial> materials;
   std::map<std::string, int> tets_per_organ;
   for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
-    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-    for (int k = 0; k < 4; ++k)
-      centroid += 0.25 * mesh.vertices.row(mesh.tets(t, k)).transpose();
-    std::size_t holder = b;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (body_of[i] == static_cast<int>(b) && organs[i].depth > organs[holder].depth &&
-          phantom.organs[i].target->value(centroid) > 0.0) {
-        holder = i;
-      }
-    }
+    const std::size_t holder = organ_of_tet[static_cast<std::size_t>(t)];
     const MaterialSettings* material = deformation.find_material(deformation.organs[holder].material);
     if (material == nullptr) {
       throw InputError(organs[holder].name + ": material '" + deformation.organs[holder].material +
@@ -104,6 +149,7 @@ Body add_solid_body(const DeformationSettings& deformation, const OrganTable& or
   body.first_vertex = add_body(model, k_mm * mesh.vertices, mesh.tets, materials);
   body.vertex_count = mesh.vertices.rows();
   body.locator = std::make_unique<TetLocator>(mesh.vertices, mesh.tets, body.first_vertex);
+  body.mesh = shared;
   std::ostringstream line;
   line << organs[b].name << ": solved as one body of " << mesh.vertices.rows() << " vertices and "
        << mesh.tets.rows() << " tets (materials by tet:";
@@ -173,8 +219,8 @@ void add_collisions(const std::vector<CollisionSettings>& collisions, const Orga
       if (!surface_of_body.count(b)) {
         const Organ& organ = phantom.organs[static_cast<std::size_t>(body->organ)];
         Eigen::MatrixX3i faces;
-        if (organ.solid)
-          faces = tet_boundary_faces(organ.solid->vertices, organ.solid->tets);
+        if (body->mesh)
+          faces = tet_boundary_faces(body->mesh->vertices, body->mesh->tets);
         else if (organ.surface)
           faces = organ.surface->base_mesh().faces;
         else

@@ -1,0 +1,141 @@
+// Tet meshes of nested shapes (mesh_nested_solid): tissue per tet, interfaces as faces, subdomain
+// volumes against the analytic ones, repeatability and quality.
+#include "anatomy/tet_mesh.hpp"
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+
+using namespace phantasm;
+
+namespace {
+
+constexpr double k_outer_mm = 20.0;
+constexpr double k_inner_mm = 12.0;
+const Eigen::Vector3d k_inner_centre(2.0, -1.0, 1.5);
+
+/// A ball of radius 20 mm holding a ball of radius 12 mm off its centre.
+struct TwoSpheres {
+  std::unique_ptr<ImplicitShape> outer = make_ellipsoid(
+      Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(k_outer_mm), Eigen::Matrix3d::Identity());
+  std::unique_ptr<ImplicitShape> inner =
+      make_ellipsoid(k_inner_centre, Eigen::Vector3d::Constant(k_inner_mm), Eigen::Matrix3d::Identity());
+  NestedShapes nested{{outer.get(), inner.get()}, {-1, 0}};
+};
+
+Eigen::Vector3d centroid(const TetMesh& mesh, Eigen::Index t) {
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (int k = 0; k < 4; ++k)
+    c += 0.25 * mesh.vertices.row(mesh.tets(t, k)).transpose();
+  return c;
+}
+
+/// Volume of each subdomain's tets, mm^3.
+std::vector<double> subdomain_volumes(const TetMesh& mesh, std::size_t shapes) {
+  std::vector<double> volume(shapes, 0.0);
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t)
+    volume[static_cast<std::size_t>(mesh.subdomains[t])] += tet_volume(mesh, t);
+  return volume;
+}
+
+TEST(NestedTetMesh, EveryTetTakesTheShapeThatHoldsItsCentroid) {
+  const TwoSpheres spheres;
+  const TetMesh mesh = mesh_nested_solid(spheres.nested, criteria_for_tet_size(3.0), 7);
+  ASSERT_EQ(mesh.subdomains.size(), mesh.tets.rows());
+  int per_shape[2] = {0, 0};
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    ASSERT_GT(tet_volume(mesh, t), 0.0);
+    EXPECT_EQ(mesh.subdomains[t], spheres.nested.innermost(centroid(mesh, t))) << "tet " << t;
+    ++per_shape[mesh.subdomains[t]];
+  }
+  EXPECT_GT(per_shape[0], 0);
+  EXPECT_GT(per_shape[1], 0);
+}
+
+TEST(NestedTetMesh, InterfaceFacesLieOnTheInnerSphereWithinTheFacetDistance) {
+  const TwoSpheres spheres;
+  const TetMeshCriteria criteria = criteria_for_tet_size(3.0);
+  const TetMesh mesh = mesh_nested_solid(spheres.nested, criteria, 7);
+  const Eigen::MatrixX3i interface = subdomain_interface_faces(mesh);
+  ASSERT_GT(interface.rows(), 50);
+  double area = 0.0;
+  for (Eigen::Index f = 0; f < interface.rows(); ++f) {
+    Eigen::Vector3d corner[3];
+    for (int k = 0; k < 3; ++k) {
+      corner[k] = mesh.vertices.row(interface(f, k)).transpose();
+      EXPECT_NEAR((corner[k] - k_inner_centre).norm(), k_inner_mm, 1e-3) << "face " << f;
+    }
+    const Eigen::Vector3d middle = (corner[0] + corner[1] + corner[2]) / 3.0;
+    EXPECT_LE(k_inner_mm - (middle - k_inner_centre).norm(), criteria.facet_distance_mm) << "face " << f;
+    // Oriented outward of the inner ball (subdomain 0 is the outer shell, so outward of it is
+    // toward the inner ball's centre).
+    area += 0.5 *
+            (corner[1] - corner[0]).cross(corner[2] - corner[0]).dot((middle - k_inner_centre).normalized());
+  }
+  // Closed: the faces cover the sphere (area within 3 %), all facing one way.
+  EXPECT_NEAR(std::abs(area), 4.0 * M_PI * k_inner_mm * k_inner_mm,
+              0.03 * 4.0 * M_PI * k_inner_mm * k_inner_mm);
+  // The boundary is the outer sphere's only.
+  for (Eigen::Index f = 0; f < mesh.boundary_faces.rows(); ++f)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(mesh.vertices.row(mesh.boundary_faces(f, k)).norm(), k_outer_mm, 1e-3);
+}
+
+TEST(NestedTetMesh, SubdomainVolumesConvergeToTheAnalyticOnesAsTetsShrink) {
+  const TwoSpheres spheres;
+  const double inner = 4.0 / 3.0 * M_PI * std::pow(k_inner_mm, 3);
+  const double shell = 4.0 / 3.0 * M_PI * std::pow(k_outer_mm, 3) - inner;
+  double previous[2] = {1.0, 1.0};
+  for (double size : {8.0, 4.0, 2.0}) {
+    const TetMesh mesh = mesh_nested_solid(spheres.nested, criteria_for_tet_size(size), 3);
+    const std::vector<double> volume = subdomain_volumes(mesh, 2);
+    const double error[2] = {std::abs(volume[0] - shell) / shell, std::abs(volume[1] - inner) / inner};
+    for (int k = 0; k < 2; ++k) {
+      EXPECT_LT(error[k], previous[k]) << "tet size " << size << " subdomain " << k;
+      previous[k] = error[k];
+    }
+  }
+  EXPECT_LT(previous[0], 0.02);
+  EXPECT_LT(previous[1], 0.02);
+}
+
+TEST(NestedTetMesh, AThinLayerGetsTetsOfItsOwnAndItsVolumeOnceTetsAreAsThin) {
+  // A 3 mm ellipsoidal shell: the interfaces are meshed, so at 8 mm tets the layer already has
+  // tets of its own (though too few: tets that would span it are left out), and at tets of its
+  // thickness its volume is within 6 % (0.3 % at 2 mm, measured).
+  const auto outer =
+      make_ellipsoid(Eigen::Vector3d::Zero(), Eigen::Vector3d(40, 35, 30), Eigen::Matrix3d::Identity());
+  const auto inner =
+      make_ellipsoid(Eigen::Vector3d::Zero(), Eigen::Vector3d(37, 32, 27), Eigen::Matrix3d::Identity());
+  const NestedShapes nested{{outer.get(), inner.get()}, {-1, 0}};
+  const double layer = 4.0 / 3.0 * M_PI * (40.0 * 35.0 * 30.0 - 37.0 * 32.0 * 27.0);
+  const TetMesh coarse = mesh_nested_solid(nested, criteria_for_tet_size(8.0), 11);
+  EXPECT_GT(subdomain_volumes(coarse, 2)[0], 0.5 * layer);
+  const TetMesh fine = mesh_nested_solid(nested, criteria_for_tet_size(3.0), 11);
+  EXPECT_NEAR(subdomain_volumes(fine, 2)[0], layer, 0.06 * layer);
+  EXPECT_GE(min_dihedral_angle_deg(fine), 10.0);
+}
+
+TEST(NestedTetMesh, TheSameSeedGivesTheSameMeshBitForBit) {
+  const TwoSpheres spheres;
+  const TetMesh a = mesh_nested_solid(spheres.nested, criteria_for_tet_size(4.0), 5);
+  const TetMesh b = mesh_nested_solid(spheres.nested, criteria_for_tet_size(4.0), 5);
+  ASSERT_EQ(a.vertices.rows(), b.vertices.rows());
+  ASSERT_EQ(a.tets.rows(), b.tets.rows());
+  EXPECT_EQ(a.vertices, b.vertices);
+  EXPECT_EQ(a.tets, b.tets);
+  EXPECT_EQ(a.subdomains, b.subdomains);
+  EXPECT_EQ(a.boundary_faces, b.boundary_faces);
+}
+
+TEST(NestedTetMesh, NoDihedralAngleIsBelowTheQualityBound) {
+  const TwoSpheres spheres;
+  for (double size : {6.0, 3.0}) {
+    const TetMesh mesh = mesh_nested_solid(spheres.nested, criteria_for_tet_size(size), 9);
+    EXPECT_GE(min_dihedral_angle_deg(mesh), 10.0) << "tet size " << size;
+  }
+}
+
+} // namespace
