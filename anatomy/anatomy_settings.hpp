@@ -50,7 +50,7 @@ struct AnatomySettings {
   int base_mesh_triangles = 320; ///< patch base mesh size per organ (the anatomy accuracy knob)
   /// element size (tet circumradius bound, mm) of a simulated body's tet mesh when organs are
   /// nested in it: the deformation's speed/accuracy knob
-  double tet_size_mm = 30.0;
+  double tet_size_mm = 10.0;
   std::vector<OrganSettings> organs;
   std::uint64_t seed = 0; ///< the scene's seed (size variation, tet meshing), set by the scene
 };

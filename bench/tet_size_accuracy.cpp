@@ -3,7 +3,7 @@
 // README's and docs/deformation.md's): tets, CSF tets, time of the stage (meshing included), and
 // the displacement error of every moved organ's surface vertices against the finest size (RMS
 // and largest, mm), with the finest run's largest displacement for scale.
-// Usage: tet_size_accuracy [SCENE] [SIZE_MM ...]   (default: the head, 30 20 12 8 and finest 5)
+// Usage: tet_size_accuracy [SCENE] [SIZE_MM ...]   (default: the head at 30 16 10 7 mm and the finest, 5)
 
 #include "anatomy/phantom.hpp"
 #include "core/format.hpp"
@@ -36,7 +36,7 @@ int main(int argc, char** argv) {
   std::vector<double> sizes;
   for (int a = 2; a < argc; ++a)
     sizes.push_back(std::atof(argv[a]));
-  if (sizes.empty()) sizes = {30.0, 20.0, 12.0, 8.0, 5.0};
+  if (sizes.empty()) sizes = {30.0, 16.0, 10.0, 7.0, 5.0};
   SceneLoadResult loaded = load_scene(path);
   if (!loaded.scene) {
     std::fprintf(stderr, "%s", format_diagnostics(loaded.problems).c_str());
