@@ -8,33 +8,6 @@
 namespace phantasm {
 namespace {
 
-bool contains(const std::vector<std::string>& names, const std::string& name) {
-  return std::find(names.begin(), names.end(), name) != names.end();
-}
-
-} // namespace
-
-std::vector<OrganMotion> classify_organ_motion(const DeformationSettings& d, const OrganTable& organs) {
-  std::vector<OrganMotion> motion(organs.size(), OrganMotion::rigid);
-  if (d.mode == DeformationMode::none) return motion;
-  for (std::size_t i = 0; i < organs.size(); ++i) {
-    const std::string& name = organs[i].name;
-    if (contains(d.fixed, name)) {
-      motion[i] = OrganMotion::fixed;
-      continue;
-    }
-    for (const auto& load : d.loads) {
-      const bool acts = load.kind == LoadKind::displacement
-                            ? load.organ == name
-                            : load.organs.empty() || contains(load.organs, name);
-      if (acts) motion[i] = OrganMotion::simulated;
-    }
-  }
-  return motion;
-}
-
-namespace {
-
 /// The nearest simulated organ containing organ i, or -1 when none does.
 int simulated_container(const OrganTable& organs, const std::vector<OrganMotion>& motion, std::size_t i) {
   // The bound guards against a cycle, which the scene's validation rejects.

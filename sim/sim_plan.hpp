@@ -1,5 +1,5 @@
-// The deformation stage's plan: how each organ moves (simulated, fixed, rigid) and what the
-// stage will solve for a scene and what it leaves out.
+// The deformation stage's plan: what the stage will solve for a scene and what it leaves out
+// (how each organ moves, classify_organ_motion(), is in sim/sim_settings.hpp).
 #pragma once
 
 #include "core/organ_table.hpp"
@@ -10,18 +10,6 @@
 #include <vector>
 
 namespace phantasm {
-
-/// How the deformation stage treats each organ.
-enum class OrganMotion {
-  simulated, ///< a load acts on it: its vertices are solved for
-  fixed,     ///< held in place by the scene (an attachment)
-  rigid,     ///< nothing moves it: carried along rigidly, not simulated
-};
-
-/// The motion class of every organ of the table, in its order. With no deformation every organ
-/// is rigid.
-std::vector<OrganMotion> classify_organ_motion(const DeformationSettings& deformation,
-                                               const OrganTable& organs);
 
 /// What the deformation stage will solve: which organs, which loads, which solver and its stop
 /// criteria; and what it leaves out (organs nothing moves, the whole stage for mode none).

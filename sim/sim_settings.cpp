@@ -1,6 +1,34 @@
 #include "sim/sim_settings.hpp"
 
+#include <algorithm>
+
 namespace phantasm {
+namespace {
+
+bool contains(const std::vector<std::string>& names, const std::string& name) {
+  return std::find(names.begin(), names.end(), name) != names.end();
+}
+
+} // namespace
+
+std::vector<OrganMotion> classify_organ_motion(const DeformationSettings& d, const OrganTable& organs) {
+  std::vector<OrganMotion> motion(organs.size(), OrganMotion::rigid);
+  if (d.mode == DeformationMode::none) return motion;
+  for (std::size_t i = 0; i < organs.size(); ++i) {
+    const std::string& name = organs[i].name;
+    if (contains(d.fixed, name)) {
+      motion[i] = OrganMotion::fixed;
+      continue;
+    }
+    for (const auto& load : d.loads) {
+      const bool acts = load.kind == LoadKind::displacement
+                            ? load.organ == name
+                            : load.organs.empty() || contains(load.organs, name);
+      if (acts) motion[i] = OrganMotion::simulated;
+    }
+  }
+  return motion;
+}
 
 const MaterialSettings* DeformationSettings::find_material(const std::string& material_name) const {
   for (const auto& m : materials) {

@@ -1,6 +1,9 @@
 // The settings the deformation stage reads (materials, solver, loads, obstacles, collisions),
-// filled by the scene parser; Eigen and the standard library only, so the scene needs no solver.
+// filled by the scene parser, and how each organ moves under them; Eigen, the organ table and
+// the standard library only, so the scene needs no solver.
 #pragma once
+
+#include "core/organ_table.hpp"
 
 #include <Eigen/Core>
 
@@ -97,6 +100,19 @@ struct DeformationSettings {
 
   const MaterialSettings* find_material(const std::string& name) const;
 };
+
+/// How the deformation stage treats each organ.
+enum class OrganMotion {
+  simulated, ///< a load acts on it: its vertices are solved for
+  fixed,     ///< held in place by the scene (an attachment)
+  rigid,     ///< nothing moves it: carried along rigidly, not simulated
+};
+
+/// The motion class of every organ of the table, in its order. With no deformation every organ
+/// is rigid. A function of the settings alone, so that the scene can resolve what depends on
+/// it (the gap tissue) without the solver.
+std::vector<OrganMotion> classify_organ_motion(const DeformationSettings& deformation,
+                                               const OrganTable& organs);
 
 const char* to_string(DeformationMode mode);
 const char* to_string(SolverMethod method);
