@@ -14,6 +14,7 @@
 #include "scene/scene_json.hpp"
 #include "voxelize/landmarks.hpp"
 #include "voxelize/level_set.hpp"
+#include "voxelize/voxelized_phantom.hpp"
 
 #include <algorithm>
 #include <functional>
@@ -74,6 +75,9 @@ std::string dseg_table(const Scene& scene) {
   int index = 1;
   for (const auto& organ : scene.anatomy.organs)
     text << index++ << '\t' << organ.name << '\t' << organ.tissue << '\n';
+  // The space a moved organ leaves in a container that stays (deformed state only).
+  if (scene.voxelization.deformed)
+    text << index << '\t' << k_gap_label_name << '\t' << scene.voxelization.gap_fill << '\n';
   return text.str();
 }
 

@@ -142,6 +142,18 @@ public:
         problem(indexed("deformation.collisions", i, "organs"),
                 "expected two different organs, found '" + organs[0] + "' twice");
     }
+    const std::string& gap_tissue = m_scene.voxelization.gap_tissue;
+    if (!gap_tissue.empty() && gap_tissue != "air") {
+      bool used = false;
+      for (const auto& organ : m_scene.anatomy.organs)
+        used = used || organ.tissue == gap_tissue;
+      if (!used) {
+        problem("deformation.gap_tissue",
+                "expected air or the tissue of an organ of this scene (what fills the space a moved organ "
+                "leaves), found '" +
+                    gap_tissue + "'");
+      }
+    }
     if (d.mode == DeformationMode::none && !d.obstacles.empty()) {
       problem("deformation.mode", "expected quasi_static or dynamic when obstacles are given, found 'none'");
     }

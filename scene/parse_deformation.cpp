@@ -126,7 +126,8 @@ void parse_load(CheckedMap& map, LoadSettings& load) {
 
 } // namespace
 
-void parse_deformation(CheckedMap& map, DeformationSettings& deformation) {
+void parse_deformation(CheckedMap& map, DeformationSettings& deformation,
+                       VoxelizationSettings& voxelization) {
   std::string mode;
   if (map.choice("mode", mode, {"none", "quasi_static", "dynamic"}, true)) {
     deformation.mode = mode == "quasi_static" ? DeformationMode::quasi_static
@@ -141,6 +142,7 @@ void parse_deformation(CheckedMap& map, DeformationSettings& deformation) {
   map.integer("frames", deformation.frames, 1, 100000);
   map.string_list("fixed", deformation.fixed);
   map.integer("load_steps", deformation.load_steps, 1, 10000);
+  map.string("gap_tissue", voxelization.gap_tissue);
   parse_list(map, "loads", "loads", deformation.loads, parse_load);
   parse_list(map, "obstacles", "obstacles", deformation.obstacles, parse_obstacle);
   parse_list(

@@ -159,7 +159,7 @@ SceneLoadResult parse_scene(const std::string& text, const std::filesystem::path
     }
     if (top.has("deformation")) {
       CheckedMap deformation(context, top.get("deformation"), "deformation");
-      if (deformation.valid()) parse_deformation(deformation, scene.deformation);
+      if (deformation.valid()) parse_deformation(deformation, scene.deformation, scene.voxelization);
     }
     if (top.has("voxelization")) {
       CheckedMap voxelization(context, top.get("voxelization"), "voxelization");

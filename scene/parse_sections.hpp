@@ -13,7 +13,8 @@ void parse_grid(CheckedMap& map, GridSettings& grid);
 void parse_materials(CheckedMap& map, std::vector<MaterialSettings>& materials);
 void parse_tissues(CheckedMap& map, std::vector<TissueOverride>& tissues);
 void parse_anatomy(CheckedMap& map, const std::filesystem::path& scene_folder, AnatomySettings& anatomy);
-void parse_deformation(CheckedMap& map, DeformationSettings& deformation);
+/// The deformation section; its gap_tissue key goes to the voxelization, which fills the gap.
+void parse_deformation(CheckedMap& map, DeformationSettings& deformation, VoxelizationSettings& voxelization);
 void parse_voxelization(CheckedMap& map, VoxelizationSettings& voxelization);
 void parse_sequences(YamlContext& context, const YAML::Node& node, std::vector<SequenceSettings>& sequences);
 void parse_acquisition(CheckedMap& map, AcquisitionSettings& acquisition);

@@ -22,6 +22,26 @@ SourceLocation Scene::location_of(const std::string& key_path) const {
   return SourceLocation{file.string(), 0, 0};
 }
 
+std::string default_gap_tissue(const DeformationSettings& deformation, const OrganTable& organs) {
+  const std::vector<OrganMotion> motion = classify_organ_motion(deformation, organs);
+  std::vector<bool> moves(organs.size(), false);
+  for (std::size_t i = 0; i < organs.size(); ++i) {
+    // The bound guards against a cycle, which the scene's validation rejects.
+    std::size_t steps = 0;
+    for (int j = static_cast<int>(i); j >= 0 && steps <= organs.size();
+         j = organs[static_cast<std::size_t>(j)].parent, ++steps)
+      if (motion[static_cast<std::size_t>(j)] == OrganMotion::simulated) moves[i] = true;
+  }
+  for (std::size_t i = 0; i < organs.size(); ++i) {
+    const int container = organs[i].parent;
+    if (!moves[i] || container < 0 || moves[static_cast<std::size_t>(container)]) continue;
+    if (organs[static_cast<std::size_t>(container)].tissue == "csf") return "csf";
+    for (const OrganEntry& sibling : organs)
+      if (sibling.parent == container && sibling.tissue == "csf") return "csf";
+  }
+  return "air";
+}
+
 void resolve_stage_settings(Scene& scene) {
   const std::vector<OrganSettings>& organs = scene.anatomy.organs;
   scene.organs = organ_table(scene.anatomy);
@@ -42,6 +62,8 @@ void resolve_stage_settings(Scene& scene) {
   voxelization.displacement_fields = outputs.displacement_fields;
   voxelization.jacobian = outputs.jacobian;
   voxelization.landmarks = outputs.landmarks;
+  voxelization.gap_fill = voxelization.gap_tissue.empty() ? default_gap_tissue(deformation, scene.organs)
+                                                          : voxelization.gap_tissue;
   voxelization.organ_bounds_mm.clear();
   for (const OrganSettings& organ : organs)
     voxelization.organ_bounds_mm.push_back(analytic_shape_bounds(organ.shape));

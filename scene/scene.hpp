@@ -60,9 +60,19 @@ struct Scene {
 
 /// Fills what each stage reads of other sections and the defaults that depend on other values:
 /// the organ table, the seed of anatomy and mri, the organs' mechanics for the deformation, the
-/// outputs voxelize and mri make, the organs' nominal bounds, and bSSFP echo times (TR / 2 unless
-/// given). parse_scene() calls it; call it again after changing a parsed scene's values.
+/// outputs voxelize and mri make, the organs' nominal bounds, the gap tissue (default_gap_tissue()
+/// unless given), and bSSFP echo times (TR / 2 unless given). parse_scene() calls it; call it again after
+/// changing a parsed scene's values.
 void resolve_stage_settings(Scene& scene);
+
+/// What fills the gaps of a scene when deformation.gap_tissue is not given (docs/scene-format.md):
+/// "csf" when an organ of tissue csf is a moved organ whose container stays, that container, or
+/// another organ inside that container (the fluid the container holds flows into the space the
+/// organ leaves); else "air" (nothing fills it: no signal). An organ moves when it or an organ
+/// containing it is simulated (classify_organ_motion()).
+/// @param deformation the deformation settings (mode, fixed organs, loads)
+/// @param organs the organ table
+std::string default_gap_tissue(const DeformationSettings& deformation, const OrganTable& organs);
 
 /// The result of reading a scene: a scene when there was no problem, else every problem found.
 struct SceneLoadResult {

@@ -68,15 +68,20 @@ TissueVolumes voxelize_tissues(const ImageGrid& grid, const std::vector<Voxelize
           }
           int label = 0;
           double largest = background;
+          double empty = background; // outside every organ, or in a gap filled with air
           for (std::size_t o = 0; o < organs.size(); ++o) {
-            out.fractions[static_cast<std::size_t>(organs[o].tissue)][index] +=
-                static_cast<float>(organ_share[o]);
+            if (organs[o].tissue < 0) {
+              empty += organ_share[o];
+            } else {
+              out.fractions[static_cast<std::size_t>(organs[o].tissue)][index] +=
+                  static_cast<float>(organ_share[o]);
+            }
             if (organ_share[o] > largest) {
               largest = organ_share[o];
               label = organs[o].label;
             }
           }
-          out.background[index] = static_cast<float>(background);
+          out.background[index] = static_cast<float>(empty);
           out.labels[index] = label;
         }
       }

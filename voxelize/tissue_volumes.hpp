@@ -13,9 +13,9 @@ namespace phantasm {
 /// One organ as the voxelizer sees it.
 struct VoxelizedOrgan {
   const LevelSet* level_set = nullptr;
-  int depth = 0;  ///< nesting depth: a point inside several organs belongs to the deepest
-  int label = 0;  ///< dseg index (1..)
-  int tissue = 0; ///< index into the tissue list
+  int depth = 0; ///< a point inside several organs belongs to the deepest (organs: twice their nesting depth)
+  int label = 0; ///< dseg index (1..)
+  int tissue = 0; ///< index into the tissue list; -1: no tissue (a gap of air), counted as background
 };
 
 /// Each voxel's fraction of every tissue: voxels whose centre is farther than half a voxel

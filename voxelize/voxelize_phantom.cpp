@@ -1,6 +1,7 @@
 #include "voxelize/voxelize_phantom.hpp"
 
 #include "core/format.hpp"
+#include "voxelize/gap_fill.hpp"
 #include "voxelize/landmarks.hpp"
 #include "voxelize/level_set.hpp"
 #include "voxelize/motion_fields.hpp"
@@ -48,7 +49,9 @@ StateLevelSets level_sets_of(const VoxelizationSettings& settings, const OrganTa
     meshes[k] = TriangleMesh();
     VoxelizedOrgan v;
     v.level_set = &out.level_sets.back();
-    v.depth = organs[o].depth;
+    // Even depths for organs, so that a gap (odd, voxelize/gap_fill.hpp) sits between its
+    // container and the organs the container holds.
+    v.depth = 2 * organs[o].depth;
     v.label = static_cast<int>(o) + 1;
     v.tissue = static_cast<int>(std::find(tissues.begin(), tissues.end(), phantom.organs[o].tissue) -
                                 tissues.begin());
@@ -85,8 +88,10 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
     if (reference.organs[o].sheet)
       report.skipped.push_back(reference.organs[o].name + ": an open sheet has no inside; it fills no voxel");
   }
+  const int gap_tissue = deformed ? gap_tissue_index(settings.gap_fill, out.tissues) : -1;
+  // The reference level sets outlive the deformed state's voxelization: they are its gaps' shapes.
+  StateLevelSets sets = level_sets_of(settings, organs, grid, reference, out.tissues, voxel_size, progress);
   {
-    StateLevelSets sets = level_sets_of(settings, organs, grid, reference, out.tissues, voxel_size, progress);
     std::size_t band = 0;
     for (const LevelSet& l : sets.level_sets)
       band += l.active_voxel_count();
@@ -97,15 +102,22 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
     out.reference =
         voxelize_tissues(out.grid, sets.organs, static_cast<int>(out.tissues.size()), settings.supersampling);
     progress.advance();
-    if (settings.keep_level_sets) keep_level_sets(reference, std::move(sets), out.reference_level_sets);
   }
   if (deformed) {
-    StateLevelSets sets = level_sets_of(settings, organs, grid, *deformed, out.tissues, voxel_size, progress);
+    StateLevelSets moved =
+        level_sets_of(settings, organs, grid, *deformed, out.tissues, voxel_size, progress);
+    std::vector<VoxelizedOrgan> with_gaps = moved.organs;
+    if (deformation) {
+      const std::vector<VoxelizedOrgan> gaps =
+          gap_organs(settings.gap_fill, gap_tissue, organs, *deformation, sets.organs, report);
+      with_gaps.insert(with_gaps.end(), gaps.begin(), gaps.end());
+    }
     out.deformed =
-        voxelize_tissues(out.grid, sets.organs, static_cast<int>(out.tissues.size()), settings.supersampling);
+        voxelize_tissues(out.grid, with_gaps, static_cast<int>(out.tissues.size()), settings.supersampling);
     progress.advance();
-    if (settings.keep_level_sets) keep_level_sets(*deformed, std::move(sets), out.deformed_level_sets);
+    if (settings.keep_level_sets) keep_level_sets(*deformed, std::move(moved), out.deformed_level_sets);
   }
+  if (settings.keep_level_sets) keep_level_sets(reference, std::move(sets), out.reference_level_sets);
   report.modelled.push_back("fractions from " + std::to_string(settings.supersampling) +
                             "^3 samples in the " + std::to_string(out.reference.supersampled_voxels) +
                             " voxels within half a voxel diagonal of a surface");

@@ -17,10 +17,15 @@ namespace phantasm {
 /// the grid: each closed organ in the field of view becomes a level set of its patch surface
 /// tessellated within settings.tessellation_tolerance_mm, at the grid's smallest voxel size;
 /// where organs overlap the deepest in the organ table's nesting wins; open sheets (zero
-/// thickness) fill no voxel. What was done goes into `report`.
+/// thickness) fill no voxel. In the deformed state the space a moved organ leaves in a container
+/// that stays is filled with settings.gap_fill under its own label (voxelize/gap_fill.hpp). What
+/// was done goes into `report`.
 /// @param settings sampling, tolerance, the organs' nominal bounds, whether to keep level sets
 /// @param organs the organ table, in the phantom's organ order
 /// @param grid the imaging grid (RAS mm)
+/// @param deformation how each organ moved (the gaps and motion fields need it), with `deformed`
+/// @throws SettingError naming deformation.gap_tissue when settings.gap_fill is neither air nor a
+///         tissue of the organs
 VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const OrganTable& organs,
                                   const ImageGrid& grid, const Phantom& reference, const Phantom* deformed,
                                   const PhantomDeformation* deformation, StageReport& report,

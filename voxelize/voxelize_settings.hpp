@@ -5,6 +5,7 @@
 #include "anatomy/anatomy_settings.hpp"
 
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace phantasm {
@@ -12,6 +13,9 @@ namespace phantasm {
 struct VoxelizationSettings {
   int supersampling = 4;                  ///< samples per voxel edge for partial-volume fractions
   double tessellation_tolerance_mm = 0.2; ///< patch surface tessellation deviation
+  /// What fills the space a moved organ leaves inside a container that stays, as the scene wrote
+  /// it (deformation.gap_tissue): "air" or the tissue of an organ; empty when not given.
+  std::string gap_tissue;
 
   // Set by the scene from other sections.
   bool deformed = false;           ///< deformation.mode is not none: a deformed state is made
@@ -21,6 +25,10 @@ struct VoxelizationSettings {
   bool displacement_fields = true; ///< outputs.displacement_fields
   bool jacobian = true;            ///< outputs.jacobian
   bool landmarks = true;           ///< outputs.landmarks
+  /// The tissue of every gap (docs/volumes-and-images.md, "The gap"): gap_tissue, or when it is
+  /// empty the scene's default (CSF when the container holds CSF, else air); "air" fills the gap
+  /// with background (no signal).
+  std::string gap_fill = "air";
   /// Per organ in scene order: the bounds of its shape as written (before seeded variation),
   /// none for shapes known only from their file (analytic_shape_bounds()).
   std::vector<std::optional<WorldBox>> organ_bounds_mm;

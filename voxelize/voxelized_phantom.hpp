@@ -21,10 +21,15 @@ namespace phantasm {
 
 class LevelSet; // voxelize/level_set.hpp (OpenVDB), held here only through a pointer
 
+/// The label table's name (dseg.tsv) of the gap: the space a moved organ leaves inside a
+/// container that stays, deformed state only (docs/volumes-and-images.md, "The gap"). Its index
+/// follows the organs'.
+inline constexpr const char* k_gap_label_name = "gap";
+
 /// Labels and partial-volume fractions on an image grid.
 struct TissueVolumes {
-  std::vector<std::int32_t>
-      labels; ///< voxel_count(): the organ (dseg index) of the largest fraction, 0 background
+  std::vector<std::int32_t> labels; ///< voxel_count(): the organ (dseg index) of the largest fraction, 0
+                                    ///< background, organs + 1 the gap
   std::vector<std::vector<float>> fractions; ///< per tissue, voxel_count(); with background they sum to 1
   std::vector<float> background;             ///< voxel_count()
   std::size_t supersampled_voxels = 0;       ///< voxels near a surface, where samples were taken

@@ -28,7 +28,8 @@ TEST(RunCommand, WritesTheHeadDatasetWithOrganMeshesAndProvenance) {
             "derivative");
   const std::string dseg = read_file(derivatives / "dseg.tsv");
   EXPECT_EQ(dseg.rfind("index\tname\ttissue\n0\tbackground\tbackground\n1\tscalp\tskin\n", 0), 0u) << dseg;
-  EXPECT_EQ(std::count(dseg.begin(), dseg.end(), '\n'), 9); // header, background, 7 organs
+  EXPECT_EQ(std::count(dseg.begin(), dseg.end(), '\n'), 10); // header, background, 7 organs, the gap
+  EXPECT_NE(dseg.find("\n8\tgap\tcsf\n"), std::string::npos) << dseg;
 
   // Every organ of the head is solid: a closed surface (.vtp) and a tet mesh (.vtu) each, which
   // VTK reads back; the surface encloses about the tet mesh's volume. In the deformed state the

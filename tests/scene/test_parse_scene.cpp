@@ -207,6 +207,38 @@ TEST(ParseScene, DeformationReferencesExistingOrgans) {
             std::string::npos);
 }
 
+TEST(ParseScene, TheGapTissueIsCsfWhenAMovedOrgansContainerHoldsCsfElseAirUnlessGiven) {
+  // docs/scene-format.md, deformation.gap_tissue.
+  const std::string box = replaced(k_minimal, "  organs:\n", R"(  organs:
+    - {name: box, tissue: bone_cortical, shape: {type: ellipsoid, center_mm: [0, 0, 0], radii_mm: 30}}
+)");
+  const std::string ball_in_box =
+      replaced(box, "      tissue: white_matter\n", "      tissue: white_matter\n      inside: box\n");
+  const std::string pushed = ball_in_box + R"(deformation:
+  mode: quasi_static
+  fixed: [box]
+  loads: [{type: displacement, organ: ball, displacement_mm: [0, 0, -2], region: {center_mm: [0, 0, 20], radius_mm: 5}}]
+)";
+  SceneLoadResult result = parse(pushed);
+  ASSERT_TRUE(result.scene) << format_diagnostics(result.problems);
+  EXPECT_EQ(result.scene->voxelization.gap_tissue, "");
+  EXPECT_EQ(result.scene->voxelization.gap_fill, "air"); // no CSF in the box
+  EXPECT_EQ(scene_settings_json(*result.scene)["deformation"]["gap_tissue"], "air");
+  // A pocket of CSF next to the ball in the box: CSF fills the space the ball leaves.
+  result = parse(replaced(pushed, "deformation:",
+                          "    - {name: pocket, tissue: csf, inside: box, shape: {type: ellipsoid, "
+                          "center_mm: [0, 0, 25], radii_mm: 2}}\ndeformation:"));
+  ASSERT_TRUE(result.scene) << format_diagnostics(result.problems);
+  EXPECT_EQ(result.scene->voxelization.gap_fill, "csf");
+  // Given: any tissue of the scene's organs; the default no longer applies.
+  result = parse(pushed + "  gap_tissue: bone_cortical\n");
+  ASSERT_TRUE(result.scene) << format_diagnostics(result.problems);
+  EXPECT_EQ(result.scene->voxelization.gap_fill, "bone_cortical");
+  EXPECT_EQ(only_problem(pushed + "  gap_tissue: csf\n"),
+            "scene.yaml:19:15: deformation.gap_tissue: expected air or the tissue of an organ of this scene "
+            "(what fills the space a moved organ leaves), found 'csf'");
+}
+
 TEST(ParseScene, MeshFilesMustExist) {
   const std::string mesh = replaced(k_minimal, "{type: ellipsoid, center_mm: [0, 0, 0], radii_mm: 20}",
                                     "{type: mesh, file: no-such-mesh.stl}");
