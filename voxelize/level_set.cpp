@@ -1,23 +1,277 @@
-// The OpenVDB adapter of voxelize: level sets from triangle meshes, and their sampling.
+// The OpenVDB adapter of voxelize: level sets from patch surfaces and triangle meshes, and
+// their sampling.
 
 #include "voxelize/level_set.hpp"
 
+#include "geometry/mesh_signed_distance.hpp"
+
+#include <Eigen/Cholesky>
+
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
+#include <openvdb/tools/LevelSetUtil.h>
 #include <openvdb/tools/MeshToVolume.h>
+#include <openvdb/tools/Prune.h>
+#include <openvdb/tools/SignedFloodFill.h>
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
 #include <mutex>
 
 namespace phantasm {
+namespace {
+
+void initialize_openvdb() {
+  static std::once_flag initialized;
+  std::call_once(initialized, [] { openvdb::initialize(); });
+}
+
+/// The bumps of one patch as heights over its base triangle: h(u, v) = sum a Q^3 [Q > 0] with
+/// Q = 1 - d^T S d, d = (u, v) - c (docs/method.md section 1).
+struct PatchHeights {
+  std::vector<PatchBump> bumps;                 ///< with symmetric shapes
+  Eigen::Vector3d origin, edge1, edge2, normal; ///< the frame: x = origin + u edge1 + v edge2 + h normal
+  double reach_mm = 0.0;                        ///< sum |a|: no point of the patch is farther from its base
+
+  /// Height above base point (u, v), mm, and its derivatives d/du, d/dv.
+  double height(const Eigen::Vector2d& uv, Eigen::Vector2d* d_uv) const {
+    double h = 0.0;
+    d_uv->setZero();
+    for (const PatchBump& b : bumps) {
+      const Eigen::Vector2d d = uv - b.center_uv;
+      const Eigen::Vector2d Sd = b.shape_uv * d;
+      const double q = 1.0 - d.dot(Sd);
+      if (q <= 0.0) continue;
+      h += b.amplitude_mm * q * q * q;
+      *d_uv += -6.0 * b.amplitude_mm * q * q * Sd;
+    }
+    return h;
+  }
+
+  Eigen::Vector3d point(const Eigen::Vector2d& uv, double h) const {
+    return origin + uv.x() * edge1 + uv.y() * edge2 + h * normal;
+  }
+
+  /// Distance from x to the patch, mm, from the base point (u, v) nearest x: Gauss-Newton on
+  /// |x - p(u, v)|^2 over the triangle from there and from the nearest bump centre, each step
+  /// accepted only when it brings p nearer.
+  double distance(const Eigen::Vector3d& x, const Eigen::Vector2d& uv) const {
+    // Outside a bump's ellipse its height and slope vanish, so a start there cannot climb it:
+    // start again from the bump centre nearest x.
+    double best = descend(x, uv);
+    const PatchBump* nearest = nullptr;
+    double nearest_squared = std::numeric_limits<double>::infinity();
+    for (const PatchBump& b : bumps) {
+      Eigen::Vector2d d_uv;
+      const double squared = (x - point(b.center_uv, height(b.center_uv, &d_uv))).squaredNorm();
+      if (squared < nearest_squared) {
+        nearest_squared = squared;
+        nearest = &b;
+      }
+    }
+    if (nearest) best = std::min(best, descend(x, nearest->center_uv));
+    return best;
+  }
+
+  double descend(const Eigen::Vector3d& x, Eigen::Vector2d uv) const {
+    Eigen::Vector2d d_uv;
+    double h = height(uv, &d_uv);
+    Eigen::Vector3d r = x - point(uv, h);
+    double best = r.squaredNorm();
+    for (int iteration = 0; iteration < 8; ++iteration) {
+      Eigen::Matrix<double, 3, 2> J;
+      J.col(0) = edge1 + d_uv.x() * normal;
+      J.col(1) = edge2 + d_uv.y() * normal;
+      const Eigen::Matrix2d JtJ = J.transpose() * J;
+      const Eigen::Vector2d step = JtJ.ldlt().solve(J.transpose() * r);
+      bool accepted = false;
+      for (double scale = 1.0; scale > 1.0 / 64.0 && !accepted; scale *= 0.5) {
+        Eigen::Vector2d next = uv + scale * step;
+        next = next.cwiseMax(0.0);
+        if (next.sum() > 1.0) next /= next.sum();
+        Eigen::Vector2d next_d_uv;
+        const double next_h = height(next, &next_d_uv);
+        const Eigen::Vector3d next_r = x - point(next, next_h);
+        if (next_r.squaredNorm() < best) {
+          accepted = true;
+          best = next_r.squaredNorm();
+          uv = next;
+          d_uv = next_d_uv;
+          r = next_r;
+        }
+      }
+      if (!accepted || step.squaredNorm() < 1e-16) break;
+    }
+    return std::sqrt(best);
+  }
+};
+
+} // namespace
 
 struct LevelSet::Impl {
   openvdb::FloatGrid::Ptr grid;
 };
 
+LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double half_width_voxels)
+    : m(std::make_unique<Impl>()), m_voxel_size(voxel_size_mm), m_half_width(half_width_voxels) {
+  initialize_openvdb();
+  const TriangleMesh& base = surface.base_mesh();
+  SignedDistanceMesh mesh(base.faces);
+  mesh.update(base.vertices);
+  const double band = half_width_voxels * voxel_size_mm;
+  const auto nf = static_cast<std::size_t>(base.face_count());
+  std::vector<PatchHeights> patches(nf);
+  for (std::size_t t = 0; t < nf; ++t) {
+    PatchHeights& p = patches[t];
+    p.bumps = surface.bumps(static_cast<Eigen::Index>(t));
+    for (PatchBump& b : p.bumps) {
+      b.shape_uv = 0.5 * (b.shape_uv + b.shape_uv.transpose()).eval();
+      p.reach_mm += std::abs(b.amplitude_mm);
+    }
+    if (!p.bumps.empty()) {
+      const PatchFrame f = surface.frame(static_cast<Eigen::Index>(t));
+      p.origin = f.origin;
+      p.edge1 = f.edge1;
+      p.edge2 = f.edge2;
+      p.normal = f.normal;
+    }
+  }
+  double patch_reach = 0.0;
+  for (const PatchHeights& p : patches)
+    patch_reach = std::max(patch_reach, p.reach_mm);
+  // The closest base triangle of every voxel within the band plus the bumps' reach of the base
+  // (every voxel within the band of the surface is among them), triangle by triangle over the
+  // voxels near it; in triangle order with a strict comparison, so ties go to the first triangle
+  // as in SignedDistanceMesh::closest().
+  const double reach = band + patch_reach + 1e-9;
+  openvdb::DoubleGrid best_squared(std::numeric_limits<double>::infinity());
+  openvdb::Int32Grid owner(-1);
+  // And the distance to the nearest patch (the bumps of a neighbouring patch can be nearer than
+  // the patch over the closest base point): patches farther than their reach beyond the
+  // nearest so far are not searched.
+  openvdb::DoubleGrid nearest(std::numeric_limits<double>::infinity());
+  // And the side where the voxel lies over or under a bump (where a neighbouring patch's bump
+  // can hold it while the closest base triangle says otherwise): the height of the point above
+  // the surface along that patch's normal, the smallest in magnitude.
+  openvdb::DoubleGrid column(std::numeric_limits<double>::infinity());
+  {
+    auto column_accessor = column.getAccessor();
+    auto best_accessor = best_squared.getAccessor();
+    auto owner_accessor = owner.getAccessor();
+    auto nearest_accessor = nearest.getAccessor();
+    for (std::size_t t = 0; t < nf; ++t) {
+      const auto& v = mesh.corners(static_cast<int>(t));
+      const Eigen::Vector3d& n = mesh.face_normal(static_cast<int>(t));
+      const PatchHeights& p = patches[t];
+      const Eigen::Vector3d low = v[0].cwiseMin(v[1]).cwiseMin(v[2]).array() - reach;
+      const Eigen::Vector3d high = v[0].cwiseMax(v[1]).cwiseMax(v[2]).array() + reach;
+      int lo[3], hi[3];
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = static_cast<int>(std::ceil(low[a] / voxel_size_mm));
+        hi[a] = static_cast<int>(std::floor(high[a] / voxel_size_mm));
+      }
+      // A degenerate face (zero normal) keeps its whole box.
+      const bool flat = n.squaredNorm() > 0.5;
+      for (int k = lo[2]; k <= hi[2]; ++k) {
+        for (int j = lo[1]; j <= hi[1]; ++j) {
+          for (int i = lo[0]; i <= hi[0]; ++i) {
+            const Eigen::Vector3d x = voxel_size_mm * Eigen::Vector3d(i, j, k);
+            if (flat && std::abs(n.dot(x - v[0])) > reach) continue;
+            const TriangleClosestPoint on_base = closest_point_on_triangle(x, v[0], v[1], v[2]);
+            const double d2 = (x - on_base.point).squaredNorm();
+            if (d2 > reach * reach) continue;
+            const openvdb::Coord ijk(i, j, k);
+            if (d2 < best_accessor.getValue(ijk)) {
+              best_accessor.setValueOn(ijk, d2);
+              owner_accessor.setValueOn(ijk, static_cast<int>(t));
+            }
+            if (!p.bumps.empty() && on_base.feature == TriangleFeature::face) {
+              Eigen::Vector2d d_uv;
+              const double h = p.height(on_base.barycentric.tail<2>(), &d_uv);
+              if (h != 0.0) {
+                const double along = n.dot(x - on_base.point) - h;
+                if (std::abs(along) < std::abs(column_accessor.getValue(ijk)))
+                  column_accessor.setValueOn(ijk, along);
+              }
+            }
+            const double base_distance = std::sqrt(d2);
+            const double so_far = nearest_accessor.getValue(ijk);
+            double patch_distance = base_distance;
+            if (!p.bumps.empty()) {
+              const double lower = base_distance - p.reach_mm;
+              if (!(lower < so_far)) continue;
+              patch_distance = lower < band ? p.distance(x, on_base.barycentric.tail<2>()) : lower;
+            }
+            if (patch_distance < so_far) nearest_accessor.setValueOn(ijk, patch_distance);
+          }
+        }
+      }
+    }
+  }
+  best_squared.clear();
+  std::vector<openvdb::Coord> coords;
+  std::vector<int> triangles;
+  std::vector<double> distances, columns;
+  coords.reserve(static_cast<std::size_t>(owner.activeVoxelCount()));
+  triangles.reserve(coords.capacity());
+  distances.reserve(coords.capacity());
+  columns.reserve(coords.capacity());
+  {
+    auto nearest_accessor = nearest.getConstAccessor();
+    auto column_accessor = column.getConstAccessor();
+    for (auto it = owner.cbeginValueOn(); it; ++it) {
+      coords.push_back(it.getCoord());
+      triangles.push_back(*it);
+      distances.push_back(nearest_accessor.getValue(it.getCoord()));
+      columns.push_back(column_accessor.getValue(it.getCoord()));
+    }
+  }
+  owner.clear();
+  nearest.clear();
+  column.clear();
+  std::vector<float> values(coords.size());
+  const auto count = static_cast<std::ptrdiff_t>(coords.size());
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t c = 0; c < count; ++c) {
+    const auto i = static_cast<std::size_t>(c);
+    const Eigen::Vector3d x = voxel_size_mm * Eigen::Vector3d(coords[i].x(), coords[i].y(), coords[i].z());
+    // The side: over or under a bump, from the height above it; elsewhere the surface is the
+    // base mesh (the bumps vanish towards the base edges), so from the closest base triangle's
+    // pseudonormals.
+    bool inside = columns[i] < 0.0;
+    if (!(std::abs(columns[i]) < band)) {
+      MeshClosestPoint closest;
+      closest.triangle = triangles[i];
+      const auto& v = mesh.corners(closest.triangle);
+      closest.on_triangle = closest_point_on_triangle(x, v[0], v[1], v[2]);
+      closest.distance_squared = (x - closest.on_triangle.point).squaredNorm();
+      inside = mesh.inside(x, closest);
+    }
+    const double d = std::min(distances[i], band);
+    values[i] = static_cast<float>(inside ? -d : d);
+  }
+  m->grid = openvdb::FloatGrid::create(static_cast<float>(band));
+  m->grid->setTransform(openvdb::math::Transform::createLinearTransform(voxel_size_mm));
+  {
+    auto accessor = m->grid->getAccessor();
+    for (std::size_t c = 0; c < coords.size(); ++c)
+      accessor.setValueOn(coords[c], values[c]);
+  }
+  // The candidates form a closed shell around the surface, so the flood fill gives every voxel
+  // off it the sign of its side; then only the narrow band stays active.
+  openvdb::tools::signedFloodFill(m->grid->tree());
+  for (auto leaf = m->grid->tree().beginLeaf(); leaf; ++leaf) {
+    for (auto it = leaf->beginValueOn(); it; ++it)
+      if (std::abs(*it) >= static_cast<float>(band)) it.setValueOff();
+  }
+  openvdb::tools::pruneLevelSet(m->grid->tree());
+  m->grid->setGridClass(openvdb::GRID_LEVEL_SET);
+}
+
 LevelSet::LevelSet(const TriangleMesh& surface, double voxel_size_mm, double half_width_voxels)
     : m(std::make_unique<Impl>()), m_voxel_size(voxel_size_mm), m_half_width(half_width_voxels) {
-  static std::once_flag initialized;
-  std::call_once(initialized, [] { openvdb::initialize(); });
+  initialize_openvdb();
   std::vector<openvdb::Vec3s> points(static_cast<std::size_t>(surface.vertex_count()));
   for (Eigen::Index v = 0; v < surface.vertex_count(); ++v) {
     points[static_cast<std::size_t>(v)] =
@@ -50,17 +304,37 @@ const void* LevelSet::grid() const {
 }
 
 struct LevelSet::Probe::Impl {
-  explicit Impl(const openvdb::FloatGrid& grid)
-      : accessor(grid.getConstAccessor()), sampler(accessor, grid.transform()) {}
+  explicit Impl(const openvdb::FloatGrid& grid, double voxel_size)
+      : accessor(grid.getConstAccessor()), sampler(accessor, grid.transform()), background(grid.background()),
+        inverse_voxel(1.0 / voxel_size) {
+    // Beyond the leaves (and a margin for the trilinear stencil and rounding) every value is the
+    // outside background: a closed surface's inside tiles lie within its band's leaves.
+    low = Eigen::Vector3d::Constant(1e300);
+    high = -low;
+    for (auto leaf = grid.tree().cbeginLeaf(); leaf; ++leaf) {
+      const openvdb::CoordBBox box = leaf->getNodeBoundingBox();
+      for (int a = 0; a < 3; ++a) {
+        low[a] = std::min(low[a], static_cast<double>(box.min()[a]) - 2.0);
+        high[a] = std::max(high[a], static_cast<double>(box.max()[a]) + 2.0);
+      }
+    }
+  }
   openvdb::FloatGrid::ConstAccessor accessor;
   openvdb::tools::GridSampler<openvdb::FloatGrid::ConstAccessor, openvdb::tools::BoxSampler> sampler;
+  float background;
+  double inverse_voxel;
+  Eigen::Vector3d low, high; ///< index-space box beyond which the value is the background
 };
 
-LevelSet::Probe::Probe(const LevelSet& level_set) : m(std::make_unique<Impl>(*level_set.m->grid)) {}
+LevelSet::Probe::Probe(const LevelSet& level_set)
+    : m(std::make_unique<Impl>(*level_set.m->grid, level_set.m_voxel_size)) {}
 LevelSet::Probe::~Probe() = default;
 LevelSet::Probe::Probe(Probe&&) noexcept = default;
 
 double LevelSet::Probe::operator()(const Eigen::Vector3d& x) const {
+  const Eigen::Vector3d index = x * m->inverse_voxel;
+  if ((index.array() < m->low.array()).any() || (index.array() > m->high.array()).any())
+    return static_cast<double>(m->background);
   return static_cast<double>(m->sampler.wsSample(openvdb::Vec3d(x.x(), x.y(), x.z())));
 }
 

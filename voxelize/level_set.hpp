@@ -2,6 +2,7 @@
 // per-thread probes in the tissue voxelization and written to .vdb files.
 #pragma once
 
+#include "anatomy/patch_surface.hpp"
 #include "anatomy/triangle_mesh.hpp"
 
 #include <Eigen/Core>
@@ -11,13 +12,26 @@
 namespace phantasm {
 
 /// A narrow-band signed distance level set of a closed surface (OpenVDB FloatGrid, world RAS mm,
-/// axis-aligned voxels of one size), negative inside. Built from a triangle mesh (a patch surface
-/// tessellated within a stated tolerance); deep inside and outside it holds -/+ the band width.
+/// axis-aligned voxels of one size), negative inside. Built from a patch surface directly, or
+/// from a triangle mesh (e.g. a patch surface tessellated within a stated tolerance); deep inside
+/// and outside it holds -/+ the band width.
 class LevelSet {
 public:
+  /// From a triangle mesh (OpenVDB's mesh-to-volume: exact distances to the triangles).
+  /// @param surface closed, outward-oriented mesh, RAS mm
   /// @param voxel_size_mm the level set's voxel edge
   /// @param half_width_voxels narrow band half width
   LevelSet(const TriangleMesh& surface, double voxel_size_mm, double half_width_voxels = 3.0);
+  /// From a patch surface without tessellating it: each band voxel finds its closest base
+  /// triangle (voxels near each triangle, in triangle order); where that patch has bumps, the
+  /// side comes from the height of the surface above the closest base point and the distance
+  /// from the patch's closest point (Gauss-Newton over the triangle), elsewhere both from the
+  /// base mesh (sign from pseudonormals; exact, the bumps vanish on base edges). Parallel over
+  /// voxels (OpenMP); the result does not depend on the thread count.
+  /// @param surface closed patch surface at its current positions, RAS mm
+  /// @param voxel_size_mm the level set's voxel edge
+  /// @param half_width_voxels narrow band half width
+  LevelSet(const PatchSurface& surface, double voxel_size_mm, double half_width_voxels = 3.0);
   ~LevelSet();
   LevelSet(LevelSet&&) noexcept;
   LevelSet& operator=(LevelSet&&) noexcept;

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <optional>
 
 namespace phantasm {
 namespace {
@@ -31,22 +32,35 @@ StateLevelSets level_sets_of(const VoxelizationSettings& settings, const OrganTa
         o < settings.organ_bounds_mm.size() ? settings.organ_bounds_mm[o] : std::optional<WorldBox>();
     if (phantom.organs[o].surface && organ_in_field_of_view(bounds, grid)) chosen.push_back(o);
   }
-  // Tessellations in parallel (each organ's is independent and deterministic), then the level
-  // sets one after the other (OpenVDB parallelizes each with TBB).
-  std::vector<TriangleMesh> meshes(chosen.size());
+  // Level sets in parallel over organs (each is independent and deterministic). From the patch
+  // surfaces directly, or (settings.level_sets_from_tessellation, the former path kept for
+  // benchmarks) from tessellations within the tolerance through OpenVDB's mesh-to-volume.
+  std::vector<std::optional<LevelSet>> built(chosen.size());
   const auto count = static_cast<std::ptrdiff_t>(chosen.size());
+  if (settings.level_sets_from_tessellation) {
+    std::vector<TriangleMesh> meshes(chosen.size());
 #pragma omp parallel for schedule(dynamic, 1)
-  for (std::ptrdiff_t k = 0; k < count; ++k) {
-    meshes[static_cast<std::size_t>(k)] =
-        phantom.organs[chosen[static_cast<std::size_t>(k)]].surface->tessellate(
-            settings.tessellation_tolerance_mm);
+    for (std::ptrdiff_t k = 0; k < count; ++k) {
+      meshes[static_cast<std::size_t>(k)] =
+          phantom.organs[chosen[static_cast<std::size_t>(k)]].surface->tessellate(
+              settings.tessellation_tolerance_mm);
+    }
+    for (std::size_t k = 0; k < chosen.size(); ++k) {
+      built[k].emplace(meshes[k], voxel_size);
+      meshes[k] = TriangleMesh();
+    }
+  } else {
+#pragma omp parallel for schedule(dynamic, 1)
+    for (std::ptrdiff_t k = 0; k < count; ++k) {
+      const auto i = static_cast<std::size_t>(k);
+      built[i].emplace(*phantom.organs[chosen[i]].surface, voxel_size);
+    }
   }
   StateLevelSets out;
   out.level_sets.reserve(chosen.size());
   for (std::size_t k = 0; k < chosen.size(); ++k) {
     const std::size_t o = chosen[k];
-    out.level_sets.emplace_back(meshes[k], voxel_size);
-    meshes[k] = TriangleMesh();
+    out.level_sets.push_back(std::move(*built[k]));
     VoxelizedOrgan v;
     v.level_set = &out.level_sets.back();
     // Even depths for organs, so that a gap (odd, voxelize/gap_fill.hpp) sits between its
@@ -95,10 +109,12 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
     std::size_t band = 0;
     for (const LevelSet& l : sets.level_sets)
       band += l.active_voxel_count();
-    report.modelled.push_back("reference: " + std::to_string(sets.level_sets.size()) + " level sets, " +
-                              std::to_string(band) + " narrow-band voxels of " + format_number(voxel_size) +
-                              " mm, surfaces tessellated within " +
-                              format_number(settings.tessellation_tolerance_mm) + " mm");
+    report.modelled.push_back(
+        "reference: " + std::to_string(sets.level_sets.size()) + " level sets, " + std::to_string(band) +
+        " narrow-band voxels of " + format_number(voxel_size) + " mm, " +
+        (settings.level_sets_from_tessellation
+             ? "surfaces tessellated within " + format_number(settings.tessellation_tolerance_mm) + " mm"
+             : std::string("from the patch surfaces directly")));
     out.reference =
         voxelize_tissues(out.grid, sets.organs, static_cast<int>(out.tissues.size()), settings.supersampling);
     progress.advance();

@@ -15,7 +15,8 @@ namespace phantasm {
 
 /// Voxelizes the reference phantom (and the deformed one with the motion fields when given) on
 /// the grid: each closed organ in the field of view becomes a level set of its patch surface
-/// tessellated within settings.tessellation_tolerance_mm, at the grid's smallest voxel size;
+/// (from the patches directly, or tessellated within settings.tessellation_tolerance_mm when
+/// settings.level_sets_from_tessellation), at the grid's smallest voxel size;
 /// where organs overlap the deepest in the organ table's nesting wins; open sheets (zero
 /// thickness) fill no voxel. In the deformed state the space a moved organ leaves in a container
 /// that stays is filled with settings.gap_fill under its own label (voxelize/gap_fill.hpp). What

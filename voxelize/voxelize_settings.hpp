@@ -16,6 +16,9 @@ struct VoxelizationSettings {
   /// What fills the space a moved organ leaves inside a container that stays, as the scene wrote
   /// it (deformation.gap_tissue): "air" or the tissue of an organ; empty when not given.
   std::string gap_tissue;
+  /// Level sets through tessellations within tessellation_tolerance_mm and OpenVDB's
+  /// mesh-to-volume instead of from the patch surfaces directly (slower; kept to compare).
+  bool level_sets_from_tessellation = false;
 
   // Set by the scene from other sections.
   bool deformed = false;           ///< deformation.mode is not none: a deformed state is made
