@@ -1,7 +1,11 @@
 // Time and peak memory of the voxelization stage on the head (labels and fractions of both
 // states, both displacement fields, Jacobian), at a given voxel size. One process per size, so
-// the peak resident memory it prints is that run's.
-// Usage: voxelize_head VOXEL_MM [SCENE]
+// the peak resident memory it prints is that run's. PATH chooses the implementation: "new" (the
+// default: level sets from the patch surfaces, field extension by a distance transform), "old"
+// (level sets through tessellations and mesh-to-volume, the extension by a search over the moved
+// boundary faces per voxel), or "both" (old, then new, in one process: the times side by side;
+// the peak memory is then the larger of the two).
+// Usage: voxelize_head VOXEL_MM [PATH [SCENE]]
 
 #include "scene/scene.hpp"
 #include "sim/deform_phantom.hpp"
@@ -16,12 +20,13 @@
 
 int main(int argc, char** argv) {
   using namespace phantasm;
-  if (argc < 2) {
-    std::fprintf(stderr, "usage: voxelize_head VOXEL_MM [SCENE]\n");
+  const std::string path_choice = argc > 2 ? argv[2] : "new";
+  if (argc < 2 || (path_choice != "new" && path_choice != "old" && path_choice != "both")) {
+    std::fprintf(stderr, "usage: voxelize_head VOXEL_MM [new|old|both [SCENE]]\n");
     return 2;
   }
   const std::string path =
-      argc > 2 ? argv[2] : std::string(PHANTASM_SOURCE_DIR) + "/data-synthetic/head.yaml";
+      argc > 3 ? argv[3] : std::string(PHANTASM_SOURCE_DIR) + "/data-synthetic/head.yaml";
   SceneLoadResult loaded = load_scene(path);
   if (!loaded.scene) {
     std::fprintf(stderr, "%s", format_diagnostics(loaded.problems).c_str());
@@ -34,15 +39,22 @@ int main(int argc, char** argv) {
   StageReport sim;
   const PhantomDeformation deformation = deform_phantom(scene.deformation, scene.organs, phantom, sim, quiet);
   const Phantom deformed = deformed_phantom(phantom, deformation);
-  StageReport report;
-  const auto start = std::chrono::steady_clock::now();
-  const VoxelizedPhantom volumes = voxelize_phantom(scene.voxelization, scene.organs, scene.grid.grid(),
-                                                    phantom, &deformed, &deformation, report, quiet);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  std::printf("voxel %s mm: grid %d x %d x %d, voxelize %.2f s, peak resident %.0f MB\n", argv[1],
-              volumes.grid.dims.x(), volumes.grid.dims.y(), volumes.grid.dims.z(), seconds,
-              static_cast<double>(usage.ru_maxrss) / 1024.0);
+  for (const bool old : {true, false}) {
+    if ((old && path_choice == "new") || (!old && path_choice == "old")) continue;
+    VoxelizationSettings settings = scene.voxelization;
+    settings.level_sets_from_tessellation = old;
+    settings.field_extension_by_search = old;
+    StageReport report;
+    const auto start = std::chrono::steady_clock::now();
+    const VoxelizedPhantom volumes = voxelize_phantom(settings, scene.organs, scene.grid.grid(), phantom,
+                                                      &deformed, &deformation, report, quiet);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    std::printf("voxel %s mm, %s path: grid %d x %d x %d, voxelize %.2f s, peak resident %.0f MB\n", argv[1],
+                old ? "old" : "new", volumes.grid.dims.x(), volumes.grid.dims.y(), volumes.grid.dims.z(),
+                seconds, static_cast<double>(usage.ru_maxrss) / 1024.0);
+    std::fflush(stdout);
+  }
   return 0;
 }

@@ -12,8 +12,8 @@
 
 namespace phantasm {
 
-DeformationMap::DeformationMap(std::vector<DeformedBody> bodies, double extension_mm)
-    : m_bodies(std::move(bodies)), m_extension(extension_mm) {
+DeformationMap::DeformationMap(std::vector<DeformedBody> bodies, double extension_mm, bool search_all_faces)
+    : m_bodies(std::move(bodies)), m_extension(extension_mm), m_search_all(search_all_faces) {
   for (const DeformedBody& body : m_bodies) {
     // Boundary faces with a moved vertex drive the extension.
     const Eigen::MatrixX3i faces = tet_boundary_faces(body.rest_mm, body.tets);
@@ -38,6 +38,59 @@ DeformationMap::DeformationMap(std::vector<DeformedBody> bodies, double extensio
     m_rest.emplace_back(body.rest_mm, body.tets);
     m_deformed.emplace_back(body.deformed_mm, body.tets);
   }
+  if (m_moved_faces.empty()) return;
+  for (int state = 0; state < 2; ++state) {
+    FaceBuckets& b = m_buckets[state];
+    const Eigen::Vector3d low = m_moved_low[state].array() - m_extension;
+    const Eigen::Vector3d extent =
+        m_moved_high[state] - m_moved_low[state] + Eigen::Vector3d::Constant(2.0 * m_extension);
+    // Cells of the extension's width, but no more than 256^3 of them.
+    b.cell_mm = std::max({m_extension, extent.maxCoeff() / 256.0, 1e-6});
+    b.origin = low;
+    for (int a = 0; a < 3; ++a)
+      b.cells[a] = std::max(1, static_cast<int>(std::ceil(extent[a] / b.cell_mm)));
+    const auto cell_count = static_cast<std::size_t>(b.cells.prod());
+    // Two passes (count, then fill) over the faces in order, so each cell lists its faces in
+    // face order.
+    auto cell_range = [&](const MovedFace& f, int lo[3], int hi[3]) {
+      const auto& v = state ? f.deformed : f.rest;
+      const Eigen::Vector3d f_low = v[0].cwiseMin(v[1]).cwiseMin(v[2]).array() - m_extension;
+      const Eigen::Vector3d f_high = v[0].cwiseMax(v[1]).cwiseMax(v[2]).array() + m_extension;
+      for (int a = 0; a < 3; ++a) {
+        lo[a] =
+            std::clamp(static_cast<int>(std::floor((f_low[a] - b.origin[a]) / b.cell_mm)), 0, b.cells[a] - 1);
+        hi[a] = std::clamp(static_cast<int>(std::floor((f_high[a] - b.origin[a]) / b.cell_mm)), 0,
+                           b.cells[a] - 1);
+      }
+    };
+    auto cell_index = [&](int i, int j, int k) {
+      return static_cast<std::size_t>(i) +
+             static_cast<std::size_t>(b.cells[0]) *
+                 (static_cast<std::size_t>(j) +
+                  static_cast<std::size_t>(b.cells[1]) * static_cast<std::size_t>(k));
+    };
+    b.offsets.assign(cell_count + 1, 0);
+    for (const MovedFace& f : m_moved_faces) {
+      int lo[3], hi[3];
+      cell_range(f, lo, hi);
+      for (int k = lo[2]; k <= hi[2]; ++k)
+        for (int j = lo[1]; j <= hi[1]; ++j)
+          for (int i = lo[0]; i <= hi[0]; ++i)
+            ++b.offsets[cell_index(i, j, k) + 1];
+    }
+    for (std::size_t c = 0; c < cell_count; ++c)
+      b.offsets[c + 1] += b.offsets[c];
+    b.faces.resize(b.offsets.back());
+    std::vector<std::uint32_t> next(b.offsets.begin(), b.offsets.end() - 1);
+    for (std::size_t face = 0; face < m_moved_faces.size(); ++face) {
+      int lo[3], hi[3];
+      cell_range(m_moved_faces[face], lo, hi);
+      for (int k = lo[2]; k <= hi[2]; ++k)
+        for (int j = lo[1]; j <= hi[1]; ++j)
+          for (int i = lo[0]; i <= hi[0]; ++i)
+            b.faces[next[cell_index(i, j, k)]++] = static_cast<std::uint32_t>(face);
+    }
+  }
 }
 
 bool DeformationMap::locate(const Eigen::Vector3d& x, bool deformed, std::size_t* body, Eigen::Index* tet,
@@ -57,7 +110,30 @@ bool DeformationMap::locate(const Eigen::Vector3d& x, bool deformed, std::size_t
 double DeformationMap::moved_boundary_distance(const Eigen::Vector3d& x, bool deformed,
                                                Eigen::Vector3d* displacement) const {
   double best = std::numeric_limits<double>::infinity();
-  for (const MovedFace& f : m_moved_faces) {
+  // Only faces nearer than the extension matter to the callers: those are in x's cell (its list
+  // holds every face whose box grown by the extension meets the cell), in face order, so the
+  // strict comparison below picks the face the scan of all faces would.
+  const std::uint32_t* first = nullptr;
+  const std::uint32_t* last = nullptr;
+  if (!m_search_all) {
+    const FaceBuckets& b = m_buckets[deformed ? 1 : 0];
+    if (b.faces.empty()) return best;
+    int ijk[3];
+    for (int a = 0; a < 3; ++a) {
+      const double c = std::floor((x[a] - b.origin[a]) / b.cell_mm);
+      if (!(c >= 0.0 && c < b.cells[a])) return best;
+      ijk[a] = static_cast<int>(c);
+    }
+    const std::size_t cell = static_cast<std::size_t>(ijk[0]) +
+                             static_cast<std::size_t>(b.cells[0]) *
+                                 (static_cast<std::size_t>(ijk[1]) +
+                                  static_cast<std::size_t>(b.cells[1]) * static_cast<std::size_t>(ijk[2]));
+    first = b.faces.data() + b.offsets[cell];
+    last = b.faces.data() + b.offsets[cell + 1];
+  }
+  const std::size_t count = m_search_all ? m_moved_faces.size() : static_cast<std::size_t>(last - first);
+  for (std::size_t n = 0; n < count; ++n) {
+    const MovedFace& f = m_moved_faces[m_search_all ? n : first[n]];
     const auto& v = deformed ? f.deformed : f.rest;
     const Eigen::Vector3d w = closest_point_on_triangle(x, v[0], v[1], v[2]).barycentric;
     const double d = (x - (w[0] * v[0] + w[1] * v[1] + w[2] * v[2])).norm();

@@ -22,7 +22,11 @@ namespace phantasm {
 /// leaves when it moves away from its container, have no exact correspondence).
 class DeformationMap {
 public:
-  DeformationMap(std::vector<DeformedBody> bodies, double extension_mm);
+  /// @param bodies the solved bodies (rest and deformed tet meshes, mm)
+  /// @param extension_mm width of the fading extension outside the bodies, mm
+  /// @param search_all_faces find the moved boundary near a point by scanning all moved faces
+  ///        rather than the buckets near it (the same result, slower; kept to compare)
+  DeformationMap(std::vector<DeformedBody> bodies, double extension_mm, bool search_all_faces = false);
 
   /// Deformed position of a reference point (RAS mm); *exact tells whether it is the solved motion.
   Eigen::Vector3d forward(const Eigen::Vector3d& x_ref, bool* exact = nullptr) const;
@@ -56,7 +60,7 @@ private:
   std::vector<DeformedBody> m_bodies;
   double m_extension = 10.0;
   /// Distance from x to the moved boundary faces in one state, and the displacement of the
-  /// closest point.
+  /// closest point, when it is below extension_mm (else infinity or a distance >= extension_mm).
   double moved_boundary_distance(const Eigen::Vector3d& x, bool deformed,
                                  Eigen::Vector3d* displacement) const;
 
@@ -64,6 +68,20 @@ private:
     std::array<Eigen::Vector3d, 3> rest, deformed;
   };
   std::vector<MovedFace> m_moved_faces;
+  /// Per state (rest [0], deformed [1]): the moved faces within extension_mm of each cell of a
+  /// uniform grid of cells of about extension_mm, in face order (compressed rows), so a query
+  /// scans only the faces that can be nearer than extension_mm, in the order the full scan
+  /// would, and finds the same face.
+  struct FaceBuckets {
+    Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+    double cell_mm = 1.0;
+    Eigen::Vector3i cells = Eigen::Vector3i::Zero();
+    std::vector<std::uint32_t> offsets; ///< cell c's faces: faces[offsets[c], offsets[c + 1])
+    std::vector<std::uint32_t> faces;
+  };
+  FaceBuckets m_buckets[2];
+  /// true: moved_boundary_distance scans every moved face (the former path, kept to compare).
+  bool m_search_all = false;
   /// Bounding boxes of the moved faces, rest [0] and deformed [1].
   Eigen::Vector3d m_moved_low[2] = {Eigen::Vector3d::Constant(1e300), Eigen::Vector3d::Constant(1e300)};
   Eigen::Vector3d m_moved_high[2] = {Eigen::Vector3d::Constant(-1e300), Eigen::Vector3d::Constant(-1e300)};

@@ -141,7 +141,7 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
     // Tissue outside the solved bodies does not move: the extension only smooths the step at a
     // moved boundary, over two voxels [choice].
     const double extension = 2.0 * out.grid.spacing_mm.maxCoeff();
-    const DeformationMap map(deformation->bodies, extension);
+    const DeformationMap map(deformation->bodies, extension, settings.field_extension_by_search);
     out.motion = compute_motion_fields(out.grid, map);
     out.landmarks = organ_landmarks(reference, deformation, &map);
     progress.advance();

@@ -164,3 +164,34 @@ TEST(DeformationMap, MotionFieldsHoldTheMotionAndItsJacobianInsideAndNothingFarA
   EXPECT_GT(inside, 100);
   EXPECT_GT(far, 100);
 }
+
+// The buckets of moved faces find the same closest face as the scan of every face, so the
+// fields are the same to the bit (both ways, masks and Jacobian), on a grid that is not aligned
+// with the cube and reaches past the buckets.
+TEST(DeformationMap, FaceBucketsGiveTheFieldsOfTheFullScanBitForBit) {
+  const DeformationMap fast({affine_cube()}, k_extension_mm);
+  const DeformationMap scan({affine_cube()}, k_extension_mm, true);
+  ImageGrid grid;
+  grid.dims = {31, 29, 27};
+  grid.spacing_mm = Eigen::Vector3d(1.3, 1.4, 1.5);
+  grid.world_from_voxel.topLeftCorner<3, 3>() = grid.spacing_mm.asDiagonal();
+  grid.world_from_voxel.topRightCorner<3, 1>() = Eigen::Vector3d(-9.7, -10.1, -9.9);
+  const MotionFields a = compute_motion_fields(grid, fast);
+  const MotionFields b = compute_motion_fields(grid, scan);
+  EXPECT_EQ(a.ref_to_def, b.ref_to_def);
+  EXPECT_EQ(a.def_to_ref, b.def_to_ref);
+  EXPECT_EQ(a.ref_to_def_exact, b.ref_to_def_exact);
+  EXPECT_EQ(a.def_to_ref_exact, b.def_to_ref_exact);
+  EXPECT_EQ(a.jacobian, b.jacobian);
+  // Off the grid too, both ways.
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> coordinate(-12.0, 35.0);
+  for (int n = 0; n < 2000; ++n) {
+    const Eigen::Vector3d x(coordinate(random), coordinate(random), coordinate(random));
+    bool exact_a = false, exact_b = false;
+    EXPECT_EQ(fast.forward(x, &exact_a), scan.forward(x, &exact_b)) << x.transpose();
+    EXPECT_EQ(exact_a, exact_b);
+    EXPECT_EQ(fast.inverse(x, &exact_a), scan.inverse(x, &exact_b)) << x.transpose();
+    EXPECT_EQ(exact_a, exact_b);
+  }
+}
