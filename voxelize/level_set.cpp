@@ -54,27 +54,9 @@ struct PatchHeights {
   }
 
   /// Distance from x to the patch, mm, from the base point (u, v) nearest x: Gauss-Newton on
-  /// |x - p(u, v)|^2 over the triangle from there and from the nearest bump centre, each step
-  /// accepted only when it brings p nearer.
-  double distance(const Eigen::Vector3d& x, const Eigen::Vector2d& uv) const {
-    // Outside a bump's ellipse its height and slope vanish, so a start there cannot climb it:
-    // start again from the bump centre nearest x.
-    double best = descend(x, uv);
-    const PatchBump* nearest = nullptr;
-    double nearest_squared = std::numeric_limits<double>::infinity();
-    for (const PatchBump& b : bumps) {
-      Eigen::Vector2d d_uv;
-      const double squared = (x - point(b.center_uv, height(b.center_uv, &d_uv))).squaredNorm();
-      if (squared < nearest_squared) {
-        nearest_squared = squared;
-        nearest = &b;
-      }
-    }
-    if (nearest) best = std::min(best, descend(x, nearest->center_uv));
-    return best;
-  }
-
-  double descend(const Eigen::Vector3d& x, Eigen::Vector2d uv) const {
+  /// |x - p(u, v)|^2 over the triangle, each step accepted only when it brings p nearer, so the
+  /// result is at most the distance along the normal |x - p(u0, v0)|.
+  double distance(const Eigen::Vector3d& x, Eigen::Vector2d uv) const {
     Eigen::Vector2d d_uv;
     double h = height(uv, &d_uv);
     Eigen::Vector3d r = x - point(uv, h);
@@ -147,23 +129,12 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
   const double reach = band + patch_reach + 1e-9;
   openvdb::DoubleGrid best_squared(std::numeric_limits<double>::infinity());
   openvdb::Int32Grid owner(-1);
-  // And the distance to the nearest patch (the bumps of a neighbouring patch can be nearer than
-  // the patch over the closest base point): patches farther than their reach beyond the
-  // nearest so far are not searched.
-  openvdb::DoubleGrid nearest(std::numeric_limits<double>::infinity());
-  // And the side where the voxel lies over or under a bump (where a neighbouring patch's bump
-  // can hold it while the closest base triangle says otherwise): the height of the point above
-  // the surface along that patch's normal, the smallest in magnitude.
-  openvdb::DoubleGrid column(std::numeric_limits<double>::infinity());
   {
-    auto column_accessor = column.getAccessor();
     auto best_accessor = best_squared.getAccessor();
     auto owner_accessor = owner.getAccessor();
-    auto nearest_accessor = nearest.getAccessor();
     for (std::size_t t = 0; t < nf; ++t) {
       const auto& v = mesh.corners(static_cast<int>(t));
       const Eigen::Vector3d& n = mesh.face_normal(static_cast<int>(t));
-      const PatchHeights& p = patches[t];
       const Eigen::Vector3d low = v[0].cwiseMin(v[1]).cwiseMin(v[2]).array() - reach;
       const Eigen::Vector3d high = v[0].cwiseMax(v[1]).cwiseMax(v[2]).array() + reach;
       int lo[3], hi[3];
@@ -186,24 +157,6 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
               best_accessor.setValueOn(ijk, d2);
               owner_accessor.setValueOn(ijk, static_cast<int>(t));
             }
-            if (!p.bumps.empty() && on_base.feature == TriangleFeature::face) {
-              Eigen::Vector2d d_uv;
-              const double h = p.height(on_base.barycentric.tail<2>(), &d_uv);
-              if (h != 0.0) {
-                const double along = n.dot(x - on_base.point) - h;
-                if (std::abs(along) < std::abs(column_accessor.getValue(ijk)))
-                  column_accessor.setValueOn(ijk, along);
-              }
-            }
-            const double base_distance = std::sqrt(d2);
-            const double so_far = nearest_accessor.getValue(ijk);
-            double patch_distance = base_distance;
-            if (!p.bumps.empty()) {
-              const double lower = base_distance - p.reach_mm;
-              if (!(lower < so_far)) continue;
-              patch_distance = lower < band ? p.distance(x, on_base.barycentric.tail<2>()) : lower;
-            }
-            if (patch_distance < so_far) nearest_accessor.setValueOn(ijk, patch_distance);
           }
         }
       }
@@ -212,44 +165,39 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
   best_squared.clear();
   std::vector<openvdb::Coord> coords;
   std::vector<int> triangles;
-  std::vector<double> distances, columns;
   coords.reserve(static_cast<std::size_t>(owner.activeVoxelCount()));
   triangles.reserve(coords.capacity());
-  distances.reserve(coords.capacity());
-  columns.reserve(coords.capacity());
-  {
-    auto nearest_accessor = nearest.getConstAccessor();
-    auto column_accessor = column.getConstAccessor();
-    for (auto it = owner.cbeginValueOn(); it; ++it) {
-      coords.push_back(it.getCoord());
-      triangles.push_back(*it);
-      distances.push_back(nearest_accessor.getValue(it.getCoord()));
-      columns.push_back(column_accessor.getValue(it.getCoord()));
-    }
+  for (auto it = owner.cbeginValueOn(); it; ++it) {
+    coords.push_back(it.getCoord());
+    triangles.push_back(*it);
   }
   owner.clear();
-  nearest.clear();
-  column.clear();
   std::vector<float> values(coords.size());
   const auto count = static_cast<std::ptrdiff_t>(coords.size());
 #pragma omp parallel for schedule(static)
   for (std::ptrdiff_t c = 0; c < count; ++c) {
     const auto i = static_cast<std::size_t>(c);
     const Eigen::Vector3d x = voxel_size_mm * Eigen::Vector3d(coords[i].x(), coords[i].y(), coords[i].z());
-    // The side: over or under a bump, from the height above it; elsewhere the surface is the
-    // base mesh (the bumps vanish towards the base edges), so from the closest base triangle's
-    // pseudonormals.
-    bool inside = columns[i] < 0.0;
-    if (!(std::abs(columns[i]) < band)) {
-      MeshClosestPoint closest;
-      closest.triangle = triangles[i];
-      const auto& v = mesh.corners(closest.triangle);
-      closest.on_triangle = closest_point_on_triangle(x, v[0], v[1], v[2]);
-      closest.distance_squared = (x - closest.on_triangle.point).squaredNorm();
-      inside = mesh.inside(x, closest);
+    MeshClosestPoint closest;
+    closest.triangle = triangles[i];
+    const auto& v = mesh.corners(closest.triangle);
+    closest.on_triangle = closest_point_on_triangle(x, v[0], v[1], v[2]);
+    closest.distance_squared = (x - closest.on_triangle.point).squaredNorm();
+    double d = std::sqrt(closest.distance_squared);
+    if (mesh.inside(x, closest)) d = -d;
+    const PatchHeights& p = patches[static_cast<std::size_t>(closest.triangle)];
+    if (!p.bumps.empty()) {
+      // On an edge or corner of the base the bumps vanish (their ellipses lie inside the
+      // triangle), so this corrects only points above a patch's interior: the side from the
+      // height of the surface above the closest base point, the distance from the patch's
+      // closest point near the band's middle.
+      const Eigen::Vector2d uv = closest.on_triangle.barycentric.tail<2>();
+      Eigen::Vector2d d_uv;
+      const double along_normal = d - p.height(uv, &d_uv);
+      const double distance = std::abs(along_normal) < band ? p.distance(x, uv) : std::abs(along_normal);
+      d = along_normal < 0.0 ? -distance : distance;
     }
-    const double d = std::min(distances[i], band);
-    values[i] = static_cast<float>(inside ? -d : d);
+    values[i] = static_cast<float>(std::clamp(d, -band, band));
   }
   m->grid = openvdb::FloatGrid::create(static_cast<float>(band));
   m->grid->setTransform(openvdb::math::Transform::createLinearTransform(voxel_size_mm));
