@@ -26,7 +26,8 @@ namespace {
 
 /// The child's whole life: run one subject, exit with phantasm's exit codes.
 [[noreturn]] void run_subject_and_exit(const Sweep& sweep, const SweepSubject& subject,
-                                       const std::filesystem::path& output, int threads, pid_t parent) {
+                                       const std::filesystem::path& output, int threads, pid_t parent,
+                                       bool strict) {
   ::prctl(PR_SET_PDEATHSIG, SIGKILL); // a batch killed outright takes its subjects with it
   if (::getppid() != parent) ::_exit(1);
   omp_set_num_threads(threads);
@@ -35,7 +36,9 @@ namespace {
     const SceneLoadResult loaded = parse_scene(subject.scene_text, sweep.base_scene);
     if (!loaded.scene) throw InputError(format_diagnostics(loaded.problems));
     Reporter quiet = Reporter::silent();
-    run_scene(*loaded.scene, RunOptions{output, true}, quiet);
+    RunOptions run_options{output, true};
+    run_options.strict = strict;
+    run_scene(*loaded.scene, run_options, quiet);
   } catch (const Cancelled&) {
     code = 130;
   } catch (const InputError& error) {
@@ -65,6 +68,16 @@ bool subject_is_complete(const std::filesystem::path& output, const SweepSubject
     return json.at("scene").at("sha256").get<std::string>() == sha256_hex(subject.scene_text);
   } catch (const std::exception&) {
     return false;
+  }
+}
+
+bool subject_converged(const std::filesystem::path& output, const SweepSubject& subject) {
+  std::ifstream in(DatasetLayout(output, subject.id).provenance());
+  if (!in) return true;
+  try {
+    return nlohmann::json::parse(in).value("converged", true);
+  } catch (const std::exception&) {
+    return true;
   }
 }
 
@@ -105,7 +118,8 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
       std::cerr.flush();
       const pid_t child = ::fork();
       if (child < 0) throw std::runtime_error("cannot start a process for subject " + sweep.subjects[s].id);
-      if (child == 0) run_subject_and_exit(sweep, sweep.subjects[s], options.output, threads, parent);
+      if (child == 0)
+        run_subject_and_exit(sweep, sweep.subjects[s], options.output, threads, parent, options.strict);
       running[child] = {s, std::chrono::steady_clock::now()};
     }
     if (running.empty()) break;
@@ -141,6 +155,11 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
                                 : "signal " + std::to_string(WTERMSIG(status)))
           << ")\n";
     }
+  }
+  for (std::size_t s = 0; s < sweep.subjects.size(); ++s) {
+    if (options.shard.holds(s) && subject_is_complete(options.output, sweep.subjects[s]) &&
+        !subject_converged(options.output, sweep.subjects[s]))
+      summary.unconverged.push_back(sweep.subjects[s].id);
   }
   if (cancellation_requested()) {
     summary.interrupted = true;

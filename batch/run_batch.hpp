@@ -16,17 +16,23 @@ struct BatchOptions {
   int jobs = 1;                 ///< subjects run at once, each in its own process
   Shard shard;                  ///< which slice of the sweep this batch makes
   bool quiet = false;
+  bool strict = false; ///< a subject whose run warned (unconverged solve, inverted tets) fails, unwritten
 };
 
 struct BatchSummary {
   std::size_t in_shard = 0, skipped = 0, ran = 0;
   std::vector<std::string> failed; ///< subject ids
+  /// subjects of the shard (made or already complete) with a solve that did not converge
+  std::vector<std::string> unconverged;
   bool interrupted = false;
 };
 
 /// True when a subject is complete in `output`: its provenance.json (written last) exists and
 /// records the hash of this subject's scene.
 bool subject_is_complete(const std::filesystem::path& output, const SweepSubject& subject);
+
+/// False when a complete subject's provenance.json records a solve that did not converge.
+bool subject_converged(const std::filesystem::path& output, const SweepSubject& subject);
 
 /// Runs the sweep's subjects of one shard into one dataset: participants.tsv first (the same
 /// bytes from every shard), then each subject that is not complete yet in a child process

@@ -32,6 +32,13 @@ void Reporter::skipped(const std::string& stage, const std::string& message) {
   modelled(stage, "skipped: " + message);
 }
 
+void Reporter::warning(const std::string& stage, const std::string& message) {
+  const std::string line = "[" + stage + "] warning: " + message;
+  std::lock_guard<std::mutex> lock(m_mutex);
+  m_log.push_back(line);
+  (*m_stream) << line << '\n' << std::flush;
+}
+
 void Reporter::note(const std::string& message) {
   print(message);
 }

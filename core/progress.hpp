@@ -61,6 +61,9 @@ public:
   void modelled(const std::string& stage, const std::string& message);
   /// "[stage] skipped: message": what the scene did not need.
   void skipped(const std::string& stage, const std::string& message);
+  /// "[stage] warning: message": a result the run could not vouch for (an unconverged solve,
+  /// inverted elements); in the log, and on stderr even when quiet.
+  void warning(const std::string& stage, const std::string& message);
   /// A note that belongs on screen but not in the log (timings, where files went).
   void note(const std::string& message);
 

@@ -16,6 +16,9 @@ struct StageReport {
   std::vector<std::string> modelled;      ///< one line per thing modelled, with why
   std::vector<std::string> skipped;       ///< one line per thing left out, with why
   std::map<std::string, double> accuracy; ///< achieved accuracy figures, named with their unit
+  /// results the stage could not vouch for (an unconverged solve, inverted elements, a
+  /// non-positive Jacobian where the ground truth is marked exact); `--strict` makes them errors
+  std::vector<std::string> warnings;
 };
 
 } // namespace phantasm

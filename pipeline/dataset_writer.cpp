@@ -55,11 +55,8 @@ private:
 };
 
 nlohmann::json stage_json(const StageReport& report) {
-  return {{"stage", report.stage},
-          {"status", report.status},
-          {"modelled", report.modelled},
-          {"skipped", report.skipped},
-          {"accuracy", report.accuracy}};
+  return {{"stage", report.stage},     {"status", report.status},     {"modelled", report.modelled},
+          {"skipped", report.skipped}, {"warnings", report.warnings}, {"accuracy", report.accuracy}};
 }
 
 nlohmann::json generated_by() {
@@ -121,12 +118,23 @@ void plan_organ_meshes(const Scene& scene, const Phantom& phantom, PhantomState 
   }
 }
 
+nlohmann::json bodies_json(const std::vector<DeformedBody>& bodies) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const DeformedBody& b : bodies)
+    list.push_back(
+        {{"organ", b.organ}, {"smallest_det_F", b.smallest_det_F}, {"inverted_tets", b.inverted_tets}});
+  return list;
+}
+
 nlohmann::json solves_json(const std::vector<SolveReport>& solves) {
   nlohmann::json list = nlohmann::json::array();
   for (const SolveReport& s : solves) {
     nlohmann::json solve = {{"solver", s.solver},
                             {"iterations", s.iterations},
                             {"stopped_by", s.stopped_by},
+                            {"converged", s.converged},
+                            {"relative_residual", s.relative_residual},
+                            {"force_scale_N", s.force_scale_N},
                             {"residual_N", s.residual_N},
                             {"initial_energy_J", s.initial_energy_J},
                             {"final_energy_J", s.final_energy_J}};
@@ -382,12 +390,24 @@ DatasetPlan plan_dataset(const Scene& scene, const Simulation& simulation, const
         {"settings", scene_settings_json(scene)},
         {"stages", stages},
         {"solves", deformation ? solves_json(deformation->solves) : nlohmann::json::array()},
+        {"converged", !deformation || std::all_of(deformation->solves.begin(), deformation->solves.end(),
+                                                  [](const SolveReport& s) { return s.converged; })},
+        {"bodies", deformation ? bodies_json(deformation->bodies) : nlohmann::json::array()},
+        {"warnings", stage_warnings(summary.stages)},
         {"files", files}};
   });
   return plan;
 }
 
 } // namespace
+
+std::vector<std::string> stage_warnings(const std::vector<StageReport>& stages) {
+  std::vector<std::string> lines;
+  for (const StageReport& stage : stages)
+    for (const std::string& warning : stage.warnings)
+      lines.push_back("[" + stage.stage + "] " + warning);
+  return lines;
+}
 
 RunSummary write_dataset(const Scene& scene, const Simulation& simulation,
                          const std::filesystem::path& output, Reporter& reporter) {

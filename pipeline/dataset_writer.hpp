@@ -8,6 +8,7 @@
 #include "scene/scene.hpp"
 
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace phantasm {
@@ -16,6 +17,9 @@ struct RunSummary {
   std::vector<StageReport> stages;
   std::vector<std::filesystem::path> files; ///< written, relative to the dataset folder
 };
+
+/// Every stage's warnings, "[stage] message", in stage order.
+std::vector<std::string> stage_warnings(const std::vector<StageReport>& stages);
 
 /// Writes a complete simulation (every stage run) as the dataset (docs/architecture.md) into `output`,
 /// provenance.json last. The folder must have been prepared (prepare_output_folder). The files

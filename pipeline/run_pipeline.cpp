@@ -22,8 +22,11 @@ namespace {
 class StageLines {
 public:
   explicit StageLines(const StageReport& report)
-      : m_modelled(report.modelled.size()), m_skipped(report.skipped.size()) {}
+      : m_modelled(report.modelled.size()), m_skipped(report.skipped.size()),
+        m_warnings(report.warnings.size()) {}
   void print_new(const StageReport& report, Reporter& reporter) const {
+    for (std::size_t k = m_warnings; k < report.warnings.size(); ++k)
+      reporter.warning(report.stage, report.warnings[k]);
     for (std::size_t k = m_modelled; k < report.modelled.size(); ++k)
       reporter.modelled(report.stage, report.modelled[k]);
     for (std::size_t k = m_skipped; k < report.skipped.size(); ++k)
@@ -31,7 +34,7 @@ public:
   }
 
 private:
-  std::size_t m_modelled, m_skipped;
+  std::size_t m_modelled, m_skipped, m_warnings;
 };
 
 /// The anatomy stage: reads the scene's shape files and builds every organ; records fit errors.
@@ -111,6 +114,15 @@ Simulation simulate(const Scene& scene, Reporter& reporter, SimulationStage unti
 RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& reporter) {
   prepare_output_folder(options.output, options.force);
   const Simulation simulation = simulate(scene, reporter);
+  if (options.strict) {
+    const std::vector<std::string> warnings = stage_warnings(simulation.stages);
+    if (!warnings.empty()) {
+      std::string message = "--strict: the run warned, no subject written:";
+      for (const std::string& line : warnings)
+        message += "\n  " + line;
+      throw StrictError(message);
+    }
+  }
   return write_dataset(scene, simulation, options.output, reporter);
 }
 

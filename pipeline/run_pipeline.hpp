@@ -9,6 +9,7 @@
 #include "scene/scene.hpp"
 
 #include <filesystem>
+#include <stdexcept>
 #include <vector>
 
 namespace phantasm {
@@ -16,6 +17,15 @@ namespace phantasm {
 struct RunOptions {
   std::filesystem::path output; ///< the dataset folder
   bool force = false;           ///< write into a folder that already holds files
+  /// a result the run cannot vouch for (an unconverged solve, inverted tets, a non-positive
+  /// Jacobian inside an exact mask) is an error: StrictError before anything is written
+  bool strict = false;
+};
+
+/// A run with --strict whose stages warned: nothing of the subject was written.
+class StrictError : public std::runtime_error {
+public:
+  using std::runtime_error::runtime_error;
 };
 
 /// Each stage's plan for a scene, in data-flow order (anatomy, sim, voxelize, mri).
@@ -30,6 +40,7 @@ Simulation simulate(const Scene& scene, Reporter& reporter, SimulationStage unti
 /// Runs a scene through every stage and writes the dataset (docs/architecture.md, dataset layout).
 /// provenance.json is written last: its presence marks a complete subject.
 /// @throws InputError for an output folder that may not be written into
+/// @throws StrictError with options.strict when a stage warned (nothing of the subject written)
 /// @throws Cancelled when cancellation was requested; files already written stay complete
 RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& reporter);
 

@@ -16,6 +16,7 @@ void parse_solver(CheckedMap& map, SolverSettings& solver) {
   map.integer("max_iterations", solver.max_iterations, 1, 1000000);
   map.number("relative_energy_tolerance", solver.relative_energy_tolerance, between(0.0, 1.0, ""));
   map.number("position_tolerance_mm", solver.position_tolerance_mm, non_negative("mm"));
+  map.number("relative_residual_tolerance", solver.relative_residual_tolerance, between(0.0, 1.0, ""));
   map.integer("threads", solver.threads, 0, 1024);
 }
 

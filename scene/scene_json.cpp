@@ -142,6 +142,7 @@ nlohmann::json scene_settings_json(const Scene& scene) {
           {"max_iterations", d.solver.max_iterations},
           {"relative_energy_tolerance", d.solver.relative_energy_tolerance},
           {"position_tolerance_mm", d.solver.position_tolerance_mm},
+          {"relative_residual_tolerance", d.solver.relative_residual_tolerance},
           {"threads", d.solver.threads}}},
         {"time_step_s", d.time_step_s},
         {"frames", d.frames},

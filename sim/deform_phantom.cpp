@@ -5,7 +5,62 @@
 #include "sim/load_schedule.hpp"
 #include "sim/loads.hpp"
 
+#include "core/format.hpp"
+
+#include <algorithm>
+
 namespace phantasm {
+namespace {
+
+/// The loads and obstacles of the scene, named for a warning.
+std::string load_names(const DeformationSettings& deformation) {
+  std::string names;
+  for (const LoadSettings& load : deformation.loads) {
+    if (!names.empty()) names += ", ";
+    names += load.kind == LoadKind::gravity
+                 ? "gravity (" + format_number(load.acceleration_m_s2.norm()) + " m/s^2)"
+                 : "the displacement of " + load.organ + " by " + format_number(load.displacement_mm.norm()) +
+                       " mm";
+  }
+  if (!deformation.obstacles.empty())
+    names +=
+        (names.empty() ? "" : ", ") + std::to_string(deformation.obstacles.size()) + " obstacle(s)";
+  return names.empty() ? "no load" : names;
+}
+
+/// Physical validity of every body: its smallest det F and its inverted tets (det F <= 0) into
+/// the body, the stage's accuracy figures and, for inverted tets, a warning naming the organ
+/// and the loads (a tet turned inside out has no physical meaning, and the displacement fields
+/// of the ground truth are not invertible there).
+void check_inversions(const DeformationSettings& deformation, PhantomDeformation& result, StageReport& report) {
+  for (DeformedBody& body : result.bodies) {
+    body.smallest_det_F = 1.0;
+    body.inverted_tets = 0;
+    for (Eigen::Index t = 0; t < body.tets.rows(); ++t) {
+      auto edges = [&](const Eigen::MatrixX3d& x) {
+        Eigen::Matrix3d D;
+        for (int k = 0; k < 3; ++k)
+          D.col(k) = (x.row(body.tets(t, k + 1)) - x.row(body.tets(t, 0))).transpose();
+        return D;
+      };
+      const double rest = edges(body.rest_mm).determinant();
+      if (rest == 0.0) continue;
+      const double det = edges(body.deformed_mm).determinant() / rest;
+      body.smallest_det_F = std::min(body.smallest_det_F, det);
+      if (!(det > 0.0)) ++body.inverted_tets;
+    }
+    report.accuracy[body.organ + " smallest det F"] = body.smallest_det_F;
+    report.accuracy[body.organ + " inverted tets"] = static_cast<double>(body.inverted_tets);
+    if (body.inverted_tets > 0) {
+      report.warnings.push_back(body.organ + ": " + std::to_string(body.inverted_tets) + " of " +
+                                std::to_string(body.tets.rows()) + " tets inverted (det F <= 0, smallest " +
+                                format_number(body.smallest_det_F) + ") under " + load_names(deformation) +
+                                "; the material is too soft for the load, or the solve did not converge");
+    }
+  }
+}
+
+} // namespace
 
 PhantomDeformation deform_phantom(const DeformationSettings& deformation, const OrganTable& organs,
                                   const Phantom& phantom, StageReport& report, Reporter& reporter) {
@@ -26,6 +81,7 @@ PhantomDeformation deform_phantom(const DeformationSettings& deformation, const 
   Eigen::MatrixX3d p = model.rest_positions_m;
   if (!built.bodies.empty()) solve_frames(deformation, model, loads, p, result, report, reporter);
   collect_deformations(organs, phantom, assignment, built.bodies, p / k_mm, result);
+  check_inversions(deformation, result, report);
   return result;
 }
 

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 
 namespace phantasm {
 
@@ -48,6 +49,7 @@ SolveReport LocalGlobalSolver::solve_jacobi_chebyshev(Eigen::MatrixX3d& p, const
   Eigen::VectorXd inverse_diagonal = m->K_free.diagonal().cwiseInverse();
   double omega = 1.0;
   int step = 0; // iterations since the acceleration (re)started
+  std::optional<ResidualTest> test;
   for (int iteration = 1; iteration <= stop.max_iterations; ++iteration) {
     start = Clock::now();
     const bool contacts_changed = m->contacts->update_factor(*m->factor) > 0;
@@ -56,16 +58,23 @@ SolveReport LocalGlobalSolver::solve_jacobi_chebyshev(Eigen::MatrixX3d& p, const
     start = Clock::now();
     if (contacts_changed) inverse_diagonal = m->matrix_diagonal().cwiseInverse();
     const Eigen::MatrixX3d Kx = m->apply_matrix(x);
+    // The equilibrium residual at x: the residual test before every step (and after the last,
+    // in finish_report).
+    const double residual = nf > 0 ? (Kx - m->rhs).rowwise().norm().maxCoeff() : 0.0;
+    if (!test) test.emplace(stop, residual);
+    if (test->passes(residual)) {
+      report.global_seconds += seconds_since(start);
+      report.stopped_by = "residual";
+      break;
+    }
     const Eigen::MatrixX3d jacobi = x + inverse_diagonal.asDiagonal() * (m->rhs - Kx);
     ++step;
     omega = step == 1 ? 1.0 : step == 2 ? 2.0 / (2.0 - rho * rho) : 4.0 / (4.0 - rho * rho * omega);
     const Eigen::MatrixX3d next = omega * (under_relaxation * (jacobi - x) + x - x_previous) + x_previous;
     report.global_seconds += seconds_since(start);
     start = Clock::now();
-    const double previous = energy;
     m->set_free_positions(next, p);
     energy = m->local_step(p, target);
-    const double change = nf > 0 ? (next - x).rowwise().norm().maxCoeff() : 0.0;
     x_previous = x;
     x = next;
     if (std::isfinite(energy) && m->contacts->pending()) {
@@ -93,18 +102,13 @@ SolveReport LocalGlobalSolver::solve_jacobi_chebyshev(Eigen::MatrixX3d& p, const
       report.seconds.push_back(report.local_seconds + report.global_seconds);
     }
     if (observer) observer(iteration, p, energy);
-    if (step > 0 && change <= stop.position_change_m) {
-      report.stopped_by = "position";
-      break;
-    }
-    if (step > 2 && !m->contacts->pending() &&
-        std::abs(previous - energy) <= stop.relative_energy_decrease * std::abs(energy)) {
-      report.stopped_by = "energy";
-      break;
-    }
+    // The step criteria stop nothing the residual test does not (a small step is not a small
+    // distance to equilibrium): the test at the next iteration's start decides.
   }
   report.final_energy_J = energy;
   m->finish_report(x, target, report);
+  if (!test) test.emplace(stop, report.residual_N);
+  judge_convergence(*test, report);
   return report;
 }
 

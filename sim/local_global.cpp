@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
 
 namespace phantasm {
 
@@ -180,12 +181,22 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
   // the history restarts. Either way the energy never increases.
   sim_detail::AndersonAcceleration anderson(nf, m->anderson_history);
   Eigen::MatrixX3d x = m->free_positions(p);
-  for (int iteration = 1; iteration <= stop.max_iterations; ++iteration) {
+  std::optional<ResidualTest> test;
+  for (int iteration = 1;; ++iteration) {
     start = Clock::now();
     const int contact_changes = m->contacts->update_factor(*m->factor); // (timed with the local step:
     report.contact_changes += contact_changes;                          // the right-hand side depends on it)
     m->gather_rhs(target);
+    // The equilibrium residual at x (K x - b(x), b from the projections the last local step
+    // made there): the residual test before every step, and after the last.
+    const double residual = nf > 0 ? (m->apply_matrix(x) - m->rhs).rowwise().norm().maxCoeff() : 0.0;
     report.local_seconds += seconds_since(start);
+    if (!test) test.emplace(stop, residual);
+    if (test->passes(residual)) {
+      report.stopped_by = "residual";
+      break;
+    }
+    if (iteration > stop.max_iterations) break;
     start = Clock::now();
     m->factor->solve(m->rhs, m->solution, m->threads);
     report.global_seconds += seconds_since(start);
@@ -219,20 +230,17 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
       report.seconds.push_back(report.local_seconds + report.global_seconds);
     }
     if (observer) observer(iteration, p, energy);
-    if (change <= stop.position_change_m) {
+    // A step that no longer moves anything: nothing more to gain (the residual test judges
+    // whether that point is the equilibrium). The step criteria of the scene otherwise stop
+    // nothing the residual test does not: a small step is not a small distance to equilibrium.
+    if (change == 0.0) {
       report.stopped_by = "position";
-      break;
-    }
-    // Contacts that came or went (in this step, or found at its result) make the energy of the
-    // step another function: no stop on its change then.
-    if (contact_changes == 0 && !m->contacts->pending() &&
-        (previous - energy) <= stop.relative_energy_decrease * std::abs(energy)) {
-      report.stopped_by = "energy";
       break;
     }
   }
   report.final_energy_J = energy;
   m->finish_report(m->free_positions(p), target, report);
+  judge_convergence(*test, report);
   return report;
 }
 

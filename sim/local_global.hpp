@@ -33,7 +33,9 @@ public:
   LocalGlobalSolver(const LocalGlobalSolver&) = delete;
   LocalGlobalSolver& operator=(const LocalGlobalSolver&) = delete;
 
-  /// Iterates from p (metres, one row per vertex) until a stop criterion holds; p is replaced
+  /// Iterates from p (metres, one row per vertex) until the residual test of `stop` passes (its
+  /// residual is K x - b(x), checked before every step at the cost of one product with K), a
+  /// step moves nothing, or the iteration limit; p is replaced
   /// by the result. `inertial_target` is s (ignored for quasi-static). With record_energies, the
   /// report lists E(p_k) for every iteration (E costs nothing extra: the local step computes it).
   SolveReport solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d& inertial_target, const StopCriteria& stop,
@@ -45,7 +47,7 @@ public:
   /// omega_k+1 = 4 / (4 - rho^2 omega_k)), with rho the spectral radius of the Jacobi iteration
   /// matrix estimated by power iteration (times `rho_scale`) and gamma = `under_relaxation`.
   /// When an iteration raises the energy, the acceleration restarts from the better point.
-  /// Stops as solve() does, on the absolute energy change (the energy is not monotone here).
+  /// Stops as solve() does, on the residual test or the iteration limit.
   SolveReport solve_jacobi_chebyshev(Eigen::MatrixX3d& p, const Eigen::MatrixX3d& inertial_target,
                                      const StopCriteria& stop, bool record_energies = false,
                                      const IterationObserver& observer = {}, double under_relaxation = 0.9,

@@ -21,6 +21,8 @@ struct DeformedBody {
   Eigen::MatrixX3d rest_mm;
   Eigen::MatrixX3d deformed_mm;
   Eigen::MatrixX4i tets;
+  double smallest_det_F = 1.0; ///< the smallest det F (deformed over rest volume) of its tets
+  long inverted_tets = 0;      ///< tets with det F <= 0 (turned inside out)
 };
 
 /// Where every organ's vertices went.

@@ -24,11 +24,11 @@ enum class PositionBasedVariant {
   gauss_seidel_pbd,
 };
 
-/// Iterates until a stop criterion holds (the position change of a sweep, the absolute change of
-/// E between sweeps relative to E (E is not monotone here), or the iteration limit); p is
-/// replaced by the result. E is evaluated after every sweep for the stop test and the report
-/// but, like an observer, not counted in the solver's time. External forces act through the
-/// inertial target (s + h^2 M^-1 f).
+/// Iterates until the residual test of `stop` passes or the iteration limit (the step criteria
+/// stop nothing the residual test does not: a small sweep is not a small distance to
+/// equilibrium); p is replaced by the result. E and the gradient are evaluated after every
+/// sweep for the stop test and the report but, like an observer, not counted in the solver's time. External
+/// forces act through the inertial target (s + h^2 M^-1 f).
 /// @throws std::invalid_argument for a quasi-static step (inertia.weight 0): position-based
 ///         methods step in time
 SolveReport position_based_solve(PositionBasedVariant variant, const ElasticModel& model,

@@ -96,9 +96,8 @@ StageReport plan_sim(const DeformationSettings& d, const OrganTable& organs) {
   }
   std::ostringstream solver;
   solver << to_string(d.solver.method) << " solver, " << to_string(d.mode) << ", at most "
-         << d.solver.max_iterations << " iterations, stop at relative energy decrease "
-         << d.solver.relative_energy_tolerance << " or position change " << d.solver.position_tolerance_mm
-         << " mm";
+         << d.solver.max_iterations << " iterations, converged at a residual of "
+         << d.solver.relative_residual_tolerance << " of the loads' force per vertex";
   if (d.mode == DeformationMode::dynamic)
     solver << ", " << d.frames << " frames of " << d.time_step_s << " s";
   else if (d.load_steps > 1)

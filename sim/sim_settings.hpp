@@ -26,10 +26,13 @@ enum class SolverMethod { local_global, newton, gauss_seidel_pbd, jacobi_chebysh
 
 struct SolverSettings {
   SolverMethod method = SolverMethod::local_global;
-  int max_iterations = 100;
+  int max_iterations = 2000;
   double relative_energy_tolerance = 1e-6; ///< stop when (E_k-1 - E_k) / E_k falls below this
   double position_tolerance_mm = 1e-4;     ///< stop when no vertex moves further in one iteration
-  int threads = 0;                         ///< 0 = all cores
+  /// converged (and stop) when the largest free gradient row is at most this fraction of the
+  /// solve's force scale (docs/deformation.md, stopping test)
+  double relative_residual_tolerance = 1e-3;
+  int threads = 0; ///< 0 = all cores
 };
 
 enum class LoadKind { gravity, displacement };

@@ -1,28 +1,54 @@
-// Stop criteria of a solve, the report every solver returns (into provenance.json), and the
-// per-iteration observer convergence studies use.
 #pragma once
 
 #include <Eigen/Core>
 
+#include <algorithm>
 #include <functional>
 #include <string>
 #include <vector>
 
 namespace phantasm {
 
-/// When a solve stops (docs/method.md section 2.5; all three are explicit in the scene).
+/// When a solve stops (docs/deformation.md, stopping test; all are explicit in the scene).
+/// A solve has converged when its equilibrium residual, the largest gradient row over the free
+/// vertices, is at most relative_residual times the force scale of the solve: force_scale_N, the
+/// per-vertex force of its loads (the deformation stage sets the weight of the heaviest free
+/// vertex, or the elastic force of a vertex moved by a displacement load's increment, whichever
+/// is larger), or when that is 0 the largest free gradient row at the start of the solve. The residual test
+/// stops a solve by itself; the step criteria (position change, energy decrease) measure a step,
+/// not the distance to equilibrium, and stop a solve only when its residual test passes too.
 struct StopCriteria {
   int max_iterations = 100;
-  double relative_energy_decrease = 1e-6; ///< stop when (E_k-1 - E_k) / |E_k| falls below this
-  double position_change_m = 1e-7;        ///< stop when no free vertex moved further in one iteration
-  double gradient_norm_N = 0.0;           ///< stop when the largest free gradient row is below this (0 = off)
+  double relative_energy_decrease = 1e-6; ///< (E_k-1 - E_k) / |E_k| below this, with the residual test
+  double position_change_m = 1e-7; ///< no free vertex moved further in one iteration, with the residual test
+  double gradient_norm_N = 0.0;    ///< stop when the largest free gradient row is below this (0 = off)
+  double relative_residual = 1e-3; ///< converged: residual <= this x force scale (0 = never)
+  double force_scale_N = 0.0;      ///< the loads' force scale, N (0 = the initial gradient)
+};
+
+/// The residual test: the force scale of a solve from its initial residual (N) and the floor in
+/// `stop`, and whether `residual_N` passes against it.
+struct ResidualTest {
+  double scale_N = 0.0;
+  double tolerance = 0.0;
+  ResidualTest(const StopCriteria& stop, double initial_residual_N)
+      : scale_N(stop.force_scale_N > 0.0 ? stop.force_scale_N : initial_residual_N),
+        tolerance(stop.relative_residual) {}
+  /// residual_N over the force scale (0 when there is no force at all).
+  double relative(double residual_N) const { return scale_N > 0.0 ? residual_N / scale_N : 0.0; }
+  bool passes(double residual_N) const {
+    return scale_N > 0.0 ? residual_N <= tolerance * scale_N : residual_N <= 0.0;
+  }
 };
 
 /// What a solve did: every solve reports it (into provenance.json).
 struct SolveReport {
   std::string solver;
   int iterations = 0;
-  std::string stopped_by; ///< "max_iterations", "energy", "position", "gradient"
+  std::string stopped_by;         ///< "max_iterations", "residual", "energy", "position", "gradient"
+  bool converged = false;         ///< the residual test passed at the result (StopCriteria)
+  double relative_residual = 0.0; ///< residual_N over the force scale of the solve
+  double force_scale_N = 0.0;     ///< the force scale the residual is measured against
   double initial_energy_J = 0.0;
   double final_energy_J = 0.0;
   double residual_N = 0.0;        ///< largest gradient row norm over free vertices at the result
@@ -34,6 +60,14 @@ struct SolveReport {
   long contact_changes = 0;       ///< vertices whose contacts came or went during the solve
   long rank_updates = 0;          ///< rank-one updates/downdates of the factor so far
 };
+
+/// The residual test's outcome at the result into `report` (converged, relative_residual,
+/// force_scale_N), from report.residual_N.
+inline void judge_convergence(const ResidualTest& test, SolveReport& report) {
+  report.force_scale_N = test.scale_N;
+  report.relative_residual = test.relative(report.residual_N);
+  report.converged = test.passes(report.residual_N);
+}
 
 /// Called after every iteration with its number, the positions and E(p); its own time is not
 /// counted in the report (convergence studies record positions with it).

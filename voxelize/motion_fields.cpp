@@ -251,6 +251,97 @@ void DeformationMap::rasterize(const ImageGrid& grid, bool deformed, std::vector
   }
 }
 
+namespace {
+
+/// A field (component-major) at a world point by trilinear interpolation of the voxel values
+/// (clamped at the border): what a user of the ground truth does to compose the fields.
+Eigen::Vector3d sample_field(const ImageGrid& grid, const std::vector<float>& field,
+                             const Eigen::Vector3d& x) {
+  const auto count = static_cast<std::size_t>(grid.voxel_count());
+  const Eigen::Vector3d index = grid.index_from_world(x);
+  int lo[3];
+  double w[3];
+  for (int a = 0; a < 3; ++a) {
+    const double c = std::clamp(index[a], 0.0, static_cast<double>(grid.dims[a] - 1));
+    lo[a] = std::min(static_cast<int>(std::floor(c)), std::max(0, grid.dims[a] - 2));
+    w[a] = grid.dims[a] > 1 ? c - lo[a] : 0.0;
+  }
+  Eigen::Vector3d u = Eigen::Vector3d::Zero();
+  for (int corner = 0; corner < 8; ++corner) {
+    double weight = 1.0;
+    std::size_t v = 0, stride = 1;
+    for (int a = 0; a < 3; ++a) {
+      const int bit = (corner >> a) & 1;
+      const int i = std::min(lo[a] + bit, grid.dims[a] - 1);
+      weight *= bit ? w[a] : 1.0 - w[a];
+      v += static_cast<std::size_t>(i) * stride;
+      stride *= static_cast<std::size_t>(grid.dims[a]);
+    }
+    if (weight == 0.0) continue;
+    for (int c = 0; c < 3; ++c)
+      u[c] += weight * field[static_cast<std::size_t>(c) * count + v];
+  }
+  return u;
+}
+
+} // namespace
+
+void check_compositions(const ImageGrid& grid, MotionFields& f) {
+  const auto count = static_cast<std::size_t>(grid.voxel_count());
+  const double tolerance = composition_tolerance_voxels * grid.spacing_mm.minCoeff();
+  const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
+  long inconsistent = 0;
+  double worst = 0.0;
+  // First both masks from the compositions (each voxel reads only the fields), then the
+  // Jacobian check against the final mask.
+  std::vector<std::uint8_t> keep_ref(f.ref_to_def_exact), keep_def(f.def_to_ref_exact);
+#pragma omp parallel for schedule(static) reduction(+ : inconsistent) reduction(max : worst)
+  for (int k = 0; k < nz; ++k) {
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        const std::size_t v =
+            static_cast<std::size_t>(i) +
+            static_cast<std::size_t>(nx) *
+                (static_cast<std::size_t>(j) + static_cast<std::size_t>(ny) * static_cast<std::size_t>(k));
+        const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
+        const Eigen::Vector3d to_def(f.ref_to_def[v], f.ref_to_def[count + v], f.ref_to_def[2 * count + v]);
+        const Eigen::Vector3d to_ref(f.def_to_ref[v], f.def_to_ref[count + v], f.def_to_ref[2 * count + v]);
+        if (f.ref_to_def_exact[v]) {
+          const double miss = (sample_field(grid, f.def_to_ref, x + to_def) + to_def).norm();
+          if (miss > tolerance) {
+            keep_ref[v] = 0;
+            ++inconsistent;
+          } else {
+            worst = std::max(worst, miss);
+          }
+        }
+        if (f.def_to_ref_exact[v]) {
+          const double miss = (sample_field(grid, f.ref_to_def, x + to_ref) + to_ref).norm();
+          if (miss > tolerance) {
+            keep_def[v] = 0;
+            ++inconsistent;
+          } else {
+            worst = std::max(worst, miss);
+          }
+        }
+      }
+    }
+  }
+  f.ref_to_def_exact = std::move(keep_ref);
+  f.def_to_ref_exact = std::move(keep_def);
+  f.inconsistent_voxels = inconsistent;
+  f.max_composition_error_mm = worst;
+  long folded = 0;
+  double smallest = 1.0;
+  for (std::size_t v = 0; v < count; ++v) {
+    if (!f.ref_to_def_exact[v]) continue;
+    smallest = std::min(smallest, static_cast<double>(f.jacobian[v]));
+    if (!(f.jacobian[v] > 0.0f)) ++folded;
+  }
+  f.folded_exact_voxels = folded;
+  f.min_exact_jacobian = smallest;
+}
+
 MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& map) {
   const auto count = static_cast<std::size_t>(grid.voxel_count());
   MotionFields f;
@@ -324,6 +415,7 @@ MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& 
   }
   f.min_jacobian = min_jacobian;
   f.max_displacement_mm = max_displacement;
+  check_compositions(grid, f);
   return f;
 }
 

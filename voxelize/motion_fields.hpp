@@ -92,4 +92,15 @@ private:
 /// The fields of `map` on every voxel of `grid`.
 MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& map);
 
+/// How far (in voxels, of the smallest spacing) the composition of the two fields may miss
+/// identity at a voxel marked exact.
+constexpr double composition_tolerance_voxels = 0.1;
+
+/// The masks of `f` narrowed to the voxels whose two-way composition is identity within
+/// composition_tolerance_voxels: ref_to_def exact at x only when def_to_ref (trilinear) at
+/// x + u_ref_to_def(x) returns to x, and the same the other way. Then the Jacobian inside the
+/// ref_to_def mask (min_exact_jacobian, folded_exact_voxels): the Jacobian map is exact only
+/// where that mask is. Called by compute_motion_fields.
+void check_compositions(const ImageGrid& grid, MotionFields& f);
+
 } // namespace phantasm

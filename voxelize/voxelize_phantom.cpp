@@ -151,6 +151,19 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
         format_number(extension) + " mm (not exact; see the mask)");
     report.accuracy["largest displacement mm"] = out.motion->max_displacement_mm;
     report.accuracy["smallest Jacobian determinant"] = out.motion->min_jacobian;
+    report.accuracy["smallest Jacobian determinant in the exact mask"] = out.motion->min_exact_jacobian;
+    report.accuracy["largest composition error in the exact masks mm"] = out.motion->max_composition_error_mm;
+    report.modelled.push_back(std::to_string(out.motion->inconsistent_voxels) +
+                              " voxels left out of the exact masks: composing the two fields there misses "
+                              "identity by more than " +
+                              format_number(composition_tolerance_voxels) + " voxel");
+    if (out.motion->folded_exact_voxels > 0) {
+      report.warnings.push_back(std::to_string(out.motion->folded_exact_voxels) +
+                                " voxels of the exact ref_to_def mask have a Jacobian determinant <= 0 "
+                                "(smallest " +
+                                format_number(out.motion->min_exact_jacobian) +
+                                "): the deformation folds tissue there");
+    }
   }
   if (!deformation) out.landmarks = organ_landmarks(reference, nullptr, nullptr);
   report.status = "done";

@@ -44,6 +44,14 @@ struct MotionFields {
   std::vector<float> jacobian; ///< det(I + grad u) of ref_to_def, central differences
   double max_displacement_mm = 0.0;
   double min_jacobian = 1.0;
+  /// voxels the maps mark exact whose two-way composition misses identity by more than
+  /// composition_tolerance_voxels (left out of the masks)
+  long inconsistent_voxels = 0;
+  /// the largest miss of identity, mm, over the voxels left in the masks
+  double max_composition_error_mm = 0.0;
+  /// voxels inside the ref_to_def exact mask with a Jacobian <= 0 (a fold: no physical map)
+  long folded_exact_voxels = 0;
+  double min_exact_jacobian = 1.0; ///< the smallest Jacobian inside the ref_to_def exact mask
 };
 
 /// A named anatomical point of an organ, in both states (RAS mm).

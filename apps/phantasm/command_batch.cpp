@@ -15,6 +15,7 @@ void add_batch_command(CLI::App& app, std::function<int()>& action) {
     std::string shard = "1/1";
     bool quiet = false;
     bool list = false;
+    bool strict = false;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
@@ -27,6 +28,10 @@ void add_batch_command(CLI::App& app, std::function<int()>& action) {
   command->add_option("--shard", options->shard, "Run the i-th of N disjoint slices of the sweep (i/N)")
       ->capture_default_str();
   command->add_flag("-q,--quiet", options->quiet, "Print nothing but errors");
+  command->add_flag(
+      "--strict", options->strict,
+      "A subject whose run warns (a solve that did not converge, inverted tets, a Jacobian <= 0 "
+      "inside an exact mask) fails and is not written");
   command->add_flag("--list", options->list,
                     "Print the sweep's subject labels, one per line in sweep order, and run nothing");
   command->callback([options, &action] {
@@ -39,8 +44,9 @@ void add_batch_command(CLI::App& app, std::function<int()>& action) {
           std::cout << subject.id << '\n';
         return static_cast<int>(exit_ok);
       }
-      const BatchSummary summary =
-          run_batch(sweep, BatchOptions{options->output, options->jobs, shard, options->quiet}, std::cerr);
+      BatchOptions batch_options{options->output, options->jobs, shard, options->quiet};
+      batch_options.strict = options->strict;
+      const BatchSummary summary = run_batch(sweep, batch_options, std::cerr);
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       if (summary.interrupted) {
         std::cerr << "phantasm: batch interrupted; complete subjects stay, run the batch again to finish\n";
@@ -50,6 +56,14 @@ void add_batch_command(CLI::App& app, std::function<int()>& action) {
         std::cerr << "[batch] " << summary.ran << " subjects made, " << summary.skipped
                   << " already complete, " << summary.failed.size() << " failed, in "
                   << static_cast<int>(seconds) << " s\n";
+      }
+      if (!summary.unconverged.empty()) {
+        std::string list;
+        for (const auto& id : summary.unconverged)
+          list += " sub-" + id;
+        std::cerr << "[batch] warning: " << summary.unconverged.size()
+                  << " subjects with a solve that did not converge (provenance.json, solves):" << list
+                  << '\n';
       }
       if (!summary.failed.empty()) {
         std::string list;

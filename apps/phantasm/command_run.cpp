@@ -17,6 +17,7 @@ void add_run_command(CLI::App& app, std::function<int()>& action) {
     std::string output = "out";
     bool force = false;
     bool quiet = false;
+    bool strict = false;
     int write_delay_ms = 0;
   };
   auto options = std::make_shared<Options>();
@@ -25,7 +26,11 @@ void add_run_command(CLI::App& app, std::function<int()>& action) {
   command->add_option("scene", options->scene, "Scene file (YAML)")->required();
   command->add_option("-o,--output", options->output, "Dataset folder to write")->capture_default_str();
   command->add_flag("--force", options->force, "Write into a folder that already holds files");
-  command->add_flag("-q,--quiet", options->quiet, "Print nothing but errors");
+  command->add_flag("-q,--quiet", options->quiet, "Print nothing but errors and warnings");
+  command->add_flag(
+      "--strict", options->strict,
+      "A warning (a solve that did not converge, inverted tets, a Jacobian <= 0 inside an exact "
+      "mask) is an error: exit 1, nothing of the subject written");
   // For tests that interrupt a run while it writes; hidden from --help.
   command->add_option("--write-delay-ms", options->write_delay_ms)->group("")->check(CLI::NonNegativeNumber);
   command->callback([options, &action] {
@@ -38,8 +43,9 @@ void add_run_command(CLI::App& app, std::function<int()>& action) {
       }
       set_write_delay_for_testing(options->write_delay_ms);
       Reporter reporter(std::cerr, progress_style_for(STDERR_FILENO, options->quiet));
-      const RunSummary summary =
-          run_scene(*result.scene, RunOptions{options->output, options->force}, reporter);
+      RunOptions run_options{options->output, options->force};
+      run_options.strict = options->strict;
+      const RunSummary summary = run_scene(*result.scene, run_options, reporter);
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       reporter.note("wrote " + std::to_string(summary.files.size()) + " files to " + options->output +
                     " in " + std::to_string(seconds).substr(0, 5) + " s");

@@ -161,3 +161,22 @@ TEST(BatchCommand, Hdf5ExportHoldsEveryImageLabelMapAndField) {
   EXPECT_EQ(empty.exit_code, 2);
   EXPECT_FALSE(fs::exists(root / "x.h5"));
 }
+
+// Subjects whose solve did not converge are listed in the batch's summary; with --strict they
+// fail and are not written (#16).
+TEST(BatchCommand, UnconvergedSubjectsAreListedAndStrictFailsThem) {
+  const fs::path folder = fresh_folder("batch-unconverged");
+  write_text_file(folder / "sweep.yaml",
+                  "phantasm_sweep: 1\nname: cut-short\nbase_scene: " + k_small_scene.string() +
+                      "\nvary:\n  deformation.solver.max_iterations: [1, 1000]\n");
+  CommandResult run = run_command(
+      {k_phantasm, "batch", (folder / "sweep.yaml").string(), "-o", (folder / "out").string(), "-q"});
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.err.find("[batch] warning: 1 subjects with a solve that did not converge"), std::string::npos)
+      << run.err;
+  run = run_command({k_phantasm, "batch", (folder / "sweep.yaml").string(), "-o",
+                     (folder / "strict").string(), "-q", "--strict"});
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_NE(run.err.find("--strict"), std::string::npos) << run.err;
+  EXPECT_EQ(count_ending(folder_contents(folder / "strict"), "provenance.json"), 1u);
+}

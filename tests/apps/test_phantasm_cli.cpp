@@ -330,3 +330,95 @@ outputs:
                        "'right'\n";
   EXPECT_EQ(result.err, expected);
 }
+
+namespace {
+
+/// The small head with `replace` swapped for `with` in its text (one occurrence).
+fs::path small_scene_variant(const fs::path& folder, const std::string& replace, const std::string& with) {
+  std::string text = read_file(k_small_scene);
+  const std::size_t at = text.find(replace);
+  EXPECT_NE(at, std::string::npos) << replace;
+  if (at != std::string::npos) text.replace(at, replace.size(), with);
+  fs::create_directories(folder);
+  const fs::path scene = folder / "scene.yaml";
+  write_text_file(scene, text);
+  return scene;
+}
+
+nlohmann::json provenance_of(const fs::path& out) {
+  return nlohmann::json::parse(read_file(out / "derivatives" / "phantasm" / "sub-01" / "provenance.json"));
+}
+
+} // namespace
+
+// A solve cut off far from equilibrium says so (#16): converged false in provenance, a warning
+// on stderr and in the log; with --strict, exit 1 and nothing of the subject written.
+TEST(RunCommand, AnUnconvergedSolveWarnsAndStrictWritesNothing) {
+  const fs::path root = fresh_folder("unconverged");
+  const fs::path scene =
+      small_scene_variant(root, "  fixed: [scalp]\n", "  fixed: [scalp]\n  solver: {max_iterations: 1}\n");
+  const CommandResult run =
+      run_command({k_phantasm, "run", scene.string(), "-o", (root / "out").string(), "-q"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.err.find("[sim] warning: 1 of 1 local_global solves did not converge"), std::string::npos)
+      << run.err;
+  const nlohmann::json provenance = provenance_of(root / "out");
+  EXPECT_FALSE(provenance["converged"].get<bool>());
+  EXPECT_FALSE(provenance["solves"][0]["converged"].get<bool>());
+  EXPECT_GT(provenance["solves"][0]["relative_residual"].get<double>(), 1e-4);
+  EXPECT_EQ(provenance["solves"][0]["stopped_by"], "max_iterations");
+  EXPECT_NE(read_file(root / "out" / "derivatives" / "phantasm" / "sub-01" / "log.txt").find("warning"),
+            std::string::npos);
+
+  const fs::path strict_out = root / "strict";
+  const CommandResult strict =
+      run_command({k_phantasm, "run", scene.string(), "-o", strict_out.string(), "-q", "--strict"});
+  EXPECT_EQ(strict.exit_code, 1) << strict.err;
+  EXPECT_NE(strict.err.find("--strict"), std::string::npos) << strict.err;
+  EXPECT_FALSE(fs::exists(strict_out / "derivatives" / "phantasm" / "sub-01"));
+  EXPECT_FALSE(fs::exists(strict_out / "sub-01"));
+  EXPECT_FALSE(fs::exists(strict_out / "dataset_description.json"));
+}
+
+// The default solve of the small head converges, and says so.
+TEST(RunCommand, TheSmallHeadConvergesWithTheDefaults) {
+  const fs::path out = fresh_folder("converged") / "out";
+  const CommandResult run =
+      run_command({k_phantasm, "run", k_small_scene.string(), "-o", out.string(), "-q", "--strict"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(run.err.find("warning"), std::string::npos) << run.err;
+  const nlohmann::json provenance = provenance_of(out);
+  EXPECT_TRUE(provenance["converged"].get<bool>());
+  EXPECT_LE(provenance["solves"][0]["relative_residual"].get<double>(), 1e-4);
+  for (const auto& body : provenance["bodies"])
+    EXPECT_EQ(body["inverted_tets"].get<long>(), 0) << body.dump();
+}
+
+// A 1 Pa brain under gravity is crushed: its tets invert, and the run says which organ and
+// under which load (#16).
+TEST(RunCommand, InvertedTetsAreAWarningNamingTheOrgan) {
+  const fs::path root = fresh_folder("inverted");
+  fs::path scene =
+      small_scene_variant(root, "brain: {youngs_modulus_Pa: 3000", "brain: {youngs_modulus_Pa: 1");
+  std::string text = read_file(scene);
+  text.replace(text.find("  loads:\n"), 9,
+               "  loads:\n    - {type: gravity, acceleration_m_s2: [0, -9.81, 0]}\n");
+  write_text_file(scene, text);
+  const CommandResult run =
+      run_command({k_phantasm, "run", scene.string(), "-o", (root / "out").string(), "-q"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.err.find("[sim] warning: grey_matter: "), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("inverted (det F <= 0"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("gravity"), std::string::npos) << run.err;
+  const nlohmann::json provenance = provenance_of(root / "out");
+  long inverted = 0;
+  for (const auto& body : provenance["bodies"]) {
+    inverted += body["inverted_tets"].get<long>();
+    if (body["inverted_tets"].get<long>() > 0) EXPECT_LE(body["smallest_det_F"].get<double>(), 0.0);
+  }
+  EXPECT_GT(inverted, 0);
+  const CommandResult strict =
+      run_command({k_phantasm, "run", scene.string(), "-o", (root / "strict").string(), "-q", "--strict"});
+  EXPECT_EQ(strict.exit_code, 1) << strict.err;
+  EXPECT_FALSE(fs::exists(root / "strict" / "derivatives" / "phantasm" / "sub-01"));
+}
