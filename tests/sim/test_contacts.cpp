@@ -73,6 +73,8 @@ Solved solve_local_global(const ElasticModel& model, const Eigen::MatrixX3d& sta
   stop.max_iterations = 20000;
   stop.relative_energy_decrease = 0.0;
   stop.position_change_m = 1e-12;
+  // as tight as the comparison below: the residual test alone would stop at 1e-3
+  stop.relative_residual = 1e-12;
   s.report = solver.solve(s.p, Eigen::MatrixX3d(), stop);
   return s;
 }
@@ -288,6 +290,8 @@ TEST(LocalGlobalContacts, BallPressedIntoTheBarAgreesAcrossSolvers) {
   stop.max_iterations = 10000;
   stop.relative_energy_decrease = 0.0;
   stop.position_change_m = 1e-13;
+  // as tight as the comparison below: the residual test alone would stop at 1e-3
+  stop.relative_residual = 1e-12;
   const SolveReport jacobi = solver.solve_jacobi_chebyshev(p, Eigen::MatrixX3d(), stop);
   std::printf("jacobi: %d iterations, stopped by %s, relative error %.3g\n", jacobi.iterations,
               jacobi.stopped_by.c_str(), (p - newton.p).norm() / scale);

@@ -60,6 +60,8 @@ TEST(LocalGlobal, TwistingBarFrameReachesTheNewtonMinimizer) {
   many.max_iterations = 4500;
   many.relative_energy_decrease = 0.0;
   many.position_change_m = 1e-13;
+  // as tight as the comparison below: the residual test alone would stop at 1e-3
+  many.relative_residual = 1e-12;
   int converged_at = -1;
   const SolveReport report = solver.solve(
       p, bar.inertia.target_m, many, true, [&](int iteration, const Eigen::MatrixX3d& q, double) {
@@ -226,6 +228,8 @@ TEST(JacobiChebyshev, CoarseTwistingBarReachesTheNewtonMinimizer) {
   stop.max_iterations = 4000;
   stop.relative_energy_decrease = 0.0;
   stop.position_change_m = 1e-12;
+  // as tight as the comparison below: the residual test alone would stop at 1e-3
+  stop.relative_residual = 1e-12;
   const SolveReport report = solver.solve_jacobi_chebyshev(p, bar.inertia.target_m, stop, true);
   ASSERT_TRUE(p.allFinite());
   std::printf("Jacobi + Chebyshev: rho %.5f, %d iterations, stopped by %s\n", rho, report.iterations,
