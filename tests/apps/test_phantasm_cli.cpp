@@ -365,7 +365,7 @@ TEST(RunCommand, AnUnconvergedSolveWarnsAndStrictWritesNothing) {
   const nlohmann::json provenance = provenance_of(root / "out");
   EXPECT_FALSE(provenance["converged"].get<bool>());
   EXPECT_FALSE(provenance["solves"][0]["converged"].get<bool>());
-  EXPECT_GT(provenance["solves"][0]["relative_residual"].get<double>(), 1e-4);
+  EXPECT_GT(provenance["solves"][0]["relative_residual"].get<double>(), 1e-3);
   EXPECT_EQ(provenance["solves"][0]["stopped_by"], "max_iterations");
   EXPECT_NE(read_file(root / "out" / "derivatives" / "phantasm" / "sub-01" / "log.txt").find("warning"),
             std::string::npos);
@@ -389,7 +389,7 @@ TEST(RunCommand, TheSmallHeadConvergesWithTheDefaults) {
   EXPECT_EQ(run.err.find("warning"), std::string::npos) << run.err;
   const nlohmann::json provenance = provenance_of(out);
   EXPECT_TRUE(provenance["converged"].get<bool>());
-  EXPECT_LE(provenance["solves"][0]["relative_residual"].get<double>(), 1e-4);
+  EXPECT_LE(provenance["solves"][0]["relative_residual"].get<double>(), 1e-3);
   for (const auto& body : provenance["bodies"])
     EXPECT_EQ(body["inverted_tets"].get<long>(), 0) << body.dump();
 }

@@ -80,7 +80,7 @@ Deflections solve_both(const Cantilever& c) {
   const Eigen::MatrixX3d rest = c.model.rest_positions_m;
   Eigen::MatrixX3d p = rest;
   StopCriteria tight;
-  tight.max_iterations = 200;
+  tight.max_iterations = 50;
   tight.relative_residual = 1e-6;
   tight.force_scale_N = c.weight_N;
   d.newton = newton_solve(c.model, c.inertia, p, tight);
