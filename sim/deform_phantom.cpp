@@ -23,8 +23,7 @@ std::string load_names(const DeformationSettings& deformation) {
                        " mm";
   }
   if (!deformation.obstacles.empty())
-    names +=
-        (names.empty() ? "" : ", ") + std::to_string(deformation.obstacles.size()) + " obstacle(s)";
+    names += (names.empty() ? "" : ", ") + std::to_string(deformation.obstacles.size()) + " obstacle(s)";
   return names.empty() ? "no load" : names;
 }
 
@@ -32,7 +31,8 @@ std::string load_names(const DeformationSettings& deformation) {
 /// the body, the stage's accuracy figures and, for inverted tets, a warning naming the organ
 /// and the loads (a tet turned inside out has no physical meaning, and the displacement fields
 /// of the ground truth are not invertible there).
-void check_inversions(const DeformationSettings& deformation, PhantomDeformation& result, StageReport& report) {
+void check_inversions(const DeformationSettings& deformation, PhantomDeformation& result,
+                      StageReport& report) {
   for (DeformedBody& body : result.bodies) {
     body.smallest_det_F = 1.0;
     body.inverted_tets = 0;

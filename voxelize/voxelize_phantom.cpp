@@ -9,6 +9,7 @@
 #include "voxelize/voxelize_plan.hpp"
 
 #include <algorithm>
+#include <map>
 #include <memory>
 #include <optional>
 
@@ -158,11 +159,24 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
                               "identity by more than " +
                               format_number(composition_tolerance_voxels) + " voxel");
     if (out.motion->folded_exact_voxels > 0) {
+      // Name the organs (reference labels) the folds fall in, so the warning says what to fix.
+      std::map<std::int32_t, long> folded_by_label;
+      for (std::size_t v = 0; v < out.motion->jacobian.size(); ++v)
+        if (out.motion->ref_to_def_exact[v] && !(out.motion->jacobian[v] > 0.0f))
+          ++folded_by_label[out.reference.labels[v]];
+      std::string where;
+      for (const auto& [label, count] : folded_by_label) {
+        const auto o = static_cast<std::size_t>(label - 1);
+        where += (where.empty() ? "" : ", ") +
+                 (label > 0 && o < reference.organs.size() ? reference.organs[o].name
+                                                           : std::string("background")) +
+                 " (" + std::to_string(count) + ")";
+      }
       report.warnings.push_back(std::to_string(out.motion->folded_exact_voxels) +
                                 " voxels of the exact ref_to_def mask have a Jacobian determinant <= 0 "
                                 "(smallest " +
-                                format_number(out.motion->min_exact_jacobian) +
-                                "): the deformation folds tissue there");
+                                format_number(out.motion->min_exact_jacobian) + ") in " + where +
+                                ": the deformation folds tissue there (see the sim stage's loads)");
     }
   }
   if (!deformation) out.landmarks = organ_landmarks(reference, nullptr, nullptr);
