@@ -21,6 +21,8 @@ std::string load_names(const DeformationSettings& deformation) {
                  ? "gravity (" + format_number(load.acceleration_m_s2.norm()) + " m/s^2)"
                  : "the displacement of " + load.organ + " by " + format_number(load.displacement_mm.norm()) +
                        " mm";
+    if (load.kind == LoadKind::displacement && load.rotation_deg != 0.0)
+      names += " and a turn of " + format_number(load.rotation_deg) + " degrees";
   }
   if (!deformation.obstacles.empty())
     names += (names.empty() ? "" : ", ") + std::to_string(deformation.obstacles.size()) + " obstacle(s)";

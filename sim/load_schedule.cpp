@@ -169,8 +169,8 @@ void solve_frames(const DeformationSettings& deformation, ElasticModel& model, L
   if (!s.dynamic) model.external_forces_N = model.masses_kg.asDiagonal() * acceleration;
   // The residual test's force scale, per vertex: the weight of the heaviest free vertex, or the
   // elastic force that moves a vertex by one increment of a displacement load (its translation
-  // and turn) or an obstacle
-  // (not the stiff springs' pull at the start, which only says how far the targets are).
+  // and turn) or an obstacle (not the stiff springs' pull at the start, which only says how far
+  // the targets are).
   for (Eigen::Index v = 0; v < p.rows(); ++v) {
     if (model.fixed.empty() || !model.fixed[static_cast<std::size_t>(v)])
       s.stop.force_scale_N = std::max(s.stop.force_scale_N, model.masses_kg[v] * acceleration.row(v).norm());
