@@ -172,6 +172,7 @@ PYBIND11_MODULE(phantasm, m) {
                                  d["status"] = r.status;
                                  d["modelled"] = r.modelled;
                                  d["skipped"] = r.skipped;
+                                 d["warnings"] = r.warnings;
                                  d["accuracy"] = r.accuracy;
                                  stages.append(d);
                                }
