@@ -47,10 +47,13 @@ std::vector<std::string> shipped_scenes() {
 /// At most this many voxels on the coarse grid: the voxelizer's motion fields cost about a
 /// millisecond of CPU per voxel near a moved boundary.
 constexpr double k_max_voxels = 1.0e5;
+/// At most this many frames of a dynamic scene.
+constexpr int k_max_frames = 20;
 
 /// A copy of the scene that keeps its anatomy and deformation but makes few, coarse images:
 /// cubic voxels of at least 4 mm and at most k_max_voxels of them, 2^3 samples per voxel, the
-/// first sequence only, no k-space or coil simulation, no previews or .vdb files. The meshes
+/// first sequence only, at most k_max_frames frames, no k-space or coil simulation, no previews
+/// or .vdb files. The meshes
 /// stay: the tet and surface checks read them.
 fs::path coarse_copy(const fs::path& scene, const fs::path& folder) {
   YAML::Node root = YAML::LoadFile(scene.string());
@@ -80,6 +83,11 @@ fs::path coarse_copy(const fs::path& scene, const fs::path& folder) {
   acquisition.remove("acquired_voxel_mm");
   acquisition.remove("kspace_oversampling");
   root["acquisition"] = acquisition;
+  // Dynamic scenes: their first k_max_frames frames (cloth.yaml's 60 converged frames take
+  // minutes; its first 20 are the first third of a second of its fall).
+  YAML::Node deformation = root["deformation"];
+  if (deformation["frames"] && deformation["frames"].as<int>() > k_max_frames)
+    deformation["frames"] = k_max_frames;
   root["outputs"]["previews"] = false;
   root["outputs"]["vdb"] = false;
   root["outputs"]["meshes"] = true;
@@ -141,16 +149,20 @@ TEST_P(ShippedScene, IsPhysicallySoundOnACoarseGrid) {
   const DatasetLayout layout(out, YAML::LoadFile(scene.string())["outputs"]["subject"].as<std::string>("01"));
   const auto provenance = nlohmann::json::parse(read_file(layout.provenance()));
 
-  // Every solve converged: the converged flag where provenance has it, else (quasi-static) a
-  // stop by a tolerance rather than by the iteration limit. A dynamic scene may give each time
-  // step a fixed iteration budget (bar.yaml: 10): there the limit is no failure.
-  const bool dynamic = provenance.at("settings").at("deformation").at("mode") == "dynamic";
+  // Every solve converged, or the run says loudly that one did not: a warning on stderr and in
+  // provenance. Scenes known not to converge with their settings are listed here, so that a
+  // scene that stops converging, or one that starts to, changes this test (docs/deformation.md,
+  // the stopping test): breast.yaml's paddle contacts hold its residual near 2e-2.
+  const bool known_unconverged = GetParam() == "breast";
+  bool all_converged = true;
   for (const auto& solve : provenance.value("solves", nlohmann::json::array())) {
-    if (solve.contains("converged")) {
-      EXPECT_TRUE(solve.at("converged").get<bool>()) << solve.dump();
-    } else if (solve.contains("stopped_by") && !dynamic) {
-      EXPECT_NE(solve.at("stopped_by").get<std::string>(), "max_iterations") << solve.dump();
-    }
+    ASSERT_TRUE(solve.contains("converged")) << solve.dump();
+    all_converged = all_converged && solve.at("converged").get<bool>();
+  }
+  EXPECT_EQ(all_converged, !known_unconverged) << provenance.at("solves").dump();
+  if (!all_converged) {
+    EXPECT_NE(result.err.find("warning"), std::string::npos) << result.err;
+    EXPECT_FALSE(provenance.value("warnings", nlohmann::json::array()).empty());
   }
 
   ImageGrid grid;
