@@ -48,9 +48,10 @@ struct OrganSettings {
 struct AnatomySettings {
   double variation = 0.0;        ///< seeded relative variation of organ sizes, 0 = exact
   int base_mesh_triangles = 320; ///< patch base mesh size per organ (the anatomy accuracy knob)
-  /// element size (tet circumradius bound, mm) of a simulated body's tet mesh when organs are
-  /// nested in it: the deformation's speed/accuracy knob
-  double tet_size_mm = 10.0;
+  /// element size (tet circumradius bound, mm) of one conforming tet mesh of a simulated body and
+  /// the organs nested in it (the deformation's speed/accuracy knob); 0 (unset): the body is
+  /// solved on its own organ's mesh, each tet with the material of the organ holding its centroid
+  double tet_size_mm = 0.0;
   std::vector<OrganSettings> organs;
   std::uint64_t seed = 0; ///< the scene's seed (size variation, tet meshing), set by the scene
 };

@@ -92,9 +92,21 @@ std::shared_ptr<const TetMesh> body_mesh(const OrganTable& organs, const Phantom
   }
   std::stable_sort(carried.begin() + 1, carried.end(),
                    [&](std::size_t x, std::size_t y) { return organs[x].depth < organs[y].depth; });
-  if (carried.size() == 1) {
-    organ_of_tet.assign(static_cast<std::size_t>(organ.solid->tets.rows()), b);
-    return std::shared_ptr<const TetMesh>(std::shared_ptr<const TetMesh>(), &*organ.solid); // not owned
+  if (carried.size() == 1 || !(phantom.tet_size_mm > 0.0)) {
+    // The organ's own mesh (not owned); without a tet size each tet takes the material of the
+    // innermost carried organ holding its centroid, so layers thinner than a tet get no tets.
+    const TetMesh& mesh = *organ.solid;
+    organ_of_tet.assign(static_cast<std::size_t>(mesh.tets.rows()), b);
+    for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+      for (int k = 0; k < 4; ++k)
+        centroid += 0.25 * mesh.vertices.row(mesh.tets(t, k)).transpose();
+      for (std::size_t k = 1; k < carried.size(); ++k) { // by depth: the innermost holder wins
+        if (phantom.organs[carried[k]].target->value(centroid) > 0.0)
+          organ_of_tet[static_cast<std::size_t>(t)] = carried[k];
+      }
+    }
+    return std::shared_ptr<const TetMesh>(std::shared_ptr<const TetMesh>(), &mesh);
   }
   NestedShapes nested;
   for (std::size_t k = 0; k < carried.size(); ++k) {
