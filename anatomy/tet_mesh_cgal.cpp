@@ -214,8 +214,7 @@ TetMesh mesh_nested_solid(const NestedShapes& nested, const TetMeshCriteria& c, 
                       1e-6, CGAL::Null_subdomain_index(), &random);
   const Criteria criteria(p::facet_angle = c.facet_angle_deg, p::facet_size = c.facet_size_mm,
                           p::facet_distance = c.facet_distance_mm,
-                          p::cell_radius_edge_ratio = c.cell_radius_edge_ratio,
-                          p::cell_size = c.cell_size_mm,
+                          p::cell_radius_edge_ratio = c.cell_radius_edge_ratio, p::cell_size = c.cell_size_mm,
                           // No facet may join two surfaces (across a thin layer): each facet's
                           // vertices lie on the one surface it approximates.
                           p::facet_topology = CGAL::FACET_VERTICES_ON_SAME_SURFACE_PATCH);

@@ -18,8 +18,8 @@ struct BodyModel {
 
 /// The model of every body of `assignment` [choices documented in docs/deformation.md]: a solid
 /// organ's tet mesh, or with organs nested in it one tet mesh of all of them (at the phantom's
-/// tet size), each tet with the material of its subdomain's organ; a surface organ as a shell of its triangles (with its enclosed volume kept when the
-/// settings ask). What was modelled goes into `report`.
+/// tet size), each tet with the material of its subdomain's organ; a surface organ as a shell of its
+/// triangles (with its enclosed volume kept when the settings ask). What was modelled goes into `report`.
 /// @throws InputError for an undefined material, or an enclosed volume asked of an open sheet
 BodyModel build_body_model(const DeformationSettings& deformation, const OrganTable& organs,
                            const Phantom& phantom, const BodyAssignment& assignment, StageReport& report);
