@@ -21,6 +21,14 @@ openvdb::math::Transform::Ptr transform_of(const ImageGrid& grid) {
   return openvdb::math::Transform::createLinearTransform(m);
 }
 
+/// What a grid holds, as string metadata that pyopenvdb and OpenVDB's tools show.
+void describe(openvdb::GridBase& grid, const std::string& units, const std::string& description) {
+  grid.insertMeta("frame",
+                  openvdb::StringMetadata("RAS (world millimetres; the transform maps index to RAS mm)"));
+  grid.insertMeta("units", openvdb::StringMetadata(units));
+  grid.insertMeta("description", openvdb::StringMetadata(description));
+}
+
 template <typename GridType, typename Value>
 typename GridType::Ptr sparse_grid(const ImageGrid& grid, const std::vector<Value>& values,
                                    const std::string& name) {
@@ -45,12 +53,23 @@ void write_vdb(const std::filesystem::path& path, const VdbContents& contents) {
   for (const auto& [organ, level_set] : contents.level_sets) {
     auto copy = static_cast<const openvdb::FloatGrid*>(level_set)->deepCopy();
     copy->setName(organ + "_sdf");
+    describe(*copy, "mm", "signed distance to the surface of " + organ + ", negative inside");
     grids.push_back(copy);
   }
-  if (contents.grid && contents.labels)
-    grids.push_back(sparse_grid<openvdb::Int32Grid>(*contents.grid, *contents.labels, "labels"));
-  for (const auto& [tissue, fractions] : contents.fractions)
-    grids.push_back(sparse_grid<openvdb::FloatGrid>(*contents.grid, *fractions, "fraction_" + tissue));
+  if (contents.grid && contents.labels) {
+    // A FloatGrid, not an Int32Grid: pyopenvdb reads only Bool, Float and Vec3S grids and fails
+    // on the whole file otherwise. Labels are small integers, which float holds exactly.
+    auto labels = sparse_grid<openvdb::FloatGrid>(*contents.grid, *contents.labels, "labels");
+    describe(*labels, "label",
+             "dseg label value per voxel (integers stored as float; names in the dataset's dseg.tsv), "
+             "0 outside every organ");
+    grids.push_back(labels);
+  }
+  for (const auto& [tissue, fractions] : contents.fractions) {
+    auto grid = sparse_grid<openvdb::FloatGrid>(*contents.grid, *fractions, "fraction_" + tissue);
+    describe(*grid, "1", "fraction of each voxel's volume that is " + tissue + " (0 to 1)");
+    grids.push_back(grid);
+  }
   // OpenVDB writes to a path: a hidden temporary next to the final name, then rename, as
   // AtomicFileWriter does (it also removes the temporary if anything throws).
   std::filesystem::create_directories(path.parent_path());

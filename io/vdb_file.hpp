@@ -1,5 +1,6 @@
 // Writing one state's grids to an OpenVDB file: every organ's level set and the label and
-// fraction volumes as sparse grids.
+// fraction volumes as sparse grids, all of grid types that OpenVDB's Python module (pyopenvdb,
+// Debian's python3-openvdb: BoolGrid, FloatGrid, Vec3SGrid) reads, so that it opens the whole file.
 #pragma once
 
 #include "core/grid.hpp"
@@ -17,14 +18,17 @@ struct VdbContents {
   /// By organ name: an openvdb::FloatGrid (LevelSet::grid()), written as "<organ>_sdf". Opaque,
   /// so that io writes level sets without linking the voxelizer that makes them.
   std::vector<std::pair<std::string, const void*>> level_sets;
-  const ImageGrid* grid = nullptr;                                          ///< of the dense volumes
-  const std::vector<std::int32_t>* labels = nullptr;                        ///< "labels" (Int32Grid)
+  const ImageGrid* grid = nullptr; ///< of the dense volumes
+  /// "labels", a FloatGrid of the dseg label values (exact: labels are small integers)
+  const std::vector<std::int32_t>* labels = nullptr;
   std::vector<std::pair<std::string, const std::vector<float>*>> fractions; ///< "fraction_<tissue>"
 };
 
 /// Writes an OpenVDB file (atomically: a temporary file, then rename): every organ's level set
-/// as it is (world RAS mm), and the label and fraction volumes as sparse grids on the image
-/// grid's transform (zero background, so they store only the object).
+/// as it is (world RAS mm), and the label and fraction volumes as sparse FloatGrids on the image
+/// grid's transform (zero background, so they store only the object). Labels are a FloatGrid, not
+/// an Int32Grid, because pyopenvdb cannot read Int32Grid and then refuses the whole file. Each
+/// grid carries string metadata "frame" (RAS), "units" and "description".
 void write_vdb(const std::filesystem::path& path, const VdbContents& contents);
 
 } // namespace phantasm
