@@ -36,7 +36,7 @@ void Reporter::warning(const std::string& stage, const std::string& message) {
   const std::string line = "[" + stage + "] warning: " + message;
   std::lock_guard<std::mutex> lock(m_mutex);
   m_log.push_back(line);
-  (*m_stream) << line << '\n' << std::flush;
+  write_line(line);
 }
 
 void Reporter::note(const std::string& message) {
@@ -46,6 +46,14 @@ void Reporter::note(const std::string& message) {
 void Reporter::print(const std::string& line) {
   if (m_style == ProgressStyle::none) return;
   std::lock_guard<std::mutex> lock(m_mutex);
+  write_line(line);
+}
+
+void Reporter::write_line(const std::string& line) {
+  // A bar redrawn with '\r' has no newline until it finishes: a line printed after it would run
+  // on after the bar. Clear the bar's line first (the bar redraws below on its next step).
+  if (m_bar_on_line) (*m_stream) << "\r\033[K";
+  m_bar_on_line = false;
   (*m_stream) << line << '\n' << std::flush;
 }
 
@@ -98,6 +106,7 @@ void ProgressBar::draw(std::size_t done, bool final) {
   }
   std::lock_guard<std::mutex> print_lock(m_reporter.m_mutex);
   (*m_reporter.m_stream) << text.str() << std::flush;
+  m_reporter.m_bar_on_line = m_reporter.m_style == ProgressStyle::bar && !final;
 }
 
 } // namespace phantasm

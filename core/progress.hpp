@@ -74,10 +74,14 @@ public:
 private:
   friend class ProgressBar;
   void print(const std::string& line);
+  /// Writes one log line; on a terminal, first clears a bar left mid-line. Needs m_mutex held.
+  void write_line(const std::string& line);
 
   std::ostream* m_stream;
   ProgressStyle m_style;
   std::vector<std::string> m_log;
+  /// A bar is drawn on the current line without its newline yet (bar style), guarded by m_mutex.
+  bool m_bar_on_line = false;
   std::mutex m_mutex;
 };
 

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <sstream>
 #include <thread>
 #include <vector>
@@ -34,6 +35,28 @@ TEST(Progress, BarRedrawsInPlaceOnATerminalAndEndsWithOneNewline) {
   EXPECT_NE(text.find('\r'), std::string::npos);
   EXPECT_NE(text.find("[##############################]"), std::string::npos);
   EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1);
+}
+
+// A log line printed while a bar is mid-line starts on a cleared line ("\r", erase to end of
+// line) instead of running on after the bar; the bar's next step redraws it below.
+TEST(Progress, ALogLineClearsABarLeftMidLine) {
+  std::ostringstream stream;
+  Reporter reporter(stream, ProgressStyle::bar);
+  {
+    ProgressBar bar(reporter, "solving", 4);
+    std::this_thread::sleep_for(std::chrono::milliseconds(60)); // past the redraw throttle
+    bar.advance(1);
+    ASSERT_NE(stream.str().find("solving ["), std::string::npos) << stream.str();
+    reporter.warning("sim", "not converged");
+    reporter.modelled("sim", "next");
+    bar.advance(3);
+  }
+  const std::string text = stream.str();
+  EXPECT_NE(text.find("s\r\033[K[sim] warning: not converged\n[sim] next\n"), std::string::npos) << text;
+  EXPECT_EQ(text.find("\033[K", text.find("[sim] next")), std::string::npos) << text;
+  // The finished bar ends its line, so a line after it needs no clearing.
+  reporter.note("done");
+  EXPECT_EQ(stream.str().substr(text.size()), "done\n");
 }
 
 TEST(Progress, QuietPrintsNothingButKeepsTheLog) {
