@@ -3,8 +3,11 @@
 #include "core/error.hpp"
 #include "core/version.hpp"
 
+#include <algorithm>
 #include <csignal>
 #include <iostream>
+#include <string>
+#include <vector>
 
 namespace {
 
@@ -12,6 +15,32 @@ extern "C" void on_interrupt(int signal_number) {
   phantasm::request_cancellation();
   // A second interrupt ends the program at once.
   std::signal(signal_number, SIG_DFL);
+}
+
+/// CLI11 answers an unknown first word with "A subcommand is required", which names neither
+/// the word nor what was expected: check the words before the subcommand ourselves.
+/// @return the message for an unknown subcommand or top-level option, or for none at all; "" when
+/// the arguments are left to CLI11
+std::string unknown_top_level_word(const CLI::App& app, int argc, char** argv) {
+  std::string names;
+  std::vector<std::string> known;
+  for (const CLI::App* command : app.get_subcommands([](const CLI::App*) { return true; })) {
+    names += (names.empty() ? "" : ", ") + command->get_name();
+    known.push_back(command->get_name());
+  }
+  for (int a = 1; a < argc; ++a) {
+    const std::string word = argv[a];
+    if (word == "-h" || word == "--help" || word == "--version") return {};
+    if (word.rfind('-', 0) == 0) {
+      return "phantasm: unknown option '" + word + "' (before a subcommand only --help and --version are " +
+             "known; subcommands: " + names + ")";
+    }
+    if (std::find(known.begin(), known.end(), word) == known.end())
+      return "phantasm: unknown subcommand '" + word + "' (expected one of: " + names +
+             "; see phantasm --help)";
+    return {};
+  }
+  return "phantasm: a subcommand is required, one of: " + names + " (see phantasm --help)";
 }
 
 } // namespace
@@ -33,6 +62,10 @@ int main(int argc, char** argv) {
   add_info_command(app, action);
   add_eval_command(app, action);
 
+  if (const std::string unknown = unknown_top_level_word(app, argc, argv); !unknown.empty()) {
+    std::cerr << unknown << '\n';
+    return exit_bad_input;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

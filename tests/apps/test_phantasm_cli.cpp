@@ -136,6 +136,69 @@ TEST(Cli, UnknownOptionsAreBadInput) {
   EXPECT_EQ(run_command({k_phantasm}).exit_code, 2);
 }
 
+// An unknown subcommand or option is named in the error, with what was expected (CLI11 alone
+// says "A subcommand is required" for a misspelt subcommand).
+TEST(Cli, UnknownWordsAreNamedInTheError) {
+  const CommandResult subcommand = run_command({k_phantasm, "frobnicate"});
+  EXPECT_EQ(subcommand.exit_code, 2);
+  EXPECT_NE(subcommand.err.find("unknown subcommand 'frobnicate'"), std::string::npos) << subcommand.err;
+  EXPECT_NE(subcommand.err.find("run, batch, hdf5"), std::string::npos) << subcommand.err;
+  const CommandResult option = run_command({k_phantasm, "--frobnicate", "run"});
+  EXPECT_EQ(option.exit_code, 2);
+  EXPECT_NE(option.err.find("unknown option '--frobnicate'"), std::string::npos) << option.err;
+  const CommandResult sub_option = run_command({k_phantasm, "info", k_head_scene.string(), "--frobnicate"});
+  EXPECT_EQ(sub_option.exit_code, 2);
+  EXPECT_NE(sub_option.err.find("--frobnicate"), std::string::npos) << sub_option.err;
+  const CommandResult none = run_command({k_phantasm});
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_NE(none.err.find("a subcommand is required, one of: run"), std::string::npos) << none.err;
+  EXPECT_EQ(run_command({k_phantasm, "--version"}).exit_code, 0);
+}
+
+// Every document the help texts, the sources and the docs point to is in the repository: each
+// "docs/<name>.md" exists, each relative Markdown link of README.md and docs/ resolves, and none
+// names the design notes that live outside it.
+TEST(Cli, HelpTextsAndDocsPointIntoTheRepository) {
+  std::vector<std::pair<std::string, std::string>> texts; // (where, text)
+  const CommandResult top = run_command({k_phantasm, "--help"});
+  texts.emplace_back("phantasm --help", top.out);
+  for (const std::string& command : subcommands_in_help(top.out))
+    texts.emplace_back("phantasm " + command + " --help", run_command({k_phantasm, command, "--help"}).out);
+  std::vector<fs::path> markdown = {k_source_dir / "README.md"};
+  for (const char* folder :
+       {"anatomy", "apps", "atlas", "batch", "bench", "core", "docs", "evaluation", "geometry", "io", "mri",
+        "pipeline", "python", "scene", "scripts", "sim", "voxelize", "data-synthetic"}) {
+    for (const auto& entry : fs::recursive_directory_iterator(k_source_dir / folder)) {
+      const std::string ext = entry.path().extension().string();
+      if (!entry.is_regular_file() ||
+          (ext != ".md" && ext != ".cpp" && ext != ".hpp" && ext != ".py" && ext != ".yaml" && ext != ".sh"))
+        continue;
+      texts.emplace_back(entry.path().lexically_relative(k_source_dir).string(), read_file(entry.path()));
+      if (ext == ".md") markdown.push_back(entry.path());
+    }
+  }
+  texts.emplace_back("README.md", read_file(k_source_dir / "README.md"));
+  const std::vector<std::string> outside = {std::string("DESIGN") + ".md", std::string("METHOD") + ".md",
+                                            std::string("../") + "shared"};
+  const std::regex doc_reference(R"(docs/([A-Za-z0-9_-]+\.md))");
+  for (const auto& [where, text] : texts) {
+    for (const std::string& name : outside)
+      EXPECT_EQ(text.find(name), std::string::npos) << where << " names " << name;
+    for (auto it = std::sregex_iterator(text.begin(), text.end(), doc_reference);
+         it != std::sregex_iterator(); ++it)
+      EXPECT_TRUE(fs::exists(k_source_dir / "docs" / (*it)[1].str())) << where << " points to " << (*it)[0];
+  }
+  const std::regex link(R"(\]\(([^)#\s]+)(#[^)]*)?\))");
+  for (const fs::path& file : markdown) {
+    const std::string text = read_file(file);
+    for (auto it = std::sregex_iterator(text.begin(), text.end(), link); it != std::sregex_iterator(); ++it) {
+      const std::string target = (*it)[1];
+      if (target.find("://") != std::string::npos || target.rfind("mailto:", 0) == 0) continue;
+      EXPECT_TRUE(fs::exists(file.parent_path() / target)) << file << " links to " << target;
+    }
+  }
+}
+
 TEST(InfoCommand, ShowsTheGridAndEveryStagePlan) {
   const CommandResult result = run_command({k_phantasm, "info", k_head_scene.string()});
   ASSERT_EQ(result.exit_code, 0) << result.err;
@@ -213,7 +276,8 @@ TEST(RunCommand, QuietPrintsNothingAndAPipeGetsPlainProgressLines) {
   EXPECT_NE(plain.err.find("[voxelize] skipped: .vdb grids"), std::string::npos) << plain.err;
 }
 
-// outputs.vdb: each state's organ level sets and its label and fraction volumes in one .vdb file.
+// outputs.vdb: each state's organ level sets and its label and fraction volumes in one .vdb file,
+// which OpenVDB's Python module (Debian's python3-openvdb) reads whole (tests/apps/check_vdb.py).
 TEST(RunCommand, VdbFilesHoldLevelSetsLabelsAndFractions) {
   const fs::path root = fresh_folder("vdb");
   std::string scene = read_file(k_small_scene);
@@ -232,18 +296,24 @@ TEST(RunCommand, VdbFilesHoldLevelSetsLabelsAndFractions) {
                                .string());
     file.open();
     auto sdf = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("white_matter_sdf"));
-    auto labels = openvdb::gridPtrCast<openvdb::Int32Grid>(file.readGrid("labels"));
+    auto labels = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("labels"));
     auto fraction = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("fraction_white_matter"));
     ASSERT_TRUE(sdf && labels && fraction);
     EXPECT_EQ(sdf->getGridClass(), openvdb::GRID_LEVEL_SET);
     // The grid centre (world origin) is deep in the white matter (dseg index 3).
     const openvdb::Coord centre = labels->transform().worldToIndexCellCentered(openvdb::Vec3d(0, 0, 0));
-    EXPECT_EQ(labels->tree().getValue(centre), 3);
+    EXPECT_EQ(labels->tree().getValue(centre), 3.0f);
     EXPECT_FLOAT_EQ(fraction->tree().getValue(centre), 1.0f);
     EXPECT_LT(sdf->tree().getValue(sdf->transform().worldToIndexCellCentered(openvdb::Vec3d(0, 0, 0))), 0.0f);
     EXPECT_EQ(
-        labels->tree().getValue(labels->transform().worldToIndexCellCentered(openvdb::Vec3d(47, 55, 51))), 0);
+        labels->tree().getValue(labels->transform().worldToIndexCellCentered(openvdb::Vec3d(47, 55, 51))),
+        0.0f);
+    EXPECT_EQ(labels->metaValue<std::string>("units"), "label");
     file.close();
+    const CommandResult python = run_command(
+        {PHANTASM_PYTHON, (k_source_dir / "tests" / "apps" / "check_vdb.py").string(), file.filename()});
+    EXPECT_EQ(python.exit_code, 0) << python.out << python.err;
+    EXPECT_NE(python.out.find(" labels "), std::string::npos) << python.out;
   }
 }
 
