@@ -12,7 +12,7 @@
 #include <algorithm>
 #include <fstream>
 #include <map>
-#include <regex>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -156,15 +156,110 @@ read_participants(const std::filesystem::path& file) {
   return rows;
 }
 
+/// A variable-length UTF-8 string array attribute (names of landmarks, organs).
+void strings_attribute(hid_t object, const std::string& name, const std::vector<std::string>& values) {
+  const Handle type(check_id(H5Tcopy(H5T_C_S1), "make a string type"), H5Tclose);
+  check(H5Tset_size(type.get(), H5T_VARIABLE), "size a string type");
+  check(H5Tset_cset(type.get(), H5T_CSET_UTF8), "set UTF-8");
+  const hsize_t count = values.size();
+  const Handle space(check_id(H5Screate_simple(1, &count, nullptr), "make a space for " + name), H5Sclose);
+  const Handle attribute(
+      check_id(H5Acreate2(object, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT),
+               "create attribute " + name),
+      H5Aclose);
+  std::vector<const char*> texts;
+  for (const std::string& value : values)
+    texts.push_back(value.c_str());
+  check(H5Awrite(attribute.get(), type.get(), texts.data()), "write attribute " + name);
+}
+
+/// Writes a landmarks CSV ("name,organ,x_mm,y_mm,z_mm") as a float64 (N, 3) array of RAS mm with
+/// the names and organs as string-array attributes.
+void write_landmarks(hid_t file, const std::string& path, const std::filesystem::path& csv,
+                     const std::map<std::string, std::string>& attributes) {
+  std::istringstream text(read_text(csv));
+  std::string line;
+  std::getline(text, line); // header
+  std::vector<std::string> names, organs;
+  std::vector<double> positions;
+  while (std::getline(text, line)) {
+    if (line.empty()) continue;
+    std::vector<std::string> fields;
+    std::stringstream parts(line);
+    std::string field;
+    while (std::getline(parts, field, ','))
+      fields.push_back(field);
+    if (fields.size() != 5)
+      throw InputError(csv.string() + ": expected name,organ,x_mm,y_mm,z_mm, found " + line);
+    names.push_back(fields[0]);
+    organs.push_back(fields[1]);
+    for (int c = 2; c < 5; ++c)
+      positions.push_back(std::stod(fields[static_cast<std::size_t>(c)]));
+  }
+  const hsize_t dims[2] = {names.size(), 3};
+  const Handle space(check_id(H5Screate_simple(2, dims, nullptr), "make a space for " + path), H5Sclose);
+  const std::size_t slash = path.rfind('/');
+  const Handle group(group_at(file, path.substr(0, slash)), H5Gclose);
+  const Handle dataset(check_id(H5Dcreate2(group.get(), path.substr(slash + 1).c_str(), H5T_NATIVE_DOUBLE,
+                                           space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+                                "create dataset " + path),
+                       H5Dclose);
+  if (!positions.empty())
+    check(H5Dwrite(dataset.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, positions.data()),
+          "write " + path);
+  strings_attribute(dataset.get(), "names", names);
+  strings_attribute(dataset.get(), "organs", organs);
+  for (const auto& [name, value] : attributes)
+    string_attribute(dataset.get(), name, value);
+}
+
+/// A path of the dataset layout with one free part (a sequence, tissue or map name): matches a
+/// dataset-relative path made by the same layout function and gives the free part back. Built
+/// from the layout function itself, so the export follows any change of file names.
+class PathPattern {
+public:
+  /// @param make the layout function, called with a marker in place of the free part
+  /// @param bids_suffix the free part is a BIDS suffix (letters and digits only); otherwise an
+  /// entity value, which may hold '_' in datasets of earlier versions
+  PathPattern(const std::function<std::filesystem::path(const std::string&)>& make,
+              const std::filesystem::path& root, bool bids_suffix)
+      : m_bids_suffix(bids_suffix) {
+    const std::string made = make(k_marker).lexically_relative(root).generic_string();
+    const std::size_t at = made.find(k_marker);
+    m_prefix = made.substr(0, at);
+    m_suffix = made.substr(at + std::string(k_marker).size());
+  }
+  /// The free part of `relative` when it has this pattern's form (a non-empty part without '/'),
+  /// else "".
+  std::string match(const std::string& relative) const {
+    if (relative.size() <= m_prefix.size() + m_suffix.size() || relative.rfind(m_prefix, 0) != 0 ||
+        relative.compare(relative.size() - m_suffix.size(), m_suffix.size(), m_suffix) != 0)
+      return {};
+    const std::string part =
+        relative.substr(m_prefix.size(), relative.size() - m_prefix.size() - m_suffix.size());
+    return part.find_first_of(m_bids_suffix ? "/_-" : "/") == std::string::npos ? part : std::string();
+  }
+
+private:
+  static constexpr const char* k_marker = "phantasmfreepart";
+  std::string m_prefix, m_suffix;
+  bool m_bids_suffix;
+};
+
+/// The "Units" of a JSON sidecar, or `fallback` when it has none.
+std::string sidecar_units(const std::string& sidecar, const std::string& fallback) {
+  if (sidecar.empty()) return fallback;
+  const nlohmann::json json = nlohmann::json::parse(sidecar, nullptr, false);
+  if (json.is_object() && json.contains("Units") && json["Units"].is_string()) return json["Units"];
+  return fallback;
+}
+
 } // namespace
 
 Hdf5ExportSummary export_hdf5(const std::filesystem::path& dataset, const std::filesystem::path& file,
                               const Hdf5ExportOptions& options,
                               const std::function<void(const std::string&)>& progress) {
-  const std::filesystem::path derivatives = dataset / "derivatives" / "phantasm";
-  std::vector<std::string> subjects;
-  for (const std::string& id : complete_subjects(dataset))
-    subjects.push_back("sub-" + id);
+  const std::vector<std::string> subjects = complete_subjects(dataset);
   if (subjects.empty()) {
     throw InputError(dataset.string() +
                      ": expected a phantasm dataset with complete subjects (derivatives/phantasm/sub-<id>/"
@@ -181,27 +276,25 @@ Hdf5ExportSummary export_hdf5(const std::filesystem::path& dataset, const std::f
                              "create " + temporary.string()),
                     H5Fclose);
     const Handle root(check_id(H5Gopen2(h5.get(), "/", H5P_DEFAULT), "open /"), H5Gclose);
-    string_attribute(root.get(), "format", "phantasm HDF5 export 1");
+    const DatasetLayout any(dataset, subjects.front());
+    string_attribute(root.get(), "format", "phantasm HDF5 export 2");
     string_attribute(root.get(), "generated_by", std::string("phantasm ") + version);
-    string_attribute(root.get(), "label_table", read_text(derivatives / "dseg.tsv"));
-    string_attribute(root.get(), "dataset_description", read_text(dataset / "dataset_description.json"));
+    string_attribute(root.get(), "label_table", read_text(any.dseg_table()));
+    string_attribute(root.get(), "dataset_description", read_text(any.dataset_description()));
     string_attribute(
         root.get(), "conventions",
         "arrays are indexed (i, j, k[, component]) like nibabel's get_fdata(); 'affine' maps (i, j, k, "
-        "1) to RAS mm; fields are ITK/elastix displacement fields, components in LPS mm, x_moving = "
-        "x_fixed + u(x_fixed)");
+        "1) to RAS mm; displacement fields are 4-D (X, Y, Z, 3) float32 arrays (the NIfTI file's 5-D "
+        "(X, Y, Z, 1, 3) without its singleton axis) of ITK/elastix displacements, components in LPS mm, "
+        "x_moving = x_fixed + u(x_fixed); landmarks are (N, 3) RAS mm; every array has attributes kind, "
+        "units, frame, axes (its dimensions, space-separated) and source (its file in the dataset, whose "
+        "JSON sidecar is attribute "
+        "sidecar)");
     const auto participants = read_participants(dataset / "participants.tsv");
-    static const std::regex image(
-        R"(sub-[A-Za-z0-9]+/ses-(ref|def)/anat/sub-[A-Za-z0-9]+_ses-(ref|def)_([A-Za-z0-9]+)\.nii\.gz)");
-    static const std::regex labels(
-        R"(derivatives/phantasm/sub-[A-Za-z0-9]+/ses-(ref|def)/anat/.*_dseg\.nii\.gz)");
-    static const std::regex field(
-        R"(derivatives/phantasm/sub-[A-Za-z0-9]+/xfm/sub-[A-Za-z0-9]+_(from-[a-z]+_to-[a-z]+)_mode-image_xfm\.nii\.gz)");
-    static const std::regex mask(
-        R"(derivatives/phantasm/sub-[A-Za-z0-9]+/xfm/sub-[A-Za-z0-9]+_(from-[a-z]+_to-[a-z]+)_desc-exact_mask\.nii\.gz)");
-    static const std::regex jacobian(R"(derivatives/phantasm/sub-[A-Za-z0-9]+/xfm/.*_jacobian\.nii\.gz)");
-    for (const std::string& subject : subjects) {
-      const std::string provenance_text = read_text(derivatives / subject / "provenance.json");
+    for (const std::string& id : subjects) {
+      const DatasetLayout layout(dataset, id);
+      const std::string subject = "sub-" + id;
+      const std::string provenance_text = read_text(layout.provenance());
       const nlohmann::json provenance = nlohmann::json::parse(provenance_text);
       {
         const Handle group(group_at(h5.get(), "/" + subject), H5Gclose);
@@ -212,35 +305,116 @@ Hdf5ExportSummary export_hdf5(const std::filesystem::path& dataset, const std::f
             string_attribute(group.get(), key, value);
         }
       }
+      const auto relative_of = [&](const std::filesystem::path& path) {
+        return path.lexically_relative(dataset).generic_string();
+      };
+      // What each file of the subject is, by the layout that wrote it.
+      struct Target {
+        std::string key, kind, units, axes;
+        int components = 1;
+        bool landmarks = false;
+        hid_t type = H5T_NATIVE_FLOAT;
+      };
+      std::map<std::string, Target> exact;
+      std::vector<std::pair<PathPattern, std::function<Target(const std::string&)>>> patterns;
+      const std::string scalar_axes = "i j k";
+      for (const PhantomState state : {PhantomState::reference, PhantomState::deformed}) {
+        const std::string session = "/" + subject + "/ses-" + session_label(state) + "/";
+        exact[relative_of(layout.dseg(state))] = {session + "dseg", "labels", "label", scalar_axes, 1, false,
+                                                  H5T_NATIVE_INT32};
+        exact[relative_of(layout.landmarks(state))] = {session + "landmarks", "landmarks", "mm",
+                                                       "landmark coordinate", 1,           true};
+        patterns.emplace_back(
+            PathPattern([&](const std::string& x) { return layout.probseg(state, x); }, dataset, false),
+            [session, scalar_axes](const std::string& tissue) {
+              return Target{session + "probseg/" + tissue, "fraction", "1 (fraction of the voxel, 0 to 1)",
+                            scalar_axes};
+            });
+        patterns.emplace_back(
+            PathPattern([&](const std::string& x) { return layout.anat_image(state, x); }, dataset, true),
+            [session, scalar_axes](const std::string& suffix) {
+              return Target{session + suffix, "image", "arbitrary (magnitude)", scalar_axes};
+            });
+        // Last: its form (a suffix next to the labels) would also match the label files above.
+        patterns.emplace_back(
+            PathPattern([&](const std::string& x) { return layout.parameter_map(state, x); }, dataset, true),
+            [session, scalar_axes](const std::string& suffix) {
+              return Target{session + "maps/" + suffix, "parameter_map", "", scalar_axes};
+            });
+      }
+      // Fields are named as their files are (without the subject), so that the HDF5 name and the
+      // dataset's name of a field always agree.
+      const auto xfm_key = [&](const std::filesystem::path& path) {
+        std::string name = path.filename().string();
+        name = name.substr(name.find('_') + 1);
+        return "/" + subject + "/xfm/" + name.substr(0, name.find('.'));
+      };
+      for (const auto& [from, to] : {std::pair{PhantomState::reference, PhantomState::deformed},
+                                     std::pair{PhantomState::deformed, PhantomState::reference}}) {
+        exact[relative_of(layout.transform(from, to))] = {xfm_key(layout.transform(from, to)),
+                                                          "displacement_field", "mm", "i j k component", 3};
+        exact[relative_of(layout.transform_mask(from, to))] = {
+            xfm_key(layout.transform_mask(from, to)),
+            "exact_mask",
+            "1 where the field is the solved motion, 0 where it is the smooth extension",
+            scalar_axes,
+            1,
+            false,
+            H5T_NATIVE_UINT8};
+      }
+      exact[relative_of(layout.jacobian())] = {xfm_key(layout.jacobian()), "jacobian",
+                                               "1 (volume ratio det(I + grad u))", scalar_axes};
+
       for (const auto& entry : provenance.at("files")) {
         const std::string relative = entry.get<std::string>();
         const std::filesystem::path path = dataset / relative;
-        std::smatch m;
-        std::map<std::string, std::string> attributes{{"source", relative}};
+        std::optional<Target> target;
+        if (const auto found = exact.find(relative); found != exact.end()) {
+          target = found->second;
+        } else {
+          for (const auto& [pattern, make] : patterns) {
+            const std::string part = pattern.match(relative);
+            if (part.empty()) continue;
+            target = make(part);
+            break;
+          }
+        }
+        if (!target) continue;
+        std::map<std::string, std::string> attributes{
+            {"source", relative},
+            {"kind", target->kind},
+            {"axes", target->axes},
+            {"frame", target->kind == "displacement_field"
+                          ? "LPS (components: world millimetres, RAS with x and y negated); grid: affine, RAS"
+                      : target->landmarks ? "RAS (world millimetres)"
+                                          : "grid: affine, RAS"}};
         const std::filesystem::path sidecar = sidecar_path(path);
-        if (std::filesystem::exists(sidecar)) attributes["sidecar"] = read_text(sidecar);
-        if (std::regex_match(relative, m, image)) {
-          const NiftiVolume volume = read_nifti(path);
-          write_array<float>(h5.get(), "/" + subject + "/ses-" + m[1].str() + "/" + m[3].str(), volume.grid,
-                             volume.values, 1, H5T_NATIVE_FLOAT, options, attributes);
-        } else if (std::regex_match(relative, m, labels)) {
-          const NiftiVolume volume = read_nifti(path);
-          write_array<std::int32_t>(h5.get(), "/" + subject + "/ses-" + m[1].str() + "/dseg", volume.grid,
-                                    volume.values, 1, H5T_NATIVE_INT32, options, attributes);
-        } else if (std::regex_match(relative, m, field)) {
-          const NiftiVolume volume = read_nifti_vectors(path, 3);
-          write_array<float>(h5.get(), "/" + subject + "/xfm/" + m[1].str(), volume.grid, volume.values, 3,
-                             H5T_NATIVE_FLOAT, options, attributes);
-        } else if (std::regex_match(relative, m, mask)) {
-          const NiftiVolume volume = read_nifti(path);
-          write_array<std::uint8_t>(h5.get(), "/" + subject + "/xfm/" + m[1].str() + "_exact_mask",
-                                    volume.grid, volume.values, 1, H5T_NATIVE_UINT8, options, attributes);
-        } else if (std::regex_match(relative, m, jacobian)) {
-          const NiftiVolume volume = read_nifti(path);
-          write_array<float>(h5.get(), "/" + subject + "/xfm/jacobian", volume.grid, volume.values, 1,
+        std::string sidecar_text;
+        if (std::filesystem::exists(sidecar)) attributes["sidecar"] = sidecar_text = read_text(sidecar);
+        attributes["units"] =
+            sidecar_units(sidecar_text, target->units.empty() ? "see sidecar" : target->units);
+        if (target->kind == "displacement_field") {
+          attributes["convention"] =
+              "ITK/elastix displacement field as a 4-D (X, Y, Z, 3) array (the NIfTI file is 5-D, (X, Y, Z, "
+              "1, 3), with a singleton time axis); components in LPS mm, x_moving = x_fixed + u(x_fixed)";
+        }
+        if (target->landmarks) {
+          write_landmarks(h5.get(), target->key, path, attributes);
+        } else if (target->components > 1) {
+          const NiftiVolume volume = read_nifti_vectors(path, target->components);
+          write_array<float>(h5.get(), target->key, volume.grid, volume.values, target->components,
                              H5T_NATIVE_FLOAT, options, attributes);
         } else {
-          continue;
+          const NiftiVolume volume = read_nifti(path);
+          if (target->type == H5T_NATIVE_INT32)
+            write_array<std::int32_t>(h5.get(), target->key, volume.grid, volume.values, 1, target->type,
+                                      options, attributes);
+          else if (target->type == H5T_NATIVE_UINT8)
+            write_array<std::uint8_t>(h5.get(), target->key, volume.grid, volume.values, 1, target->type,
+                                      options, attributes);
+          else
+            write_array<float>(h5.get(), target->key, volume.grid, volume.values, 1, target->type, options,
+                               attributes);
         }
         ++summary.arrays;
       }

@@ -14,7 +14,9 @@ void add_hdf5_command(CLI::App& app, std::function<int()>& action) {
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
-      "hdf5", "Export a dataset's images, labels and fields into one HDF5 file for machine-learning loaders");
+      "hdf5",
+      "Export a dataset's images, labels, fractions, parameter maps, fields, exact masks, Jacobian and "
+      "landmarks into one HDF5 file (docs/use-with-your-tools.md)");
   command->add_option("dataset", options->dataset, "Dataset folder written by phantasm run or batch")
       ->required();
   command->add_option("-o,--output", options->output, "HDF5 file to write")->required();

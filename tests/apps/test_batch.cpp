@@ -139,8 +139,9 @@ TEST(BatchCommand, SnakemakeWorkflowMakesTheSameSubjects) {
   EXPECT_EQ(folder_contents(root / "snakemake"), made);
 }
 
-// The HDF5 export of a batch, read by h5py: every array equals its NIfTI file (values, shape,
-// affine), chunked and compressed (tests/apps/check_hdf5.py).
+// The HDF5 export of a batch, read by h5py: every image, label map, fraction, parameter map, field,
+// exact mask, Jacobian and landmark list equals its file (values, shape, affine), chunked and
+// compressed, with its kind, units, frame and axes (tests/apps/check_hdf5.py).
 TEST(BatchCommand, Hdf5ExportHoldsEveryImageLabelMapAndField) {
   const fs::path sweep = k_source_dir / "tests" / "data" / "sweeps" / "three-subjects.yaml";
   const fs::path root = fresh_folder("batch-hdf5");
@@ -155,7 +156,10 @@ TEST(BatchCommand, Hdf5ExportHoldsEveryImageLabelMapAndField) {
       run_command({PHANTASM_PYTHON, (k_source_dir / "tests" / "apps" / "check_hdf5.py").string(),
                    (root / "sweep.h5").string(), (root / "out").string()});
   EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
-  EXPECT_NE(check.out.find("checked 33 arrays"), std::string::npos) << check.out;
+  EXPECT_NE(check.out.find("checked 81 arrays: displacement_field 6, exact_mask 6, fraction 18, image 12, "
+                           "jacobian 3, labels 6, landmarks 6, parameter_map 24"),
+            std::string::npos)
+      << check.out;
   const CommandResult empty =
       run_command({k_phantasm, "hdf5", root.string(), "-o", (root / "x.h5").string()});
   EXPECT_EQ(empty.exit_code, 2);
