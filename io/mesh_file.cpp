@@ -8,7 +8,9 @@
 
 #include <vtkCellArray.h>
 #include <vtkCellType.h>
+#include <vtkDataObject.h>
 #include <vtkDoubleArray.h>
+#include <vtkFieldData.h>
 #include <vtkIdList.h>
 #include <vtkNew.h>
 #include <vtkOBJReader.h>
@@ -18,6 +20,7 @@
 #include <vtkPolyData.h>
 #include <vtkSTLReader.h>
 #include <vtkSmartPointer.h>
+#include <vtkStringArray.h>
 #include <vtkTriangleFilter.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLPolyDataReader.h>
@@ -91,6 +94,30 @@ void add_point_arrays(vtkPointData* data, const std::vector<PointArray>& arrays,
     std::copy(array.values.begin(), array.values.end(), values->GetPointer(0));
     data->AddArray(values);
   }
+}
+
+void add_string(vtkFieldData* data, const std::string& name, const std::string& value) {
+  vtkNew<vtkStringArray> array;
+  array->SetName(name.c_str());
+  array->InsertNextValue(value);
+  data->AddArray(array);
+}
+
+/// The frame and units of the points and of every point array, as field data: a mesh's
+/// displacement is in RAS like its points, while the NIfTI fields are in LPS, and only the file
+/// can tell a reader which it holds.
+void add_frames_and_units(vtkDataObject& object, const std::vector<PointArray>& arrays) {
+  vtkFieldData* data = object.GetFieldData();
+  add_string(data, "Points_frame", "RAS");
+  add_string(data, "Points_units", "mm");
+  for (const PointArray& array : arrays) {
+    add_string(data, array.name + "_frame", array.frame);
+    add_string(data, array.name + "_units", array.units);
+  }
+  add_string(data, "conventions",
+             "phantasm: points in world RAS millimetres (+x right, +y anterior, +z superior), as the NIfTI "
+             "affines; each point array's frame and units are in <array>_frame and <array>_units (vector "
+             "components in RAS, unlike the NIfTI displacement fields, whose components are LPS)");
 }
 
 /// Configures an XML writer for compact, deterministic output into a string.
@@ -186,6 +213,7 @@ void write_vtp(const std::filesystem::path& path, const TriangleMesh& mesh,
   }
   data->SetPolys(polys);
   add_point_arrays(data->GetPointData(), arrays, mesh.vertices.rows(), path);
+  add_frames_and_units(*data, arrays);
   vtkNew<vtkXMLPolyDataWriter> writer;
   writer->SetInputData(data);
   write_xml(*writer, path);
@@ -201,6 +229,7 @@ void write_vtu(const std::filesystem::path& path, const TetMesh& mesh,
     grid->InsertNextCell(VTK_TETRA, 4, ids);
   }
   add_point_arrays(grid->GetPointData(), arrays, mesh.vertices.rows(), path);
+  add_frames_and_units(*grid, arrays);
   vtkNew<vtkXMLUnstructuredGridWriter> writer;
   writer->SetInputData(grid);
   write_xml(*writer, path);

@@ -20,19 +20,25 @@ namespace phantasm {
 /// @throws InputError naming the file: missing, unknown extension, unreadable, no triangles
 TriangleMesh read_triangle_mesh(const std::filesystem::path& path);
 
-/// A per-vertex array written with a mesh (ParaView shows it as point data).
+/// A per-vertex array written with a mesh (ParaView shows it as point data). Its frame and
+/// units are written into the file's field data as "<name>_frame" and "<name>_units".
 struct PointArray {
   std::string name;
   int components = 1;
   std::vector<double> values; ///< #vertices * components, vertex-major
+  std::string frame = "RAS";  ///< the frame of vector components ("RAS": world RAS, as the points)
+  std::string units;          ///< e.g. "mm"; empty for a unitless array
 };
 
 /// Writes a triangle mesh as VTK XML PolyData (.vtp, binary, zlib), atomically; also reads back
-/// with read_triangle_mesh.
+/// with read_triangle_mesh. The file's field data state the frame and units of the points
+/// ("Points_frame" = "RAS", "Points_units" = "mm") and of every point array, as one-value
+/// string arrays, so that a reader need not know phantasm's conventions.
 void write_vtp(const std::filesystem::path& path, const TriangleMesh& mesh,
                const std::vector<PointArray>& arrays = {});
 
-/// Writes a tet mesh as VTK XML UnstructuredGrid (.vtu, binary, zlib), atomically.
+/// Writes a tet mesh as VTK XML UnstructuredGrid (.vtu, binary, zlib), atomically, with field
+/// data as write_vtp.
 void write_vtu(const std::filesystem::path& path, const TetMesh& mesh,
                const std::vector<PointArray>& arrays = {});
 

@@ -88,7 +88,7 @@ double mesh_export_tolerance_mm(const Scene& scene) {
 
 /// Each organ's surface (.vtp: the patch surface tessellated within mesh_export_tolerance_mm, or
 /// the sheet) and tet mesh (.vtu) in one state. The deformed state's tet meshes carry each
-/// vertex's displacement from the reference (mm).
+/// vertex's displacement from the reference (RAS mm, as the files' field data say).
 void plan_organ_meshes(const Scene& scene, const Phantom& phantom, PhantomState state,
                        const DatasetLayout& layout, DatasetPlan& plan, const Phantom* reference = nullptr) {
   const double tolerance = mesh_export_tolerance_mm(scene);
@@ -106,7 +106,7 @@ void plan_organ_meshes(const Scene& scene, const Phantom& phantom, PhantomState 
                   if (reference) {
                     const Eigen::MatrixX3d displacement =
                         organ.solid->vertices - reference->organs[index].solid->vertices;
-                    PointArray array{"displacement_mm", 3, {}};
+                    PointArray array{"displacement_mm", 3, {}, "RAS", "mm"};
                     for (Eigen::Index v = 0; v < displacement.rows(); ++v)
                       for (int c = 0; c < 3; ++c)
                         array.values.push_back(displacement(v, c));

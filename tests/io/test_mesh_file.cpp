@@ -3,6 +3,7 @@
 #include "io/mesh_file.hpp"
 #include "tests/support/error_message.hpp"
 #include "tests/support/files.hpp"
+#include "tests/support/subprocess.hpp"
 
 #include <gtest/gtest.h>
 
@@ -140,4 +141,35 @@ TEST(MeshFile, VtuRoundTripKeepsPositiveTetsAndBoundary) {
   for (Eigen::Index t = 0; t < back.tets.rows(); ++t)
     EXPECT_GT(tet_volume(back, t), 0.0);
   EXPECT_THROW(read_vtu(folder / "none.vtu"), InputError);
+}
+
+// Every mesh file states the frame and units of its points and point arrays in its field data
+// (a tet mesh's displacement_mm is RAS like its points, unlike the LPS NIfTI fields), read back
+// with VTK's Python module as ParaView or a script would.
+TEST(MeshFile, FieldDataStateTheFrameAndUnitsOfEveryArray) {
+  const fs::path folder = fresh_folder("mesh-frames");
+  const TetMesh box = structured_box({20, 10, 30}, {2, 1, 3}, Eigen::Matrix3d::Identity(), {1, 2, 3});
+  std::vector<double> values(static_cast<std::size_t>(box.vertices.rows()) * 3, 0.5);
+  write_vtu(folder / "box.vtu", box, {PointArray{"displacement_mm", 3, values, "RAS", "mm"}});
+  write_vtp(folder / "sphere.vtp", unit_icosphere(1));
+  write_text_file(folder / "check.py", R"(import sys
+import vtk
+from vtk.util.numpy_support import vtk_to_numpy
+for name in sys.argv[1:]:
+    reader = vtk.vtkXMLUnstructuredGridReader() if name.endswith(".vtu") else vtk.vtkXMLPolyDataReader()
+    reader.SetFileName(name)
+    reader.Update()
+    data = reader.GetOutput().GetFieldData()
+    values = {data.GetAbstractArray(i).GetName(): data.GetAbstractArray(i).GetValue(0)
+              for i in range(data.GetNumberOfArrays())}
+    print(name.rsplit("/", 1)[1], sorted((k, v) for k, v in values.items() if k != "conventions"))
+    print("conventions" in values)
+)");
+  const phantasm::testing::CommandResult result =
+      phantasm::testing::run_command({PHANTASM_PYTHON, (folder / "check.py").string(),
+                                      (folder / "box.vtu").string(), (folder / "sphere.vtp").string()});
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_EQ(result.out, "box.vtu [('Points_frame', 'RAS'), ('Points_units', 'mm'), ('displacement_mm_frame', "
+                        "'RAS'), ('displacement_mm_units', 'mm')]\nTrue\n"
+                        "sphere.vtp [('Points_frame', 'RAS'), ('Points_units', 'mm')]\nTrue\n");
 }
