@@ -108,6 +108,8 @@ void add_string(vtkFieldData* data, const std::string& name, const std::string& 
 /// can tell a reader which it holds.
 void add_frames_and_units(vtkDataObject& object, const std::vector<PointArray>& arrays) {
   vtkFieldData* data = object.GetFieldData();
+  // 3D Slicer reads the points' frame from a field named SPACE (and takes LPS without it).
+  add_string(data, "SPACE", "RAS");
   add_string(data, "Points_frame", "RAS");
   add_string(data, "Points_units", "mm");
   for (const PointArray& array : arrays) {

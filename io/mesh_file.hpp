@@ -32,8 +32,9 @@ struct PointArray {
 
 /// Writes a triangle mesh as VTK XML PolyData (.vtp, binary, zlib), atomically; also reads back
 /// with read_triangle_mesh. The file's field data state the frame and units of the points
-/// ("Points_frame" = "RAS", "Points_units" = "mm") and of every point array, as one-value
-/// string arrays, so that a reader need not know phantasm's conventions.
+/// ("Points_frame" = "RAS", "Points_units" = "mm", and "SPACE" = "RAS" as 3D Slicer reads it) and
+/// of every point array, as one-value string arrays, so that a reader need not know phantasm's
+/// conventions.
 void write_vtp(const std::filesystem::path& path, const TriangleMesh& mesh,
                const std::vector<PointArray>& arrays = {});
 

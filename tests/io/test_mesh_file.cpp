@@ -145,7 +145,7 @@ TEST(MeshFile, VtuRoundTripKeepsPositiveTetsAndBoundary) {
 
 // Every mesh file states the frame and units of its points and point arrays in its field data
 // (a tet mesh's displacement_mm is RAS like its points, unlike the LPS NIfTI fields), read back
-// with VTK's Python module as ParaView or a script would.
+// with VTK's Python module as ParaView or a script would; SPACE is the field 3D Slicer reads.
 TEST(MeshFile, FieldDataStateTheFrameAndUnitsOfEveryArray) {
   const fs::path folder = fresh_folder("mesh-frames");
   const TetMesh box = structured_box({20, 10, 30}, {2, 1, 3}, Eigen::Matrix3d::Identity(), {1, 2, 3});
@@ -169,7 +169,8 @@ for name in sys.argv[1:]:
       phantasm::testing::run_command({PHANTASM_PYTHON, (folder / "check.py").string(),
                                       (folder / "box.vtu").string(), (folder / "sphere.vtp").string()});
   ASSERT_EQ(result.exit_code, 0) << result.err;
-  EXPECT_EQ(result.out, "box.vtu [('Points_frame', 'RAS'), ('Points_units', 'mm'), ('displacement_mm_frame', "
-                        "'RAS'), ('displacement_mm_units', 'mm')]\nTrue\n"
-                        "sphere.vtp [('Points_frame', 'RAS'), ('Points_units', 'mm')]\nTrue\n");
+  EXPECT_EQ(result.out,
+            "box.vtu [('Points_frame', 'RAS'), ('Points_units', 'mm'), ('SPACE', 'RAS'), "
+            "('displacement_mm_frame', 'RAS'), ('displacement_mm_units', 'mm')]\nTrue\n"
+            "sphere.vtp [('Points_frame', 'RAS'), ('Points_units', 'mm'), ('SPACE', 'RAS')]\nTrue\n");
 }
