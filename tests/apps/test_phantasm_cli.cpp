@@ -317,6 +317,29 @@ TEST(RunCommand, VdbFilesHoldLevelSetsLabelsAndFractions) {
   }
 }
 
+// The commands of docs/use-with-your-tools.md marked as tested (VTK, h5py, pyopenvdb) run on a
+// small run with .vdb output (tests/apps/check_tool_docs.py).
+TEST(Tools, DocumentedCommandsRunOnASmallRun) {
+  const fs::path root = fresh_folder("tool-docs");
+  std::string scene = read_file(k_small_scene);
+  const std::string marker = "outputs:\n  subject: \"01\"\n";
+  ASSERT_NE(scene.find(marker), std::string::npos);
+  scene.replace(scene.find(marker), marker.size(), marker + "  vdb: true\n");
+  write_text_file(root / "scene.yaml", scene);
+  ASSERT_EQ(
+      run_command({k_phantasm, "run", (root / "scene.yaml").string(), "-o", (root / "out").string(), "-q"})
+          .exit_code,
+      0);
+  const CommandResult check =
+      run_command({PHANTASM_PYTHON, (k_source_dir / "tests" / "apps" / "check_tool_docs.py").string(),
+                   (k_source_dir / "docs" / "use-with-your-tools.md").string(), root.string(),
+                   fs::path(k_phantasm).parent_path().string()});
+  EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
+  EXPECT_NE(check.out.find("ran 4 blocks, 0 failed"), std::string::npos) << check.out;
+  EXPECT_NE(check.out.find("displacement_mm: RAS mm"), std::string::npos) << check.out;
+  EXPECT_NE(check.out.find("label at the origin: 3"), std::string::npos) << check.out;
+}
+
 // An inversion-recovery sidecar says which readout made the image; an MPRAGE sidecar also gives
 // the echo train (spacing, length) and what TI is measured to, the timing the signal model assumes.
 TEST(RunCommand, InversionRecoverySidecarsRecordTheReadoutAndTheTrainTiming) {
