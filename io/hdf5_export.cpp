@@ -199,7 +199,8 @@ Hdf5ExportSummary export_hdf5(const std::filesystem::path& dataset, const std::f
         R"(derivatives/phantasm/sub-[A-Za-z0-9]+/xfm/sub-[A-Za-z0-9]+_(from-[a-z]+_to-[a-z]+)_mode-image_xfm\.nii\.gz)");
     static const std::regex mask(
         R"(derivatives/phantasm/sub-[A-Za-z0-9]+/xfm/sub-[A-Za-z0-9]+_(from-[a-z]+_to-[a-z]+)_desc-exact_mask\.nii\.gz)");
-    static const std::regex jacobian(R"(derivatives/phantasm/sub-[A-Za-z0-9]+/xfm/.*_jacobian\.nii\.gz)");
+    static const std::regex jacobian(
+        R"(derivatives/phantasm/sub-[A-Za-z0-9]+/xfm/sub-[A-Za-z0-9]+_(from-[a-z]+_to-[a-z]+)_jacobian\.nii\.gz)");
     for (const std::string& subject : subjects) {
       const std::string provenance_text = read_text(derivatives / subject / "provenance.json");
       const nlohmann::json provenance = nlohmann::json::parse(provenance_text);
@@ -237,8 +238,8 @@ Hdf5ExportSummary export_hdf5(const std::filesystem::path& dataset, const std::f
                                     volume.grid, volume.values, 1, H5T_NATIVE_UINT8, options, attributes);
         } else if (std::regex_match(relative, m, jacobian)) {
           const NiftiVolume volume = read_nifti(path);
-          write_array<float>(h5.get(), "/" + subject + "/xfm/jacobian", volume.grid, volume.values, 1,
-                             H5T_NATIVE_FLOAT, options, attributes);
+          write_array<float>(h5.get(), "/" + subject + "/xfm/" + m[1].str() + "_jacobian", volume.grid,
+                             volume.values, 1, H5T_NATIVE_FLOAT, options, attributes);
         } else {
           continue;
         }

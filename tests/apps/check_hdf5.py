@@ -38,7 +38,7 @@ with h5py.File(path, "r") as f:
             elif name.endswith("_desc-exact_mask.nii.gz"):
                 key = f"{subject}/xfm/" + name.split("_", 1)[1].replace("_desc-exact_mask.nii.gz", "_exact_mask")
             elif name.endswith("_jacobian.nii.gz"):
-                key = f"{subject}/xfm/jacobian"
+                key = f"{subject}/xfm/" + name.split("_", 1)[1].replace(".nii.gz", "")
             elif name.endswith("_dseg.nii.gz"):
                 key = f"{subject}/{name.split('_')[1]}/dseg"
             else:

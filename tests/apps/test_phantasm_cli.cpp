@@ -150,16 +150,17 @@ TEST(InfoCommand, ShowsTheGridAndEveryStagePlan) {
 TEST(RunCommand, WritesSheetAndShellSurfacesWithoutTetMeshes) {
   const fs::path out = fresh_folder("small") / "out";
   ASSERT_EQ(run_command({k_phantasm, "run", k_small_scene.string(), "-o", out.string(), "-q"}).exit_code, 0);
-  const fs::path meshes = out / "derivatives" / "phantasm" / "sub-01" / "meshes";
+  const fs::path meshes = out / "derivatives" / "phantasm" / "sub-01" / "ses-ref" / "meshes";
   EXPECT_TRUE(fs::exists(meshes / "sub-01_ses-ref_organ-scalp_mesh.vtp"));
   EXPECT_FALSE(fs::exists(meshes / "sub-01_ses-ref_organ-scalp_tetmesh.vtu")); // solid: false
-  EXPECT_TRUE(fs::exists(meshes / "sub-01_ses-ref_organ-grey_matter_tetmesh.vtu"));
+  EXPECT_TRUE(fs::exists(meshes / "sub-01_ses-ref_organ-greyMatter_tetmesh.vtu"));
 
   // A preview per image: a PNG of the three middle slices side by side (48 + 48 + 56 wide,
   // max(56, 52) high for the 48 x 56 x 52 grid).
   for (const char* state : {"ref", "def"}) {
-    const std::string png = read_file(out / "derivatives" / "phantasm" / "sub-01" / "previews" /
-                                      (std::string("sub-01_ses-") + state + "_T1w.png"));
+    const std::string png =
+        read_file(out / "derivatives" / "phantasm" / "sub-01" / (std::string("ses-") + state) / "previews" /
+                  (std::string("sub-01_ses-") + state + "_T1w.png"));
     ASSERT_GT(png.size(), 24u);
     EXPECT_EQ(png.substr(1, 3), "PNG");
     auto be32 = [&](std::size_t at) {
@@ -227,9 +228,10 @@ TEST(RunCommand, VdbFilesHoldLevelSetsLabelsAndFractions) {
       0);
   openvdb::initialize();
   for (const char* state : {"ref", "def"}) {
-    openvdb::io::File file((root / "out" / "derivatives" / "phantasm" / "sub-01" / "vdb" /
-                            (std::string("sub-01_ses-") + state + "_grids.vdb"))
-                               .string());
+    openvdb::io::File file(
+        (root / "out" / "derivatives" / "phantasm" / "sub-01" / (std::string("ses-") + state) / "vdb" /
+         (std::string("sub-01_ses-") + state + "_grids.vdb"))
+            .string());
     file.open();
     auto sdf = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("white_matter_sdf"));
     auto labels = openvdb::gridPtrCast<openvdb::Int32Grid>(file.readGrid("labels"));
