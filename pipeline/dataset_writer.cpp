@@ -1,6 +1,7 @@
 #include "pipeline/dataset_writer.hpp"
 
 #include "core/cancellation.hpp"
+#include "core/error.hpp"
 #include "core/format.hpp"
 #include "core/version.hpp"
 #include "geometry/ras_lps.hpp"
@@ -18,6 +19,7 @@
 
 #include <algorithm>
 #include <functional>
+#include <map>
 #include <sstream>
 #include <utility>
 
@@ -124,7 +126,7 @@ std::string derivatives_bidsignore() {
          "*_xfm.*\n"
          "*_desc-exact_mask.*\n"
          "*_jacobian.*\n"
-         "*_landmarks.csv\n"
+         "*_landmarks.*\n"
          "*_mesh.vtp\n"
          "*_tetmesh.vtu\n"
          "*_grids.vdb\n"
@@ -396,6 +398,12 @@ void plan_volumes(const Scene& scene, const VoxelizedPhantom& v, const DatasetLa
       if (!volumes) continue;
       plan.text(layout.landmarks(state),
                 [&v, state = state] { return landmarks_csv(v.landmarks, state == PhantomState::deformed); });
+      plan.json(sidecar_path(layout.landmarks(state)), [] {
+        return nlohmann::json{
+            {"Description", "named material points of the organs, the same points in both states"},
+            {"Columns", {"name", "organ", "x_mm", "y_mm", "z_mm"}},
+            {"Units", "mm, world RAS (the images' affine frame)"}};
+      });
     }
   }
   if (!v.motion) return;
@@ -533,8 +541,32 @@ std::vector<std::string> stage_warnings(const std::vector<StageReport>& stages) 
   return lines;
 }
 
+void check_dataset_names(const Scene& scene) {
+  std::map<std::string, std::string> organs, tissues;
+  const auto add = [](std::map<std::string, std::string>& seen, const std::string& name, const char* kind,
+                      const char* entity) {
+    const std::string value = bids_entity_value(name);
+    if (value.empty()) {
+      throw InputError(std::string(kind) + " '" + name + "': expected a name with a letter or digit (the " +
+                       entity + " entity of its files)");
+    }
+    const auto [at, inserted] = seen.emplace(value, name);
+    if (!inserted && at->second != name) {
+      throw InputError(std::string(kind) + "s '" + at->second + "' and '" + name + "' would both be " +
+                       entity + "-" + value +
+                       " in file names (BIDS entity values hold letters and digits only): "
+                       "rename one of them");
+    }
+  };
+  for (const auto& organ : scene.anatomy.organs) {
+    add(organs, organ.name, "organ", "organ");
+    add(tissues, organ.tissue, "tissue", "label");
+  }
+}
+
 RunSummary write_dataset(const Scene& scene, const Simulation& simulation,
                          const std::filesystem::path& output, Reporter& reporter) {
+  check_dataset_names(scene);
   RunSummary summary;
   summary.stages = simulation.stages;
   const DatasetLayout layout(output, scene.outputs.subject);

@@ -209,7 +209,7 @@ TEST(RunCommand, QuietPrintsNothingAndAPipeGetsPlainProgressLines) {
   const CommandResult plain =
       run_command({k_phantasm, "run", k_small_scene.string(), "-o", (root / "p").string()});
   EXPECT_EQ(plain.exit_code, 0);
-  EXPECT_NE(plain.err.find("writing 100% (59/59)"), std::string::npos) << plain.err;
+  EXPECT_NE(plain.err.find("writing 100% (78/78)"), std::string::npos) << plain.err;
   EXPECT_EQ(plain.err.find('\r'), std::string::npos);
   EXPECT_NE(plain.err.find("[voxelize] skipped: .vdb grids"), std::string::npos) << plain.err;
 }
@@ -290,6 +290,33 @@ TEST(RunCommand, AnInvalidSceneWritesNothing) {
   const CommandResult result = run_command({k_phantasm, "run", scene.string(), "-o", out.string()});
   EXPECT_EQ(result.exit_code, 2);
   EXPECT_FALSE(fs::exists(out));
+}
+
+// Organ names become BIDS entity values in camelCase: two names that give the same value would
+// name the same files, so the run stops before any stage with both names, and writes nothing.
+TEST(RunCommand, OrganNamesThatGiveTheSameFileNamesAreRefused) {
+  const fs::path folder = fresh_folder("entity-clash");
+  const fs::path scene = folder / "scene.yaml";
+  write_text_file(scene, R"(phantasm: 1
+name: entity-clash
+seed: 1
+field_strength_T: 3.0
+grid: {field_of_view_mm: [120, 80, 80], voxel_size_mm: 4.0}
+anatomy:
+  base_mesh_triangles: 80
+  organs:
+    - {name: ventricle_left, tissue: csf, shape: {type: ellipsoid, center_mm: [-21, 0, 0], radii_mm: [20, 20, 20]}}
+    - {name: ventricleLeft, tissue: csf, shape: {type: ellipsoid, center_mm: [21, 0, 0], radii_mm: [20, 20, 20]}}
+outputs:
+  images: false
+)");
+  const CommandResult result =
+      run_command({k_phantasm, "run", "--quiet", scene.string(), "-o", (folder / "out").string()});
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("organs 'ventricle_left' and 'ventricleLeft' would both be organ-ventricleLeft"),
+            std::string::npos)
+      << result.err;
+  EXPECT_FALSE(fs::exists(folder / "out"));
 }
 
 // A setting the scene's validation accepts but a stage cannot carry out (here a collision with
