@@ -62,7 +62,12 @@ if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
 fi
 
 install_bids_validator() {
-  if [ "$(bids-validator --version 2>/dev/null)" = "$bids_validator_version" ]; then return 0; fi
+  # The installed version from its package.json (starting node to ask takes seconds).
+  local manifest=/usr/local/lib/node_modules/bids-validator/package.json
+  if [ -x /usr/local/bin/bids-validator ] && [ -f "$manifest" ] &&
+    grep -q "\"version\": \"$bids_validator_version\"" "$manifest"; then
+    return 0
+  fi
   echo "phantasm: installing bids-validator $bids_validator_version (npm) under /usr/local" >&2
   "${sudo_cmd[@]}" npm install --global --prefix /usr/local --no-audit --no-fund \
     "bids-validator@$bids_validator_version" >&2
