@@ -211,9 +211,11 @@ nlohmann::json evaluate_registration(const EvaluationRequest& request) {
 
   if (field) {
     // Dense endpoint error where the ground truth is exact.
-    const DisplacementField truth = read_displacement_field(layout.transform(fixed, moving));
-    require_same_grid(grid, truth.grid, layout.transform(fixed, moving));
-    const NiftiVolume mask = read_nifti(layout.transform_mask(fixed, moving));
+    // The truth on the fixed grid is the field that brings the moving image there (BIDS
+    // from-<moving>_to-<fixed>).
+    const DisplacementField truth = read_displacement_field(layout.transform(moving, fixed));
+    require_same_grid(grid, truth.grid, layout.transform(moving, fixed));
+    const NiftiVolume mask = read_nifti(layout.transform_mask(moving, fixed));
     std::vector<double> error;
     for (std::size_t v = 0; v < truth.lps_mm.size(); ++v)
       if (mask.values[v] > 0.5) error.push_back((field->lps_mm[v] - truth.lps_mm[v]).norm());

@@ -1,6 +1,7 @@
 #include "io/dataset_layout.hpp"
 
 #include <algorithm>
+#include <cctype>
 
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
@@ -9,6 +10,20 @@ namespace phantasm {
 
 const char* session_label(PhantomState state) {
   return state == PhantomState::reference ? "ref" : "def";
+}
+
+std::string bids_entity_value(const std::string& name) {
+  std::string value;
+  bool new_word = false;
+  for (const char c : name) {
+    if (!std::isalnum(static_cast<unsigned char>(c))) {
+      new_word = !value.empty();
+      continue;
+    }
+    value += new_word ? static_cast<char>(std::toupper(static_cast<unsigned char>(c))) : c;
+    new_word = false;
+  }
+  return value;
 }
 
 DatasetLayout::DatasetLayout(std::filesystem::path root, std::string subject)
@@ -27,12 +42,24 @@ std::filesystem::path DatasetLayout::anat_image(PhantomState state, const std::s
          (prefix(state) + "_" + suffix + ".nii.gz");
 }
 
+std::filesystem::path DatasetLayout::readme() const {
+  return m_root / "README";
+}
+
 std::filesystem::path DatasetLayout::derivatives() const {
   return m_root / "derivatives" / "phantasm";
 }
 
 std::filesystem::path DatasetLayout::derivatives_description() const {
   return derivatives() / "dataset_description.json";
+}
+
+std::filesystem::path DatasetLayout::derivatives_readme() const {
+  return derivatives() / "README";
+}
+
+std::filesystem::path DatasetLayout::derivatives_bidsignore() const {
+  return derivatives() / ".bidsignore";
 }
 
 std::filesystem::path DatasetLayout::dseg_table() const {
@@ -43,14 +70,17 @@ std::filesystem::path DatasetLayout::subject_derivatives() const {
   return derivatives() / ("sub-" + m_subject);
 }
 
+std::filesystem::path DatasetLayout::session_derivatives(PhantomState state) const {
+  return subject_derivatives() / (std::string("ses-") + session_label(state));
+}
+
 std::filesystem::path DatasetLayout::dseg(PhantomState state) const {
-  return subject_derivatives() / (std::string("ses-") + session_label(state)) / "anat" /
-         (prefix(state) + "_dseg.nii.gz");
+  return session_derivatives(state) / "anat" / (prefix(state) + "_dseg.nii.gz");
 }
 
 std::filesystem::path DatasetLayout::probseg(PhantomState state, const std::string& tissue) const {
-  return subject_derivatives() / (std::string("ses-") + session_label(state)) / "anat" /
-         (prefix(state) + "_label-" + tissue + "_probseg.nii.gz");
+  return session_derivatives(state) / "anat" /
+         (prefix(state) + "_label-" + bids_entity_value(tissue) + "_probseg.nii.gz");
 }
 
 std::filesystem::path DatasetLayout::parameter_map(PhantomState state, const std::string& suffix) const {
@@ -69,28 +99,32 @@ std::filesystem::path DatasetLayout::transform_mask(PhantomState from, PhantomSt
           "_desc-exact_mask.nii.gz");
 }
 
-std::filesystem::path DatasetLayout::jacobian() const {
-  return subject_derivatives() / "xfm" / ("sub-" + m_subject + "_from-ref_to-def_jacobian.nii.gz");
+std::filesystem::path DatasetLayout::jacobian(PhantomState from, PhantomState to) const {
+  return subject_derivatives() / "xfm" /
+         ("sub-" + m_subject + "_from-" + session_label(from) + "_to-" + session_label(to) +
+          "_jacobian.nii.gz");
 }
 
 std::filesystem::path DatasetLayout::landmarks(PhantomState state) const {
-  return subject_derivatives() / "landmarks" / (prefix(state) + "_landmarks.csv");
+  return session_derivatives(state) / "landmarks" / (prefix(state) + "_landmarks.csv");
 }
 
 std::filesystem::path DatasetLayout::mesh(PhantomState state, const std::string& organ) const {
-  return subject_derivatives() / "meshes" / (prefix(state) + "_organ-" + organ + "_mesh.vtp");
+  return session_derivatives(state) / "meshes" /
+         (prefix(state) + "_organ-" + bids_entity_value(organ) + "_mesh.vtp");
 }
 
 std::filesystem::path DatasetLayout::tet_mesh(PhantomState state, const std::string& organ) const {
-  return subject_derivatives() / "meshes" / (prefix(state) + "_organ-" + organ + "_tetmesh.vtu");
+  return session_derivatives(state) / "meshes" /
+         (prefix(state) + "_organ-" + bids_entity_value(organ) + "_tetmesh.vtu");
 }
 
 std::filesystem::path DatasetLayout::vdb(PhantomState state) const {
-  return subject_derivatives() / "vdb" / (prefix(state) + "_grids.vdb");
+  return session_derivatives(state) / "vdb" / (prefix(state) + "_grids.vdb");
 }
 
 std::filesystem::path DatasetLayout::preview(PhantomState state, const std::string& suffix) const {
-  return subject_derivatives() / "previews" / (prefix(state) + "_" + suffix + ".png");
+  return session_derivatives(state) / "previews" / (prefix(state) + "_" + suffix + ".png");
 }
 
 std::filesystem::path DatasetLayout::provenance() const {
@@ -107,7 +141,7 @@ std::filesystem::path DatasetLayout::scene_copy() const {
 
 std::filesystem::path sidecar_path(const std::filesystem::path& image) {
   std::string name = image.filename().string();
-  for (const char* extension : {".nii.gz", ".nii", ".csv", ".vtp", ".vtu"}) {
+  for (const char* extension : {".nii.gz", ".nii", ".csv", ".tsv", ".vtp", ".vtu"}) {
     const std::string ext = extension;
     if (name.size() > ext.size() && name.compare(name.size() - ext.size(), ext.size(), ext) == 0) {
       name.resize(name.size() - ext.size());

@@ -361,9 +361,10 @@ Hdf5ExportSummary export_hdf5(const std::filesystem::path& dataset, const std::f
             1,
             false,
             H5T_NATIVE_UINT8};
+        // One Jacobian per direction, on the field's own (the `to` state's) grid.
+        exact[relative_of(layout.jacobian(from, to))] = {xfm_key(layout.jacobian(from, to)), "jacobian",
+                                                         "1 (volume ratio det(I + grad u))", scalar_axes};
       }
-      exact[relative_of(layout.jacobian())] = {xfm_key(layout.jacobian()), "jacobian",
-                                               "1 (volume ratio det(I + grad u))", scalar_axes};
 
       for (const auto& entry : provenance.at("files")) {
         const std::string relative = entry.get<std::string>();

@@ -25,9 +25,10 @@ struct Hdf5ExportSummary {
 ///   /sub-<id>/ses-<ref|def>/probseg/<tissue>   fractions 0-1, float32 (X, Y, Z)
 ///   /sub-<id>/ses-<ref|def>/maps/<suffix>      parameter maps (PDmap, T1map, ...), float32 (X, Y, Z)
 ///   /sub-<id>/ses-<ref|def>/landmarks          float64 (N, 3) RAS mm; attributes names, organs
-///   /sub-<id>/xfm/<file name less subject>     fields, float32 (X, Y, Z, 3) in LPS mm (the
-///                                              NIfTI file's (X, Y, Z, 1, 3)); their exact masks,
-///                                              uint8; the Jacobian, float32
+///   /sub-<id>/xfm/<file name less subject>     for each direction (from-def_to-ref,
+///                                              from-ref_to-def): the field, float32 (X, Y, Z, 3)
+///                                              in LPS mm (the NIfTI file's (X, Y, Z, 1, 3)); its
+///                                              exact mask, uint8; its Jacobian, float32
 /// Arrays are indexed (i, j, k[, component]) like nibabel's get_fdata(), chunked and
 /// gzip-compressed. Metadata are attributes: each array's kind, units (a sidecar's "Units" when it
 /// has one), frame, axes, source file, affine (4 x 4, RAS mm) and JSON sidecar; each subject's

@@ -1,6 +1,7 @@
 #include "pipeline/dataset_writer.hpp"
 
 #include "core/cancellation.hpp"
+#include "core/error.hpp"
 #include "core/format.hpp"
 #include "core/version.hpp"
 #include "geometry/ras_lps.hpp"
@@ -18,6 +19,7 @@
 
 #include <algorithm>
 #include <functional>
+#include <map>
 #include <sstream>
 #include <utility>
 
@@ -66,16 +68,84 @@ nlohmann::json generated_by() {
         {"Description", "Deformable anatomical MRI phantom with exact ground truth"}}});
 }
 
+/// The labels of the dseg maps, and for each the entity values that name its files: organ_entity
+/// in the organ-<value> of its meshes, tissue_entity in the label-<value> of its tissue's probseg
+/// (bids_entity_value of the names).
 std::string dseg_table(const Scene& scene) {
   std::ostringstream text;
-  text << "index\tname\ttissue\n0\tbackground\tbackground\n";
+  text << "index\tname\ttissue\torgan_entity\ttissue_entity\n";
+  const auto row = [&text](int index, const std::string& name, const std::string& tissue) {
+    text << index << '\t' << name << '\t' << tissue << '\t' << bids_entity_value(name) << '\t'
+         << bids_entity_value(tissue) << '\n';
+  };
+  row(0, "background", "background");
   int index = 1;
   for (const auto& organ : scene.anatomy.organs)
-    text << index++ << '\t' << organ.name << '\t' << organ.tissue << '\n';
+    row(index++, organ.name, organ.tissue);
   // The space a moved organ leaves in a container that stays (deformed state only).
-  if (scene.voxelization.deformed)
-    text << index << '\t' << k_gap_label_name << '\t' << scene.voxelization.gap_fill << '\n';
+  if (scene.voxelization.deformed) row(index, k_gap_label_name, scene.voxelization.gap_fill);
   return text.str();
+}
+
+/// The column descriptions of dseg.tsv (a BIDS sidecar of a TSV file).
+nlohmann::json dseg_table_sidecar() {
+  return {
+      {"index", {{"Description", "label value in the dseg maps"}, {"Units", "n/a (label)"}}},
+      {"name", {{"Description", "organ name as the scene gives it"}}},
+      {"tissue", {{"Description", "tissue of the organ (its MR parameters and probseg map)"}}},
+      {"organ_entity",
+       {{"Description", "value of the organ entity in the file names of the organ's meshes "
+                        "(organ-<value>): the name in camelCase, since BIDS splits names at '_' and '-'"}}},
+      {"tissue_entity",
+       {{"Description", "value of the label entity in the file name of the tissue's probseg map "
+                        "(label-<value>): the tissue name in camelCase"}}}};
+}
+
+/// The ground truth's README.
+std::string derivatives_readme(const Scene& scene) {
+  return "# " + scene.name +
+         " ground truth\n\nExact ground truth of the synthetic MRI dataset one folder up, " +
+         "made by phantasm " + std::string(version) +
+         ": per subject and state (ses-ref, ses-def) label maps (dseg, numbered as in dseg.tsv), tissue "
+         "fractions (probseg), PD, T1, T2 and T2* maps (relaxation times in seconds), landmarks (CSV, "
+         "RAS mm), organ meshes (VTK) and, when asked for, OpenVDB grids; per subject the displacement "
+         "fields between the states (xfm: from-A_to-B brings an image of state A onto the grid of state "
+         "B; ITK convention, LPS mm), their exact masks and Jacobians, provenance.json, log.txt and the "
+         "scene as run. Every image has a JSON sidecar stating its units.\n";
+}
+
+/// bids-validator 1.x applies the rules of raw data to a derivative dataset: the derivative
+/// files BIDS defines (dseg, probseg, xfm, masks) and the ones it does not cover yet (meshes,
+/// landmarks, grids, previews, provenance) are listed for it to pass over
+/// (docs/use-with-your-tools.md, bids-validator).
+std::string derivatives_bidsignore() {
+  return "# Derivative files bids-validator 1.x does not know (it checks raw-data names only).\n"
+         "/dseg.*\n"
+         "*_dseg.*\n"
+         "*_probseg.*\n"
+         "*_xfm.*\n"
+         "*_desc-exact_mask.*\n"
+         "*_jacobian.*\n"
+         "*_landmarks.*\n"
+         "*_mesh.vtp\n"
+         "*_tetmesh.vtu\n"
+         "*_grids.vdb\n"
+         "/sub-*/ses-*/previews/\n"
+         "/sub-*/provenance.json\n"
+         "/sub-*/log.txt\n"
+         "/sub-*/scene.yaml\n";
+}
+
+/// The raw dataset's README: what the dataset is and where the ground truth lies.
+std::string dataset_readme(const Scene& scene) {
+  return "# " + scene.name + "\n\nA synthetic MRI dataset made by phantasm " + std::string(version) +
+         " from the scene file derivatives/phantasm/sub-*/scene.yaml: simulated images of a phantom "
+         "in two states, ses-ref (reference) and ses-def (deformed). No person was imaged.\n\n"
+         "derivatives/phantasm holds the exact ground truth: label maps (dseg, with dseg.tsv), tissue "
+         "fractions (probseg), relaxation-time maps in seconds (T1map, T2map, T2starmap), PDmap, "
+         "displacement fields between the states in the BIDS and ITK convention "
+         "(from-<state>_to-<state>_mode-image_xfm: brings an image of the first state onto the grid "
+         "of the second), their exact masks and Jacobians, landmarks, meshes and OpenVDB grids.\n";
 }
 
 /// How closely exported surfaces follow the patch surfaces: a fifth of the smallest voxel edge
@@ -198,18 +268,23 @@ void plan_parameter_maps(const ImageGrid& grid, const ParameterMaps& maps, Phant
     const std::vector<float>* values;
     const char* units;
     const char* description;
+    float scale; ///< from the values in memory to the units of the file
   };
+  // BIDS quantitative maps hold relaxation times in seconds; the signal model works in ms.
   const Map list[] = {
       {"PDmap", &maps.PD, "arbitrary (water = 1)",
-       "proton density: fraction-weighted sum over the voxel's tissues"},
-      {"T1map", &maps.T1_ms, "ms", "T1: fraction-weighted mean over the voxel's tissues that have one"},
-      {"T2map", &maps.T2_ms, "ms", "T2: fraction-weighted mean over the voxel's tissues that have one"},
-      {"T2starmap", &maps.T2star_ms, "ms",
-       "T2*: fraction-weighted mean over the voxel's tissues that have one"}};
+       "proton density: fraction-weighted sum over the voxel's tissues", 1.0f},
+      {"T1map", &maps.T1_ms, "s", "T1: fraction-weighted mean over the voxel's tissues that have one", 1e-3f},
+      {"T2map", &maps.T2_ms, "s", "T2: fraction-weighted mean over the voxel's tissues that have one", 1e-3f},
+      {"T2starmap", &maps.T2star_ms, "s",
+       "T2*: fraction-weighted mean over the voxel's tissues that have one", 1e-3f}};
   for (const Map& map : list) {
     const std::filesystem::path path = layout.parameter_map(state, map.suffix);
     plan.file(path, [&grid, map](const std::filesystem::path& p) {
-      write_nifti(p, grid, *map.values, {NiftiIntent::none, 1, std::string("phantasm ") + map.suffix});
+      std::vector<float> values(*map.values);
+      for (float& value : values)
+        value *= map.scale;
+      write_nifti(p, grid, values, {NiftiIntent::none, 1, std::string("phantasm ") + map.suffix});
     });
     plan.json(sidecar_path(path), [map] {
       return nlohmann::json{{"Units", map.units},
@@ -243,22 +318,29 @@ void plan_images(const ImageGrid& grid, const Scene& scene, const MrImages& imag
   }
 }
 
-nlohmann::json field_sidecar(PhantomState from, PhantomState to, const std::string& mask) {
+/// The sidecar of transform(from, to): the field that brings a `from` image onto the `to` grid.
+nlohmann::json field_sidecar(PhantomState from, PhantomState to, const std::string& mask,
+                             const std::string& jacobian) {
   const std::string f = session_label(from), t = session_label(to);
-  return {{"Description", "Displacement field from the " + f + " state to the " + t +
-                              " state: a point x of the " + f + " grid is at x + u(x) in the " + t +
-                              " state. With fixed image = ses-" + f + " and moving image = ses-" + t +
-                              ", elastix/transformix and ITK resample the " + t + " image onto the " + f +
+  return {{"Description", "Displacement field that brings an image of the " + f + " state into the " + t +
+                              " state's space (BIDS from-" + f + "_to-" + t + "): it lives on the " + t +
+                              " grid, and a point x of the " + t + " state is at x + u(x) in the " + f +
+                              " state. ITK, ANTs (antsApplyTransforms -r ses-" + t +
+                              " image) and transformix resample a ses-" + f + " image onto the " + t +
                               " grid with it."},
           {"Convention",
            "ITK displacement field: 5-D NIfTI (X, Y, Z, 1, 3), intent 1007 (vector), components in "
            "world LPS millimetres (RAS with x and y negated), x_moving = x_fixed + u(x_fixed)"},
-          {"FixedImageSession", "ses-" + f},
-          {"MovingImageSession", "ses-" + t},
+          {"Units", "mm"},
+          {"FromSession", "ses-" + f},
+          {"ToSession", "ses-" + t},
+          {"FixedImageSession", "ses-" + t},
+          {"MovingImageSession", "ses-" + f},
           {"ExactMask", mask},
           {"ExactMaskDescription",
            "1 where u is the solved motion (inside the simulated tets, or tissue that does not "
-           "move), 0 where it is the smooth extension outside them"}};
+           "move), 0 where it is the smooth extension outside them"},
+          {"Jacobian", jacobian}};
 }
 
 /// Labels, fractions, .vdb grids, landmarks, both fields with masks and sidecars, the Jacobian.
@@ -272,6 +354,12 @@ void plan_volumes(const Scene& scene, const VoxelizedPhantom& v, const DatasetLa
       plan.file(layout.dseg(state), [&v, volumes = volumes](const std::filesystem::path& p) {
         write_nifti_labels(p, v.grid, volumes->labels, {NiftiIntent::label, 1, "phantasm dseg"});
       });
+      plan.json(sidecar_path(layout.dseg(state)), [] {
+        return nlohmann::json{{"Description", "organ of the largest fraction in each voxel; the values are "
+                                              "the index column of dseg.tsv (0 background)"},
+                              {"Units", "n/a (label)"},
+                              {"GeneratedBy", "phantasm " + std::string(version)}};
+      });
     }
     if (scene.outputs.fractions) {
       for (std::size_t t = 0; t < v.tissues.size(); ++t) {
@@ -280,6 +368,12 @@ void plan_volumes(const Scene& scene, const VoxelizedPhantom& v, const DatasetLa
                     write_nifti(p, v.grid, volumes->fractions[t],
                                 {NiftiIntent::none, 1, "fraction of " + v.tissues[t]});
                   });
+        plan.json(sidecar_path(layout.probseg(state, v.tissues[t])), [&v, t] {
+          return nlohmann::json{{"Description", "fraction of each voxel's volume taken by the tissue"},
+                                {"Tissue", v.tissues[t]},
+                                {"Units", "n/a (volume fraction, 0 to 1)"},
+                                {"GeneratedBy", "phantasm " + std::string(version)}};
+        });
       }
     }
   }
@@ -304,34 +398,65 @@ void plan_volumes(const Scene& scene, const VoxelizedPhantom& v, const DatasetLa
       if (!volumes) continue;
       plan.text(layout.landmarks(state),
                 [&v, state = state] { return landmarks_csv(v.landmarks, state == PhantomState::deformed); });
+      plan.json(sidecar_path(layout.landmarks(state)), [] {
+        return nlohmann::json{
+            {"Description", "named material points of the organs, the same points in both states"},
+            {"Columns", {"name", "organ", "x_mm", "y_mm", "z_mm"}},
+            {"Units", "mm, world RAS (the images' affine frame)"}};
+      });
     }
   }
   if (!v.motion) return;
+  // transform(from, to) lives on `to`'s grid: the reference grid's field carries reference
+  // points into the deformed state (ref_to_def), and brings deformed images onto it.
+  const auto on_reference_grid = [](PhantomState to) { return to == PhantomState::reference; };
+  const std::pair<PhantomState, PhantomState> directions[] = {
+      {PhantomState::deformed, PhantomState::reference}, {PhantomState::reference, PhantomState::deformed}};
   if (scene.outputs.displacement_fields) {
-    for (const auto& [from, to] : {std::pair{PhantomState::reference, PhantomState::deformed},
-                                   std::pair{PhantomState::deformed, PhantomState::reference}}) {
-      const bool forward = from == PhantomState::reference;
+    for (const auto& [from, to] : directions) {
+      const bool ref_grid = on_reference_grid(to);
       const std::filesystem::path field = layout.transform(from, to);
-      plan.file(field, [&v, forward](const std::filesystem::path& p) {
+      plan.file(field, [&v, ref_grid](const std::filesystem::path& p) {
         // The ITK/elastix convention (README.md, Output): 5-D, components in LPS mm.
-        write_nifti(p, v.grid, lps_from_ras_components(forward ? v.motion->ref_to_def : v.motion->def_to_ref),
+        write_nifti(p, v.grid,
+                    lps_from_ras_components(ref_grid ? v.motion->ref_to_def : v.motion->def_to_ref),
                     {NiftiIntent::displacement, 3, "phantasm displacement, LPS mm"});
       });
       const std::filesystem::path mask = layout.transform_mask(from, to);
-      plan.file(mask, [&v, forward](const std::filesystem::path& p) {
-        const auto& exact = forward ? v.motion->ref_to_def_exact : v.motion->def_to_ref_exact;
+      plan.file(mask, [&v, ref_grid](const std::filesystem::path& p) {
+        const auto& exact = ref_grid ? v.motion->ref_to_def_exact : v.motion->def_to_ref_exact;
         write_nifti_labels(p, v.grid, std::vector<std::int32_t>(exact.begin(), exact.end()),
                            {NiftiIntent::none, 1, "1 where the field is exact"});
       });
-      plan.json(sidecar_path(field), [from = from, to = to, name = mask.filename().string()] {
-        return field_sidecar(from, to, name);
+      plan.json(sidecar_path(field),
+                [from = from, to = to, name = mask.filename().string(),
+                 jacobian = scene.outputs.jacobian
+                                ? layout.jacobian(from, to).filename().string()
+                                : std::string()] { return field_sidecar(from, to, name, jacobian); });
+      plan.json(sidecar_path(mask), [field = field.filename().string()] {
+        return nlohmann::json{{"Description", "1 where the field " + field +
+                                                  " is the solved motion, 0 where it is the smooth "
+                                                  "extension outside the simulated bodies"},
+                              {"Units", "n/a (0 or 1)"}};
       });
     }
   }
   if (scene.outputs.jacobian) {
-    plan.file(layout.jacobian(), [&v](const std::filesystem::path& p) {
-      write_nifti(p, v.grid, v.motion->jacobian, {NiftiIntent::none, 1, "det(I + grad u), ref to def"});
-    });
+    for (const auto& [from, to] : directions) {
+      const bool ref_grid = on_reference_grid(to);
+      const std::filesystem::path path = layout.jacobian(from, to);
+      plan.file(path, [&v, ref_grid](const std::filesystem::path& p) {
+        write_nifti(p, v.grid, ref_grid ? v.motion->jacobian : v.motion->def_to_ref_jacobian,
+                    {NiftiIntent::none, 1, "det(I + grad u) of the field"});
+      });
+      plan.json(sidecar_path(path), [field = layout.transform(from, to).filename().string(), t = to] {
+        return nlohmann::json{
+            {"Description", "det(I + grad u) of the displacement field " + field +
+                                " (central differences, on the ses-" + session_label(t) +
+                                " grid): the local volume ratio of the other state to this one"},
+            {"Units", "n/a (ratio of volumes)"}};
+      });
+    }
   }
 }
 
@@ -344,19 +469,26 @@ DatasetPlan plan_dataset(const Scene& scene, const Simulation& simulation, const
   const std::optional<PhantomDeformation>& deformation = simulation.deformation;
 
   DatasetPlan plan;
+  // Authors: the program that made the data (the scene file names no people).
   plan.json(layout.dataset_description(), [&scene] {
     return nlohmann::json{{"Name", scene.name},
                           {"BIDSVersion", "1.9.0"},
                           {"DatasetType", "raw"},
+                          {"Authors", nlohmann::json::array({"phantasm " + std::string(version)})},
                           {"GeneratedBy", generated_by()}};
   });
+  plan.text(layout.readme(), [&scene] { return dataset_readme(scene); });
   plan.json(layout.derivatives_description(), [&scene] {
     return nlohmann::json{{"Name", scene.name + " ground truth"},
                           {"BIDSVersion", "1.9.0"},
                           {"DatasetType", "derivative"},
+                          {"Authors", nlohmann::json::array({"phantasm " + std::string(version)})},
                           {"GeneratedBy", generated_by()}};
   });
+  plan.text(layout.derivatives_readme(), [&scene] { return derivatives_readme(scene); });
+  plan.text(layout.derivatives_bidsignore(), [] { return derivatives_bidsignore(); });
   plan.text(layout.dseg_table(), [&scene] { return dseg_table(scene); });
+  plan.json(sidecar_path(layout.dseg_table()), [] { return dseg_table_sidecar(); });
   plan.text(layout.scene_copy(), [&scene] { return scene.source_text; });
   if (scene.outputs.meshes) {
     reporter.modelled("anatomy", "organ meshes for ParaView: surfaces tessellated within " +
@@ -409,8 +541,32 @@ std::vector<std::string> stage_warnings(const std::vector<StageReport>& stages) 
   return lines;
 }
 
+void check_dataset_names(const Scene& scene) {
+  std::map<std::string, std::string> organs, tissues;
+  const auto add = [](std::map<std::string, std::string>& seen, const std::string& name, const char* kind,
+                      const char* entity) {
+    const std::string value = bids_entity_value(name);
+    if (value.empty()) {
+      throw InputError(std::string(kind) + " '" + name + "': expected a name with a letter or digit (the " +
+                       entity + " entity of its files)");
+    }
+    const auto [at, inserted] = seen.emplace(value, name);
+    if (!inserted && at->second != name) {
+      throw InputError(std::string(kind) + "s '" + at->second + "' and '" + name + "' would both be " +
+                       entity + "-" + value +
+                       " in file names (BIDS entity values hold letters and digits only): "
+                       "rename one of them");
+    }
+  };
+  for (const auto& organ : scene.anatomy.organs) {
+    add(organs, organ.name, "organ", "organ");
+    add(tissues, organ.tissue, "tissue", "label");
+  }
+}
+
 RunSummary write_dataset(const Scene& scene, const Simulation& simulation,
                          const std::filesystem::path& output, Reporter& reporter) {
+  check_dataset_names(scene);
   RunSummary summary;
   summary.stages = simulation.stages;
   const DatasetLayout layout(output, scene.outputs.subject);

@@ -21,6 +21,11 @@ struct RunSummary {
 /// Every stage's warnings, "[stage] message", in stage order.
 std::vector<std::string> stage_warnings(const std::vector<StageReport>& stages);
 
+/// Checks that the organ and tissue names of the scene give distinct, non-empty BIDS entity values
+/// (bids_entity_value: "ventricle_left" and "ventricleLeft" would name the same files).
+/// @throws InputError naming the names that clash
+void check_dataset_names(const Scene& scene);
+
 /// Writes a complete simulation (every stage run) as the dataset (docs/architecture.md) into `output`,
 /// provenance.json last. The folder must have been prepared (prepare_output_folder). The files
 /// are first listed (path and how to make its bytes), then written in list order: the progress

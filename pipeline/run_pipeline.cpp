@@ -112,6 +112,7 @@ Simulation simulate(const Scene& scene, Reporter& reporter, SimulationStage unti
 }
 
 RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& reporter) {
+  check_dataset_names(scene); // before the stages run, not after
   prepare_output_folder(options.output, options.force);
   const Simulation simulation = simulate(scene, reporter);
   if (options.strict) {

@@ -207,26 +207,37 @@ PYBIND11_MODULE(phantasm, m) {
           py::arg("tissue"), py::arg("state") = "ref", "Tissue fraction (X, Y, Z) float32")
       .def(
           "field",
-          [](const PySimulation& s, const std::string& direction) {
+          [](const PySimulation& s, const std::string& name) {
             if (!s.result.volumes.motion)
               throw py::value_error("the scene does not deform: there is no field");
-            if (direction != "ref_to_def" && direction != "def_to_ref")
-              throw py::value_error("direction: expected 'ref_to_def' or 'def_to_ref'");
+            // The BIDS names of the dataset's files: from-def_to-ref brings a deformed image onto
+            // the reference grid, so it carries reference points into the deformed state.
+            if (name != "from-def_to-ref" && name != "from-ref_to-def")
+              throw py::value_error("field: expected 'from-def_to-ref' or 'from-ref_to-def', found '" + name +
+                                    "'");
             const std::vector<float> lps =
-                lps_from_ras_components(direction == "ref_to_def" ? s.result.volumes.motion->ref_to_def
+                lps_from_ras_components(name == "from-def_to-ref" ? s.result.volumes.motion->ref_to_def
                                                                   : s.result.volumes.motion->def_to_ref);
             return volume_array<float>(s.result.volumes.grid, lps, 3);
           },
-          py::arg("direction") = "ref_to_def",
-          "Displacement field (X, Y, Z, 3) float32 in the ITK convention: LPS mm, x_to = x_from + u(x_from)")
+          py::arg("name") = "from-def_to-ref",
+          "Displacement field (X, Y, Z, 3) float32 of the dataset's sub-<id>_<name>_mode-image_xfm.nii.gz: "
+          "it brings an image of the 'from' state onto the 'to' grid; ITK convention, LPS mm, a point x of "
+          "the 'to' state is at x + u(x) in the 'from' state")
       .def(
           "jacobian",
-          [](const PySimulation& s) {
+          [](const PySimulation& s, const std::string& name) {
             if (!s.result.volumes.motion)
               throw py::value_error("the scene does not deform: there is no field");
-            return volume_array<float>(s.result.volumes.grid, s.result.volumes.motion->jacobian);
+            if (name != "from-def_to-ref" && name != "from-ref_to-def")
+              throw py::value_error("jacobian: expected 'from-def_to-ref' or 'from-ref_to-def', found '" +
+                                    name + "'");
+            return volume_array<float>(s.result.volumes.grid,
+                                       name == "from-def_to-ref"
+                                           ? s.result.volumes.motion->jacobian
+                                           : s.result.volumes.motion->def_to_ref_jacobian);
           },
-          "det(I + grad u) of the ref_to_def field (X, Y, Z) float32")
+          py::arg("name") = "from-def_to-ref", "det(I + grad u) (X, Y, Z) float32 of the field of that name")
       .def(
           "landmarks",
           [](const PySimulation& s) {

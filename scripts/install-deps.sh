@@ -49,8 +49,33 @@ select_openmp_blas() {
   done
 }
 
+# The BIDS validator the test suite runs on every dataset layout (tests/io/CMakeLists.txt):
+# the npm package, version 1 (the one most users run), under /usr/local. Node.js and npm come
+# from Debian unless a node is already installed (a NodeSource node brings its own npm).
+bids_validator_version=1.15.0
+if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
+  for p in nodejs npm; do
+    if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed'; then
+      missing+=("$p")
+    fi
+  done
+fi
+
+install_bids_validator() {
+  # The installed version from its package.json (starting node to ask takes seconds).
+  local manifest=/usr/local/lib/node_modules/bids-validator/package.json
+  if [ -x /usr/local/bin/bids-validator ] && [ -f "$manifest" ] &&
+    grep -q "\"version\": \"$bids_validator_version\"" "$manifest"; then
+    return 0
+  fi
+  echo "phantasm: installing bids-validator $bids_validator_version (npm) under /usr/local" >&2
+  "${sudo_cmd[@]}" npm install --global --prefix /usr/local --no-audit --no-fund \
+    "bids-validator@$bids_validator_version" >&2
+}
+
 if [ ${#missing[@]} -eq 0 ]; then
   select_openmp_blas
+  install_bids_validator
   exit 0
 fi
 
@@ -59,3 +84,4 @@ export DEBIAN_FRONTEND=noninteractive
 "${sudo_cmd[@]}" apt-get update
 "${sudo_cmd[@]}" apt-get install -y --no-install-recommends "${missing[@]}"
 select_openmp_blas
+install_bids_validator

@@ -342,6 +342,48 @@ void check_compositions(const ImageGrid& grid, MotionFields& f) {
   f.min_exact_jacobian = smallest;
 }
 
+namespace {
+
+/// det(I + grad u) of the field `u` (3 * voxel_count, component-major) at every voxel into
+/// `jacobian`: central differences in index space (one-sided at the border), mapped to world
+/// derivatives by the inverse of the grid's linear part. Returns the smallest.
+double jacobian_determinants(const ImageGrid& grid, const std::vector<float>& u,
+                             std::vector<float>& jacobian) {
+  const auto count = static_cast<std::size_t>(grid.voxel_count());
+  const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
+  auto at = [&](int i, int j, int k) { return voxel_index(grid.dims, i, j, k); };
+  const Eigen::Matrix3d index_from_world = grid.world_from_voxel.topLeftCorner<3, 3>().inverse();
+  double min_jacobian = 1.0;
+#pragma omp parallel for schedule(static) reduction(min : min_jacobian)
+  for (int k = 0; k < nz; ++k) {
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        const int index[3] = {i, j, k};
+        const int size[3] = {nx, ny, nz};
+        Eigen::Matrix3d d_index; // column a: du / d(index a)
+        for (int a = 0; a < 3; ++a) {
+          int lo[3] = {i, j, k}, hi[3] = {i, j, k};
+          lo[a] = std::max(0, index[a] - 1);
+          hi[a] = std::min(size[a] - 1, index[a] + 1);
+          const double span = hi[a] - lo[a];
+          for (int c = 0; c < 3; ++c) {
+            const auto base = static_cast<std::size_t>(c) * count;
+            d_index(c, a) =
+                span > 0 ? (u[base + at(hi[0], hi[1], hi[2])] - u[base + at(lo[0], lo[1], lo[2])]) / span
+                         : 0.0;
+          }
+        }
+        const double det = (Eigen::Matrix3d::Identity() + d_index * index_from_world).determinant();
+        jacobian[at(i, j, k)] = static_cast<float>(det);
+        min_jacobian = std::min(min_jacobian, det);
+      }
+    }
+  }
+  return min_jacobian;
+}
+
+} // namespace
+
 MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& map) {
   const auto count = static_cast<std::size_t>(grid.voxel_count());
   MotionFields f;
@@ -350,6 +392,7 @@ MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& 
   f.ref_to_def_exact.assign(count, 1);
   f.def_to_ref_exact.assign(count, 1);
   f.jacobian.assign(count, 1.0f);
+  f.def_to_ref_jacobian.assign(count, 1.0f);
   const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
   auto at = [&](int i, int j, int k) { return voxel_index(grid.dims, i, j, k); };
   if (map.bodies().empty()) return f;
@@ -380,40 +423,14 @@ MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& 
       }
     }
   }
-  // Jacobian determinant of x -> x + u(x): central differences in index space (one-sided at the
-  // border), mapped to world derivatives by the inverse of the grid's linear part.
-  const Eigen::Matrix3d index_from_world = grid.world_from_voxel.topLeftCorner<3, 3>().inverse();
-  double min_jacobian = 1.0, max_displacement = 0.0;
-#pragma omp parallel for schedule(static) reduction(min : min_jacobian) reduction(max : max_displacement)
-  for (int k = 0; k < nz; ++k) {
-    for (int j = 0; j < ny; ++j) {
-      for (int i = 0; i < nx; ++i) {
-        const int index[3] = {i, j, k};
-        const int size[3] = {nx, ny, nz};
-        Eigen::Matrix3d d_index; // column a: du / d(index a)
-        for (int a = 0; a < 3; ++a) {
-          int lo[3] = {i, j, k}, hi[3] = {i, j, k};
-          lo[a] = std::max(0, index[a] - 1);
-          hi[a] = std::min(size[a] - 1, index[a] + 1);
-          const double span = hi[a] - lo[a];
-          for (int c = 0; c < 3; ++c) {
-            const auto base = static_cast<std::size_t>(c) * count;
-            d_index(c, a) = span > 0 ? (f.ref_to_def[base + at(hi[0], hi[1], hi[2])] -
-                                        f.ref_to_def[base + at(lo[0], lo[1], lo[2])]) /
-                                           span
-                                     : 0.0;
-          }
-        }
-        const double det = (Eigen::Matrix3d::Identity() + d_index * index_from_world).determinant();
-        const std::size_t v = at(i, j, k);
-        f.jacobian[v] = static_cast<float>(det);
-        min_jacobian = std::min(min_jacobian, det);
-        const Eigen::Vector3d u(f.ref_to_def[v], f.ref_to_def[count + v], f.ref_to_def[2 * count + v]);
-        max_displacement = std::max(max_displacement, u.norm());
-      }
-    }
+  f.min_jacobian = jacobian_determinants(grid, f.ref_to_def, f.jacobian);
+  jacobian_determinants(grid, f.def_to_ref, f.def_to_ref_jacobian);
+  double max_displacement = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : max_displacement)
+  for (std::size_t v = 0; v < count; ++v) {
+    const Eigen::Vector3d u(f.ref_to_def[v], f.ref_to_def[count + v], f.ref_to_def[2 * count + v]);
+    max_displacement = std::max(max_displacement, u.norm());
   }
-  f.min_jacobian = min_jacobian;
   f.max_displacement_mm = max_displacement;
   check_compositions(grid, f);
   return f;

@@ -36,12 +36,14 @@ struct TissueVolumes {
 };
 
 /// Dense displacement fields both ways on one grid (RAS mm, x_to = x + u(x)), their exact-masks,
-/// and the Jacobian determinant of the reference-to-deformed map.
+/// and the Jacobian determinant of each. (In the dataset, ref_to_def is the BIDS transform
+/// from-def_to-ref, def_to_ref is from-ref_to-def: io/dataset_layout.hpp.)
 struct MotionFields {
   std::vector<float> ref_to_def; ///< 3 * voxel_count: component-major (all x, then all y, then all z)
   std::vector<float> def_to_ref;
   std::vector<std::uint8_t> ref_to_def_exact, def_to_ref_exact;
-  std::vector<float> jacobian; ///< det(I + grad u) of ref_to_def, central differences
+  std::vector<float> jacobian;            ///< det(I + grad u) of ref_to_def, central differences
+  std::vector<float> def_to_ref_jacobian; ///< det(I + grad u) of def_to_ref, central differences
   double max_displacement_mm = 0.0;
   double min_jacobian = 1.0;
   /// voxels the maps mark exact whose two-way composition misses identity by more than

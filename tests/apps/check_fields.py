@@ -1,6 +1,7 @@
 """Checks phantasm's ground-truth fields against transformix results (called by
 test_ground_truth_fields). Arguments: dataset folder, transformix result of the deformed labels
-through from-ref_to-def, transformix result of the reference labels through from-def_to-ref.
+through from-def_to-ref, transformix result of the reference labels through from-ref_to-def (the
+BIDS names: from-A_to-B brings an image of state A onto the grid of state B).
 Prints one line per check and exits non-zero when one fails."""
 import sys
 
@@ -60,9 +61,9 @@ for path in paths:
           and np.allclose(h.get_qform(), reference_affine, atol=1e-4) and h.get_xyzt_units()[0] == "mm")
     check("nibabel reads " + name, ok, "shape %s, %s, intent %s" % (image.shape, image.get_data_dtype(), h.get_intent()[0]))
 
-compare("def labels through from-ref_to-def vs ref labels",
+compare("def labels through from-def_to-ref vs ref labels",
         np.asanyarray(nib.load(forward_result).dataobj).astype(int), ref)
-compare("ref labels through from-def_to-ref vs def labels",
+compare("ref labels through from-ref_to-def vs def labels",
         np.asanyarray(nib.load(backward_result).dataobj).astype(int), dfm)
 
 
@@ -74,10 +75,12 @@ def field(name):
     return u, image.affine
 
 
-forward, affine = field("from-ref_to-def")
-backward, _ = field("from-def_to-ref")
-exact_f = np.asanyarray(nib.load(sub + "/xfm/sub-01_from-ref_to-def_desc-exact_mask.nii.gz").dataobj) > 0
-exact_b = np.asanyarray(nib.load(sub + "/xfm/sub-01_from-def_to-ref_desc-exact_mask.nii.gz").dataobj) > 0
+# forward: on the reference grid, carries reference points into the deformed state (it brings
+# deformed images onto the reference grid); backward: the way back, on the deformed grid.
+forward, affine = field("from-def_to-ref")
+backward, _ = field("from-ref_to-def")
+exact_f = np.asanyarray(nib.load(sub + "/xfm/sub-01_from-def_to-ref_desc-exact_mask.nii.gz").dataobj) > 0
+exact_b = np.asanyarray(nib.load(sub + "/xfm/sub-01_from-ref_to-def_desc-exact_mask.nii.gz").dataobj) > 0
 # Compose: x -> x + u_f(x) -> x + u_f(x) + u_b(x + u_f(x)), trilinear in u_b; identity expected
 # where u_f is exact at x and u_b at all 8 voxels of the interpolation stencil.
 shape = ref.shape
@@ -105,17 +108,17 @@ def compose_miss(u_first, u_second):
     return np.linalg.norm(u_first.reshape(-1, 3) + u_back, axis=1)
 
 
-for name, miss, exact in (("from-ref_to-def", compose_miss(forward, backward), exact_f),
-                          ("from-def_to-ref", compose_miss(backward, forward), exact_b)):
+for name, miss, exact in (("from-def_to-ref", compose_miss(forward, backward), exact_f),
+                          ("from-ref_to-def", compose_miss(backward, forward), exact_b)):
     inside = exact.reshape(-1)
     check("every voxel of the %s exact mask composes to identity within 0.1 voxel" % name,
           (miss[inside] <= 0.1 * voxel + 1e-6).all(),
           "largest miss %.4f voxel over %d exact voxels, %d of them beyond 0.1"
           % (miss[inside].max() / voxel, inside.sum(), (miss[inside] > 0.1 * voxel + 1e-6).sum()))
-# Landmarks: each reference landmark carried by the from-ref_to-def field lands on its deformed
+# Landmarks: each reference landmark carried by the from-def_to-ref field (on the reference grid) lands on its deformed
 # position (where the field is exact around it), and the two files name the same points.
 def landmarks(state):
-    rows = [line.split(",") for line in open(sub + "/landmarks/sub-01_ses-%s_landmarks.csv" % state).read().split("\n")[1:] if line]
+    rows = [line.split(",") for line in open(sub + "/ses-%s/landmarks/sub-01_ses-%s_landmarks.csv" % (state, state)).read().split("\n")[1:] if line]
     return [r[0] for r in rows], np.array([[float(v) for v in r[2:5]] for r in rows])
 
 

@@ -1,6 +1,7 @@
 // The README's main job: the default scene (data-synthetic/head.yaml) end to end.
 
 #include "core/sha256.hpp"
+#include "io/dataset_layout.hpp"
 #include "io/mesh_file.hpp"
 #include "io/nifti_file.hpp"
 #include "tests/apps/cli_fixtures.hpp"
@@ -27,30 +28,33 @@ TEST(RunCommand, WritesTheHeadDatasetWithOrganMeshesAndProvenance) {
   EXPECT_EQ(nlohmann::json::parse(read_file(derivatives / "dataset_description.json"))["DatasetType"],
             "derivative");
   const std::string dseg = read_file(derivatives / "dseg.tsv");
-  EXPECT_EQ(dseg.rfind("index\tname\ttissue\n0\tbackground\tbackground\n1\tscalp\tskin\n", 0), 0u) << dseg;
+  EXPECT_EQ(dseg.rfind("index\tname\ttissue\torgan_entity\ttissue_entity\n"
+                       "0\tbackground\tbackground\tbackground\tbackground\n1\tscalp\tskin\tscalp\tskin\n",
+                       0),
+            0u)
+      << dseg;
   EXPECT_EQ(std::count(dseg.begin(), dseg.end(), '\n'), 10); // header, background, 7 organs, the gap
-  EXPECT_NE(dseg.find("\n8\tgap\tcsf\n"), std::string::npos) << dseg;
+  EXPECT_NE(dseg.find("\n8\tgap\tcsf\tgap\tcsf\n"), std::string::npos) << dseg;
+  EXPECT_NE(dseg.find("\tventricle_left\tcsf\tventricleLeft\tcsf\n"), std::string::npos) << dseg;
 
   // Every organ of the head is solid: a closed surface (.vtp) and a tet mesh (.vtu) each, which
   // VTK reads back; the surface encloses about the tet mesh's volume. In the deformed state the
   // fixed scalp and skull have not moved, the grey matter has (the retractor), no tet inverted.
-  const fs::path meshes = derivatives / "sub-01" / "meshes";
+  const phantasm::DatasetLayout layout(out, "01");
+  const auto ref = phantasm::PhantomState::reference, def = phantasm::PhantomState::deformed;
   for (const std::string organ :
        {"scalp", "skull", "csf", "grey_matter", "white_matter", "ventricle_left", "ventricle_right"}) {
     SCOPED_TRACE(organ);
-    const phantasm::TriangleMesh surface =
-        phantasm::read_triangle_mesh(meshes / ("sub-01_ses-ref_organ-" + organ + "_mesh.vtp"));
+    const phantasm::TriangleMesh surface = phantasm::read_triangle_mesh(layout.mesh(ref, organ));
     EXPECT_NO_THROW(phantasm::check_closed_manifold(surface, organ));
-    const phantasm::TetMesh solid =
-        phantasm::read_vtu(meshes / ("sub-01_ses-ref_organ-" + organ + "_tetmesh.vtu"));
+    const phantasm::TetMesh solid = phantasm::read_vtu(layout.tet_mesh(ref, organ));
     double volume = 0.0;
     for (Eigen::Index t = 0; t < solid.tets.rows(); ++t) {
       ASSERT_GT(phantasm::tet_volume(solid, t), 0.0);
       volume += phantasm::tet_volume(solid, t);
     }
     EXPECT_NEAR(phantasm::enclosed_volume(surface) / volume, 1.0, 0.02);
-    const phantasm::TetMesh deformed =
-        phantasm::read_vtu(meshes / ("sub-01_ses-def_organ-" + organ + "_tetmesh.vtu"));
+    const phantasm::TetMesh deformed = phantasm::read_vtu(layout.tet_mesh(def, organ));
     ASSERT_EQ(deformed.tets, solid.tets);
     for (Eigen::Index t = 0; t < deformed.tets.rows(); ++t)
       ASSERT_GT(phantasm::tet_volume(deformed, t), 0.0);
@@ -61,8 +65,8 @@ TEST(RunCommand, WritesTheHeadDatasetWithOrganMeshesAndProvenance) {
     if (organ == "grey_matter") {
       EXPECT_GT(moved, 3.0);
     }
-    EXPECT_NO_THROW(phantasm::check_closed_manifold(
-        phantasm::read_triangle_mesh(meshes / ("sub-01_ses-def_organ-" + organ + "_mesh.vtp")), organ));
+    EXPECT_NO_THROW(
+        phantasm::check_closed_manifold(phantasm::read_triangle_mesh(layout.mesh(def, organ)), organ));
   }
 
   const auto provenance = nlohmann::json::parse(read_file(derivatives / "sub-01" / "provenance.json"));
@@ -73,7 +77,7 @@ TEST(RunCommand, WritesTheHeadDatasetWithOrganMeshesAndProvenance) {
   EXPECT_EQ(provenance["stages"][0]["stage"], "anatomy");
   EXPECT_EQ(provenance["stages"][0]["status"], "done");
   EXPECT_LT(provenance["stages"][0]["accuracy"]["white_matter fit Hausdorff mm"].get<double>(), 3.0);
-  EXPECT_EQ(provenance["files"].size(), 88u); // every file but provenance.json itself
+  EXPECT_EQ(provenance["files"].size(), 111u); // every file but provenance.json itself
   // The head was deformed: one quasi-static solve, stopped by a criterion, its residual reported.
   EXPECT_EQ(provenance["stages"][1]["status"], "done");
   ASSERT_EQ(provenance["solves"].size(), 1u);

@@ -213,16 +213,17 @@ TEST(InfoCommand, ShowsTheGridAndEveryStagePlan) {
 TEST(RunCommand, WritesSheetAndShellSurfacesWithoutTetMeshes) {
   const fs::path out = fresh_folder("small") / "out";
   ASSERT_EQ(run_command({k_phantasm, "run", k_small_scene.string(), "-o", out.string(), "-q"}).exit_code, 0);
-  const fs::path meshes = out / "derivatives" / "phantasm" / "sub-01" / "meshes";
+  const fs::path meshes = out / "derivatives" / "phantasm" / "sub-01" / "ses-ref" / "meshes";
   EXPECT_TRUE(fs::exists(meshes / "sub-01_ses-ref_organ-scalp_mesh.vtp"));
   EXPECT_FALSE(fs::exists(meshes / "sub-01_ses-ref_organ-scalp_tetmesh.vtu")); // solid: false
-  EXPECT_TRUE(fs::exists(meshes / "sub-01_ses-ref_organ-grey_matter_tetmesh.vtu"));
+  EXPECT_TRUE(fs::exists(meshes / "sub-01_ses-ref_organ-greyMatter_tetmesh.vtu"));
 
   // A preview per image: a PNG of the three middle slices side by side (48 + 48 + 56 wide,
   // max(56, 52) high for the 48 x 56 x 52 grid).
   for (const char* state : {"ref", "def"}) {
-    const std::string png = read_file(out / "derivatives" / "phantasm" / "sub-01" / "previews" /
-                                      (std::string("sub-01_ses-") + state + "_T1w.png"));
+    const std::string png =
+        read_file(out / "derivatives" / "phantasm" / "sub-01" / (std::string("ses-") + state) / "previews" /
+                  (std::string("sub-01_ses-") + state + "_T1w.png"));
     ASSERT_GT(png.size(), 24u);
     EXPECT_EQ(png.substr(1, 3), "PNG");
     auto be32 = [&](std::size_t at) {
@@ -271,7 +272,7 @@ TEST(RunCommand, QuietPrintsNothingAndAPipeGetsPlainProgressLines) {
   const CommandResult plain =
       run_command({k_phantasm, "run", k_small_scene.string(), "-o", (root / "p").string()});
   EXPECT_EQ(plain.exit_code, 0);
-  EXPECT_NE(plain.err.find("writing 100% (59/59)"), std::string::npos) << plain.err;
+  EXPECT_NE(plain.err.find("writing 100% (78/78)"), std::string::npos) << plain.err;
   EXPECT_EQ(plain.err.find('\r'), std::string::npos);
   EXPECT_NE(plain.err.find("[voxelize] skipped: .vdb grids"), std::string::npos) << plain.err;
 }
@@ -291,9 +292,10 @@ TEST(RunCommand, VdbFilesHoldLevelSetsLabelsAndFractions) {
       0);
   openvdb::initialize();
   for (const char* state : {"ref", "def"}) {
-    openvdb::io::File file((root / "out" / "derivatives" / "phantasm" / "sub-01" / "vdb" /
-                            (std::string("sub-01_ses-") + state + "_grids.vdb"))
-                               .string());
+    openvdb::io::File file(
+        (root / "out" / "derivatives" / "phantasm" / "sub-01" / (std::string("ses-") + state) / "vdb" /
+         (std::string("sub-01_ses-") + state + "_grids.vdb"))
+            .string());
     file.open();
     auto sdf = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("white_matter_sdf"));
     auto labels = openvdb::gridPtrCast<openvdb::FloatGrid>(file.readGrid("labels"));
@@ -381,6 +383,33 @@ TEST(RunCommand, AnInvalidSceneWritesNothing) {
   const CommandResult result = run_command({k_phantasm, "run", scene.string(), "-o", out.string()});
   EXPECT_EQ(result.exit_code, 2);
   EXPECT_FALSE(fs::exists(out));
+}
+
+// Organ names become BIDS entity values in camelCase: two names that give the same value would
+// name the same files, so the run stops before any stage with both names, and writes nothing.
+TEST(RunCommand, OrganNamesThatGiveTheSameFileNamesAreRefused) {
+  const fs::path folder = fresh_folder("entity-clash");
+  const fs::path scene = folder / "scene.yaml";
+  write_text_file(scene, R"(phantasm: 1
+name: entity-clash
+seed: 1
+field_strength_T: 3.0
+grid: {field_of_view_mm: [120, 80, 80], voxel_size_mm: 4.0}
+anatomy:
+  base_mesh_triangles: 80
+  organs:
+    - {name: ventricle_left, tissue: csf, shape: {type: ellipsoid, center_mm: [-21, 0, 0], radii_mm: [20, 20, 20]}}
+    - {name: ventricleLeft, tissue: csf, shape: {type: ellipsoid, center_mm: [21, 0, 0], radii_mm: [20, 20, 20]}}
+outputs:
+  images: false
+)");
+  const CommandResult result =
+      run_command({k_phantasm, "run", "--quiet", scene.string(), "-o", (folder / "out").string()});
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("organs 'ventricle_left' and 'ventricleLeft' would both be organ-ventricleLeft"),
+            std::string::npos)
+      << result.err;
+  EXPECT_FALSE(fs::exists(folder / "out"));
 }
 
 // A setting the scene's validation accepts but a stage cannot carry out (here a collision with

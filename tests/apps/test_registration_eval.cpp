@@ -36,8 +36,8 @@ fs::path subject_folder() {
 }
 
 std::map<std::string, Eigen::Vector3d> landmarks(const std::string& session) {
-  std::istringstream csv(
-      read_file(subject_folder() / "landmarks" / ("sub-01_ses-" + session + "_landmarks.csv")));
+  std::istringstream csv(read_file(subject_folder() / ("ses-" + session) / "landmarks" /
+                                   ("sub-01_ses-" + session + "_landmarks.csv")));
   std::map<std::string, Eigen::Vector3d> points;
   std::string line;
   std::getline(csv, line);
@@ -88,7 +88,8 @@ TEST(EvalCommand, IdentityGivesTheTrueMotionAndTheGroundTruthScoresPerfectly) {
   EXPECT_EQ(identity["jacobian"]["folding_voxels"], 0);
   EXPECT_DOUBLE_EQ(identity["jacobian"]["log_jacobian_sd"].get<double>(), 0.0);
 
-  const fs::path truth_field = subject_folder() / "xfm" / "sub-01_from-ref_to-def_mode-image_xfm.nii.gz";
+  // The field on the fixed (reference) grid that brings the moving (deformed) image there.
+  const fs::path truth_field = subject_folder() / "xfm" / "sub-01_from-def_to-ref_mode-image_xfm.nii.gz";
   const nlohmann::json truth = evaluate({"--field", truth_field.string()}, folder / "truth.json");
   const double voxel = 2.0;
   EXPECT_LT(truth["tre_mm"]["mean"].get<double>(), 0.1 * voxel);

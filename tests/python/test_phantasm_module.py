@@ -46,9 +46,14 @@ class PythonModule(unittest.TestCase):
             np.testing.assert_array_equal(t1.get_fdata(dtype=np.float32), self.simulation.image("T1w", "def"))
             np.testing.assert_allclose(t1.affine, self.simulation.affine)
             xfm = os.path.join(out, "derivatives", "phantasm", "sub-01", "xfm")
-            field = nib.load(os.path.join(xfm, "sub-01_from-ref_to-def_mode-image_xfm.nii.gz"))
-            np.testing.assert_array_equal(field.get_fdata(dtype=np.float32)[:, :, :, 0, :],
-                                          self.simulation.field("ref_to_def"))
+            for name in ("from-def_to-ref", "from-ref_to-def"):
+                field = nib.load(os.path.join(xfm, "sub-01_" + name + "_mode-image_xfm.nii.gz"))
+                np.testing.assert_array_equal(field.get_fdata(dtype=np.float32)[:, :, :, 0, :],
+                                              self.simulation.field(name))
+                jacobian = nib.load(os.path.join(xfm, "sub-01_" + name + "_jacobian.nii.gz"))
+                np.testing.assert_array_equal(jacobian.get_fdata(dtype=np.float32), self.simulation.jacobian(name))
+            with self.assertRaises(ValueError):
+                self.simulation.field("ref_to_def")
             labels = nib.load(os.path.join(out, "derivatives", "phantasm", "sub-01", "ses-def", "anat",
                                            "sub-01_ses-def_dseg.nii.gz"))
             np.testing.assert_array_equal(np.asarray(labels.dataobj), self.simulation.labels("def"))

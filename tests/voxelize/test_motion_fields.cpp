@@ -121,7 +121,7 @@ TEST(DeformationMap, OutsideTheBodyTheBoundaryMotionFadesOutOverTheExtensionAndI
 }
 
 // The dense fields on a grid: the motion inside the cube, its Jacobian determinant det A (central
-// differences of an affine field are exact), zero and exact far away.
+// differences of an affine field are exact) and det A^-1 for the way back, zero and exact far away.
 TEST(DeformationMap, MotionFieldsHoldTheMotionAndItsJacobianInsideAndNothingFarAway) {
   const DeformationMap map({affine_cube()}, k_extension_mm);
   ImageGrid grid;
@@ -132,7 +132,7 @@ TEST(DeformationMap, MotionFieldsHoldTheMotionAndItsJacobianInsideAndNothingFarA
   const MotionFields fields = compute_motion_fields(grid, map);
   const auto count = static_cast<std::size_t>(grid.voxel_count());
   const double det = motion_matrix().determinant();
-  int inside = 0, far = 0;
+  int inside = 0, inside_deformed = 0, far = 0;
   for (int k = 0; k < grid.dims.z(); ++k) {
     for (int j = 0; j < grid.dims.y(); ++j) {
       for (int i = 0; i < grid.dims.x(); ++i) {
@@ -147,6 +147,15 @@ TEST(DeformationMap, MotionFieldsHoldTheMotionAndItsJacobianInsideAndNothingFarA
           EXPECT_TRUE(fields.ref_to_def_exact[v]);
           EXPECT_NEAR(fields.jacobian[v], det, 1e-5) << x.transpose();
         }
+        // Deformed voxels whose stencil lies inside the moved cube: the way back has det A^-1.
+        const Eigen::Vector3d back(fields.def_to_ref[v], fields.def_to_ref[count + v],
+                                   fields.def_to_ref[2 * count + v]);
+        const Eigen::Vector3d origin = x + back;
+        if ((origin.array() >= 4.0).all() && (origin.array() <= k_side_mm - 4.0).all()) {
+          ++inside_deformed;
+          EXPECT_TRUE(fields.def_to_ref_exact[v]);
+          EXPECT_NEAR(fields.def_to_ref_jacobian[v], 1.0 / det, 1e-5) << x.transpose();
+        }
         // More than extension_mm from the cube in both states: nothing moves.
         const Eigen::Vector3d low = Eigen::Vector3d::Constant(-k_extension_mm - 3.0);
         const Eigen::Vector3d high = Eigen::Vector3d::Constant(k_side_mm + k_extension_mm + 4.0);
@@ -155,6 +164,7 @@ TEST(DeformationMap, MotionFieldsHoldTheMotionAndItsJacobianInsideAndNothingFarA
           EXPECT_EQ(u, Eigen::Vector3d::Zero()) << x.transpose();
           EXPECT_TRUE(fields.ref_to_def_exact[v] && fields.def_to_ref_exact[v]) << x.transpose();
           EXPECT_EQ(fields.jacobian[v], 1.0f) << x.transpose();
+          EXPECT_EQ(fields.def_to_ref_jacobian[v], 1.0f) << x.transpose();
         }
       }
     }
@@ -162,6 +172,7 @@ TEST(DeformationMap, MotionFieldsHoldTheMotionAndItsJacobianInsideAndNothingFarA
   // Both kinds of voxel were there to check (x = 3, 5, ..., 17 mm inside; -13 to -9 and 31 to
   // 33 mm far along each axis).
   EXPECT_GT(inside, 100);
+  EXPECT_GT(inside_deformed, 50);
   EXPECT_GT(far, 100);
 }
 
@@ -183,6 +194,7 @@ TEST(DeformationMap, FaceBucketsGiveTheFieldsOfTheFullScanBitForBit) {
   EXPECT_EQ(a.ref_to_def_exact, b.ref_to_def_exact);
   EXPECT_EQ(a.def_to_ref_exact, b.def_to_ref_exact);
   EXPECT_EQ(a.jacobian, b.jacobian);
+  EXPECT_EQ(a.def_to_ref_jacobian, b.def_to_ref_jacobian);
   // Off the grid too, both ways.
   std::mt19937 random(7);
   std::uniform_real_distribution<double> coordinate(-12.0, 35.0);
