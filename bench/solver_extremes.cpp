@@ -3,7 +3,8 @@
 // that invert it, for every solver with the scene defaults, each row against Newton's converged
 // answer (bench/solver_extremes.hpp). Prints the table as Markdown; exit status 1 when a row is a
 // silent wrong answer (converged, nothing inverted, and off the oracle).
-// Usage: solver_extremes [first_case [last_case]] (0-based, inclusive; default all)
+// Usage: solver_extremes [first_case [last_case [solver]]] (cases 0-based, inclusive; default
+// all; solver: one of local_global, jacobi_chebyshev, newton, xpbd, gauss_seidel_pbd)
 
 #include "bench/solver_extremes.hpp"
 
@@ -65,6 +66,7 @@ int main(int argc, char** argv) {
     std::vector<ExtremeRow> rows;
     bool needed = false;
     for (ExtremeSolver solver : solvers_for(c)) {
+      if (argc > 3 && std::string(argv[3]) != to_string(solver)) continue;
       rows.push_back(run_extreme(c, solver, k, k.stop));
       needed = needed || rows.back().verdict == Verdict::no_oracle;
     }
