@@ -1,5 +1,6 @@
 #include "io/hdf5_export.hpp"
 
+#include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/version.hpp"
 #include "io/dataset_layout.hpp"
@@ -213,6 +214,7 @@ Hdf5ExportSummary export_hdf5(const std::filesystem::path& dataset, const std::f
         }
       }
       for (const auto& entry : provenance.at("files")) {
+        throw_if_cancelled(); // the temporary file is removed below
         const std::string relative = entry.get<std::string>();
         const std::filesystem::path path = dataset / relative;
         std::smatch m;

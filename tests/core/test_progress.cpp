@@ -3,24 +3,62 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <chrono>
 #include <sstream>
+#include <stdexcept>
+#include <string>
 #include <thread>
 #include <vector>
 
 using namespace phantasm;
 
-TEST(Progress, PlainLinesAppearOncePerTenthWhenNotOnATerminal) {
+TEST(Progress, PlainLinesComeAtMostEveryFewSecondsWhenNotOnATerminal) {
   std::ostringstream stream;
   Reporter reporter(stream, ProgressStyle::lines);
   {
     ProgressBar bar(reporter, "voxelizing", 100);
-    for (int i = 0; i < 100; ++i)
+    for (int i = 0; i < 100; ++i) {
       bar.advance();
+      bar.set_detail("organ " + std::to_string(i));
+    }
   }
+  // A quick step writes one line, at its end (a log or pipe gets no line per unit of work).
   const std::string text = stream.str();
-  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 10);
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1);
   EXPECT_EQ(text.find('\r'), std::string::npos);
   EXPECT_NE(text.find("voxelizing 100% (100/100)"), std::string::npos);
+}
+
+TEST(Progress, ASlowStepShowsElapsedTimeTheTimeLeftAndItsDetailWhileItRuns) {
+  std::ostringstream stream;
+  Reporter reporter(stream, ProgressStyle::bar);
+  {
+    ProgressBar bar(reporter, "anatomy", 4);
+    bar.advance();
+    progress_detail("ball: tet meshing");
+    // No call for over a second (a step inside a library): the ticker redraws the bar.
+    std::this_thread::sleep_for(std::chrono::milliseconds(1300));
+    const std::string text = stream.str();
+    EXPECT_NE(text.find("ball: tet meshing"), std::string::npos) << text;
+    EXPECT_NE(text.find(" left"), std::string::npos) << text;
+    EXPECT_NE(text.rfind("25% (1/4) 1."), std::string::npos) << text; // redrawn after a second
+  }
+  EXPECT_FALSE(progress_detail_due()); // no bar lives any more
+}
+
+TEST(Progress, ABarUnwoundByAnExceptionStopsWhereTheWorkStopped) {
+  std::ostringstream stream;
+  Reporter reporter(stream, ProgressStyle::lines);
+  try {
+    ProgressBar bar(reporter, "mri", 4);
+    bar.advance();
+    throw std::runtime_error("cancelled");
+  } catch (const std::runtime_error&) {
+  }
+  const std::string text = stream.str();
+  EXPECT_EQ(text.find("100%"), std::string::npos) << text;
+  EXPECT_NE(text.find("mri  25% (1/4)"), std::string::npos) << text;
+  EXPECT_NE(text.find("stopped"), std::string::npos) << text;
 }
 
 TEST(Progress, BarRedrawsInPlaceOnATerminalAndEndsWithOneNewline) {
