@@ -92,8 +92,10 @@ TriangleMesh extract_surface(const ImplicitShape& shape, const SurfaceMeshCriter
   const Criteria criteria(p::facet_angle = c.facet_angle_deg, p::facet_size = c.facet_size_mm,
                           p::facet_distance = c.facet_distance_mm);
   CGAL::get_default_random() = CGAL::Random(seed);
-  const Complex complex = CGAL::make_mesh_3<Complex>(domain, criteria, p::no_lloyd(), p::no_odt(),
-                                                     p::no_perturb(), p::no_exude(), p::manifold());
+  const Complex complex = CGAL::make_mesh_3<Complex>(
+      domain, criteria, p::no_lloyd(), p::no_odt(), p::no_perturb(), p::no_exude(), p::manifold(),
+      p::mesh_3_options(p::pointer_to_stop_atomic_boolean = &cancellation_flag()));
+  throw_if_cancelled(); // a mesher asked to stop returns what it has: never a result
 
   std::map<Triangulation::Vertex_handle, int> index;
   std::vector<Eigen::Vector3d> points;

@@ -216,7 +216,9 @@ TetMesh mesh_implicit_solid(const ImplicitShape& shape, const TetMeshCriteria& c
   CGAL::get_default_random() = CGAL::Random(seed);
   Complex complex = CGAL::make_mesh_3<Complex>(
       domain, criteria, p::no_lloyd(), p::odt(p::max_iteration_number = 20, p::time_limit = 0),
-      p::perturb(p::sliver_bound = c.sliver_bound_deg, p::time_limit = 0), p::no_exude());
+      p::perturb(p::sliver_bound = c.sliver_bound_deg, p::time_limit = 0), p::no_exude(),
+      // The refinement polls the flag too (the domain is not called while it drains stale cells).
+      p::mesh_3_options(p::pointer_to_stop_atomic_boolean = &cancellation_flag()));
   exude(complex, c.sliver_bound_deg);
   return to_tet_mesh(complex, false, c.cell_size_mm);
 }
@@ -284,9 +286,11 @@ TetMesh mesh_nested_solid(const NestedShapes& nested, const TetMeshCriteria& c, 
       complex.set_index(vertex, std::get<1>(crossing));
     }
   }
-  CGAL::refine_mesh_3(complex, domain, criteria, p::no_lloyd(),
-                      p::odt(p::max_iteration_number = 20, p::time_limit = 0),
-                      p::perturb(p::sliver_bound = c.sliver_bound_deg, p::time_limit = 0), p::no_exude());
+  CGAL::refine_mesh_3(
+      complex, domain, criteria, p::no_lloyd(), p::odt(p::max_iteration_number = 20, p::time_limit = 0),
+      p::perturb(p::sliver_bound = c.sliver_bound_deg, p::time_limit = 0), p::no_exude(),
+      // The refinement polls the flag too (the domain is not called while it drains stale cells).
+      p::mesh_3_options(p::pointer_to_stop_atomic_boolean = &cancellation_flag()));
   exude(complex, c.sliver_bound_deg);
   return to_tet_mesh(complex, true, c.cell_size_mm);
 }

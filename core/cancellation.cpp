@@ -1,7 +1,13 @@
 #include "core/cancellation.hpp"
+
+#include "core/abandonable_work.hpp"
 #include "core/error.hpp"
 
+#include <unistd.h>
+
+#include <chrono>
 #include <csignal>
+#include <thread>
 
 namespace phantasm {
 namespace {
@@ -19,6 +25,26 @@ extern "C" void on_signal_then_default(int signal_number) {
 
 extern "C" void on_signal(int signal_number) {
   request_cancellation(signal_number);
+}
+
+std::atomic<int> g_abandonable_depth{0};
+
+/// Waits for a cancellation; if 0.5 s later the process is inside abandonable work (which
+/// should have thrown by then), ends it (AbandonableWork). Polls every 20 ms: a sleeping thread.
+void watch_cancellation() {
+  using namespace std::chrono_literals;
+  while (!cancellation_requested())
+    std::this_thread::sleep_for(20ms);
+  std::this_thread::sleep_for(500ms);
+  while (true) {
+    if (g_abandonable_depth.load() > 0) {
+      static const char message[] = "\nphantasm: interrupted; every file written so far is complete\n";
+      [[maybe_unused]] const ssize_t ignored = ::write(STDERR_FILENO, message, sizeof message - 1);
+      const int signal_number = cancellation_signal();
+      ::_exit(128 + (signal_number > 0 ? signal_number : SIGINT));
+    }
+    std::this_thread::sleep_for(20ms);
+  }
 }
 } // namespace
 
@@ -51,6 +77,15 @@ void install_cancellation_handlers(bool second_signal_ends) {
   action.sa_flags = SA_RESTART; // a signal must not fail a read or write with EINTR
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);
+  std::thread(watch_cancellation).detach();
+}
+
+AbandonableWork::AbandonableWork() noexcept {
+  g_abandonable_depth.fetch_add(1);
+}
+
+AbandonableWork::~AbandonableWork() {
+  g_abandonable_depth.fetch_sub(1);
 }
 
 void reset_cancellation() noexcept {
