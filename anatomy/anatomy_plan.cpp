@@ -1,5 +1,9 @@
 #include "anatomy/anatomy_plan.hpp"
 
+#include "anatomy/tet_mesh.hpp"
+#include "core/format.hpp"
+
+#include <cmath>
 #include <sstream>
 
 namespace phantasm {
@@ -9,11 +13,30 @@ StageReport plan_anatomy(const AnatomySettings& anatomy, const OrganTable& organ
   report.stage = "anatomy";
   for (std::size_t i = 0; i < anatomy.organs.size(); ++i) {
     const OrganSettings& organ = anatomy.organs[i];
+    // The organ's own base size when it sets one (the run builds that, not the scene's).
+    const bool own = organ.base_mesh_triangles > 0;
+    const int base = own ? organ.base_mesh_triangles : anatomy.base_mesh_triangles;
     std::ostringstream line;
-    line << organ.name << ": " << to_string(organ.shape.kind) << " surface of " << anatomy.base_mesh_triangles
-         << " base triangles with fitted patches, tissue " << organ.tissue;
+    line << organ.name << ": " << to_string(organ.shape.kind) << " surface of " << base << " base triangles"
+         << (own ? " (its own base_mesh_triangles)" : "") << " with fitted patches, tissue " << organ.tissue;
     if (!organ.inside.empty()) line << ", inside " << organ.inside << " (depth " << organs[i].depth << ")";
-    line << (organ.solid ? ", solid (tetrahedral interior)" : ", surface only (no interior mesh)");
+    if (!organ.solid) {
+      line << ", surface only (no interior mesh)";
+    } else if (organ.shape.kind == ShapeKind::ellipsoid) {
+      // Its tets' size follows from the base size (anatomy/tet_mesh.hpp, criteria_for_boundary_size)
+      // and the surface area (Thomsen's approximation for an ellipsoid, within about 1 %).
+      const Eigen::Vector3d r = organ.shape.radii_mm;
+      constexpr double p = 1.6075;
+      const double area =
+          4.0 * M_PI *
+          std::pow((std::pow(r.x() * r.y(), p) + std::pow(r.x() * r.z(), p) + std::pow(r.y() * r.z(), p)) /
+                       3.0,
+                   1.0 / p);
+      line << ", solid (tetrahedral interior, tets of about "
+           << format_number(criteria_for_boundary_size(area, base).cell_size_mm) << " mm)";
+    } else {
+      line << ", solid (tetrahedral interior, its boundary of about the base size)";
+    }
     report.modelled.push_back(line.str());
   }
   if (anatomy.variation > 0.0) {

@@ -1,5 +1,7 @@
 #include "anatomy/mesh_distance.hpp"
 
+#include "core/cancellation.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -16,6 +18,7 @@ SurfaceDistance symmetric_distance(const TriangleMesh& mesh, const std::vector<E
   const MeshDistance to_mesh(mesh);
   double total = 0.0;
   for (const auto& p : samples_on_b) {
+    throw_if_cancelled();
     const double d = to_mesh.distance(p);
     result.hausdorff_mm = std::max(result.hausdorff_mm, d);
     total += d;

@@ -2,6 +2,7 @@
 
 #include "anatomy/mesh_distance.hpp"
 #include "anatomy/surface_extraction.hpp"
+#include "core/cancellation.hpp"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
@@ -167,6 +168,7 @@ Eigen::MatrixX3d straddle_vertices(const TriangleMesh& base, const ImplicitShape
   Eigen::VectorXd count = Eigen::VectorXd::Zero(base.vertex_count());
   const bool radial_depth = target.star_shaped();
   for (Eigen::Index t = 0; t < base.face_count(); ++t) {
+    throw_if_cancelled(); // a poll per patch: fits of 10^5 patches take minutes
     for (int k = 0; k < 3; ++k) {
       const int a = base.faces(t, k), b = base.faces(t, (k + 1) % 3);
       if (a > b) continue; // each edge once (its other triangle has it as b > a)
@@ -201,6 +203,7 @@ void fit_bumps(PatchSurface& surface, const ImplicitShape& target, const PatchFi
   const TriangleMesh& base = surface.base_mesh();
   const int n = 1 << options.sample_level;
   for (Eigen::Index t = 0; t < surface.patch_count(); ++t) {
+    throw_if_cancelled();
     const PatchFrame frame = surface.frame(t);
     const Eigen::Vector3d x0 = surface.rest_positions().row(base.faces(t, 0)).transpose();
     const Eigen::Vector3d x1 = surface.rest_positions().row(base.faces(t, 1)).transpose();
@@ -290,6 +293,7 @@ PatchFitReport measure_fit(const PatchSurface& surface, const ImplicitShape& tar
   const MeshDistance to_target_mesh(target_mesh);
   std::vector<double> to_target;
   for (Eigen::Index t = 0; t < surface.patch_count(); ++t) {
+    throw_if_cancelled();
     for (const Eigen::Vector3d& p : surface.patch_grid_points(t, 4))
       to_target.push_back(to_target_mesh.distance(p));
   }

@@ -110,6 +110,8 @@ void build_solid(Organ& organ, const AnatomySettings& anatomy, std::size_t index
   // since that move changes the boundary tets' angles a little.
   TriangleMesh base;
   for (std::uint32_t attempt = 0; attempt < 8; ++attempt) {
+    progress_detail(organ.name + ": tet meshing (CGAL Mesh_3" +
+                    (attempt > 0 ? ", attempt " + std::to_string(attempt + 1) : std::string()) + ")");
     tets = mesh_implicit_solid(target, criteria, organ_seed(anatomy.seed, index) + attempt);
     base = boundary_surface(tets, &organ.tet_vertex_of_surface_vertex);
     base.vertices = straddle_vertices(base, target, PatchFitOptions{}.vertex_offset_factor);
@@ -118,6 +120,7 @@ void build_solid(Organ& organ, const AnatomySettings& anatomy, std::size_t index
     }
     if (min_dihedral_angle_deg(tets) >= k_min_dihedral_deg) break;
   }
+  progress_detail(organ.name + ": fitting " + std::to_string(base.face_count()) + " patches");
   PatchSurface surface(base, "organ " + organ.name);
   fit_bumps(surface, target, PatchFitOptions{});
   match_volume(surface, target.volume());
@@ -219,14 +222,17 @@ Phantom build_phantom(const AnatomySettings& anatomy, const std::map<std::string
       organ.fit = measure_fit(*organ.surface, *organ.target, 1e-3 * organ.target->bounding_radius(), 4);
     } else if (s.solid) {
       build_solid(organ, anatomy, o);
+      progress.set_detail(s.name + ": measuring the fit");
       organ.fit = measure_fit(*organ.surface, *organ.target, 5e-3 * organ.target->bounding_radius(), 4);
     } else {
       PatchFitOptions options;
       options.base_triangles = base_triangles(anatomy, o);
+      progress.set_detail(s.name + ": fitting about " + std::to_string(options.base_triangles) + " patches");
       const Eigen::Vector3d hint = shape.kind == ShapeKind::mesh || shape.kind == ShapeKind::label_volume
                                        ? Eigen::Vector3d::Ones()
                                        : Eigen::Vector3d(shape.radii_mm);
       organ.surface.emplace(fit_patch_surface(*organ.target, hint, rotation, options, "organ " + s.name));
+      progress.set_detail(s.name + ": measuring the fit");
       organ.fit = measure_fit(*organ.surface, *organ.target, 5e-3 * organ.target->bounding_radius(), 4);
     }
     if (organ.surface) {

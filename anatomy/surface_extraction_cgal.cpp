@@ -5,6 +5,7 @@
 // output is put in a canonical order (vertices by position, faces rotated and sorted).
 
 #include "anatomy/surface_extraction.hpp"
+#include "core/cancellation.hpp"
 #include "core/error.hpp"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -74,7 +75,11 @@ TriangleMesh canonical(const std::vector<Eigen::Vector3d>& points,
 TriangleMesh extract_surface(const ImplicitShape& shape, const SurfaceMeshCriteria& c, std::uint32_t seed) {
   namespace p = CGAL::parameters;
   // CGAL's implicit domains are negative inside; ours are positive inside.
+  // Mesh_3 cannot be asked to stop, but it calls the domain all the time (refinement, ODT,
+  // perturbation): a cancelled run throws from here and the mesher unwinds (its containers free
+  // themselves), so SIGINT ends even minutes of meshing at once.
   std::function<double(const Point&)> inside_negative = [&shape](const Point& x) {
+    throw_if_cancelled();
     return -shape.value(Eigen::Vector3d(x.x(), x.y(), x.z()));
   };
   const Eigen::Vector3d centre = shape.center();
@@ -87,8 +92,10 @@ TriangleMesh extract_surface(const ImplicitShape& shape, const SurfaceMeshCriter
   const Criteria criteria(p::facet_angle = c.facet_angle_deg, p::facet_size = c.facet_size_mm,
                           p::facet_distance = c.facet_distance_mm);
   CGAL::get_default_random() = CGAL::Random(seed);
-  const Complex complex = CGAL::make_mesh_3<Complex>(domain, criteria, p::no_lloyd(), p::no_odt(),
-                                                     p::no_perturb(), p::no_exude(), p::manifold());
+  const Complex complex = CGAL::make_mesh_3<Complex>(
+      domain, criteria, p::no_lloyd(), p::no_odt(), p::no_perturb(), p::no_exude(), p::manifold(),
+      p::mesh_3_options(p::pointer_to_stop_atomic_boolean = &cancellation_flag()));
+  throw_if_cancelled(); // a mesher asked to stop returns what it has: never a result
 
   std::map<Triangulation::Vertex_handle, int> index;
   std::vector<Eigen::Vector3d> points;

@@ -6,6 +6,7 @@
 // (vertices by position), which removes differences of container order.
 
 #include "anatomy/tet_mesh.hpp"
+#include "core/cancellation.hpp"
 #include "core/error.hpp"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -13,6 +14,7 @@
 #include <CGAL/Mesh_complex_3_in_triangulation_3.h>
 #include <CGAL/Mesh_criteria_3.h>
 #include <CGAL/Mesh_triangulation_3.h>
+#include <CGAL/exude_mesh_3.h>
 #include <CGAL/make_mesh_3.h>
 #include <CGAL/refine_mesh_3.h>
 
@@ -169,8 +171,23 @@ TetMesh to_tet_mesh(const Complex& complex, bool labeled, double cell_size_mm) {
     mesh.subdomains =
         Eigen::Map<const Eigen::VectorXi>(subdomains.data(), static_cast<Eigen::Index>(subdomains.size()));
   }
+  throw_if_cancelled(); // sorting a million tets takes a second
   canonicalize(mesh);
   return mesh;
+}
+
+/// Mesh_3's sliver exudation as make_mesh_3 runs it last (no time limit), with a visitor that
+/// stops a cancelled run: exudation never calls the domain, so the oracle's poll cannot.
+void exude(Complex& complex, double sliver_bound_deg) {
+  struct CancellingVisitor {
+    void after_cell_pumped(std::size_t) { throw_if_cancelled(); }
+  };
+  using Criterion = CGAL::Mesh_3::Min_dihedral_angle_criterion<Triangulation>;
+  const Criterion criterion(sliver_bound_deg, complex.triangulation());
+  CGAL::Mesh_3::Slivers_exuder<Complex, Criterion, CancellingVisitor> exuder(complex, criterion);
+  exuder.set_time_limit(0);
+  exuder(CancellingVisitor());
+  throw_if_cancelled();
 }
 
 } // namespace
@@ -178,7 +195,11 @@ TetMesh to_tet_mesh(const Complex& complex, bool labeled, double cell_size_mm) {
 TetMesh mesh_implicit_solid(const ImplicitShape& shape, const TetMeshCriteria& c, std::uint32_t seed) {
   namespace p = CGAL::parameters;
   // CGAL's implicit domains are negative inside; ours are positive inside.
+  // Mesh_3 cannot be asked to stop, but it calls the domain all the time (refinement, ODT,
+  // perturbation): a cancelled run throws from here and the mesher unwinds (its containers free
+  // themselves), so SIGINT ends even minutes of meshing at once.
   std::function<double(const Point&)> inside_negative = [&shape](const Point& x) {
+    throw_if_cancelled();
     return -shape.value(Eigen::Vector3d(x.x(), x.y(), x.z()));
   };
   const Eigen::Vector3d centre = shape.center();
@@ -193,10 +214,12 @@ TetMesh mesh_implicit_solid(const ImplicitShape& shape, const TetMeshCriteria& c
                           p::cell_size = c.cell_size_mm);
   // Mesh_3 draws from CGAL's default generator too: reseed it for repeatable meshes.
   CGAL::get_default_random() = CGAL::Random(seed);
-  const Complex complex = CGAL::make_mesh_3<Complex>(
+  Complex complex = CGAL::make_mesh_3<Complex>(
       domain, criteria, p::no_lloyd(), p::odt(p::max_iteration_number = 20, p::time_limit = 0),
-      p::perturb(p::sliver_bound = c.sliver_bound_deg, p::time_limit = 0),
-      p::exude(p::sliver_bound = c.sliver_bound_deg, p::time_limit = 0));
+      p::perturb(p::sliver_bound = c.sliver_bound_deg, p::time_limit = 0), p::no_exude(),
+      // The refinement polls the flag too (the domain is not called while it drains stale cells).
+      p::mesh_3_options(p::pointer_to_stop_atomic_boolean = &cancellation_flag()));
+  exude(complex, c.sliver_bound_deg);
   return to_tet_mesh(complex, false, c.cell_size_mm);
 }
 
@@ -204,6 +227,7 @@ TetMesh mesh_nested_solid(const NestedShapes& nested, const TetMeshCriteria& c, 
   namespace p = CGAL::parameters;
   // Label 0 is outside; shape k is subdomain k + 1.
   std::function<int(const Point&)> label = [&nested](const Point& x) {
+    throw_if_cancelled(); // as in mesh_implicit_solid: the mesher unwinds
     return nested.innermost(Eigen::Vector3d(x.x(), x.y(), x.z())) + 1;
   };
   const ImplicitShape& outer = *nested.shapes.at(0);
@@ -262,10 +286,12 @@ TetMesh mesh_nested_solid(const NestedShapes& nested, const TetMeshCriteria& c, 
       complex.set_index(vertex, std::get<1>(crossing));
     }
   }
-  CGAL::refine_mesh_3(complex, domain, criteria, p::no_lloyd(),
-                      p::odt(p::max_iteration_number = 20, p::time_limit = 0),
-                      p::perturb(p::sliver_bound = c.sliver_bound_deg, p::time_limit = 0),
-                      p::exude(p::sliver_bound = c.sliver_bound_deg, p::time_limit = 0));
+  CGAL::refine_mesh_3(
+      complex, domain, criteria, p::no_lloyd(), p::odt(p::max_iteration_number = 20, p::time_limit = 0),
+      p::perturb(p::sliver_bound = c.sliver_bound_deg, p::time_limit = 0), p::no_exude(),
+      // The refinement polls the flag too (the domain is not called while it drains stale cells).
+      p::mesh_3_options(p::pointer_to_stop_atomic_boolean = &cancellation_flag()));
+  exude(complex, c.sliver_bound_deg);
   return to_tet_mesh(complex, true, c.cell_size_mm);
 }
 

@@ -13,7 +13,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdlib>
 #include <fstream>
@@ -30,6 +32,9 @@ namespace {
                                        bool strict) {
   ::prctl(PR_SET_PDEATHSIG, SIGKILL); // a batch killed outright takes its subjects with it
   if (::getppid() != parent) ::_exit(1);
+  // SIGINT from the terminal reaches the subject and the batch, which then sends SIGTERM: a
+  // subject counts every signal as a request to stop, so it always cleans up before it exits.
+  install_cancellation_handlers(false);
   omp_set_num_threads(threads);
   int code = 0;
   try {
@@ -40,7 +45,7 @@ namespace {
     run_options.strict = strict;
     run_scene(*loaded.scene, run_options, quiet);
   } catch (const Cancelled&) {
-    code = 130;
+    code = 128 + (cancellation_signal() > 0 ? cancellation_signal() : SIGINT);
   } catch (const InputError& error) {
     std::cerr << "sub-" << subject.id << ": " << error.what() << '\n';
     code = 2;
@@ -55,7 +60,25 @@ namespace {
 struct Running {
   std::size_t subject;
   std::chrono::steady_clock::time_point start;
+  bool signalled = false; ///< asked to stop once (a second signal would end it before it cleans up)
 };
+
+/// "3 done, 1 failed, 6 left, about 2 min 10 s left": the subjects left times the mean time of
+/// those made so far, over the jobs that run at once.
+std::string batch_status(const BatchSummary& summary, std::size_t to_run, double subject_seconds, int jobs) {
+  const std::size_t finished = summary.ran + summary.failed.size();
+  const std::size_t left = to_run > finished ? to_run - finished : 0;
+  std::string text = std::to_string(summary.ran) + " done, " + std::to_string(summary.failed.size()) +
+                     " failed, " + std::to_string(left) + " left";
+  if (summary.ran > 0 && left > 0) {
+    const double seconds = subject_seconds / static_cast<double>(summary.ran) * static_cast<double>(left) /
+                           static_cast<double>(std::min<std::size_t>(left, static_cast<std::size_t>(jobs)));
+    const long whole = std::lround(seconds);
+    text += ", about " + (whole >= 60 ? std::to_string(whole / 60) + " min " : std::string()) +
+            std::to_string(whole % 60) + " s left";
+  }
+  return text;
+}
 
 } // namespace
 
@@ -109,6 +132,7 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
   }
   std::map<pid_t, Running> running;
   std::size_t next = 0;
+  double subject_seconds = 0.0; // summed over the subjects made, for the time left
   const pid_t parent = ::getpid();
   while (true) {
     while (!cancellation_requested() && static_cast<int>(running.size()) < options.jobs &&
@@ -124,8 +148,10 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
     }
     if (running.empty()) break;
     if (cancellation_requested()) {
-      for (const auto& [pid, job] : running)
-        ::kill(pid, SIGTERM);
+      for (auto& [pid, job] : running) {
+        if (!job.signalled) ::kill(pid, SIGTERM);
+        job.signalled = true;
+      }
     }
     int status = 0;
     const pid_t done = ::waitpid(-1, &status, WNOHANG);
@@ -142,9 +168,10 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
     const bool ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
     if (ok) {
       ++summary.ran;
+      subject_seconds += seconds;
       if (!options.quiet) {
         log << "[batch] sub-" << subject.id << " done in " << static_cast<int>(seconds * 10) / 10.0 << " s ("
-            << summary.ran + summary.failed.size() << "/" << pending.size() << ")\n";
+            << batch_status(summary, pending.size(), subject_seconds, options.jobs) << ")\n";
       }
     } else if (cancellation_requested()) {
       summary.interrupted = true;
@@ -153,7 +180,7 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
       log << "[batch] sub-" << subject.id << " failed ("
           << (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status))
                                 : "signal " + std::to_string(WTERMSIG(status)))
-          << ")\n";
+          << "; " << batch_status(summary, pending.size(), subject_seconds, options.jobs) << ")\n";
     }
   }
   for (std::size_t s = 0; s < sweep.subjects.size(); ++s) {
@@ -161,12 +188,10 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
         !subject_converged(options.output, sweep.subjects[s]))
       summary.unconverged.push_back(sweep.subjects[s].id);
   }
-  if (cancellation_requested()) {
-    summary.interrupted = true;
-  } else {
-    // Processes of an earlier, killed batch may have ended only after this one started.
-    remove_stale_temporaries(options.output);
-  }
+  if (cancellation_requested()) summary.interrupted = true;
+  // Processes of an earlier, killed batch may have ended only after this one started (and every
+  // subject of this one has ended: what is left of theirs is stale too).
+  remove_stale_temporaries(options.output);
   return summary;
 }
 

@@ -1,18 +1,56 @@
 #include "core/cancellation.hpp"
 
+#include "core/abandonable_work.hpp"
 #include "core/error.hpp"
 
-#include <atomic>
+#include <unistd.h>
+
+#include <chrono>
 #include <csignal>
+#include <thread>
 
 namespace phantasm {
 namespace {
 // A lock-free atomic is async-signal-safe; volatile sig_atomic_t would not be thread-safe.
 std::atomic<bool> g_cancel_requested{false};
+std::atomic<int> g_cancel_signal{0};
 static_assert(std::atomic<bool>::is_always_lock_free);
+static_assert(std::atomic<int>::is_always_lock_free);
+
+extern "C" void on_signal_then_default(int signal_number) {
+  request_cancellation(signal_number);
+  // A second signal ends the program at once.
+  std::signal(signal_number, SIG_DFL);
+}
+
+extern "C" void on_signal(int signal_number) {
+  request_cancellation(signal_number);
+}
+
+std::atomic<int> g_abandonable_depth{0};
+
+/// Waits for a cancellation; if 0.5 s later the process is inside abandonable work (which
+/// should have thrown by then), ends it (AbandonableWork). Polls every 20 ms: a sleeping thread.
+void watch_cancellation() {
+  using namespace std::chrono_literals;
+  while (!cancellation_requested())
+    std::this_thread::sleep_for(20ms);
+  std::this_thread::sleep_for(500ms);
+  while (true) {
+    if (g_abandonable_depth.load() > 0) {
+      static const char message[] = "\nphantasm: interrupted; every file written so far is complete\n";
+      [[maybe_unused]] const ssize_t ignored = ::write(STDERR_FILENO, message, sizeof message - 1);
+      const int signal_number = cancellation_signal();
+      ::_exit(128 + (signal_number > 0 ? signal_number : SIGINT));
+    }
+    std::this_thread::sleep_for(20ms);
+  }
+}
 } // namespace
 
-void request_cancellation() noexcept {
+void request_cancellation(int signal_number) noexcept {
+  int none = 0;
+  if (signal_number != 0) g_cancel_signal.compare_exchange_strong(none, signal_number);
   g_cancel_requested.store(true, std::memory_order_relaxed);
 }
 
@@ -20,12 +58,39 @@ bool cancellation_requested() noexcept {
   return g_cancel_requested.load(std::memory_order_relaxed);
 }
 
+int cancellation_signal() noexcept {
+  return g_cancel_signal.load(std::memory_order_relaxed);
+}
+
 void throw_if_cancelled() {
   if (cancellation_requested()) throw Cancelled();
 }
 
+std::atomic<bool>& cancellation_flag() noexcept {
+  return g_cancel_requested;
+}
+
+void install_cancellation_handlers(bool second_signal_ends) {
+  struct sigaction action {};
+  action.sa_handler = second_signal_ends ? on_signal_then_default : on_signal;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESTART; // a signal must not fail a read or write with EINTR
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+  std::thread(watch_cancellation).detach();
+}
+
+AbandonableWork::AbandonableWork() noexcept {
+  g_abandonable_depth.fetch_add(1);
+}
+
+AbandonableWork::~AbandonableWork() {
+  g_abandonable_depth.fetch_sub(1);
+}
+
 void reset_cancellation() noexcept {
   g_cancel_requested.store(false, std::memory_order_relaxed);
+  g_cancel_signal.store(0, std::memory_order_relaxed);
 }
 
 } // namespace phantasm

@@ -1,18 +1,36 @@
-// Cooperative cancellation: a signal handler requests it, and stages check for it between units
-// of work so that SIGINT or SIGTERM stops a run with nothing left half-written.
+// Cooperative cancellation: a signal handler requests it, and stages check for it inside their
+// long loops (and library callbacks: CGAL's domain oracle, OpenVDB's interrupter) so that SIGINT
+// or SIGTERM stops a run within a second with nothing left half-written.
 #pragma once
+
+#include <atomic>
 
 namespace phantasm {
 
 /// Asks running stages to stop at their next safe point. Safe to call from a signal handler.
-void request_cancellation() noexcept;
+/// @param signal_number the signal that asked (SIGINT, SIGTERM), 0 when none; the first one is
+///        kept and decides the exit code (128 + signal).
+void request_cancellation(int signal_number = 0) noexcept;
 
-/// True once request_cancellation() was called.
+/// True once request_cancellation() was called. A relaxed atomic load: cheap enough for inner
+/// loops (a poll per patch, per voxel slab, per solver iteration).
 bool cancellation_requested() noexcept;
+
+/// The signal that asked for cancellation, 0 when none was given (or none was requested).
+int cancellation_signal() noexcept;
 
 /// Throws phantasm::Cancelled when cancellation was requested; stages call it between units
 /// of work so that nothing is left half-written.
 void throw_if_cancelled();
+
+/// The flag itself, for libraries that poll an std::atomic<bool> (read it, never store into it).
+std::atomic<bool>& cancellation_flag() noexcept;
+
+/// Installs handlers that turn SIGINT and SIGTERM into request_cancellation(signal).
+/// @param second_signal_ends true: a second signal ends the process at once (the default action,
+///        for a person at a terminal); false: every signal only requests cancellation (a batch's
+///        subject, which its batch signals too).
+void install_cancellation_handlers(bool second_signal_ends);
 
 /// Clears the request (tests and long-lived processes such as the Python module).
 void reset_cancellation() noexcept;

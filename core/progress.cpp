@@ -2,7 +2,9 @@
 
 #include <unistd.h>
 
+#include <cstdint>
 #include <cstdio>
+#include <exception>
 #include <iostream>
 #include <sstream>
 
@@ -57,12 +59,93 @@ void Reporter::write_line(const std::string& line) {
   (*m_stream) << line << '\n' << std::flush;
 }
 
+namespace {
+
+/// The innermost living bar: progress_detail() reaches it without being handed it.
+std::atomic<ProgressBar*> g_innermost{nullptr};
+/// When a detail was last set (steady clock, ns): progress_detail_due() reads it lock-free.
+std::atomic<std::int64_t> g_last_detail_ns{0};
+
+/// A plain line at most this often (a pipe or a log file).
+constexpr auto k_line_interval = std::chrono::seconds(5);
+/// The bar is redrawn at most this often on advance(), and at least this often by the ticker.
+constexpr auto k_redraw_interval = std::chrono::milliseconds(100);
+constexpr auto k_tick_interval = std::chrono::seconds(1);
+constexpr std::size_t k_max_detail = 70; ///< characters of detail kept on the line
+
+std::int64_t now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+/// "42.1 s", "3 min 20 s", "1 h 05 min".
+std::string format_duration(double seconds) {
+  char text[32];
+  if (seconds < 100.0) {
+    std::snprintf(text, sizeof text, "%.1f s", seconds);
+  } else if (seconds < 3600.0) {
+    const int s = static_cast<int>(seconds);
+    std::snprintf(text, sizeof text, "%d min %02d s", s / 60, s % 60);
+  } else {
+    const int m = static_cast<int>(seconds / 60.0);
+    std::snprintf(text, sizeof text, "%d h %02d min", m / 60, m % 60);
+  }
+  return text;
+}
+
+} // namespace
+
+void progress_detail(std::string detail) {
+  g_last_detail_ns.store(now_ns(), std::memory_order_relaxed);
+  if (ProgressBar* bar = g_innermost.load()) bar->set_detail(std::move(detail));
+}
+
+bool progress_detail_due() noexcept {
+  if (g_innermost.load(std::memory_order_relaxed) == nullptr) return false;
+  return now_ns() - g_last_detail_ns.load(std::memory_order_relaxed) >= 200'000'000;
+}
+
 ProgressBar::ProgressBar(Reporter& reporter, std::string label, std::size_t total)
     : m_reporter(reporter), m_label(std::move(label)), m_total(total == 0 ? 1 : total),
-      m_start(std::chrono::steady_clock::now()), m_last_draw(m_start) {}
+      m_start(std::chrono::steady_clock::now()), m_last_draw(m_start),
+      m_uncaught_exceptions(std::uncaught_exceptions()) {
+  m_outer = g_innermost.exchange(this);
+  if (m_reporter.m_style == ProgressStyle::none) return;
+  m_ticker = std::thread([this] {
+    std::unique_lock<std::mutex> lock(m_mutex);
+    while (!m_stop_ticker) {
+      m_wake.wait_for(lock, k_tick_interval);
+      if (m_stop_ticker) break;
+      lock.unlock();
+      const std::size_t done = m_done.load();
+      draw(done < m_total ? done : m_total, false, true);
+      lock.lock();
+    }
+  });
+}
 
 ProgressBar::~ProgressBar() {
-  finish();
+  if (std::uncaught_exceptions() > m_uncaught_exceptions && !m_finished) {
+    // Unwinding (a cancellation, an error): end the line where the work stopped, not at 100 %.
+    stop_ticker();
+    const std::size_t done = m_done.load();
+    set_detail("stopped");
+    draw(done < m_total ? done : m_total, true);
+    m_finished = true;
+  } else {
+    finish();
+  }
+  g_innermost.store(m_outer);
+}
+
+void ProgressBar::stop_ticker() {
+  {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    m_stop_ticker = true;
+  }
+  m_wake.notify_all();
+  if (m_ticker.joinable()) m_ticker.join();
 }
 
 void ProgressBar::advance(std::size_t steps) {
@@ -70,38 +153,62 @@ void ProgressBar::advance(std::size_t steps) {
   draw(done < m_total ? done : m_total, false);
 }
 
+void ProgressBar::set_detail(std::string detail) {
+  if (detail.size() > k_max_detail) detail = detail.substr(0, k_max_detail - 3) + "...";
+  {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    m_detail = std::move(detail);
+  }
+  const std::size_t done = m_done.load();
+  draw(done < m_total ? done : m_total, false);
+}
+
 void ProgressBar::finish() {
   if (m_finished) return;
+  stop_ticker();
+  {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    m_detail.clear();
+  }
   draw(m_total, true);
   m_finished = true;
 }
 
-void ProgressBar::draw(std::size_t done, bool final) {
+void ProgressBar::draw(std::size_t done, bool final, bool tick) {
   if (m_reporter.m_style == ProgressStyle::none) return;
   std::lock_guard<std::mutex> lock(m_mutex);
   if (m_finished) return;
   const auto now = std::chrono::steady_clock::now();
+  const bool bar = m_reporter.m_style == ProgressStyle::bar;
+  if (!final) {
+    // A bar redraws at most every 100 ms (more often costs more than it tells); plain lines
+    // come at most every few seconds, so a log stays readable.
+    if (bar && !tick && now - m_last_draw < k_redraw_interval) return;
+    if (!bar && now - m_last_draw < k_line_interval) return;
+  }
+  m_last_draw = now;
   const double seconds = std::chrono::duration<double>(now - m_start).count();
   const double fraction = static_cast<double>(done) / static_cast<double>(m_total);
-  char tail[64];
-  std::snprintf(tail, sizeof tail, " %3d%% (%zu/%zu) %.1f s", static_cast<int>(100.0 * fraction), done,
-                m_total, seconds);
+  char counts[64];
+  std::snprintf(counts, sizeof counts, " %3d%% (%zu/%zu) ", static_cast<int>(100.0 * fraction), done,
+                m_total);
+  std::string tail = counts + format_duration(seconds);
+  // The time left, from the mean time per unit so far (once a unit is done and some remain).
+  if (!final && done > 0 && done < m_total) {
+    const double left = seconds * static_cast<double>(m_total - done) / static_cast<double>(done);
+    tail += ", about " + format_duration(left) + " left";
+  }
+  if (!m_detail.empty()) tail += ": " + m_detail;
 
   std::ostringstream text;
-  if (m_reporter.m_style == ProgressStyle::bar) {
-    // Redrawing more often than every 50 ms costs more than it tells.
-    if (!final && now - m_last_draw < std::chrono::milliseconds(50)) return;
-    m_last_draw = now;
+  if (bar) {
     constexpr int width = 30;
     const int filled = static_cast<int>(fraction * width);
+    // \r and clear to the end of the line: one line, redrawn in place, whatever its length was.
     text << '\r' << m_label << " [" << std::string(filled, '#') << std::string(width - filled, '-') << ']'
-         << tail;
+         << tail << "\033[K";
     if (final) text << '\n';
   } else {
-    const std::size_t tenth = static_cast<std::size_t>(fraction * 10.0);
-    if (!final && tenth <= m_last_tenth) return;
-    if (final && m_last_tenth >= 10) return;
-    m_last_tenth = final ? 10 : tenth;
     text << m_label << tail << '\n';
   }
   std::lock_guard<std::mutex> print_lock(m_reporter.m_mutex);

@@ -4,10 +4,12 @@
 
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstddef>
 #include <iosfwd>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace phantasm {
@@ -15,13 +17,17 @@ namespace phantasm {
 /// How a Reporter shows progress on its stream.
 enum class ProgressStyle {
   bar,   ///< a bar redrawn in place (stderr is a terminal)
-  lines, ///< one plain line per tenth of the work (stderr is a file or a pipe)
+  lines, ///< a plain line at most every few seconds, and one at the end (stderr is a file or a pipe)
   none,  ///< nothing (--quiet)
 };
 
 class Reporter;
 
-/// Progress of one long stage. advance() may be called from several threads at once.
+/// Progress of one long stage: done/total, elapsed time, an estimate of the time left, and a
+/// detail of what is being done (progress_detail()). advance() may be called from several
+/// threads at once. While it lives, a ticker redraws it every second (a bar) or writes a line
+/// every few seconds (plain lines), so a step that cannot report (CGAL's mesher) still shows
+/// that it runs and for how long.
 class ProgressBar {
 public:
   ProgressBar(Reporter& reporter, std::string label, std::size_t total);
@@ -31,22 +37,41 @@ public:
 
   /// Marks `steps` more units of work as done.
   void advance(std::size_t steps = 1);
-  /// Marks all work as done and ends the bar's line (also done by the destructor).
+  /// Marks all work as done and ends the bar's line (also done by the destructor, which during
+  /// an exception, such as a cancellation, ends the line where the work stopped instead).
   void finish();
+  /// What is being done now, shown after the counts ("ball: tet meshing", "frame 2/5,
+  /// iteration 40, residual 3.1e-04"); empty clears it.
+  void set_detail(std::string detail);
 
 private:
-  void draw(std::size_t done, bool final);
+  void draw(std::size_t done, bool final, bool tick = false);
+  void stop_ticker();
 
   Reporter& m_reporter;
   std::string m_label;
   std::size_t m_total;
   std::atomic<std::size_t> m_done{0};
-  std::size_t m_last_tenth = 0;
+  std::string m_detail;
   std::chrono::steady_clock::time_point m_start;
   std::chrono::steady_clock::time_point m_last_draw;
   bool m_finished = false;
+  bool m_stop_ticker = false;
+  int m_uncaught_exceptions = 0;
+  ProgressBar* m_outer = nullptr; ///< the bar that was innermost before this one
   std::mutex m_mutex;
+  std::condition_variable m_wake;
+  std::thread m_ticker;
 };
+
+/// Sets the detail of the innermost living ProgressBar (none: does nothing), so that code deep
+/// inside a stage (a solver's iterations, an organ's fitting phases) can say what it does
+/// without being handed the bar. Thread-safe while that bar lives.
+void progress_detail(std::string detail);
+
+/// True when a bar lives and its detail was last set 200 ms ago or more: loops call it before
+/// formatting a detail, so that a tight loop does not format strings nobody will see.
+bool progress_detail_due() noexcept;
 
 /// The record of what each stage modelled and what it skipped, shown on stderr (unless quiet)
 /// and kept for the run's log file.

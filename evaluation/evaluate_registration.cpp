@@ -1,5 +1,6 @@
 #include "evaluation/evaluate_registration.hpp"
 
+#include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
 #include "evaluation/registration_metrics.hpp"
@@ -190,6 +191,7 @@ nlohmann::json evaluate_registration(const EvaluationRequest& request) {
   std::set<std::int32_t> present(fixed_labels.begin(), fixed_labels.end());
   present.insert(warped.begin(), warped.end());
   for (std::int32_t label : present) {
+    throw_if_cancelled();
     if (label == 0) continue;
     // The gap (the space a moved organ left, deformed state only, the last row of dseg.tsv:
     // docs/volumes-and-images.md) has no counterpart in the reference: no overlap to measure.

@@ -1,5 +1,6 @@
 #include "evaluation/registration_metrics.hpp"
 
+#include "core/cancellation.hpp"
 #include "geometry/ras_lps.hpp"
 #include "io/nifti_file.hpp"
 
@@ -205,6 +206,7 @@ std::vector<double> distance_to(const std::vector<bool>& feature, const ImageGri
           squared[static_cast<std::size_t>(base + t * stride[a])] = out[static_cast<std::size_t>(t)];
       }
     }
+    throw_if_cancelled(); // between passes: no exception may leave an OpenMP region
   }
   for (double& d : squared)
     d = std::sqrt(d);

@@ -1,5 +1,6 @@
 #include "io/hdf5_export.hpp"
 
+#include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/version.hpp"
 #include "io/dataset_layout.hpp"
@@ -367,6 +368,7 @@ Hdf5ExportSummary export_hdf5(const std::filesystem::path& dataset, const std::f
       }
 
       for (const auto& entry : provenance.at("files")) {
+        throw_if_cancelled(); // the temporary file is removed below
         const std::string relative = entry.get<std::string>();
         const std::filesystem::path path = dataset / relative;
         std::optional<Target> target;

@@ -1,5 +1,7 @@
 #include "mri/kspace.hpp"
 
+#include "core/cancellation.hpp"
+
 #include <fftw3.h>
 
 #include <array>
@@ -69,6 +71,7 @@ void transform_lines(std::vector<std::complex<double>>& image, const Eigen::Vect
         reinterpret_cast<std::complex<double>*>(fftw_alloc_complex(static_cast<std::size_t>(n) * k_batch));
 #pragma omp for schedule(static)
     for (std::int64_t batch = 0; batch < batches; ++batch) {
+      if (cancellation_requested()) continue; // no exception may leave an OpenMP region
       const std::size_t first = static_cast<std::size_t>(batch) * k_batch;
       const std::size_t count = std::min<std::size_t>(k_batch, set.lines.size() - first);
       std::array<std::int64_t, k_batch> base{};
@@ -86,6 +89,7 @@ void transform_lines(std::vector<std::complex<double>>& image, const Eigen::Vect
     }
     fftw_free(buffer);
   }
+  throw_if_cancelled(); // a cut-short transform is garbage: nobody may read it
 }
 
 /// Lines along `axis` whose indices along the two other axes pass `keep(u, v)`.

@@ -1,5 +1,6 @@
 #include "mri/synthesize_images.hpp"
 
+#include "core/cancellation.hpp"
 #include "core/format.hpp"
 #include "mri/kspace.hpp"
 #include "mri/parameter_maps.hpp"
@@ -106,6 +107,9 @@ MrImage image_of(const Acquisition& acquisition, const SequenceSettings& sequenc
   std::vector<std::complex<double>> coil_image(count);
   image.magnitude.resize(count);
   for (int c = 0; c < coils; ++c) {
+    throw_if_cancelled();
+    if (coils > 1 && progress_detail_due())
+      progress_detail("coil " + std::to_string(c + 1) + "/" + std::to_string(coils));
 #pragma omp parallel for schedule(static)
     for (std::int64_t row = 0; row < rows; ++row) {
       const int j = static_cast<int>(row % ny);
@@ -194,6 +198,7 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
   }
   ProgressBar progress(reporter, "mri", mri.sequences.size() * (volumes.deformed ? 2 : 1));
   for (std::size_t q = 0; q < mri.sequences.size(); ++q) {
+    throw_if_cancelled();
     const SequenceSettings& sequence = mri.sequences[q];
     std::vector<double> tissue_signal;
     std::string line = sequence.name + " tissue signals (x PD units):";
@@ -212,10 +217,12 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
     }
     const double sigma = settings.noise_percent / 100.0 * std::abs(reference_signal);
     // One seed per image (sequence and state): images differ, and every run repeats them.
+    progress.set_detail(sequence.name + ", reference");
     images.reference.push_back(
         image_of(acquisition, sequence, mix_seed(mri.seed, 2 * q), volumes.reference, tissue_signal, sigma));
     progress.advance();
     if (volumes.deformed) {
+      progress.set_detail(sequence.name + ", deformed");
       images.deformed.push_back(image_of(acquisition, sequence, mix_seed(mri.seed, 2 * q + 1),
                                          *volumes.deformed, tissue_signal, sigma));
       progress.advance();

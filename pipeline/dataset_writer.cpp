@@ -577,6 +577,7 @@ RunSummary write_dataset(const Scene& scene, const Simulation& simulation,
 
   ProgressBar progress(reporter, "writing", plan.files().size());
   for (const PlannedFile& file : plan.files()) {
+    progress.set_detail(file.path.filename().string());
     file.write(file.path);
     summary.files.push_back(std::filesystem::relative(file.path, layout.root()));
     progress.advance();

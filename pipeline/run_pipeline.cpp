@@ -2,6 +2,7 @@
 
 #include "anatomy/anatomy_plan.hpp"
 #include "anatomy/phantom.hpp"
+#include "core/abandonable_work.hpp"
 #include "core/error.hpp"
 #include "io/dataset_layout.hpp"
 #include "io/shape_files.hpp"
@@ -101,6 +102,9 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until, S
 
 Simulation simulate(const Scene& scene, Reporter& reporter, SimulationStage until) {
   Simulation result;
+  // The stages write nothing: a run asked to stop may be abandoned anywhere in them when a
+  // library call (CGAL's mesh optimisers) does not return to a poll within half a second.
+  const AbandonableWork abandonable;
   try {
     run_stages(scene, reporter, until, result);
   } catch (const SettingError& error) {

@@ -2,6 +2,8 @@
 // replaced by one Jacobi sweep per iteration, accelerated by Chebyshev's semi-iterative method.
 #include "sim/local_global.hpp"
 
+#include "core/cancellation.hpp"
+#include "core/progress.hpp"
 #include "sim/local_global_impl.hpp"
 
 #include <algorithm>
@@ -51,6 +53,7 @@ SolveReport LocalGlobalSolver::solve_jacobi_chebyshev(Eigen::MatrixX3d& p, const
   int step = 0; // iterations since the acceleration (re)started
   std::optional<ResidualTest> test;
   for (int iteration = 1; iteration <= stop.max_iterations; ++iteration) {
+    throw_if_cancelled(); // an iteration takes milliseconds to a second: SIGINT stops here
     start = Clock::now();
     const bool contacts_changed = m->contacts->update_factor(*m->factor) > 0;
     m->gather_rhs(target);
@@ -62,6 +65,7 @@ SolveReport LocalGlobalSolver::solve_jacobi_chebyshev(Eigen::MatrixX3d& p, const
     // in finish_report).
     const double residual = nf > 0 ? (Kx - m->rhs).rowwise().norm().maxCoeff() : 0.0;
     if (!test) test.emplace(stop, residual);
+    if (progress_detail_due()) progress_detail(solver_detail(iteration, residual));
     if (test->passes(residual)) {
       report.global_seconds += seconds_since(start);
       report.stopped_by = "residual";

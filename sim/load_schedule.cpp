@@ -2,6 +2,7 @@
 // moved per frame (load increments or motion profiles), the solves, and their report.
 #include "sim/load_schedule.hpp"
 
+#include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
 #include "sim/build_model.hpp"
@@ -55,6 +56,8 @@ FrameSolver make_frame_solver(const DeformationSettings& deformation, const Elas
     if (solver.method == SolverMethod::local_global || s.jacobi)
       s.local_global =
           std::make_unique<LocalGlobalSolver>(model, s.dynamic ? 1.0 / (s.h * s.h) : 0.0, solver.threads);
+  } catch (const Cancelled&) {
+    throw;
   } catch (const std::runtime_error& error) {
     throw InputError(std::string("deformation: ") + error.what() +
                      "; in quasi-static mode put each loaded organ inside a fixed organ or list it in "
@@ -186,6 +189,7 @@ void solve_frames(const DeformationSettings& deformation, ElasticModel& model, L
   Eigen::MatrixX3d velocity = Eigen::MatrixX3d::Zero(p.rows(), 3);
   ProgressBar progress(reporter, "deform", static_cast<std::size_t>(s.frames));
   for (int frame = 0; frame < s.frames; ++frame) {
+    throw_if_cancelled();
     move_loads(deformation, s, frame, loads, model);
     StepInertia inertia;
     if (s.dynamic) {

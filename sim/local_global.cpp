@@ -2,6 +2,8 @@
 // the global step, and the solve loop with its Anderson acceleration.
 #include "sim/local_global.hpp"
 
+#include "core/cancellation.hpp"
+#include "core/progress.hpp"
 #include "sim/anderson_acceleration.hpp"
 #include "sim/local_global_impl.hpp"
 #include "sim/tet_projection_batch.hpp"
@@ -183,6 +185,7 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
   Eigen::MatrixX3d x = m->free_positions(p);
   std::optional<ResidualTest> test;
   for (int iteration = 1;; ++iteration) {
+    throw_if_cancelled(); // an iteration takes milliseconds to a second: SIGINT stops here
     start = Clock::now();
     const int contact_changes = m->contacts->update_factor(*m->factor); // (timed with the local step:
     report.contact_changes += contact_changes;                          // the right-hand side depends on it)
@@ -192,6 +195,7 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
     const double residual = nf > 0 ? (m->apply_matrix(x) - m->rhs).rowwise().norm().maxCoeff() : 0.0;
     report.local_seconds += seconds_since(start);
     if (!test) test.emplace(stop, residual);
+    if (progress_detail_due()) progress_detail(solver_detail(iteration, residual));
     if (test->passes(residual)) {
       report.stopped_by = "residual";
       break;

@@ -1,5 +1,8 @@
 #include "sim/newton.hpp"
 
+#include "core/cancellation.hpp"
+#include "core/progress.hpp"
+
 #include <Eigen/CholmodSupport>
 #include <Eigen/Sparse>
 
@@ -153,7 +156,9 @@ SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, 
   Eigen::MatrixX3d gradient = model_gradient(model, inertia, p);
   const ResidualTest test(stop, free_gradient_norm(model, gradient));
   for (int iteration = 1; iteration <= stop.max_iterations; ++iteration) {
+    throw_if_cancelled(); // an iteration takes milliseconds to a second: SIGINT stops here
     const double residual = free_gradient_norm(model, gradient);
+    if (progress_detail_due()) progress_detail(solver_detail(iteration, residual));
     if (residual <= stop.gradient_norm_N) {
       report.stopped_by = "gradient";
       break;

@@ -1,5 +1,7 @@
 #include "sim/position_based.hpp"
 
+#include "core/cancellation.hpp"
+#include "core/progress.hpp"
 #include "sim/signed_svd.hpp"
 
 #include <array>
@@ -253,6 +255,7 @@ SolveReport position_based_solve(PositionBasedVariant variant, const ElasticMode
   // vertices placed). XPBD takes M (x - s) = sum grad C lambda as given rather than solving for
   // it, so where gradients turn during the step its fixed point is near, not at, the minimizer.
   for (int iteration = 1; iteration <= stop.max_iterations; ++iteration) {
+    throw_if_cancelled(); // an iteration takes milliseconds to a second: SIGINT stops here
     const auto start_time = Clock::now();
     sweeper.sweep(p);
     solver_seconds += std::chrono::duration<double>(Clock::now() - start_time).count();
@@ -265,6 +268,7 @@ SolveReport position_based_solve(PositionBasedVariant variant, const ElasticMode
     if (observer) observer(iteration, p, energy);
     if (!p.allFinite()) throw std::runtime_error(std::string(name) + ": non-finite positions");
     residual = free_gradient_norm(model, model_gradient(model, inertia, p));
+    if (progress_detail_due()) progress_detail(solver_detail(iteration, residual));
     // The step criteria measure a sweep, not the distance to equilibrium: they stop only a
     // solve whose residual test passes, which stops it by itself. Gauss-Seidel PBD's fixed point
     // is not the energy's minimizer (and XPBD's only near it): they may run to the limit and

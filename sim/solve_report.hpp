@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 
 #include <algorithm>
+#include <cstdio>
 #include <functional>
 #include <string>
 #include <vector>
@@ -40,6 +41,13 @@ struct ResidualTest {
     return scale_N > 0.0 ? residual_N <= tolerance * scale_N : residual_N <= 0.0;
   }
 };
+
+/// A solver's progress detail (core/progress.hpp): "iteration 40, residual 3.1e-04 N".
+inline std::string solver_detail(int iteration, double residual_N) {
+  char text[64];
+  std::snprintf(text, sizeof text, "iteration %d, residual %.2e N", iteration, residual_N);
+  return text;
+}
 
 /// What a solve did: every solve reports it (into provenance.json).
 struct SolveReport {

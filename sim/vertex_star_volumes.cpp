@@ -2,9 +2,56 @@
 
 #include <algorithm>
 #include <map>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace phantasm {
+
+namespace {
+
+/// The union of `tets` (indices into model.tets) as an EnclosedVolume of its boundary triangles
+/// (faces shared by two of its tets cancel) with bulk modulus K, range model.volume_range.
+EnclosedVolume union_volume(const ElasticModel& model, const std::vector<int>& tets, double bulk_modulus_Pa) {
+  // A positively oriented tet (a, b, c, d)'s outward faces.
+  static constexpr int faces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  // Each face with its orientation, keyed by its sorted vertices; a face shared by two of the
+  // tets appears twice (opposite orientations) and cancels.
+  std::map<std::array<int, 3>, std::array<int, 3>> boundary;
+  for (int t : tets) {
+    const TetElement& e = model.tets[static_cast<std::size_t>(t)];
+    for (const auto& f : faces) {
+      const std::array<int, 3> face = {e.vertices[static_cast<std::size_t>(f[0])],
+                                       e.vertices[static_cast<std::size_t>(f[1])],
+                                       e.vertices[static_cast<std::size_t>(f[2])]};
+      std::array<int, 3> key = face;
+      std::sort(key.begin(), key.end());
+      const auto [it, inserted] = boundary.emplace(key, face);
+      if (!inserted) boundary.erase(it);
+    }
+  }
+  std::vector<int> vertices;
+  std::map<int, int> local;
+  std::vector<std::array<int, 3>> triangles;
+  for (const auto& [key, face] : boundary) {
+    std::array<int, 3> triangle{};
+    for (int k = 0; k < 3; ++k) {
+      const int u = face[static_cast<std::size_t>(k)];
+      const auto [it, inserted] = local.emplace(u, static_cast<int>(vertices.size()));
+      if (inserted) vertices.push_back(u);
+      triangle[static_cast<std::size_t>(k)] = it->second;
+    }
+    triangles.push_back(triangle);
+  }
+  EnclosedVolume volume =
+      enclosed_volume_constraint(std::move(vertices), std::move(triangles), {}, model.rest_positions_m,
+                                 bulk_modulus_Pa, model.volume_range);
+  // Few vertices: Newton takes the rank-one Gauss-Newton block (sim/newton.cpp), as for stars.
+  volume.vertex_star = true;
+  return volume;
+}
+
+} // namespace
 
 int move_bulk_to_vertex_stars(ElasticModel& model) {
   const auto n = static_cast<std::size_t>(model.vertex_count());
@@ -19,51 +66,47 @@ int move_bulk_to_vertex_stars(ElasticModel& model) {
       lambda_volume[static_cast<std::size_t>(v)] += e.volume_weight / 3.0;
     }
   }
-  // A positively oriented tet (a, b, c, d)'s outward faces.
-  static constexpr int faces[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
   int added = 0;
   for (std::size_t v = 0; v < n; ++v) {
     if (tets_of[v].empty()) continue;
-    // Boundary of the star: each face with its orientation, keyed by its sorted vertices; a
-    // face shared by two of the star's tets appears twice (opposite orientations) and cancels.
-    std::map<std::array<int, 3>, std::array<int, 3>> boundary;
     double star_volume = 0.0;
-    for (int t : tets_of[v]) {
-      const TetElement& e = model.tets[static_cast<std::size_t>(t)];
-      star_volume += e.rest_volume_m3;
-      for (const auto& f : faces) {
-        const std::array<int, 3> face = {e.vertices[static_cast<std::size_t>(f[0])],
-                                         e.vertices[static_cast<std::size_t>(f[1])],
-                                         e.vertices[static_cast<std::size_t>(f[2])]};
-        std::array<int, 3> key = face;
-        std::sort(key.begin(), key.end());
-        const auto [it, inserted] = boundary.emplace(key, face);
-        if (!inserted) boundary.erase(it);
-      }
-    }
-    std::vector<int> vertices;
-    std::map<int, int> local;
-    std::vector<std::array<int, 3>> triangles;
-    for (const auto& [key, face] : boundary) {
-      std::array<int, 3> triangle{};
-      for (int k = 0; k < 3; ++k) {
-        const int u = face[static_cast<std::size_t>(k)];
-        const auto [it, inserted] = local.emplace(u, static_cast<int>(vertices.size()));
-        if (inserted) vertices.push_back(u);
-        triangle[static_cast<std::size_t>(k)] = it->second;
-      }
-      triangles.push_back(triangle);
-    }
-    const double bulk_modulus = lambda_volume[v] / (4.0 * star_volume);
-    EnclosedVolume star =
-        enclosed_volume_constraint(std::move(vertices), std::move(triangles), {}, model.rest_positions_m,
-                                   bulk_modulus, model.volume_range);
-    star.vertex_star = true;
-    model.volumes.push_back(std::move(star));
+    for (int t : tets_of[v])
+      star_volume += model.tets[static_cast<std::size_t>(t)].rest_volume_m3;
+    model.volumes.push_back(union_volume(model, tets_of[v], lambda_volume[v] / (4.0 * star_volume)));
     ++added;
   }
   for (TetElement& e : model.tets)
     e.volume_weight = 0.0;
+  return added;
+}
+
+int move_bulk_to_tet_groups(ElasticModel& model, const std::vector<std::vector<int>>& groups) {
+  std::vector<char> grouped(model.tets.size(), 0);
+  for (const std::vector<int>& group : groups) {
+    for (int t : group) {
+      if (t < 0 || static_cast<std::size_t>(t) >= model.tets.size() || grouped[static_cast<std::size_t>(t)])
+        throw std::invalid_argument("move_bulk_to_tet_groups: tet " + std::to_string(t) +
+                                    " is out of range or in two groups");
+      grouped[static_cast<std::size_t>(t)] = 1;
+    }
+  }
+  int added = 0;
+  for (const std::vector<int>& group : groups) {
+    double volume = 0.0, lambda_volume = 0.0;
+    std::vector<int> bulk;
+    for (int t : group) {
+      const TetElement& e = model.tets[static_cast<std::size_t>(t)];
+      if (!(e.volume_weight > 0.0)) continue;
+      bulk.push_back(t);
+      volume += e.rest_volume_m3;
+      lambda_volume += e.volume_weight / 3.0;
+    }
+    if (bulk.empty()) continue;
+    model.volumes.push_back(union_volume(model, bulk, lambda_volume / volume));
+    for (int t : bulk)
+      model.tets[static_cast<std::size_t>(t)].volume_weight = 0.0;
+    ++added;
+  }
   return added;
 }
 

@@ -3,6 +3,7 @@
 
 #include "voxelize/level_set.hpp"
 
+#include "core/cancellation.hpp"
 #include "geometry/mesh_signed_distance.hpp"
 
 #include <Eigen/Cholesky>
@@ -13,6 +14,7 @@
 #include <openvdb/tools/MeshToVolume.h>
 #include <openvdb/tools/Prune.h>
 #include <openvdb/tools/SignedFloodFill.h>
+#include <openvdb/util/NullInterrupter.h>
 
 #include <algorithm>
 #include <cmath>
@@ -26,6 +28,12 @@ void initialize_openvdb() {
   static std::once_flag initialized;
   std::call_once(initialized, [] { openvdb::initialize(); });
 }
+
+/// Lets OpenVDB's tools (which poll their interrupter between leaf nodes) stop a cancelled run.
+class CancellationInterrupter : public openvdb::util::NullInterrupter {
+public:
+  bool wasInterrupted(int /*percent*/ = -1) override { return cancellation_requested(); }
+};
 
 /// The bumps of one patch as heights over its base triangle: h(u, v) = sum a Q^3 [Q > 0] with
 /// Q = 1 - d^T S d, d = (u, v) - c (docs/method.md section 1).
@@ -92,7 +100,8 @@ struct PatchHeights {
 } // namespace
 
 struct LevelSet::Impl {
-  openvdb::FloatGrid::Ptr grid;
+  /// Never null: a construction cut short by cancellation leaves an empty grid.
+  openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create();
 };
 
 LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double half_width_voxels)
@@ -133,6 +142,9 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
     auto best_accessor = best_squared.getAccessor();
     auto owner_accessor = owner.getAccessor();
     for (std::size_t t = 0; t < nf; ++t) {
+      // Built inside an OpenMP loop over organs, so a cancelled run returns (no exception may
+      // leave the region) and the caller throws once the loop ends; the grid is left empty.
+      if (cancellation_requested()) return;
       const auto& v = mesh.corners(static_cast<int>(t));
       const Eigen::Vector3d& n = mesh.face_normal(static_cast<int>(t));
       const Eigen::Vector3d low = v[0].cwiseMin(v[1]).cwiseMin(v[2]).array() - reach;
@@ -176,6 +188,7 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
   const auto count = static_cast<std::ptrdiff_t>(coords.size());
 #pragma omp parallel for schedule(static)
   for (std::ptrdiff_t c = 0; c < count; ++c) {
+    if (cancellation_requested()) continue;
     const auto i = static_cast<std::size_t>(c);
     const Eigen::Vector3d x = voxel_size_mm * Eigen::Vector3d(coords[i].x(), coords[i].y(), coords[i].z());
     MeshClosestPoint closest;
@@ -199,6 +212,7 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
     }
     values[i] = static_cast<float>(std::clamp(d, -band, band));
   }
+  if (cancellation_requested()) return;
   m->grid = openvdb::FloatGrid::create(static_cast<float>(band));
   m->grid->setTransform(openvdb::math::Transform::createLinearTransform(voxel_size_mm));
   {
@@ -234,8 +248,10 @@ LevelSet::LevelSet(const TriangleMesh& surface, double voxel_size_mm, double hal
   }
   const openvdb::math::Transform::Ptr transform =
       openvdb::math::Transform::createLinearTransform(voxel_size_mm);
-  m->grid = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*transform, points, triangles,
+  CancellationInterrupter interrupter;
+  m->grid = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(interrupter, *transform, points, triangles,
                                                                static_cast<float>(half_width_voxels));
+  if (cancellation_requested()) return; // cut short: the caller throws before reading it
   m->grid->setGridClass(openvdb::GRID_LEVEL_SET);
 }
 

@@ -1,5 +1,6 @@
 #include "voxelize/motion_fields.hpp"
 
+#include "core/cancellation.hpp"
 #include "geometry/closest_point_triangle.hpp"
 #include "geometry/tet_boundary.hpp"
 
@@ -297,6 +298,7 @@ void check_compositions(const ImageGrid& grid, MotionFields& f) {
   std::vector<std::uint8_t> keep_ref(f.ref_to_def_exact), keep_def(f.def_to_ref_exact);
 #pragma omp parallel for schedule(static) reduction(+ : inconsistent) reduction(max : worst)
   for (int k = 0; k < nz; ++k) {
+    if (cancellation_requested()) continue; // no exception may leave an OpenMP region
     for (int j = 0; j < ny; ++j) {
       for (int i = 0; i < nx; ++i) {
         const std::size_t v =
@@ -356,6 +358,7 @@ double jacobian_determinants(const ImageGrid& grid, const std::vector<float>& u,
   double min_jacobian = 1.0;
 #pragma omp parallel for schedule(static) reduction(min : min_jacobian)
   for (int k = 0; k < nz; ++k) {
+    if (cancellation_requested()) continue; // no exception may leave an OpenMP region
     for (int j = 0; j < ny; ++j) {
       for (int i = 0; i < nx; ++i) {
         const int index[3] = {i, j, k};
@@ -403,6 +406,7 @@ MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& 
   map.rasterize(grid, true, f.def_to_ref, inside_def);
 #pragma omp parallel for schedule(dynamic, 1)
   for (int k = 0; k < nz; ++k) {
+    if (cancellation_requested()) continue; // no exception may leave an OpenMP region
     for (int j = 0; j < ny; ++j) {
       for (int i = 0; i < nx; ++i) {
         const std::size_t v = at(i, j, k);
@@ -432,7 +436,9 @@ MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& 
     max_displacement = std::max(max_displacement, u.norm());
   }
   f.max_displacement_mm = max_displacement;
+  throw_if_cancelled();
   check_compositions(grid, f);
+  throw_if_cancelled();
   return f;
 }
 

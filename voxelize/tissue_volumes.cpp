@@ -1,8 +1,13 @@
 #include "voxelize/tissue_volumes.hpp"
 
+#include "core/cancellation.hpp"
+#include "core/progress.hpp"
+
 #include <omp.h>
 
+#include <atomic>
 #include <cmath>
+#include <string>
 
 namespace phantasm {
 
@@ -17,6 +22,7 @@ TissueVolumes voxelize_tissues(const ImageGrid& grid, const std::vector<Voxelize
   const double half_diagonal = 0.5 * grid.spacing_mm.norm();
   const Eigen::Matrix3d axes = grid.world_from_voxel.topLeftCorner<3, 3>();
   std::size_t sampled = 0;
+  std::atomic<int> slabs_done{0};
   const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
 #pragma omp parallel reduction(+ : sampled)
   {
@@ -27,6 +33,10 @@ TissueVolumes voxelize_tissues(const ImageGrid& grid, const std::vector<Voxelize
     std::vector<double> organ_share(organs.size());
 #pragma omp for schedule(dynamic, 1)
     for (int k = 0; k < nz; ++k) {
+      if (cancellation_requested()) continue; // no exception may leave an OpenMP region
+      const int slab = slabs_done.fetch_add(1) + 1;
+      if (progress_detail_due())
+        progress_detail("tissue fractions, slab " + std::to_string(slab) + "/" + std::to_string(nz));
       for (int j = 0; j < ny; ++j) {
         for (int i = 0; i < nx; ++i) {
           const std::size_t index = voxel_index(grid.dims, i, j, k);
@@ -87,6 +97,7 @@ TissueVolumes voxelize_tissues(const ImageGrid& grid, const std::vector<Voxelize
       }
     }
   }
+  throw_if_cancelled();
   out.supersampled_voxels = sampled;
   return out;
 }

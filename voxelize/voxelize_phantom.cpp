@@ -1,5 +1,6 @@
 #include "voxelize/voxelize_phantom.hpp"
 
+#include "core/cancellation.hpp"
 #include "core/format.hpp"
 #include "voxelize/gap_fill.hpp"
 #include "voxelize/landmarks.hpp"
@@ -42,21 +43,28 @@ StateLevelSets level_sets_of(const VoxelizationSettings& settings, const OrganTa
     std::vector<TriangleMesh> meshes(chosen.size());
 #pragma omp parallel for schedule(dynamic, 1)
     for (std::ptrdiff_t k = 0; k < count; ++k) {
+      if (cancellation_requested()) continue; // no exception may leave an OpenMP region
       meshes[static_cast<std::size_t>(k)] =
           phantom.organs[chosen[static_cast<std::size_t>(k)]].surface->tessellate(
               settings.tessellation_tolerance_mm);
     }
     for (std::size_t k = 0; k < chosen.size(); ++k) {
+      throw_if_cancelled();
       built[k].emplace(meshes[k], voxel_size);
       meshes[k] = TriangleMesh();
+      progress.advance();
     }
   } else {
 #pragma omp parallel for schedule(dynamic, 1)
     for (std::ptrdiff_t k = 0; k < count; ++k) {
+      if (cancellation_requested()) continue; // no exception may leave an OpenMP region
       const auto i = static_cast<std::size_t>(k);
       built[i].emplace(*phantom.organs[chosen[i]].surface, voxel_size);
+      progress.advance();
     }
   }
+  // A level set cut short by cancellation is incomplete: stop before anything reads it.
+  throw_if_cancelled();
   StateLevelSets out;
   out.level_sets.reserve(chosen.size());
   for (std::size_t k = 0; k < chosen.size(); ++k) {
@@ -72,7 +80,7 @@ StateLevelSets level_sets_of(const VoxelizationSettings& settings, const OrganTa
                                 tissues.begin());
     out.organs.push_back(v);
   }
-  progress.advance(phantom.organs.size());
+  progress.advance(phantom.organs.size() - chosen.size());
   return out;
 }
 
@@ -105,6 +113,7 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
   }
   const int gap_tissue = deformed ? gap_tissue_index(settings.gap_fill, out.tissues) : -1;
   // The reference level sets outlive the deformed state's voxelization: they are its gaps' shapes.
+  progress.set_detail("reference level sets");
   StateLevelSets sets = level_sets_of(settings, organs, grid, reference, out.tissues, voxel_size, progress);
   {
     std::size_t band = 0;
@@ -116,11 +125,13 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
         (settings.level_sets_from_tessellation
              ? "surfaces tessellated within " + format_number(settings.tessellation_tolerance_mm) + " mm"
              : std::string("from the patch surfaces directly")));
+    progress.set_detail("reference tissue fractions");
     out.reference =
         voxelize_tissues(out.grid, sets.organs, static_cast<int>(out.tissues.size()), settings.supersampling);
     progress.advance();
   }
   if (deformed) {
+    progress.set_detail("deformed level sets");
     StateLevelSets moved =
         level_sets_of(settings, organs, grid, *deformed, out.tissues, voxel_size, progress);
     std::vector<VoxelizedOrgan> with_gaps = moved.organs;
@@ -129,6 +140,7 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
           gap_organs(settings.gap_fill, gap_tissue, organs, *deformation, sets.organs, report);
       with_gaps.insert(with_gaps.end(), gaps.begin(), gaps.end());
     }
+    progress.set_detail("deformed tissue fractions");
     out.deformed =
         voxelize_tissues(out.grid, with_gaps, static_cast<int>(out.tissues.size()), settings.supersampling);
     progress.advance();
@@ -142,6 +154,7 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
     // Tissue outside the solved bodies does not move: the extension only smooths the step at a
     // moved boundary, over two voxels [choice].
     const double extension = 2.0 * out.grid.spacing_mm.maxCoeff();
+    progress.set_detail("displacement fields");
     const DeformationMap map(deformation->bodies, extension, settings.field_extension_by_search);
     out.motion = compute_motion_fields(out.grid, map);
     out.landmarks = organ_landmarks(reference, deformation, &map);

@@ -13,7 +13,7 @@ enum ExitCode : int {
   exit_ok = 0,
   exit_failure = 1,       ///< a fault of the program or the system (disk full, ...)
   exit_bad_input = 2,     ///< the scene or another input is wrong; the message says where
-  exit_interrupted = 130, ///< SIGINT or SIGTERM; nothing half-written is left
+  exit_interrupted = 130, ///< SIGINT (143 after SIGTERM); nothing half-written is left
 };
 
 /// Each subcommand registers itself and sets the action run after parsing.

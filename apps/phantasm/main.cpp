@@ -4,17 +4,17 @@
 #include "core/version.hpp"
 
 #include <algorithm>
-#include <csignal>
 #include <iostream>
 #include <string>
 #include <vector>
 
 namespace {
 
-extern "C" void on_interrupt(int signal_number) {
-  phantasm::request_cancellation();
-  // A second interrupt ends the program at once.
-  std::signal(signal_number, SIG_DFL);
+/// 130 after SIGINT, 143 after SIGTERM (the shell's 128 + signal), as if the signal had ended
+/// the program, once every file written so far is complete.
+int interrupted_exit_code() {
+  const int signal_number = phantasm::cancellation_signal();
+  return signal_number > 0 ? 128 + signal_number : phantasm::cli::exit_interrupted;
 }
 
 /// CLI11 answers an unknown first word with "A subcommand is required", which names neither
@@ -47,8 +47,7 @@ std::string unknown_top_level_word(const CLI::App& app, int argc, char** argv) {
 
 int main(int argc, char** argv) {
   using namespace phantasm::cli;
-  std::signal(SIGINT, on_interrupt);
-  std::signal(SIGTERM, on_interrupt);
+  phantasm::install_cancellation_handlers(true);
 
   CLI::App app{"phantasm: deformable anatomical MRI phantoms with exact ground truth", "phantasm"};
   app.set_version_flag("--version", std::string("phantasm ") + phantasm::version);
@@ -73,10 +72,11 @@ int main(int argc, char** argv) {
     return code == 0 ? exit_ok : exit_bad_input;
   }
   try {
-    return action();
+    const int code = action();
+    return code == exit_interrupted ? interrupted_exit_code() : code;
   } catch (const phantasm::Cancelled&) {
     std::cerr << "phantasm: interrupted; every file written so far is complete\n";
-    return exit_interrupted;
+    return interrupted_exit_code();
   } catch (const phantasm::InputError& error) {
     std::cerr << error.what() << '\n';
     return exit_bad_input;

@@ -42,3 +42,24 @@ TEST(OrganTable, ResolvesParentsAndCountsContainingOrgans) {
   ASSERT_EQ(report.modelled.size(), 3u);
   EXPECT_NE(report.modelled[2].find("inside skull (depth 2)"), std::string::npos) << report.modelled[2];
 }
+
+TEST(AnatomyPlan, StatesEachOrgansOwnBaseSizeAndItsTetSize) {
+  AnatomySettings anatomy; // the scene's base size: 320
+  OrganSettings ball, pea;
+  ball.name = "ball", pea.name = "pea";
+  ball.tissue = pea.tissue = "muscle_skeletal";
+  ball.base_mesh_triangles = 100000; // its own
+  pea.solid = false;
+  anatomy.organs = {ball, pea};
+  anatomy.organs[0].shape.radii_mm = {50, 45, 40};
+  const StageReport report = plan_anatomy(anatomy, organ_table(anatomy));
+  ASSERT_EQ(report.modelled.size(), 2u);
+  // What the run builds: the organ's own 100000, not the scene's 320.
+  EXPECT_NE(report.modelled[0].find("surface of 100000 base triangles (its own base_mesh_triangles)"),
+            std::string::npos)
+      << report.modelled[0];
+  // Area 25400 mm^2 over 100000 triangles: edges of 1.35 x 0.77 = 1.03 mm.
+  EXPECT_NE(report.modelled[0].find("tets of about 1."), std::string::npos) << report.modelled[0];
+  EXPECT_NE(report.modelled[1].find("surface of 320 base triangles with"), std::string::npos)
+      << report.modelled[1];
+}

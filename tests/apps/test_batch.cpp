@@ -23,6 +23,7 @@ struct ReferenceBatch {
   fs::path folder;
   std::map<std::string, std::string> files;
   int milliseconds = 0;
+  std::string err; ///< what it printed (progress)
 };
 
 /// The sweep made once with two jobs.
@@ -38,6 +39,7 @@ const ReferenceBatch& reference() {
         std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - start)
             .count());
     b.files = folder_contents(b.folder);
+    b.err = run.err;
     return b;
   }();
   return batch;
@@ -98,6 +100,38 @@ TEST(BatchCommand, JobsShardsRestartsAndKillsEndWithTheSameSubjects) {
   ASSERT_EQ(finish.exit_code, 0) << finish.err;
   // Every file equals the uninterrupted batch's, and nothing else (no temporary file) is there.
   EXPECT_EQ(folder_contents(out), a.files);
+
+  // Interrupted with SIGINT or SIGTERM at random moments: each exits 128 + signal (or 0 when it
+  // had finished), leaves the subjects it made and no temporary, and the next batch makes the rest.
+  const fs::path signalled = fresh_folder("batch-signalled") / "out";
+  int interrupted = 0;
+  for (int attempt = 0; attempt < 4; ++attempt) {
+    const int signal_number = attempt % 2 == 0 ? SIGINT : SIGTERM;
+    BackgroundProcess batch(
+        {k_phantasm, "batch", k_sweep.string(), "-o", signalled.string(), "-j", "2", "-q"});
+    std::this_thread::sleep_for(std::chrono::milliseconds(delay(random)));
+    batch.send_signal(signal_number);
+    const int code = batch.wait();
+    EXPECT_TRUE(code == 128 + signal_number || code == 0) << code;
+    interrupted += code != 0;
+    if (!fs::exists(signalled)) continue;
+    for (const auto& [path, bytes] : folder_contents(signalled)) {
+      EXPECT_EQ(path.find(".phantasm-tmp-"), std::string::npos) << "temporary file left: " << path;
+      // What is there is what the uninterrupted batch made (a subject's files are complete).
+      if (a.files.count(path) != 0 && path != "participants.tsv") EXPECT_EQ(bytes, a.files.at(path)) << path;
+    }
+  }
+  EXPECT_GE(interrupted, 2);
+  const CommandResult rest =
+      run_command({k_phantasm, "batch", k_sweep.string(), "-o", signalled.string(), "-j", "2"});
+  ASSERT_EQ(rest.exit_code, 0) << rest.err;
+  EXPECT_EQ(folder_contents(signalled), a.files);
+}
+
+TEST(BatchCommand, ShowsSubjectsDoneFailedAndLeftWithTheTimeLeft) {
+  const std::string& err = reference().err;
+  EXPECT_NE(err.find("(1 done, 0 failed, 5 left, about "), std::string::npos) << err;
+  EXPECT_NE(err.find("(6 done, 0 failed, 0 left)"), std::string::npos) << err;
 }
 
 TEST(BatchCommand, BadSweepsAndShardsAreReportedClearly) {

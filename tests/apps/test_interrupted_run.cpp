@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <csignal>
+#include <fstream>
 #include <random>
 #include <thread>
 
@@ -52,8 +53,9 @@ bool interrupt_and_check(int signal_number, int delay_ms, const fs::path& out, b
   std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
   run.send_signal(signal_number);
   const int exit_code = run.wait();
-  if (signal_number == SIGINT) {
-    EXPECT_TRUE(exit_code == 130 || exit_code == 0) << exit_code;
+  if (signal_number == SIGINT || signal_number == SIGTERM) {
+    // 130 after SIGINT, 143 after SIGTERM: the shell's code for a program the signal ended.
+    EXPECT_TRUE(exit_code == 128 + signal_number || exit_code == 0) << exit_code;
   } else {
     EXPECT_TRUE(exit_code == 128 + SIGKILL || exit_code == 0) << exit_code;
   }
@@ -106,6 +108,10 @@ TEST(InterruptedRun, SigintLeavesOnlyCompleteFilesAndNoTemporaries) {
   interrupt_at_random_moments(SIGINT, 20261122, "sigint", true);
 }
 
+TEST(InterruptedRun, SigtermLeavesOnlyCompleteFilesAndNoTemporariesAndExits143) {
+  interrupt_at_random_moments(SIGTERM, 20261124, "sigterm", true);
+}
+
 TEST(InterruptedRun, SigkillLeavesNoPartialFileUnderAFinalName) {
   interrupt_at_random_moments(SIGKILL, 1122, "sigkill", false);
 }
@@ -120,4 +126,91 @@ TEST(InterruptedRun, ARunKilledRepeatedlyIntoOneFolderStillEndsComplete) {
     interrupted += interrupt_and_check(SIGKILL, delay_ms, out, false);
   EXPECT_GE(interrupted, 1);
   rerun_with_force_completes(out);
+}
+
+namespace {
+
+struct SignalledRun {
+  int exit_code = -1;
+  double seconds_after_signal = 0.0;
+  std::string err; ///< its standard error (progress lines and messages)
+};
+
+/// Starts `argv`, waits until its standard error shows `marker` (a stage's last progress line;
+/// empty: at once), then `delay_ms`, sends the signal and waits for the end.
+SignalledRun signal_after(const std::vector<std::string>& argv, const fs::path& err_file,
+                          const std::string& marker, int delay_ms, int signal_number) {
+  BackgroundProcess run(argv, err_file.string());
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::minutes(5);
+  while (!marker.empty() && read_file(err_file).find(marker) == std::string::npos && !run.ended() &&
+         std::chrono::steady_clock::now() < give_up)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+  const auto sent = std::chrono::steady_clock::now();
+  run.send_signal(signal_number);
+  SignalledRun result;
+  result.exit_code = run.wait();
+  result.seconds_after_signal =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - sent).count();
+  result.err = read_file(err_file);
+  return result;
+}
+
+/// What an interrupted run may leave: no temporary, and no completion marker (provenance.json,
+/// which batch resumption reads as "this subject is complete").
+void expect_no_temporary_and_no_marker(const fs::path& out) {
+  if (!fs::exists(out)) return;
+  for (const auto& [path, bytes] : folder_contents(out)) {
+    EXPECT_FALSE(is_temporary(path)) << "temporary file left: " << path;
+    EXPECT_NE(fs::path(path).filename(), "provenance.json") << "a completion marker that lies: " << path;
+  }
+}
+
+} // namespace
+
+// The large organ's CGAL tet mesh takes minutes; the signal lands inside the mesher (its domain
+// oracle polls the flag) at several moments, and the run ends long before the stage would have.
+TEST(InterruptedRun, ASignalInsideTheMeshingOfALargeOrganEndsTheRunAtOnce) {
+  const fs::path scene = k_source_dir / "tests" / "data" / "scenes" / "large-organ.yaml";
+  const fs::path root = fresh_folder("large-organ");
+  int attempt = 0;
+  for (const auto& [signal_number, delay_ms] :
+       std::vector<std::pair<int, int>>{{SIGINT, 1500}, {SIGTERM, 4000}}) {
+    SCOPED_TRACE("signal " + std::to_string(signal_number) + " after " + std::to_string(delay_ms) + " ms");
+    const fs::path out = root / ("out" + std::to_string(attempt++));
+    const SignalledRun run = signal_after({k_phantasm, "run", scene.string(), "-o", out.string()},
+                                          root / "err.txt", "", delay_ms, signal_number);
+    EXPECT_EQ(run.exit_code, 128 + signal_number) << run.err;
+    // Behaviour, not timing: the anatomy stage never ended (it runs for minutes), and the exit
+    // came within a generous bound of the signal (sanitizer builds are several times slower).
+    EXPECT_EQ(run.err.find("anatomy 100%"), std::string::npos) << run.err;
+    EXPECT_LT(run.seconds_after_signal, 30.0) << run.err;
+    EXPECT_NE(run.err.find("interrupted"), std::string::npos) << run.err;
+    expect_no_temporary_and_no_marker(out);
+  }
+}
+
+// The small head on a 1 mm grid: voxelization takes seconds (15 s on 2 cores). Signals land inside it, the
+// run ends before the stage does, and a rerun with --force completes.
+TEST(InterruptedRun, ASignalInsideVoxelizationEndsTheRunBeforeTheStageEnds) {
+  const fs::path root = fresh_folder("voxelization");
+  std::string text = read_file(k_small_scene);
+  const std::string coarse = "voxel_size_mm: 2.0";
+  ASSERT_NE(text.find(coarse), std::string::npos);
+  text.replace(text.find(coarse), coarse.size(), "voxel_size_mm: 1.0");
+  const fs::path scene = root / "fine-grid.yaml";
+  std::ofstream(scene) << text;
+  int attempt = 0;
+  for (const auto& [signal_number, delay_ms] :
+       std::vector<std::pair<int, int>>{{SIGINT, 50}, {SIGTERM, 400}, {SIGINT, 900}}) {
+    SCOPED_TRACE("signal " + std::to_string(signal_number) + " " + std::to_string(delay_ms) +
+                 " ms after the deformation stage ended");
+    const fs::path out = root / ("out" + std::to_string(attempt++));
+    const SignalledRun run = signal_after({k_phantasm, "run", scene.string(), "-o", out.string()},
+                                          root / "err.txt", "deform 100%", delay_ms, signal_number);
+    ASSERT_NE(run.err.find("deform 100%"), std::string::npos) << run.err;
+    EXPECT_EQ(run.exit_code, 128 + signal_number) << run.err;
+    EXPECT_EQ(run.err.find("voxelize 100%"), std::string::npos) << "the stage ran to its end\n" << run.err;
+    expect_no_temporary_and_no_marker(out);
+  }
 }

@@ -5,23 +5,60 @@
 #include <algorithm>
 #include <chrono>
 #include <sstream>
+#include <stdexcept>
+#include <string>
 #include <thread>
 #include <vector>
 
 using namespace phantasm;
 
-TEST(Progress, PlainLinesAppearOncePerTenthWhenNotOnATerminal) {
+TEST(Progress, PlainLinesComeAtMostEveryFewSecondsWhenNotOnATerminal) {
   std::ostringstream stream;
   Reporter reporter(stream, ProgressStyle::lines);
   {
     ProgressBar bar(reporter, "voxelizing", 100);
-    for (int i = 0; i < 100; ++i)
+    for (int i = 0; i < 100; ++i) {
       bar.advance();
+      bar.set_detail("organ " + std::to_string(i));
+    }
   }
+  // A quick step writes one line, at its end (a log or pipe gets no line per unit of work).
   const std::string text = stream.str();
-  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 10);
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 1);
   EXPECT_EQ(text.find('\r'), std::string::npos);
   EXPECT_NE(text.find("voxelizing 100% (100/100)"), std::string::npos);
+}
+
+TEST(Progress, ASlowStepShowsElapsedTimeTheTimeLeftAndItsDetailWhileItRuns) {
+  std::ostringstream stream;
+  Reporter reporter(stream, ProgressStyle::bar);
+  {
+    ProgressBar bar(reporter, "anatomy", 4);
+    bar.advance();
+    progress_detail("ball: tet meshing");
+    // No call for over a second (a step inside a library): the ticker redraws the bar.
+    std::this_thread::sleep_for(std::chrono::milliseconds(1300));
+    const std::string text = stream.str();
+    EXPECT_NE(text.find("ball: tet meshing"), std::string::npos) << text;
+    EXPECT_NE(text.find(" left"), std::string::npos) << text;
+    EXPECT_NE(text.rfind("25% (1/4) 1."), std::string::npos) << text; // redrawn after a second
+  }
+  EXPECT_FALSE(progress_detail_due()); // no bar lives any more
+}
+
+TEST(Progress, ABarUnwoundByAnExceptionStopsWhereTheWorkStopped) {
+  std::ostringstream stream;
+  Reporter reporter(stream, ProgressStyle::lines);
+  try {
+    ProgressBar bar(reporter, "mri", 4);
+    bar.advance();
+    throw std::runtime_error("cancelled");
+  } catch (const std::runtime_error&) {
+  }
+  const std::string text = stream.str();
+  EXPECT_EQ(text.find("100%"), std::string::npos) << text;
+  EXPECT_NE(text.find("mri  25% (1/4)"), std::string::npos) << text;
+  EXPECT_NE(text.find("stopped"), std::string::npos) << text;
 }
 
 TEST(Progress, BarRedrawsInPlaceOnATerminalAndEndsWithOneNewline) {
@@ -44,7 +81,7 @@ TEST(Progress, ALogLineClearsABarLeftMidLine) {
   Reporter reporter(stream, ProgressStyle::bar);
   {
     ProgressBar bar(reporter, "solving", 4);
-    std::this_thread::sleep_for(std::chrono::milliseconds(60)); // past the redraw throttle
+    std::this_thread::sleep_for(std::chrono::milliseconds(150)); // past the 100 ms redraw throttle
     bar.advance(1);
     ASSERT_NE(stream.str().find("solving ["), std::string::npos) << stream.str();
     reporter.warning("sim", "not converged");
@@ -52,8 +89,9 @@ TEST(Progress, ALogLineClearsABarLeftMidLine) {
     bar.advance(3);
   }
   const std::string text = stream.str();
-  EXPECT_NE(text.find("s\r\033[K[sim] warning: not converged\n[sim] next\n"), std::string::npos) << text;
-  EXPECT_EQ(text.find("\033[K", text.find("[sim] next")), std::string::npos) << text;
+  // A bar draw is "\r<bar>\033[K"; only a log line's clearing has "\r\033[K".
+  EXPECT_NE(text.find("\033[K\r\033[K[sim] warning: not converged\n[sim] next\n"), std::string::npos) << text;
+  EXPECT_EQ(text.find("\r\033[K", text.find("[sim] next")), std::string::npos) << text;
   // The finished bar ends its line, so a line after it needs no clearing.
   reporter.note("done");
   EXPECT_EQ(stream.str().substr(text.size()), "done\n");

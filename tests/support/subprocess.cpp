@@ -69,11 +69,11 @@ CommandResult run_command(const std::vector<std::string>& argv) {
   return result;
 }
 
-BackgroundProcess::BackgroundProcess(const std::vector<std::string>& argv) {
+BackgroundProcess::BackgroundProcess(const std::vector<std::string>& argv, const std::string& stderr_path) {
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 2, stderr_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   auto args = c_arguments(argv);
   pid_t pid = 0;
   const int spawned = ::posix_spawn(&pid, args[0], &actions, nullptr, args.data(), environ);
@@ -91,6 +91,13 @@ BackgroundProcess::~BackgroundProcess() {
 
 void BackgroundProcess::send_signal(int signal_number) {
   ::kill(m_pid, signal_number);
+}
+
+bool BackgroundProcess::ended() {
+  if (m_waited) return true;
+  if (::waitpid(m_pid, &m_status, WNOHANG) != m_pid) return false;
+  m_waited = true;
+  return true;
 }
 
 int BackgroundProcess::wait() {

@@ -19,7 +19,9 @@ CommandResult run_command(const std::vector<std::string>& argv);
 /// A program started in the background; its output goes to files.
 class BackgroundProcess {
 public:
-  explicit BackgroundProcess(const std::vector<std::string>& argv);
+  /// @param stderr_path where its standard error goes (a file the test can read as it grows)
+  explicit BackgroundProcess(const std::vector<std::string>& argv,
+                             const std::string& stderr_path = "/dev/null");
   ~BackgroundProcess();
   BackgroundProcess(const BackgroundProcess&) = delete;
   BackgroundProcess& operator=(const BackgroundProcess&) = delete;
@@ -27,6 +29,8 @@ public:
   void send_signal(int signal_number);
   /// Waits for the program to end; returns the exit status, or 128 + signal number.
   int wait();
+  /// Whether the program has ended (without waiting).
+  bool ended();
 
 private:
   int m_pid = -1;
