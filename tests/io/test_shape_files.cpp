@@ -65,7 +65,7 @@ TEST(ShapeFiles, MeshAndLabelVolumeOrgansBecomePatchSurfacesOfTheirVolume) {
   const std::map<std::string, ShapeData> files = read_shape_files(scene.anatomy);
   ASSERT_EQ(files.size(), 3u);
   EXPECT_EQ(files.at("ball").mesh->face_count(), 1280);
-  EXPECT_EQ(files.at("left").labels.size(), 64u * 40u * 40u);
+  EXPECT_EQ(files.at("left").labels->size(), 64u * 40u * 40u);
 
   Reporter quiet = Reporter::silent();
   const Phantom phantom = build_phantom(scene.anatomy, files, quiet);
@@ -91,7 +91,7 @@ TEST(ShapeFiles, ALabelMissingFromItsVolumeIsReportedAtItsSceneField) {
     FAIL() << "no error";
   } catch (const SettingError& error) {
     // The stage names the setting; the scene knows where it was written.
-    EXPECT_EQ(error.key_path(), "anatomy.organs[0].shape.file");
+    EXPECT_EQ(error.key_path(), "anatomy.organs[0].shape.label");
     EXPECT_NE(error.message().find("expected voxels of label 7 (organ gone), found none"), std::string::npos)
         << error.message();
     const SourceLocation where = scene.location_of(error.key_path());
