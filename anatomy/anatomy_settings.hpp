@@ -33,6 +33,7 @@ struct ShapeSettings {
   int label = 0; ///< the first label value given by number (0 when every label is named)
   /// every label of the organ: numbers, or names of the atlas's label table, as written
   std::vector<std::string> labels;
+  double smoothing_mm = 0.0; ///< label volume: Gaussian smoothing of the labels' indicator, mm (0: none)
 };
 
 /// One organ of the phantom.

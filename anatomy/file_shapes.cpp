@@ -60,12 +60,15 @@ private:
 class LabelShape final : public ImplicitShape {
 public:
   LabelShape(const ImageGrid& grid, const std::vector<std::int32_t>& labels,
-             const std::vector<std::int32_t>& label_set, const std::string& what)
+             const std::vector<std::int32_t>& label_set, double smoothing_mm, const std::string& what)
       : m_grid(grid) {
     if (static_cast<std::int64_t>(labels.size()) != grid.voxel_count()) {
       throw InputError(what + ": expected " + std::to_string(grid.voxel_count()) + " label values, found " +
                        std::to_string(labels.size()));
     }
+    // value() runs millions of times while meshing: invert the affine once.
+    m_voxel_from_world = grid.world_from_voxel.topLeftCorner<3, 3>().inverse();
+    m_origin = grid.world_from_voxel.topRightCorner<3, 1>();
     const auto in_set = [&label_set](std::int32_t l) {
       return std::find(label_set.begin(), label_set.end(), l) != label_set.end();
     };
@@ -91,18 +94,23 @@ public:
         names += (names.empty() ? "" : ", ") + std::to_string(l);
       throw InputError(what + ": expected voxels with label " + names + ", found none");
     }
-    // Keep the box one voxel wider (the interpolation reaches it), one byte a voxel.
-    m_low = (low.array() - 1).max(0).matrix();
-    const Eigen::Vector3i top = (high.array() + 1).min(grid.dims.array() - 1).matrix();
+    // Keep the box one voxel wider (the interpolation reaches it), and wider by the smoothing
+    // kernel's reach.
+    const Eigen::Vector3i reach =
+        (3.0 * smoothing_mm * grid.spacing_mm.cwiseInverse()).array().ceil().cast<int>().matrix() +
+        Eigen::Vector3i::Ones();
+    m_low = (low - reach).cwiseMax(Eigen::Vector3i::Zero());
+    const Eigen::Vector3i top = (high + reach).cwiseMin(grid.dims - Eigen::Vector3i::Ones());
     m_dims = top - m_low + Eigen::Vector3i::Ones();
-    m_inside.assign(static_cast<std::size_t>(m_dims.cast<std::int64_t>().prod()), 0);
+    m_inside.assign(static_cast<std::size_t>(m_dims.cast<std::int64_t>().prod()), 0.0f);
     for (int k = 0; k < m_dims.z(); ++k)
       for (int j = 0; j < m_dims.y(); ++j)
         for (int i = 0; i < m_dims.x(); ++i) {
           const std::size_t index = static_cast<std::size_t>(
               (std::int64_t{k + m_low.z()} * grid.dims.y() + j + m_low.y()) * grid.dims.x() + i + m_low.x());
-          if (in_set(labels[index])) m_inside[local_index(Eigen::Vector3i(i, j, k))] = 1;
+          if (in_set(labels[index])) m_inside[local_index(Eigen::Vector3i(i, j, k))] = 1.0f;
         }
+    if (smoothing_mm > 0.0) smooth(smoothing_mm);
     m_center = sum / static_cast<double>(count);
     const double voxel_volume = std::abs(grid.world_from_voxel.topLeftCorner<3, 3>().determinant());
     m_volume = static_cast<double>(count) * voxel_volume;
@@ -133,7 +141,7 @@ public:
   bool star_shaped() const override { return m_star_shaped; }
 
   double value(const Eigen::Vector3d& x) const override {
-    const Eigen::Vector3d ijk = m_grid.index_from_world(x) - m_low.cast<double>();
+    const Eigen::Vector3d ijk = m_voxel_from_world * (x - m_origin) - m_low.cast<double>();
     const Eigen::Vector3d base = ijk.array().floor();
     double total = 0.0;
     for (int corner = 0; corner < 8; ++corner) {
@@ -158,14 +166,51 @@ public:
   double volume() const override { return m_volume; }
 
 private:
+  /// Separable Gaussian blur of the indicator (standard deviation sigma_mm, kernel cut at 3
+  /// sigma, renormalized at the box's faces): its 1/2-level drops voxel steps and one-voxel
+  /// bridges, which the surface mesher would otherwise chase.
+  void smooth(double sigma_mm) {
+    for (int axis = 0; axis < 3; ++axis) {
+      const double sigma = sigma_mm / m_grid.spacing_mm[axis];
+      const int half = static_cast<int>(std::ceil(3.0 * sigma));
+      std::vector<float> kernel(static_cast<std::size_t>(2 * half + 1));
+      for (int t = -half; t <= half; ++t)
+        kernel[static_cast<std::size_t>(t + half)] =
+            static_cast<float>(std::exp(-0.5 * t * t / (sigma * sigma)));
+      const int n = m_dims[axis];
+      std::vector<float> line(static_cast<std::size_t>(n));
+      Eigen::Vector3i at(0, 0, 0);
+      const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+      for (at[a2] = 0; at[a2] < m_dims[a2]; ++at[a2])
+        for (at[a1] = 0; at[a1] < m_dims[a1]; ++at[a1]) {
+          Eigen::Vector3i p = at;
+          for (p[axis] = 0; p[axis] < n; ++p[axis])
+            line[static_cast<std::size_t>(p[axis])] = m_inside[local_index(p)];
+          for (p[axis] = 0; p[axis] < n; ++p[axis]) {
+            double sum = 0.0, weight = 0.0;
+            for (int t = -half; t <= half; ++t) {
+              const int q = p[axis] + t;
+              if (q < 0 || q >= n) continue;
+              const double w = kernel[static_cast<std::size_t>(t + half)];
+              sum += w * line[static_cast<std::size_t>(q)];
+              weight += w;
+            }
+            m_inside[local_index(p)] = static_cast<float>(sum / weight);
+          }
+        }
+    }
+  }
+
   std::size_t local_index(const Eigen::Vector3i& at) const {
     return static_cast<std::size_t>((std::int64_t{at.z()} * m_dims.y() + at.y()) * m_dims.x() + at.x());
   }
 
   ImageGrid m_grid;
+  Eigen::Matrix3d m_voxel_from_world = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d m_origin{0, 0, 0};
   Eigen::Vector3i m_low{0, 0, 0};  ///< the kept box's first voxel in the volume
   Eigen::Vector3i m_dims{0, 0, 0}; ///< the kept box's size in voxels
-  std::vector<std::uint8_t> m_inside;
+  std::vector<float> m_inside;     ///< the indicator of the labels (smoothed when asked)
   Eigen::Vector3d m_center;
   double m_radius = 0.0, m_volume = 0.0, m_step = 0.05;
   bool m_star_shaped = false;
@@ -180,8 +225,8 @@ std::unique_ptr<ImplicitShape> make_mesh_shape(const TriangleMesh& mesh, const s
 std::unique_ptr<ImplicitShape> make_label_shape(const ImageGrid& grid,
                                                 const std::vector<std::int32_t>& labels,
                                                 const std::vector<std::int32_t>& label_set,
-                                                const std::string& what) {
-  return std::make_unique<LabelShape>(grid, labels, label_set, what);
+                                                double smoothing_mm, const std::string& what) {
+  return std::make_unique<LabelShape>(grid, labels, label_set, smoothing_mm, what);
 }
 
 } // namespace phantasm

@@ -155,6 +155,7 @@ std::unique_ptr<ImplicitShape> target_shape(const ShapeSettings& shape, const Sh
     return make_label_shape(
         *file->label_grid, *file->labels,
         file->target_labels.empty() ? std::vector<std::int32_t>{shape.label} : file->target_labels,
+        shape.smoothing_mm,
         "organ " + organ + " (" + (file->source.empty() ? shape.file.string() : file->source) + ")");
   }
   return nullptr;

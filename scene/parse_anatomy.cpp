@@ -135,7 +135,10 @@ void parse_shape(CheckedMap& map, const std::filesystem::path& scene_folder, Sha
       }
     }
   }
-  if (shape.kind == ShapeKind::label_volume) parse_labels(map, shape);
+  if (shape.kind == ShapeKind::label_volume) {
+    parse_labels(map, shape);
+    map.number("smoothing_mm", shape.smoothing_mm, NumberRule{0.0, 10.0, false, false, "mm"});
+  }
 }
 
 } // namespace

@@ -36,6 +36,7 @@ nlohmann::json organ_json(const OrganSettings& organ) {
         shape["label"] = organ.shape.label;
       else
         shape["label"] = organ.shape.labels;
+      shape["smoothing_mm"] = organ.shape.smoothing_mm;
     }
   }
   return {{"name", organ.name},
