@@ -7,6 +7,9 @@
 #include "tests/support/subprocess.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
 
 #include <cmath>
 #include <fstream>
@@ -99,6 +102,27 @@ TEST(ColinHeadScene, CoarseRunLabelsEveryOrganKeepsTheGreyMatterAndShiftsTheBrai
   std::printf("voxels whose label changed: %ld\n", static_cast<long>(changed));
   EXPECT_GT(changed, 20);
   const std::string provenance = read_file(derivatives / "sub-01" / "provenance.json");
+  // Physically sound, as every shipped scene (tests/apps/test_shipped_scenes.cpp): the solve
+  // converged, no tet inverted, no NaN in any volume.
+  const auto record = nlohmann::json::parse(provenance);
+  EXPECT_TRUE(record.at("converged").get<bool>()) << record.at("solves").dump();
+  ASSERT_FALSE(record.at("bodies").empty());
+  for (const auto& body : record.at("bodies")) {
+    EXPECT_EQ(body.at("inverted_tets").get<int>(), 0) << body.dump();
+    EXPECT_GT(body.at("smallest_det_F").get<double>(), 0.0) << body.dump();
+  }
+  std::size_t volumes = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(folder / "out")) {
+    const std::string name = entry.path().filename().string();
+    if (!entry.is_regular_file() || name.size() < 7 || name.substr(name.size() - 7) != ".nii.gz" ||
+        name.find("_xfm") != std::string::npos)
+      continue;
+    ++volumes;
+    const std::vector<double> values = read_nifti(entry.path()).values;
+    EXPECT_TRUE(std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); }))
+        << entry.path();
+  }
+  EXPECT_GT(volumes, 5u);
   EXPECT_NE(provenance.find("J Comput Assist Tomogr 1998; 22:324"), std::string::npos);
   EXPECT_NE(provenance.find("NeuroImage 2002; 15:273"), std::string::npos);
   EXPECT_NE(provenance.find("colin27 labels derived"), std::string::npos);
