@@ -27,7 +27,13 @@ struct ShapeSettings {
   Eigen::Vector3d size_mm{10, 10, 10};   ///< box edge lengths; sheet: x and y extent (z unused)
   Eigen::Vector3i cells{1, 1, 1};        ///< box: hexahedral cells per axis (5 tets each); sheet: x, y
   std::filesystem::path file;            ///< mesh or label volume, resolved against the scene's folder
-  int label = 0;                         ///< label value to extract from a label volume
+  /// label volume derived at run time from installed data instead of a file ("colin27",
+  /// docs/anatomy-colin27.md); empty for a file
+  std::string atlas;
+  int label = 0; ///< the first label value given by number (0 when every label is named)
+  /// every label of the organ: numbers, or names of the atlas's label table, as written
+  std::vector<std::string> labels;
+  double smoothing_mm = 0.0; ///< label volume: Gaussian smoothing of the labels' indicator, mm (0: none)
 };
 
 /// One organ of the phantom.

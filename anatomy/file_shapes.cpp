@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 
+#include <algorithm>
 #include <cmath>
 
 namespace phantasm {
@@ -58,35 +59,69 @@ private:
 
 class LabelShape final : public ImplicitShape {
 public:
-  LabelShape(const ImageGrid& grid, const std::vector<std::int32_t>& labels, int label,
-             const std::string& what)
-      : m_grid(grid), m_inside(labels.size(), 0.0f) {
+  LabelShape(const ImageGrid& grid, const std::vector<std::int32_t>& labels,
+             const std::vector<std::int32_t>& label_set, double smoothing_mm, const std::string& what)
+      : m_grid(grid) {
     if (static_cast<std::int64_t>(labels.size()) != grid.voxel_count()) {
       throw InputError(what + ": expected " + std::to_string(grid.voxel_count()) + " label values, found " +
                        std::to_string(labels.size()));
     }
-    // One pass over the volume: mark the label's voxels and keep their centres.
-    std::vector<Eigen::Vector3d> centres;
+    // value() runs millions of times while meshing: invert the affine once.
+    m_voxel_from_world = grid.world_from_voxel.topLeftCorner<3, 3>().inverse();
+    m_origin = grid.world_from_voxel.topRightCorner<3, 1>();
+    const auto in_set = [&label_set](std::int32_t l) {
+      return std::find(label_set.begin(), label_set.end(), l) != label_set.end();
+    };
+    // First pass: the union's voxel box, its centre and volume.
+    Eigen::Vector3i low = grid.dims, high = Eigen::Vector3i::Constant(-1);
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    std::int64_t count = 0;
     for (int k = 0; k < grid.dims.z(); ++k)
       for (int j = 0; j < grid.dims.y(); ++j)
         for (int i = 0; i < grid.dims.x(); ++i) {
           const std::size_t index =
               static_cast<std::size_t>((std::int64_t{k} * grid.dims.y() + j) * grid.dims.x() + i);
-          if (labels[index] != label) continue;
-          m_inside[index] = 1.0f;
-          centres.push_back(grid.world_from_index(Eigen::Vector3d(i, j, k)));
+          if (!in_set(labels[index])) continue;
+          const Eigen::Vector3i at(i, j, k);
+          low = low.cwiseMin(at);
+          high = high.cwiseMax(at);
+          sum += grid.world_from_index(at.cast<double>());
+          ++count;
         }
-    if (centres.empty())
-      throw InputError(what + ": expected voxels with label " + std::to_string(label) + ", found none");
-    m_center = Eigen::Vector3d::Zero();
-    for (const Eigen::Vector3d& c : centres)
-      m_center += c;
-    m_center /= static_cast<double>(centres.size());
+    if (count == 0) {
+      std::string names;
+      for (const std::int32_t l : label_set)
+        names += (names.empty() ? "" : ", ") + std::to_string(l);
+      throw InputError(what + ": expected voxels with label " + names + ", found none");
+    }
+    // Keep the box one voxel wider (the interpolation reaches it), and wider by the smoothing
+    // kernel's reach.
+    const Eigen::Vector3i reach =
+        (3.0 * smoothing_mm * grid.spacing_mm.cwiseInverse()).array().ceil().cast<int>().matrix() +
+        Eigen::Vector3i::Ones();
+    m_low = (low - reach).cwiseMax(Eigen::Vector3i::Zero());
+    const Eigen::Vector3i top = (high + reach).cwiseMin(grid.dims - Eigen::Vector3i::Ones());
+    m_dims = top - m_low + Eigen::Vector3i::Ones();
+    m_inside.assign(static_cast<std::size_t>(m_dims.cast<std::int64_t>().prod()), 0.0f);
+    for (int k = 0; k < m_dims.z(); ++k)
+      for (int j = 0; j < m_dims.y(); ++j)
+        for (int i = 0; i < m_dims.x(); ++i) {
+          const std::size_t index = static_cast<std::size_t>(
+              (std::int64_t{k + m_low.z()} * grid.dims.y() + j + m_low.y()) * grid.dims.x() + i + m_low.x());
+          if (in_set(labels[index])) m_inside[local_index(Eigen::Vector3i(i, j, k))] = 1.0f;
+        }
+    if (smoothing_mm > 0.0) smooth(smoothing_mm);
+    m_center = sum / static_cast<double>(count);
     const double voxel_volume = std::abs(grid.world_from_voxel.topLeftCorner<3, 3>().determinant());
-    m_volume = static_cast<double>(centres.size()) * voxel_volume;
+    m_volume = static_cast<double>(count) * voxel_volume;
+    // The farthest voxel centre lies at a corner of the voxel box at most.
     m_radius = 0.0;
-    for (const Eigen::Vector3d& c : centres)
-      m_radius = std::max(m_radius, (c - m_center).norm());
+    for (int corner = 0; corner < 8; ++corner) {
+      Eigen::Vector3d at;
+      for (int a = 0; a < 3; ++a)
+        at[a] = ((corner >> a) & 1) ? high[a] : low[a];
+      m_radius = std::max(m_radius, (grid.world_from_index(at) - m_center).norm());
+    }
     m_radius += grid.spacing_mm.norm();
     m_step = 0.05 * grid.spacing_mm.minCoeff();
     // Star-shaped when every ray from the centre (icosphere directions, steps of a quarter
@@ -106,7 +141,7 @@ public:
   bool star_shaped() const override { return m_star_shaped; }
 
   double value(const Eigen::Vector3d& x) const override {
-    const Eigen::Vector3d ijk = m_grid.index_from_world(x);
+    const Eigen::Vector3d ijk = m_voxel_from_world * (x - m_origin) - m_low.cast<double>();
     const Eigen::Vector3d base = ijk.array().floor();
     double total = 0.0;
     for (int corner = 0; corner < 8; ++corner) {
@@ -118,9 +153,8 @@ public:
         const double t = ijk[a] - base[a];
         weight *= offset ? t : 1.0 - t;
       }
-      if ((at.array() < 0).any() || (at.array() >= m_grid.dims.array()).any() || weight == 0.0) continue;
-      total += weight * m_inside[static_cast<std::size_t>(
-                            (std::int64_t{at.z()} * m_grid.dims.y() + at.y()) * m_grid.dims.x() + at.x())];
+      if ((at.array() < 0).any() || (at.array() >= m_dims.array()).any() || weight == 0.0) continue;
+      total += weight * m_inside[local_index(at)];
     }
     return total - 0.5;
   }
@@ -132,8 +166,51 @@ public:
   double volume() const override { return m_volume; }
 
 private:
+  /// Separable Gaussian blur of the indicator (standard deviation sigma_mm, kernel cut at 3
+  /// sigma, renormalized at the box's faces): its 1/2-level drops voxel steps and one-voxel
+  /// bridges, which the surface mesher would otherwise chase.
+  void smooth(double sigma_mm) {
+    for (int axis = 0; axis < 3; ++axis) {
+      const double sigma = sigma_mm / m_grid.spacing_mm[axis];
+      const int half = static_cast<int>(std::ceil(3.0 * sigma));
+      std::vector<float> kernel(static_cast<std::size_t>(2 * half + 1));
+      for (int t = -half; t <= half; ++t)
+        kernel[static_cast<std::size_t>(t + half)] =
+            static_cast<float>(std::exp(-0.5 * t * t / (sigma * sigma)));
+      const int n = m_dims[axis];
+      std::vector<float> line(static_cast<std::size_t>(n));
+      Eigen::Vector3i at(0, 0, 0);
+      const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+      for (at[a2] = 0; at[a2] < m_dims[a2]; ++at[a2])
+        for (at[a1] = 0; at[a1] < m_dims[a1]; ++at[a1]) {
+          Eigen::Vector3i p = at;
+          for (p[axis] = 0; p[axis] < n; ++p[axis])
+            line[static_cast<std::size_t>(p[axis])] = m_inside[local_index(p)];
+          for (p[axis] = 0; p[axis] < n; ++p[axis]) {
+            double sum = 0.0, weight = 0.0;
+            for (int t = -half; t <= half; ++t) {
+              const int q = p[axis] + t;
+              if (q < 0 || q >= n) continue;
+              const double w = kernel[static_cast<std::size_t>(t + half)];
+              sum += w * line[static_cast<std::size_t>(q)];
+              weight += w;
+            }
+            m_inside[local_index(p)] = static_cast<float>(sum / weight);
+          }
+        }
+    }
+  }
+
+  std::size_t local_index(const Eigen::Vector3i& at) const {
+    return static_cast<std::size_t>((std::int64_t{at.z()} * m_dims.y() + at.y()) * m_dims.x() + at.x());
+  }
+
   ImageGrid m_grid;
-  std::vector<float> m_inside;
+  Eigen::Matrix3d m_voxel_from_world = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d m_origin{0, 0, 0};
+  Eigen::Vector3i m_low{0, 0, 0};  ///< the kept box's first voxel in the volume
+  Eigen::Vector3i m_dims{0, 0, 0}; ///< the kept box's size in voxels
+  std::vector<float> m_inside;     ///< the indicator of the labels (smoothed when asked)
   Eigen::Vector3d m_center;
   double m_radius = 0.0, m_volume = 0.0, m_step = 0.05;
   bool m_star_shaped = false;
@@ -146,9 +223,10 @@ std::unique_ptr<ImplicitShape> make_mesh_shape(const TriangleMesh& mesh, const s
 }
 
 std::unique_ptr<ImplicitShape> make_label_shape(const ImageGrid& grid,
-                                                const std::vector<std::int32_t>& labels, int label,
-                                                const std::string& what) {
-  return std::make_unique<LabelShape>(grid, labels, label, what);
+                                                const std::vector<std::int32_t>& labels,
+                                                const std::vector<std::int32_t>& label_set,
+                                                double smoothing_mm, const std::string& what) {
+  return std::make_unique<LabelShape>(grid, labels, label_set, smoothing_mm, what);
 }
 
 } // namespace phantasm

@@ -9,7 +9,7 @@ namespace phantasm {
 
 MeshDistance::MeshDistance(const TriangleMesh& mesh) : m_mesh(mesh.faces) {
   m_mesh.update(mesh.vertices);
-  m_mesh.build_search_grid();
+  m_mesh.build_search_tree();
 }
 
 SurfaceDistance symmetric_distance(const TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& samples_on_b,

@@ -37,11 +37,16 @@ struct Organ {
   PatchFitReport fit; ///< how well the surface matches the target
 };
 
-/// A dense triangle mesh or a label volume read from a file, for organs whose shape is a file.
+/// A dense triangle mesh or a label volume (read from a file or derived from an atlas), for
+/// organs whose shape is one. Organs of one volume share its labels.
 struct ShapeData {
   std::optional<TriangleMesh> mesh;
   std::optional<ImageGrid> label_grid;
-  std::vector<std::int32_t> labels; ///< label_grid.voxel_count() values, i fastest
+  std::shared_ptr<const std::vector<std::int32_t>> labels; ///< label_grid.voxel_count() values, i fastest
+  /// The labels whose union is the organ's solid: its own and those of the organs nested in it
+  /// (their surfaces lie inside its surface); empty: shape.label alone.
+  std::vector<std::int32_t> target_labels;
+  std::string source; ///< the file or the atlas, for messages
 };
 
 /// The anatomy of a scene.

@@ -150,10 +150,13 @@ std::unique_ptr<ImplicitShape> target_shape(const ShapeSettings& shape, const Sh
     if (file == nullptr || !file->mesh) throw InputError("organ " + organ + ": its mesh file was not loaded");
     return make_mesh_shape(*file->mesh, "organ " + organ + " (" + shape.file.string() + ")");
   case ShapeKind::label_volume:
-    if (file == nullptr || !file->label_grid)
+    if (file == nullptr || !file->label_grid || !file->labels)
       throw InputError("organ " + organ + ": its label volume was not loaded");
-    return make_label_shape(*file->label_grid, file->labels, shape.label,
-                            "organ " + organ + " (" + shape.file.string() + ")");
+    return make_label_shape(
+        *file->label_grid, *file->labels,
+        file->target_labels.empty() ? std::vector<std::int32_t>{shape.label} : file->target_labels,
+        shape.smoothing_mm,
+        "organ " + organ + " (" + (file->source.empty() ? shape.file.string() : file->source) + ")");
   }
   return nullptr;
 }

@@ -32,10 +32,18 @@ std::unique_ptr<ImplicitShape> target_shape(const ShapeSettings& shape, const Sh
 /// An implicit shape from a closed triangle mesh: minus the signed distance (positive inside).
 std::unique_ptr<ImplicitShape> make_mesh_shape(const TriangleMesh& mesh, const std::string& what);
 
-/// An implicit shape from one label of a label volume: the trilinear interpolation of the
-/// label's indicator minus 1/2 (positive inside).
+/// An implicit shape from labels of a label volume: the trilinear interpolation of the
+/// indicator of their union (Gaussian-smoothed when asked) minus 1/2 (positive inside). Only the
+/// union's bounding box (wider by the interpolation's and the kernel's reach) is kept.
+/// @param grid the volume's grid (world RAS mm)
+/// @param labels grid.voxel_count() labels, i fastest
+/// @param label_set the labels whose union is the shape
+/// @param smoothing_mm standard deviation of the Gaussian applied to the indicator, mm (0: none)
+/// @param what names the shape in messages
+/// @throws InputError when no voxel holds one of the labels
 std::unique_ptr<ImplicitShape> make_label_shape(const ImageGrid& grid,
-                                                const std::vector<std::int32_t>& labels, int label,
-                                                const std::string& what);
+                                                const std::vector<std::int32_t>& labels,
+                                                const std::vector<std::int32_t>& label_set,
+                                                double smoothing_mm, const std::string& what);
 
 } // namespace phantasm

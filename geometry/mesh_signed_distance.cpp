@@ -8,7 +8,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
+#include <numeric>
 #include <utility>
 
 namespace phantasm {
@@ -92,41 +94,64 @@ void SignedDistanceMesh::update(const Eigen::MatrixX3d& p) {
       m_edge_normals[static_cast<std::size_t>(m_edge[t][k])] += unit;
     }
   }
-  m_buckets.clear();
-  m_cells.setZero();
+  m_nodes.clear();
 }
 
-void SignedDistanceMesh::build_search_grid() {
-  const auto nf = static_cast<double>(m_triangles.size());
-  // (An empty mesh gets one cell, which no search visits for long.)
-  m_grid_min = m_triangles.empty() ? Eigen::Vector3d(Eigen::Vector3d::Zero()) : m_min;
-  const Eigen::Vector3d extent = m_triangles.empty() ? Eigen::Vector3d(Eigen::Vector3d::Ones())
-                                                     : Eigen::Vector3d((m_max - m_min).cwiseMax(1e-9));
-  // About as many cells as triangles: a surface crosses ~#F^(2/3) of them, ~#F^(1/3) triangles each.
-  const double cell = std::max(std::cbrt(extent.prod() / std::max(1.0, nf)), 1e-6 * extent.maxCoeff());
-  for (int a = 0; a < 3; ++a)
-    m_cells[a] = std::max(1, static_cast<int>(std::ceil(extent[a] / cell)));
-  m_cell_size = extent.cwiseQuotient(m_cells.cast<double>());
-  m_buckets.assign(static_cast<std::size_t>(m_cells.prod()), {});
-  for (std::size_t t = 0; t < m_triangles.size(); ++t) {
-    const Eigen::Vector3i c0 = cell_of(m_face_min[t]), c1 = cell_of(m_face_max[t]);
-    for (int z = c0.z(); z <= c1.z(); ++z)
-      for (int y = c0.y(); y <= c1.y(); ++y)
-        for (int x = c0.x(); x <= c1.x(); ++x)
-          m_buckets[voxel_index(m_cells, x, y, z)].push_back(static_cast<int>(t));
+void SignedDistanceMesh::build_search_tree() {
+  m_nodes.clear();
+  m_order.resize(m_triangles.size());
+  std::iota(m_order.begin(), m_order.end(), 0);
+  if (m_triangles.empty()) return;
+  std::vector<Eigen::Vector3d> centre(m_triangles.size());
+  for (std::size_t t = 0; t < m_triangles.size(); ++t)
+    centre[t] = 0.5 * (m_face_min[t] + m_face_max[t]);
+  // Median splits along the longest side of the triangle centres' box, leaves of at most 4
+  // triangles; built depth first with an explicit stack (node, range), children after parents.
+  struct Pending {
+    int node, begin, end;
+  };
+  std::vector<Pending> pending{{0, 0, static_cast<int>(m_triangles.size())}};
+  m_nodes.emplace_back();
+  while (!pending.empty()) {
+    const Pending p = pending.back();
+    pending.pop_back();
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    Eigen::Vector3d centre_lo = lo, centre_hi = hi;
+    for (int i = p.begin; i < p.end; ++i) {
+      const auto t = static_cast<std::size_t>(m_order[static_cast<std::size_t>(i)]);
+      lo = lo.cwiseMin(m_face_min[t]);
+      hi = hi.cwiseMax(m_face_max[t]);
+      centre_lo = centre_lo.cwiseMin(centre[t]);
+      centre_hi = centre_hi.cwiseMax(centre[t]);
+    }
+    m_nodes[static_cast<std::size_t>(p.node)].lo = lo;
+    m_nodes[static_cast<std::size_t>(p.node)].hi = hi;
+    if (p.end - p.begin <= 4) {
+      m_nodes[static_cast<std::size_t>(p.node)].begin = p.begin;
+      m_nodes[static_cast<std::size_t>(p.node)].end = p.end;
+      continue;
+    }
+    int axis = 0;
+    (centre_hi - centre_lo).maxCoeff(&axis);
+    const int middle = p.begin + (p.end - p.begin) / 2;
+    // Ties broken by triangle index: the same tree on every run.
+    std::nth_element(m_order.begin() + p.begin, m_order.begin() + middle, m_order.begin() + p.end,
+                     [&](int a, int b) {
+                       const double ca = centre[static_cast<std::size_t>(a)][axis],
+                                    cb = centre[static_cast<std::size_t>(b)][axis];
+                       return ca < cb || (ca == cb && a < b);
+                     });
+    const auto first = static_cast<int>(m_nodes.size());
+    m_nodes.emplace_back();
+    m_nodes.emplace_back();
+    m_nodes[static_cast<std::size_t>(p.node)].first_child = first;
+    pending.push_back({first + 1, middle, p.end});
+    pending.push_back({first, p.begin, middle});
   }
 }
 
-Eigen::Vector3i SignedDistanceMesh::cell_of(const Eigen::Vector3d& x) const {
-  Eigen::Vector3i cell;
-  for (int a = 0; a < 3; ++a)
-    cell[a] =
-        std::clamp(static_cast<int>(std::floor((x[a] - m_grid_min[a]) / m_cell_size[a])), 0, m_cells[a] - 1);
-  return cell;
-}
-
 MeshClosestPoint SignedDistanceMesh::closest(const Eigen::Vector3d& x) const {
-  return m_buckets.empty() ? scan(x) : search_grid(x);
+  return m_nodes.empty() ? scan(x) : search_tree(x);
 }
 
 MeshClosestPoint SignedDistanceMesh::scan(const Eigen::Vector3d& x) const {
@@ -141,39 +166,39 @@ MeshClosestPoint SignedDistanceMesh::scan(const Eigen::Vector3d& x) const {
   return best;
 }
 
-MeshClosestPoint SignedDistanceMesh::search_grid(const Eigen::Vector3d& x) const {
+MeshClosestPoint SignedDistanceMesh::search_tree(const Eigen::Vector3d& x) const {
   MeshClosestPoint best;
-  const Eigen::Vector3i centre = cell_of(x);
-  auto visit = [&](int cx, int cy, int cz) {
-    if (cz < 0 || cy < 0 || cx < 0 || cz >= m_cells.z() || cy >= m_cells.y() || cx >= m_cells.x()) return;
-    // A cell, or a triangle's box, no closer than the best so far cannot hold a closer point
-    // (a tie keeps the first found either way, so the answer is the unpruned search's).
-    const Eigen::Vector3d lo = m_grid_min + Eigen::Vector3d(cx, cy, cz).cwiseProduct(m_cell_size);
-    if (box_distance_squared(x, lo, lo + m_cell_size) >= best.distance_squared) return;
-    for (int t : m_buckets[voxel_index(m_cells, cx, cy, cz)]) {
-      if (box_distance_squared(x, m_face_min[static_cast<std::size_t>(t)],
-                               m_face_max[static_cast<std::size_t>(t)]) >= best.distance_squared)
-        continue;
-      const auto& v = m_corners[static_cast<std::size_t>(t)];
-      const TriangleClosestPoint c = closest_point_on_triangle(x, v[0], v[1], v[2]);
-      const double d = (c.point - x).squaredNorm();
-      if (d < best.distance_squared) best = {t, c, d};
-    }
-  };
-  // Growing shells of cells until the nearest candidate is closer than the shell.
-  for (int ring = 0;; ++ring) {
-    // Only the shell of cells at Chebyshev distance `ring`: O(ring^2) cells per ring.
-    for (int dz = -ring; dz <= ring; ++dz) {
-      for (int dy = -ring; dy <= ring; ++dy) {
-        const bool whole_row = std::abs(dz) == ring || std::abs(dy) == ring;
-        for (int dx = -ring; dx <= ring; dx += whole_row ? 1 : std::max(1, 2 * ring))
-          visit(centre.x() + dx, centre.y() + dy, centre.z() + dz);
+  // Branch and bound, nearer child first: a box farther than the best so far cannot hold a
+  // closer point (one exactly as far may hold a tie of lower index, which wins as in scan()).
+  // The cost grows with log #F, not with the distance to the surface.
+  std::array<int, 128> stack{};
+  int size = 0;
+  stack[static_cast<std::size_t>(size++)] = 0;
+  while (size > 0) {
+    const SearchNode& node = m_nodes[static_cast<std::size_t>(stack[static_cast<std::size_t>(--size)])];
+    if (box_distance_squared(x, node.lo, node.hi) > best.distance_squared) continue;
+    if (node.first_child < 0) {
+      for (int i = node.begin; i < node.end; ++i) {
+        const auto t = static_cast<std::size_t>(m_order[static_cast<std::size_t>(i)]);
+        if (box_distance_squared(x, m_face_min[t], m_face_max[t]) > best.distance_squared) continue;
+        const auto& v = m_corners[t];
+        const TriangleClosestPoint c = closest_point_on_triangle(x, v[0], v[1], v[2]);
+        const double d = (c.point - x).squaredNorm();
+        // Equal distances (a shared edge or vertex) keep the lower triangle index: the answer
+        // is scan()'s whatever the visiting order.
+        if (d < best.distance_squared || (d == best.distance_squared && static_cast<int>(t) < best.triangle))
+          best = {static_cast<int>(t), c, d};
       }
+      continue;
     }
-    // Cells within `ring` of the centre cover a ball of radius ring * (smallest cell edge) around x.
-    const double covered = ring * m_cell_size.minCoeff();
-    if (best.triangle >= 0 && best.distance_squared <= covered * covered) break;
-    if (ring > m_cells.maxCoeff()) break;
+    const int a = node.first_child, b = node.first_child + 1;
+    const double da = box_distance_squared(x, m_nodes[static_cast<std::size_t>(a)].lo,
+                                           m_nodes[static_cast<std::size_t>(a)].hi),
+                 db = box_distance_squared(x, m_nodes[static_cast<std::size_t>(b)].lo,
+                                           m_nodes[static_cast<std::size_t>(b)].hi);
+    // Pushed far child first, so the near one is searched first.
+    stack[static_cast<std::size_t>(size++)] = da <= db ? b : a;
+    stack[static_cast<std::size_t>(size++)] = da <= db ? a : b;
   }
   return best;
 }

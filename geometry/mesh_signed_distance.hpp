@@ -27,8 +27,8 @@ struct MeshClosestPoint {
 ///
 /// Closest points are searched either through every triangle whose bounding box is nearer than
 /// the best so far (in triangle order: ties go to the first triangle), or, after
-/// build_search_grid(), through a uniform grid of buckets in growing shells (static meshes
-/// queried at many points).
+/// build_search_tree(), through a bounding-box hierarchy (static meshes queried at many points;
+/// ties go to the lowest triangle index).
 class SignedDistanceMesh {
 public:
   SignedDistanceMesh() = default;
@@ -38,13 +38,13 @@ public:
   /// @param faces (#F x 3) vertex indices, counter-clockwise seen from outside
   explicit SignedDistanceMesh(const Eigen::MatrixX3i& faces);
 
-  /// Recomputes corners, bounds and normals at new positions; drops the search grid.
+  /// Recomputes corners, bounds and normals at new positions; drops the search tree.
   /// @param positions (#V x 3) vertex positions, mm, one row per vertex index
   void update(const Eigen::MatrixX3d& positions);
 
-  /// Builds a uniform grid of buckets (about as many cells as triangles) over the current
-  /// positions, used by closest() until the next update().
-  void build_search_grid();
+  /// Builds a bounding-box hierarchy (median splits, leaves of at most 4 triangles) over the
+  /// current positions, used by closest() until the next update().
+  void build_search_tree();
 
   /// The point of the mesh closest to x (x in mm). Its triangle is -1 for a mesh without triangles.
   MeshClosestPoint closest(const Eigen::Vector3d& x) const;
@@ -79,8 +79,7 @@ public:
 private:
   void connect();
   MeshClosestPoint scan(const Eigen::Vector3d& x) const;
-  MeshClosestPoint search_grid(const Eigen::Vector3d& x) const;
-  Eigen::Vector3i cell_of(const Eigen::Vector3d& x) const;
+  MeshClosestPoint search_tree(const Eigen::Vector3d& x) const;
 
   std::vector<std::array<int, 3>> m_triangles;
   // Connectivity, from the constructor.
@@ -92,10 +91,14 @@ private:
   std::vector<Eigen::Vector3d> m_vertex_normals, m_edge_normals;
   Eigen::Vector3d m_min = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector3d m_max = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
-  // The search grid, from build_search_grid().
-  Eigen::Vector3d m_grid_min = Eigen::Vector3d::Zero(), m_cell_size = Eigen::Vector3d::Ones();
-  Eigen::Vector3i m_cells = Eigen::Vector3i::Zero();
-  std::vector<std::vector<int>> m_buckets;
+  // The search tree, from build_search_tree(): node 0 is the root; a node's children are
+  // first_child and first_child + 1, a leaf (first_child -1) holds m_order[begin, end).
+  struct SearchNode {
+    Eigen::Vector3d lo, hi;
+    int first_child = -1, begin = 0, end = 0;
+  };
+  std::vector<SearchNode> m_nodes;
+  std::vector<int> m_order;
 };
 
 } // namespace phantasm

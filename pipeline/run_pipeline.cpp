@@ -2,6 +2,7 @@
 
 #include "anatomy/anatomy_plan.hpp"
 #include "anatomy/phantom.hpp"
+#include "atlas/atlas_labels.hpp"
 #include "core/abandonable_work.hpp"
 #include "core/error.hpp"
 #include "io/dataset_layout.hpp"
@@ -13,6 +14,7 @@
 #include "voxelize/voxelize_phantom.hpp"
 #include "voxelize/voxelize_plan.hpp"
 
+#include <filesystem>
 #include <map>
 #include <string>
 
@@ -38,9 +40,29 @@ private:
   std::size_t m_modelled, m_skipped, m_warnings;
 };
 
+/// Derives the label volumes organs name by atlas (once per run) and records what was derived,
+/// from which inputs, and the sources to cite, in the log and the provenance.
+AtlasLoader atlas_loader(StageReport& report, Reporter& reporter) {
+  return [&report, &reporter](const std::string& atlas) {
+    AtlasLabels derived = derive_atlas_labels(atlas);
+    for (const std::string& line : derived.provenance) {
+      report.modelled.push_back(line);
+      reporter.modelled(report.stage, line);
+    }
+    AtlasLabelVolume volume;
+    volume.grid = derived.head.grid;
+    volume.source = derived.source;
+    for (const HeadLabelInfo& info : derived.head.table)
+      if (info.label != 0) volume.names[info.name] = info.label;
+    volume.labels = std::make_shared<const std::vector<std::int32_t>>(std::move(derived.head.labels));
+    return volume;
+  };
+}
+
 /// The anatomy stage: reads the scene's shape files and builds every organ; records fit errors.
 Phantom build_anatomy(const Scene& scene, StageReport& report, Reporter& reporter) {
-  const std::map<std::string, ShapeData> files = read_shape_files(scene.anatomy);
+  const std::map<std::string, ShapeData> files =
+      read_shape_files(scene.anatomy, atlas_loader(report, reporter), scene.grid.grid());
   Phantom phantom = build_phantom(scene.anatomy, files, reporter);
   for (const Organ& organ : phantom.organs) {
     if (!organ.surface) continue;
@@ -117,18 +139,28 @@ Simulation simulate(const Scene& scene, Reporter& reporter, SimulationStage unti
 
 RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& reporter) {
   check_dataset_names(scene); // before the stages run, not after
+  std::error_code error;
+  const bool existed = std::filesystem::exists(options.output, error);
   prepare_output_folder(options.output, options.force);
-  const Simulation simulation = simulate(scene, reporter);
-  if (options.strict) {
-    const std::vector<std::string> warnings = stage_warnings(simulation.stages);
-    if (!warnings.empty()) {
-      std::string message = "--strict: the run warned, no subject written:";
-      for (const std::string& line : warnings)
-        message += "\n  " + line;
-      throw StrictError(message);
+  try {
+    const Simulation simulation = simulate(scene, reporter);
+    if (options.strict) {
+      const std::vector<std::string> warnings = stage_warnings(simulation.stages);
+      if (!warnings.empty()) {
+        std::string message = "--strict: the run warned, no subject written:";
+        for (const std::string& line : warnings)
+          message += "\n  " + line;
+        throw StrictError(message);
+      }
     }
+    return write_dataset(scene, simulation, options.output, reporter);
+  } catch (const InputError&) {
+    // Bad input found by a stage (a label missing from its volume, ...): leave nothing behind,
+    // as when the scene itself is rejected.
+    if (!existed && std::filesystem::is_empty(options.output, error))
+      std::filesystem::remove(options.output, error);
+    throw;
   }
-  return write_dataset(scene, simulation, options.output, reporter);
 }
 
 } // namespace phantasm

@@ -3,6 +3,51 @@
 namespace phantasm::scene_detail {
 namespace {
 
+/// `label`: one label or a list of them, each an integer in [1, 65535] or (atlases) a name of
+/// the atlas's label table; names are resolved when the atlas is derived.
+void parse_labels(CheckedMap& map, ShapeSettings& shape) {
+  const YAML::Node node = map.get("label");
+  const std::string path = map.child_path("label");
+  const std::string expected =
+      shape.atlas.empty() ? "an integer in [1, 65535] or a list of them"
+                          : "a label (an integer in [1, 65535] or a name of the atlas's label table) "
+                            "or a list of them";
+  if (!node.IsDefined()) {
+    map.missing("label", expected);
+    return;
+  }
+  std::vector<YAML::Node> items;
+  if (node.IsSequence() && node.size() > 0) {
+    for (std::size_t i = 0; i < node.size(); ++i)
+      items.push_back(node[i]);
+  } else if (node.IsScalar()) {
+    items.push_back(node);
+  } else {
+    map.context().problem(node, path, "expected " + expected + ", found " + describe(node));
+    return;
+  }
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    const std::string item_path = node.IsSequence() ? path + "[" + std::to_string(i) + "]" : path;
+    const YAML::Node& item = items[i];
+    const std::string text = item.IsScalar() ? item.Scalar() : std::string();
+    const bool number = !text.empty() && text.find_first_not_of("+-0123456789") == std::string::npos;
+    const bool name = !text.empty() && !number &&
+                      text.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_") == std::string::npos;
+    if (number || shape.atlas.empty()) {
+      long long value = 0;
+      if (!read_integer(map.context(), item, item_path, 1, 65535, value)) continue;
+      map.context().remember(item, item_path);
+      if (shape.label == 0) shape.label = static_cast<int>(value);
+      shape.labels.push_back(std::to_string(value));
+    } else if (name) {
+      map.context().remember(item, item_path);
+      shape.labels.push_back(text);
+    } else {
+      map.context().problem(item, item_path, "expected " + expected + ", found " + describe(item));
+    }
+  }
+}
+
 void parse_shape(CheckedMap& map, const std::filesystem::path& scene_folder, ShapeSettings& shape) {
   std::string kind;
   if (!map.choice("type", kind, {"ellipsoid", "superquadric", "box", "sheet", "mesh", "label_volume"},
@@ -65,24 +110,34 @@ void parse_shape(CheckedMap& map, const std::filesystem::path& scene_folder, Sha
     return;
   }
   shape.kind = kind == "mesh" ? ShapeKind::mesh : ShapeKind::label_volume;
-  std::string file;
-  if (map.string("file", file, true)) {
-    shape.file =
-        std::filesystem::path(file).is_absolute() ? std::filesystem::path(file) : scene_folder / file;
-    std::error_code error;
-    if (!std::filesystem::is_regular_file(shape.file, error)) {
+  if (shape.kind == ShapeKind::label_volume && map.has("atlas")) {
+    // A label volume derived at run time from installed data (docs/anatomy-colin27.md).
+    map.choice("atlas", shape.atlas, {"colin27"}, true);
+    if (map.has("file")) {
       map.context().problem(map.get("file"), map.child_path("file"),
-                            "expected an existing file, found no file at '" + shape.file.string() + "'");
-    } else if (kind == "mesh") {
-      const std::string extension = shape.file.extension().string();
-      if (extension != ".stl" && extension != ".obj" && extension != ".ply" && extension != ".vtp") {
+                            "expected either file or atlas, found both");
+    }
+  } else {
+    std::string file;
+    if (map.string("file", file, true)) {
+      shape.file =
+          std::filesystem::path(file).is_absolute() ? std::filesystem::path(file) : scene_folder / file;
+      std::error_code error;
+      if (!std::filesystem::is_regular_file(shape.file, error)) {
         map.context().problem(map.get("file"), map.child_path("file"),
-                              "expected a .stl, .obj, .ply or .vtp mesh, found '" + extension + "'");
+                              "expected an existing file, found no file at '" + shape.file.string() + "'");
+      } else if (kind == "mesh") {
+        const std::string extension = shape.file.extension().string();
+        if (extension != ".stl" && extension != ".obj" && extension != ".ply" && extension != ".vtp") {
+          map.context().problem(map.get("file"), map.child_path("file"),
+                                "expected a .stl, .obj, .ply or .vtp mesh, found '" + extension + "'");
+        }
       }
     }
   }
   if (shape.kind == ShapeKind::label_volume) {
-    map.integer("label", shape.label, 1, 65535, true);
+    parse_labels(map, shape);
+    map.number("smoothing_mm", shape.smoothing_mm, NumberRule{0.0, 10.0, false, false, "mm"});
   }
 }
 

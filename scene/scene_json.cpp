@@ -27,8 +27,17 @@ nlohmann::json organ_json(const OrganSettings& organ) {
     shape["rotation_deg"] = vec3(organ.shape.rotation_deg);
     shape["cells"] = {organ.shape.cells.x(), organ.shape.cells.y(), organ.shape.cells.z()};
   } else {
-    shape["file"] = organ.shape.file.string();
-    if (organ.shape.kind == ShapeKind::label_volume) shape["label"] = organ.shape.label;
+    if (organ.shape.atlas.empty())
+      shape["file"] = organ.shape.file.string();
+    else
+      shape["atlas"] = organ.shape.atlas;
+    if (organ.shape.kind == ShapeKind::label_volume) {
+      if (organ.shape.atlas.empty() && organ.shape.labels.size() <= 1)
+        shape["label"] = organ.shape.label;
+      else
+        shape["label"] = organ.shape.labels;
+      shape["smoothing_mm"] = organ.shape.smoothing_mm;
+    }
   }
   return {{"name", organ.name},
           {"tissue", organ.tissue},

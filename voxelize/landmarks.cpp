@@ -13,31 +13,65 @@
 namespace phantasm {
 namespace {
 
+/// The organs' surfaces for distance queries, each tessellated once when first asked for (an
+/// organ is its own material's outer surface and the inner one of the organ it is nested in) and
+/// dropped after its last use (done() of itself and of that organ), so that few are held at once.
+class OrganDistances {
+public:
+  explicit OrganDistances(const Phantom& phantom)
+      : m_phantom(phantom), m_meshes(phantom.organs.size()), m_uses(phantom.organs.size(), 1) {
+    for (const Organ& organ : phantom.organs)
+      for (std::size_t p = 0; p < phantom.organs.size(); ++p)
+        if (organ.surface && phantom.organs[p].surface && phantom.organs[p].name == organ.inside)
+          ++m_uses[&organ - phantom.organs.data()];
+  }
+
+  /// Organ o's material is done: its surface and those nested in it lose one use.
+  void done(std::size_t o) {
+    release(o);
+    for (std::size_t n = 0; n < m_phantom.organs.size(); ++n)
+      if (m_phantom.organs[n].inside == m_phantom.organs[o].name && m_phantom.organs[n].surface) release(n);
+  }
+
+  const MeshDistance& of(std::size_t o) {
+    // Within 0.5 mm of the patch surface: the point's depth needs no more, and distance queries
+    // deep inside a finer tessellation visit many more triangles.
+    if (!m_meshes[o])
+      m_meshes[o] = std::make_unique<MeshDistance>(m_phantom.organs[o].surface->tessellate(0.5));
+    return *m_meshes[o];
+  }
+
+private:
+  void release(std::size_t o) {
+    if (m_uses[o] > 0 && --m_uses[o] == 0) m_meshes[o].reset();
+  }
+
+  const Phantom& m_phantom;
+  std::vector<std::unique_ptr<MeshDistance>> m_meshes;
+  std::vector<int> m_uses;
+};
+
 /// How far a point is inside an organ's own material: the distance to the organ's surface or to
 /// the nearest organ nested in it, whichever is closer (mm; negative outside that material).
 class OwnMaterial {
 public:
-  OwnMaterial(const Phantom& phantom, std::size_t o) {
-    const PatchSurface& surface = *phantom.organs[o].surface;
-    // Within 0.5 mm of the patch surface: the point's depth needs no more, and distance queries
-    // deep inside a finer tessellation visit many more empty cells.
-    m_own = std::make_unique<MeshDistance>(surface.tessellate(0.5));
-    for (const Organ& nested : phantom.organs) {
-      if (nested.inside == phantom.organs[o].name && nested.surface)
-        m_nested.push_back(std::make_unique<MeshDistance>(nested.surface->tessellate(0.5)));
+  OwnMaterial(const Phantom& phantom, std::size_t o, OrganDistances& distances) : m_own(&distances.of(o)) {
+    for (std::size_t n = 0; n < phantom.organs.size(); ++n) {
+      if (phantom.organs[n].inside == phantom.organs[o].name && phantom.organs[n].surface)
+        m_nested.push_back(&distances.of(n));
     }
   }
 
   double clearance(const Eigen::Vector3d& x) const {
     double c = -m_own->signed_distance(x);
-    for (const auto& nested : m_nested)
+    for (const MeshDistance* nested : m_nested)
       c = std::min(c, nested->signed_distance(x));
     return c;
   }
 
 private:
-  std::unique_ptr<MeshDistance> m_own;
-  std::vector<std::unique_ptr<MeshDistance>> m_nested;
+  const MeshDistance* m_own;
+  std::vector<const MeshDistance*> m_nested;
 };
 
 struct Candidate {
@@ -130,9 +164,10 @@ bool exact_around(const DeformationMap& map, const Eigen::Vector3d& x, bool move
 /// The deepest point of an organ's own material (inside it, outside the organs nested in it):
 /// the candidate of largest clearance, refined; with a map, the deepest whose surroundings the
 /// map moves exactly with the organ (else the deepest of all).
-Eigen::Vector3d deepest_point(const Phantom& phantom, std::size_t o, const DeformationMap* map, bool moved) {
+Eigen::Vector3d deepest_point(const Phantom& phantom, std::size_t o, OrganDistances& distances,
+                              const DeformationMap* map, bool moved) {
   const PatchSurface& surface = *phantom.organs[o].surface;
-  const OwnMaterial material(phantom, o);
+  const OwnMaterial material(phantom, o, distances);
   std::vector<Candidate> list = candidates(surface, material);
   if (list.empty()) return surface.rest_positions().colwise().mean().transpose();
   std::vector<std::size_t> order(list.size());
@@ -165,6 +200,7 @@ std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDef
   static const char* const k_directions[6] = {"left",     "right",    "posterior",
                                               "anterior", "inferior", "superior"};
   std::vector<Landmark> out;
+  OrganDistances distances(reference);
   for (std::size_t o = 0; o < reference.organs.size(); ++o) {
     const Organ& organ = reference.organs[o];
     if (!organ.surface) continue;
@@ -174,8 +210,9 @@ std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDef
     // solved tets); the others did not move.
     const bool moved_organ = deformation && (deformation->organs[o].moved_by == "solver" ||
                                              deformation->organs[o].moved_by.rfind("embedded", 0) == 0);
-    Landmark deepest{organ.name + "_deepest", organ.name, deepest_point(reference, o, map, moved_organ),
-                     Eigen::Vector3d::Zero()};
+    Landmark deepest{organ.name + "_deepest", organ.name,
+                     deepest_point(reference, o, distances, map, moved_organ), Eigen::Vector3d::Zero()};
+    distances.done(o);
     deepest.deformed_mm = moved_organ && map ? map->forward(deepest.reference_mm) : deepest.reference_mm;
     out.push_back(deepest);
     for (int d = 0; d < 6; ++d) {

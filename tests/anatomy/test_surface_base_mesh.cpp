@@ -123,7 +123,7 @@ TEST(SurfaceBaseMesh, ATorusFromALabelVolumeBecomesAnOrganOfGenusOne) {
   ASSERT_TRUE(loaded.scene) << format_diagnostics(loaded.problems);
   std::map<std::string, ShapeData> files;
   files["ring"].label_grid = grid;
-  files["ring"].labels = labels;
+  files["ring"].labels = std::make_shared<const std::vector<std::int32_t>>(labels);
   Reporter quiet = Reporter::silent();
   const Phantom phantom = build_phantom(loaded.scene->anatomy, files, quiet);
   const Organ& organ = *phantom.find("ring");

@@ -89,16 +89,16 @@ TEST(MeshSignedDistance, SphereMeshMatchesTheSphereWithinTheSagittaWithTheRightS
   ASSERT_LT(s, 0.02 * r);
   SignedDistanceMesh scanned(sphere.faces);
   scanned.update(sphere.vertices);
-  SignedDistanceMesh gridded(sphere.faces);
-  gridded.update(sphere.vertices);
-  gridded.build_search_grid();
+  SignedDistanceMesh tree(sphere.faces);
+  tree.update(sphere.vertices);
+  tree.build_search_tree();
   std::mt19937 random(3);
   std::uniform_real_distribution<double> radius(0.0, 2.5 * r);
   int inside = 0, outside = 0;
   for (int i = 0; i < 3000; ++i) {
     const Eigen::Vector3d x = radius(random) * random_direction(random);
     const double exact = x.norm() - r;
-    for (const SignedDistanceMesh* mesh : {&scanned, &gridded}) {
+    for (const SignedDistanceMesh* mesh : {&scanned, &tree}) {
       const double d = mesh->signed_distance(x);
       EXPECT_NEAR(d, exact, s * (1 + 1e-9)) << x.transpose();
       EXPECT_NEAR(std::abs(d), mesh->distance(x), 1e-12);
@@ -107,8 +107,9 @@ TEST(MeshSignedDistance, SphereMeshMatchesTheSphereWithinTheSagittaWithTheRightS
         EXPECT_EQ(mesh->inside(x, mesh->closest(x)), exact < 0.0);
       }
     }
-    // The two searches find the same distance.
-    EXPECT_NEAR(scanned.closest(x).distance_squared, gridded.closest(x).distance_squared, 1e-9);
+    // The two searches find the same point of the same triangle.
+    EXPECT_EQ(scanned.closest(x).triangle, tree.closest(x).triangle) << x.transpose();
+    EXPECT_EQ(scanned.closest(x).distance_squared, tree.closest(x).distance_squared);
     (exact < 0 ? inside : outside) += 1;
   }
   EXPECT_GT(inside, 100);
@@ -146,7 +147,7 @@ TEST(MeshSignedDistance, GradientHasUnitLengthAwayFromTheMedialAxis) {
   const Mesh sphere = icosphere(2, r);
   SignedDistanceMesh mesh(sphere.faces);
   mesh.update(sphere.vertices);
-  mesh.build_search_grid();
+  mesh.build_search_tree();
   const double h = 1e-5;
   auto gradient = [&](const Eigen::Vector3d& x) {
     Eigen::Vector3d g;

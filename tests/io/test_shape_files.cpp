@@ -65,7 +65,7 @@ TEST(ShapeFiles, MeshAndLabelVolumeOrgansBecomePatchSurfacesOfTheirVolume) {
   const std::map<std::string, ShapeData> files = read_shape_files(scene.anatomy);
   ASSERT_EQ(files.size(), 3u);
   EXPECT_EQ(files.at("ball").mesh->face_count(), 1280);
-  EXPECT_EQ(files.at("left").labels.size(), 64u * 40u * 40u);
+  EXPECT_EQ(files.at("left").labels->size(), 64u * 40u * 40u);
 
   Reporter quiet = Reporter::silent();
   const Phantom phantom = build_phantom(scene.anatomy, files, quiet);
@@ -91,7 +91,7 @@ TEST(ShapeFiles, ALabelMissingFromItsVolumeIsReportedAtItsSceneField) {
     FAIL() << "no error";
   } catch (const SettingError& error) {
     // The stage names the setting; the scene knows where it was written.
-    EXPECT_EQ(error.key_path(), "anatomy.organs[0].shape.file");
+    EXPECT_EQ(error.key_path(), "anatomy.organs[0].shape.label");
     EXPECT_NE(error.message().find("expected voxels of label 7 (organ gone), found none"), std::string::npos)
         << error.message();
     const SourceLocation where = scene.location_of(error.key_path());
@@ -116,4 +116,129 @@ TEST(ShapeFiles, AnOpenMeshIsRejectedWithTheDefectNamed) {
   } catch (const InputError& error) {
     EXPECT_NE(std::string(error.what()).find("open edge"), std::string::npos) << error.what();
   }
+}
+
+namespace {
+
+/// The two balls as an atlas would give them: label 1 "big", label 2 "small", on a grid whose
+/// origin is shifted by `offset_mm`.
+AtlasLabelVolume two_ball_atlas(const fs::path& folder,
+                                const Eigen::Vector3d& offset_mm = Eigen::Vector3d::Zero()) {
+  write_two_balls(folder / "atlas.nii.gz");
+  AtlasLabelVolume volume;
+  volume.labels = std::make_shared<const std::vector<std::int32_t>>(
+      read_nifti_labels(folder / "atlas.nii.gz", &volume.grid));
+  volume.grid.world_from_voxel.topRightCorner<3, 1>() += offset_mm;
+  volume.names = {{"big", 1}, {"small", 2}};
+  volume.source = "atlas test";
+  return volume;
+}
+
+/// The message of the SettingError that reading the organs' shapes throws, with its key path.
+std::pair<std::string, std::string> shape_error(const Scene& scene, const AtlasLoader& atlases,
+                                                const std::optional<ImageGrid>& grid = std::nullopt) {
+  try {
+    read_shape_files(scene.anatomy, atlases, grid);
+  } catch (const SettingError& error) {
+    return {error.key_path(), error.message()};
+  }
+  return {"", "no error"};
+}
+
+} // namespace
+
+TEST(ShapeFiles, AtlasLabelsAreNamedAndNestedOrgansAreUnitedIntoTheirContainer) {
+  const fs::path folder = fresh_folder("shape-files-atlas");
+  int derivations = 0;
+  const AtlasLoader atlases = [&](const std::string& name) {
+    EXPECT_EQ(name, "colin27");
+    ++derivations;
+    return two_ball_atlas(folder);
+  };
+  // "outer" holds both balls (label 2 by number, "small" by name) and contains "inner".
+  const Scene scene = scene_in(
+      folder, R"(    - {name: outer, tissue: csf, shape: {type: label_volume, atlas: colin27, label: big}}
+    - {name: inner, tissue: gray_matter, inside: outer, shape: {type: label_volume, atlas: colin27, label: [small]}}
+    - {name: both, tissue: csf, solid: false, shape: {type: label_volume, atlas: colin27, label: [1, small]}}
+)");
+  const std::map<std::string, ShapeData> files = read_shape_files(scene.anatomy, atlases);
+  EXPECT_EQ(derivations, 1); // once per run, shared by the organs
+  EXPECT_EQ(files.at("outer").target_labels, (std::vector<std::int32_t>{1, 2}));
+  EXPECT_EQ(files.at("inner").target_labels, (std::vector<std::int32_t>{2}));
+  EXPECT_EQ(files.at("both").target_labels, (std::vector<std::int32_t>{1, 2}));
+  EXPECT_EQ(files.at("outer").labels, files.at("inner").labels); // one copy of the volume
+}
+
+TEST(ShapeFiles, AnUnknownAtlasLabelNameIsReportedWithTheAtlasAndItsNames) {
+  const fs::path folder = fresh_folder("shape-files-atlas-name");
+  const AtlasLoader atlases = [&](const std::string&) { return two_ball_atlas(folder); };
+  const Scene scene = scene_in(
+      folder, "    - {name: gm, tissue: csf, shape: {type: label_volume, atlas: colin27, label: grey}}\n");
+  const auto [key, message] = shape_error(scene, atlases);
+  EXPECT_EQ(key, "anatomy.organs[0].shape.label");
+  EXPECT_NE(message.find("atlas test: expected a label of its table (big, small) for organ gm, found 'grey'"),
+            std::string::npos)
+      << message;
+}
+
+TEST(ShapeFiles, ALabelOnTheVolumesEdgeIsRejectedNamingFileAndLabel) {
+  const fs::path folder = fresh_folder("shape-files-edge");
+  ImageGrid grid;
+  grid.dims = {20, 20, 20};
+  std::vector<std::int32_t> labels(static_cast<std::size_t>(grid.voxel_count()), 0);
+  for (int k = 0; k < 20; ++k)
+    for (int j = 5; j < 15; ++j)
+      for (int i = 5; i < 15; ++i)
+        labels[voxel_index(grid.dims, i, j, k)] = 3; // a bar through the volume along k
+  write_nifti_labels(folder / "bar.nii.gz", grid, labels);
+  const Scene scene = scene_in(
+      folder, "    - {name: bar, tissue: csf, shape: {type: label_volume, file: bar.nii.gz, label: 3}}\n");
+  const auto [key, message] = shape_error(scene, {});
+  EXPECT_EQ(key, "anatomy.organs[0].shape.label");
+  EXPECT_NE(message.find("bar.nii.gz: label 3 (organ bar) touches the volume's edge"), std::string::npos)
+      << message;
+}
+
+TEST(ShapeFiles, LabelsOutsideTheSceneGridAreRejected) {
+  const fs::path folder = fresh_folder("shape-files-outside");
+  const AtlasLoader atlases = [&](const std::string&) {
+    return two_ball_atlas(folder, Eigen::Vector3d(500, 0, 0));
+  };
+  const Scene scene = scene_in(
+      folder, "    - {name: ball, tissue: csf, shape: {type: label_volume, atlas: colin27, label: big}}\n");
+  const auto [key, message] = shape_error(scene, atlases, scene.grid.grid());
+  EXPECT_EQ(key, "anatomy.organs[0].shape.label");
+  EXPECT_NE(message.find("atlas test: the voxels of organ ball"), std::string::npos) << message;
+  EXPECT_NE(message.find("lie outside the scene grid"), std::string::npos) << message;
+  // The same volume where the grid is: accepted.
+  EXPECT_EQ(shape_error(
+                scene, [&](const std::string&) { return two_ball_atlas(folder); }, scene.grid.grid())
+                .second,
+            "no error");
+}
+
+TEST(ShapeFiles, AtlasAndFileTogetherOrALabelNameWithAFileAreSceneErrors) {
+  const fs::path folder = fresh_folder("shape-files-atlas-scene");
+  write_two_balls(folder / "labels.nii.gz");
+  const std::string head = "phantasm: 1\nname: files\nseed: 1\nfield_strength_T: 3.0\n"
+                           "grid: {field_of_view_mm: 96, voxel_size_mm: 2}\nanatomy:\n  organs:\n";
+  const SceneLoadResult both = parse_scene(
+      head + "    - {name: a, tissue: csf, shape: {type: label_volume, atlas: colin27, file: labels.nii.gz, "
+             "label: csf}}\n",
+      folder / "scene.yaml");
+  ASSERT_FALSE(both.scene);
+  EXPECT_NE(format_diagnostics(both.problems).find("expected either file or atlas, found both"),
+            std::string::npos)
+      << format_diagnostics(both.problems);
+  const SceneLoadResult named = parse_scene(
+      head + "    - {name: a, tissue: csf, shape: {type: label_volume, file: labels.nii.gz, label: csf}}\n",
+      folder / "scene.yaml");
+  ASSERT_FALSE(named.scene);
+  EXPECT_NE(format_diagnostics(named.problems).find("anatomy.organs[0].shape.label: expected an integer"),
+            std::string::npos)
+      << format_diagnostics(named.problems);
+  const SceneLoadResult unknown = parse_scene(
+      head + "    - {name: a, tissue: csf, shape: {type: label_volume, atlas: mni152, label: csf}}\n",
+      folder / "scene.yaml");
+  ASSERT_FALSE(unknown.scene);
 }

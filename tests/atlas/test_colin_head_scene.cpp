@@ -1,0 +1,157 @@
+// data-synthetic/colin-head.yaml end to end at 4 mm (small base meshes, one sequence, no
+// k-space), and a bad label volume through the CLI.
+
+#include "atlas/colin27_head.hpp"
+#include "io/nifti_file.hpp"
+#include "tests/support/files.hpp"
+#include "tests/support/subprocess.hpp"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <sstream>
+
+namespace phantasm {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::fresh_folder;
+using testing::read_file;
+using testing::run_command;
+using testing::write_text_file;
+
+const std::string k_phantasm = PHANTASM_EXECUTABLE;
+
+/// The shipped scene made coarse: 4 mm voxels, 320-triangle base meshes, surfaces voxelized from
+/// 1 mm tessellations (0.2 mm ones dominate a 4 mm run), the first sequence only, images sampled
+/// directly.
+std::string coarse_scene() {
+  std::string text = read_file(fs::path(PHANTASM_SOURCE_DIR) / "data-synthetic" / "colin-head.yaml");
+  const std::vector<std::pair<std::string, std::string>> edits = {
+      {"voxel_size_mm: 1.0", "voxel_size_mm: 4.0"},
+      {R"(field_of_view_mm: \[189, 217, 185\])", "field_of_view_mm: [188, 216, 184]"},
+      {R"(base_mesh_triangles: \d+)", "base_mesh_triangles: 320"},
+      {"supersampling: 4", "supersampling: 1"},
+      {"tessellation_tolerance_mm: 0.2", "tessellation_tolerance_mm: 1.0"},
+      {"kspace: true", "kspace: false"},
+      {R"(  acquired_voxel_mm: [0-9.]+\n)", ""},
+      {R"(  - \{name: T2w[^\n]*\n)", ""},
+      {R"(  - \{name: FLAIR[^\n]*\n)", ""}};
+  for (const auto& [from, to] : edits) {
+    const std::string before = text;
+    text = std::regex_replace(text, std::regex(from), to);
+    EXPECT_NE(text, before) << "the scene no longer has " << from;
+  }
+  return text;
+}
+
+/// dseg.tsv: label value by organ name.
+std::map<std::string, int> dseg_table(const fs::path& path) {
+  std::map<std::string, int> table;
+  std::istringstream in(read_file(path));
+  std::string line;
+  std::getline(in, line); // header
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    int index = 0;
+    std::string name;
+    if (fields >> index >> name) table[name] = index;
+  }
+  return table;
+}
+
+TEST(ColinHeadScene, CoarseRunLabelsEveryOrganKeepsTheGreyMatterAndShiftsTheBrain) {
+  if (!fs::is_directory(default_colin27_templates_dir())) GTEST_SKIP() << "mricron-data is not installed";
+  const fs::path folder = fresh_folder("colin-head-scene");
+  write_text_file(folder / "colin-coarse.yaml", coarse_scene());
+  const auto result = run_command({k_phantasm, "run", (folder / "colin-coarse.yaml").string(), "-o",
+                                   (folder / "out").string(), "--quiet"});
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+
+  const fs::path derivatives = folder / "out" / "derivatives" / "phantasm";
+  const std::map<std::string, int> table = dseg_table(derivatives / "dseg.tsv");
+  ImageGrid grid;
+  const std::vector<std::int32_t> ref =
+      read_nifti_labels(derivatives / "sub-01" / "ses-ref" / "anat" / "sub-01_ses-ref_dseg.nii.gz", &grid);
+  const std::vector<std::int32_t> def =
+      read_nifti_labels(derivatives / "sub-01" / "ses-def" / "anat" / "sub-01_ses-def_dseg.nii.gz", &grid);
+  std::map<int, std::int64_t> count;
+  for (const std::int32_t l : ref)
+    ++count[l];
+  for (const char* organ : {"scalp", "skull", "csf", "grey_matter", "white_matter", "ventricles",
+                            "deep_grey_matter", "cerebellum", "brainstem"}) {
+    ASSERT_TRUE(table.count(organ)) << organ;
+    EXPECT_GT(count[table.at(organ)], 0) << organ << " has no voxel";
+  }
+  // The cortical grey matter's voxels against the source label (682.7 ml, docs/anatomy-colin27.md):
+  // 4 mm voxels sample a 2-3 mm ribbon, so the bound is loose.
+  const double voxel_ml = grid.spacing_mm.prod() / 1000.0;
+  const double grey_ml = static_cast<double>(count[table.at("grey_matter")]) * voxel_ml;
+  std::printf("grey_matter %.1f ml (source label 682.7 ml)\n", grey_ml);
+  EXPECT_NEAR(grey_ml / 682.7, 1.0, 0.3);
+  // The deformation moved the brain: labels changed and the provenance names the sources.
+  std::int64_t changed = 0;
+  for (std::size_t n = 0; n < ref.size(); ++n)
+    changed += ref[n] != def[n];
+  std::printf("voxels whose label changed: %ld\n", static_cast<long>(changed));
+  EXPECT_GT(changed, 20);
+  const std::string provenance = read_file(derivatives / "sub-01" / "provenance.json");
+  // Physically sound, as every shipped scene (tests/apps/test_shipped_scenes.cpp): the solve
+  // converged, no tet inverted, no NaN in any volume.
+  const auto record = nlohmann::json::parse(provenance);
+  EXPECT_TRUE(record.at("converged").get<bool>()) << record.at("solves").dump();
+  ASSERT_FALSE(record.at("bodies").empty());
+  for (const auto& body : record.at("bodies")) {
+    EXPECT_EQ(body.at("inverted_tets").get<int>(), 0) << body.dump();
+    EXPECT_GT(body.at("smallest_det_F").get<double>(), 0.0) << body.dump();
+  }
+  std::size_t volumes = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(folder / "out")) {
+    const std::string name = entry.path().filename().string();
+    if (!entry.is_regular_file() || name.size() < 7 || name.substr(name.size() - 7) != ".nii.gz" ||
+        name.find("_xfm") != std::string::npos)
+      continue;
+    ++volumes;
+    const std::vector<double> values = read_nifti(entry.path()).values;
+    EXPECT_TRUE(std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); }))
+        << entry.path();
+  }
+  EXPECT_GT(volumes, 5u);
+  EXPECT_NE(provenance.find("J Comput Assist Tomogr 1998; 22:324"), std::string::npos);
+  EXPECT_NE(provenance.find("NeuroImage 2002; 15:273"), std::string::npos);
+  EXPECT_NE(provenance.find("colin27 labels derived"), std::string::npos);
+}
+
+TEST(ColinHeadScene, ALabelVolumeWithALabelOnItsEdgeIsABadInputAndNothingIsWritten) {
+  const fs::path folder = fresh_folder("colin-head-scene-edge");
+  ImageGrid grid;
+  grid.dims = {20, 20, 20};
+  grid.world_from_voxel.topRightCorner<3, 1>() = Eigen::Vector3d(-9.5, -9.5, -9.5);
+  std::vector<std::int32_t> labels(static_cast<std::size_t>(grid.voxel_count()), 0);
+  for (int k = 0; k < 20; ++k)
+    for (int j = 5; j < 15; ++j)
+      for (int i = 5; i < 15; ++i)
+        labels[voxel_index(grid.dims, i, j, k)] = 4;
+  write_nifti_labels(folder / "bar.nii.gz", grid, labels);
+  write_text_file(folder / "scene.yaml", "phantasm: 1\nname: bar\nseed: 1\nfield_strength_T: 3.0\n"
+                                         "grid: {field_of_view_mm: 40, voxel_size_mm: 2}\n"
+                                         "anatomy:\n  organs:\n"
+                                         "    - {name: bar, tissue: csf, shape: {type: label_volume, "
+                                         "file: bar.nii.gz, label: 4}}\n");
+  const auto result =
+      run_command({k_phantasm, "run", (folder / "scene.yaml").string(), "-o", (folder / "out").string()});
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find("bar.nii.gz: label 4 (organ bar) touches the volume's edge"), std::string::npos)
+      << result.err;
+  EXPECT_NE(result.err.find("anatomy.organs[0].shape.label"), std::string::npos) << result.err;
+  EXPECT_FALSE(fs::exists(folder / "out"));
+}
+
+} // namespace
+} // namespace phantasm
