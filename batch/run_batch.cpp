@@ -5,6 +5,7 @@
 #include "core/sha256.hpp"
 #include "io/atomic_file.hpp"
 #include "io/dataset_layout.hpp"
+#include "io/output_path.hpp"
 #include "pipeline/run_pipeline.hpp"
 
 #include <nlohmann/json.hpp>
@@ -80,6 +81,25 @@ std::string batch_status(const BatchSummary& summary, std::size_t to_run, double
   return text;
 }
 
+/// Refuses a batch into a folder that holds anything but a dataset phantasm writes (a batch
+/// resumes into its own folder; it must not scatter subjects among unrelated files).
+void require_batch_folder(const std::filesystem::path& folder) {
+  std::error_code error;
+  if (!std::filesystem::is_directory(folder, error)) return;
+  for (const auto& entry : std::filesystem::directory_iterator(folder, error)) {
+    const std::string name = entry.path().filename().string();
+    const bool ours = name == k_output_lock_name || name == "dataset_description.json" ||
+                      name == "participants.tsv" || name == "derivatives" || name.rfind("sub-", 0) == 0 ||
+                      is_temporary_file_name(entry.path());
+    if (!ours) {
+      throw InputError(
+          folder.string() +
+          ": expected an empty or new output folder, or a dataset an earlier batch wrote, found '" + name +
+          "' in it (a file phantasm does not write)");
+    }
+  }
+}
+
 } // namespace
 
 bool subject_is_complete(const std::filesystem::path& output, const SweepSubject& subject) {
@@ -108,6 +128,9 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
   if (options.jobs < 1)
     throw InputError("--jobs: expected at least 1, found " + std::to_string(options.jobs));
   BatchSummary summary;
+  // One writer per dataset: held until the batch returns (its subjects' processes share it).
+  const OutputFolderLock lock(options.output);
+  require_batch_folder(options.output);
   prepare_output_folder(options.output, true);
   write_file_atomically(options.output / "participants.tsv", participants_tsv(sweep));
 

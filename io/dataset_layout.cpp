@@ -4,6 +4,7 @@
 
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
+#include "io/output_path.hpp"
 
 namespace phantasm {
 
@@ -23,8 +24,9 @@ std::filesystem::path DatasetLayout::dataset_description() const {
 }
 
 std::filesystem::path DatasetLayout::anat_image(PhantomState state, const std::string& suffix) const {
-  return m_root / ("sub-" + m_subject) / (std::string("ses-") + session_label(state)) / "anat" /
-         (prefix(state) + "_" + suffix + ".nii.gz");
+  return output_file(output_file(m_root, "sub-" + m_subject) / (std::string("ses-") + session_label(state)) /
+                         "anat",
+                     prefix(state) + "_" + suffix + ".nii.gz");
 }
 
 std::filesystem::path DatasetLayout::derivatives() const {
@@ -40,7 +42,7 @@ std::filesystem::path DatasetLayout::dseg_table() const {
 }
 
 std::filesystem::path DatasetLayout::subject_derivatives() const {
-  return derivatives() / ("sub-" + m_subject);
+  return output_file(derivatives(), "sub-" + m_subject);
 }
 
 std::filesystem::path DatasetLayout::dseg(PhantomState state) const {
@@ -49,12 +51,12 @@ std::filesystem::path DatasetLayout::dseg(PhantomState state) const {
 }
 
 std::filesystem::path DatasetLayout::probseg(PhantomState state, const std::string& tissue) const {
-  return subject_derivatives() / (std::string("ses-") + session_label(state)) / "anat" /
-         (prefix(state) + "_label-" + tissue + "_probseg.nii.gz");
+  return output_file(subject_derivatives() / (std::string("ses-") + session_label(state)) / "anat",
+                     prefix(state) + "_label-" + tissue + "_probseg.nii.gz");
 }
 
 std::filesystem::path DatasetLayout::parameter_map(PhantomState state, const std::string& suffix) const {
-  return dseg(state).parent_path() / (prefix(state) + "_" + suffix + ".nii.gz");
+  return output_file(dseg(state).parent_path(), prefix(state) + "_" + suffix + ".nii.gz");
 }
 
 std::filesystem::path DatasetLayout::transform(PhantomState from, PhantomState to) const {
@@ -78,11 +80,11 @@ std::filesystem::path DatasetLayout::landmarks(PhantomState state) const {
 }
 
 std::filesystem::path DatasetLayout::mesh(PhantomState state, const std::string& organ) const {
-  return subject_derivatives() / "meshes" / (prefix(state) + "_organ-" + organ + "_mesh.vtp");
+  return output_file(subject_derivatives() / "meshes", prefix(state) + "_organ-" + organ + "_mesh.vtp");
 }
 
 std::filesystem::path DatasetLayout::tet_mesh(PhantomState state, const std::string& organ) const {
-  return subject_derivatives() / "meshes" / (prefix(state) + "_organ-" + organ + "_tetmesh.vtu");
+  return output_file(subject_derivatives() / "meshes", prefix(state) + "_organ-" + organ + "_tetmesh.vtu");
 }
 
 std::filesystem::path DatasetLayout::vdb(PhantomState state) const {
@@ -90,7 +92,7 @@ std::filesystem::path DatasetLayout::vdb(PhantomState state) const {
 }
 
 std::filesystem::path DatasetLayout::preview(PhantomState state, const std::string& suffix) const {
-  return subject_derivatives() / "previews" / (prefix(state) + "_" + suffix + ".png");
+  return output_file(subject_derivatives() / "previews", prefix(state) + "_" + suffix + ".png");
 }
 
 std::filesystem::path DatasetLayout::provenance() const {
@@ -137,7 +139,14 @@ void prepare_output_folder(const std::filesystem::path& folder, bool force) {
     if (!std::filesystem::is_directory(folder, error)) {
       throw InputError(folder.string() + ": expected an output folder, found a file");
     }
-    const bool empty = std::filesystem::is_empty(folder, error);
+    // The lock file of the run that holds the folder (io/output_path.hpp) is not a file of it.
+    bool empty = true;
+    for (const auto& entry : std::filesystem::directory_iterator(folder, error)) {
+      if (entry.path().filename() != k_output_lock_name) {
+        empty = false;
+        break;
+      }
+    }
     if (!empty && !force) {
       throw InputError(folder.string() +
                        ": expected an empty or new output folder, found one with files in it "
