@@ -22,6 +22,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <new>
 #include <thread>
 
 namespace phantasm {
@@ -50,6 +51,15 @@ namespace {
   } catch (const InputError& error) {
     std::cerr << "sub-" << subject.id << ": " << error.what() << '\n';
     code = 2;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "sub-" << subject.id
+              << ": error: out of memory: expected a subject that fits in this machine's memory with --jobs "
+                 "at a time, found more than it holds\n";
+    code = 1;
+  } catch (const std::filesystem::filesystem_error& error) {
+    std::cerr << "sub-" << subject.id << ": error: " << error.path1().string() << ": "
+              << error.code().message() << '\n';
+    code = 1;
   } catch (const std::exception& error) {
     std::cerr << "sub-" << subject.id << ": error: " << error.what() << '\n';
     code = 1;

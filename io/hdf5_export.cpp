@@ -203,7 +203,14 @@ Hdf5ExportSummary export_hdf5(const std::filesystem::path& dataset, const std::f
     static const std::regex jacobian(R"(derivatives/phantasm/sub-[A-Za-z0-9]+/xfm/.*_jacobian\.nii\.gz)");
     for (const std::string& subject : subjects) {
       const std::string provenance_text = read_text(derivatives / subject / "provenance.json");
-      const nlohmann::json provenance = nlohmann::json::parse(provenance_text);
+      nlohmann::json provenance;
+      try {
+        provenance = nlohmann::json::parse(provenance_text);
+      } catch (const nlohmann::json::exception& error) {
+        throw InputError((derivatives / subject / "provenance.json").string() +
+                         ": expected the JSON phantasm writes, found a file it cannot parse (" +
+                         error.what() + ")");
+      }
       {
         const Handle group(group_at(h5.get(), "/" + subject), H5Gclose);
         string_attribute(group.get(), "provenance", provenance_text);
