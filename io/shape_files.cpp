@@ -41,7 +41,8 @@ void check_volume_grid(const std::filesystem::path& file, const ImageGrid& grid)
   if (!m.allFinite() || !std::isfinite(m.topLeftCorner<3, 3>().determinant()) ||
       m.topLeftCorner<3, 3>().determinant() == 0.0) {
     throw InputError(
-        file.string() + ": expected a finite, invertible voxel-to-world affine (sform or qform), found " +
+        file.string() +
+        ": expected a finite voxel-to-world affine (sform or qform) that can be inverted, found " +
         (m.allFinite() ? std::string("a singular one") : std::string("NaN or infinite entries")));
   }
   for (int corner = 0; corner < 8; ++corner) {
