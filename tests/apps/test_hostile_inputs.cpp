@@ -237,7 +237,7 @@ TEST(HostileInputs, LabelVolumesWithANaNAffineAndFloatVolumesWithNaNAreRefused) 
   const CommandResult result =
       run_command({k_phantasm, "run", (root / "volume.yaml").string(), "-o", (root / "out").string(), "-q"});
   EXPECT_EQ(result.exit_code, 2);
-  EXPECT_NE(result.err.find(":12:33: anatomy.organs[0].shape.file: "), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find(":12:41: anatomy.organs[0].shape.file: "), std::string::npos) << result.err;
   EXPECT_NE(result.err.find("expected a finite voxel-to-world affine"), std::string::npos) << result.err;
 
   // libnifti turns NaN into 0 as it loads: an all-NaN field would read as no motion at all.
