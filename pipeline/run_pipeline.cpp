@@ -87,6 +87,10 @@ namespace {
 void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until, Simulation& result) {
   result.stages = plan_stages(scene);
   for (const auto& stage : result.stages) {
+    // Settings a plan finds pointless (a flip angle that excites nothing, ...) warn before work;
+    // they stay in the report, so provenance.json records them and --strict refuses them.
+    for (const auto& line : stage.warnings)
+      reporter.warning(stage.stage, line);
     for (const auto& line : stage.modelled)
       reporter.modelled(stage.stage, line);
     for (const auto& line : stage.skipped)

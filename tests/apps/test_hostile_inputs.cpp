@@ -308,3 +308,24 @@ TEST(HostileSweeps, AMillionSubjectsAreValidatedAndListedInSeconds) {
   EXPECT_NE(too_many.err.find("vary: expected at most 10^6 subjects, found more (1100000"), std::string::npos)
       << too_many.err;
 }
+
+TEST(HostileInputs, SettingsThatMakeNoSignalWarnAndProvenanceRecordsIt) {
+  const fs::path root = fresh_folder("hostile-no-signal");
+  write_text_file(root / "scene.yaml",
+                  ball_scene("ball", "gray_matter") +
+                      "tissues:\n  gray_matter: {T1_ms: 1.0e300}\nsequences:\n"
+                      "  - {name: T1w, type: spoiled_gre, TR_ms: 20, TE_ms: 5, flip_deg: 0}\n");
+  const fs::path out = root / "out";
+  const CommandResult result =
+      run_command({k_phantasm, "run", (root / "scene.yaml").string(), "-o", out.string(), "-q"});
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.err.find("[mri] warning: sequence T1w: a flip angle of 0 deg makes no signal"),
+            std::string::npos)
+      << result.err;
+  EXPECT_NE(result.err.find("[mri] warning: tissue gray_matter: T1 of 1e+300 ms is beyond any tissue's"),
+            std::string::npos)
+      << result.err;
+  const std::string provenance = read_file(out / "derivatives" / "phantasm" / "sub-01" / "provenance.json");
+  EXPECT_NE(provenance.find("a flip angle of 0 deg makes no signal"), std::string::npos);
+  EXPECT_NE(provenance.find("T1 of 1e+300 ms"), std::string::npos);
+}
