@@ -98,8 +98,8 @@ void require_batch_folder(const std::filesystem::path& folder) {
   if (!std::filesystem::is_directory(folder, error)) return;
   for (const auto& entry : std::filesystem::directory_iterator(folder, error)) {
     const std::string name = entry.path().filename().string();
-    const bool ours = name == k_output_lock_name || name == "dataset_description.json" ||
-                      name == "participants.tsv" || name == "derivatives" || name.rfind("sub-", 0) == 0 ||
+    const bool ours = name == "dataset_description.json" || name == "participants.tsv" ||
+                      name == "derivatives" || name.rfind("sub-", 0) == 0 ||
                       is_temporary_file_name(entry.path());
     if (!ours) {
       throw InputError(
@@ -138,8 +138,8 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
   if (options.jobs < 1)
     throw InputError("--jobs: expected at least 1, found " + std::to_string(options.jobs));
   BatchSummary summary;
-  // One writer per dataset: held until the batch returns (its subjects' processes share it).
-  const OutputFolderLock lock(options.output);
+  // Held until the batch returns: shards of a sweep share the folder, a run cannot enter it.
+  const OutputFolderLock lock(options.output, FolderLockMode::shared);
   require_batch_folder(options.output);
   prepare_output_folder(options.output, true);
   write_file_atomically(options.output / "participants.tsv", participants_tsv(sweep));

@@ -260,6 +260,20 @@ public:
            "expected a scene file, found no such file: " + sweep.base_scene.string());
     }
     m_base_text.assign((std::istreambuf_iterator<char>(base_file)), std::istreambuf_iterator<char>());
+    // The base scene's own mistakes are named in the base scene (each subject's scene is made
+    // from its first document only, so a second one would be dropped without a word).
+    try {
+      const std::vector<YAML::Node> base = YAML::LoadAll(m_base_text);
+      if (base.size() > 1) {
+        throw InputError(sweep.base_scene.string() + ":" + std::to_string(base[1].Mark().line + 1) + ":" +
+                         std::to_string(base[1].Mark().column + 1) + ": expected one YAML document, found " +
+                         std::to_string(base.size()) + " (a second '---')");
+      }
+    } catch (const YAML::Exception& base_error) {
+      throw InputError(sweep.base_scene.string() + ":" + std::to_string(base_error.mark.line + 1) + ":" +
+                       std::to_string(base_error.mark.column + 1) + ": expected valid YAML, found " +
+                       base_error.msg);
+    }
     sweep.name = top["name"] ? scalar(top["name"], "name") : m_file.stem().string();
     if (top["name"] && !is_safe_name(sweep.name))
       fail(top["name"].Mark(), "name",

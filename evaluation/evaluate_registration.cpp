@@ -44,6 +44,10 @@ std::vector<LandmarkRow> read_landmarks(const std::filesystem::path& path) {
       throw InputError(path.string() + ":" + std::to_string(number) + ": expected three numbers, found '" +
                        line + "'");
     }
+    if (!row.ras_mm.allFinite()) {
+      throw InputError(path.string() + ":" + std::to_string(number) +
+                       ": expected three finite numbers (mm), found '" + line + "'");
+    }
     rows.push_back(row);
   }
   return rows;

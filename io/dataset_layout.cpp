@@ -139,14 +139,7 @@ void prepare_output_folder(const std::filesystem::path& folder, bool force) {
     if (!std::filesystem::is_directory(folder, error)) {
       throw InputError(folder.string() + ": expected an output folder, found a file");
     }
-    // The lock file of the run that holds the folder (io/output_path.hpp) is not a file of it.
-    bool empty = true;
-    for (const auto& entry : std::filesystem::directory_iterator(folder, error)) {
-      if (entry.path().filename() != k_output_lock_name) {
-        empty = false;
-        break;
-      }
-    }
+    const bool empty = std::filesystem::is_empty(folder, error);
     if (!empty && !force) {
       throw InputError(folder.string() +
                        ": expected an empty or new output folder, found one with files in it "

@@ -66,68 +66,35 @@ void require_replaceable_file(const std::filesystem::path& path, std::string_vie
                    ": expected a new file or a regular file to replace, found " + kind);
 }
 
-OutputFolderLock::OutputFolderLock(const std::filesystem::path& folder) {
+OutputFolderLock::OutputFolderLock(const std::filesystem::path& folder, FolderLockMode mode) {
   std::error_code error;
   if (std::filesystem::exists(folder, error) && !std::filesystem::is_directory(folder, error))
     throw InputError(folder.string() + ": expected an output folder, found a file");
   std::filesystem::create_directories(folder, error);
   if (error) throw InputError(folder.string() + ": cannot create the output folder: " + error.message());
-  m_path = folder / k_output_lock_name;
-  // The holder removes the lock file when it ends: a lock taken on a file already unlinked (or
-  // replaced) meanwhile is no lock, so take it again on the file now under the name.
-  for (int attempt = 0; attempt < 100; ++attempt) {
-    if (try_lock(folder)) return;
-  }
-  throw InputError(folder.string() + ": cannot lock the output folder: its lock file keeps changing");
-}
-
-bool OutputFolderLock::try_lock(const std::filesystem::path& folder) {
-  const std::filesystem::path& lock = m_path;
-  m_fd = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  m_fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (m_fd < 0) {
-    throw InputError(folder.string() + ": cannot create the lock file " + lock.filename().string() + ": " +
-                     std::strerror(errno));
+    throw InputError(folder.string() +
+                     ": expected an output folder phantasm can open, found: " + std::strerror(errno));
   }
-  if (::flock(m_fd, LOCK_EX | LOCK_NB) != 0) {
-    const int cause = errno;
-    std::string holder;
-    char text[32] = {};
-    if (::pread(m_fd, text, sizeof(text) - 1, 0) > 0) holder = std::string(" (pid ") + text + ")";
-    while (!holder.empty() && (holder.back() == '\n' || holder.back() == ')'))
-      holder.pop_back();
-    if (!holder.empty()) holder += ")";
-    ::close(m_fd);
-    m_fd = -1;
-    if (cause == EWOULDBLOCK) {
-      throw InputError(folder.string() +
-                       ": expected an output folder no other run writes into, found one "
-                       "being written by another phantasm process" +
-                       holder + "; wait for it to finish or choose another folder");
-    }
-    throw InputError(folder.string() + ": cannot lock the output folder: " + std::strerror(cause));
+  const int operation = (mode == FolderLockMode::exclusive ? LOCK_EX : LOCK_SH) | LOCK_NB;
+  if (::flock(m_fd, operation) == 0) return;
+  const int cause = errno;
+  ::close(m_fd);
+  m_fd = -1;
+  if (cause == EWOULDBLOCK) {
+    throw InputError(
+        folder.string() +
+        ": expected an output folder no other run writes into, found one being written by another "
+        "phantasm process (" +
+        (mode == FolderLockMode::exclusive ? "a run or a batch" : "a run") +
+        "); wait for it to finish or choose another folder");
   }
-  struct stat held {
-  }, named{};
-  if (::fstat(m_fd, &held) != 0 || ::stat(lock.c_str(), &named) != 0 || held.st_ino != named.st_ino ||
-      held.st_dev != named.st_dev) {
-    ::close(m_fd);
-    m_fd = -1;
-    return false;
-  }
-  // Who holds the lock, for the message a second writer gets.
-  const std::string pid = std::to_string(::getpid()) + "\n";
-  if (::ftruncate(m_fd, 0) == 0) {
-    [[maybe_unused]] const ssize_t written = ::pwrite(m_fd, pid.data(), pid.size(), 0);
-  }
-  return true;
+  // A filesystem without flock() (some network mounts): the folder is used unlocked.
 }
 
 OutputFolderLock::~OutputFolderLock() {
-  if (m_fd < 0) return;
-  // Unlinked while held, so the folder is left as the run made it; a process that opened the
-  // old file meanwhile sees it is gone once it gets the lock, and retries (try_lock).
-  ::unlink(m_path.c_str());
-  ::close(m_fd); // releases the lock
+  if (m_fd >= 0) ::close(m_fd); // releases the lock
 }
 
 } // namespace phantasm

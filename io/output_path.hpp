@@ -27,27 +27,27 @@ void require_inside(const std::filesystem::path& root, const std::filesystem::pa
 /// @param what names the option in the message, e.g. "--json"
 void require_replaceable_file(const std::filesystem::path& path, std::string_view what);
 
-/// The lock file a run or a batch holds inside its output folder (hidden, removed when the run
-/// ends; not part of the dataset, and not counted when the folder is checked for files).
-inline constexpr const char* k_output_lock_name = ".phantasm.lock";
+/// How an output folder is held: a run alone, or batches side by side (the shards of one sweep
+/// run at once into one dataset, each writing its own subjects).
+enum class FolderLockMode { exclusive, shared };
 
-/// An exclusive lock on an output folder for the life of a run or a batch, so that two writers
-/// never mix their files in one dataset. Creates the folder when missing, then takes flock() on
-/// k_output_lock_name inside it without waiting. The lock ends with the object or the process
-/// (flock locks die with their last descriptor, so a killed run leaves no stale lock).
+/// A lock on an output folder for the life of a run or a batch, so that two writers never mix
+/// their files in one dataset. Creates the folder when missing, then takes flock() on the folder
+/// itself without waiting: no lock file is made, and the lock ends with the object or the
+/// process (a killed run leaves nothing stale). A run holds it exclusively; batches share it, so
+/// shards run side by side but a run and a batch, or two runs, never do. On a filesystem
+/// without flock() support the folder is used unlocked.
 class OutputFolderLock {
 public:
   /// @throws InputError when the folder cannot be made (e.g. it is a file) or another process
-  ///         holds the lock ("... is being written by another phantasm process (pid N)")
-  explicit OutputFolderLock(const std::filesystem::path& folder);
+  ///         holds the lock in a conflicting mode ("... being written by another phantasm process")
+  explicit OutputFolderLock(const std::filesystem::path& folder,
+                            FolderLockMode mode = FolderLockMode::exclusive);
   ~OutputFolderLock();
   OutputFolderLock(const OutputFolderLock&) = delete;
   OutputFolderLock& operator=(const OutputFolderLock&) = delete;
 
 private:
-  bool try_lock(const std::filesystem::path& folder);
-
-  std::filesystem::path m_path;
   int m_fd = -1;
 };
 
