@@ -143,7 +143,7 @@ Simulation simulate(const Scene& scene, Reporter& reporter, SimulationStage unti
 
 RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& reporter) {
   std::error_code error;
-  const bool existed = std::filesystem::exists(options.output, error);
+  const bool existed = !options.output_created && std::filesystem::exists(options.output, error);
   prepare_output_folder(options.output, options.force);
   try {
     const Simulation simulation = simulate(scene, reporter);
