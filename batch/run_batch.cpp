@@ -5,6 +5,7 @@
 #include "core/sha256.hpp"
 #include "io/atomic_file.hpp"
 #include "io/dataset_layout.hpp"
+#include "io/output_path.hpp"
 #include "pipeline/run_pipeline.hpp"
 
 #include <nlohmann/json.hpp>
@@ -21,6 +22,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <new>
 #include <thread>
 
 namespace phantasm {
@@ -49,6 +51,15 @@ namespace {
   } catch (const InputError& error) {
     std::cerr << "sub-" << subject.id << ": " << error.what() << '\n';
     code = 2;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "sub-" << subject.id
+              << ": error: out of memory: expected a subject that fits in this machine's memory with --jobs "
+                 "at a time, found more than it holds\n";
+    code = 1;
+  } catch (const std::filesystem::filesystem_error& error) {
+    std::cerr << "sub-" << subject.id << ": error: " << error.path1().string() << ": "
+              << error.code().message() << '\n';
+    code = 1;
   } catch (const std::exception& error) {
     std::cerr << "sub-" << subject.id << ": error: " << error.what() << '\n';
     code = 1;
@@ -80,6 +91,25 @@ std::string batch_status(const BatchSummary& summary, std::size_t to_run, double
   return text;
 }
 
+/// Refuses a batch into a folder that holds anything but a dataset phantasm writes (a batch
+/// resumes into its own folder; it must not scatter subjects among unrelated files).
+void require_batch_folder(const std::filesystem::path& folder) {
+  std::error_code error;
+  if (!std::filesystem::is_directory(folder, error)) return;
+  for (const auto& entry : std::filesystem::directory_iterator(folder, error)) {
+    const std::string name = entry.path().filename().string();
+    const bool ours = name == "dataset_description.json" || name == "participants.tsv" ||
+                      name == "derivatives" || name.rfind("sub-", 0) == 0 ||
+                      is_temporary_file_name(entry.path());
+    if (!ours) {
+      throw InputError(
+          folder.string() +
+          ": expected an empty or new output folder, or a dataset an earlier batch wrote, found '" + name +
+          "' in it (a file phantasm does not write)");
+    }
+  }
+}
+
 } // namespace
 
 bool subject_is_complete(const std::filesystem::path& output, const SweepSubject& subject) {
@@ -108,6 +138,9 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
   if (options.jobs < 1)
     throw InputError("--jobs: expected at least 1, found " + std::to_string(options.jobs));
   BatchSummary summary;
+  // Held until the batch returns: shards of a sweep share the folder, a run cannot enter it.
+  const OutputFolderLock lock(options.output, FolderLockMode::shared);
+  require_batch_folder(options.output);
   prepare_output_folder(options.output, true);
   write_file_atomically(options.output / "participants.tsv", participants_tsv(sweep));
 

@@ -1,6 +1,7 @@
 #include "batch/sweep.hpp"
 
 #include "core/error.hpp"
+#include "core/safe_name.hpp"
 #include "scene/scene.hpp"
 
 #include <yaml-cpp/yaml.h>
@@ -9,6 +10,7 @@
 #include <fstream>
 #include <random>
 #include <regex>
+#include <set>
 #include <sstream>
 
 namespace phantasm {
@@ -48,7 +50,7 @@ public:
   }
 
   std::vector<Segment> parse_path(const Variation& v) const {
-    static const std::regex segment(R"(([A-Za-z_][A-Za-z0-9_]*)((\[[0-9]+\])*))");
+    static const std::regex segment(R"(([A-Za-z_][A-Za-z0-9_]*)((\[[0-9]{1,6}\])*))");
     std::vector<Segment> path;
     std::stringstream parts(v.key);
     std::string part;
@@ -62,7 +64,7 @@ public:
                  part + "' in it");
       }
       Segment s{match[1].str(), {}};
-      static const std::regex index(R"(\[([0-9]+)\])");
+      static const std::regex index(R"(\[([0-9]{1,6})\])");
       const std::string indices = match[2].str();
       for (std::sregex_iterator it(indices.begin(), indices.end(), index), end; it != end; ++it)
         s.indices.push_back(std::stoul((*it)[1].str()));
@@ -98,6 +100,13 @@ public:
       } catch (const YAML::Exception&) {
         fail(v.mark, "vary." + key + "." + v.random_kind,
              "expected [low, high] (two numbers), found " + flow(range));
+      }
+      // Whole numbers beyond 2^53 are not exact in a double; no scene setting is that large.
+      constexpr double k_largest = 9007199254740992.0;
+      if (!std::isfinite(v.low) || !std::isfinite(v.high) || std::abs(v.low) > k_largest ||
+          std::abs(v.high) > k_largest) {
+        fail(v.mark, "vary." + key + "." + v.random_kind,
+             "expected two finite numbers within +-2^53, found " + flow(range));
       }
       if (!(v.low <= v.high) || (v.random_kind == "log_uniform" && v.low <= 0.0) ||
           (v.random_kind == "random_integer" &&
@@ -201,124 +210,225 @@ public:
     root["sequences"] = kept;
   }
 
-  Sweep read() {
-    YAML::Node top;
+  /// Reads the sweep: its header, its variations and, as `depth` asks, its subjects.
+  Sweep read(SweepDepth depth) {
     try {
-      top = YAML::LoadFile(m_file.string());
+      return read_checked(depth);
+    } catch (const YAML::Exception& error) {
+      // A value of the wrong kind where a reader asked for a scalar (yaml-cpp's "bad conversion").
+      fail(error.mark, "sweep", "expected a sweep as docs/batch.md describes it, found " + error.msg);
+    }
+  }
+
+  Sweep read_checked(SweepDepth depth) {
+    std::vector<YAML::Node> documents;
+    try {
+      documents = YAML::LoadAllFromFile(m_file.string());
     } catch (const YAML::BadFile&) {
       throw InputError(m_file.string() + ": expected a sweep file, found no readable file");
     } catch (const YAML::Exception& error) {
       fail(error.mark, "sweep", "expected valid YAML, found " + error.msg);
     }
+    if (documents.empty()) fail(YAML::Mark::null_mark(), "sweep", "expected a mapping, found an empty file");
+    if (documents.size() > 1) {
+      fail(documents[1].Mark(), "sweep",
+           "expected one YAML document, found " + std::to_string(documents.size()) + " (a second '---')");
+    }
+    const YAML::Node top = documents.front();
     if (!top.IsMap()) fail(top.Mark(), "sweep", "expected a mapping, found " + flow(top));
+    reject_duplicate_keys(top, "");
     for (const auto& entry : top) {
-      const std::string key = entry.first.as<std::string>();
+      const std::string key = scalar(entry.first, "sweep");
       if (key != "phantasm_sweep" && key != "name" && key != "base_scene" && key != "seed" &&
           key != "repeats" && key != "vary") {
         fail(entry.first.Mark(), key,
              "expected one of phantasm_sweep, name, base_scene, seed, repeats, vary; found an unknown key");
       }
     }
-    if (!top["phantasm_sweep"] || top["phantasm_sweep"].as<std::string>() != "1") {
+    if (!top["phantasm_sweep"] || !top["phantasm_sweep"].IsScalar() ||
+        top["phantasm_sweep"].Scalar() != "1") {
       fail(top.Mark(), "phantasm_sweep", "expected 'phantasm_sweep: 1' (the sweep format version)");
     }
     Sweep sweep;
     sweep.file = m_file;
     if (!top["base_scene"]) fail(top.Mark(), "base_scene", "expected the path of the base scene, found none");
-    sweep.base_scene = m_file.parent_path() / top["base_scene"].as<std::string>();
+    sweep.base_scene = m_file.parent_path() / scalar(top["base_scene"], "base_scene");
     std::ifstream base_file(sweep.base_scene);
-    if (!base_file) {
+    std::error_code error;
+    if (!base_file || std::filesystem::is_directory(sweep.base_scene, error)) {
       fail(top["base_scene"].Mark(), "base_scene",
            "expected a scene file, found no such file: " + sweep.base_scene.string());
     }
-    const std::string base_text((std::istreambuf_iterator<char>(base_file)),
-                                std::istreambuf_iterator<char>());
-    sweep.name = top["name"] ? top["name"].as<std::string>() : m_file.stem().string();
-    std::uint64_t seed = 0;
-    int repeats = 1;
+    m_base_text.assign((std::istreambuf_iterator<char>(base_file)), std::istreambuf_iterator<char>());
+    // The base scene's own mistakes are named in the base scene (each subject's scene is made
+    // from its first document only, so a second one would be dropped without a word).
     try {
-      if (top["seed"]) seed = top["seed"].as<std::uint64_t>();
-      if (top["repeats"]) repeats = top["repeats"].as<int>();
-    } catch (const YAML::Exception& error) {
-      fail(error.mark, top["seed"] && !top["seed"].IsScalar() ? "seed" : "seed or repeats",
-           "expected a whole number");
+      const std::vector<YAML::Node> base = YAML::LoadAll(m_base_text);
+      if (base.size() > 1) {
+        throw InputError(sweep.base_scene.string() + ":" + std::to_string(base[1].Mark().line + 1) + ":" +
+                         std::to_string(base[1].Mark().column + 1) + ": expected one YAML document, found " +
+                         std::to_string(base.size()) + " (a second '---')");
+      }
+    } catch (const YAML::Exception& base_error) {
+      throw InputError(sweep.base_scene.string() + ":" + std::to_string(base_error.mark.line + 1) + ":" +
+                       std::to_string(base_error.mark.column + 1) + ": expected valid YAML, found " +
+                       base_error.msg);
     }
-    if (repeats < 1 || repeats > 100000) fail(top["repeats"].Mark(), "repeats", "expected 1 to 100000");
+    sweep.name = top["name"] ? scalar(top["name"], "name") : m_file.stem().string();
+    if (top["name"] && !is_safe_name(sweep.name))
+      fail(top["name"].Mark(), "name",
+           std::string("expected ") + k_safe_name_rule + ", found " + quote_name(sweep.name));
+    try {
+      if (top["seed"]) m_seed = top["seed"].as<std::uint64_t>();
+    } catch (const YAML::Exception&) {
+      fail(top["seed"].Mark(), "seed",
+           "expected a whole number from 0 to 2^64 - 1, found " + flow(top["seed"]));
+    }
+    try {
+      if (top["repeats"]) m_repeats = top["repeats"].as<int>();
+    } catch (const YAML::Exception&) {
+      fail(top["repeats"].Mark(), "repeats",
+           "expected a whole number from 1 to 100000, found " + flow(top["repeats"]));
+    }
+    if (m_repeats < 1 || m_repeats > 100000)
+      fail(top["repeats"].Mark(), "repeats", "expected 1 to 100000, found " + std::to_string(m_repeats));
 
-    std::vector<Variation> variations;
     if (top["vary"]) {
       if (!top["vary"].IsMap()) fail(top["vary"].Mark(), "vary", "expected a mapping of key paths to values");
+      reject_duplicate_keys(top["vary"], "vary.");
       for (const auto& entry : top["vary"])
-        variations.push_back(read_variation(entry.first.as<std::string>(), entry.second));
+        m_variations.push_back(read_variation(scalar(entry.first, "vary"), entry.second));
     }
-    std::size_t combinations = 1;
-    for (const auto& v : variations) {
+    // The count is bounded before anything is made (each factor is at most 10^6).
+    std::size_t count = static_cast<std::size_t>(m_repeats);
+    for (const auto& v : m_variations) {
       sweep.varied_keys.push_back(v.key);
-      if (!v.values.empty()) combinations *= v.values.size();
+      if (!v.values.empty()) count *= v.values.size();
+      if (count > k_max_subjects)
+        fail(top.Mark(), "vary",
+             "expected at most 10^6 subjects, found more (" + std::to_string(count) + " so far)");
     }
-    const std::size_t count = combinations * static_cast<std::size_t>(repeats);
-    if (count > 1000000)
-      fail(top.Mark(), "vary", "expected at most 10^6 subjects, found " + std::to_string(count));
-    const int width = std::max<int>(2, static_cast<int>(std::to_string(count).size()));
+    m_width = std::max<int>(2, static_cast<int>(std::to_string(count).size()));
+    sweep.subject_count = count;
 
-    for (std::size_t s = 0; s < count; ++s) {
-      SweepSubject subject;
-      subject.id = std::to_string(s + 1);
-      subject.id.insert(0, static_cast<std::size_t>(width) - subject.id.size(), '0');
-      YAML::Node scene = YAML::Load(base_text);
-      std::size_t combination = s / static_cast<std::size_t>(repeats);
-      // The grid index of each list, the last list fastest.
-      std::vector<std::size_t> choice(variations.size(), 0);
-      for (std::size_t k = variations.size(); k-- > 0;) {
-        if (variations[k].values.empty()) continue;
-        choice[k] = combination % variations[k].values.size();
-        combination /= variations[k].values.size();
-      }
-      for (std::size_t k = 0; k < variations.size(); ++k) {
-        const Variation& v = variations[k];
-        YAML::Node value;
-        if (!v.values.empty()) {
-          value = v.values[choice[k]];
-        } else {
-          std::seed_seq mix{static_cast<std::uint32_t>(seed), static_cast<std::uint32_t>(seed >> 32),
-                            static_cast<std::uint32_t>(s), static_cast<std::uint32_t>(k)};
-          std::mt19937_64 random(mix);
-          std::ostringstream text;
-          text.precision(6);
-          if (v.random_kind == "random_integer") {
-            std::uniform_int_distribution<long long> draw(static_cast<long long>(v.low),
-                                                          static_cast<long long>(v.high));
-            text << draw(random);
-          } else if (v.random_kind == "uniform") {
-            text << std::uniform_real_distribution<double>(v.low, v.high)(random);
-          } else {
-            text << std::exp(
-                std::uniform_real_distribution<double>(std::log(v.low), std::log(v.high))(random));
-          }
-          value = YAML::Load(text.str());
-        }
-        assign(scene, v, value);
-        subject.values.emplace_back(v.key, flow(value));
-      }
-      scene["outputs"]["subject"] = subject.id;
-      YAML::Emitter out;
-      out << scene;
-      subject.scene_text = std::string(out.c_str()) + "\n";
-      const SceneLoadResult checked = parse_scene(subject.scene_text, sweep.base_scene);
-      if (!checked.scene) {
-        std::string values;
-        for (const auto& [key, text] : subject.values)
-          values += (values.empty() ? "" : ", ") + key + " = " + text;
-        throw InputError(m_file.string() + ": subject " + subject.id + " (" + values +
-                         ") gives a scene that does not validate:\n" + format_diagnostics(checked.problems));
-      }
-      sweep.subjects.push_back(std::move(subject));
+    if (depth == SweepDepth::labels) {
+      sweep.subjects.reserve(count);
+      for (std::size_t s = 0; s < count; ++s)
+        sweep.subjects.push_back(SweepSubject{label(s), {}, {}});
+      return sweep;
     }
+    if (depth == SweepDepth::sample && count > k_checked_subjects) {
+      // Every value of every list at least once, the first subjects (their random draws) and the
+      // last: what `validate` answers in seconds for a sweep of any size.
+      std::set<std::size_t> chosen;
+      for (std::size_t s = 0; s < k_checked_subjects; ++s)
+        chosen.insert(s);
+      chosen.insert(count - 1);
+      std::size_t stride = static_cast<std::size_t>(m_repeats);
+      for (std::size_t k = m_variations.size(); k-- > 0;) {
+        const std::size_t n = m_variations[k].values.size();
+        if (n == 0) continue;
+        for (std::size_t i = 0; i < n; ++i)
+          chosen.insert(i * stride);
+        stride *= n;
+      }
+      for (const std::size_t s : chosen)
+        sweep.subjects.push_back(make_subject(sweep, s));
+      return sweep;
+    }
+    for (std::size_t s = 0; s < count; ++s)
+      sweep.subjects.push_back(make_subject(sweep, s));
     return sweep;
   }
 
+  std::string label(std::size_t s) const {
+    std::string id = std::to_string(s + 1);
+    id.insert(0, static_cast<std::size_t>(m_width) - id.size(), '0');
+    return id;
+  }
+
+  /// Subject s: the base scene with its values set, checked as `phantasm validate` would.
+  SweepSubject make_subject(const Sweep& sweep, std::size_t s) const {
+    SweepSubject subject;
+    subject.id = label(s);
+    YAML::Node scene = YAML::Load(m_base_text);
+    std::size_t combination = s / static_cast<std::size_t>(m_repeats);
+    // The grid index of each list, the last list fastest.
+    std::vector<std::size_t> choice(m_variations.size(), 0);
+    for (std::size_t k = m_variations.size(); k-- > 0;) {
+      if (m_variations[k].values.empty()) continue;
+      choice[k] = combination % m_variations[k].values.size();
+      combination /= m_variations[k].values.size();
+    }
+    for (std::size_t k = 0; k < m_variations.size(); ++k) {
+      const Variation& v = m_variations[k];
+      YAML::Node value;
+      if (!v.values.empty()) {
+        value = v.values[choice[k]];
+      } else {
+        std::seed_seq mix{static_cast<std::uint32_t>(m_seed), static_cast<std::uint32_t>(m_seed >> 32),
+                          static_cast<std::uint32_t>(s), static_cast<std::uint32_t>(k)};
+        std::mt19937_64 random(mix);
+        std::ostringstream text;
+        text.precision(6);
+        if (v.random_kind == "random_integer") {
+          std::uniform_int_distribution<long long> draw(static_cast<long long>(v.low),
+                                                        static_cast<long long>(v.high));
+          text << draw(random);
+        } else if (v.random_kind == "uniform") {
+          text << std::uniform_real_distribution<double>(v.low, v.high)(random);
+        } else {
+          text << std::exp(std::uniform_real_distribution<double>(std::log(v.low), std::log(v.high))(random));
+        }
+        value = YAML::Load(text.str());
+      }
+      assign(scene, v, value);
+      subject.values.emplace_back(v.key, flow(value));
+    }
+    scene["outputs"]["subject"] = subject.id;
+    YAML::Emitter out;
+    out << scene;
+    subject.scene_text = std::string(out.c_str()) + "\n";
+    const SceneLoadResult checked = parse_scene(subject.scene_text, sweep.base_scene);
+    if (!checked.scene) {
+      std::string values;
+      for (const auto& [key, text] : subject.values)
+        values += (values.empty() ? "" : ", ") + key + " = " + text;
+      throw InputError(m_file.string() + ": subject " + subject.id + " (" + values +
+                       ") gives a scene that does not validate:\n" + format_diagnostics(checked.problems));
+    }
+    return subject;
+  }
+
+  /// A scalar's text; anything else is named at its line.
+  std::string scalar(const YAML::Node& node, const std::string& key) const {
+    if (!node.IsScalar())
+      fail(node.Mark(), key, "expected a single value (text or number), found " + flow(node));
+    return node.Scalar();
+  }
+
+  /// yaml-cpp keeps both entries of a key given twice (and lookups see only the first).
+  void reject_duplicate_keys(const YAML::Node& map, const std::string& prefix) const {
+    std::set<std::string> seen;
+    for (const auto& entry : map) {
+      const std::string key =
+          scalar(entry.first, prefix.empty() ? "sweep" : prefix.substr(0, prefix.size() - 1));
+      if (!seen.insert(key).second)
+        fail(entry.first.Mark(), prefix + key, "expected each key once, found it a second time");
+    }
+  }
+
 private:
+  static constexpr std::size_t k_max_subjects = 1000000;
+  /// Above this many subjects `validate` checks a sample (SweepDepth::sample).
+  static constexpr std::size_t k_checked_subjects = 1000;
+
   std::filesystem::path m_file;
+  std::string m_base_text;
+  std::vector<Variation> m_variations;
+  std::uint64_t m_seed = 0;
+  int m_repeats = 1;
+  int m_width = 2;
 };
 
 } // namespace
@@ -331,8 +441,8 @@ bool is_sweep_file(const std::filesystem::path& file) {
   return false;
 }
 
-Sweep load_sweep(const std::filesystem::path& file) {
-  return SweepReader(file).read();
+Sweep load_sweep(const std::filesystem::path& file, SweepDepth depth) {
+  return SweepReader(file).read(depth);
 }
 
 std::string scene_text_with_value(const std::string& scene_text, const std::string& key,

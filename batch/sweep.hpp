@@ -27,15 +27,25 @@ struct Sweep {
   std::filesystem::path base_scene; ///< anchors the subjects' relative paths
   std::string name;
   std::vector<std::string> varied_keys;
+  std::size_t subject_count = 0; ///< every subject of the sweep, also when `subjects` holds a sample
   std::vector<SweepSubject> subjects;
+};
+
+/// How much of a sweep load_sweep makes.
+enum class SweepDepth {
+  full,   ///< every subject with its scene, each checked (batch)
+  labels, ///< every subject's label only, no scene made (batch --list): seconds for 10^6 subjects
+  sample, ///< every subject up to 1000; beyond, a sample: the first 1000, the last, and each value
+          ///< of each list at least once, each checked (validate)
 };
 
 /// True when a YAML file is a sweep (its text has a top-level `phantasm_sweep:` key).
 bool is_sweep_file(const std::filesystem::path& file);
 
-/// Reads a sweep and checks every subject's scene (as `phantasm validate` would).
+/// Reads a sweep and, as `depth` asks, makes and checks its subjects' scenes (as `phantasm
+/// validate` would). The subject count is bounded (10^6) before any subject is made.
 /// @throws InputError naming the sweep file, line and key, or the subject and its scene problem
-Sweep load_sweep(const std::filesystem::path& file);
+Sweep load_sweep(const std::filesystem::path& file, SweepDepth depth = SweepDepth::full);
 
 /// The i-th of N disjoint slices of a sweep ("2/3"): subjects whose index modulo N is i - 1.
 struct Shard {

@@ -44,6 +44,10 @@ std::vector<LandmarkRow> read_landmarks(const std::filesystem::path& path) {
       throw InputError(path.string() + ":" + std::to_string(number) + ": expected three numbers, found '" +
                        line + "'");
     }
+    if (!row.ras_mm.allFinite()) {
+      throw InputError(path.string() + ":" + std::to_string(number) +
+                       ": expected three finite numbers (mm), found '" + line + "'");
+    }
     rows.push_back(row);
   }
   return rows;
@@ -98,6 +102,27 @@ void require_same_grid(const ImageGrid& expected, const ImageGrid& found, const 
   }
 }
 
+/// Refuses a grid whose affine is not finite (a damaged or hand-made file).
+void require_finite_grid(const ImageGrid& grid, const std::filesystem::path& path) {
+  if (!grid.world_from_voxel.allFinite())
+    throw InputError(path.string() +
+                     ": expected a finite voxel-to-world affine, found NaN or infinite entries");
+}
+
+/// Refuses a field with a NaN or infinite displacement: scores computed from it would be NaN.
+void require_finite_field(const DisplacementField& field, const std::filesystem::path& path) {
+  for (std::size_t v = 0; v < field.lps_mm.size(); ++v) {
+    if (!field.lps_mm[v].allFinite()) {
+      const Eigen::Vector3i& d = field.grid.dims;
+      const long long i = static_cast<long long>(v % d.x()), j = static_cast<long long>((v / d.x()) % d.y()),
+                      k = static_cast<long long>(v / (static_cast<std::size_t>(d.x()) * d.y()));
+      throw InputError(path.string() +
+                       ": expected finite displacements (mm), found NaN or infinity at voxel (" +
+                       std::to_string(i) + ", " + std::to_string(j) + ", " + std::to_string(k) + ")");
+    }
+  }
+}
+
 nlohmann::json summary_json(const Summary& s) {
   return {{"count", s.count}, {"mean", s.mean}, {"sd", s.sd}, {"p95", s.p95}, {"max", s.max}};
 }
@@ -126,6 +151,8 @@ nlohmann::json evaluate_registration(const EvaluationRequest& request) {
   const std::vector<std::int32_t> fixed_labels = read_nifti_labels(layout.dseg(fixed), &grid);
   const std::vector<std::int32_t> moving_labels = read_nifti_labels(layout.dseg(moving), &moving_grid);
   const std::map<std::int32_t, std::string> names = read_label_names(layout.dseg_table());
+  require_finite_grid(grid, layout.dseg(fixed));
+  require_finite_grid(moving_grid, layout.dseg(moving));
 
   nlohmann::json result = {
       {"dataset", request.dataset.string()},
@@ -140,6 +167,7 @@ nlohmann::json evaluate_registration(const EvaluationRequest& request) {
   if (request.field) {
     field = read_displacement_field(*request.field);
     require_same_grid(grid, field->grid, *request.field);
+    require_finite_field(*field, *request.field);
     result["result"] = {{"kind", "field"}, {"path", request.field->string()}};
   } else if (request.identity) {
     field = zero_field(grid);
@@ -217,7 +245,15 @@ nlohmann::json evaluate_registration(const EvaluationRequest& request) {
     // from-<moving>_to-<fixed>).
     const DisplacementField truth = read_displacement_field(layout.transform(moving, fixed));
     require_same_grid(grid, truth.grid, layout.transform(moving, fixed));
+    require_finite_field(truth, layout.transform(moving, fixed));
     const NiftiVolume mask = read_nifti(layout.transform_mask(moving, fixed));
+    // Read voxel by voxel with the field's indices: a mask of another grid would be read out of bounds.
+    require_same_grid(grid, mask.grid, layout.transform_mask(moving, fixed));
+    if (mask.values.size() != truth.lps_mm.size()) {
+      throw InputError(layout.transform_mask(moving, fixed).string() + ": expected " +
+                       std::to_string(truth.lps_mm.size()) + " voxels (one component), found " +
+                       std::to_string(mask.values.size()));
+    }
     std::vector<double> error;
     for (std::size_t v = 0; v < truth.lps_mm.size(); ++v)
       if (mask.values[v] > 0.5) error.push_back((field->lps_mm[v] - truth.lps_mm[v]).norm());

@@ -1,6 +1,7 @@
 #include "io/atomic_file.hpp"
 
 #include "core/cancellation.hpp"
+#include "io/output_path.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -37,6 +38,8 @@ void fsync_folder(const std::filesystem::path& folder) {
 } // namespace
 
 AtomicFileWriter::AtomicFileWriter(std::filesystem::path final_path) : m_final_path(std::move(final_path)) {
+  // The rename of commit() would replace a device node or a FIFO with a regular file.
+  require_replaceable_file(m_final_path, "output file");
   const std::filesystem::path folder = m_final_path.parent_path();
   if (!folder.empty()) std::filesystem::create_directories(folder);
   const std::string name = "." + m_final_path.filename().string() + k_temporary_marker +

@@ -5,6 +5,7 @@
 
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
+#include "io/output_path.hpp"
 
 namespace phantasm {
 
@@ -38,8 +39,9 @@ std::filesystem::path DatasetLayout::dataset_description() const {
 }
 
 std::filesystem::path DatasetLayout::anat_image(PhantomState state, const std::string& suffix) const {
-  return m_root / ("sub-" + m_subject) / (std::string("ses-") + session_label(state)) / "anat" /
-         (prefix(state) + "_" + suffix + ".nii.gz");
+  return output_file(output_file(m_root, "sub-" + m_subject) / (std::string("ses-") + session_label(state)) /
+                         "anat",
+                     prefix(state) + "_" + suffix + ".nii.gz");
 }
 
 std::filesystem::path DatasetLayout::readme() const {
@@ -67,7 +69,7 @@ std::filesystem::path DatasetLayout::dseg_table() const {
 }
 
 std::filesystem::path DatasetLayout::subject_derivatives() const {
-  return derivatives() / ("sub-" + m_subject);
+  return output_file(derivatives(), "sub-" + m_subject);
 }
 
 std::filesystem::path DatasetLayout::session_derivatives(PhantomState state) const {
@@ -79,12 +81,12 @@ std::filesystem::path DatasetLayout::dseg(PhantomState state) const {
 }
 
 std::filesystem::path DatasetLayout::probseg(PhantomState state, const std::string& tissue) const {
-  return session_derivatives(state) / "anat" /
-         (prefix(state) + "_label-" + bids_entity_value(tissue) + "_probseg.nii.gz");
+  return output_file(session_derivatives(state) / "anat",
+                     prefix(state) + "_label-" + bids_entity_value(tissue) + "_probseg.nii.gz");
 }
 
 std::filesystem::path DatasetLayout::parameter_map(PhantomState state, const std::string& suffix) const {
-  return dseg(state).parent_path() / (prefix(state) + "_" + suffix + ".nii.gz");
+  return output_file(dseg(state).parent_path(), prefix(state) + "_" + suffix + ".nii.gz");
 }
 
 std::filesystem::path DatasetLayout::transform(PhantomState from, PhantomState to) const {
@@ -110,13 +112,13 @@ std::filesystem::path DatasetLayout::landmarks(PhantomState state) const {
 }
 
 std::filesystem::path DatasetLayout::mesh(PhantomState state, const std::string& organ) const {
-  return session_derivatives(state) / "meshes" /
-         (prefix(state) + "_organ-" + bids_entity_value(organ) + "_mesh.vtp");
+  return output_file(session_derivatives(state) / "meshes",
+                     prefix(state) + "_organ-" + bids_entity_value(organ) + "_mesh.vtp");
 }
 
 std::filesystem::path DatasetLayout::tet_mesh(PhantomState state, const std::string& organ) const {
-  return session_derivatives(state) / "meshes" /
-         (prefix(state) + "_organ-" + bids_entity_value(organ) + "_tetmesh.vtu");
+  return output_file(session_derivatives(state) / "meshes",
+                     prefix(state) + "_organ-" + bids_entity_value(organ) + "_tetmesh.vtu");
 }
 
 std::filesystem::path DatasetLayout::vdb(PhantomState state) const {
@@ -124,7 +126,7 @@ std::filesystem::path DatasetLayout::vdb(PhantomState state) const {
 }
 
 std::filesystem::path DatasetLayout::preview(PhantomState state, const std::string& suffix) const {
-  return session_derivatives(state) / "previews" / (prefix(state) + "_" + suffix + ".png");
+  return output_file(session_derivatives(state) / "previews", prefix(state) + "_" + suffix + ".png");
 }
 
 std::filesystem::path DatasetLayout::provenance() const {

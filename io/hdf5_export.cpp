@@ -296,7 +296,14 @@ Hdf5ExportSummary export_hdf5(const std::filesystem::path& dataset, const std::f
       const DatasetLayout layout(dataset, id);
       const std::string subject = "sub-" + id;
       const std::string provenance_text = read_text(layout.provenance());
-      const nlohmann::json provenance = nlohmann::json::parse(provenance_text);
+      nlohmann::json provenance;
+      try {
+        provenance = nlohmann::json::parse(provenance_text);
+      } catch (const nlohmann::json::exception& error) {
+        throw InputError(layout.provenance().string() +
+                         ": expected the JSON phantasm writes, found a file it cannot parse (" +
+                         error.what() + ")");
+      }
       {
         const Handle group(group_at(h5.get(), "/" + subject), H5Gclose);
         string_attribute(group.get(), "provenance", provenance_text);

@@ -192,11 +192,60 @@ void write_nifti_labels(const std::filesystem::path& path, const ImageGrid& grid
 namespace {
 
 /// Reads a NIfTI file holding `components` values per voxel: a 3-D volume for 1, a 5-D
+/// Refuses a float image with a NaN or infinite value. libnifti sets such values to 0 as it
+/// loads them (nifti_read_buffer), so a field or map of NaN would read as zeros without a word:
+/// the stored bytes are checked here, before the load.
+void require_finite_floats(const std::filesystem::path& path, const nifti_image& header) {
+  if (header.datatype != DT_FLOAT32 && header.datatype != DT_FLOAT64) return;
+  const znzFile file = znzopen(header.iname, "rb", nifti_is_gzfile(header.iname));
+  if (znz_isnull(file)) return; // the load below says what is wrong
+  znzFile handle = file;
+  if (znzseek(handle, static_cast<znz_off_t>(header.iname_offset), SEEK_SET) < 0) {
+    znzclose(handle);
+    return;
+  }
+  const std::size_t bytes_per_value = header.datatype == DT_FLOAT32 ? 4 : 8;
+  const bool swap = header.byteorder != nifti_short_order();
+  std::vector<unsigned char> chunk(std::size_t{1} << 20);
+  std::int64_t index = 0;
+  const std::int64_t count = header.nvox;
+  while (index < count) {
+    const std::size_t values =
+        static_cast<std::size_t>(std::min<std::int64_t>(count - index, chunk.size() / bytes_per_value));
+    const std::size_t read = znzread(chunk.data(), 1, values * bytes_per_value, handle);
+    if (read != values * bytes_per_value) break; // short file: the load below refuses it
+    for (std::size_t v = 0; v < values; ++v, ++index) {
+      unsigned char* at = chunk.data() + v * bytes_per_value;
+      if (swap) std::reverse(at, at + bytes_per_value);
+      double value = 0.0;
+      if (bytes_per_value == 4) {
+        float f = 0.0f;
+        std::memcpy(&f, at, 4);
+        value = f;
+      } else {
+        std::memcpy(&value, at, 8);
+      }
+      if (!std::isfinite(value)) {
+        znzclose(handle);
+        fail(path, "expected finite values, found " + std::string(std::isnan(value) ? "NaN" : "infinity") +
+                       " at value " + std::to_string(index) + " of " + std::to_string(count) +
+                       " (i fastest, then j, k, components)");
+      }
+    }
+  }
+  znzclose(handle);
+}
+
 /// (X, Y, Z, 1, components) image in the ITK vector convention otherwise.
 NiftiVolume read_volume(const std::filesystem::path& path, int components) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error)) fail(path, "expected a NIfTI file, found no such file");
   nifti_set_debug_level(0);
+  {
+    const std::unique_ptr<nifti_image, void (*)(nifti_image*)> header(nifti_image_read(path.c_str(), 0),
+                                                                      nifti_image_free);
+    if (header) require_finite_floats(path, *header);
+  }
   const std::unique_ptr<nifti_image, void (*)(nifti_image*)> image(nifti_image_read(path.c_str(), 1),
                                                                    nifti_image_free);
   if (!image || !image->data)

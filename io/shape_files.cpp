@@ -5,12 +5,57 @@
 #include "io/mesh_file.hpp"
 #include "io/nifti_file.hpp"
 
+#include <Eigen/LU>
 #include <algorithm>
+#include <cmath>
+#include <memory>
 #include <set>
 #include <sstream>
 
 namespace phantasm {
 namespace {
+
+/// How far from the origin an imported shape may reach: 100 m, far beyond any body or scanner,
+/// and the bound of the grid's centre (docs/scene-format.md). Coordinates beyond it (1e30 mm)
+/// would make every later stage work on absurd extents instead of failing.
+constexpr double k_max_coordinate_mm = 1e5;
+
+/// Refuses a mesh with a non-finite coordinate or one beyond k_max_coordinate_mm.
+void check_mesh_bounds(const std::filesystem::path& file, const TriangleMesh& mesh) {
+  for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v) {
+    for (int c = 0; c < 3; ++c) {
+      const double x = mesh.vertices(v, c);
+      if (!std::isfinite(x) || std::abs(x) > k_max_coordinate_mm) {
+        throw InputError(file.string() + ": vertex " + std::to_string(v) +
+                         ": expected coordinates within +-" + format_number(k_max_coordinate_mm) +
+                         " mm, found " + format_number(x));
+      }
+    }
+  }
+}
+
+/// Refuses a label volume whose affine is not finite or not invertible, or whose voxels reach
+/// beyond k_max_coordinate_mm.
+void check_volume_grid(const std::filesystem::path& file, const ImageGrid& grid) {
+  const Eigen::Matrix4d& m = grid.world_from_voxel;
+  if (!m.allFinite() || !std::isfinite(m.topLeftCorner<3, 3>().determinant()) ||
+      m.topLeftCorner<3, 3>().determinant() == 0.0) {
+    throw InputError(
+        file.string() +
+        ": expected a finite voxel-to-world affine (sform or qform) that can be inverted, found " +
+        (m.allFinite() ? std::string("a singular one") : std::string("NaN or infinite entries")));
+  }
+  for (int corner = 0; corner < 8; ++corner) {
+    const Eigen::Vector3d ijk((corner & 1) ? grid.dims.x() : 0, (corner & 2) ? grid.dims.y() : 0,
+                              (corner & 4) ? grid.dims.z() : 0);
+    const Eigen::Vector3d world = grid.world_from_index(ijk);
+    if (!world.allFinite() || world.cwiseAbs().maxCoeff() > k_max_coordinate_mm) {
+      throw InputError(file.string() + ": expected voxels within +-" + format_number(k_max_coordinate_mm) +
+                       " mm of the origin, found a corner of the volume at " +
+                       format_number(world.cwiseAbs().maxCoeff()) + " mm");
+    }
+  }
+}
 
 /// A label volume as the organs share it, with each label's voxel box (from one pass).
 struct LoadedVolume {
@@ -113,6 +158,7 @@ std::map<std::string, ShapeData> read_shape_files(const AnatomySettings& anatomy
     try {
       if (shape.kind == ShapeKind::mesh) {
         files[organ.name].mesh = read_triangle_mesh(shape.file);
+        check_mesh_bounds(shape.file, *files[organ.name].mesh);
         continue;
       }
       volume_of[i] = atlas ? "atlas:" + shape.atlas : shape.file.string();
@@ -131,6 +177,7 @@ std::map<std::string, ShapeData> read_shape_files(const AnatomySettings& anatomy
           data.label_grid.emplace();
           data.labels = std::make_shared<const std::vector<std::int32_t>>(
               read_nifti_labels(shape.file, &*data.label_grid));
+          check_volume_grid(shape.file, *data.label_grid);
           data.source = shape.file.string();
         }
         measure_boxes(*volume);

@@ -3,7 +3,9 @@
 #include "core/format.hpp"
 #include "mri/tissue_parameters.hpp"
 
+#include <cmath>
 #include <sstream>
+#include <utility>
 
 namespace phantasm {
 namespace {
@@ -31,6 +33,29 @@ StageReport plan_mri(const MriSettings& settings, const OrganTable& organs) {
       line << ", TI " << s.TI_ms << " ms";
     line << "; reference and deformed";
     report.modelled.push_back(line.str());
+  }
+  for (const auto& s : settings.sequences) {
+    // A gradient-echo excitation of 0 or 180 degrees leaves no transverse magnetisation: the image
+    // is zero, and noise relative to the reference tissue's signal is zero as well.
+    const bool gradient_echo = s.kind == SequenceKind::spoiled_gre || s.kind == SequenceKind::bssfp ||
+                               s.kind == SequenceKind::mprage;
+    if (gradient_echo && std::abs(std::sin(s.flip_deg * M_PI / 180.0)) < 1e-6) {
+      report.warnings.push_back("sequence " + s.name + ": a flip angle of " + format_number(s.flip_deg) +
+                                " deg makes no signal (sin(flip) = 0): the image is zero");
+    }
+  }
+  for (const auto& [name, p] : resolve_tissue_parameters(settings, organs)) {
+    // No tissue relaxes over more than 1000 s (water's T1 is about 4 s): longer times make the
+    // signal equations 0/0 or 0 for every sequence.
+    constexpr double k_longest_ms = 1e6;
+    for (const auto& [label, value] :
+         {std::pair{"T1", p.T1_ms}, std::pair{"T2", p.T2_ms}, std::pair{"T2*", p.T2star_ms}}) {
+      if (value && *value > k_longest_ms) {
+        report.warnings.push_back(
+            "tissue " + name + ": " + label + " of " + format_number(*value) +
+            " ms is beyond any tissue's (at most 1e6 ms): its signal may be zero or undefined");
+      }
+    }
   }
   for (const auto& [name, p] : resolve_tissue_parameters(settings, organs)) {
     report.modelled.push_back("tissue " + name + " at " + value_text(settings.field_strength_T) + " T: T1 " +

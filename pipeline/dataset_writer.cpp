@@ -10,6 +10,7 @@
 #include "io/json_file.hpp"
 #include "io/mesh_file.hpp"
 #include "io/nifti_file.hpp"
+#include "io/output_path.hpp"
 #include "io/preview_png.hpp"
 #include "io/vdb_file.hpp"
 #include "scene/scene_json.hpp"
@@ -571,6 +572,19 @@ RunSummary write_dataset(const Scene& scene, const Simulation& simulation,
   summary.stages = simulation.stages;
   const DatasetLayout layout(output, scene.outputs.subject);
   const DatasetPlan plan = plan_dataset(scene, simulation, layout, reporter, summary);
+  // No name from the scene may lead a file out of the dataset (io/output_path.hpp).
+  for (const PlannedFile& file : plan.files())
+    require_inside(layout.root(), file.path);
+  // provenance.json marks a complete subject: an earlier run's marker goes before any file is
+  // replaced, so a run that fails or is killed from here on leaves a subject that says it is
+  // incomplete, never one that mixes two runs under an old marker.
+  std::error_code removed;
+  std::filesystem::remove(layout.provenance(), removed);
+  if (removed) {
+    throw std::runtime_error(
+        layout.provenance().string() +
+        ": cannot remove the completion marker of the earlier run: " + removed.message());
+  }
   // Both sessions' anat folders exist even without images (the BIDS layout names them).
   for (PhantomState state : {PhantomState::reference, PhantomState::deformed})
     std::filesystem::create_directories(layout.anat_image(state, "T1w").parent_path());

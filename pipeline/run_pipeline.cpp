@@ -87,6 +87,10 @@ namespace {
 void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until, Simulation& result) {
   result.stages = plan_stages(scene);
   for (const auto& stage : result.stages) {
+    // Settings a plan finds pointless (a flip angle that excites nothing, ...) warn before work;
+    // they stay in the report, so provenance.json records them and --strict refuses them.
+    for (const auto& line : stage.warnings)
+      reporter.warning(stage.stage, line);
     for (const auto& line : stage.modelled)
       reporter.modelled(stage.stage, line);
     for (const auto& line : stage.skipped)
@@ -140,7 +144,7 @@ Simulation simulate(const Scene& scene, Reporter& reporter, SimulationStage unti
 RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& reporter) {
   check_dataset_names(scene); // before the stages run, not after
   std::error_code error;
-  const bool existed = std::filesystem::exists(options.output, error);
+  const bool existed = !options.output_created && std::filesystem::exists(options.output, error);
   prepare_output_folder(options.output, options.force);
   try {
     const Simulation simulation = simulate(scene, reporter);

@@ -20,6 +20,9 @@ struct RunOptions {
   /// a result the run cannot vouch for (an unconverged solve, inverted tets, a non-positive
   /// Jacobian inside an exact mask) is an error: StrictError before anything is written
   bool strict = false;
+  /// the caller made the output folder for this run (to lock it): a run that fails on its input
+  /// removes it again when it is still empty, as one that made it itself
+  bool output_created = false;
 };
 
 /// A run with --strict whose stages warned: nothing of the subject was written.

@@ -41,6 +41,16 @@ public:
     }
     if (total > (std::int64_t{1} << 31)) {
       problem("grid.voxel_size_mm", "expected at most 2^31 voxels, found " + std::to_string(total));
+      return;
+    }
+    // The tessellation grows about 4x per halving of its tolerance: a hundredth of the smallest
+    // voxel edge is far below what a voxel shows, and bounds the triangle count (a tolerance of
+    // 1e-9 mm would ask for more triangles than memory holds and never end).
+    const double finest = g.voxel_size_mm.minCoeff() / 100.0;
+    if (m_scene.voxelization.tessellation_tolerance_mm < finest) {
+      problem("voxelization.tessellation_tolerance_mm",
+              "expected at least a hundredth of the smallest voxel edge (" + format_number(finest) +
+                  " mm), found " + format_number(m_scene.voxelization.tessellation_tolerance_mm) + " mm");
     }
   }
 

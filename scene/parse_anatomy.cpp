@@ -161,8 +161,10 @@ void parse_anatomy(CheckedMap& map, const std::filesystem::path& scene_folder, A
     CheckedMap entry(map.context(), organs[i], path + "[" + std::to_string(i) + "]");
     if (!entry.valid()) continue;
     OrganSettings organ;
-    entry.string("name", organ.name, true);
-    entry.string("tissue", organ.tissue, true);
+    if (entry.string("name", organ.name, true))
+      check_name(map.context(), entry.get("name"), entry.child_path("name"), organ.name);
+    if (entry.string("tissue", organ.tissue, true))
+      check_name(map.context(), entry.get("tissue"), entry.child_path("tissue"), organ.tissue);
     entry.string("material", organ.material);
     entry.string("inside", organ.inside);
     entry.boolean("solid", organ.solid);

@@ -1,3 +1,4 @@
+#include "core/safe_name.hpp"
 #include "core/sha256.hpp"
 #include "scene/parse_sections.hpp"
 
@@ -6,6 +7,13 @@
 
 namespace phantasm {
 namespace scene_detail {
+
+bool check_name(YamlContext& context, const YAML::Node& at, const std::string& key_path,
+                const std::string& value) {
+  if (is_safe_name(value)) return true;
+  context.problem(at, key_path, std::string("expected ") + k_safe_name_rule + ", found " + quote_name(value));
+  return false;
+}
 
 bool is_bids_label(const std::string& text) {
   if (text.empty()) return false;
@@ -31,6 +39,7 @@ void parse_materials(CheckedMap& map, std::vector<MaterialSettings>& materials) 
   if (!map.valid()) return;
   for (const auto& pair : map.node()) {
     const std::string name = pair.first.Scalar();
+    check_name(map.context(), pair.first, map.child_path(name), name);
     CheckedMap entry(map.context(), map.get(name), map.child_path(name));
     MaterialSettings material;
     material.name = name;
@@ -46,6 +55,7 @@ void parse_tissues(CheckedMap& map, std::vector<TissueOverride>& tissues) {
   if (!map.valid()) return;
   for (const auto& pair : map.node()) {
     const std::string name = pair.first.Scalar();
+    check_name(map.context(), pair.first, map.child_path(name), name);
     CheckedMap entry(map.context(), map.get(name), map.child_path(name));
     TissueOverride tissue;
     tissue.tissue = name;
@@ -113,7 +123,16 @@ SceneLoadResult parse_scene(const std::string& text, const std::filesystem::path
 
   YAML::Node root;
   try {
-    root = YAML::Load(text);
+    const std::vector<YAML::Node> documents = YAML::LoadAll(text);
+    if (documents.size() > 1) {
+      // yaml-cpp's Load would read the first and drop the rest without a word.
+      const YAML::Mark at = documents[1].Mark();
+      result.problems.push_back(Diagnostic{SourceLocation{file_name, at.line + 1, at.column + 1}, "",
+                                           "expected one YAML document, found " +
+                                               std::to_string(documents.size()) + " (a second '---')"});
+      return result;
+    }
+    if (!documents.empty()) root = documents.front();
   } catch (const YAML::Exception& error) {
     SourceLocation where{file_name, error.mark.line + 1, error.mark.column + 1};
     if (error.mark.is_null()) where.line = where.column = 0;
@@ -130,10 +149,7 @@ SceneLoadResult parse_scene(const std::string& text, const std::filesystem::path
     if (top.integer("phantasm", format_version, 1, 1, true)) {
       // Only version 1 exists; the key is there so that later formats can be told apart.
     }
-    if (top.string("name", scene.name, true) && scene.name.find_first_of("/\\ \t") != std::string::npos) {
-      context.problem(top.get("name"), "name",
-                      "expected a name without spaces or slashes, found '" + scene.name + "'");
-    }
+    if (top.string("name", scene.name, true)) check_name(context, top.get("name"), "name", scene.name);
     top.unsigned_integer("seed", scene.seed, true);
     top.number("field_strength_T", scene.mri.field_strength_T, NumberRule{0.0, 11.7, true, false, "T"}, true);
 

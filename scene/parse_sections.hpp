@@ -24,6 +24,12 @@ void parse_outputs(CheckedMap& map, OutputSettings& outputs);
 /// sequences need, consistent timings. Runs only on a scene whose sections parsed cleanly.
 void check_consistency(YamlContext& context, const Scene& scene);
 
+/// Reports a problem at `at` unless `value` obeys the name rule of core/safe_name.hpp (names
+/// that reach file names: organs, tissues, materials, the scene's name).
+/// @return true when the name is accepted
+bool check_name(YamlContext& context, const YAML::Node& at, const std::string& key_path,
+                const std::string& value);
+
 /// True for a BIDS label: letters and digits only.
 bool is_bids_label(const std::string& text);
 

@@ -38,7 +38,7 @@ void add_batch_command(CLI::App& app, std::function<int()>& action) {
     action = [options] {
       const auto start = std::chrono::steady_clock::now();
       const Shard shard = parse_shard(options->shard);
-      const Sweep sweep = load_sweep(options->sweep);
+      const Sweep sweep = load_sweep(options->sweep, options->list ? SweepDepth::labels : SweepDepth::full);
       if (options->list) {
         for (const auto& subject : sweep.subjects)
           std::cout << subject.id << '\n';

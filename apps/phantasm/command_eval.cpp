@@ -1,6 +1,9 @@
 #include "apps/phantasm/commands.hpp"
+#include "core/error.hpp"
+#include "core/safe_name.hpp"
 #include "evaluation/evaluate_registration.hpp"
 #include "io/json_file.hpp"
+#include "io/output_path.hpp"
 
 #include <iostream>
 #include <memory>
@@ -32,6 +35,12 @@ void add_eval_command(CLI::App& app, std::function<int()>& action) {
   command->add_flag("-q,--quiet", options->quiet, "Do not print the table");
   command->callback([options, &action] {
     action = [options] {
+      // The subject label becomes part of the paths read: it obeys the scene's name rule.
+      if (!options->subject.empty() && !is_safe_name(options->subject)) {
+        throw InputError(std::string("--subject: expected ") + k_safe_name_rule +
+                         " (the label after sub-), found " + quote_name(options->subject));
+      }
+      if (!options->json.empty()) require_replaceable_file(options->json, "--json");
       EvaluationRequest request;
       request.dataset = options->dataset;
       request.subject = options->subject;

@@ -1,5 +1,6 @@
 #include "apps/phantasm/commands.hpp"
 #include "io/hdf5_export.hpp"
+#include "io/output_path.hpp"
 
 #include <iostream>
 #include <memory>
@@ -29,6 +30,7 @@ void add_hdf5_command(CLI::App& app, std::function<int()>& action) {
   command->add_flag("-q,--quiet", options->quiet, "Print nothing but errors");
   command->callback([options, &action] {
     action = [options] {
+      require_replaceable_file(options->output, "--output");
       const Hdf5ExportSummary summary = export_hdf5(options->dataset, options->output,
                                                     Hdf5ExportOptions{options->compression, options->chunk},
                                                     [&](const std::string& subject) {

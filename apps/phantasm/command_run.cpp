@@ -1,11 +1,13 @@
 #include "apps/phantasm/commands.hpp"
 #include "core/progress.hpp"
 #include "io/atomic_file.hpp"
+#include "io/output_path.hpp"
 #include "pipeline/run_pipeline.hpp"
 
 #include <unistd.h>
 
 #include <chrono>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 
@@ -43,7 +45,11 @@ void add_run_command(CLI::App& app, std::function<int()>& action) {
       }
       set_write_delay_for_testing(options->write_delay_ms);
       Reporter reporter(std::cerr, progress_style_for(STDERR_FILENO, options->quiet));
+      // One writer per dataset, from before the folder is checked until the last file is written.
+      const bool existed = std::filesystem::exists(options->output);
+      const OutputFolderLock lock(options->output);
       RunOptions run_options{options->output, options->force};
+      run_options.output_created = !existed;
       run_options.strict = options->strict;
       const RunSummary summary = run_scene(*result.scene, run_options, reporter);
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -21,8 +21,13 @@ void add_validate_command(CLI::App& app, std::function<int()>& action) {
       for (const auto& file : *files) {
         if (is_sweep_file(file)) {
           try {
-            const Sweep sweep = load_sweep(file);
-            std::cout << file << ": valid sweep of " << sweep.subjects.size() << " subjects\n";
+            const Sweep sweep = load_sweep(file, SweepDepth::sample);
+            std::cout << file << ": valid sweep of " << sweep.subject_count << " subjects";
+            if (sweep.subjects.size() < sweep.subject_count) {
+              std::cout << " (" << sweep.subjects.size()
+                        << " checked: the first, the last and every listed value; batch checks them all)";
+            }
+            std::cout << '\n';
           } catch (const InputError& error) {
             std::cerr << error.what() << '\n';
             exit_code = exit_bad_input;

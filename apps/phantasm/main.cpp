@@ -4,7 +4,9 @@
 #include "core/version.hpp"
 
 #include <algorithm>
+#include <filesystem>
 #include <iostream>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -80,6 +82,18 @@ int main(int argc, char** argv) {
   } catch (const phantasm::InputError& error) {
     std::cerr << error.what() << '\n';
     return exit_bad_input;
+  } catch (const std::bad_alloc&) {
+    // What ran out is the grid, the meshes or the sweep the inputs asked for.
+    std::cerr
+        << "phantasm: error: out of memory: expected inputs that fit in this machine's memory (a coarser "
+           "grid, fewer or smaller meshes, a smaller sweep), found more than it holds\n";
+    return exit_failure;
+  } catch (const std::filesystem::filesystem_error& error) {
+    // The library's message ("filesystem error: cannot rename: ...") said what failed, not where.
+    std::cerr << "phantasm: error: " << error.path1().string() << ": " << error.code().message();
+    if (!error.path2().empty()) std::cerr << " (with " << error.path2().string() << ")";
+    std::cerr << '\n';
+    return exit_failure;
   } catch (const std::exception& error) {
     std::cerr << "phantasm: error: " << error.what() << '\n';
     return exit_failure;

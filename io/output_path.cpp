@@ -1,0 +1,100 @@
+#include "io/output_path.hpp"
+
+#include "core/error.hpp"
+#include "core/safe_name.hpp"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
+#include <string>
+
+namespace phantasm {
+
+std::filesystem::path output_file(const std::filesystem::path& folder, std::string_view name) {
+  const char* problem = nullptr;
+  if (name.empty()) {
+    problem = "an empty name";
+  } else if (name == "." || name == "..") {
+    problem = "a name that is '.' or '..'";
+  } else if (name.front() == '/') {
+    problem = "an absolute path";
+  } else {
+    for (const char c : name) {
+      const auto byte = static_cast<unsigned char>(c);
+      if (c == '/' || c == '\\') {
+        problem = "a path separator";
+        break;
+      }
+      if (byte < 0x20 || byte == 0x7f) {
+        problem = "a control character (tab, newline, NUL, ...)";
+        break;
+      }
+    }
+  }
+  if (problem) {
+    throw InputError(folder.string() + ": expected a file name that stays inside the output folder, found " +
+                     problem + " in " + quote_name(name));
+  }
+  return folder / std::string(name);
+}
+
+void require_inside(const std::filesystem::path& root, const std::filesystem::path& path) {
+  const std::filesystem::path base = root.lexically_normal();
+  const std::filesystem::path relative = path.lexically_normal().lexically_relative(base);
+  const bool inside = !relative.empty() && *relative.begin() != "..";
+  if (!inside || path.lexically_normal().is_absolute() != base.is_absolute()) {
+    throw InputError(path.string() + ": expected a path inside the output folder " + root.string() +
+                     ", found one outside it");
+  }
+}
+
+void require_replaceable_file(const std::filesystem::path& path, std::string_view what) {
+  struct stat info {};
+  if (::stat(path.c_str(), &info) != 0) return; // missing (or unreadable: opening will say)
+  if (S_ISREG(info.st_mode)) return;
+  const char* kind = S_ISDIR(info.st_mode)                            ? "a folder"
+                     : S_ISCHR(info.st_mode) || S_ISBLK(info.st_mode) ? "a device node"
+                     : S_ISFIFO(info.st_mode)                         ? "a FIFO"
+                     : S_ISSOCK(info.st_mode)                         ? "a socket"
+                                                                      : "something that is not a file";
+  throw InputError(std::string(what) + ": " + path.string() +
+                   ": expected a new file or a regular file to replace, found " + kind);
+}
+
+OutputFolderLock::OutputFolderLock(const std::filesystem::path& folder, FolderLockMode mode) {
+  std::error_code error;
+  if (std::filesystem::exists(folder, error) && !std::filesystem::is_directory(folder, error))
+    throw InputError(folder.string() + ": expected an output folder, found a file");
+  std::filesystem::create_directories(folder, error);
+  if (error) throw InputError(folder.string() + ": cannot create the output folder: " + error.message());
+  m_fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (m_fd < 0) {
+    throw InputError(folder.string() +
+                     ": expected an output folder phantasm can open, found: " + std::strerror(errno));
+  }
+  const int operation = (mode == FolderLockMode::exclusive ? LOCK_EX : LOCK_SH) | LOCK_NB;
+  if (::flock(m_fd, operation) == 0) return;
+  const int cause = errno;
+  ::close(m_fd);
+  m_fd = -1;
+  if (cause == EWOULDBLOCK) {
+    throw InputError(
+        folder.string() +
+        ": expected an output folder no other run writes into, found one being written by another "
+        "phantasm process (" +
+        (mode == FolderLockMode::exclusive ? "a run or a batch" : "a run") +
+        "); wait for it to finish or choose another folder");
+  }
+  // A filesystem without flock() (some network mounts): the folder is used unlocked.
+}
+
+OutputFolderLock::~OutputFolderLock() {
+  if (m_fd >= 0) ::close(m_fd); // releases the lock
+}
+
+} // namespace phantasm

@@ -1,0 +1,54 @@
+// The one way output file names are joined to an output folder, so that no name taken from a
+// scene, a sweep or the command line can make a path outside that folder; and the checks made
+// before an existing path is replaced.
+#pragma once
+
+#include <filesystem>
+#include <string_view>
+
+namespace phantasm {
+
+/// `folder / name` for one file or folder name made from user-given parts (organ, tissue,
+/// subject names). Refused with an InputError naming the name: an empty name, ".", "..", a name
+/// with '/', '\\', NUL or another control character, or an absolute path. The result is always
+/// directly inside `folder`.
+/// @param folder the output folder (or a folder inside it)
+/// @param name a single path component
+std::filesystem::path output_file(const std::filesystem::path& folder, std::string_view name);
+
+/// Checks that `path`, lexically normalised, lies inside `root` (or is `root`): no ".." leaves
+/// it. Throws an InputError naming both otherwise. Used as the last check on every file a
+/// dataset writer is about to write.
+void require_inside(const std::filesystem::path& root, const std::filesystem::path& path);
+
+/// Refuses (InputError) to replace an existing path that is not a regular file (a device node,
+/// a folder, a FIFO, a socket): writing "to" /dev/null must not replace the node. A missing path
+/// and a symbolic link to a regular file are accepted.
+/// @param what names the option in the message, e.g. "--json"
+void require_replaceable_file(const std::filesystem::path& path, std::string_view what);
+
+/// How an output folder is held: a run alone, or batches side by side (the shards of one sweep
+/// run at once into one dataset, each writing its own subjects).
+enum class FolderLockMode { exclusive, shared };
+
+/// A lock on an output folder for the life of a run or a batch, so that two writers never mix
+/// their files in one dataset. Creates the folder when missing, then takes flock() on the folder
+/// itself without waiting: no lock file is made, and the lock ends with the object or the
+/// process (a killed run leaves nothing stale). A run holds it exclusively; batches share it, so
+/// shards run side by side but a run and a batch, or two runs, never do. On a filesystem
+/// without flock() support the folder is used unlocked.
+class OutputFolderLock {
+public:
+  /// @throws InputError when the folder cannot be made (e.g. it is a file) or another process
+  ///         holds the lock in a conflicting mode ("... being written by another phantasm process")
+  explicit OutputFolderLock(const std::filesystem::path& folder,
+                            FolderLockMode mode = FolderLockMode::exclusive);
+  ~OutputFolderLock();
+  OutputFolderLock(const OutputFolderLock&) = delete;
+  OutputFolderLock& operator=(const OutputFolderLock&) = delete;
+
+private:
+  int m_fd = -1;
+};
+
+} // namespace phantasm

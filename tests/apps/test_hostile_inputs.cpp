@@ -1,0 +1,334 @@
+// Hostile inputs and faults (#20): names that would make paths outside the output folder, two
+// writers into one dataset, a --force run killed while it writes, files that are not what they
+// claim, sweeps too large to expand. Each is refused with file, line or option, expected, found.
+#include "tests/apps/cli_fixtures.hpp"
+#include "tests/support/subprocess.hpp"
+
+#include "core/error.hpp"
+#include "io/nifti_file.hpp"
+#include "io/output_path.hpp"
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <chrono>
+#include <csignal>
+#include <limits>
+#include <thread>
+
+using namespace phantasm::testing;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// A one-ball scene; `organ` and `tissue` are YAML scalars written as given.
+std::string ball_scene(const std::string& organ, const std::string& tissue, double voxel_mm = 2.0) {
+  return "phantasm: 1\nname: ball\nseed: 1\nfield_strength_T: 3.0\ngrid:\n  field_of_view_mm: 64\n"
+         "  voxel_size_mm: " +
+         std::to_string(voxel_mm) + "\nanatomy:\n  organs:\n    - name: " + organ +
+         "\n      tissue: " + tissue +
+         "\n      shape: {type: ellipsoid, center_mm: [0, 0, 0], radii_mm: 20}\n";
+}
+
+/// Every path under a folder whose name holds `text`.
+std::vector<fs::path> paths_named(const fs::path& folder, const std::string& text) {
+  std::vector<fs::path> found;
+  for (const auto& entry : fs::recursive_directory_iterator(folder))
+    if (entry.path().filename().string().find(text) != std::string::npos) found.push_back(entry.path());
+  return found;
+}
+
+/// Waits until `ready` holds (up to 60 s); false when it never did.
+template <class Predicate>
+bool wait_for(Predicate ready) {
+  for (int i = 0; i < 3000; ++i) {
+    if (ready()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return false;
+}
+
+bool has_temporary_file(const fs::path& folder) {
+  std::error_code error;
+  if (!fs::is_directory(folder, error)) return false;
+  for (auto it = fs::recursive_directory_iterator(folder, error); it != fs::recursive_directory_iterator();
+       it.increment(error)) {
+    if (error) return false;
+    if (it->path().filename().string().find(".phantasm-tmp-") != std::string::npos) return true;
+  }
+  return false;
+}
+
+} // namespace
+
+TEST(HostileNames, OrganAndTissueNamesThatLeaveTheFolderAreRefusedAndNothingIsWrittenOutside) {
+  const fs::path root = fresh_folder("hostile-names");
+  const fs::path deep = root / "a" / "b" / "c" / "d";
+  fs::create_directories(deep);
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"../../../../ESCAPED", "gray_matter"}, {"ball", "../../../../ESCAPED"},
+      {"\"ESCAPED\\tx\"", "gray_matter"},     {"\"ESCAPED\\nx\"", "gray_matter"},
+      {"/tmp/ESCAPED", "gray_matter"},
+  };
+  for (const auto& [organ, tissue] : cases) {
+    SCOPED_TRACE(organ + " / " + tissue);
+    const fs::path scene = deep / "scene.yaml";
+    write_text_file(scene, ball_scene(organ, tissue));
+    const fs::path out = deep / "out";
+    const CommandResult result = run_command({k_phantasm, "run", scene.string(), "-o", out.string(), "-q"});
+    EXPECT_EQ(result.exit_code, 2) << result.err;
+    EXPECT_TRUE(result.err.rfind(scene.string() + ":10:13: anatomy.organs[0].name: ", 0) == 0 ||
+                result.err.rfind(scene.string() + ":11:15: anatomy.organs[0].tissue: ", 0) == 0)
+        << result.err;
+    EXPECT_NE(result.err.find("expected a name of 1 to 64 ASCII letters, digits, '_' or '-', found '"),
+              std::string::npos)
+        << result.err;
+    EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+    EXPECT_FALSE(fs::exists(out));
+    EXPECT_TRUE(paths_named(root, "ESCAPED").empty());
+  }
+}
+
+TEST(HostileNames, OutputFileNeverLeavesTheFolder) {
+  using phantasm::InputError;
+  using phantasm::output_file;
+  const fs::path folder = "/data/out";
+  for (const std::string name : {std::string("../x"), std::string(".."), std::string("."), std::string(""),
+                                 std::string("a/b"), std::string("a\\b"), std::string("/etc/passwd"),
+                                 std::string("a\tb"), std::string("a\nb"), std::string("a\0b", 3)}) {
+    SCOPED_TRACE(name);
+    EXPECT_THROW(output_file(folder, name), InputError);
+  }
+  EXPECT_EQ(output_file(folder, "sub-01_ses-ref_organ-left_lung_mesh.vtp"),
+            folder / "sub-01_ses-ref_organ-left_lung_mesh.vtp");
+  try {
+    output_file(folder, "../../ESCAPED");
+    ADD_FAILURE() << "no exception";
+  } catch (const InputError& error) {
+    EXPECT_EQ(
+        std::string(error.what()),
+        "/data/out: expected a file name that stays inside the output folder, found a path separator in "
+        "'../../ESCAPED'");
+  }
+  EXPECT_NO_THROW(phantasm::require_inside(folder, folder / "derivatives" / "x.json"));
+  EXPECT_THROW(phantasm::require_inside(folder, folder / "derivatives" / ".." / ".." / "x.json"), InputError);
+}
+
+TEST(HostileNames, EvalSubjectIsANameNotAPath) {
+  const fs::path root = fresh_folder("hostile-subject");
+  for (const std::string subject : {"../../../x", "01\t02", "/etc"}) {
+    const CommandResult result =
+        run_command({k_phantasm, "eval", root.string(), "--identity", "--subject", subject});
+    EXPECT_EQ(result.exit_code, 2) << result.err;
+    EXPECT_EQ(result.err.rfind("--subject: expected a name of 1 to 64 ASCII letters", 0), 0u) << result.err;
+  }
+}
+
+TEST(HostileTargets, DeviceNodesAreNotReplaced) {
+  const fs::path root = fresh_folder("hostile-device");
+  const CommandResult eval =
+      run_command({k_phantasm, "eval", root.string(), "--identity", "--json", "/dev/null"});
+  EXPECT_EQ(eval.exit_code, 2);
+  EXPECT_EQ(eval.err,
+            "--json: /dev/null: expected a new file or a regular file to replace, found a device node\n");
+  const CommandResult hdf5 = run_command({k_phantasm, "hdf5", root.string(), "-o", "/dev/null", "-q"});
+  EXPECT_EQ(hdf5.exit_code, 2);
+  EXPECT_EQ(hdf5.err,
+            "--output: /dev/null: expected a new file or a regular file to replace, found a device node\n");
+  struct stat info {};
+  ASSERT_EQ(::stat("/dev/null", &info), 0);
+  EXPECT_TRUE(S_ISCHR(info.st_mode));
+}
+
+TEST(DatasetIntegrity, ASecondRunIntoAFolderBeingWrittenIsRefused) {
+  const fs::path root = fresh_folder("hostile-lock");
+  const fs::path scene = root / "ball.yaml";
+  write_text_file(scene, ball_scene("ball", "gray_matter", 1.0));
+  const fs::path out = root / "out";
+  BackgroundProcess first({k_phantasm, "run", scene.string(), "-o", out.string(), "--write-delay-ms", "5"});
+  ASSERT_TRUE(wait_for([&] { return has_temporary_file(out); }));
+  const CommandResult second =
+      run_command({k_phantasm, "run", scene.string(), "-o", out.string(), "--force"});
+  EXPECT_EQ(second.exit_code, 2) << second.err;
+  EXPECT_EQ(
+      second.err.rfind(
+          out.string() +
+              ": expected an output folder no other run writes into, found one "
+              "being written by another phantasm process (a run or a batch); wait for it to finish or choose "
+              "another folder\n",
+          0),
+      0u)
+      << second.err;
+  EXPECT_EQ(first.wait(), 0);
+  EXPECT_TRUE(fs::exists(out / "derivatives" / "phantasm" / "sub-01" / "provenance.json"));
+  // A batch is refused the same way while a run holds the folder, and a run while a batch does.
+  BackgroundProcess third(
+      {k_phantasm, "run", scene.string(), "-o", out.string(), "--force", "--write-delay-ms", "5"});
+  ASSERT_TRUE(wait_for([&] { return has_temporary_file(out); }));
+  const CommandResult batch = run_command(
+      {k_phantasm, "batch", (k_source_dir / "tests" / "data" / "sweeps" / "three-subjects.yaml").string(),
+       "-o", out.string(), "-q"});
+  EXPECT_EQ(batch.exit_code, 2) << batch.err;
+  EXPECT_NE(batch.err.find("being written by another phantasm process"), std::string::npos) << batch.err;
+  EXPECT_EQ(third.wait(), 0);
+}
+
+TEST(DatasetIntegrity, ForceRemovesTheOldCompletionMarkerBeforeWritingAnything) {
+  const fs::path root = fresh_folder("hostile-force");
+  const fs::path scene = root / "ball.yaml";
+  write_text_file(scene, ball_scene("ball", "gray_matter", 1.0));
+  const fs::path out = root / "out";
+  const fs::path provenance = out / "derivatives" / "phantasm" / "sub-01" / "provenance.json";
+  ASSERT_EQ(run_command({k_phantasm, "run", scene.string(), "-o", out.string(), "-q"}).exit_code, 0);
+  ASSERT_TRUE(fs::exists(provenance));
+  BackgroundProcess rerun(
+      {k_phantasm, "run", scene.string(), "-o", out.string(), "--force", "-q", "--write-delay-ms", "20"});
+  // The first temporary file means writing has begun: the old marker must be gone by then.
+  ASSERT_TRUE(wait_for([&] { return has_temporary_file(out); }));
+  EXPECT_FALSE(fs::exists(provenance));
+  rerun.send_signal(SIGKILL);
+  rerun.wait();
+  EXPECT_FALSE(fs::exists(provenance)) << "a killed --force run left a folder that claims to be complete";
+  // Run to its end, the folder is complete again.
+  ASSERT_EQ(run_command({k_phantasm, "run", scene.string(), "-o", out.string(), "--force", "-q"}).exit_code,
+            0);
+  EXPECT_TRUE(fs::exists(provenance));
+}
+
+TEST(DatasetIntegrity, BatchRefusesAFolderOfUnrelatedFiles) {
+  const fs::path root = fresh_folder("hostile-batch-folder");
+  write_text_file(root / "notes.txt", "mine\n");
+  const CommandResult result = run_command(
+      {k_phantasm, "batch", (k_source_dir / "tests" / "data" / "sweeps" / "three-subjects.yaml").string(),
+       "-o", root.string(), "-q"});
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_EQ(result.err, root.string() +
+                            ": expected an empty or new output folder, or a dataset an earlier batch wrote, "
+                            "found 'notes.txt' in it (a file phantasm does not write)\n");
+  EXPECT_EQ(folder_contents(root).size(), 1u);
+}
+
+TEST(HostileInputs, ImportedShapesWithAbsurdCoordinatesAreRefusedBeforeWork) {
+  const fs::path root = fresh_folder("hostile-shapes");
+  write_text_file(root / "huge.obj",
+                  "v 1e30 0 0\nv 0 1e30 0\nv 0 0 1e30\nv 0 0 0\nf 1 2 3\nf 1 4 2\nf 2 4 3\nf 3 4 1\n");
+  std::string scene = ball_scene("thing", "gray_matter");
+  scene.replace(scene.find("{type: ellipsoid"), std::string::npos, "{type: mesh, file: huge.obj}\n");
+  write_text_file(root / "mesh.yaml", scene);
+  const CommandResult result =
+      run_command({k_phantasm, "run", (root / "mesh.yaml").string(), "-o", (root / "out").string(), "-q"});
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_EQ(result.err, (root / "mesh.yaml").string() +
+                            ":12:33: anatomy.organs[0].shape.file: " + (root / "huge.obj").string() +
+                            ": vertex 0: expected coordinates "
+                            "within +-100000 mm, found 1e+30\n");
+}
+
+TEST(HostileInputs, LabelVolumesWithANaNAffineAndFloatVolumesWithNaNAreRefused) {
+  const fs::path root = fresh_folder("hostile-nifti");
+  phantasm::ImageGrid grid;
+  grid.dims = Eigen::Vector3i(8, 8, 8);
+  grid.world_from_voxel(0, 3) = std::numeric_limits<double>::quiet_NaN();
+  std::vector<std::int32_t> labels(512, 0);
+  for (int v = 100; v < 300; ++v)
+    labels[v] = 1;
+  phantasm::write_nifti_labels(root / "nan-affine.nii.gz", grid, labels);
+  std::string scene = ball_scene("thing", "gray_matter");
+  scene.replace(scene.find("{type: ellipsoid"), std::string::npos,
+                "{type: label_volume, file: nan-affine.nii.gz, label: 1}\n");
+  write_text_file(root / "volume.yaml", scene);
+  const CommandResult result =
+      run_command({k_phantasm, "run", (root / "volume.yaml").string(), "-o", (root / "out").string(), "-q"});
+  EXPECT_EQ(result.exit_code, 2);
+  EXPECT_NE(result.err.find(":12:41: anatomy.organs[0].shape.file: "), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("expected a finite voxel-to-world affine"), std::string::npos) << result.err;
+
+  // libnifti turns NaN into 0 as it loads: an all-NaN field would read as no motion at all.
+  grid.world_from_voxel(0, 3) = 0.0;
+  phantasm::write_nifti(root / "nan.nii.gz", grid,
+                        std::vector<float>(512, std::numeric_limits<float>::quiet_NaN()));
+  try {
+    phantasm::read_nifti(root / "nan.nii.gz");
+    ADD_FAILURE() << "no exception";
+  } catch (const phantasm::InputError& error) {
+    EXPECT_EQ(std::string(error.what()),
+              (root / "nan.nii.gz").string() +
+                  ": expected finite values, found NaN at value 0 of 512 (i fastest, "
+                  "then j, k, components)");
+  }
+}
+
+TEST(HostileSweeps, DuplicateKeysSecondDocumentsAndBadNamesAreErrors) {
+  const fs::path root = fresh_folder("hostile-sweeps");
+  const std::string base = "base_scene: " + k_small_scene.string() + "\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"phantasm_sweep: 1\n" + base + "seed: 1\nseed: 2\n", ":4:1: seed: expected each key once"},
+      {"phantasm_sweep: 1\n" + base + "vary:\n  seed: [1, 2]\n  seed: [3]\n",
+       ":5:3: vary.seed: expected each key once"},
+      {"phantasm_sweep: 1\n" + base + "---\nseed: 2\n", ":4:1: sweep: expected one YAML document, found 2"},
+      {"phantasm_sweep: 1\nname: ../x\n" + base, ":2:7: name: expected a name of 1 to 64"},
+      {"phantasm_sweep: 1\nname: [a]\n" + base, ":2:7: name: expected a single value"},
+      {"phantasm_sweep: 1\n" + base + "vary:\n  seed: {random_integer: [0, 1e30]}\n",
+       ":4:9: vary.seed.random_integer: expected two finite numbers"},
+      {"phantasm_sweep: 1\n" + base + "vary:\n  deformation.loads[99999999999999999999].x: [1]\n",
+       "vary.deformation.loads[99999999999999999999].x: expected a scene key path"},
+  };
+  int n = 0;
+  for (const auto& [text, expected] : cases) {
+    const fs::path sweep = root / ("sweep" + std::to_string(n++) + ".yaml");
+    write_text_file(sweep, text);
+    const CommandResult result = run_command({k_phantasm, "validate", sweep.string()});
+    EXPECT_EQ(result.exit_code, 2) << text;
+    EXPECT_EQ(result.err.rfind(sweep.string(), 0), 0u) << result.err;
+    EXPECT_NE(result.err.find(expected), std::string::npos)
+        << "expected " << expected << "\nfound " << result.err;
+  }
+}
+
+TEST(HostileSweeps, AMillionSubjectsAreValidatedAndListedInSeconds) {
+  const fs::path root = fresh_folder("hostile-million");
+  const fs::path sweep = root / "million.yaml";
+  write_text_file(sweep, "phantasm_sweep: 1\nbase_scene: " + k_small_scene.string() +
+                             "\nrepeats: 100000\nvary:\n  seed: {random_integer: [1, 100000]}\n"
+                             "  acquisition.noise_percent: [1, 2, 3, 4, 5, 6, 7, 8, 9, 10]\n");
+  const auto start = std::chrono::steady_clock::now();
+  const CommandResult validate = run_command({k_phantasm, "validate", sweep.string()});
+  EXPECT_EQ(validate.exit_code, 0) << validate.err;
+  EXPECT_EQ(validate.out.rfind(sweep.string() + ": valid sweep of 1000000 subjects (", 0), 0u)
+      << validate.out;
+  const CommandResult list = run_command({k_phantasm, "batch", "--list", sweep.string()});
+  EXPECT_EQ(list.exit_code, 0) << list.err;
+  EXPECT_EQ(std::count(list.out.begin(), list.out.end(), '\n'), 1000000);
+  EXPECT_EQ(list.out.substr(0, 8), "0000001\n");
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_LT(seconds, 60.0);
+  write_text_file(
+      sweep,
+      "phantasm_sweep: 1\nbase_scene: " + k_small_scene.string() +
+          "\nrepeats: 100000\nvary:\n  acquisition.noise_percent: [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11]\n");
+  const CommandResult too_many = run_command({k_phantasm, "batch", "--list", sweep.string()});
+  EXPECT_EQ(too_many.exit_code, 2);
+  EXPECT_NE(too_many.err.find("vary: expected at most 10^6 subjects, found more (1100000"), std::string::npos)
+      << too_many.err;
+}
+
+TEST(HostileInputs, SettingsThatMakeNoSignalWarnAndProvenanceRecordsIt) {
+  const fs::path root = fresh_folder("hostile-no-signal");
+  write_text_file(root / "scene.yaml",
+                  ball_scene("ball", "gray_matter") +
+                      "tissues:\n  gray_matter: {T1_ms: 1.0e300}\nsequences:\n"
+                      "  - {name: T1w, type: spoiled_gre, TR_ms: 20, TE_ms: 5, flip_deg: 0}\n");
+  const fs::path out = root / "out";
+  const CommandResult result =
+      run_command({k_phantasm, "run", (root / "scene.yaml").string(), "-o", out.string(), "-q"});
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.err.find("[mri] warning: sequence T1w: a flip angle of 0 deg makes no signal"),
+            std::string::npos)
+      << result.err;
+  EXPECT_NE(result.err.find("[mri] warning: tissue gray_matter: T1 of 1e+300 ms is beyond any tissue's"),
+            std::string::npos)
+      << result.err;
+  const std::string provenance = read_file(out / "derivatives" / "phantasm" / "sub-01" / "provenance.json");
+  EXPECT_NE(provenance.find("a flip angle of 0 deg makes no signal"), std::string::npos);
+  EXPECT_NE(provenance.find("T1 of 1e+300 ms"), std::string::npos);
+}
