@@ -142,11 +142,11 @@ Simulation simulate(const Scene& scene, Reporter& reporter, SimulationStage unti
 }
 
 RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& reporter) {
-  check_dataset_names(scene); // before the stages run, not after
   std::error_code error;
   const bool existed = !options.output_created && std::filesystem::exists(options.output, error);
   prepare_output_folder(options.output, options.force);
   try {
+    check_dataset_names(scene); // before the stages run, not after
     const Simulation simulation = simulate(scene, reporter);
     if (options.strict) {
       const std::vector<std::string> warnings = stage_warnings(simulation.stages);
