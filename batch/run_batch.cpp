@@ -98,7 +98,7 @@ void require_batch_folder(const std::filesystem::path& folder) {
   if (!std::filesystem::is_directory(folder, error)) return;
   for (const auto& entry : std::filesystem::directory_iterator(folder, error)) {
     const std::string name = entry.path().filename().string();
-    const bool ours = name == "dataset_description.json" || name == "participants.tsv" ||
+    const bool ours = name == "dataset_description.json" || name == "participants.tsv" || name == "README" ||
                       name == "derivatives" || name.rfind("sub-", 0) == 0 ||
                       is_temporary_file_name(entry.path());
     if (!ours) {

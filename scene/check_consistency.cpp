@@ -44,13 +44,15 @@ public:
       return;
     }
     // The tessellation grows about 4x per halving of its tolerance: a hundredth of the smallest
-    // voxel edge is far below what a voxel shows, and bounds the triangle count (a tolerance of
-    // 1e-9 mm would ask for more triangles than memory holds and never end).
-    const double finest = g.voxel_size_mm.minCoeff() / 100.0;
+    // voxel edge (or 0.01 mm, when the voxels are coarser than 1 mm: the meshes written beside
+    // coarse images may still be fine) is far below what a voxel shows, and bounds the triangle
+    // count (a tolerance of 1e-9 mm would ask for more triangles than memory holds and never end).
+    const double finest = std::min(g.voxel_size_mm.minCoeff() / 100.0, 0.01);
     if (m_scene.voxelization.tessellation_tolerance_mm < finest) {
       problem("voxelization.tessellation_tolerance_mm",
-              "expected at least a hundredth of the smallest voxel edge (" + format_number(finest) +
-                  " mm), found " + format_number(m_scene.voxelization.tessellation_tolerance_mm) + " mm");
+              "expected at least a hundredth of the smallest voxel edge or 0.01 mm, whichever is smaller (" +
+                  format_number(finest) + " mm), found " +
+                  format_number(m_scene.voxelization.tessellation_tolerance_mm) + " mm");
     }
   }
 
