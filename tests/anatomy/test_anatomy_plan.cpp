@@ -28,9 +28,9 @@ TEST(AnalyticShapeBounds, FileShapesHaveNoBoundsUntilRead) {
 
 TEST(OrganTable, ResolvesParentsAndCountsContainingOrgans) {
   AnatomySettings anatomy;
-  anatomy.organs = {{"scalp", "skin", "", "", true, 0, {}},
-                    {"skull", "bone_cortical", "", "scalp", true, 0, {}},
-                    {"brain", "white_matter", "", "skull", true, 0, {}}};
+  anatomy.organs = {{"scalp", "skin", "", "", true, 0, {}, 1.0, {}},
+                    {"skull", "bone_cortical", "", "scalp", true, 0, {}, 1.0, {}},
+                    {"brain", "white_matter", "", "skull", true, 0, {}, 1.0, {}}};
   const OrganTable organs = organ_table(anatomy);
   EXPECT_EQ(organs[0].depth, 0);
   EXPECT_EQ(organs[0].parent, -1);

@@ -118,7 +118,9 @@ TEST(BatchCommand, JobsShardsRestartsAndKillsEndWithTheSameSubjects) {
     for (const auto& [path, bytes] : folder_contents(signalled)) {
       EXPECT_EQ(path.find(".phantasm-tmp-"), std::string::npos) << "temporary file left: " << path;
       // What is there is what the uninterrupted batch made (a subject's files are complete).
-      if (a.files.count(path) != 0 && path != "participants.tsv") EXPECT_EQ(bytes, a.files.at(path)) << path;
+      if (a.files.count(path) != 0 && path != "participants.tsv") {
+        EXPECT_EQ(bytes, a.files.at(path)) << path;
+      }
     }
   }
   EXPECT_GE(interrupted, 2);

@@ -93,9 +93,9 @@ TEST(HostileNames, OutputFileNeverLeavesTheFolder) {
   using phantasm::InputError;
   using phantasm::output_file;
   const fs::path folder = "/data/out";
-  for (const std::string name : {std::string("../x"), std::string(".."), std::string("."), std::string(""),
-                                 std::string("a/b"), std::string("a\\b"), std::string("/etc/passwd"),
-                                 std::string("a\tb"), std::string("a\nb"), std::string("a\0b", 3)}) {
+  for (const std::string& name : {std::string("../x"), std::string(".."), std::string("."), std::string(""),
+                                  std::string("a/b"), std::string("a\\b"), std::string("/etc/passwd"),
+                                  std::string("a\tb"), std::string("a\nb"), std::string("a\0b", 3)}) {
     SCOPED_TRACE(name);
     EXPECT_THROW(output_file(folder, name), InputError);
   }

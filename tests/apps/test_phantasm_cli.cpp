@@ -536,7 +536,9 @@ TEST(RunCommand, InvertedTetsAreAWarningNamingTheOrgan) {
   long inverted = 0;
   for (const auto& body : provenance["bodies"]) {
     inverted += body["inverted_tets"].get<long>();
-    if (body["inverted_tets"].get<long>() > 0) EXPECT_LE(body["smallest_det_F"].get<double>(), 0.0);
+    if (body["inverted_tets"].get<long>() > 0) {
+      EXPECT_LE(body["smallest_det_F"].get<double>(), 0.0);
+    }
   }
   EXPECT_GT(inverted, 0);
   const CommandResult strict =

@@ -59,13 +59,14 @@ TEST(MeshFile, VtpRoundTripKeepsVerticesFacesAndPointData) {
   TriangleMesh sphere = unit_icosphere(2);
   sphere.vertices *= 10.0;
   std::vector<double> values(static_cast<std::size_t>(sphere.vertex_count()) * 3, 0.25);
-  write_vtp(folder / "sphere.vtp", sphere, {PointArray{"displacement_mm", 3, values}});
+  write_vtp(folder / "sphere.vtp", sphere, {PointArray{"displacement_mm", 3, values, "RAS", "mm"}});
   const TriangleMesh back = read_triangle_mesh(folder / "sphere.vtp");
   ASSERT_EQ(back.vertex_count(), sphere.vertex_count());
   ASSERT_EQ(back.face_count(), sphere.face_count());
   EXPECT_EQ(back.vertices, sphere.vertices); // doubles, bit for bit
   EXPECT_EQ(back.faces, sphere.faces);
-  EXPECT_THROW(write_vtp(folder / "bad.vtp", sphere, {PointArray{"short", 3, {1.0}}}), std::invalid_argument);
+  EXPECT_THROW(write_vtp(folder / "bad.vtp", sphere, {PointArray{"short", 3, {1.0}, "RAS", ""}}),
+               std::invalid_argument);
   EXPECT_FALSE(fs::exists(folder / "bad.vtp"));
 }
 

@@ -54,7 +54,9 @@ TEST(OrganLandmarks, DeepestPointsLieInTheirOrgansOwnMaterialInBothStates) {
       // Well inside: the scalp's shell is about 6 mm thick, its deepest point about 3 mm from both sides.
       EXPECT_GT(clearance(phantom, l.organ, l.reference_mm), 2.0);
       EXPECT_GT(clearance(moved, l.organ, l.deformed_mm), 2.0);
-      if (d.organs[o].moved_by == "fixed") EXPECT_EQ(l.deformed_mm, l.reference_mm);
+      if (d.organs[o].moved_by == "fixed") {
+        EXPECT_EQ(l.deformed_mm, l.reference_mm);
+      }
       if (d.organs[o].moved_by == "solver") {
         bool exact = false;
         EXPECT_EQ(l.deformed_mm, map.forward(l.reference_mm, &exact));

@@ -84,7 +84,7 @@ TEST(PatchLevelSet, FractionsGiveTheVolumeAndTheDistanceIsNearZeroOnTheSurface) 
     const LevelSet::Probe probe(direct);
     double worst = 0.0;
     for (Eigen::Index t = 0; t < surface.patch_count(); t += 7)
-      for (const Eigen::Vector2d uv : {Eigen::Vector2d(1.0 / 3.0, 1.0 / 3.0), Eigen::Vector2d(0.4, 0.2)})
+      for (const Eigen::Vector2d& uv : {Eigen::Vector2d(1.0 / 3.0, 1.0 / 3.0), Eigen::Vector2d(0.4, 0.2)})
         worst = std::max(worst, std::abs(probe(surface.surface_point(t, uv.x(), uv.y()))));
     std::printf("largest |distance| on the surface: %.3f mm\n", worst);
     EXPECT_LT(worst, 0.15 * h);
