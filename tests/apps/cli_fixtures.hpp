@@ -4,6 +4,8 @@
 
 #include "tests/support/files.hpp"
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -29,6 +31,21 @@ inline std::map<std::string, std::string> folder_contents(const std::filesystem:
     }
   }
   return contents;
+}
+
+/// The scene `source` with `replace` swapped for `with` (its first occurrence), written to
+/// folder/scene.yaml; the calling test fails if the text lacks `replace`.
+inline std::filesystem::path scene_variant(const std::filesystem::path& source,
+                                           const std::filesystem::path& folder, const std::string& replace,
+                                           const std::string& with) {
+  std::string text = read_file(source);
+  const std::size_t at = text.find(replace);
+  EXPECT_NE(at, std::string::npos) << source << " lacks " << replace;
+  if (at != std::string::npos) text.replace(at, replace.size(), with);
+  std::filesystem::create_directories(folder);
+  const std::filesystem::path scene = folder / "scene.yaml";
+  write_text_file(scene, text);
+  return scene;
 }
 
 } // namespace phantasm::testing

@@ -10,7 +10,6 @@
 
 #include <algorithm>
 #include <cstdint>
-#include <fstream>
 #include <string>
 #include <vector>
 
@@ -88,13 +87,9 @@ TEST(GapTissue, TheSpaceAMovedOrganLeavesIsCsfNotTheContainer) {
 }
 
 TEST(GapTissue, AnExplicitGapTissueOfAirLeavesNoSignal) {
-  const fs::path folder = fresh_folder("gap-air-scene");
-  std::string text = read_file(k_gap_scene);
-  const std::string anchor = "  fixed: [box]\n";
-  ASSERT_NE(text.find(anchor), std::string::npos);
-  text.replace(text.find(anchor), anchor.size(), anchor + "  gap_tissue: air\n");
-  std::ofstream(folder / "gap-air.yaml") << text;
-  const GapRun run = run_scene(folder / "gap-air.yaml", "gap-air");
+  const fs::path scene = scene_variant(k_gap_scene, fresh_folder("gap-air-scene"), "  fixed: [box]\n",
+                                       "  fixed: [box]\n  gap_tissue: air\n");
+  const GapRun run = run_scene(scene, "gap-air");
   EXPECT_NE(run.table.find("4\tgap\tair\t"), std::string::npos) << run.table;
   std::size_t gap = 0;
   for (std::size_t v = 0; v < run.deformed.size(); ++v)

@@ -277,19 +277,23 @@ TEST(RunCommand, QuietPrintsNothingAndAPipeGetsPlainProgressLines) {
   EXPECT_NE(plain.err.find("[voxelize] skipped: .vdb grids"), std::string::npos) << plain.err;
 }
 
+namespace {
+
+/// Runs the small head with `outputs.vdb: true` into root/out (its scene in root/scene.yaml);
+/// whether the run exited 0.
+bool run_small_scene_with_vdb(const fs::path& root) {
+  const std::string marker = "outputs:\n  subject: \"01\"\n";
+  const fs::path scene = scene_variant(k_small_scene, root, marker, marker + "  vdb: true\n");
+  return run_command({k_phantasm, "run", scene.string(), "-o", (root / "out").string(), "-q"}).exit_code == 0;
+}
+
+} // namespace
+
 // outputs.vdb: each state's organ level sets and its label and fraction volumes in one .vdb file,
 // which OpenVDB's Python module (Debian's python3-openvdb) reads whole (tests/apps/check_vdb.py).
 TEST(RunCommand, VdbFilesHoldLevelSetsLabelsAndFractions) {
   const fs::path root = fresh_folder("vdb");
-  std::string scene = read_file(k_small_scene);
-  const std::string marker = "outputs:\n  subject: \"01\"\n";
-  ASSERT_NE(scene.find(marker), std::string::npos);
-  scene.replace(scene.find(marker), marker.size(), marker + "  vdb: true\n");
-  write_text_file(root / "scene.yaml", scene);
-  ASSERT_EQ(
-      run_command({k_phantasm, "run", (root / "scene.yaml").string(), "-o", (root / "out").string(), "-q"})
-          .exit_code,
-      0);
+  ASSERT_TRUE(run_small_scene_with_vdb(root));
   openvdb::initialize();
   for (const char* state : {"ref", "def"}) {
     openvdb::io::File file(
@@ -323,15 +327,7 @@ TEST(RunCommand, VdbFilesHoldLevelSetsLabelsAndFractions) {
 // small run with .vdb output (tests/apps/check_tool_docs.py).
 TEST(Tools, DocumentedCommandsRunOnASmallRun) {
   const fs::path root = fresh_folder("tool-docs");
-  std::string scene = read_file(k_small_scene);
-  const std::string marker = "outputs:\n  subject: \"01\"\n";
-  ASSERT_NE(scene.find(marker), std::string::npos);
-  scene.replace(scene.find(marker), marker.size(), marker + "  vdb: true\n");
-  write_text_file(root / "scene.yaml", scene);
-  ASSERT_EQ(
-      run_command({k_phantasm, "run", (root / "scene.yaml").string(), "-o", (root / "out").string(), "-q"})
-          .exit_code,
-      0);
+  ASSERT_TRUE(run_small_scene_with_vdb(root));
   const CommandResult check =
       run_command({PHANTASM_PYTHON, (k_source_dir / "tests" / "apps" / "check_tool_docs.py").string(),
                    (k_source_dir / "docs" / "use-with-your-tools.md").string(), root.string(),
@@ -457,14 +453,7 @@ namespace {
 
 /// The small head with `replace` swapped for `with` in its text (one occurrence).
 fs::path small_scene_variant(const fs::path& folder, const std::string& replace, const std::string& with) {
-  std::string text = read_file(k_small_scene);
-  const std::size_t at = text.find(replace);
-  EXPECT_NE(at, std::string::npos) << replace;
-  if (at != std::string::npos) text.replace(at, replace.size(), with);
-  fs::create_directories(folder);
-  const fs::path scene = folder / "scene.yaml";
-  write_text_file(scene, text);
-  return scene;
+  return scene_variant(k_small_scene, folder, replace, with);
 }
 
 nlohmann::json provenance_of(const fs::path& out) {
