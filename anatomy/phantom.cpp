@@ -7,8 +7,12 @@
 
 #include <Eigen/Geometry>
 
+#include <cstring>
 #include <random>
 #include <sstream>
+#include <stdexcept>
+#include <string_view>
+#include <type_traits>
 
 namespace phantasm {
 namespace {
@@ -161,13 +165,22 @@ std::unique_ptr<ImplicitShape> target_shape(const ShapeSettings& shape, const Sh
   return nullptr;
 }
 
-Phantom build_phantom(const AnatomySettings& anatomy, const std::map<std::string, ShapeData>& files,
-                      Reporter& reporter) {
-  const auto& settings = anatomy.organs;
-  Variation variation = draw_variation(anatomy);
-  // Shapes with variation; a jitter that would break nesting or touch a sibling is dropped.
+namespace {
+
+/// The organs' target shapes with seeded variation (a jitter that would break nesting or touch
+/// a sibling is dropped), and the shape settings they were made from.
+struct VariedTargets {
   std::vector<ShapeSettings> shapes;
   std::vector<std::shared_ptr<const ImplicitShape>> targets;
+};
+
+VariedTargets varied_targets(const AnatomySettings& anatomy, const std::map<std::string, ShapeData>& files,
+                             Reporter& reporter) {
+  const auto& settings = anatomy.organs;
+  Variation variation = draw_variation(anatomy);
+  VariedTargets out;
+  auto& shapes = out.shapes;
+  auto& targets = out.targets;
   for (std::size_t o = 0; o < settings.size(); ++o) {
     const auto found = files.find(settings[o].name);
     const ShapeData* file = found == files.end() ? nullptr : &found->second;
@@ -194,63 +207,278 @@ Phantom build_phantom(const AnatomySettings& anatomy, const std::map<std::string
     shapes.push_back(shape);
     targets.push_back(target);
   }
+  return out;
+}
 
+/// An organ's names and target, before its geometry.
+Organ organ_without_geometry(const OrganSettings& s, std::shared_ptr<const ImplicitShape> target) {
+  Organ organ;
+  organ.name = s.name;
+  organ.tissue = s.tissue;
+  organ.material = s.material;
+  organ.inside = s.inside;
+  organ.target = std::move(target);
+  return organ;
+}
+
+/// Builds one organ's geometry: a sheet, a structured box, a solid or a fitted surface.
+void build_organ_geometry(Organ& organ, const AnatomySettings& anatomy, std::size_t o,
+                          const ShapeSettings& shape, ProgressBar& progress) {
+  const OrganSettings& s = anatomy.organs[o];
+  const Eigen::Matrix3d rotation = rotation_from_degrees(shape.rotation_deg);
+  if (shape.kind == ShapeKind::sheet) {
+    organ.sheet = structured_sheet(shape.size_mm.head<2>(), shape.cells.head<2>(), rotation, shape.center_mm);
+  } else if (shape.kind == ShapeKind::box) {
+    TetMesh tets = structured_box(shape.size_mm, shape.cells, rotation, shape.center_mm);
+    TriangleMesh base = boundary_surface(tets, &organ.tet_vertex_of_surface_vertex);
+    organ.surface.emplace(base, "organ " + s.name); // flat faces: a box needs no bumps
+    if (s.solid) organ.solid = std::move(tets);
+    organ.fit = measure_fit(*organ.surface, *organ.target, 1e-3 * organ.target->bounding_radius(), 4);
+  } else if (s.solid) {
+    build_solid(organ, anatomy, o);
+    progress.set_detail(s.name + ": measuring the fit");
+    organ.fit = measure_fit(*organ.surface, *organ.target, 5e-3 * organ.target->bounding_radius(), 4);
+  } else {
+    PatchFitOptions options;
+    options.base_triangles = base_triangles(anatomy, o);
+    progress.set_detail(s.name + ": fitting about " + std::to_string(options.base_triangles) + " patches");
+    const Eigen::Vector3d hint = shape.kind == ShapeKind::mesh || shape.kind == ShapeKind::label_volume
+                                     ? Eigen::Vector3d::Ones()
+                                     : Eigen::Vector3d(shape.radii_mm);
+    organ.surface.emplace(fit_patch_surface(*organ.target, hint, rotation, options, "organ " + s.name));
+    progress.set_detail(s.name + ": measuring the fit");
+    organ.fit = measure_fit(*organ.surface, *organ.target, 5e-3 * organ.target->bounding_radius(), 4);
+  }
+}
+
+/// The log line of a built organ.
+std::string organ_line(const Organ& organ) {
+  std::ostringstream line;
+  line << organ.name << ": ";
+  if (organ.sheet) {
+    line << "sheet of " << organ.sheet->face_count() << " triangles (zero thickness: no volume to voxelize)";
+  }
+  if (organ.surface) {
+    line << organ.surface->patch_count() << " patches";
+    if (organ.solid) {
+      line << ", " << organ.solid->vertices.rows() << " vertices / " << organ.solid->tets.rows()
+           << " tets (min dihedral " << format_number(min_dihedral_angle_deg(*organ.solid)) << " deg)";
+    }
+    line << ", volume " << format_number(organ.surface->volume() / 1000.0) << " ml, fit Hausdorff "
+         << format_number(organ.fit.hausdorff_mm) << " mm, volume error "
+         << format_number(100.0 * organ.fit.volume_error) << " %";
+  }
+  return line.str();
+}
+
+// The geometry encoding (encode_organ_geometry): native-endian raw values, each array preceded by
+// its dimensions. Bumped whenever the layout or what an organ holds changes.
+constexpr std::uint32_t k_geometry_format = 2;
+
+class ByteWriter {
+public:
+  template <typename T>
+  void value(const T& v) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    m_bytes.append(reinterpret_cast<const char*>(&v), sizeof v);
+  }
+  void text(const std::string& s) {
+    value(static_cast<std::uint64_t>(s.size()));
+    m_bytes += s;
+  }
+  template <typename Derived>
+  void matrix(const Eigen::PlainObjectBase<Derived>& m) {
+    value(static_cast<std::int64_t>(m.rows()));
+    value(static_cast<std::int64_t>(m.cols()));
+    m_bytes.append(reinterpret_cast<const char*>(m.data()), sizeof(typename Derived::Scalar) * m.size());
+  }
+  std::string take() { return std::move(m_bytes); }
+
+private:
+  std::string m_bytes;
+};
+
+class ByteReader {
+public:
+  explicit ByteReader(std::string_view bytes) : m_bytes(bytes) {}
+  template <typename T>
+  T value() {
+    static_assert(std::is_trivially_copyable_v<T>);
+    need(sizeof(T));
+    T v;
+    std::memcpy(&v, m_bytes.data() + m_at, sizeof v);
+    m_at += sizeof v;
+    return v;
+  }
+  std::string text() {
+    const auto size = value<std::uint64_t>();
+    need(size);
+    std::string s(m_bytes.substr(m_at, size));
+    m_at += size;
+    return s;
+  }
+  template <typename Derived>
+  void matrix(Eigen::PlainObjectBase<Derived>& m) {
+    const auto rows = value<std::int64_t>();
+    const auto cols = value<std::int64_t>();
+    if (rows < 0 || cols < 0 ||
+        (Derived::ColsAtCompileTime != Eigen::Dynamic && cols != Derived::ColsAtCompileTime) ||
+        (Derived::RowsAtCompileTime != Eigen::Dynamic && rows != Derived::RowsAtCompileTime))
+      throw DamagedGeometry("organ geometry: an array of unexpected shape");
+    const std::size_t size = sizeof(typename Derived::Scalar) * static_cast<std::size_t>(rows * cols);
+    need(size);
+    m.resize(rows, cols);
+    std::memcpy(m.data(), m_bytes.data() + m_at, size);
+    m_at += size;
+  }
+  bool done() const { return m_at == m_bytes.size(); }
+
+private:
+  void need(std::size_t size) const {
+    if (size > m_bytes.size() - m_at) throw DamagedGeometry("organ geometry: the bytes end early");
+  }
+  std::string_view m_bytes;
+  std::size_t m_at = 0;
+};
+
+} // namespace
+
+Phantom build_phantom(const AnatomySettings& anatomy, const std::map<std::string, ShapeData>& files,
+                      Reporter& reporter) {
+  const auto& settings = anatomy.organs;
+  const VariedTargets varied = varied_targets(anatomy, files, reporter);
   Phantom phantom;
   phantom.tet_size_mm = anatomy.tet_size_mm;
   phantom.seed = anatomy.seed;
   ProgressBar progress(reporter, "anatomy", settings.size());
   for (std::size_t o = 0; o < settings.size(); ++o) {
     throw_if_cancelled();
-    const OrganSettings& s = settings[o];
-    Organ organ;
-    organ.name = s.name;
-    organ.tissue = s.tissue;
-    organ.material = s.material;
-    organ.inside = s.inside;
-    organ.target = targets[o];
-    const ShapeSettings& shape = shapes[o];
-    const Eigen::Matrix3d rotation = rotation_from_degrees(shape.rotation_deg);
-    std::ostringstream line;
-    line << s.name << ": ";
-    if (shape.kind == ShapeKind::sheet) {
-      organ.sheet =
-          structured_sheet(shape.size_mm.head<2>(), shape.cells.head<2>(), rotation, shape.center_mm);
-      line << "sheet of " << organ.sheet->face_count()
-           << " triangles (zero thickness: no volume to voxelize)";
-    } else if (shape.kind == ShapeKind::box) {
-      TetMesh tets = structured_box(shape.size_mm, shape.cells, rotation, shape.center_mm);
-      TriangleMesh base = boundary_surface(tets, &organ.tet_vertex_of_surface_vertex);
-      organ.surface.emplace(base, "organ " + s.name); // flat faces: a box needs no bumps
-      if (s.solid) organ.solid = std::move(tets);
-      organ.fit = measure_fit(*organ.surface, *organ.target, 1e-3 * organ.target->bounding_radius(), 4);
-    } else if (s.solid) {
-      build_solid(organ, anatomy, o);
-      progress.set_detail(s.name + ": measuring the fit");
-      organ.fit = measure_fit(*organ.surface, *organ.target, 5e-3 * organ.target->bounding_radius(), 4);
-    } else {
-      PatchFitOptions options;
-      options.base_triangles = base_triangles(anatomy, o);
-      progress.set_detail(s.name + ": fitting about " + std::to_string(options.base_triangles) + " patches");
-      const Eigen::Vector3d hint = shape.kind == ShapeKind::mesh || shape.kind == ShapeKind::label_volume
-                                       ? Eigen::Vector3d::Ones()
-                                       : Eigen::Vector3d(shape.radii_mm);
-      organ.surface.emplace(fit_patch_surface(*organ.target, hint, rotation, options, "organ " + s.name));
-      progress.set_detail(s.name + ": measuring the fit");
-      organ.fit = measure_fit(*organ.surface, *organ.target, 5e-3 * organ.target->bounding_radius(), 4);
-    }
-    if (organ.surface) {
-      line << organ.surface->patch_count() << " patches";
-      if (organ.solid) {
-        line << ", " << organ.solid->vertices.rows() << " vertices / " << organ.solid->tets.rows()
-             << " tets (min dihedral " << format_number(min_dihedral_angle_deg(*organ.solid)) << " deg)";
-      }
-      line << ", volume " << format_number(organ.surface->volume() / 1000.0) << " ml, fit Hausdorff "
-           << format_number(organ.fit.hausdorff_mm) << " mm, volume error "
-           << format_number(100.0 * organ.fit.volume_error) << " %";
-    }
-    reporter.modelled("anatomy", line.str());
+    Organ organ = organ_without_geometry(settings[o], varied.targets[o]);
+    build_organ_geometry(organ, anatomy, o, varied.shapes[o], progress);
+    reporter.modelled("anatomy", organ_line(organ));
     phantom.organs.push_back(std::move(organ));
     progress.advance();
+  }
+  return phantom;
+}
+
+std::string encode_organ_geometry(const Phantom& phantom) {
+  ByteWriter out;
+  out.value(k_geometry_format);
+  out.value(static_cast<std::uint64_t>(phantom.organs.size()));
+  for (const Organ& organ : phantom.organs) {
+    out.text(organ.name);
+    out.value(static_cast<std::uint8_t>(organ.surface.has_value()));
+    if (organ.surface) {
+      const PatchSurface& surface = *organ.surface;
+      if (surface.base_mesh().vertices != surface.rest_positions())
+        throw std::logic_error("encode_organ_geometry: organ " + organ.name + " is not at rest");
+      out.matrix(surface.rest_positions());
+      out.matrix(surface.base_mesh().faces);
+      for (Eigen::Index t = 0; t < surface.patch_count(); ++t) {
+        const std::vector<PatchBump>& bumps = surface.bumps(t);
+        out.value(static_cast<std::uint32_t>(bumps.size()));
+        for (const PatchBump& bump : bumps) {
+          // Seven doubles: c (2), S (4, column-major), amplitude.
+          for (int i = 0; i < 2; ++i)
+            out.value(bump.center_uv[i]);
+          for (int i = 0; i < 4; ++i)
+            out.value(bump.shape_uv.data()[i]);
+          out.value(bump.amplitude_mm);
+        }
+      }
+    }
+    out.value(static_cast<std::uint8_t>(organ.sheet.has_value()));
+    if (organ.sheet) {
+      out.matrix(organ.sheet->vertices);
+      out.matrix(organ.sheet->faces);
+    }
+    out.value(static_cast<std::uint8_t>(organ.solid.has_value()));
+    if (organ.solid) {
+      out.matrix(organ.solid->vertices);
+      out.matrix(organ.solid->tets);
+      out.matrix(organ.solid->boundary_faces);
+      out.matrix(organ.solid->subdomains);
+    }
+    out.matrix(organ.tet_vertex_of_surface_vertex);
+    // Field by field: the struct's padding bytes are undefined.
+    out.value(organ.fit.base_triangles);
+    out.value(organ.fit.vertex_offset_factor);
+    out.value(organ.fit.hausdorff_mm);
+    out.value(organ.fit.mean_distance_mm);
+    out.value(organ.fit.volume_error);
+  }
+  return out.take();
+}
+
+Phantom phantom_from_geometry(const AnatomySettings& anatomy, const std::map<std::string, ShapeData>& files,
+                              std::string_view bytes, Reporter& reporter) {
+  const auto& settings = anatomy.organs;
+  ByteReader in(bytes);
+  if (in.value<std::uint32_t>() != k_geometry_format)
+    throw DamagedGeometry("organ geometry: written in another format");
+  if (in.value<std::uint64_t>() != settings.size())
+    throw DamagedGeometry("organ geometry: another number of organs");
+  // Decoded before the targets are made, so that damaged bytes cost no shape building.
+  std::vector<Organ> organs(settings.size());
+  for (std::size_t o = 0; o < settings.size(); ++o) {
+    Organ& organ = organs[o];
+    organ.name = in.text();
+    if (organ.name != settings[o].name)
+      throw DamagedGeometry("organ geometry: organ " + organ.name + " where " + settings[o].name +
+                            " was expected");
+    if (in.value<std::uint8_t>()) {
+      TriangleMesh base;
+      in.matrix(base.vertices);
+      in.matrix(base.faces);
+      PatchSurface surface(std::move(base), "organ " + organ.name);
+      for (Eigen::Index t = 0; t < surface.patch_count(); ++t) {
+        std::vector<PatchBump> bumps(in.value<std::uint32_t>());
+        for (PatchBump& bump : bumps) {
+          for (int i = 0; i < 2; ++i)
+            bump.center_uv[i] = in.value<double>();
+          for (int i = 0; i < 4; ++i)
+            bump.shape_uv.data()[i] = in.value<double>();
+          bump.amplitude_mm = in.value<double>();
+        }
+        if (!bumps.empty()) surface.set_bumps(t, std::move(bumps));
+      }
+      organ.surface = std::move(surface);
+    }
+    if (in.value<std::uint8_t>()) {
+      organ.sheet.emplace();
+      in.matrix(organ.sheet->vertices);
+      in.matrix(organ.sheet->faces);
+    }
+    if (in.value<std::uint8_t>()) {
+      organ.solid.emplace();
+      in.matrix(organ.solid->vertices);
+      in.matrix(organ.solid->tets);
+      in.matrix(organ.solid->boundary_faces);
+      in.matrix(organ.solid->subdomains);
+    }
+    in.matrix(organ.tet_vertex_of_surface_vertex);
+    organ.fit.base_triangles = in.value<int>();
+    organ.fit.vertex_offset_factor = in.value<double>();
+    organ.fit.hausdorff_mm = in.value<double>();
+    organ.fit.mean_distance_mm = in.value<double>();
+    organ.fit.volume_error = in.value<double>();
+  }
+  if (!in.done()) throw DamagedGeometry("organ geometry: bytes after the last organ");
+
+  const VariedTargets varied = varied_targets(anatomy, files, reporter);
+  Phantom phantom;
+  phantom.tet_size_mm = anatomy.tet_size_mm;
+  phantom.seed = anatomy.seed;
+  for (std::size_t o = 0; o < settings.size(); ++o) {
+    Organ organ = organ_without_geometry(settings[o], varied.targets[o]);
+    organ.surface = std::move(organs[o].surface);
+    organ.sheet = std::move(organs[o].sheet);
+    organ.solid = std::move(organs[o].solid);
+    organ.tet_vertex_of_surface_vertex = std::move(organs[o].tet_vertex_of_surface_vertex);
+    organ.fit = organs[o].fit;
+    reporter.modelled("anatomy", organ_line(organ));
+    phantom.organs.push_back(std::move(organ));
   }
   return phantom;
 }

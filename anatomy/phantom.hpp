@@ -11,7 +11,9 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace phantasm {
@@ -24,6 +26,24 @@ namespace phantasm {
 /// @throws InputError for shapes that cannot be built (invalid meshes, empty labels)
 Phantom build_phantom(const AnatomySettings& anatomy, const std::map<std::string, ShapeData>& files,
                       Reporter& reporter);
+
+/// Bytes that do not hold the geometry of the organs they were read for.
+class DamagedGeometry : public std::runtime_error {
+public:
+  using std::runtime_error::runtime_error;
+};
+
+/// The geometry of a built phantom's organs (patch surfaces with their bumps, sheets, tet
+/// meshes, fit reports) as bytes, everything but the target shapes, which phantom_from_geometry
+/// makes again from the settings (cheap next to fitting and meshing). For the anatomy cache.
+/// @param phantom as build_phantom returned it (every surface at rest)
+std::string encode_organ_geometry(const Phantom& phantom);
+
+/// The phantom build_phantom(anatomy, files, ...) made, from its encode_organ_geometry bytes:
+/// targets made again, geometry decoded, the same log lines; bit for bit the built phantom.
+/// @throws DamagedGeometry when the bytes are damaged or were written for other organs
+Phantom phantom_from_geometry(const AnatomySettings& anatomy, const std::map<std::string, ShapeData>& files,
+                              std::string_view bytes, Reporter& reporter);
 
 /// The implicit shape of an organ's settings (before variation); files supply mesh and label shapes.
 std::unique_ptr<ImplicitShape> target_shape(const ShapeSettings& shape, const ShapeData* file,

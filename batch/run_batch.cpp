@@ -31,7 +31,7 @@ namespace {
 /// The child's whole life: run one subject, exit with phantasm's exit codes.
 [[noreturn]] void run_subject_and_exit(const Sweep& sweep, const SweepSubject& subject,
                                        const std::filesystem::path& output, int threads, pid_t parent,
-                                       bool strict) {
+                                       bool strict, const std::filesystem::path& anatomy_cache) {
   ::prctl(PR_SET_PDEATHSIG, SIGKILL); // a batch killed outright takes its subjects with it
   if (::getppid() != parent) ::_exit(1);
   // SIGINT from the terminal reaches the subject and the batch, which then sends SIGTERM: a
@@ -43,8 +43,11 @@ namespace {
     const SceneLoadResult loaded = parse_scene(subject.scene_text, sweep.base_scene);
     if (!loaded.scene) throw InputError(format_diagnostics(loaded.problems));
     Reporter quiet = Reporter::silent();
-    RunOptions run_options{output, true};
+    RunOptions run_options;
+    run_options.output = output;
+    run_options.force = true;
     run_options.strict = strict;
+    run_options.anatomy_cache = anatomy_cache;
     run_scene(*loaded.scene, run_options, quiet);
   } catch (const Cancelled&) {
     code = 128 + (cancellation_signal() > 0 ? cancellation_signal() : SIGINT);
@@ -93,6 +96,18 @@ std::string batch_status(const BatchSummary& summary, std::size_t to_run, double
 
 /// Refuses a batch into a folder that holds anything but a dataset phantasm writes (a batch
 /// resumes into its own folder; it must not scatter subjects among unrelated files).
+/// Entries of an anatomy cache folder (pipeline/anatomy_cache.hpp).
+std::size_t anatomy_cache_entries(const std::filesystem::path& folder) {
+  std::size_t entries = 0;
+  std::error_code error;
+  if (folder.empty() || !std::filesystem::is_directory(folder, error)) return 0;
+  for (const auto& entry : std::filesystem::directory_iterator(folder, error)) {
+    const std::string name = entry.path().filename().string();
+    entries += name.rfind("anatomy-", 0) == 0 && entry.path().extension() == ".bin";
+  }
+  return entries;
+}
+
 void require_batch_folder(const std::filesystem::path& folder) {
   std::error_code error;
   if (!std::filesystem::is_directory(folder, error)) return;
@@ -163,6 +178,7 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
         << summary.skipped << " already complete, " << pending.size() << " to run, " << options.jobs
         << " at a time with " << threads << " threads each\n";
   }
+  const std::size_t cache_entries = anatomy_cache_entries(options.anatomy_cache);
   std::map<pid_t, Running> running;
   std::size_t next = 0;
   double subject_seconds = 0.0; // summed over the subjects made, for the time left
@@ -176,7 +192,8 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
       const pid_t child = ::fork();
       if (child < 0) throw std::runtime_error("cannot start a process for subject " + sweep.subjects[s].id);
       if (child == 0)
-        run_subject_and_exit(sweep, sweep.subjects[s], options.output, threads, parent, options.strict);
+        run_subject_and_exit(sweep, sweep.subjects[s], options.output, threads, parent, options.strict,
+                             options.anatomy_cache);
       running[child] = {s, std::chrono::steady_clock::now()};
     }
     if (running.empty()) break;
@@ -222,6 +239,12 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
       summary.unconverged.push_back(sweep.subjects[s].id);
   }
   if (cancellation_requested()) summary.interrupted = true;
+  if (!options.quiet && !options.anatomy_cache.empty()) {
+    const std::size_t entries = anatomy_cache_entries(options.anatomy_cache);
+    log << "[batch] anatomy cache " << options.anatomy_cache.string() << ": " << entries << " anatomies, "
+        << entries - std::min(entries, cache_entries)
+        << " built by this batch (subjects with the same anatomy settings, inputs and seed share one)\n";
+  }
   // Processes of an earlier, killed batch may have ended only after this one started (and every
   // subject of this one has ended: what is left of theirs is stale too).
   remove_stale_temporaries(options.output);

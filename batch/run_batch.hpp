@@ -17,6 +17,9 @@ struct BatchOptions {
   Shard shard;                  ///< which slice of the sweep this batch makes
   bool quiet = false;
   bool strict = false; ///< a subject whose run warned (unconverged solve, inverted tets) fails, unwritten
+  /// the subjects' anatomy cache (pipeline/anatomy_cache.hpp), shared by every subject, job and
+  /// shard; empty: none
+  std::filesystem::path anatomy_cache;
 };
 
 struct BatchSummary {

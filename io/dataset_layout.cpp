@@ -52,6 +52,10 @@ std::filesystem::path DatasetLayout::derivatives() const {
   return m_root / "derivatives" / "phantasm";
 }
 
+std::filesystem::path dataset_anatomy_cache(const std::filesystem::path& dataset) {
+  return DatasetLayout(dataset, "").derivatives() / "cache";
+}
+
 std::filesystem::path DatasetLayout::derivatives_description() const {
   return derivatives() / "dataset_description.json";
 }

@@ -85,6 +85,10 @@ private:
   std::string m_subject;
 };
 
+/// A dataset's anatomy cache folder, derivatives/phantasm/cache (pipeline/anatomy_cache.hpp):
+/// where a batch keeps the anatomies its subjects share.
+std::filesystem::path dataset_anatomy_cache(const std::filesystem::path& dataset);
+
 /// Labels of the complete subjects of a dataset (derivatives/phantasm/sub-<id>/provenance.json
 /// present, since it is written last), sorted; empty when there are none.
 std::vector<std::string> complete_subjects(const std::filesystem::path& dataset);

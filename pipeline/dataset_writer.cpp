@@ -134,7 +134,8 @@ std::string derivatives_bidsignore() {
          "/sub-*/ses-*/previews/\n"
          "/sub-*/provenance.json\n"
          "/sub-*/log.txt\n"
-         "/sub-*/scene.yaml\n";
+         "/sub-*/scene.yaml\n"
+         "/cache/\n";
 }
 
 /// The raw dataset's README: what the dataset is and where the ground truth lies.

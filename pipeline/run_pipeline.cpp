@@ -9,6 +9,7 @@
 #include "io/shape_files.hpp"
 #include "mri/mri_plan.hpp"
 #include "mri/synthesize_images.hpp"
+#include "pipeline/anatomy_cache.hpp"
 #include "sim/deform_phantom.hpp"
 #include "sim/sim_plan.hpp"
 #include "voxelize/voxelize_phantom.hpp"
@@ -60,10 +61,11 @@ AtlasLoader atlas_loader(StageReport& report, Reporter& reporter) {
 }
 
 /// The anatomy stage: reads the scene's shape files and builds every organ; records fit errors.
-Phantom build_anatomy(const Scene& scene, StageReport& report, Reporter& reporter) {
+Phantom build_anatomy(const Scene& scene, const std::filesystem::path& cache, StageReport& report,
+                      Reporter& reporter) {
   const std::map<std::string, ShapeData> files =
       read_shape_files(scene.anatomy, atlas_loader(report, reporter), scene.grid.grid());
-  Phantom phantom = build_phantom(scene.anatomy, files, reporter);
+  Phantom phantom = build_phantom_cached(scene.anatomy, files, cache, report, reporter);
   for (const Organ& organ : phantom.organs) {
     if (!organ.surface) continue;
     report.accuracy[organ.name + " fit Hausdorff mm"] = organ.fit.hausdorff_mm;
@@ -84,7 +86,8 @@ std::vector<StageReport> plan_stages(const Scene& scene) {
 namespace {
 
 /// Runs the stages; what they reject is named by its key path (SettingError).
-void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until, Simulation& result) {
+void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
+                const std::filesystem::path& cache, Simulation& result) {
   result.stages = plan_stages(scene);
   for (const auto& stage : result.stages) {
     // Settings a plan finds pointless (a flip angle that excites nothing, ...) warn before work;
@@ -96,7 +99,7 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until, S
     for (const auto& line : stage.skipped)
       reporter.skipped(stage.stage, line);
   }
-  result.phantom = build_anatomy(scene, result.stages[0], reporter);
+  result.phantom = build_anatomy(scene, cache, result.stages[0], reporter);
   if (until == SimulationStage::anatomy) return;
 
   StageReport& sim = result.stages[1];
@@ -126,13 +129,14 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until, S
 
 } // namespace
 
-Simulation simulate(const Scene& scene, Reporter& reporter, SimulationStage until) {
+Simulation simulate(const Scene& scene, Reporter& reporter, SimulationStage until,
+                    const std::filesystem::path& anatomy_cache) {
   Simulation result;
   // The stages write nothing: a run asked to stop may be abandoned anywhere in them when a
   // library call (CGAL's mesh optimisers) does not return to a poll within half a second.
   const AbandonableWork abandonable;
   try {
-    run_stages(scene, reporter, until, result);
+    run_stages(scene, reporter, until, anatomy_cache, result);
   } catch (const SettingError& error) {
     // Stages name the setting; the scene knows where it was written.
     throw InputError(
@@ -147,7 +151,7 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& re
   prepare_output_folder(options.output, options.force);
   try {
     check_dataset_names(scene); // before the stages run, not after
-    const Simulation simulation = simulate(scene, reporter);
+    const Simulation simulation = simulate(scene, reporter, SimulationStage::mri, options.anatomy_cache);
     if (options.strict) {
       const std::vector<std::string> warnings = stage_warnings(simulation.stages);
       if (!warnings.empty()) {

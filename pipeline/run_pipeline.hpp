@@ -23,6 +23,9 @@ struct RunOptions {
   /// the caller made the output folder for this run (to lock it): a run that fails on its input
   /// removes it again when it is still empty, as one that made it itself
   bool output_created = false;
+  /// the anatomy cache folder (pipeline/anatomy_cache.hpp): runs with the same anatomy build it
+  /// once; empty: no cache
+  std::filesystem::path anatomy_cache;
 };
 
 /// A run with --strict whose stages warned: nothing of the subject was written.
@@ -37,8 +40,10 @@ std::vector<StageReport> plan_stages(const Scene& scene);
 /// The last stage simulate() runs.
 enum class SimulationStage { anatomy, deformation, voxelization, mri };
 
-/// Runs a scene's stages in data-flow order up to `until`, writing nothing.
-Simulation simulate(const Scene& scene, Reporter& reporter, SimulationStage until = SimulationStage::mri);
+/// Runs a scene's stages in data-flow order up to `until`, writing nothing but the anatomy cache.
+/// @param anatomy_cache the anatomy cache folder (pipeline/anatomy_cache.hpp); empty: none
+Simulation simulate(const Scene& scene, Reporter& reporter, SimulationStage until = SimulationStage::mri,
+                    const std::filesystem::path& anatomy_cache = {});
 
 /// Runs a scene through every stage and writes the dataset (docs/architecture.md, dataset layout).
 /// provenance.json is written last: its presence marks a complete subject.

@@ -1,5 +1,6 @@
 #include "apps/phantasm/commands.hpp"
 #include "batch/run_batch.hpp"
+#include "io/dataset_layout.hpp"
 
 #include <chrono>
 #include <iostream>
@@ -16,6 +17,8 @@ void add_batch_command(CLI::App& app, std::function<int()>& action) {
     bool quiet = false;
     bool list = false;
     bool strict = false;
+    std::string cache;
+    bool no_cache = false;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
@@ -32,6 +35,12 @@ void add_batch_command(CLI::App& app, std::function<int()>& action) {
       "--strict", options->strict,
       "A subject whose run warns (a solve that did not converge, inverted tets, a Jacobian <= 0 "
       "inside an exact mask) fails and is not written");
+  command->add_option(
+      "--cache", options->cache,
+      "Anatomy cache folder: subjects with the same anatomy settings, inputs and seed fit and "
+      "mesh it once (default: derivatives/phantasm/cache in the dataset)");
+  command->add_flag("--no-cache", options->no_cache, "Build every subject's anatomy anew")
+      ->excludes("--cache");
   command->add_flag("--list", options->list,
                     "Print the sweep's subject labels, one per line in sweep order, and run nothing");
   command->callback([options, &action] {
@@ -44,8 +53,16 @@ void add_batch_command(CLI::App& app, std::function<int()>& action) {
           std::cout << subject.id << '\n';
         return static_cast<int>(exit_ok);
       }
-      BatchOptions batch_options{options->output, options->jobs, shard, options->quiet};
+      BatchOptions batch_options;
+      batch_options.output = options->output;
+      batch_options.jobs = options->jobs;
+      batch_options.shard = shard;
+      batch_options.quiet = options->quiet;
       batch_options.strict = options->strict;
+      if (!options->no_cache) {
+        batch_options.anatomy_cache = options->cache.empty() ? dataset_anatomy_cache(options->output)
+                                                             : std::filesystem::path(options->cache);
+      }
       const BatchSummary summary = run_batch(sweep, batch_options, std::cerr);
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       if (summary.interrupted) {

@@ -21,6 +21,7 @@ void add_run_command(CLI::App& app, std::function<int()>& action) {
     bool quiet = false;
     bool strict = false;
     int write_delay_ms = 0;
+    std::string cache;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
@@ -33,6 +34,9 @@ void add_run_command(CLI::App& app, std::function<int()>& action) {
       "--strict", options->strict,
       "A warning (a solve that did not converge, inverted tets, a Jacobian <= 0 inside an exact "
       "mask) is an error: exit 1, nothing of the subject written");
+  command->add_option("--cache", options->cache,
+                      "Anatomy cache folder: a run whose anatomy settings, inputs and seed match an earlier "
+                      "one's reads its organs from there instead of fitting and meshing them again");
   // For tests that interrupt a run while it writes; hidden from --help.
   command->add_option("--write-delay-ms", options->write_delay_ms)->group("")->check(CLI::NonNegativeNumber);
   command->callback([options, &action] {
@@ -48,9 +52,12 @@ void add_run_command(CLI::App& app, std::function<int()>& action) {
       // One writer per dataset, from before the folder is checked until the last file is written.
       const bool existed = std::filesystem::exists(options->output);
       const OutputFolderLock lock(options->output);
-      RunOptions run_options{options->output, options->force};
+      RunOptions run_options;
+      run_options.output = options->output;
+      run_options.force = options->force;
       run_options.output_created = !existed;
       run_options.strict = options->strict;
+      run_options.anatomy_cache = options->cache;
       const RunSummary summary = run_scene(*result.scene, run_options, reporter);
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
       reporter.note("wrote " + std::to_string(summary.files.size()) + " files to " + options->output +

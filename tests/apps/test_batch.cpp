@@ -220,3 +220,39 @@ TEST(BatchCommand, UnconvergedSubjectsAreListedAndStrictFailsThem) {
   EXPECT_NE(run.err.find("--strict"), std::string::npos) << run.err;
   EXPECT_EQ(count_ending(folder_contents(folder / "strict"), "provenance.json"), 1u);
 }
+
+// Subjects that differ only in what comes after the anatomy share one anatomy cache entry: the
+// batch builds it once (#17 item 4), and their datasets are those of runs without the cache.
+TEST(BatchCommand, SubjectsWithTheSameAnatomyBuildItOnce) {
+  const fs::path folder = fresh_folder("batch-anatomy-cache");
+  write_text_file(folder / "sweep.yaml",
+                  "phantasm_sweep: 1\nname: noise-only\nbase_scene: " + k_small_scene.string() +
+                      "\nvary:\n  acquisition.noise_percent: [1, 2, 3]\n");
+  const CommandResult run = run_command(
+      {k_phantasm, "batch", (folder / "sweep.yaml").string(), "-o", (folder / "out").string(), "-j", "2"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.err.find(": 1 anatomies, 1 built by this batch"), std::string::npos) << run.err;
+  const auto files = folder_contents(folder / "out");
+  EXPECT_EQ(count_ending(files, ".bin"), 1u);
+  EXPECT_EQ(count_ending(files, "provenance.json"), 3u);
+  // A run of the first subject's scene without the cache writes the same files.
+  const fs::path alone = folder / "alone";
+  ASSERT_EQ(run_command({k_phantasm, "run",
+                         (folder / "out" / "derivatives" / "phantasm" / "sub-01" / "scene.yaml").string(),
+                         "-o", alone.string(), "-q"})
+                .exit_code,
+            0);
+  std::size_t compared = 0;
+  for (const auto& [path, bytes] : folder_contents(alone)) {
+    if (path.find("sub-01") == std::string::npos) continue;
+    ++compared;
+    const std::string in_batch = files.count(path) ? files.at(path) : std::string();
+    if (path.find("log.txt") != std::string::npos || path.find("provenance.json") != std::string::npos) {
+      // The batch's subject says where its organs came from; the rest of the record is the same.
+      EXPECT_NE(in_batch.find("kept in the anatomy cache as entry"), std::string::npos) << path;
+      continue;
+    }
+    EXPECT_TRUE(in_batch == bytes) << path;
+  }
+  EXPECT_GT(compared, 50u);
+}

@@ -1,0 +1,195 @@
+#include "pipeline/anatomy_cache.hpp"
+
+#include "anatomy/phantom.hpp"
+#include "core/build_id.hpp"
+#include "core/cancellation.hpp"
+#include "core/error.hpp"
+#include "core/sha256.hpp"
+#include "io/atomic_file.hpp"
+
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <fcntl.h>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+#include <sys/file.h>
+#include <thread>
+#include <unistd.h>
+
+namespace phantasm {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// The file's first line; the key follows on the second, the geometry after it.
+constexpr const char* k_magic = "phantasm anatomy cache 1\n";
+
+/// Doubles as hex floats: the key changes with any bit of a setting.
+std::string exact(double value) {
+  std::ostringstream out;
+  out << std::hexfloat << value;
+  return out.str();
+}
+
+template <typename Derived>
+std::string exact(const Eigen::MatrixBase<Derived>& m) {
+  std::string out = "[";
+  for (Eigen::Index c = 0; c < m.cols(); ++c)
+    for (Eigen::Index r = 0; r < m.rows(); ++r)
+      out += (r + c > 0 ? " " : "") + exact(static_cast<double>(m(r, c)));
+  return out + "]";
+}
+
+template <typename Derived>
+std::string bytes_hash(const Eigen::PlainObjectBase<Derived>& m) {
+  return std::to_string(m.rows()) + "x" + std::to_string(m.cols()) + ":" +
+         sha256_hex(std::string_view(reinterpret_cast<const char*>(m.data()),
+                                     sizeof(typename Derived::Scalar) * static_cast<std::size_t>(m.size())));
+}
+
+/// Every field of the anatomy settings, one per line. A field added to AnatomySettings,
+/// OrganSettings or ShapeSettings must be added here (tests/pipeline/test_anatomy_cache.cpp
+/// changes each and expects another key).
+std::string settings_text(const AnatomySettings& a) {
+  std::ostringstream out;
+  out << "variation " << exact(a.variation) << "\nbase_mesh_triangles " << a.base_mesh_triangles
+      << "\ntet_size_mm " << exact(a.tet_size_mm) << "\nseed " << a.seed << "\norgans " << a.organs.size()
+      << "\n";
+  for (const OrganSettings& o : a.organs) {
+    const ShapeSettings& s = o.shape;
+    out << "organ " << o.name << "\n tissue " << o.tissue << "\n material " << o.material << "\n inside "
+        << o.inside << "\n solid " << o.solid << "\n base_mesh_triangles " << o.base_mesh_triangles
+        << "\n thickness_mm " << exact(o.thickness_mm) << "\n enclosed_volume_tolerance "
+        << (o.enclosed_volume_tolerance ? exact(*o.enclosed_volume_tolerance) : "none") << "\n shape "
+        << to_string(s.kind) << " center " << exact(s.center_mm) << " radii " << exact(s.radii_mm)
+        << " rotation " << exact(s.rotation_deg) << " exponents " << exact(s.exponent_1) << " "
+        << exact(s.exponent_2) << " size " << exact(s.size_mm) << " cells " << exact(s.cells) << " file "
+        << s.file.string() << " atlas " << s.atlas << " label " << s.label << " labels";
+    for (const std::string& l : s.labels)
+      out << " " << l;
+    out << " smoothing " << exact(s.smoothing_mm) << "\n";
+  }
+  return out.str();
+}
+
+/// The shape data by content (label volumes shared by organs are hashed once).
+std::string files_text(const std::map<std::string, ShapeData>& files) {
+  std::ostringstream out;
+  std::map<const void*, std::string> label_hashes;
+  for (const auto& [organ, data] : files) {
+    out << "file of " << organ << " from " << data.source << "\n";
+    if (data.mesh)
+      out << " mesh " << bytes_hash(data.mesh->vertices) << " " << bytes_hash(data.mesh->faces) << "\n";
+    if (data.label_grid) {
+      out << " grid " << exact(data.label_grid->dims) << " " << exact(data.label_grid->spacing_mm) << " "
+          << exact(data.label_grid->world_from_voxel) << "\n";
+    }
+    if (data.labels) {
+      std::string& hash = label_hashes[data.labels.get()];
+      if (hash.empty()) {
+        hash = sha256_hex(std::string_view(reinterpret_cast<const char*>(data.labels->data()),
+                                           data.labels->size() * sizeof(std::int32_t)));
+      }
+      out << " labels " << data.labels->size() << " " << hash << "\n";
+    }
+    out << " target labels";
+    for (std::int32_t l : data.target_labels)
+      out << " " << l;
+    out << "\n";
+  }
+  return out.str();
+}
+
+/// An exclusive flock on a key's lock file, taken by polling so that a cancelled run stops waiting.
+class KeyLock {
+public:
+  explicit KeyLock(const fs::path& path) {
+    m_fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (m_fd < 0)
+      throw InputError(path.string() +
+                       ": cannot open the anatomy cache's lock file: " + std::strerror(errno));
+    while (::flock(m_fd, LOCK_EX | LOCK_NB) != 0) {
+      if (errno != EWOULDBLOCK && errno != EINTR) break; // no flock on this filesystem: unlocked
+      throw_if_cancelled();
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  }
+  ~KeyLock() {
+    if (m_fd >= 0) ::close(m_fd);
+  }
+  KeyLock(const KeyLock&) = delete;
+  KeyLock& operator=(const KeyLock&) = delete;
+
+private:
+  int m_fd = -1;
+};
+
+/// The entry's line of the log and the provenance: the same whether this run built the entry or
+/// read it (log lines are deterministic; which it did is a screen note).
+void record_entry(const std::string& key, StageReport& report, Reporter& reporter) {
+  const std::string line = "organ geometry kept in the anatomy cache as entry " + key.substr(0, 16) +
+                           " (the first run with these settings and inputs builds it, the others read it)";
+  report.modelled.push_back(line);
+  reporter.modelled("anatomy", line);
+}
+
+std::string read_whole(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+} // namespace
+
+std::string anatomy_cache_key(const AnatomySettings& anatomy, const std::map<std::string, ShapeData>& files) {
+  const std::string build = code_build_id();
+  if (build.empty()) return {};
+  return sha256_hex(std::string(k_magic) + "build " + build + "\n" + settings_text(anatomy) +
+                    files_text(files));
+}
+
+Phantom build_phantom_cached(const AnatomySettings& anatomy, const std::map<std::string, ShapeData>& files,
+                             const fs::path& folder, StageReport& report, Reporter& reporter) {
+  if (folder.empty()) return build_phantom(anatomy, files, reporter);
+  const std::string key = anatomy_cache_key(anatomy, files);
+  if (key.empty()) {
+    const std::string line =
+        "anatomy cache: not used (this build of phantasm has no build id to tell its entries apart)";
+    report.skipped.push_back(line);
+    reporter.skipped("anatomy", line);
+    return build_phantom(anatomy, files, reporter);
+  }
+  std::error_code error;
+  fs::create_directories(folder, error);
+  if (error) throw InputError(folder.string() + ": cannot make the anatomy cache folder: " + error.message());
+  const fs::path entry = folder / ("anatomy-" + key + ".bin");
+  const KeyLock lock(folder / ("anatomy-" + key + ".lock"));
+  const std::string header = std::string(k_magic) + key + "\n";
+  if (fs::exists(entry)) {
+    const std::string bytes = read_whole(entry);
+    try {
+      if (bytes.compare(0, header.size(), header) != 0) throw DamagedGeometry("another key or format");
+      Phantom phantom =
+          phantom_from_geometry(anatomy, files, std::string_view(bytes).substr(header.size()), reporter);
+      record_entry(key, report, reporter);
+      reporter.note("[anatomy] organs read from the anatomy cache: " + entry.string() +
+                    " (built by an earlier run with the same settings and inputs)");
+      return phantom;
+    } catch (const DamagedGeometry& damaged) {
+      const std::string line =
+          entry.string() + ": a damaged anatomy cache entry (" + damaged.what() + "); built again";
+      // Not a stage warning: the anatomy built again is sound, so --strict has nothing to refuse.
+      report.modelled.push_back(line);
+      reporter.warning("anatomy", line);
+    }
+  }
+  Phantom phantom = build_phantom(anatomy, files, reporter);
+  write_file_atomically(entry, header + encode_organ_geometry(phantom));
+  record_entry(key, report, reporter);
+  reporter.note("[anatomy] organs stored in the anatomy cache: " + entry.string());
+  return phantom;
+}
+
+} // namespace phantasm
