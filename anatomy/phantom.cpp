@@ -1,5 +1,6 @@
 #include "anatomy/phantom.hpp"
 
+#include "anatomy/smooth_warp.hpp"
 #include "anatomy/structured_mesh.hpp"
 #include "core/cancellation.hpp"
 #include "core/error.hpp"
@@ -178,12 +179,21 @@ VariedTargets varied_targets(const AnatomySettings& anatomy, const std::map<std:
                              Reporter& reporter) {
   const auto& settings = anatomy.organs;
   Variation variation = draw_variation(anatomy);
+  // Shapes read from files vary by one smooth warp of space shared by all of them (nesting kept).
+  const SmoothWarp warp = draw_shape_warp(files, anatomy.variation, anatomy.seed);
+  const std::map<std::string, ShapeData> warped = warped_shapes(files, warp);
+  if (!warp.identity()) {
+    reporter.modelled(
+        "anatomy", "label volumes and meshes warped smoothly by up to " + format_number(warp.amplitude_mm()) +
+                       " mm from seed " + std::to_string(anatomy.seed) +
+                       " (seeded variation: one warp for all of them, so the organs stay nested)");
+  }
   VariedTargets out;
   auto& shapes = out.shapes;
   auto& targets = out.targets;
   for (std::size_t o = 0; o < settings.size(); ++o) {
-    const auto found = files.find(settings[o].name);
-    const ShapeData* file = found == files.end() ? nullptr : &found->second;
+    const auto found = warped.find(settings[o].name);
+    const ShapeData* file = found == warped.end() ? nullptr : &found->second;
     ShapeSettings shape = varied(settings[o].shape, variation.global, variation.per_organ[o]);
     std::shared_ptr<const ImplicitShape> target = target_shape(shape, file, settings[o].name);
     if (target && analytic(shape.kind) && variation.per_organ[o] != Eigen::Vector3d::Ones()) {
