@@ -13,6 +13,7 @@
 #include "io/output_path.hpp"
 #include "io/preview_png.hpp"
 #include "io/vdb_file.hpp"
+#include "pipeline/cost_estimate.hpp"
 #include "scene/scene_json.hpp"
 #include "voxelize/landmarks.hpp"
 #include "voxelize/level_set.hpp"
@@ -522,6 +523,7 @@ DatasetPlan plan_dataset(const Scene& scene, const Simulation& simulation, const
         {"scene", {{"file", scene.file.filename().string()}, {"sha256", scene.sha256}}},
         {"seed", scene.seed},
         {"settings", scene_settings_json(scene)},
+        {"estimate", cost_json(estimate_cost(scene))},
         {"stages", stages},
         {"solves", deformation ? solves_json(deformation->solves) : nlohmann::json::array()},
         {"converged", !deformation || std::all_of(deformation->solves.begin(), deformation->solves.end(),

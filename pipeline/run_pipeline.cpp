@@ -10,6 +10,7 @@
 #include "mri/mri_plan.hpp"
 #include "mri/synthesize_images.hpp"
 #include "pipeline/anatomy_cache.hpp"
+#include "pipeline/cost_estimate.hpp"
 #include "sim/deform_phantom.hpp"
 #include "sim/sim_plan.hpp"
 #include "voxelize/voxelize_phantom.hpp"
@@ -89,6 +90,10 @@ namespace {
 void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
                 const std::filesystem::path& cache, Simulation& result) {
   result.stages = plan_stages(scene);
+  // The cost before the work heads the log: each organ's effective settings and what the run
+  // will build and need (deterministic for the scene, so the log stays the same run to run).
+  for (const std::string& line : cost_lines(estimate_cost(scene)))
+    reporter.modelled("estimate", line);
   for (const auto& stage : result.stages) {
     // Settings a plan finds pointless (a flip angle that excites nothing, ...) warn before work;
     // they stay in the report, so provenance.json records them and --strict refuses them.

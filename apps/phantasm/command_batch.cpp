@@ -1,12 +1,43 @@
 #include "apps/phantasm/commands.hpp"
 #include "batch/run_batch.hpp"
 #include "io/dataset_layout.hpp"
+#include "pipeline/cost_estimate.hpp"
 
 #include <chrono>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 namespace phantasm::cli {
+namespace {
+
+/// Refuses, before any subject runs, a sweep whose largest subject of this shard needs more
+/// memory times the jobs that run at once than the machine has (at most 1000 subjects are
+/// estimated: the first ones, as a sweep's grid varies its last key fastest).
+void check_sweep_memory(const Sweep& sweep, const Shard& shard, int jobs, const MemoryLimit& limit) {
+  if (limit.bytes <= 0.0) return;
+  std::optional<CostEstimate> largest;
+  std::string largest_id;
+  std::size_t in_shard = 0, estimated = 0;
+  for (std::size_t s = 0; s < sweep.subjects.size(); ++s) {
+    if (!shard.holds(s)) continue;
+    ++in_shard;
+    if (estimated >= 1000) continue;
+    ++estimated;
+    const SceneLoadResult loaded = parse_scene(sweep.subjects[s].scene_text, sweep.base_scene);
+    if (!loaded.scene) continue; // the batch reports it as the subject's failure
+    CostEstimate estimate = estimate_cost(*loaded.scene);
+    if (!largest || estimate.peak_memory_bytes > largest->peak_memory_bytes) {
+      largest = std::move(estimate);
+      largest_id = sweep.subjects[s].id;
+    }
+  }
+  if (!largest) return;
+  const int copies = static_cast<int>(std::min<std::size_t>(in_shard, static_cast<std::size_t>(jobs)));
+  check_memory(*largest, limit.bytes, limit.source, sweep.file.string() + ": sub-" + largest_id, copies);
+}
+
+} // namespace
 
 void add_batch_command(CLI::App& app, std::function<int()>& action) {
   struct Options {
@@ -19,6 +50,7 @@ void add_batch_command(CLI::App& app, std::function<int()>& action) {
     bool strict = false;
     std::string cache;
     bool no_cache = false;
+    std::string max_memory;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
@@ -41,6 +73,9 @@ void add_batch_command(CLI::App& app, std::function<int()>& action) {
       "mesh it once (default: derivatives/phantasm/cache in the dataset)");
   command->add_flag("--no-cache", options->no_cache, "Build every subject's anatomy anew")
       ->excludes("--cache");
+  command->add_option("--max-memory", options->max_memory,
+                      "Refuse a sweep whose largest subject's estimated peak memory times --jobs exceeds "
+                      "this (4G, 512M; default: the memory available)");
   command->add_flag("--list", options->list,
                     "Print the sweep's subject labels, one per line in sweep order, and run nothing");
   command->callback([options, &action] {
@@ -53,6 +88,7 @@ void add_batch_command(CLI::App& app, std::function<int()>& action) {
           std::cout << subject.id << '\n';
         return static_cast<int>(exit_ok);
       }
+      check_sweep_memory(sweep, shard, options->jobs, memory_limit(options->max_memory));
       BatchOptions batch_options;
       batch_options.output = options->output;
       batch_options.jobs = options->jobs;

@@ -1,4 +1,5 @@
 #include "apps/phantasm/commands.hpp"
+#include "pipeline/cost_estimate.hpp"
 #include "pipeline/run_pipeline.hpp"
 #include "scene/scene_json.hpp"
 
@@ -40,6 +41,20 @@ void add_info_command(CLI::App& app, std::function<int()>& action) {
           std::cout << "  " << line << '\n';
         for (const auto& line : stage.skipped)
           std::cout << "  skipped: " << line << '\n';
+      }
+      // The cost before the work: each organ's effective settings, what the run builds and
+      // needs, against what this machine has.
+      const CostEstimate estimate = estimate_cost(scene);
+      std::cout << "\nestimate (docs/architecture.md, Cost estimate):\n";
+      for (const auto& line : cost_lines(estimate))
+        std::cout << "  " << line << '\n';
+      const double available = available_memory_bytes();
+      if (available > 0.0) {
+        std::cout << "  memory available on this machine: " << format_bytes(available)
+                  << (estimate.peak_memory_bytes > available
+                          ? " (less than the estimated peak: run refuses it)"
+                          : "")
+                  << '\n';
       }
       return static_cast<int>(exit_ok);
     };

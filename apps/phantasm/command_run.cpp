@@ -2,6 +2,7 @@
 #include "core/progress.hpp"
 #include "io/atomic_file.hpp"
 #include "io/output_path.hpp"
+#include "pipeline/cost_estimate.hpp"
 #include "pipeline/run_pipeline.hpp"
 
 #include <unistd.h>
@@ -22,6 +23,7 @@ void add_run_command(CLI::App& app, std::function<int()>& action) {
     bool strict = false;
     int write_delay_ms = 0;
     std::string cache;
+    std::string max_memory;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
@@ -37,6 +39,9 @@ void add_run_command(CLI::App& app, std::function<int()>& action) {
   command->add_option("--cache", options->cache,
                       "Anatomy cache folder: a run whose anatomy settings, inputs and seed match an earlier "
                       "one's reads its organs from there instead of fitting and meshing them again");
+  command->add_option("--max-memory", options->max_memory,
+                      "Refuse a scene whose estimated peak memory exceeds this (4G, 512M; default: the "
+                      "memory available, MemAvailable and the cgroup's limit)");
   // For tests that interrupt a run while it writes; hidden from --help.
   command->add_option("--write-delay-ms", options->write_delay_ms)->group("")->check(CLI::NonNegativeNumber);
   command->callback([options, &action] {
@@ -47,6 +52,10 @@ void add_run_command(CLI::App& app, std::function<int()>& action) {
         std::cerr << format_diagnostics(result.problems);
         return static_cast<int>(exit_bad_input);
       }
+      // The cost before the work: a scene that would not fit is refused before anything is
+      // made or written (not even the output folder).
+      const MemoryLimit limit = memory_limit(options->max_memory);
+      check_memory(estimate_cost(*result.scene), limit.bytes, limit.source, options->scene);
       set_write_delay_for_testing(options->write_delay_ms);
       Reporter reporter(std::cerr, progress_style_for(STDERR_FILENO, options->quiet));
       // One writer per dataset, from before the folder is checked until the last file is written.

@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 
 #include <functional>
+#include <string>
 
 namespace phantasm::cli {
 
@@ -15,6 +16,15 @@ enum ExitCode : int {
   exit_bad_input = 2,     ///< the scene or another input is wrong; the message says where
   exit_interrupted = 130, ///< SIGINT (143 after SIGTERM); nothing half-written is left
 };
+
+/// The memory a run may use: --max-memory when given, else what the machine has available.
+struct MemoryLimit {
+  double bytes = 0.0; ///< 0: unknown (no check)
+  std::string source; ///< "(--max-memory)" or "available"
+};
+/// @param max_memory the --max-memory text, empty when not given
+/// @throws InputError for a size that does not parse
+MemoryLimit memory_limit(const std::string& max_memory);
 
 /// Each subcommand registers itself and sets the action run after parsing.
 void add_run_command(CLI::App& app, std::function<int()>& action);

@@ -2,6 +2,7 @@
 #include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/version.hpp"
+#include "pipeline/cost_estimate.hpp"
 
 #include <algorithm>
 #include <filesystem>
@@ -46,6 +47,15 @@ std::string unknown_top_level_word(const CLI::App& app, int argc, char** argv) {
 }
 
 } // namespace
+
+namespace phantasm::cli {
+
+MemoryLimit memory_limit(const std::string& max_memory) {
+  if (!max_memory.empty()) return {parse_memory_size(max_memory), "(--max-memory)"};
+  return {available_memory_bytes(), "available"};
+}
+
+} // namespace phantasm::cli
 
 int main(int argc, char** argv) {
   using namespace phantasm::cli;

@@ -8,6 +8,7 @@
 #include "io/mesh_file.hpp"
 #include "io/nifti_file.hpp"
 #include "tests/apps/cli_fixtures.hpp"
+#include "tests/support/coarse_scenes.hpp"
 #include "tests/support/subprocess.hpp"
 
 #include <gtest/gtest.h>
@@ -44,58 +45,6 @@ std::vector<std::string> shipped_scenes() {
   }
   std::sort(scenes.begin(), scenes.end());
   return scenes;
-}
-
-/// At most this many voxels on the coarse grid: the voxelizer's motion fields cost about a
-/// millisecond of CPU per voxel near a moved boundary.
-constexpr double k_max_voxels = 1.0e5;
-/// At most this many frames of a dynamic scene.
-constexpr int k_max_frames = 20;
-
-/// A copy of the scene that keeps its anatomy and deformation but makes few, coarse images:
-/// cubic voxels of at least 4 mm and at most k_max_voxels of them, 2^3 samples per voxel, the
-/// first sequence only, at most k_max_frames frames, no k-space or coil simulation, no previews
-/// or .vdb files. The meshes
-/// stay: the tet and surface checks read them.
-fs::path coarse_copy(const fs::path& scene, const fs::path& folder) {
-  YAML::Node root = YAML::LoadFile(scene.string());
-  auto largest = [](const YAML::Node& node) {
-    double value = 0.0;
-    if (node.IsScalar()) value = node.as<double>();
-    if (node.IsSequence())
-      for (const auto& entry : node)
-        value = std::max(value, entry.as<double>());
-    return value;
-  };
-  const YAML::Node fov = root["grid"]["field_of_view_mm"];
-  double volume = 1.0;
-  for (int a = 0; a < 3; ++a)
-    volume *= fov.IsSequence() ? fov[a].as<double>() : fov.as<double>();
-  root["grid"]["voxel_size_mm"] =
-      std::max({4.0, largest(root["grid"]["voxel_size_mm"]), std::cbrt(volume / k_max_voxels)});
-  root["voxelization"]["supersampling"] = 2;
-  if (root["sequences"] && root["sequences"].size() > 1) {
-    YAML::Node first(YAML::NodeType::Sequence);
-    first.push_back(root["sequences"][0]);
-    root["sequences"] = first;
-  }
-  YAML::Node acquisition = root["acquisition"];
-  acquisition["kspace"] = false;
-  acquisition["coils"] = 1;
-  acquisition.remove("acquired_voxel_mm");
-  acquisition.remove("kspace_oversampling");
-  root["acquisition"] = acquisition;
-  // Dynamic scenes: their first k_max_frames frames (cloth.yaml's 60 converged frames take
-  // minutes; its first 20 are the first third of a second of its fall).
-  YAML::Node deformation = root["deformation"];
-  if (deformation["frames"] && deformation["frames"].as<int>() > k_max_frames)
-    deformation["frames"] = k_max_frames;
-  root["outputs"]["previews"] = false;
-  root["outputs"]["vdb"] = false;
-  root["outputs"]["meshes"] = true;
-  const fs::path copy = folder / scene.filename();
-  std::ofstream(copy) << YAML::Dump(root) << '\n';
-  return copy;
 }
 
 /// Whether a point (RAS mm) lies inside the grid's field of view: within half a voxel of the

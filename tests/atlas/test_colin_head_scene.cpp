@@ -3,6 +3,7 @@
 
 #include "atlas/colin27_head.hpp"
 #include "io/nifti_file.hpp"
+#include "tests/support/coarse_scenes.hpp"
 #include "tests/support/files.hpp"
 #include "tests/support/subprocess.hpp"
 
@@ -28,29 +29,6 @@ using testing::write_text_file;
 
 const std::string k_phantasm = PHANTASM_EXECUTABLE;
 
-/// The shipped scene made coarse: 4 mm voxels, 320-triangle base meshes, surfaces voxelized from
-/// 1 mm tessellations (0.2 mm ones dominate a 4 mm run), the first sequence only, images sampled
-/// directly.
-std::string coarse_scene() {
-  std::string text = read_file(fs::path(PHANTASM_SOURCE_DIR) / "data-synthetic" / "colin-head.yaml");
-  const std::vector<std::pair<std::string, std::string>> edits = {
-      {"voxel_size_mm: 1.0", "voxel_size_mm: 4.0"},
-      {R"(field_of_view_mm: \[189, 217, 185\])", "field_of_view_mm: [188, 216, 184]"},
-      {R"(base_mesh_triangles: \d+)", "base_mesh_triangles: 320"},
-      {"supersampling: 4", "supersampling: 1"},
-      {"tessellation_tolerance_mm: 0.2", "tessellation_tolerance_mm: 1.0"},
-      {"kspace: true", "kspace: false"},
-      {R"(  acquired_voxel_mm: [0-9.]+\n)", ""},
-      {R"(  - \{name: T2w[^\n]*\n)", ""},
-      {R"(  - \{name: FLAIR[^\n]*\n)", ""}};
-  for (const auto& [from, to] : edits) {
-    const std::string before = text;
-    text = std::regex_replace(text, std::regex(from), to);
-    EXPECT_NE(text, before) << "the scene no longer has " << from;
-  }
-  return text;
-}
-
 /// dseg.tsv: label value by organ name.
 std::map<std::string, int> dseg_table(const fs::path& path) {
   std::map<std::string, int> table;
@@ -69,7 +47,7 @@ std::map<std::string, int> dseg_table(const fs::path& path) {
 TEST(ColinHeadScene, CoarseRunLabelsEveryOrganKeepsTheGreyMatterAndShiftsTheBrain) {
   if (!fs::is_directory(default_colin27_templates_dir())) GTEST_SKIP() << "mricron-data is not installed";
   const fs::path folder = fresh_folder("colin-head-scene");
-  write_text_file(folder / "colin-coarse.yaml", coarse_scene());
+  write_text_file(folder / "colin-coarse.yaml", testing::coarse_colin_head_text());
   const auto result = run_command({k_phantasm, "run", (folder / "colin-coarse.yaml").string(), "-o",
                                    (folder / "out").string(), "--quiet"});
   ASSERT_EQ(result.exit_code, 0) << result.err;

@@ -1,0 +1,407 @@
+#include "pipeline/cost_estimate.hpp"
+
+#include "core/error.hpp"
+#include "core/format.hpp"
+#include "pipeline/cost_rates.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+namespace phantasm {
+namespace {
+
+using namespace cost_rates;
+
+/// Surface area of an ellipsoid, mm^2 (Thomsen's approximation, within about 1 %).
+double ellipsoid_area(const Eigen::Vector3d& r) {
+  constexpr double p = 1.6075;
+  return 4.0 * M_PI *
+         std::pow((std::pow(r.x() * r.y(), p) + std::pow(r.x() * r.z(), p) + std::pow(r.y() * r.z(), p)) /
+                      3.0,
+                  1.0 / p);
+}
+
+/// Area and volume of an organ's shape as written. Shapes known only from their file (meshes,
+/// label volumes, atlases) are guessed from the grid: the outermost fills the inscribed ellipsoid
+/// of the field of view, each level of nesting a fraction of its container.
+std::pair<double, double> shape_area_volume(const ShapeSettings& shape, const GridSettings& grid, int depth) {
+  switch (shape.kind) {
+  case ShapeKind::ellipsoid:
+    return {ellipsoid_area(shape.radii_mm), 4.0 / 3.0 * M_PI * shape.radii_mm.prod()};
+  case ShapeKind::superquadric: {
+    // Exponents below 1 make it boxier (up to the bounding box, 6/pi of the ellipsoid's volume).
+    const double boxy = std::clamp(2.0 - 0.5 * (shape.exponent_1 + shape.exponent_2), 0.5, 1.5);
+    const double factor = 1.0 + (6.0 / M_PI - 1.0) * std::clamp(boxy - 1.0, 0.0, 1.0);
+    return {factor * ellipsoid_area(shape.radii_mm), factor * 4.0 / 3.0 * M_PI * shape.radii_mm.prod()};
+  }
+  case ShapeKind::box: {
+    const Eigen::Vector3d s = shape.size_mm;
+    return {2.0 * (s.x() * s.y() + s.y() * s.z() + s.x() * s.z()), s.prod()};
+  }
+  case ShapeKind::sheet: return {shape.size_mm.x() * shape.size_mm.y(), 0.0};
+  case ShapeKind::mesh:
+  case ShapeKind::label_volume: break;
+  }
+  const Eigen::Vector3d radii = 0.5 * k_file_shape_extent * grid.field_of_view_mm *
+                                std::pow(k_file_shape_nesting, static_cast<double>(depth));
+  return {ellipsoid_area(radii), 4.0 / 3.0 * M_PI * radii.prod()};
+}
+
+/// Cell size bound of an organ's own tets for its base size (anatomy/tet_mesh.cpp,
+/// criteria_for_boundary_size), mm.
+double boundary_tet_size(double area_mm2, int base_triangles) {
+  return 1.35 * std::sqrt(area_mm2 / (0.25 * std::sqrt(3.0) * std::max(1, base_triangles)));
+}
+
+/// How closely exported surfaces follow the patch surfaces (pipeline/dataset_writer.cpp,
+/// mesh_export_tolerance_mm), mm.
+double export_tolerance_mm(const Scene& scene) {
+  return std::min(
+      0.5, std::max(scene.voxelization.tessellation_tolerance_mm, 0.2 * scene.grid.voxel_size_mm.minCoeff()));
+}
+
+bool is_fixed(const Scene& scene, const std::string& organ) {
+  const auto& fixed = scene.deformation.fixed;
+  return std::find(fixed.begin(), fixed.end(), organ) != fixed.end();
+}
+
+std::string sci(double value) {
+  std::ostringstream text;
+  text.precision(2);
+  if (value < 1e5)
+    text << std::fixed << std::setprecision(0) << value;
+  else
+    text << value;
+  return text.str();
+}
+
+std::string seconds_text(double seconds) {
+  std::ostringstream text;
+  text.precision(seconds < 10.0 ? 2 : 3);
+  if (seconds < 120.0) {
+    text << seconds << " s";
+  } else if (seconds < 7200.0) {
+    text << std::fixed << std::setprecision(1) << seconds / 60.0 << " min";
+  } else {
+    text << std::fixed << std::setprecision(1) << seconds / 3600.0 << " h";
+  }
+  return text.str();
+}
+
+} // namespace
+
+CostEstimate estimate_cost(const Scene& scene) {
+  CostEstimate e;
+  const ImageGrid grid = scene.grid.grid();
+  const double voxel_mm = scene.grid.voxel_size_mm.minCoeff();
+  const double voxel_area = voxel_mm * voxel_mm;
+  const bool deformed = scene.deformation.mode != DeformationMode::none;
+  e.states = deformed ? 2 : 1;
+  e.dense_voxels = static_cast<double>(grid.voxel_count());
+  const double tolerance = scene.voxelization.level_sets_from_tessellation
+                               ? scene.voxelization.tessellation_tolerance_mm
+                               : export_tolerance_mm(scene);
+  bool file_shapes = false;
+  double body_tets = 0.0, simulated_tets = 0.0, surface_area = 0.0;
+  for (std::size_t i = 0; i < scene.anatomy.organs.size(); ++i) {
+    const OrganSettings& settings = scene.anatomy.organs[i];
+    const int depth = i < scene.organs.size() ? scene.organs[i].depth : 0;
+    OrganCost organ;
+    organ.name = settings.name;
+    organ.own_base = settings.base_mesh_triangles > 0;
+    organ.base_mesh_triangles =
+        organ.own_base ? settings.base_mesh_triangles : scene.anatomy.base_mesh_triangles;
+    organ.tessellation_tolerance_mm = tolerance;
+    const auto [area, volume] = shape_area_volume(settings.shape, scene.grid, depth);
+    organ.area_mm2 = area;
+    organ.volume_mm3 = settings.solid ? volume : 0.0;
+    file_shapes = file_shapes || settings.shape.kind == ShapeKind::mesh ||
+                  settings.shape.kind == ShapeKind::label_volume;
+    const Eigen::Vector3d cells = settings.shape.cells.cast<double>();
+    if (settings.shape.kind == ShapeKind::sheet) {
+      organ.patches = 2.0 * cells.x() * cells.y();
+    } else if (settings.shape.kind == ShapeKind::box) {
+      // A structured hexahedral mesh, five tets per cell, its boundary quads split in two.
+      organ.patches = 4.0 * (cells.x() * cells.y() + cells.y() * cells.z() + cells.x() * cells.z());
+      if (settings.solid) {
+        organ.tets = 5.0 * cells.prod();
+        organ.tet_size_mm = (settings.shape.size_mm.array() / cells.array()).maxCoeff();
+        organ.tet_size_from = "shape.cells";
+      }
+    } else {
+      organ.patches = organ.base_mesh_triangles;
+      if (settings.solid) {
+        organ.tet_size_mm = boundary_tet_size(area, organ.base_mesh_triangles);
+        organ.tet_size_from = "base size";
+        organ.tets = volume / (k_tet_volume_factor * std::pow(organ.tet_size_mm, 3.0));
+      }
+    }
+    // A simulated body meshed as one (anatomy.tet_size_mm): the outermost solid organ that the
+    // scene does not hold, with what it holds, gets a conforming mesh of that size as well.
+    if (deformed && settings.solid && scene.anatomy.tet_size_mm > 0.0 && !is_fixed(scene, settings.name)) {
+      const bool container_moves =
+          !settings.inside.empty() && !is_fixed(scene, settings.inside) &&
+          std::any_of(scene.anatomy.organs.begin(), scene.anatomy.organs.end(),
+                      [&](const OrganSettings& o) { return o.name == settings.inside && o.solid; });
+      if (!container_moves) {
+        const double s = scene.anatomy.tet_size_mm;
+        const double body = volume / (k_tet_volume_factor * s * s * s) + k_interface_tets * area / (s * s);
+        organ.tets += body;
+        body_tets += body;
+        organ.tet_size_mm = s;
+        organ.tet_size_from = "anatomy.tet_size_mm";
+      }
+    }
+    if (deformed && !is_fixed(scene, settings.name)) simulated_tets += organ.tets;
+    e.patches += organ.patches;
+    e.tets += organ.tets;
+    surface_area += area;
+    e.organs.push_back(organ);
+  }
+  (void)body_tets;
+
+  // Voxels: each organ's level set holds a band of k_band_width voxels across its surface per
+  // state; partial volume takes supersampling^3 samples in the voxels a surface crosses.
+  const double crossed = std::min(e.dense_voxels, surface_area / voxel_area);
+  e.band_voxels =
+      std::min(e.dense_voxels * e.organs.size(), k_band_width * surface_area / voxel_area) * e.states;
+  const int ss = scene.voxelization.supersampling;
+  e.supersamples = k_crossed_voxels_per_area * crossed * ss * ss * ss * e.states;
+
+  const std::size_t tissues = [&] {
+    std::vector<std::string> names;
+    for (const auto& o : scene.anatomy.organs)
+      if (std::find(names.begin(), names.end(), o.tissue) == names.end()) names.push_back(o.tissue);
+    return names.size();
+  }();
+  const bool images = scene.mri.images && !scene.mri.sequences.empty();
+  e.images = images ? static_cast<int>(scene.mri.sequences.size()) * e.states : 0;
+  const int coils = scene.mri.acquisition.coils;
+  const bool kspace = scene.mri.acquisition.kspace;
+
+  // Memory: what the volumes of the run hold per voxel when the last image is made (labels,
+  // background and a fraction per tissue per state, the fields, masks and Jacobians both ways,
+  // every image and parameter map), and the largest transient on top of it.
+  double held = e.states * (4.0 + 4.0 + 4.0 * static_cast<double>(tissues));
+  if (deformed) held += 2 * 12.0 + 2 * 1.0 + 2 * 4.0;
+  if (images) held += 4.0 * e.images;
+  if (scene.outputs.parameter_maps) held += 16.0 * e.states;
+  double transient = deformed ? k_field_transient_bytes : 0.0;
+  if (images) transient = std::max(transient, k_image_transient_bytes + (coils > 1 ? 8.0 : 0.0));
+  e.dense_bytes_per_voxel = held + transient;
+  const double dense = e.dense_voxels * e.dense_bytes_per_voxel;
+  const double meshes = e.tets * k_bytes_per_tet + e.patches * k_bytes_per_patch;
+  const double bands = e.band_voxels * k_bytes_per_band_voxel;
+  const double atlas = file_shapes ? k_file_shape_bytes : 0.0;
+  e.peak_memory_bytes = k_base_bytes + dense + meshes + bands + atlas;
+
+  // Processor time per stage.
+  e.anatomy_seconds = e.patches * k_seconds_per_patch + e.tets * k_seconds_per_tet +
+                      (file_shapes ? k_file_shape_seconds : 0.0);
+  const double steps =
+      deformed ? std::max(1, scene.deformation.frames) * std::max(1, scene.deformation.load_steps) : 0.0;
+  e.sim_seconds = simulated_tets * steps * k_seconds_per_tet_step;
+  e.voxelize_seconds = e.dense_voxels * e.states * k_seconds_per_dense_voxel +
+                       e.band_voxels * k_seconds_per_band_voxel + e.supersamples * k_seconds_per_sample +
+                       (deformed ? crossed * k_seconds_per_moved_voxel : 0.0);
+  e.mri_seconds = images ? e.dense_voxels * e.images *
+                               (k_seconds_per_image_voxel + (kspace ? coils * k_seconds_per_coil_voxel : 0.0))
+                         : 0.0;
+  const double volumes_written = held / 4.0; // float volumes written, roughly
+  e.write_seconds = e.dense_voxels * volumes_written * k_seconds_per_written_voxel +
+                    e.patches * e.states * k_seconds_per_written_patch;
+  e.cpu_seconds = k_base_seconds + e.anatomy_seconds + e.sim_seconds + e.voxelize_seconds + e.mri_seconds +
+                  e.write_seconds;
+
+  // What drives the memory: the grid when its volumes are most of it, else the meshes.
+  if (dense >= meshes + bands) {
+    e.memory_driver_key = "grid.voxel_size_mm";
+    e.memory_driver = "grid.voxel_size_mm " + format_number(voxel_mm) + " makes " + sci(e.dense_voxels) +
+                      " voxels of " + format_number(std::round(e.dense_bytes_per_voxel)) + " bytes";
+  } else if (meshes >= bands) {
+    const auto largest =
+        std::max_element(e.organs.begin(), e.organs.end(), [](const OrganCost& a, const OrganCost& b) {
+          return a.tets + a.patches < b.tets + b.patches;
+        });
+    if (largest->tet_size_from == "anatomy.tet_size_mm") {
+      e.memory_driver_key = "anatomy.tet_size_mm";
+      e.memory_driver = "anatomy.tet_size_mm " + format_number(scene.anatomy.tet_size_mm) + " makes " +
+                        sci(e.tets) + " tets";
+    } else {
+      e.memory_driver_key = largest->own_base ? "anatomy.organs." + largest->name + ".base_mesh_triangles"
+                                              : "anatomy.base_mesh_triangles";
+      e.memory_driver = e.memory_driver_key + " " + std::to_string(largest->base_mesh_triangles) + " makes " +
+                        sci(largest->tets) + " tets of organ " + largest->name;
+    }
+  } else {
+    e.memory_driver_key = "grid.voxel_size_mm";
+    e.memory_driver = "grid.voxel_size_mm " + format_number(voxel_mm) + " makes " + sci(e.band_voxels) +
+                      " narrow-band voxels";
+  }
+  return e;
+}
+
+double estimated_wall_seconds(const CostEstimate& e, int threads) {
+  // The meshing and fitting run mostly on one thread; the voxel stages and the solver's local
+  // step on all of them, at k_parallel_efficiency each.
+  const double parallel = 1.0 + k_parallel_efficiency * (std::max(1, threads) - 1);
+  return k_base_seconds + e.anatomy_seconds + e.write_seconds +
+         (e.sim_seconds + e.voxelize_seconds + e.mri_seconds) / parallel;
+}
+
+std::vector<std::string> cost_lines(const CostEstimate& e) {
+  std::vector<std::string> lines;
+  for (const OrganCost& organ : e.organs) {
+    std::ostringstream line;
+    line << organ.name << ": base size " << organ.base_mesh_triangles
+         << (organ.own_base ? " (its own)" : " (the scene's)");
+    if (organ.tet_size_mm > 0.0)
+      line << ", tets of " << format_number(std::round(organ.tet_size_mm * 10.0) / 10.0) << " mm (from "
+           << organ.tet_size_from << ")";
+    else
+      line << ", no tets (surface only)";
+    line << ", tessellation tolerance " << format_number(organ.tessellation_tolerance_mm) << " mm: about "
+         << sci(organ.patches) << " patches, " << sci(organ.tets) << " tets";
+    lines.push_back(line.str());
+  }
+  std::ostringstream total;
+  total << sci(e.patches) << " patches, " << sci(e.tets) << " tets, " << sci(e.band_voxels)
+        << " narrow-band voxels, " << sci(e.dense_voxels) << " dense voxels x " << e.states
+        << (e.states == 1 ? " state" : " states") << ", " << e.images << " images";
+  lines.push_back(total.str());
+  std::ostringstream need;
+  need << "peak memory " << format_bytes(e.peak_memory_bytes) << " (" << e.memory_driver
+       << "), processor time " << seconds_text(e.cpu_seconds) << " (anatomy "
+       << seconds_text(e.anatomy_seconds) << ", deformation " << seconds_text(e.sim_seconds)
+       << ", voxelization " << seconds_text(e.voxelize_seconds) << ", images " << seconds_text(e.mri_seconds)
+       << ", writing " << seconds_text(e.write_seconds) << "), wall time "
+       << seconds_text(estimated_wall_seconds(e, 2)) << " on 2 threads";
+  lines.push_back(need.str());
+  return lines;
+}
+
+nlohmann::json cost_json(const CostEstimate& e) {
+  nlohmann::json organs = nlohmann::json::array();
+  for (const OrganCost& o : e.organs) {
+    organs.push_back({{"name", o.name},
+                      {"base_mesh_triangles", o.base_mesh_triangles},
+                      {"own_base_mesh_triangles", o.own_base},
+                      {"tet_size_mm", o.tet_size_mm},
+                      {"tet_size_from", o.tet_size_from},
+                      {"tessellation_tolerance_mm", o.tessellation_tolerance_mm},
+                      {"patches", std::round(o.patches)},
+                      {"tets", std::round(o.tets)}});
+  }
+  return {{"organs", organs},
+          {"patches", std::round(e.patches)},
+          {"tets", std::round(e.tets)},
+          {"narrow_band_voxels", std::round(e.band_voxels)},
+          {"dense_voxels", std::round(e.dense_voxels)},
+          {"states", e.states},
+          {"images", e.images},
+          {"peak_memory_bytes", std::round(e.peak_memory_bytes)},
+          {"memory_driver", e.memory_driver_key},
+          {"cpu_seconds", e.cpu_seconds},
+          {"stage_cpu_seconds",
+           {{"anatomy", e.anatomy_seconds},
+            {"deformation", e.sim_seconds},
+            {"voxelization", e.voxelize_seconds},
+            {"mri", e.mri_seconds},
+            {"writing", e.write_seconds}}},
+          {"rates", k_rates_measured_by}};
+}
+
+double available_memory_bytes() {
+  double available = 0.0;
+  {
+    std::ifstream meminfo("/proc/meminfo");
+    std::string key;
+    double kb = 0.0;
+    std::string unit;
+    while (meminfo >> key >> kb >> unit) {
+      if (key == "MemAvailable:") {
+        available = kb * 1024.0;
+        break;
+      }
+    }
+  }
+  // A cgroup limit (a container, a Slurm job) below what the machine has is what counts.
+  const auto read_number = [](const char* path) -> double {
+    std::ifstream in(path);
+    std::string text;
+    if (!(in >> text) || text == "max") return 0.0;
+    try {
+      return std::stod(text);
+    } catch (const std::exception&) {
+      return 0.0;
+    }
+  };
+  double limit = read_number("/sys/fs/cgroup/memory.max");
+  double usage = read_number("/sys/fs/cgroup/memory.current");
+  if (limit <= 0.0) {
+    limit = read_number("/sys/fs/cgroup/memory/memory.limit_in_bytes");
+    usage = read_number("/sys/fs/cgroup/memory/memory.usage_in_bytes");
+    if (limit > 1e18) limit = 0.0; // v1's "unlimited"
+  }
+  if (limit > 0.0) {
+    const double left = std::max(0.0, limit - usage);
+    available = available > 0.0 ? std::min(available, left) : left;
+  }
+  return available;
+}
+
+double parse_memory_size(const std::string& text) {
+  std::size_t used = 0;
+  double value = 0.0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  std::string unit = text.substr(used);
+  for (char& c : unit)
+    c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  if (!unit.empty() && unit.back() == 'B') unit.pop_back();
+  if (!unit.empty() && unit.back() == 'I') unit.pop_back(); // GiB
+  double scale = 0.0;
+  if (unit.empty()) scale = 1.0;
+  if (unit == "K") scale = 1024.0;
+  if (unit == "M") scale = 1024.0 * 1024.0;
+  if (unit == "G") scale = 1024.0 * 1024.0 * 1024.0;
+  if (unit == "T") scale = 1024.0 * 1024.0 * 1024.0 * 1024.0;
+  if (used == 0 || scale == 0.0 || !(value > 0.0) || !std::isfinite(value))
+    throw InputError("--max-memory: expected a size such as 4G, 512M or 2.5GB, found '" + text + "'");
+  return value * scale;
+}
+
+std::string format_bytes(double bytes) {
+  std::ostringstream text;
+  text.precision(bytes >= 1e9 ? 3 : 2);
+  if (bytes >= 1e12)
+    text << bytes / 1e12 << " TB";
+  else if (bytes >= 1e9)
+    text << bytes / 1e9 << " GB";
+  else
+    text << std::fixed << std::setprecision(0) << bytes / 1e6 << " MB";
+  return text.str();
+}
+
+void check_memory(const CostEstimate& estimate, double limit_bytes, const std::string& limit_source,
+                  const std::string& what, int copies) {
+  if (limit_bytes <= 0.0) return;
+  const double need = estimate.peak_memory_bytes * std::max(1, copies);
+  if (need <= limit_bytes) return;
+  std::string message =
+      what + ": " + estimate.memory_driver + ": estimated peak " + format_bytes(estimate.peak_memory_bytes);
+  if (copies > 1) message += " x " + std::to_string(copies) + " jobs = " + format_bytes(need);
+  message += " > " + format_bytes(limit_bytes) + " " + limit_source + "; expected a coarser " +
+             estimate.memory_driver_key + (copies > 1 ? " or fewer --jobs" : "") +
+             " (or a larger --max-memory if the estimate is wrong; docs/architecture.md, Cost estimate)";
+  throw InputError(message);
+}
+
+} // namespace phantasm

@@ -1,0 +1,79 @@
+// The rates the cost estimate (pipeline/cost_estimate.hpp) turns counts into memory and time
+// with, measured on the 2-core development machine (docs/architecture.md, "Cost estimate").
+// Re-measure them with `/usr/bin/python3 bench/cost_rates.py build/release/apps/phantasm/phantasm`,
+// which runs the scenes of tests/pipeline/test_cost_estimate.cpp under /usr/bin/time and prints
+// each estimate against the measured peak resident memory and processor time.
+#pragma once
+
+namespace phantasm::cost_rates {
+
+/// How the rates were measured (recorded in provenance.json with the estimate).
+inline constexpr const char* k_rates_measured_by =
+    "bench/cost_rates.py on the 2-core development machine (README, Performance)";
+
+// --- Memory, bytes ------------------------------------------------------------------------
+/// The process before any stage holds data: code, libraries, OpenVDB and CGAL's pools, the
+/// worker threads' stacks (peak resident of `phantasm run` on a one-organ scene of 1000 voxels).
+inline constexpr double k_base_bytes = 120e6;
+/// Per tet at the peak of meshing and solving: CGAL's triangulation during Mesh_3 (about
+/// 1 kB a cell, freed after), the solver's matrix factor and constraint data.
+inline constexpr double k_bytes_per_tet = 600.0;
+/// Per fitted patch: the fit's samples and normal equations, the patch coefficients.
+inline constexpr double k_bytes_per_patch = 20e3;
+/// Per narrow-band voxel of a level set (OpenVDB leaf nodes, partly filled).
+inline constexpr double k_bytes_per_band_voxel = 8.0;
+/// Per dense voxel while the motion fields are made (the deformation map's rasterized field
+/// and the search's scratch) on top of the volumes held.
+inline constexpr double k_field_transient_bytes = 24.0;
+/// Per dense voxel while one image is made: the complex coil image, the object and the bias
+/// field (doubles), on top of the volumes held.
+inline constexpr double k_image_transient_bytes = 40.0;
+/// Shapes read from files or atlases: the label volume and its smoothed indicator (Colin 27:
+/// 181 x 217 x 181 labels).
+inline constexpr double k_file_shape_bytes = 200e6;
+
+// --- Counts -------------------------------------------------------------------------------
+/// A shape known only from its file: its extent as a fraction of the field of view, and each
+/// level of nesting as a fraction of its container's extent.
+inline constexpr double k_file_shape_extent = 0.9;
+inline constexpr double k_file_shape_nesting = 0.8;
+/// Mesh_3's tets of cell size bound s have a mean volume of this times s^3.
+inline constexpr double k_tet_volume_factor = 0.1;
+/// Extra tets of a body mesh per s^2 of interface area (the refined layer at organ boundaries).
+inline constexpr double k_interface_tets = 2.0;
+/// Narrow-band voxels per voxel area of surface (both sides of a surface, all of its width).
+inline constexpr double k_band_width = 6.0;
+/// Voxels a surface crosses per voxel area of surface.
+inline constexpr double k_crossed_voxels_per_area = 1.5;
+
+// --- Processor time, s ----------------------------------------------------------------------
+/// Start, scene parsing, the writer's fixed files.
+inline constexpr double k_base_seconds = 0.3;
+/// Per patch: the base mesh, the bump fit, the volume match and the fit measurement.
+inline constexpr double k_seconds_per_patch = 1.5e-3;
+/// Shapes read from files or atlases: reading, deriving and smoothing the label volumes.
+inline constexpr double k_file_shape_seconds = 20.0;
+/// Per tet: CGAL Mesh_3 with ODT smoothing and sliver checks.
+inline constexpr double k_seconds_per_tet = 50e-6;
+/// Per simulated tet per frame and load step: local/global iterations to convergence.
+inline constexpr double k_seconds_per_tet_step = 12e-6;
+/// Per dense voxel and state: labels, fractions away from surfaces, gap fill.
+inline constexpr double k_seconds_per_dense_voxel = 0.3e-6;
+/// Per narrow-band voxel: the closest patch point of each level-set voxel.
+inline constexpr double k_seconds_per_band_voxel = 0.5e-6;
+/// Per partial-volume sample.
+inline constexpr double k_seconds_per_sample = 50e-9;
+/// Per voxel a moved surface crosses: the motion fields' boundary search and extension.
+inline constexpr double k_seconds_per_moved_voxel = 20e-6;
+/// Per dense voxel and image: the signal equations, bias and noise.
+inline constexpr double k_seconds_per_image_voxel = 80e-9;
+/// Per dense voxel, image and receive coil when acquired in k-space: FFTs both ways.
+inline constexpr double k_seconds_per_coil_voxel = 50e-9;
+/// Per dense voxel of each float volume written: gzip-compressed NIfTI.
+inline constexpr double k_seconds_per_written_voxel = 130e-9;
+/// Per patch and state of the surface meshes written (tessellation and .vtp).
+inline constexpr double k_seconds_per_written_patch = 1e-4;
+/// The fraction of a second thread the parallel stages use.
+inline constexpr double k_parallel_efficiency = 0.7;
+
+} // namespace phantasm::cost_rates
