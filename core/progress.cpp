@@ -1,5 +1,7 @@
 #include "core/progress.hpp"
 
+#include "core/cancellation.hpp"
+
 #include <unistd.h>
 
 #include <cstdint>
@@ -130,8 +132,12 @@ ProgressBar::~ProgressBar() {
     // Unwinding (a cancellation, an error): end the line where the work stopped, not at 100 %.
     stop_ticker();
     const std::size_t done = m_done.load();
-    set_detail("stopped");
+    {
+      std::lock_guard<std::mutex> lock(m_mutex);
+      m_detail = "stopped";
+    }
     draw(done < m_total ? done : m_total, true);
+    notify(done < m_total ? done : m_total, true);
     m_finished = true;
   } else {
     finish();
@@ -151,6 +157,29 @@ void ProgressBar::stop_ticker() {
 void ProgressBar::advance(std::size_t steps) {
   const std::size_t done = m_done.fetch_add(steps) + steps;
   draw(done < m_total ? done : m_total, false);
+  notify(done < m_total ? done : m_total, false);
+}
+
+void ProgressBar::notify(std::size_t done, bool final) {
+  if (!m_reporter.m_callback) return;
+  if (!final) {
+    // At most every 100 ms: one caller wins the slot, the others return at once.
+    const std::int64_t now = now_ns();
+    std::int64_t last = m_last_notify_ns.load(std::memory_order_relaxed);
+    if (now - last < 100'000'000) return;
+    if (!m_last_notify_ns.compare_exchange_strong(last, now)) return;
+  }
+  std::string detail;
+  {
+    std::lock_guard<std::mutex> lock(m_mutex);
+    detail = m_detail;
+  }
+  try {
+    m_reporter.m_callback(m_label, static_cast<double>(done) / static_cast<double>(m_total), detail);
+  } catch (...) {
+    // Stages advance bars inside parallel loops, where an exception may not pass: stop instead.
+    request_cancellation();
+  }
 }
 
 void ProgressBar::set_detail(std::string detail) {
@@ -161,6 +190,7 @@ void ProgressBar::set_detail(std::string detail) {
   }
   const std::size_t done = m_done.load();
   draw(done < m_total ? done : m_total, false);
+  notify(done < m_total ? done : m_total, false);
 }
 
 void ProgressBar::finish() {
@@ -171,6 +201,7 @@ void ProgressBar::finish() {
     m_detail.clear();
   }
   draw(m_total, true);
+  notify(m_total, true);
   m_finished = true;
 }
 

@@ -6,6 +6,8 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstddef>
+#include <cstdint>
+#include <functional>
 #include <iosfwd>
 #include <mutex>
 #include <string>
@@ -22,6 +24,13 @@ enum class ProgressStyle {
 };
 
 class Reporter;
+
+/// Told of a long stage's progress: its label ("anatomy", "deform", "voxelize", "mri",
+/// "writing"), the fraction done (0..1) and what is being done now. Called from whichever thread
+/// advances the stage, at most every 100 ms per stage and once when the stage ends. It must not
+/// throw: an exception from it requests cancellation (the stage stops at its next poll).
+using ProgressCallback =
+    std::function<void(const std::string& stage, double fraction, const std::string& detail)>;
 
 /// Progress of one long stage: done/total, elapsed time, an estimate of the time left, and a
 /// detail of what is being done (progress_detail()). advance() may be called from several
@@ -46,6 +55,8 @@ public:
 
 private:
   void draw(std::size_t done, bool final, bool tick = false);
+  /// Tells the reporter's progress callback, if any (throttled unless final).
+  void notify(std::size_t done, bool final);
   void stop_ticker();
 
   Reporter& m_reporter;
@@ -55,6 +66,7 @@ private:
   std::string m_detail;
   std::chrono::steady_clock::time_point m_start;
   std::chrono::steady_clock::time_point m_last_draw;
+  std::atomic<std::int64_t> m_last_notify_ns{0}; ///< when the progress callback was last called
   bool m_finished = false;
   bool m_stop_ticker = false;
   int m_uncaught_exceptions = 0;
@@ -91,6 +103,9 @@ public:
   void warning(const std::string& stage, const std::string& message);
   /// A note that belongs on screen but not in the log (timings, where files went).
   void note(const std::string& message);
+  /// Calls `callback` with the progress of every stage's bar from now on (whatever the style:
+  /// the Python module's progress= argument). Set it before the stages run.
+  void set_progress_callback(ProgressCallback callback) { m_callback = std::move(callback); }
 
   /// The log lines so far, in order, without timings (deterministic for a given scene).
   const std::vector<std::string>& log_lines() const { return m_log; }
@@ -105,6 +120,7 @@ private:
   std::ostream* m_stream;
   ProgressStyle m_style;
   std::vector<std::string> m_log;
+  ProgressCallback m_callback;
   /// A bar is drawn on the current line without its newline yet (bar style), guarded by m_mutex.
   bool m_bar_on_line = false;
   std::mutex m_mutex;

@@ -105,8 +105,11 @@ CostEstimate estimate_cost(const Scene& scene) {
   const double tolerance = scene.voxelization.level_sets_from_tessellation
                                ? scene.voxelization.tessellation_tolerance_mm
                                : export_tolerance_mm(scene);
-  bool file_shapes = false;
-  double body_tets = 0.0, simulated_tets = 0.0, surface_area = 0.0;
+  int file_shapes = 0;          // organs whose shape is read from a file or an atlas
+  std::string file_shape_organ; // the last of them
+  double body_tets = 0.0, simulated_tets = 0.0, surface_area = 0.0, shell_triangles = 0.0;
+  double fit_seconds = 0.0, fit_peak = 0.0; // organs are fitted one after the other
+  std::size_t fit_peak_organ = 0;           // the organ whose fit peaks highest
   for (std::size_t i = 0; i < scene.anatomy.organs.size(); ++i) {
     const OrganSettings& settings = scene.anatomy.organs[i];
     const int depth = i < scene.organs.size() ? scene.organs[i].depth : 0;
@@ -119,8 +122,10 @@ CostEstimate estimate_cost(const Scene& scene) {
     const auto [area, volume] = shape_area_volume(settings.shape, scene.grid, depth);
     organ.area_mm2 = area;
     organ.volume_mm3 = settings.solid ? volume : 0.0;
-    file_shapes = file_shapes || settings.shape.kind == ShapeKind::mesh ||
-                  settings.shape.kind == ShapeKind::label_volume;
+    if (settings.shape.kind == ShapeKind::mesh || settings.shape.kind == ShapeKind::label_volume) {
+      ++file_shapes;
+      file_shape_organ = settings.name;
+    }
     const Eigen::Vector3d cells = settings.shape.cells.cast<double>();
     if (settings.shape.kind == ShapeKind::sheet) {
       organ.patches = 2.0 * cells.x() * cells.y();
@@ -156,7 +161,29 @@ CostEstimate estimate_cost(const Scene& scene) {
         organ.tet_size_from = "anatomy.tet_size_mm";
       }
     }
-    if (deformed && !is_fixed(scene, settings.name)) simulated_tets += organ.tets;
+    if (deformed && !is_fixed(scene, settings.name)) {
+      simulated_tets += organ.tets;
+      // A surface organ a load moves is solved as a shell (its triangles), unless it rides in a
+      // solid organ that moves (then it follows that organ's tets).
+      const bool embedded =
+          std::any_of(scene.anatomy.organs.begin(), scene.anatomy.organs.end(), [&](const OrganSettings& o) {
+            return o.name == settings.inside && o.solid && !is_fixed(scene, o.name);
+          });
+      if (!settings.solid && !embedded) shell_triangles += organ.patches;
+    }
+    // Boxes and sheets are structured meshes: nothing is fitted.
+    const bool fitted = settings.shape.kind != ShapeKind::sheet && settings.shape.kind != ShapeKind::box;
+    if (fitted) {
+      // Fitting and measuring the fit take longer on coarse base meshes (their patches deviate
+      // more from the target, so the measurement refines more) and on large ones (more patches).
+      const double coarseness = 320.0 / std::max(1, organ.base_mesh_triangles);
+      fit_seconds += k_fit_seconds_at_320 * coarseness + k_seconds_per_patch * organ.patches;
+      const double peak = k_fit_bytes_at_320 * coarseness + k_bytes_per_fitted_patch * organ.patches;
+      if (peak > fit_peak) {
+        fit_peak = peak;
+        fit_peak_organ = e.organs.size();
+      }
+    }
     e.patches += organ.patches;
     e.tets += organ.tets;
     surface_area += area;
@@ -194,17 +221,23 @@ CostEstimate estimate_cost(const Scene& scene) {
   if (images) transient = std::max(transient, k_image_transient_bytes + (coils > 1 ? 8.0 : 0.0));
   e.dense_bytes_per_voxel = held + transient;
   const double dense = e.dense_voxels * e.dense_bytes_per_voxel;
-  const double meshes = e.tets * k_bytes_per_tet + e.patches * k_bytes_per_patch;
+  const double meshes = e.tets * k_bytes_per_tet + fit_peak;
   const double bands = e.band_voxels * k_bytes_per_band_voxel;
-  const double atlas = file_shapes ? k_file_shape_bytes : 0.0;
+  // A shape from a file is a distance field over its volume, sampled finely, kept for the run.
+  const double fov_mm3 = scene.grid.field_of_view_mm.prod();
+  const double atlas = file_shapes * fov_mm3 * k_file_shape_bytes_per_mm3;
   e.peak_memory_bytes = k_base_bytes + dense + meshes + bands + atlas;
 
   // Processor time per stage.
-  e.anatomy_seconds = e.patches * k_seconds_per_patch + e.tets * k_seconds_per_tet +
-                      (file_shapes ? k_file_shape_seconds : 0.0);
+  e.anatomy_seconds =
+      fit_seconds + e.tets * k_seconds_per_tet + file_shapes * fov_mm3 * k_file_shape_seconds_per_mm3;
   const double steps =
       deformed ? std::max(1, scene.deformation.frames) * std::max(1, scene.deformation.load_steps) : 0.0;
-  e.sim_seconds = simulated_tets * steps * k_seconds_per_tet_step;
+  const bool contacts = !scene.deformation.collisions.empty() || !scene.deformation.obstacles.empty();
+  e.sim_seconds =
+      (simulated_tets * k_seconds_per_tet_step + shell_triangles * k_seconds_per_shell_triangle_step +
+       (contacts ? k_seconds_per_contact_step : 0.0)) *
+      steps;
   e.voxelize_seconds = e.dense_voxels * e.states * k_seconds_per_dense_voxel +
                        e.band_voxels * k_seconds_per_band_voxel + e.supersamples * k_seconds_per_sample +
                        (deformed ? crossed * k_seconds_per_moved_voxel : 0.0);
@@ -218,16 +251,25 @@ CostEstimate estimate_cost(const Scene& scene) {
                   e.write_seconds;
 
   // What drives the memory: the grid when its volumes are most of it, else the meshes.
-  if (dense >= meshes + bands) {
+  if (atlas >= dense && atlas >= meshes + bands) {
+    e.memory_driver_key = "anatomy.organs." + file_shape_organ + ".shape";
+    e.memory_driver = std::to_string(file_shapes) + " organs of shapes from files or atlases (" +
+                      e.memory_driver_key + ") over a field of view of " + sci(fov_mm3 / 1000.0) + " ml";
+  } else if (dense >= meshes + bands) {
     e.memory_driver_key = "grid.voxel_size_mm";
     e.memory_driver = "grid.voxel_size_mm " + format_number(voxel_mm) + " makes " + sci(e.dense_voxels) +
                       " voxels of " + format_number(std::round(e.dense_bytes_per_voxel)) + " bytes";
   } else if (meshes >= bands) {
     const auto largest =
-        std::max_element(e.organs.begin(), e.organs.end(), [](const OrganCost& a, const OrganCost& b) {
-          return a.tets + a.patches < b.tets + b.patches;
-        });
-    if (largest->tet_size_from == "anatomy.tet_size_mm") {
+        std::max_element(e.organs.begin(), e.organs.end(),
+                         [](const OrganCost& a, const OrganCost& b) { return a.tets < b.tets; });
+    if (fit_peak >= e.tets * k_bytes_per_tet) {
+      const OrganCost& organ = e.organs[fit_peak_organ];
+      e.memory_driver_key = organ.own_base ? "anatomy.organs." + organ.name + ".base_mesh_triangles"
+                                           : "anatomy.base_mesh_triangles";
+      e.memory_driver = e.memory_driver_key + " " + std::to_string(organ.base_mesh_triangles) +
+                        ": fitting organ " + organ.name + " takes " + format_bytes(fit_peak);
+    } else if (largest->tet_size_from == "anatomy.tet_size_mm") {
       e.memory_driver_key = "anatomy.tet_size_mm";
       e.memory_driver = "anatomy.tet_size_mm " + format_number(scene.anatomy.tet_size_mm) + " makes " +
                         sci(e.tets) + " tets";

@@ -1,25 +1,29 @@
 // The rates the cost estimate (pipeline/cost_estimate.hpp) turns counts into memory and time
 // with, measured on the 2-core development machine (docs/architecture.md, "Cost estimate").
-// Re-measure them with `/usr/bin/python3 bench/cost_rates.py build/release/apps/phantasm/phantasm`,
-// which runs the scenes of tests/pipeline/test_cost_estimate.cpp under /usr/bin/time and prints
-// each estimate against the measured peak resident memory and processor time.
+// Re-measure them with `build/release/tests/test_cost_estimate`, which runs the coarse copies of
+// the shipped scenes and the test scenes under /usr/bin/time and prints each estimate against the
+// measured peak resident memory and processor time (and fails beyond a factor of two).
 #pragma once
 
 namespace phantasm::cost_rates {
 
 /// How the rates were measured (recorded in provenance.json with the estimate).
 inline constexpr const char* k_rates_measured_by =
-    "bench/cost_rates.py on the 2-core development machine (README, Performance)";
+    "build/release/tests/test_cost_estimate on the 2-core development machine (README, Performance)";
 
 // --- Memory, bytes ------------------------------------------------------------------------
 /// The process before any stage holds data: code, libraries, OpenVDB and CGAL's pools, the
-/// worker threads' stacks (peak resident of `phantasm run` on a one-organ scene of 1000 voxels).
-inline constexpr double k_base_bytes = 120e6;
+/// worker threads' stacks (peak resident of `phantasm run` on cloth.yaml's coarse copy: 77 MB).
+inline constexpr double k_base_bytes = 75e6;
 /// Per tet at the peak of meshing and solving: CGAL's triangulation during Mesh_3 (about
 /// 1 kB a cell, freed after), the solver's matrix factor and constraint data.
 inline constexpr double k_bytes_per_tet = 600.0;
-/// Per fitted patch: the fit's samples and normal equations, the patch coefficients.
-inline constexpr double k_bytes_per_patch = 20e3;
+/// Fitting one organ (organs are fitted one after the other, so the largest sets the peak): this
+/// times 320 / its base size (a coarse base deviates more from its target, and measuring the
+/// fit refines more: a ball of 80 base triangles peaks at 263 MB, of 320 at 94 MB) ...
+inline constexpr double k_fit_bytes_at_320 = 30e6;
+/// ... plus this per patch (the samples and normal equations of the fit).
+inline constexpr double k_bytes_per_fitted_patch = 75e3;
 /// Per narrow-band voxel of a level set (OpenVDB leaf nodes, partly filled).
 inline constexpr double k_bytes_per_band_voxel = 8.0;
 /// Per dense voxel while the motion fields are made (the deformation map's rasterized field
@@ -28,9 +32,10 @@ inline constexpr double k_field_transient_bytes = 24.0;
 /// Per dense voxel while one image is made: the complex coil image, the object and the bias
 /// field (doubles), on top of the volumes held.
 inline constexpr double k_image_transient_bytes = 40.0;
-/// Shapes read from files or atlases: the label volume and its smoothed indicator (Colin 27:
-/// 181 x 217 x 181 labels).
-inline constexpr double k_file_shape_bytes = 200e6;
+/// Per organ whose shape is read from a file or an atlas, per mm^3 of the field of view: its
+/// label volume, smoothed indicator and distance samples at the label volume's resolution (about
+/// 1 mm), kept for the run (the coarse Colin head: 9 such organs, 2.6 GB).
+inline constexpr double k_file_shape_bytes_per_mm3 = 36.0;
 
 // --- Counts -------------------------------------------------------------------------------
 /// A shape known only from its file: its extent as a fraction of the field of view, and each
@@ -49,14 +54,24 @@ inline constexpr double k_crossed_voxels_per_area = 1.5;
 // --- Processor time, s ----------------------------------------------------------------------
 /// Start, scene parsing, the writer's fixed files.
 inline constexpr double k_base_seconds = 0.3;
-/// Per patch: the base mesh, the bump fit, the volume match and the fit measurement.
-inline constexpr double k_seconds_per_patch = 1.5e-3;
-/// Shapes read from files or atlases: reading, deriving and smoothing the label volumes.
-inline constexpr double k_file_shape_seconds = 20.0;
+/// Fitting one organ: this times 320 / its base size, plus k_seconds_per_patch per patch (the
+/// head's 7 organs of 320 triangles take 2.7 s, the abdomen's 7 of 320 and 3 of 1280 5.5 s,
+/// README, Performance).
+inline constexpr double k_fit_seconds_at_320 = 0.16;
+inline constexpr double k_seconds_per_patch = 0.7e-3;
+/// Per organ whose shape is read from a file or an atlas, per mm^3 of the field of view:
+/// deriving, smoothing and searching its label volume (the coarse Colin head: 12 s an organ).
+inline constexpr double k_file_shape_seconds_per_mm3 = 1.6e-6;
 /// Per tet: CGAL Mesh_3 with ODT smoothing and sliver checks.
 inline constexpr double k_seconds_per_tet = 50e-6;
 /// Per simulated tet per frame and load step: local/global iterations to convergence.
 inline constexpr double k_seconds_per_tet_step = 12e-6;
+/// Per shell triangle per frame and load step: a shell's solve takes many more iterations than a
+/// solid's (cloth.yaml's swing: hundreds per frame).
+inline constexpr double k_seconds_per_shell_triangle_step = 0.8e-3;
+/// Per frame and load step of a scene with obstacles or collisions: contact detection and the
+/// factor's updates (tests/data/scenes/two-balls.yaml, breast.yaml).
+inline constexpr double k_seconds_per_contact_step = 0.3;
 /// Per dense voxel and state: labels, fractions away from surfaces, gap fill.
 inline constexpr double k_seconds_per_dense_voxel = 0.3e-6;
 /// Per narrow-band voxel: the closest patch point of each level-set voxel.

@@ -3,6 +3,7 @@
 // the pipeline, as the command line is.
 
 #include "batch/sweep.hpp"
+#include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/progress.hpp"
 #include "geometry/ras_lps.hpp"
@@ -106,6 +107,46 @@ SimulationStage stage_of(const std::string& until) {
   if (until == "mri") return SimulationStage::mri;
   throw py::value_error("until: expected anatomy, deformation, voxelization or mri, found '" + until + "'");
 }
+
+/// A Python progress callable as the stages' ProgressCallback. The stages call it from their
+/// threads with the GIL released: it takes the GIL, and what the callable raises (an exception,
+/// or KeyboardInterrupt from Ctrl-C, which Python delivers on the main thread when the callable
+/// runs there) is kept and cancels the run; simulate() raises it once the stages have stopped.
+class PythonProgress {
+public:
+  explicit PythonProgress(py::object callable) : m_callable(std::move(callable)) {}
+  ~PythonProgress() {
+    py::gil_scoped_acquire gil;
+    m_callable = py::object();
+    m_error.reset();
+  }
+
+  ProgressCallback callback() {
+    return [this](const std::string& stage, double fraction, const std::string& detail) {
+      py::gil_scoped_acquire gil;
+      if (m_error) return; // already stopping: call no more
+      try {
+        m_callable(stage, fraction, detail);
+        // Ctrl-C while the stages ran: Python runs its handler here on the main thread.
+        if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+      } catch (py::error_already_set& error) {
+        m_error = std::make_unique<py::error_already_set>(std::move(error));
+        request_cancellation();
+      }
+    };
+  }
+
+  /// Raises what the callable raised, if it did.
+  void rethrow() {
+    if (!m_error) return;
+    std::unique_ptr<py::error_already_set> error = std::move(m_error);
+    throw std::move(*error);
+  }
+
+private:
+  py::object m_callable;
+  std::unique_ptr<py::error_already_set> m_error;
+};
 
 } // namespace
 
@@ -273,16 +314,42 @@ PYBIND11_MODULE(phantasm, m) {
 
   m.def(
       "simulate",
-      [](const std::shared_ptr<Scene>& scene, const std::string& until, bool verbose) {
+      [](const std::shared_ptr<Scene>& scene, const std::string& until, bool verbose,
+         const py::object& progress) {
         auto result = std::make_unique<PySimulation>();
         result->scene = std::make_shared<const Scene>(*scene);
         result->until = until;
         const SimulationStage stage = stage_of(until);
-        py::gil_scoped_release release;
-        Reporter reporter = verbose ? Reporter(std::cerr, ProgressStyle::lines) : Reporter::silent();
-        result->result = simulate(*result->scene, reporter, stage);
+        if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
+          throw py::type_error("progress: expected a callable (stage, fraction, detail), found " +
+                               py::repr(progress).cast<std::string>());
+        std::unique_ptr<PythonProgress> observer =
+            progress.is_none() ? nullptr : std::make_unique<PythonProgress>(progress);
+        {
+          py::gil_scoped_release release;
+          Reporter reporter = verbose ? Reporter(std::cerr, ProgressStyle::lines) : Reporter::silent();
+          if (observer) reporter.set_progress_callback(observer->callback());
+          reset_cancellation();
+          try {
+            result->result = simulate(*result->scene, reporter, stage);
+          } catch (const Cancelled&) {
+            // Only the callback requests cancellation in this process: raise what it raised.
+            reset_cancellation();
+            py::gil_scoped_acquire gil;
+            if (observer) observer->rethrow();
+            throw;
+          }
+          reset_cancellation();
+        }
+        // The callable raised after the last poll of the stages: the run finished, but the
+        // caller asked to stop (Ctrl-C), so that is what it gets.
+        if (observer) observer->rethrow();
         return result;
       },
       py::arg("scene"), py::arg("until") = "mri", py::arg("verbose") = false,
-      "Runs the scene's stages in memory up to `until` (anatomy, deformation, voxelization, mri)");
+      py::arg("progress") = py::none(),
+      "Runs the scene's stages in memory up to `until` (anatomy, deformation, voxelization, mri). "
+      "`progress`, when given, is called as progress(stage, fraction, detail) while they run (stage: "
+      "anatomy, deform, voxelize, mri; fraction 0..1; detail: what is being done), at most every 0.1 s "
+      "per stage; an exception it raises, or Ctrl-C, stops the run and is raised here");
 }

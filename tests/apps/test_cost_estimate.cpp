@@ -35,8 +35,11 @@ struct Measured {
 
 /// Runs `phantasm run` on a scene under /usr/bin/time and reads what it measured.
 Measured measure_run(const fs::path& scene, const fs::path& out) {
-  const CommandResult result = run_command({"/usr/bin/time", "-f", "phantasm-time %M %U %S %e", k_phantasm,
-                                            "run", scene.string(), "-o", out.string(), "-q"});
+  // OpenMP threads wait passively: spinning threads on a shared machine add processor time
+  // that does no work (a run of two-balls.yaml measured 10.1 s instead of 4.8 s that way).
+  const CommandResult result =
+      run_command({"/usr/bin/env", "OMP_WAIT_POLICY=passive", "/usr/bin/time", "-f",
+                   "phantasm-time %M %U %S %e", k_phantasm, "run", scene.string(), "-o", out.string(), "-q"});
   EXPECT_EQ(result.exit_code, 0) << result.err;
   Measured measured;
   const std::size_t at = result.err.rfind("phantasm-time ");
@@ -52,15 +55,16 @@ Measured measure_run(const fs::path& scene, const fs::path& out) {
   return measured;
 }
 
-/// The scenes the estimate is held to: the coarse copies of the shipped scenes, the coarse Colin
-/// head, and the test scenes. tests/data/scenes/large-organ.yaml (1.5 M tets) is left out: its
-/// CGAL meshing alone takes minutes (the estimate's tet count is checked against it in
-/// Estimate.CountsFollowTheSettings instead).
+/// The scenes the estimate is held to: the coarse copies of the shipped scenes and the test
+/// scenes (the coarse Colin head has a test of its own, labelled heavy: its run takes minutes).
+/// tests/data/scenes/large-organ.yaml (1.5 M tets) is left out: its CGAL meshing alone takes minutes (the
+/// estimate's tet count is checked against it in Estimate.CountsFollowTheSettings instead).
 std::vector<std::string> scenes() {
   std::vector<std::string> names;
   for (const auto& entry : fs::directory_iterator(k_source_dir / "data-synthetic")) {
     if (entry.path().extension() != ".yaml") continue;
-    if (YAML::LoadFile(entry.path().string())["phantasm_sweep"]) continue;
+    if (YAML::LoadFile(entry.path().string())["phantasm_sweep"] || entry.path().stem() == "colin-head")
+      continue;
     names.push_back("shipped/" + entry.path().stem().string());
   }
   for (const char* name : {"gap-ball", "small-head", "two-balls"})
@@ -78,10 +82,8 @@ std::string test_name(const ::testing::TestParamInfo<std::string>& info) {
   return name;
 }
 
-} // namespace
-
-TEST_P(EstimateAgainstRun, IsWithinAFactorOfTwoOfPeakMemoryAndProcessorTime) {
-  const std::string param = GetParam();
+/// Runs a scene ("shipped/<stem>" or "test/<stem>") and holds the estimate to what was measured.
+void check_estimate(const std::string& param) {
   const std::string kind = param.substr(0, param.find('/'));
   const std::string stem = param.substr(param.find('/') + 1);
   const fs::path folder = fresh_folder("cost-" + stem);
@@ -89,7 +91,6 @@ TEST_P(EstimateAgainstRun, IsWithinAFactorOfTwoOfPeakMemoryAndProcessorTime) {
   if (kind == "test") {
     scene = k_source_dir / "tests" / "data" / "scenes" / (stem + ".yaml");
   } else if (stem == "colin-head") {
-    if (!fs::is_directory(default_colin27_templates_dir())) GTEST_SKIP() << "mricron-data is not installed";
     scene = folder / "colin-coarse.yaml";
     write_text_file(scene, coarse_colin_head_text());
   } else {
@@ -105,8 +106,8 @@ TEST_P(EstimateAgainstRun, IsWithinAFactorOfTwoOfPeakMemoryAndProcessorTime) {
               "(wall %.2f s)\n",
               param.c_str(), estimate.peak_memory_bytes / 1e6, measured.peak_bytes / 1e6, memory_ratio,
               estimate.cpu_seconds, measured.cpu_seconds, time_ratio, measured.wall_seconds);
-  RecordProperty("memory_ratio", std::to_string(memory_ratio));
-  RecordProperty("time_ratio", std::to_string(time_ratio));
+  ::testing::Test::RecordProperty("memory_ratio", std::to_string(memory_ratio));
+  ::testing::Test::RecordProperty("time_ratio", std::to_string(time_ratio));
   EXPECT_GT(memory_ratio, 0.5);
   EXPECT_LT(memory_ratio, 2.0);
   EXPECT_GT(time_ratio, 0.5);
@@ -118,6 +119,17 @@ TEST_P(EstimateAgainstRun, IsWithinAFactorOfTwoOfPeakMemoryAndProcessorTime) {
   EXPECT_EQ(provenance.at("estimate").at("peak_memory_bytes").get<double>(),
             std::round(estimate.peak_memory_bytes));
   fs::remove_all(folder);
+}
+
+} // namespace
+
+TEST_P(EstimateAgainstRun, IsWithinAFactorOfTwoOfPeakMemoryAndProcessorTime) {
+  check_estimate(GetParam());
+}
+
+TEST(EstimateAgainstColinHead, IsWithinAFactorOfTwoOfPeakMemoryAndProcessorTime) {
+  if (!fs::is_directory(default_colin27_templates_dir())) GTEST_SKIP() << "mricron-data is not installed";
+  check_estimate("shipped/colin-head");
 }
 
 INSTANTIATE_TEST_SUITE_P(Scenes, EstimateAgainstRun, ::testing::ValuesIn(scenes()), test_name);

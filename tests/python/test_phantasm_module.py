@@ -74,6 +74,43 @@ class PythonModule(unittest.TestCase):
         with self.assertRaises(KeyError):
             self.simulation.image("FLAIR", "ref")
 
+    def test_progress_callback_hears_every_stage_and_can_stop_the_run(self):
+        calls = []
+
+        def progress(stage, fraction, detail):
+            self.assertIsInstance(detail, str)
+            calls.append((stage, fraction))
+
+        phantasm.simulate(self.scene, progress=progress)
+        stages = [stage for stage, _ in calls]
+        for stage in ("anatomy", "deform", "voxelize", "mri"):
+            self.assertIn(stage, stages)
+        self.assertTrue(all(0.0 <= fraction <= 1.0 for _, fraction in calls))
+        self.assertIn(("mri", 1.0), calls)  # each stage's end is reported
+
+        # An exception raised by the callback stops the run and comes out of simulate; so does
+        # KeyboardInterrupt (what Ctrl-C raises in the callback on the main thread).
+        class Stop(Exception):
+            pass
+
+        def stop_in_voxelization(stage, fraction, detail):
+            if stage == "voxelize":
+                raise Stop("enough")
+
+        with self.assertRaises(Stop):
+            phantasm.simulate(self.scene, progress=stop_in_voxelization)
+
+        def interrupt(stage, fraction, detail):
+            raise KeyboardInterrupt
+
+        with self.assertRaises(KeyboardInterrupt):
+            phantasm.simulate(self.scene, progress=interrupt)
+        with self.assertRaises(TypeError):
+            phantasm.simulate(self.scene, progress=3)
+        # The module is usable again after a stopped run.
+        again = phantasm.simulate(self.scene, until="anatomy", progress=lambda *args: None)
+        self.assertEqual(again.stages[0]["status"], "done")
+
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)
