@@ -107,7 +107,7 @@ CostEstimate estimate_cost(const Scene& scene) {
                                : export_tolerance_mm(scene);
   int file_shapes = 0;          // organs whose shape is read from a file or an atlas
   std::string file_shape_organ; // the last of them
-  double body_tets = 0.0, simulated_tets = 0.0, surface_area = 0.0, shell_triangles = 0.0;
+  double meshed_tets = 0.0, simulated_tets = 0.0, surface_area = 0.0, shell_triangles = 0.0;
   double fit_seconds = 0.0, fit_peak = 0.0; // organs are fitted one after the other
   std::size_t fit_peak_organ = 0;           // the organ whose fit peaks highest
   for (std::size_t i = 0; i < scene.anatomy.organs.size(); ++i) {
@@ -143,6 +143,7 @@ CostEstimate estimate_cost(const Scene& scene) {
         organ.tet_size_mm = boundary_tet_size(area, organ.base_mesh_triangles);
         organ.tet_size_from = "base size";
         organ.tets = volume / (k_tet_volume_factor * std::pow(organ.tet_size_mm, 3.0));
+        meshed_tets += organ.tets;
       }
     }
     // A simulated body meshed as one (anatomy.tet_size_mm): the outermost solid organ that the
@@ -156,7 +157,7 @@ CostEstimate estimate_cost(const Scene& scene) {
         const double s = scene.anatomy.tet_size_mm;
         const double body = volume / (k_tet_volume_factor * s * s * s) + k_interface_tets * area / (s * s);
         organ.tets += body;
-        body_tets += body;
+        meshed_tets += body;
         organ.tet_size_mm = s;
         organ.tet_size_from = "anatomy.tet_size_mm";
       }
@@ -189,7 +190,6 @@ CostEstimate estimate_cost(const Scene& scene) {
     surface_area += area;
     e.organs.push_back(organ);
   }
-  (void)body_tets;
 
   // Voxels: each organ's level set holds a band of k_band_width voxels across its surface per
   // state; partial volume takes supersampling^3 samples in the voxels a surface crosses.
@@ -230,7 +230,7 @@ CostEstimate estimate_cost(const Scene& scene) {
 
   // Processor time per stage.
   e.anatomy_seconds =
-      fit_seconds + e.tets * k_seconds_per_tet + file_shapes * fov_mm3 * k_file_shape_seconds_per_mm3;
+      fit_seconds + meshed_tets * k_seconds_per_tet + file_shapes * fov_mm3 * k_file_shape_seconds_per_mm3;
   const double steps =
       deformed ? std::max(1, scene.deformation.frames) * std::max(1, scene.deformation.load_steps) : 0.0;
   const bool contacts = !scene.deformation.collisions.empty() || !scene.deformation.obstacles.empty();
@@ -253,10 +253,12 @@ CostEstimate estimate_cost(const Scene& scene) {
   // What drives the memory: the grid when its volumes are most of it, else the meshes.
   if (atlas >= dense && atlas >= meshes + bands) {
     e.memory_driver_key = "anatomy.organs." + file_shape_organ + ".shape";
+    e.memory_advice = "fewer organs from files, or a smaller grid.field_of_view_mm";
     e.memory_driver = std::to_string(file_shapes) + " organs of shapes from files or atlases (" +
                       e.memory_driver_key + ") over a field of view of " + sci(fov_mm3 / 1000.0) + " ml";
   } else if (dense >= meshes + bands) {
     e.memory_driver_key = "grid.voxel_size_mm";
+    e.memory_advice = "a coarser grid.voxel_size_mm";
     e.memory_driver = "grid.voxel_size_mm " + format_number(voxel_mm) + " makes " + sci(e.dense_voxels) +
                       " voxels of " + format_number(std::round(e.dense_bytes_per_voxel)) + " bytes";
   } else if (meshes >= bands) {
@@ -267,20 +269,25 @@ CostEstimate estimate_cost(const Scene& scene) {
       const OrganCost& organ = e.organs[fit_peak_organ];
       e.memory_driver_key = organ.own_base ? "anatomy.organs." + organ.name + ".base_mesh_triangles"
                                            : "anatomy.base_mesh_triangles";
+      e.memory_advice = "a base size nearer 320 in " + e.memory_driver_key +
+                        " (a coarse base deviates more, and measuring its fit refines more)";
       e.memory_driver = e.memory_driver_key + " " + std::to_string(organ.base_mesh_triangles) +
                         ": fitting organ " + organ.name + " takes " + format_bytes(fit_peak);
     } else if (largest->tet_size_from == "anatomy.tet_size_mm") {
       e.memory_driver_key = "anatomy.tet_size_mm";
+      e.memory_advice = "a larger anatomy.tet_size_mm";
       e.memory_driver = "anatomy.tet_size_mm " + format_number(scene.anatomy.tet_size_mm) + " makes " +
                         sci(e.tets) + " tets";
     } else {
       e.memory_driver_key = largest->own_base ? "anatomy.organs." + largest->name + ".base_mesh_triangles"
                                               : "anatomy.base_mesh_triangles";
+      e.memory_advice = "a smaller " + e.memory_driver_key;
       e.memory_driver = e.memory_driver_key + " " + std::to_string(largest->base_mesh_triangles) + " makes " +
                         sci(largest->tets) + " tets of organ " + largest->name;
     }
   } else {
     e.memory_driver_key = "grid.voxel_size_mm";
+    e.memory_advice = "a coarser grid.voxel_size_mm";
     e.memory_driver = "grid.voxel_size_mm " + format_number(voxel_mm) + " makes " + sci(e.band_voxels) +
                       " narrow-band voxels";
   }
@@ -440,8 +447,8 @@ void check_memory(const CostEstimate& estimate, double limit_bytes, const std::s
   std::string message =
       what + ": " + estimate.memory_driver + ": estimated peak " + format_bytes(estimate.peak_memory_bytes);
   if (copies > 1) message += " x " + std::to_string(copies) + " jobs = " + format_bytes(need);
-  message += " > " + format_bytes(limit_bytes) + " " + limit_source + "; expected a coarser " +
-             estimate.memory_driver_key + (copies > 1 ? " or fewer --jobs" : "") +
+  message += " > " + format_bytes(limit_bytes) + " " + limit_source + "; expected " + estimate.memory_advice +
+             (copies > 1 ? " or fewer --jobs" : "") +
              " (or a larger --max-memory if the estimate is wrong; docs/architecture.md, Cost estimate)";
   throw InputError(message);
 }

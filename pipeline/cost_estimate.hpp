@@ -49,6 +49,7 @@ struct CostEstimate {
   /// the setting that drives the peak memory, as a key path, and a sentence on how
   std::string memory_driver_key;
   std::string memory_driver;
+  std::string memory_advice; ///< what would lower it ("a coarser grid.voxel_size_mm")
 };
 
 /// Estimates a scene's run from its settings alone (nothing is read or built).

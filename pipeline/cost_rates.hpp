@@ -53,25 +53,26 @@ inline constexpr double k_crossed_voxels_per_area = 1.5;
 
 // --- Processor time, s ----------------------------------------------------------------------
 /// Start, scene parsing, the writer's fixed files.
-inline constexpr double k_base_seconds = 0.3;
+inline constexpr double k_base_seconds = 0.15;
 /// Fitting one organ: this times 320 / its base size, plus k_seconds_per_patch per patch (the
 /// head's 7 organs of 320 triangles take 2.7 s, the abdomen's 7 of 320 and 3 of 1280 5.5 s,
 /// README, Performance).
-inline constexpr double k_fit_seconds_at_320 = 0.16;
+inline constexpr double k_fit_seconds_at_320 = 0.2;
 inline constexpr double k_seconds_per_patch = 0.7e-3;
 /// Per organ whose shape is read from a file or an atlas, per mm^3 of the field of view:
 /// deriving, smoothing and searching its label volume (the coarse Colin head: 12 s an organ).
 inline constexpr double k_file_shape_seconds_per_mm3 = 1.6e-6;
-/// Per tet: CGAL Mesh_3 with ODT smoothing and sliver checks.
+/// Per tet CGAL meshes: Mesh_3 with ODT smoothing and sliver checks (a box's structured tets cost
+/// nothing).
 inline constexpr double k_seconds_per_tet = 50e-6;
 /// Per simulated tet per frame and load step: local/global iterations to convergence.
-inline constexpr double k_seconds_per_tet_step = 12e-6;
-/// Per shell triangle per frame and load step: a shell's solve takes many more iterations than a
+inline constexpr double k_seconds_per_tet_step = 3e-6;
+/// Per shell triangle per frame and load step: a shell's solve takes more iterations than a
 /// solid's (cloth.yaml's swing: hundreds per frame).
-inline constexpr double k_seconds_per_shell_triangle_step = 0.8e-3;
+inline constexpr double k_seconds_per_shell_triangle_step = 80e-6;
 /// Per frame and load step of a scene with obstacles or collisions: contact detection and the
 /// factor's updates (tests/data/scenes/two-balls.yaml, breast.yaml).
-inline constexpr double k_seconds_per_contact_step = 0.3;
+inline constexpr double k_seconds_per_contact_step = 0.1;
 /// Per dense voxel and state: labels, fractions away from surfaces, gap fill.
 inline constexpr double k_seconds_per_dense_voxel = 0.3e-6;
 /// Per narrow-band voxel: the closest patch point of each level-set voxel.
@@ -87,7 +88,7 @@ inline constexpr double k_seconds_per_coil_voxel = 50e-9;
 /// Per dense voxel of each float volume written: gzip-compressed NIfTI.
 inline constexpr double k_seconds_per_written_voxel = 130e-9;
 /// Per patch and state of the surface meshes written (tessellation and .vtp).
-inline constexpr double k_seconds_per_written_patch = 1e-4;
+inline constexpr double k_seconds_per_written_patch = 0.5e-4;
 /// The fraction of a second thread the parallel stages use.
 inline constexpr double k_parallel_efficiency = 0.7;
 

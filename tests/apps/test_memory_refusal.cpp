@@ -51,7 +51,7 @@ TEST(MemoryRefusal, MaxMemoryIsHonouredByRunAndBatch) {
       {k_phantasm, "run", k_small_scene.string(), "-o", (folder / "out").string(), "--max-memory", "10M"});
   EXPECT_EQ(refused.exit_code, 2) << refused.err;
   EXPECT_NE(refused.err.find("(--max-memory)"), std::string::npos) << refused.err;
-  EXPECT_NE(refused.err.find("grid.voxel_size_mm"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("estimated peak"), std::string::npos) << refused.err;
   EXPECT_FALSE(fs::exists(folder / "out"));
 
   const CommandResult bad = run_command(
