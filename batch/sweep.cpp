@@ -3,6 +3,7 @@
 #include "core/error.hpp"
 #include "core/safe_name.hpp"
 #include "scene/scene.hpp"
+#include "scene/yaml_documents.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -222,10 +223,12 @@ public:
 
   Sweep read_checked(SweepDepth depth) {
     std::vector<YAML::Node> documents;
+    std::ifstream sweep_file(m_file, std::ios::binary);
+    if (!sweep_file) throw InputError(m_file.string() + ": expected a sweep file, found no readable file");
+    const std::string sweep_text((std::istreambuf_iterator<char>(sweep_file)),
+                                 std::istreambuf_iterator<char>());
     try {
-      documents = YAML::LoadAllFromFile(m_file.string());
-    } catch (const YAML::BadFile&) {
-      throw InputError(m_file.string() + ": expected a sweep file, found no readable file");
+      documents = load_yaml_documents(sweep_text);
     } catch (const YAML::Exception& error) {
       fail(error.mark, "sweep", "expected valid YAML, found " + error.msg);
     }
@@ -263,7 +266,7 @@ public:
     // The base scene's own mistakes are named in the base scene (each subject's scene is made
     // from its first document only, so a second one would be dropped without a word).
     try {
-      const std::vector<YAML::Node> base = YAML::LoadAll(m_base_text);
+      const std::vector<YAML::Node> base = load_yaml_documents(m_base_text);
       if (base.size() > 1) {
         throw InputError(sweep.base_scene.string() + ":" + std::to_string(base[1].Mark().line + 1) + ":" +
                          std::to_string(base[1].Mark().column + 1) + ": expected one YAML document, found " +

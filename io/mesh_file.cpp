@@ -27,11 +27,14 @@
 #include <vtkXMLPolyDataWriter.h>
 #include <vtkXMLUnstructuredGridReader.h>
 #include <vtkXMLUnstructuredGridWriter.h>
+#include <vtksys/SystemTools.hxx>
 
 #include <algorithm>
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
+#include <fstream>
 #include <map>
 
 namespace phantasm {
@@ -54,6 +57,27 @@ void check_readable(const std::filesystem::path& path, const char* what) {
     fail(path, std::string("expected ") + what + ", found no such file");
   if (std::filesystem::file_size(path, error) == 0)
     fail(path, std::string("expected ") + what + ", found an empty file");
+}
+
+/// Refuses a binary STL file whose triangle count (the 4 bytes after its 80-byte header) is more
+/// than the file holds: vtkSTLReader allocates the points of that many triangles before it reads
+/// any (a 100-byte file could ask for 100 GB). A count below the file's triangles is left to VTK,
+/// which reads them all (exporters that write 0 exist). vtkSTLReader's own test tells binary
+/// from ASCII files.
+void check_binary_stl_count(const std::filesystem::path& path) {
+  if (vtksys::SystemTools::DetectFileType(path.c_str()) == vtksys::SystemTools::FileTypeText) return;
+  std::ifstream in(path, std::ios::binary);
+  unsigned char header[84] = {};
+  if (!in.read(reinterpret_cast<char*>(header), sizeof header)) return; // too short: VTK refuses it
+  const std::uint64_t count = std::uint64_t{header[80]} | std::uint64_t{header[81]} << 8 |
+                              std::uint64_t{header[82]} << 16 | std::uint64_t{header[83]} << 24;
+  std::error_code error;
+  const std::uintmax_t size = std::filesystem::file_size(path, error);
+  if (!error && 84 + 50 * count > size) {
+    fail(path, "expected a binary STL file of 84 + 50 bytes per triangle (" +
+                   std::to_string(84 + 50 * count) + " bytes for the " + std::to_string(count) +
+                   " triangles its header counts), found " + std::to_string(size) + " bytes");
+  }
 }
 
 /// Runs a VTK reader with VTK's own messages silenced (they would go to stderr as warnings
@@ -142,6 +166,7 @@ TriangleMesh read_triangle_mesh(const std::filesystem::path& path) {
   vtkSmartPointer<vtkPolyData> data;
   if (extension == ".stl") {
     check_readable(path, what);
+    check_binary_stl_count(path);
     data = read_poly_data<vtkSTLReader>(path);
   } else if (extension == ".obj") {
     check_readable(path, what);

@@ -244,12 +244,23 @@ NiftiVolume read_volume(const std::filesystem::path& path, int components) {
   {
     const std::unique_ptr<nifti_image, void (*)(nifti_image*)> header(nifti_image_read(path.c_str(), 0),
                                                                       nifti_image_free);
+    // A negative offset is how libnifti stores a vox_offset beyond 2^31 (an int of a float):
+    // uncompressed, it then takes the voxels from the end of the file, and compressed it refuses
+    // the file, so the same file would read differently gzipped.
+    if (header && header->iname_offset < 0)
+      fail(
+          path,
+          "expected the voxels at an offset (vox_offset) within the file, found an offset beyond 2^31 bytes");
     if (header) require_finite_floats(path, *header);
   }
   const std::unique_ptr<nifti_image, void (*)(nifti_image*)> image(nifti_image_read(path.c_str(), 1),
                                                                    nifti_image_free);
   if (!image || !image->data)
     fail(path, "expected a NIfTI-1 or NIfTI-2 image, found a file libnifti cannot read");
+  // libnifti also reads ANALYZE 7.5 headers (no "n+1" or "n+2" magic): they have no orientation,
+  // and inside a .nii file libnifti reads their voxels from different offsets plain and gzipped.
+  if (image->nifti_type == NIFTI_FTYPE_ANALYZE)
+    fail(path, "expected a NIfTI-1 or NIfTI-2 image (magic \"n+1\" or \"n+2\"), found an ANALYZE 7.5 header");
   if (components == 1) {
     for (int d = 4; d <= 7; ++d) {
       if (image->dim[0] >= d && image->dim[d] > 1) {

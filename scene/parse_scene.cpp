@@ -1,6 +1,7 @@
 #include "core/safe_name.hpp"
 #include "core/sha256.hpp"
 #include "scene/parse_sections.hpp"
+#include "scene/yaml_documents.hpp"
 
 #include <fstream>
 #include <sstream>
@@ -123,7 +124,7 @@ SceneLoadResult parse_scene(const std::string& text, const std::filesystem::path
 
   YAML::Node root;
   try {
-    const std::vector<YAML::Node> documents = YAML::LoadAll(text);
+    const std::vector<YAML::Node> documents = load_yaml_documents(text);
     if (documents.size() > 1) {
       // yaml-cpp's Load would read the first and drop the rest without a word.
       const YAML::Mark at = documents[1].Mark();

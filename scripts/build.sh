@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# Configures and builds one build tree. Usage: scripts/build.sh release|asan
+# Configures and builds one build tree. Usage: scripts/build.sh release|asan|fuzz
 # release: optimized (-O3), tests and benchmarks; asan: AddressSanitizer + UBSan, tests only, at
 # -O1 with line tables only (-g1): enough for the sanitizers' stack traces, and the build is
-# shorter than with full debug information.
+# shorter than with full debug information. fuzz: the libFuzzer targets of fuzz/ with clang
+# (ASan + UBSan, -O1 -g1, assertions on) and only the libraries they link (scripts/fuzz.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -10,7 +11,10 @@ kind=${1:-release}
 case "$kind" in
   release) flags=(-DCMAKE_BUILD_TYPE=Release) ;;
   asan) flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" -DPHANTASM_SANITIZE=ON -DPHANTASM_BUILD_BENCHMARKS=OFF) ;;
-  *) echo "usage: $0 release|asan" >&2; exit 2 ;;
+  fuzz) flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1"
+              -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 -DPHANTASM_FUZZ=ON
+              -DPHANTASM_BUILD_TESTS=OFF -DPHANTASM_BUILD_BENCHMARKS=OFF) ;;
+  *) echo "usage: $0 release|asan|fuzz" >&2; exit 2 ;;
 esac
 
 build_dir="build/$kind"
