@@ -120,26 +120,27 @@ void write_mesh_seeds(const fs::path& folder) {
   vtkNew<vtkPolyData> data;
   data->SetPoints(points);
   data->SetPolys(triangles);
-  const fs::path scratch = folder / "scratch";
+  // Each writer writes a scratch file of its own extension (vtkPLYWriter adds ".ply" otherwise).
+  const auto scratch = [&folder](const char* extension) { return folder / (std::string("scratch") + extension); };
   for (const bool binary : {false, true}) {
     vtkNew<vtkSTLWriter> stl;
     stl->SetInputData(data);
-    stl->SetFileName(scratch.c_str());
+    stl->SetFileName(scratch(".stl").c_str());
     binary ? stl->SetFileTypeToBinary() : stl->SetFileTypeToASCII();
     stl->Write();
-    write_mesh_seed(folder / (binary ? "binary.stl" : "ascii.stl"), 0, read_bytes(scratch));
+    write_mesh_seed(folder / (binary ? "binary.stl" : "ascii.stl"), 0, read_bytes(scratch(".stl")));
     vtkNew<vtkPLYWriter> ply;
     ply->SetInputData(data);
-    ply->SetFileName(scratch.c_str());
+    ply->SetFileName(scratch(".ply").c_str());
     binary ? ply->SetFileTypeToBinary() : ply->SetFileTypeToASCII();
     ply->Write();
-    write_mesh_seed(folder / (binary ? "binary.ply" : "ascii.ply"), 2, read_bytes(scratch));
+    write_mesh_seed(folder / (binary ? "binary.ply" : "ascii.ply"), 2, read_bytes(scratch(".ply")));
     vtkNew<vtkXMLPolyDataWriter> vtp;
     vtp->SetInputData(data);
-    vtp->SetFileName(scratch.c_str());
+    vtp->SetFileName(scratch(".vtp").c_str());
     binary ? vtp->SetDataModeToBinary() : vtp->SetDataModeToAscii();
     vtp->Write();
-    write_mesh_seed(folder / (binary ? "binary.vtp" : "ascii.vtp"), 3, read_bytes(scratch));
+    write_mesh_seed(folder / (binary ? "binary.vtp" : "ascii.vtp"), 3, read_bytes(scratch(".vtp")));
   }
   // OBJ by hand: vertices, a normal, faces with and without texture and normal indices, a quad.
   std::ostringstream obj;
@@ -158,9 +159,10 @@ void write_mesh_seeds(const fs::path& folder) {
   write_mesh_seed(folder / "icosahedron.obj", 1, obj.str());
   write_mesh_seed(folder / "square.obj", 1, "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n");
   // phantasm's own .vtp (appended, zlib-compressed, with field data).
-  write_vtp(scratch, mesh);
-  write_mesh_seed(folder / "phantasm.vtp", 3, read_bytes(scratch));
-  fs::remove(scratch);
+  write_vtp(scratch(".vtp"), mesh);
+  write_mesh_seed(folder / "phantasm.vtp", 3, read_bytes(scratch(".vtp")));
+  for (const char* extension : {".stl", ".ply", ".vtp"})
+    fs::remove(scratch(extension));
 }
 
 } // namespace

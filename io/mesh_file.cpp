@@ -1,8 +1,10 @@
-// Mesh files through VTK: the only place besides the other io adapters that includes it.
+// Mesh files through VTK: the only place besides the other io adapters that includes it. OBJ and
+// PLY files are parsed here (VTK's readers of them crash on faces that name missing vertices).
 
 #include "io/mesh_file.hpp"
 
 #include "core/error.hpp"
+#include "core/format.hpp"
 #include "geometry/tet_boundary.hpp"
 #include "io/atomic_file.hpp"
 
@@ -13,8 +15,6 @@
 #include <vtkFieldData.h>
 #include <vtkIdList.h>
 #include <vtkNew.h>
-#include <vtkOBJReader.h>
-#include <vtkPLYReader.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkPolyData.h>
@@ -32,10 +32,17 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
+#include <cstring>
 #include <fstream>
+#include <limits>
 #include <map>
+#include <optional>
+#include <sstream>
 
 namespace phantasm {
 namespace {
@@ -78,6 +85,330 @@ void check_binary_stl_count(const std::filesystem::path& path) {
                    std::to_string(84 + 50 * count) + " bytes for the " + std::to_string(count) +
                    " triangles its header counts), found " + std::to_string(size) + " bytes");
   }
+}
+
+/// Polygons of a mesh file, as phantasm's own OBJ and PLY readers read them (VTK's readers of
+/// these formats crash on faces that name missing vertices): points as float, as VTK keeps
+/// them, and faces of at least three indices into the points.
+struct Polygons {
+  std::vector<std::array<float, 3>> points;
+  std::vector<std::vector<vtkIdType>> faces;
+  std::vector<std::string> face_places; ///< where each face is in the file, for messages
+};
+
+/// A coordinate as float, as VTK's readers store points; beyond float's range, infinity (which
+/// the coordinate checks refuse), since converting such a double is undefined.
+float to_float(double x) {
+  if (std::isfinite(x) && std::abs(x) > std::numeric_limits<float>::max())
+    return std::copysign(std::numeric_limits<float>::infinity(), x);
+  return static_cast<float>(x);
+}
+
+/// A whole token as a number (strtod's syntax), or nothing.
+std::optional<double> parse_number(const std::string& token) {
+  if (token.empty()) return std::nullopt;
+  char* end = nullptr;
+  errno = 0;
+  const double value = std::strtod(token.c_str(), &end);
+  if (end != token.c_str() + token.size()) return std::nullopt;
+  return value;
+}
+
+/// Checks every face's indices against the points and makes the VTK polygons.
+vtkSmartPointer<vtkPolyData> to_poly_data(const std::filesystem::path& path, const Polygons& polygons) {
+  vtkNew<vtkPoints> points;
+  points->SetNumberOfPoints(static_cast<vtkIdType>(polygons.points.size()));
+  for (std::size_t i = 0; i < polygons.points.size(); ++i)
+    points->SetPoint(static_cast<vtkIdType>(i), polygons.points[i].data());
+  vtkNew<vtkCellArray> cells;
+  const auto count = static_cast<vtkIdType>(polygons.points.size());
+  for (std::size_t f = 0; f < polygons.faces.size(); ++f) {
+    for (const vtkIdType id : polygons.faces[f]) {
+      if (id < 0 || id >= count)
+        fail(path, polygons.face_places[f] + ": expected vertex indices that refer to the file's " +
+                       std::to_string(count) + " vertices, found one of vertex " + std::to_string(id) +
+                       " (counted from 0)");
+    }
+    cells->InsertNextCell(static_cast<vtkIdType>(polygons.faces[f].size()), polygons.faces[f].data());
+  }
+  vtkNew<vtkPolyData> data;
+  data->SetPoints(points);
+  data->SetPolys(cells);
+  return data;
+}
+
+/// Wavefront OBJ: `v x y z` vertices and `f` faces of 1-based indices (negative ones count back
+/// from the last vertex so far; `i/t/n` forms keep i); every other statement is skipped.
+vtkSmartPointer<vtkPolyData> read_obj(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  Polygons polygons;
+  std::string line;
+  for (std::size_t number = 1; std::getline(in, line); ++number) {
+    if (const auto comment = line.find('#'); comment != std::string::npos) line.resize(comment);
+    std::istringstream words(line);
+    std::string keyword, word;
+    if (!(words >> keyword)) continue;
+    const std::string place = "line " + std::to_string(number);
+    if (keyword == "v") {
+      std::array<float, 3> p{};
+      for (float& x : p) {
+        const std::optional<double> value = words >> word ? parse_number(word) : std::nullopt;
+        if (!value) fail(path, place + ": expected 'v x y z' (three numbers), found '" + line + "'");
+        x = to_float(*value);
+      }
+      polygons.points.push_back(p);
+    } else if (keyword == "f") {
+      std::vector<vtkIdType> face;
+      while (words >> word) {
+        const std::string index_text = word.substr(0, word.find('/'));
+        long long index = 0;
+        const auto [end, error] =
+            std::from_chars(index_text.data(), index_text.data() + index_text.size(), index);
+        if (error != std::errc() || end != index_text.data() + index_text.size() || index == 0 ||
+            index < -static_cast<long long>(polygons.points.size()) || index > (1ll << 40))
+          fail(path,
+               place + ": expected vertex indices from 1 (or back from -1, the last vertex so far), found '" +
+                   word + "'");
+        face.push_back(static_cast<vtkIdType>(
+            index < 0 ? static_cast<long long>(polygons.points.size()) + index : index - 1));
+      }
+      if (face.size() < 3)
+        fail(path, place + ": expected a face of at least 3 vertices, found " + std::to_string(face.size()));
+      polygons.faces.push_back(std::move(face));
+      polygons.face_places.push_back(place);
+    }
+  }
+  return to_poly_data(path, polygons);
+}
+
+/// The value types of PLY properties.
+enum class PlyType { int8, uint8, int16, uint16, int32, uint32, float32, float64 };
+
+std::optional<PlyType> ply_type(const std::string& name) {
+  static const std::map<std::string, PlyType> types = {
+      {"char", PlyType::int8},      {"int8", PlyType::int8},       {"uchar", PlyType::uint8},
+      {"uint8", PlyType::uint8},    {"short", PlyType::int16},     {"int16", PlyType::int16},
+      {"ushort", PlyType::uint16},  {"uint16", PlyType::uint16},   {"int", PlyType::int32},
+      {"int32", PlyType::int32},    {"uint", PlyType::uint32},     {"uint32", PlyType::uint32},
+      {"float", PlyType::float32},  {"float32", PlyType::float32}, {"double", PlyType::float64},
+      {"float64", PlyType::float64}};
+  const auto found = types.find(name);
+  if (found == types.end()) return std::nullopt;
+  return found->second;
+}
+
+std::size_t ply_size(PlyType type) {
+  switch (type) {
+  case PlyType::int8:
+  case PlyType::uint8: return 1;
+  case PlyType::int16:
+  case PlyType::uint16: return 2;
+  case PlyType::int32:
+  case PlyType::uint32:
+  case PlyType::float32: return 4;
+  case PlyType::float64: return 8;
+  }
+  return 1;
+}
+
+struct PlyProperty {
+  std::string name;
+  PlyType type = PlyType::float32;
+  bool list = false;
+  PlyType count_type = PlyType::uint8;
+};
+
+struct PlyElement {
+  std::string name;
+  std::uint64_t count = 0;
+  std::vector<PlyProperty> properties;
+};
+
+/// Reads the values of a PLY body: whitespace-separated numbers (ascii) or packed binary values.
+class PlyValues {
+public:
+  PlyValues(const std::filesystem::path& path, const std::string& bytes, std::size_t at, int format)
+      : m_path(path), m_bytes(bytes), m_at(at), m_format(format) {}
+
+  double next(PlyType type, const std::string& place) {
+    if (m_format == 0) {
+      while (m_at < m_bytes.size() && std::isspace(static_cast<unsigned char>(m_bytes[m_at])))
+        ++m_at;
+      const std::size_t start = m_at;
+      while (m_at < m_bytes.size() && !std::isspace(static_cast<unsigned char>(m_bytes[m_at])))
+        ++m_at;
+      const std::string token = m_bytes.substr(start, m_at - start);
+      const std::optional<double> value = parse_number(token);
+      if (!value)
+        fail(m_path, place + ": expected a number, found " +
+                         (token.empty() ? "the end of the file" : "'" + token + "'"));
+      return *value;
+    }
+    const std::size_t size = ply_size(type);
+    if (m_bytes.size() - m_at < size)
+      fail(m_path, place + ": expected more values, found the end of the file");
+    unsigned char raw[8];
+    std::memcpy(raw, m_bytes.data() + m_at, size);
+    m_at += size;
+    const std::uint16_t one = 1;
+    const bool native_little = *reinterpret_cast<const unsigned char*>(&one) == 1;
+    if ((m_format == 1) != native_little) std::reverse(raw, raw + size);
+    switch (type) {
+    case PlyType::int8: return static_cast<double>(static_cast<std::int8_t>(raw[0]));
+    case PlyType::uint8: return raw[0];
+    case PlyType::int16: return load<std::int16_t>(raw);
+    case PlyType::uint16: return load<std::uint16_t>(raw);
+    case PlyType::int32: return load<std::int32_t>(raw);
+    case PlyType::uint32: return load<std::uint32_t>(raw);
+    case PlyType::float32: return load<float>(raw);
+    case PlyType::float64: return load<double>(raw);
+    }
+    return 0.0;
+  }
+  std::size_t remaining() const { return m_bytes.size() - m_at; }
+
+private:
+  template <typename T>
+  static double load(const unsigned char* raw) {
+    T value;
+    std::memcpy(&value, raw, sizeof value);
+    return static_cast<double>(value);
+  }
+
+  const std::filesystem::path& m_path;
+  const std::string& m_bytes;
+  std::size_t m_at;
+  int m_format; ///< 0 ascii, 1 binary little endian, 2 binary big endian
+};
+
+/// Stanford PLY (ascii and binary): the x, y, z of element `vertex` and the index list
+/// `vertex_indices` (or `vertex_index`) of element `face`; other elements and properties are read
+/// past.
+vtkSmartPointer<vtkPolyData> read_ply(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::vector<PlyElement> elements;
+  int format = -1;
+  std::size_t at = 0;
+  for (std::size_t number = 1;; ++number) {
+    const std::size_t end = bytes.find('\n', at);
+    if (end == std::string::npos) fail(path, "expected a PLY header ending in 'end_header', found none");
+    std::string line = bytes.substr(at, end - at);
+    at = end + 1;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    const std::string place = "header line " + std::to_string(number);
+    std::istringstream words(line);
+    std::string keyword;
+    words >> keyword;
+    if (number == 1) {
+      if (line != "ply") fail(path, "expected 'ply' on the first line, found '" + line + "'");
+      continue;
+    }
+    if (keyword == "end_header") break;
+    if (keyword.empty() || keyword == "comment" || keyword == "obj_info") continue;
+    std::string a, b, c, d;
+    if (keyword == "format") {
+      words >> a >> b;
+      format = a == "ascii" ? 0 : a == "binary_little_endian" ? 1 : a == "binary_big_endian" ? 2 : -1;
+      if (format < 0 || b != "1.0")
+        fail(path, place + ": expected 'format ascii|binary_little_endian|binary_big_endian 1.0', found '" +
+                       line + "'");
+    } else if (keyword == "element") {
+      words >> a >> b;
+      std::uint64_t count = 0;
+      const auto [end_of_count, error] = std::from_chars(b.data(), b.data() + b.size(), count);
+      // Every element takes at least a byte: a count beyond the file's size is not a mesh.
+      if (a.empty() || error != std::errc() || end_of_count != b.data() + b.size() || count > bytes.size())
+        fail(path, place + ": expected 'element NAME COUNT' with a count the file can hold (at most " +
+                       std::to_string(bytes.size()) + "), found '" + line + "'");
+      elements.push_back(PlyElement{a, count, {}});
+    } else if (keyword == "property") {
+      if (elements.empty())
+        fail(path, place + ": expected 'element' before its properties, found '" + line + "'");
+      PlyProperty property;
+      words >> a;
+      if (a == "list") {
+        words >> b >> c >> d;
+        const auto count_type = ply_type(b), item_type = ply_type(c);
+        if (!count_type || !item_type || d.empty() || *count_type == PlyType::float32 ||
+            *count_type == PlyType::float64)
+          fail(path, place + ": expected 'property list COUNT_TYPE ITEM_TYPE NAME' (integer count), found '" +
+                         line + "'");
+        property = PlyProperty{d, *item_type, true, *count_type};
+      } else {
+        words >> b;
+        const auto type = ply_type(a);
+        if (!type || b.empty()) fail(path, place + ": expected 'property TYPE NAME', found '" + line + "'");
+        property = PlyProperty{b, *type, false, PlyType::uint8};
+      }
+      elements.back().properties.push_back(property);
+    } else {
+      fail(path,
+           place +
+               ": expected a PLY header keyword (format, element, property, comment, end_header), found '" +
+               keyword + "'");
+    }
+  }
+  if (format < 0) fail(path, "expected a 'format' line in the PLY header, found none");
+
+  Polygons polygons;
+  PlyValues values(path, bytes, at, format);
+  for (const PlyElement& element : elements) {
+    const bool vertex = element.name == "vertex", face = element.name == "face";
+    int xyz[3] = {-1, -1, -1};
+    int indices = -1;
+    for (std::size_t p = 0; p < element.properties.size(); ++p) {
+      const PlyProperty& property = element.properties[p];
+      for (int c = 0; c < 3 && vertex; ++c)
+        if (!property.list && property.name == std::string(1, static_cast<char>('x' + c)))
+          xyz[c] = static_cast<int>(p);
+      if (face && property.list && (property.name == "vertex_indices" || property.name == "vertex_index"))
+        indices = static_cast<int>(p);
+    }
+    if (vertex && element.count > 0 && (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0)) {
+      std::string found;
+      for (const PlyProperty& property : element.properties)
+        found += (found.empty() ? "" : ", ") + property.name;
+      fail(path,
+           "expected properties x, y and z of element 'vertex', found " + (found.empty() ? "none" : found));
+    }
+    if (face && element.count > 0 && indices < 0)
+      fail(path, "expected a list property 'vertex_indices' of element 'face', found none");
+    for (std::uint64_t e = 0; e < element.count; ++e) {
+      const std::string place = "element " + element.name + " " + std::to_string(e);
+      std::array<float, 3> point{};
+      std::vector<vtkIdType> polygon;
+      for (std::size_t p = 0; p < element.properties.size(); ++p) {
+        const PlyProperty& property = element.properties[p];
+        if (!property.list) {
+          const double value = values.next(property.type, place);
+          for (int c = 0; c < 3; ++c)
+            if (static_cast<int>(p) == xyz[c]) point[c] = to_float(value);
+          continue;
+        }
+        const double count = values.next(property.count_type, place);
+        if (!(count >= 0.0) || count != std::floor(count) || count > static_cast<double>(values.remaining()))
+          fail(path, place + ": expected a list length the file can hold, found " + format_number(count));
+        for (std::size_t i = 0; i < static_cast<std::size_t>(count); ++i) {
+          const double item = values.next(property.type, place);
+          if (static_cast<int>(p) != indices) continue;
+          if (!(item >= 0.0) || item != std::floor(item) || item > static_cast<double>(bytes.size()))
+            fail(path,
+                 place + ": expected vertex indices (whole numbers from 0), found " + format_number(item));
+          polygon.push_back(static_cast<vtkIdType>(item));
+        }
+      }
+      if (vertex) polygons.points.push_back(point);
+      if (face) {
+        if (polygon.size() < 3)
+          fail(path,
+               place + ": expected a face of at least 3 vertices, found " + std::to_string(polygon.size()));
+        polygons.faces.push_back(std::move(polygon));
+        polygons.face_places.push_back(place);
+      }
+    }
+  }
+  return to_poly_data(path, polygons);
 }
 
 /// Runs a VTK reader with VTK's own messages silenced (they would go to stderr as warnings
@@ -170,10 +501,10 @@ TriangleMesh read_triangle_mesh(const std::filesystem::path& path) {
     data = read_poly_data<vtkSTLReader>(path);
   } else if (extension == ".obj") {
     check_readable(path, what);
-    data = read_poly_data<vtkOBJReader>(path);
+    data = read_obj(path);
   } else if (extension == ".ply") {
     check_readable(path, what);
-    data = read_poly_data<vtkPLYReader>(path);
+    data = read_ply(path);
   } else if (extension == ".vtp") {
     check_readable(path, what);
     data = read_poly_data<vtkXMLPolyDataReader>(path);
@@ -199,11 +530,20 @@ TriangleMesh read_triangle_mesh(const std::filesystem::path& path) {
   mesh.faces.resize(cells->GetNumberOfCells(), 3);
   vtkNew<vtkIdList> ids;
   Eigen::Index f = 0;
+  const vtkIdType point_count = result->GetNumberOfPoints();
   for (cells->InitTraversal(); cells->GetNextCell(ids);) {
     if (ids->GetNumberOfIds() != 3)
       fail(path, "expected triangles, found a cell of " + std::to_string(ids->GetNumberOfIds()) + " points");
-    for (int k = 0; k < 3; ++k)
-      mesh.faces(f, k) = static_cast<int>(ids->GetId(k));
+    for (int k = 0; k < 3; ++k) {
+      // VTK's readers keep the indices as the file gives them (an OBJ face "f 1 2 9" of a file
+      // with three vertices).
+      const vtkIdType id = ids->GetId(k);
+      if (id < 0 || id >= point_count)
+        fail(path, "triangle " + std::to_string(f) + ": expected vertex indices that refer to the file's " +
+                       std::to_string(point_count) + " vertices, found index " + std::to_string(id) +
+                       " (from 0)");
+      mesh.faces(f, k) = static_cast<int>(id);
+    }
     ++f;
   }
   std::vector<int> merged(static_cast<std::size_t>(result->GetNumberOfPoints()), -1);

@@ -33,6 +33,11 @@ ASAN_OPTIONS=detect_leaks=0 "$build/fuzz/fuzz_seeds" "$seeds/nifti" "$seeds/mesh
 # seeds' size (the largest seed is a few kB), where the fuzzer explores faster.
 export ASAN_OPTIONS=abort_on_error=1:detect_leaks=1:allocator_may_return_null=0
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+export LSAN_OPTIONS=suppressions=$PWD/fuzz/lsan.supp
+# The targets write the files the readers take by path into folders of their own under TMPDIR.
+export TMPDIR=$PWD/$build/tmp
+rm -rf "$TMPDIR"
+mkdir -p "$TMPDIR"
 status=0
 summary=""
 for target in "${targets[@]}"; do
