@@ -191,51 +191,87 @@ void write_nifti_labels(const std::filesystem::path& path, const ImageGrid& grid
 
 namespace {
 
-/// Reads a NIfTI file holding `components` values per voxel: a 3-D volume for 1, a 5-D
-/// Refuses a float image with a NaN or infinite value. libnifti sets such values to 0 as it
-/// loads them (nifti_read_buffer), so a field or map of NaN would read as zeros without a word:
-/// the stored bytes are checked here, before the load.
-void require_finite_floats(const std::filesystem::path& path, const nifti_image& header) {
-  if (header.datatype != DT_FLOAT32 && header.datatype != DT_FLOAT64) return;
-  const znzFile file = znzopen(header.iname, "rb", nifti_is_gzfile(header.iname));
+/// Checks the voxels a header describes before libnifti allocates and loads them: that their
+/// count is what the dimensions multiply to, and that the file holds their bytes (a header of a
+/// few hundred bytes can claim 10^12 voxels, which libnifti would allocate before finding the file
+/// short). Refuses a float image with a NaN or infinite value: libnifti sets such values to 0 as
+/// it loads them (nifti_read_buffer), so a field or map of NaN would read as zeros without a word.
+/// An uncompressed file's size tells whether it holds the bytes; a gzipped file, and any float
+/// image, is read through once.
+void check_voxel_data(const std::filesystem::path& path, const nifti_image& header) {
+  double product = 1.0;
+  std::string dims;
+  for (int d = 1; d <= std::clamp<int>(static_cast<int>(header.dim[0]), 0, 7); ++d) {
+    product *= static_cast<double>(header.dim[d]);
+    dims += (d > 1 ? " x " : "") + std::to_string(header.dim[d]);
+  }
+  // Whole numbers up to 2^53 are exact in a double; no file of this machine holds more voxels.
+  if (!(product >= 1.0) || product > 9007199254740992.0 || static_cast<double>(header.nvox) != product ||
+      header.nbyper <= 0)
+    fail(path, "expected positive dimensions whose product is the voxel count, found dimensions " + dims);
+  for (const std::int64_t n : {header.nx, header.ny, header.nz}) {
+    if (n > std::numeric_limits<int>::max())
+      fail(path, "expected at most 2^31 - 1 voxels along an axis, found dimensions " + dims);
+  }
+  const std::uint64_t needed =
+      static_cast<std::uint64_t>(header.nvox) * static_cast<std::uint64_t>(header.nbyper);
+  const auto short_file = [&](std::uint64_t found) {
+    fail(path, "expected " + std::to_string(needed) + " bytes of voxels (dimensions " + dims + ", " +
+                   std::to_string(header.nbyper) + " bytes each) from byte " +
+                   std::to_string(header.iname_offset) + ", found " + std::to_string(found));
+  };
+  const bool gzip = nifti_is_gzfile(header.iname) != 0;
+  const bool floats = header.datatype == DT_FLOAT32 || header.datatype == DT_FLOAT64;
+  if (!gzip) {
+    std::error_code error;
+    const std::uintmax_t size = std::filesystem::file_size(header.iname, error);
+    const auto offset = static_cast<std::uint64_t>(header.iname_offset);
+    if (!error && size < offset + needed) short_file(size > offset ? size - offset : 0);
+    if (!floats) return;
+  }
+  const znzFile file = znzopen(header.iname, "rb", gzip);
   if (znz_isnull(file)) return; // the load below says what is wrong
   znzFile handle = file;
   if (znzseek(handle, static_cast<znz_off_t>(header.iname_offset), SEEK_SET) < 0) {
     znzclose(handle);
-    return;
+    short_file(0);
   }
-  const std::size_t bytes_per_value = header.datatype == DT_FLOAT32 ? 4 : 8;
+  const std::size_t bytes_per_value = header.datatype == DT_FLOAT64 ? 8 : 4;
   const bool swap = header.byteorder != nifti_short_order();
   std::vector<unsigned char> chunk(std::size_t{1} << 20);
-  std::int64_t index = 0;
-  const std::int64_t count = header.nvox;
-  while (index < count) {
-    const std::size_t values =
-        static_cast<std::size_t>(std::min<std::int64_t>(count - index, chunk.size() / bytes_per_value));
-    const std::size_t read = znzread(chunk.data(), 1, values * bytes_per_value, handle);
-    if (read != values * bytes_per_value) break; // short file: the load below refuses it
-    for (std::size_t v = 0; v < values; ++v, ++index) {
-      unsigned char* at = chunk.data() + v * bytes_per_value;
-      if (swap) std::reverse(at, at + bytes_per_value);
-      double value = 0.0;
-      if (bytes_per_value == 4) {
-        float f = 0.0f;
-        std::memcpy(&f, at, 4);
-        value = f;
-      } else {
-        std::memcpy(&value, at, 8);
-      }
-      if (!std::isfinite(value)) {
-        znzclose(handle);
-        fail(path, "expected finite values, found " + std::string(std::isnan(value) ? "NaN" : "infinity") +
-                       " at value " + std::to_string(index) + " of " + std::to_string(count) +
-                       " (i fastest, then j, k, components)");
+  std::uint64_t done = 0;
+  while (done < needed) {
+    const auto want = static_cast<std::size_t>(std::min<std::uint64_t>(needed - done, chunk.size()));
+    const std::size_t read = znzread(chunk.data(), 1, want, handle);
+    if (floats) {
+      // Chunks hold whole values (their size and the offset into the voxels are multiples of 8).
+      for (std::size_t b = 0; b + bytes_per_value <= read; b += bytes_per_value) {
+        unsigned char* at = chunk.data() + b;
+        if (swap) std::reverse(at, at + bytes_per_value);
+        double value = 0.0;
+        if (bytes_per_value == 4) {
+          float f = 0.0f;
+          std::memcpy(&f, at, 4);
+          value = f;
+        } else {
+          std::memcpy(&value, at, 8);
+        }
+        if (!std::isfinite(value)) {
+          znzclose(handle);
+          fail(path, "expected finite values, found " + std::string(std::isnan(value) ? "NaN" : "infinity") +
+                         " at value " + std::to_string((done + b) / bytes_per_value) + " of " +
+                         std::to_string(header.nvox) + " (i fastest, then j, k, components)");
+        }
       }
     }
+    done += read;
+    if (read < want) break;
   }
   znzclose(handle);
+  if (done < needed) short_file(done);
 }
 
+/// Reads a NIfTI file holding `components` values per voxel: a 3-D volume for 1, a 5-D
 /// (X, Y, Z, 1, components) image in the ITK vector convention otherwise.
 NiftiVolume read_volume(const std::filesystem::path& path, int components) {
   std::error_code error;
@@ -251,7 +287,7 @@ NiftiVolume read_volume(const std::filesystem::path& path, int components) {
       fail(
           path,
           "expected the voxels at an offset (vox_offset) within the file, found an offset beyond 2^31 bytes");
-    if (header) require_finite_floats(path, *header);
+    if (header) check_voxel_data(path, *header);
   }
   const std::unique_ptr<nifti_image, void (*)(nifti_image*)> image(nifti_image_read(path.c_str(), 1),
                                                                    nifti_image_free);

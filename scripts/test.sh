@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds, and runs the whole test suite optimized, then the tests
+# Installs what is missing, builds, and runs the whole test suite optimized, then the fuzz targets
+# for 20 s each (scripts/fuzz.sh: clang, libFuzzer), then the tests
 # labelled "fast" again with AddressSanitizer + UndefinedBehaviorSanitizer. The fast tests cover
 # the libraries on small inputs; the slow and heavy tests
 # (whole runs of the command, larger models, sweeps) would take most of the CI budget under the
@@ -13,6 +14,9 @@ jobs=$(nproc)
 echo "== Release build and tests"
 bash scripts/build.sh release
 ctest --test-dir build/release --output-on-failure --parallel "$jobs" "$@"
+
+echo "== Fuzzing: scene and sweep parsers, NIfTI and mesh readers (clang, libFuzzer, ASan + UBSan)"
+bash scripts/fuzz.sh 20
 
 echo "== ASan + UBSan build and tests"
 bash scripts/build.sh asan

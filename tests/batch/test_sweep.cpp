@@ -127,3 +127,18 @@ TEST(Sweep, MistakesAreNamedWithTheirLine) {
             }).find("jobs: expected one of phantasm_sweep, name, base_scene, seed, repeats, vary"),
             std::string::npos);
 }
+
+// yaml-cpp 0.7 reads a ',' where a document starts as endless empty documents; the sweep and its
+// base scene are refused at the comma instead (found by fuzz/fuzz_sweep.cpp).
+TEST(Sweep, AStrayCommaWhereTheSweepStartsIsASyntaxError) {
+  const fs::path folder = fresh_folder("sweep-stray-comma");
+  write_text_file(folder / "sweep.yaml", "# sweep\n, phantasm_sweep: 1\n");
+  EXPECT_EQ(input_error_message([&] { load_sweep(folder / "sweep.yaml"); }),
+            (folder / "sweep.yaml").string() +
+                ":2:1: sweep: expected valid YAML, found unexpected ',' where a value or a key should start");
+  write_text_file(folder / "base.yaml", ", phantasm: 1\n");
+  write_text_file(folder / "sweep.yaml", "phantasm_sweep: 1\nbase_scene: base.yaml\nvary:\n  seed: [1, 2]\n");
+  EXPECT_EQ(input_error_message([&] { load_sweep(folder / "sweep.yaml"); }),
+            (folder / "base.yaml").string() +
+                ":1:1: expected valid YAML, found unexpected ',' where a value or a key should start");
+}

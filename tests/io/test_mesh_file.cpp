@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <sstream>
 
 using namespace phantasm;
@@ -174,4 +175,85 @@ for name in sys.argv[1:]:
             "box.vtu [('Points_frame', 'RAS'), ('Points_units', 'mm'), ('SPACE', 'RAS'), "
             "('displacement_mm_frame', 'RAS'), ('displacement_mm_units', 'mm')]\nTrue\n"
             "sphere.vtp [('Points_frame', 'RAS'), ('Points_units', 'mm'), ('SPACE', 'RAS')]\nTrue\n");
+}
+
+// Found by fuzz/fuzz_mesh.cpp: faces naming missing vertices (VTK's OBJ and PLY readers crashed on
+// them), a binary STL whose count asks for more triangles than the file holds (VTK allocated
+// them all first), and PLY headers that promise more than the file holds.
+TEST(MeshFile, FacesAndCountsBeyondTheFileAreRefusedWithTheirPlace) {
+  const fs::path folder = fresh_folder("mesh-hostile");
+  write_text_file(folder / "far.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 9\n");
+  EXPECT_EQ(
+      input_error_message([&] { read_triangle_mesh(folder / "far.obj"); }),
+      (folder / "far.obj").string() +
+          ": line 5: expected vertex indices that refer to the file's 3 vertices, found one of vertex 8 "
+          "(counted from 0)");
+  write_text_file(folder / "zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n");
+  EXPECT_NE(
+      input_error_message([&] {
+        read_triangle_mesh(folder / "zero.obj");
+      }).find("line 4: expected vertex indices from 1 (or back from -1, the last vertex so far), found '0'"),
+      std::string::npos);
+  write_text_file(folder / "back.obj",
+                  "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf -4 -2 -3\nf -4 -3 -1\nf -3 -2 -1\nf -4 -1 -2\n");
+  EXPECT_EQ(read_triangle_mesh(folder / "back.obj").face_count(), 4);
+
+  const std::string header =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  write_text_file(folder / "far.ply", header + "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n");
+  EXPECT_EQ(input_error_message([&] { read_triangle_mesh(folder / "far.ply"); }),
+            (folder / "far.ply").string() + ": element face 0: expected vertex indices that refer to the "
+                                            "file's 3 vertices, found one of vertex 7 "
+                                            "(counted from 0)");
+  write_text_file(folder / "short.ply", header + "0 0 0\n1 0 0\n");
+  EXPECT_EQ(input_error_message([&] { read_triangle_mesh(folder / "short.ply"); }),
+            (folder / "short.ply").string() +
+                ": element vertex 2: expected a number, found the end of the file");
+  write_text_file(folder / "huge.ply", "ply\nformat ascii 1.0\nelement vertex 99999999999\nend_header\n");
+  EXPECT_NE(input_error_message([&] {
+              read_triangle_mesh(folder / "huge.ply");
+            }).find("header line 3: expected 'element NAME COUNT' with a count the file can hold"),
+            std::string::npos);
+
+  // A binary PLY, big-endian, with an extra property and element read past.
+  std::string binary =
+      "ply\nformat binary_big_endian 1.0\nelement vertex 4\nproperty double x\nproperty double y\n"
+      "property double z\nproperty uchar flag\nelement face 4\nproperty list uchar int vertex_indices\n"
+      "element note 1\nproperty short n\nend_header\n";
+  const auto put = [&binary](const void* value, std::size_t size) {
+    const auto* bytes = static_cast<const char*>(value);
+    for (std::size_t b = size; b-- > 0;) // little-endian machine: reverse for big-endian
+      binary += bytes[b];
+  };
+  const double corners[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (const auto& corner : corners) {
+    for (const double x : corner)
+      put(&x, 8);
+    binary += '\1';
+  }
+  const int faces[4][3] = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
+  for (const auto& face : faces) {
+    binary += '\3';
+    for (const int v : face)
+      put(&v, 4);
+  }
+  binary += std::string("\0\7", 2);
+  write_text_file(folder / "tet.ply", binary);
+  const TriangleMesh tet = read_triangle_mesh(folder / "tet.ply");
+  EXPECT_EQ(tet.vertex_count(), 4);
+  EXPECT_EQ(tet.face_count(), 4);
+  EXPECT_NO_THROW(check_closed_manifold(tet, "tet.ply"));
+  EXPECT_NEAR(enclosed_volume(tet), 1.0 / 6.0, 1e-12);
+
+  std::string stl(80, '\1'); // not text: read as binary
+  const std::uint32_t count = 1000000000;
+  stl.append(reinterpret_cast<const char*>(&count), 4);
+  stl.append(100, '\0');
+  write_text_file(folder / "huge.stl", stl);
+  EXPECT_EQ(
+      input_error_message([&] { read_triangle_mesh(folder / "huge.stl"); }),
+      (folder / "huge.stl").string() +
+          ": expected a binary STL file of 84 + 50 bytes per triangle (50000000084 bytes for the 1000000000 "
+          "triangles its header counts), found 184 bytes");
 }

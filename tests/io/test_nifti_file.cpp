@@ -8,6 +8,9 @@
 
 #include <Eigen/Geometry>
 
+#include <fstream>
+#include <iterator>
+
 using namespace phantasm;
 using phantasm::testing::fresh_folder;
 using phantasm::testing::input_error_message;
@@ -146,4 +149,24 @@ print('ok')
       {PHANTASM_PYTHON, (folder / "check.py").string(), folder.string(), expected_affine.str()});
   EXPECT_EQ(result.exit_code, 0) << result.out << result.err;
   EXPECT_EQ(result.out, "ok\n") << result.err;
+}
+
+// Found by fuzz/fuzz_nifti.cpp: a vox_offset beyond 2^31 became a negative offset in libnifti,
+// which then read an uncompressed file's voxels from its end (and refused the file gzipped).
+TEST(NiftiFile, AVoxelOffsetBeyondTheFileIsRefusedPlainAndGzipped) {
+  const fs::path folder = fresh_folder("nifti-offset");
+  ImageGrid grid;
+  grid.dims = Eigen::Vector3i(4, 4, 4);
+  write_nifti(folder / "image.nii", grid, std::vector<float>(64, 1.0f));
+  std::string bytes;
+  {
+    std::ifstream in(folder / "image.nii", std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const float offset = 1.5e16f;
+  bytes.replace(108, 4, reinterpret_cast<const char*>(&offset), 4); // vox_offset
+  phantasm::testing::write_text_file(folder / "far.nii", bytes);
+  EXPECT_EQ(input_error_message([&] { read_nifti(folder / "far.nii"); }),
+            (folder / "far.nii").string() + ": expected the voxels at an offset (vox_offset) within the "
+                                            "file, found an offset beyond 2^31 bytes");
 }
