@@ -4,6 +4,7 @@
 #include "io/nifti_file.hpp"
 
 #include "core/error.hpp"
+#include "core/format.hpp"
 #include "io/atomic_file.hpp"
 
 #include <nifti/nifti2_io.h>
@@ -191,6 +192,43 @@ void write_nifti_labels(const std::filesystem::path& path, const ImageGrid& grid
 
 namespace {
 
+/// Refuses a vox_offset (the byte where the voxels start, as the header gives it) that is not a
+/// whole number below 2^31. libnifti converts NIfTI-1's float offset to an int: beyond its range
+/// the offset became negative, and libnifti then read an uncompressed file's voxels from the end
+/// of the file, or the header bytes after replacing it by 348, and refused the file gzipped.
+void check_voxel_offset(const std::filesystem::path& path) {
+  const znzFile file = znzopen(path.c_str(), "rb", nifti_is_gzfile(path.c_str()));
+  if (znz_isnull(file)) return; // libnifti says what is wrong
+  znzFile handle = file;
+  unsigned char header[176] = {};
+  const std::size_t read = znzread(header, 1, sizeof header, handle);
+  znzclose(handle);
+  if (read < sizeof header) return;
+  const auto swapped = [](unsigned char* at, std::size_t size, bool swap) {
+    if (swap) std::reverse(at, at + size);
+    return at;
+  };
+  std::int32_t size = 0;
+  std::memcpy(&size, header, 4);
+  const bool swap = size != 348 && size != 540;
+  std::memcpy(&size, swapped(header, 4, swap), 4);
+  double offset = 0.0;
+  if (size == 348) {
+    float value = 0.0f;
+    std::memcpy(&value, swapped(header + 108, 4, swap), 4);
+    offset = value;
+  } else if (size == 540) {
+    std::int64_t value = 0;
+    std::memcpy(&value, swapped(header + 168, 8, swap), 8);
+    offset = static_cast<double>(value);
+  } else {
+    return; // not a NIfTI header: libnifti refuses it
+  }
+  if (!(offset >= 0.0) || offset >= 2147483648.0 || offset != std::floor(offset))
+    fail(path, "expected the voxels at a whole byte offset (vox_offset) below 2^31, found " +
+                   format_number(offset));
+}
+
 /// Checks the voxels a header describes before libnifti allocates and loads them: that their
 /// count is what the dimensions multiply to, and that the file holds their bytes (a header of a
 /// few hundred bytes can claim 10^12 voxels, which libnifti would allocate before finding the file
@@ -280,13 +318,7 @@ NiftiVolume read_volume(const std::filesystem::path& path, int components) {
   {
     const std::unique_ptr<nifti_image, void (*)(nifti_image*)> header(nifti_image_read(path.c_str(), 0),
                                                                       nifti_image_free);
-    // A negative offset is how libnifti stores a vox_offset beyond 2^31 (an int of a float):
-    // uncompressed, it then takes the voxels from the end of the file, and compressed it refuses
-    // the file, so the same file would read differently gzipped.
-    if (header && header->iname_offset < 0)
-      fail(
-          path,
-          "expected the voxels at an offset (vox_offset) within the file, found an offset beyond 2^31 bytes");
+    check_voxel_offset(path);
     if (header) check_voxel_data(path, *header);
   }
   const std::unique_ptr<nifti_image, void (*)(nifti_image*)> image(nifti_image_read(path.c_str(), 1),
