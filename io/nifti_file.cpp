@@ -17,6 +17,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
 namespace phantasm {
@@ -200,7 +201,7 @@ void check_voxel_offset(const std::filesystem::path& path) {
   const znzFile file = znzopen(path.c_str(), "rb", nifti_is_gzfile(path.c_str()));
   if (znz_isnull(file)) return; // libnifti says what is wrong
   znzFile handle = file;
-  unsigned char header[176] = {};
+  unsigned char header[348] = {};
   const std::size_t read = znzread(header, 1, sizeof header, handle);
   znzclose(handle);
   if (read < sizeof header) return;
@@ -212,6 +213,13 @@ void check_voxel_offset(const std::filesystem::path& path) {
   std::memcpy(&size, header, 4);
   const bool swap = size != 348 && size != 540;
   std::memcpy(&size, swapped(header, 4, swap), 4);
+  // The magic tells NIfTI from ANALYZE 7.5, whose header has the same size: libnifti reads a
+  // .nii file without it as NIfTI-1 anyway, taking the voxels from vox_offset (often 0, the header).
+  const bool nifti1 = std::memcmp(header + 344, "n+1", 4) == 0 || std::memcmp(header + 344, "ni1", 4) == 0;
+  const bool nifti2 = std::memcmp(header + 4, "n+2", 4) == 0 || std::memcmp(header + 4, "ni2", 4) == 0;
+  if ((size == 348 && !nifti1) || (size == 540 && !nifti2))
+    fail(path, "expected a NIfTI-1 or NIfTI-2 header (magic \"n+1\" or \"n+2\"), found a header of " +
+                   std::to_string(size) + " bytes without it (ANALYZE 7.5?)");
   double offset = 0.0;
   if (size == 348) {
     float value = 0.0f;
@@ -278,6 +286,9 @@ void check_voxel_data(const std::filesystem::path& path, const nifti_image& head
   const bool swap = header.byteorder != nifti_short_order();
   std::vector<unsigned char> chunk(std::size_t{1} << 20);
   std::uint64_t done = 0;
+  // The first value that is not finite, reported once the file is known to hold every voxel (a
+  // short file is named as such, compressed or not).
+  std::optional<std::pair<std::uint64_t, double>> first_bad;
   while (done < needed) {
     const auto want = static_cast<std::size_t>(std::min<std::uint64_t>(needed - done, chunk.size()));
     const std::size_t read = znzread(chunk.data(), 1, want, handle);
@@ -294,12 +305,7 @@ void check_voxel_data(const std::filesystem::path& path, const nifti_image& head
         } else {
           std::memcpy(&value, at, 8);
         }
-        if (!std::isfinite(value)) {
-          znzclose(handle);
-          fail(path, "expected finite values, found " + std::string(std::isnan(value) ? "NaN" : "infinity") +
-                         " at value " + std::to_string((done + b) / bytes_per_value) + " of " +
-                         std::to_string(header.nvox) + " (i fastest, then j, k, components)");
-        }
+        if (!std::isfinite(value) && !first_bad) first_bad = std::pair{(done + b) / bytes_per_value, value};
       }
     }
     done += read;
@@ -307,6 +313,12 @@ void check_voxel_data(const std::filesystem::path& path, const nifti_image& head
   }
   znzclose(handle);
   if (done < needed) short_file(done);
+  if (first_bad) {
+    fail(path, "expected finite values, found " +
+                   std::string(std::isnan(first_bad->second) ? "NaN" : "infinity") + " at value " +
+                   std::to_string(first_bad->first) + " of " + std::to_string(header.nvox) +
+                   " (i fastest, then j, k, components)");
+  }
 }
 
 /// Reads a NIfTI file holding `components` values per voxel: a 3-D volume for 1, a 5-D
@@ -325,10 +337,6 @@ NiftiVolume read_volume(const std::filesystem::path& path, int components) {
                                                                    nifti_image_free);
   if (!image || !image->data)
     fail(path, "expected a NIfTI-1 or NIfTI-2 image, found a file libnifti cannot read");
-  // libnifti also reads ANALYZE 7.5 headers (no "n+1" or "n+2" magic): they have no orientation,
-  // and inside a .nii file libnifti reads their voxels from different offsets plain and gzipped.
-  if (image->nifti_type == NIFTI_FTYPE_ANALYZE)
-    fail(path, "expected a NIfTI-1 or NIfTI-2 image (magic \"n+1\" or \"n+2\"), found an ANALYZE 7.5 header");
   if (components == 1) {
     for (int d = 4; d <= 7; ++d) {
       if (image->dim[0] >= d && image->dim[d] > 1) {
