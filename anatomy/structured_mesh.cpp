@@ -61,6 +61,14 @@ TetMesh structured_box(const Eigen::Vector3d& size_mm, const Eigen::Vector3i& ce
   return mesh;
 }
 
+std::vector<std::vector<int>> structured_box_cells(const Eigen::Vector3i& cells) {
+  std::vector<std::vector<int>> groups(static_cast<std::size_t>(cells.prod()));
+  for (std::size_t c = 0; c < groups.size(); ++c)
+    for (int k = 0; k < 5; ++k)
+      groups[c].push_back(static_cast<int>(5 * c) + k);
+  return groups;
+}
+
 TriangleMesh structured_sheet(const Eigen::Vector2d& size_mm, const Eigen::Vector2i& cells,
                               const Eigen::Matrix3d& rotation, const Eigen::Vector3d& center_mm) {
   const int nx = cells.x(), ny = cells.y();

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <set>
 #include <utility>
 
 namespace phantasm {
@@ -134,6 +135,127 @@ double mean_edge_length(const TetMesh& mesh) {
   for (const auto& [a, b] : edges)
     sum += (mesh.vertices.row(a) - mesh.vertices.row(b)).norm();
   return edges.empty() ? 0.0 : sum / static_cast<double>(edges.size());
+}
+
+std::vector<std::vector<int>> group_tets(const TetMesh& mesh, int target_size,
+                                         const std::vector<int>& labels) {
+  const auto n = static_cast<std::size_t>(mesh.tets.rows());
+  target_size = std::max(1, target_size);
+  std::vector<int> label(n, 0);
+  if (labels.size() == n) {
+    label = labels;
+  } else if (static_cast<std::size_t>(mesh.subdomains.size()) == n) {
+    for (std::size_t t = 0; t < n; ++t)
+      label[t] = mesh.subdomains[static_cast<Eigen::Index>(t)];
+  }
+  // Face neighbours of the same label (at most 4 per tet).
+  std::vector<std::array<int, 4>> neighbours(n, {-1, -1, -1, -1});
+  {
+    std::vector<std::pair<std::array<int, 3>, int>> faces;
+    faces.reserve(4 * n);
+    for (std::size_t t = 0; t < n; ++t) {
+      for (int skip = 0; skip < 4; ++skip) {
+        std::array<int, 3> f{};
+        for (int k = 0, j = 0; k < 4; ++k)
+          if (k != skip) f[static_cast<std::size_t>(j++)] = mesh.tets(static_cast<Eigen::Index>(t), k);
+        std::sort(f.begin(), f.end());
+        faces.emplace_back(f, static_cast<int>(t));
+      }
+    }
+    std::sort(faces.begin(), faces.end());
+    std::vector<int> used(n, 0);
+    for (std::size_t i = 0; i + 1 < faces.size(); ++i) {
+      if (faces[i].first != faces[i + 1].first) continue;
+      const int a = faces[i].second, b = faces[i + 1].second;
+      if (label[static_cast<std::size_t>(a)] != label[static_cast<std::size_t>(b)]) continue;
+      neighbours[static_cast<std::size_t>(a)][static_cast<std::size_t>(used[static_cast<std::size_t>(a)]++)] =
+          b;
+      neighbours[static_cast<std::size_t>(b)][static_cast<std::size_t>(used[static_cast<std::size_t>(b)]++)] =
+          a;
+    }
+  }
+  std::vector<Eigen::Vector3d> centroid(n, Eigen::Vector3d::Zero());
+  for (std::size_t t = 0; t < n; ++t)
+    for (int k = 0; k < 4; ++k)
+      centroid[t] += 0.25 * mesh.vertices.row(mesh.tets(static_cast<Eigen::Index>(t), k)).transpose();
+  std::vector<int> group_of(n, -1);
+  // Seeds: the ungrouped tet with the fewest ungrouped neighbours, then the smallest index.
+  std::vector<int> free_neighbours(n, 0);
+  std::set<std::pair<int, int>> seeds;
+  for (std::size_t t = 0; t < n; ++t) {
+    for (int u : neighbours[t])
+      if (u >= 0) ++free_neighbours[t];
+    seeds.emplace(free_neighbours[t], static_cast<int>(t));
+  }
+  auto take = [&](int t, int group) {
+    seeds.erase({free_neighbours[static_cast<std::size_t>(t)], t});
+    group_of[static_cast<std::size_t>(t)] = group;
+    for (int u : neighbours[static_cast<std::size_t>(t)]) {
+      if (u < 0 || group_of[static_cast<std::size_t>(u)] >= 0) continue;
+      seeds.erase({free_neighbours[static_cast<std::size_t>(u)], u});
+      seeds.emplace(--free_neighbours[static_cast<std::size_t>(u)], u);
+    }
+  };
+  std::vector<std::vector<int>> groups;
+  while (!seeds.empty()) {
+    const int group = static_cast<int>(groups.size());
+    std::vector<int> members = {seeds.begin()->second};
+    take(members[0], group);
+    Eigen::Vector3d center = centroid[static_cast<std::size_t>(members[0])];
+    while (static_cast<int>(members.size()) < target_size) {
+      // The best ungrouped neighbour: most faces shared with the group, then closest, then first.
+      int best = -1, best_shared = 0;
+      double best_distance = 0.0;
+      for (int m : members) {
+        for (int u : neighbours[static_cast<std::size_t>(m)]) {
+          if (u < 0 || group_of[static_cast<std::size_t>(u)] >= 0) continue;
+          int shared = 0;
+          for (int w : neighbours[static_cast<std::size_t>(u)])
+            if (w >= 0 && group_of[static_cast<std::size_t>(w)] == group) ++shared;
+          const double distance = (centroid[static_cast<std::size_t>(u)] - center).squaredNorm();
+          if (best < 0 || shared > best_shared || (shared == best_shared && distance < best_distance) ||
+              (shared == best_shared && distance == best_distance && u < best)) {
+            best = u;
+            best_shared = shared;
+            best_distance = distance;
+          }
+        }
+      }
+      if (best < 0) break;
+      take(best, group);
+      members.push_back(best);
+      center = (center * static_cast<double>(members.size() - 1) + centroid[static_cast<std::size_t>(best)]) /
+               static_cast<double>(members.size());
+    }
+    groups.push_back(std::move(members));
+  }
+  // Small leftovers join the smallest neighbouring group (of the same label, by adjacency).
+  const auto small = static_cast<std::size_t>(std::max(1, target_size / 2));
+  for (std::size_t g = 0; g < groups.size(); ++g) {
+    if (groups[g].empty() || groups[g].size() >= small) continue;
+    int into = -1;
+    for (int t : groups[g])
+      for (int u : neighbours[static_cast<std::size_t>(t)]) {
+        if (u < 0) continue;
+        const int h = group_of[static_cast<std::size_t>(u)];
+        if (h == static_cast<int>(g)) continue;
+        if (into < 0 ||
+            groups[static_cast<std::size_t>(h)].size() < groups[static_cast<std::size_t>(into)].size() ||
+            (groups[static_cast<std::size_t>(h)].size() == groups[static_cast<std::size_t>(into)].size() &&
+             h < into))
+          into = h;
+      }
+    if (into < 0) continue; // an isolated piece: it stays a group of its own
+    for (int t : groups[g]) {
+      group_of[static_cast<std::size_t>(t)] = into;
+      groups[static_cast<std::size_t>(into)].push_back(t);
+    }
+    groups[g].clear();
+  }
+  groups.erase(
+      std::remove_if(groups.begin(), groups.end(), [](const std::vector<int>& g) { return g.empty(); }),
+      groups.end());
+  return groups;
 }
 
 TriangleMesh boundary_surface(const TetMesh& mesh, Eigen::VectorXi* tet_vertex_of_surface_vertex) {

@@ -83,6 +83,21 @@ double min_dihedral_angle_deg(const TetMesh& mesh);
 /// Mean length of the tets' edges (each edge once), mm.
 double mean_edge_length(const TetMesh& mesh);
 
+/// A deterministic partition of the tets into small face-connected groups of about
+/// `target_size` tets (the groups whose volume-averaged deformation gradient carries one bulk
+/// constraint each, sim/vertex_star_volumes.hpp): greedy region growing over face adjacency.
+/// Seeds are taken in order of fewest ungrouped face neighbours (then tet index), so groups
+/// start at the boundary of what is left and few tets are left stranded; a group grows by the
+/// ungrouped neighbour sharing the most faces with it (then the closest centroid, then the
+/// smallest index). Groups left with fewer than target_size / 2 tets join the smallest
+/// face-adjacent group of the same label. Tets of different labels (mesh.subdomains when
+/// `labels` is empty and the mesh has them: one material per group) are never grouped together.
+/// @param target_size tets per group aimed at (>= 1)
+/// @param labels per tet, or empty
+/// @return groups of tet indices (each tet in exactly one), in order of creation
+std::vector<std::vector<int>> group_tets(const TetMesh& mesh, int target_size,
+                                         const std::vector<int>& labels = {});
+
 /// The boundary as a closed triangle mesh of its own (the patch base mesh), and for each of its
 /// vertices the index of the tet-mesh vertex it is, so that both move together.
 TriangleMesh boundary_surface(const TetMesh& mesh, Eigen::VectorXi* tet_vertex_of_surface_vertex);

@@ -1,17 +1,29 @@
-// Locking of the bulk term as nu -> 1/2 (#16, docs/deformation.md): the cantilever 20 x 20 x
-// 100 mm (E = 250 kPa, 1000 kg/m^3, gravity, z-min face held) on n x n x 5n cells of 5 tets,
-// Newton to 1e-9 N, with the bulk term per tet, per vertex star and per hexahedral cell (its 5
-// tets); prints the mean downward deflection of the free face at nu = 0.45, 0.49, 0.499.
-// Usage: volume_locking [n] (default 4)
+// Locking of the bulk term as nu -> 1/2 (#16, docs/deformation.md).
+//
+// volume_locking [N]: the cantilever 20 x 20 x 100 mm (E = 250 kPa, 1000 kg/m^3, gravity, z-min
+//   face held; sim/cantilever.hpp) on N x N x 5N structured cells (default 4), bulk term per tet,
+//   per vertex star and per hexahedral cell (its 5 tets); Newton to 1e-9 N at nu = 0.45, 0.49,
+//   0.499, and local/global (scene defaults, 2000 iterations at most) at 0.45 and 0.499.
+// volume_locking cgal SIZE [GROUP ...]: the same cantilever on a CGAL tet mesh of SIZE mm, per
+//   tet and in groups of GROUP tets (default 5; group_tets).
+// volume_locking head [SCENE]: the head's deformation (data-synthetic/head.yaml) with the brain's
+//   Poisson ratio at 0.45, 0.49, 0.499 and each formulation: the bodies' volume change.
+// Tables go to stdout (Markdown).
 
-#include "anatomy/structured_mesh.hpp"
-#include "sim/elastic_model.hpp"
+#include "anatomy/phantom.hpp"
+#include "anatomy/tet_mesh.hpp"
+#include "core/format.hpp"
+#include "scene/scene.hpp"
+#include "sim/cantilever.hpp"
+#include "sim/deform_phantom.hpp"
 #include "sim/local_global.hpp"
 #include "sim/newton.hpp"
-#include "sim/vertex_star_volumes.hpp"
 
+#include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <string>
 #include <unistd.h>
 #include <vector>
 
@@ -19,90 +31,184 @@ using namespace phantasm;
 
 namespace {
 
-/// Local/global at nu = 0.45 with the scene defaults (relative residual 1e-3 of a vertex's
-/// weight, at most 2000 iterations): iterations, converged, tip (mm).
-struct LocalGlobalRun {
-  int iterations = 0;
-  bool converged = false;
-  double tip_mm = 0.0;
-};
+std::FILE* table = stdout;
 
-double tip_mm(int n, double nu, VolumeFormulation formulation, LocalGlobalRun* local_global = nullptr) {
-  const Eigen::Vector3d size(20, 20, 100);
-  const TetMesh mesh = structured_box(size, {n, n, 5 * n}, Eigen::Matrix3d::Identity(), 0.5 * size);
-  ElasticModel model;
-  add_body(model, 1e-3 * mesh.vertices, mesh.tets, lame_parameters(2.5e5, nu), 1000.0);
-  if (formulation == VolumeFormulation::vertex_star) move_bulk_to_vertex_stars(model);
-  if (formulation == VolumeFormulation::tet_group) { // structured_box: 5 consecutive tets per cell
-    std::vector<std::vector<int>> cells(model.tets.size() / 5);
-    for (std::size_t t = 0; t < model.tets.size(); ++t)
-      cells[t / 5].push_back(static_cast<int>(t));
-    move_bulk_to_tet_groups(model, cells);
+const char* name_of(VolumeFormulation v, bool structured) {
+  switch (v) {
+  case VolumeFormulation::tet: return "per tet";
+  case VolumeFormulation::vertex_star: return "vertex stars";
+  case VolumeFormulation::tet_group: return structured ? "hexahedral cells" : "groups";
   }
-  model.external_forces_N = Eigen::MatrixX3d::Zero(model.vertex_count(), 3);
-  model.external_forces_N.col(1) = -9.81 * model.masses_kg;
-  for (Eigen::Index v = 0; v < model.vertex_count(); ++v)
-    model.fixed[static_cast<std::size_t>(v)] = model.rest_positions_m(v, 2) < 1e-9 ? 1 : 0;
-  if (local_global) {
-    Eigen::MatrixX3d q = model.rest_positions_m;
-    StopCriteria defaults;
-    defaults.max_iterations = 2000;
-    defaults.force_scale_N = 9.81 * model.masses_kg.maxCoeff();
-    LocalGlobalSolver solver(model, 0.0, 1);
-    const SolveReport report = solver.solve(q, q, defaults);
-    local_global->iterations = report.iterations;
-    local_global->converged = report.converged;
-    double sum = 0.0;
-    int count = 0;
-    for (Eigen::Index v = 0; v < q.rows(); ++v) {
-      if (model.rest_positions_m(v, 2) > 0.1 - 1e-9) {
-        sum += model.rest_positions_m(v, 1) - q(v, 1);
-        ++count;
-      }
-    }
-    local_global->tip_mm = 1e3 * sum / count;
-  }
+  return "?";
+}
+
+double newton_tip_mm(const ElasticModel& model) {
   Eigen::MatrixX3d p = model.rest_positions_m;
   StopCriteria stop;
   stop.max_iterations = 200;
   stop.gradient_norm_N = 1e-9;
   newton_solve(model, StepInertia{}, p, stop);
-  double sum = 0.0;
-  int count = 0;
-  for (Eigen::Index v = 0; v < p.rows(); ++v) {
-    if (model.rest_positions_m(v, 2) > 0.1 - 1e-9) {
-      sum += model.rest_positions_m(v, 1) - p(v, 1);
-      ++count;
+  return cantilever_tip_deflection_mm(model, p);
+}
+
+/// Local/global with the scene defaults (relative residual 1e-3 of a vertex's weight, at most
+/// 2000 iterations): "iterations, converged or not, tip".
+std::string local_global_run(const ElasticModel& model) {
+  Eigen::MatrixX3d q = model.rest_positions_m;
+  StopCriteria defaults;
+  defaults.max_iterations = 2000;
+  defaults.force_scale_N = 9.81 * model.masses_kg.maxCoeff();
+  LocalGlobalSolver solver(model, 0.0, 1);
+  const auto start = std::chrono::steady_clock::now();
+  const SolveReport report = solver.solve(q, q, defaults);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  char text[160];
+  std::snprintf(text, sizeof text, "%d it., %s, %.2f mm, %.1f s", report.iterations,
+                report.converged ? "converged" : "not converged", cantilever_tip_deflection_mm(model, q),
+                seconds);
+  return text;
+}
+
+void cantilever_row(CantileverSettings s, const char* name, bool with_local_global) {
+  const double nus[3] = {0.45, 0.49, 0.499};
+  double tip[3];
+  std::string runs[2];
+  long tets = 0, constraints = 0;
+  for (int k = 0; k < 3; ++k) {
+    s.poisson_ratio = nus[k];
+    const ElasticModel model = cantilever_model(s);
+    tets = static_cast<long>(model.tets.size());
+    constraints = s.volume == VolumeFormulation::tet_group     ? static_cast<long>(model.tet_groups.size())
+                  : s.volume == VolumeFormulation::vertex_star ? static_cast<long>(model.volumes.size())
+                                                               : tets;
+    tip[k] = newton_tip_mm(model);
+    if (with_local_global && k != 1) runs[k / 2] = local_global_run(model);
+  }
+  std::fprintf(table, "| %s | %ld / %ld | %.2f mm | %.2f mm | %.2f mm | %+.1f %% | %s | %s |\n", name,
+               constraints, tets, tip[0], tip[1], tip[2], 100.0 * (tip[2] / tip[0] - 1.0), runs[0].c_str(),
+               runs[1].c_str());
+  std::fflush(table);
+}
+
+void header(const char* mesh) {
+  std::fprintf(table,
+               "| bulk term, %s | constraints / tets | nu 0.45 | nu 0.49 | nu 0.499 | 0.499 vs 0.45 | "
+               "local/global at 0.45 | local/global at 0.499 |\n",
+               mesh);
+  std::fprintf(table, "|---|---|---|---|---|---|---|---|\n");
+}
+
+void beam_theory(const CantileverSettings& s) {
+  CantileverSettings t = s;
+  std::fprintf(table, "\nEuler-Bernoulli %.2f mm; Timoshenko", cantilever_beam_theory_mm(s, false));
+  for (double nu : {0.45, 0.49, 0.499}) {
+    t.poisson_ratio = nu;
+    std::fprintf(table, " %.2f", cantilever_beam_theory_mm(t, true));
+  }
+  std::fprintf(table, " mm (nu 0.45, 0.49, 0.499)\n");
+}
+
+int structured(int n) {
+  CantileverSettings s;
+  s.cells = {n, n, 5 * n};
+  char mesh[64];
+  std::snprintf(mesh, sizeof mesh, "%d x %d x %d cells", n, n, 5 * n);
+  header(mesh);
+  for (VolumeFormulation v :
+       {VolumeFormulation::tet, VolumeFormulation::vertex_star, VolumeFormulation::tet_group}) {
+    s.volume = v;
+    cantilever_row(s, name_of(v, true), true);
+  }
+  beam_theory(s);
+  return 0;
+}
+
+int unstructured(double size, std::vector<int> group_sizes) {
+  if (group_sizes.empty()) group_sizes = {5};
+  CantileverSettings s;
+  s.tet_size_mm = size;
+  char mesh[64];
+  std::snprintf(mesh, sizeof mesh, "CGAL tets of %g mm", size);
+  header(mesh);
+  s.volume = VolumeFormulation::tet;
+  cantilever_row(s, "per tet", false);
+  s.volume = VolumeFormulation::vertex_star;
+  cantilever_row(s, "vertex stars", false);
+  for (int g : group_sizes) {
+    s.volume = VolumeFormulation::tet_group;
+    s.group_size = g;
+    char name[64];
+    std::snprintf(name, sizeof name, "groups of %d tets", g);
+    cantilever_row(s, name, true);
+  }
+  beam_theory(s);
+  return 0;
+}
+
+int head(const std::string& path) {
+  SceneLoadResult loaded = load_scene(path);
+  if (!loaded.scene) {
+    std::fprintf(stderr, "%s", format_diagnostics(loaded.problems).c_str());
+    return 2;
+  }
+  Scene scene = *loaded.scene;
+  Reporter quiet = Reporter::silent();
+  const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
+  std::fprintf(
+      table, "| bulk term | brain nu | volume change | largest abs(det F - 1) | iterations | converged |\n");
+  std::fprintf(table, "|---|---|---|---|---|---|\n");
+  for (VolumeFormulation v :
+       {VolumeFormulation::tet, VolumeFormulation::vertex_star, VolumeFormulation::tet_group}) {
+    for (double nu : {0.45, 0.49, 0.499}) {
+      DeformationSettings d = scene.deformation;
+      d.volume = v;
+      for (MaterialSettings& m : d.materials)
+        if (m.name == "brain") m.poisson_ratio = nu;
+      StageReport report;
+      const PhantomDeformation result = deform_phantom(d, scene.organs, phantom, report, quiet);
+      double rest = 0.0, deformed = 0.0, largest = 0.0;
+      for (const DeformedBody& body : result.bodies) {
+        for (Eigen::Index t = 0; t < body.tets.rows(); ++t) {
+          Eigen::Matrix3d R, D;
+          for (int k = 0; k < 3; ++k) {
+            R.col(k) =
+                (body.rest_mm.row(body.tets(t, k + 1)) - body.rest_mm.row(body.tets(t, 0))).transpose();
+            D.col(k) = (body.deformed_mm.row(body.tets(t, k + 1)) - body.deformed_mm.row(body.tets(t, 0)))
+                           .transpose();
+          }
+          rest += R.determinant() / 6.0;
+          deformed += D.determinant() / 6.0;
+          largest = std::max(largest, std::abs(D.determinant() / R.determinant() - 1.0));
+        }
+      }
+      int iterations = 0;
+      bool converged = true;
+      for (const SolveReport& r : result.solves) {
+        iterations += r.iterations;
+        converged = converged && r.converged;
+      }
+      std::fprintf(table, "| %s | %g | %+.3f %% | %.3f | %d | %s |\n", name_of(v, false), nu,
+                   100.0 * (deformed / rest - 1.0), largest, iterations, converged ? "yes" : "no");
+      std::fflush(table);
     }
   }
-  return 1e3 * sum / count;
+  return 0;
 }
 
 } // namespace
 
 int main(int argc, char** argv) {
-  const int n = argc > 1 ? std::atoi(argv[1]) : 4;
-  // The table goes to stdout; CHOLMOD's warnings (a singular Hessian, which Newton shifts) to stderr.
-  std::FILE* table = fdopen(dup(1), "w");
+  // The tables go to stdout; CHOLMOD's warnings (a singular Hessian, which Newton shifts) to stderr.
+  table = fdopen(dup(1), "w");
   dup2(2, 1);
-  std::fprintf(table,
-               "| bulk term, %d x %d x %d cells | nu 0.45 | nu 0.49 | nu 0.499 | 0.499 vs 0.45 | "
-               "local/global at 0.45 |\n",
-               n, n, 5 * n);
-  std::fprintf(table, "|---|---|---|---|---|---|\n");
-  const std::pair<VolumeFormulation, const char*> formulations[] = {
-      {VolumeFormulation::tet, "per tet"},
-      {VolumeFormulation::vertex_star, "vertex stars"},
-      {VolumeFormulation::tet_group, "hexahedral cells"}};
-  for (const auto& [formulation, name] : formulations) {
-    double tip[3];
-    const double nus[3] = {0.45, 0.49, 0.499};
-    LocalGlobalRun run;
-    for (int k = 0; k < 3; ++k)
-      tip[k] = tip_mm(n, nus[k], formulation, k == 0 ? &run : nullptr);
-    std::fprintf(table, "| %s | %.2f mm | %.2f mm | %.2f mm | %+.1f %% | %d iterations, %s, %.2f mm |\n",
-                 name, tip[0], tip[1], tip[2], 100.0 * (tip[2] / tip[0] - 1.0), run.iterations,
-                 run.converged ? "converged" : "not converged", run.tip_mm);
-    std::fflush(table);
+  const std::string mode = argc > 1 ? argv[1] : "";
+  if (mode == "cgal") {
+    std::vector<int> groups;
+    for (int a = 3; a < argc; ++a)
+      groups.push_back(std::atoi(argv[a]));
+    return unstructured(argc > 2 ? std::atof(argv[2]) : 5.0, groups);
   }
+  if (mode == "head")
+    return head(argc > 2 ? argv[2] : std::string(PHANTASM_SOURCE_DIR) + "/data-synthetic/head.yaml");
+  return structured(argc > 1 ? std::atoi(argv[1]) : 4);
 }

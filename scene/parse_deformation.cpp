@@ -143,6 +143,12 @@ void parse_deformation(CheckedMap& map, DeformationSettings& deformation,
   map.integer("frames", deformation.frames, 1, 100000);
   map.string_list("fixed", deformation.fixed);
   map.integer("load_steps", deformation.load_steps, 1, 10000);
+  std::string volume;
+  if (map.choice("volume", volume, {"per_tet", "tet_groups", "vertex_stars"})) {
+    deformation.volume = volume == "tet_groups"     ? VolumeFormulation::tet_group
+                         : volume == "vertex_stars" ? VolumeFormulation::vertex_star
+                                                    : VolumeFormulation::tet;
+  }
   map.string("gap_tissue", voxelization.gap_tissue);
   parse_list(map, "loads", "loads", deformation.loads, parse_load);
   parse_list(map, "obstacles", "obstacles", deformation.obstacles, parse_obstacle);

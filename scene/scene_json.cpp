@@ -157,6 +157,7 @@ nlohmann::json scene_settings_json(const Scene& scene) {
         {"frames", d.frames},
         {"fixed", d.fixed},
         {"load_steps", d.load_steps},
+        {"volume", to_string(d.volume)},
         {"loads", loads},
         {"obstacles", obstacles},
         {"collisions", collisions},

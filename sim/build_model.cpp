@@ -5,6 +5,7 @@
 #include "core/error.hpp"
 #include "core/format.hpp"
 #include "geometry/tet_boundary.hpp"
+#include "sim/vertex_star_volumes.hpp"
 
 #include <algorithm>
 #include <map>
@@ -158,7 +159,10 @@ Body add_solid_body(const DeformationSettings& deformation, const OrganTable& or
   }
   Body body;
   body.organ = static_cast<int>(b);
+  const std::size_t first_tet = model.tets.size();
   body.first_vertex = add_body(model, k_mm * mesh.vertices, mesh.tets, materials);
+  std::vector<int> organ_labels(organ_of_tet.begin(), organ_of_tet.end());
+  const int bulk_terms = apply_volume_formulation(model, deformation.volume, mesh, first_tet, organ_labels);
   body.vertex_count = mesh.vertices.rows();
   body.locator = std::make_unique<TetLocator>(mesh.vertices, mesh.tets, body.first_vertex);
   body.mesh = shared;
@@ -168,6 +172,10 @@ Body add_solid_body(const DeformationSettings& deformation, const OrganTable& or
   for (const auto& [name, count] : tets_per_organ)
     line << ' ' << name << ' ' << count;
   line << ")";
+  if (deformation.volume == VolumeFormulation::tet_group)
+    line << "; bulk term on " << bulk_terms << " groups of tets (volume-averaged F)";
+  if (deformation.volume == VolumeFormulation::vertex_star)
+    line << "; bulk term on " << bulk_terms << " vertex stars";
   report.modelled.push_back(line.str());
   if (organs[b].parent >= 0) {
     for (Eigen::Index f = 0; f < mesh.boundary_faces.rows(); ++f)
@@ -207,6 +215,13 @@ double nominal_stiffness(const ElasticModel& model) {
     diagonal += (e.strain_weight + e.volume_weight) * e.Q.squaredNorm();
   for (const SurfaceElement& e : model.surfaces)
     diagonal += e.weight * e.Q.squaredNorm();
+  // A group's bulk term as its tets' was (their share of its weight by volume), so that the
+  // penalties scaled by this do not depend on where the bulk term lives.
+  for (const TetGroup& g : model.tet_groups)
+    for (int t : g.tets) {
+      const TetElement& e = model.tets[static_cast<std::size_t>(t)];
+      diagonal += g.weight * e.rest_volume_m3 / g.rest_volume_m3 * e.Q.squaredNorm();
+    }
   return model.vertex_count() > 0 ? diagonal / static_cast<double>(model.vertex_count()) : 0.0;
 }
 

@@ -72,6 +72,13 @@ Eigen::Matrix3d deformation_gradient(const TetElement& e, const Eigen::MatrixX3d
   return X * e.Q;
 }
 
+Eigen::Matrix3d group_deformation_gradient(const TetGroup& g, const Eigen::MatrixX3d& p) {
+  Eigen::Matrix3d F = Eigen::Matrix3d::Zero();
+  for (std::size_t k = 0; k < g.vertices.size(); ++k)
+    F.noalias() += p.row(g.vertices[k]).transpose() * g.G.row(static_cast<Eigen::Index>(k));
+  return F;
+}
+
 int add_sheet(ElasticModel& model, const Eigen::MatrixX3d& rest_m, const Eigen::MatrixX3i& faces,
               double youngs_modulus_Pa, double poisson_ratio, double density_kg_m3, double thickness_m) {
   const int first_vertex = append_vertices(model, rest_m);
@@ -146,6 +153,17 @@ Eigen::Matrix3d tet_stress(const ElasticModel& model, const TetElement& e, const
   return svd.U * (strain.gradient + volume.gradient).asDiagonal() * svd.V.transpose();
 }
 
+/// dE/dF_g of a tet group's volume term at F: U diag(psi) V^T, and its energy.
+Eigen::Matrix3d group_stress(const ElasticModel& model, const TetGroup& g, const Eigen::Matrix3d& F,
+                             double* energy) {
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+  const SignedSvd svd = signed_svd(F, rotation);
+  const SingularValueEnergy volume =
+      singular_value_energy(TetConstraintKind::volume, model.volume_range, g.weight, svd.sigma);
+  *energy = volume.value;
+  return svd.U * volume.gradient.asDiagonal() * svd.V.transpose();
+}
+
 } // namespace
 
 double model_energy(const ElasticModel& model, const StepInertia& inertia, const Eigen::MatrixX3d& p) {
@@ -159,6 +177,11 @@ double model_energy(const ElasticModel& model, const StepInertia& inertia, const
     double tet = 0.0;
     tet_stress(model, e, deformation_gradient(e, p), &tet);
     energy += tet;
+  }
+  for (const TetGroup& g : model.tet_groups) {
+    double group = 0.0;
+    group_stress(model, g, group_deformation_gradient(g, p), &group);
+    energy += group;
   }
   for (const SurfaceElement& e : model.surfaces) {
     const SurfaceMatrix F = surface_deformation(e, p);
@@ -192,6 +215,12 @@ Eigen::MatrixX3d model_gradient(const ElasticModel& model, const StepInertia& in
     const Eigen::Matrix<double, 3, 4> forces = P * e.Q.transpose();
     for (int k = 0; k < 4; ++k)
       g.row(e.vertices[static_cast<std::size_t>(k)]) += forces.col(k).transpose();
+  }
+  for (const TetGroup& group : model.tet_groups) {
+    double unused = 0.0;
+    const Eigen::Matrix3d P = group_stress(model, group, group_deformation_gradient(group, p), &unused);
+    for (std::size_t k = 0; k < group.vertices.size(); ++k) // dE/dX = P G^T
+      g.row(group.vertices[k]) += (P * group.G.row(static_cast<Eigen::Index>(k)).transpose()).transpose();
   }
   for (const SurfaceElement& e : model.surfaces) {
     // d/dX w/2 |F - P(F)|^2 = w (F - P(F)) Q^T (the distance to a set: envelope theorem).

@@ -26,6 +26,21 @@ struct TetElement {
   double volume_weight = 0.0; ///< 3 lambda V
 };
 
+/// The bulk term of a group of tets on their volume-averaged deformation gradient (mean
+/// dilatation): F_g = sum_t V_t F_t / V_g = X G with X the 3 x n matrix of the group's vertices
+/// (columns) and G = sum_t V_t S_t Q_t / V_g (S_t placing tet t's corners among the group's
+/// vertices), linear in the positions as a tet's F is. Energy w/2 |F_g - P_volume(F_g)|^2 with
+/// w = 3 sum_t lambda_t V_t: for a uniform strain F_g = F_t, so it is exactly the sum of the
+/// tets' volume terms; one constraint per group of about 5 tets does not lock as nu -> 1/2
+/// (docs/deformation.md). A projective-dynamics constraint: w G G^T in the global matrix.
+struct TetGroup {
+  std::vector<int> tets;                      ///< the group's tets (indices into model.tets)
+  std::vector<int> vertices;                  ///< distinct vertices of the group's tets
+  Eigen::Matrix<double, Eigen::Dynamic, 3> G; ///< one row per vertex: F_g = X G
+  double rest_volume_m3 = 0.0;                ///< V_g
+  double weight = 0.0;                        ///< 3 sum_t lambda_t V_t
+};
+
 /// A point of the model (a vertex, or a barycentric combination of up to four vertices, e.g. a
 /// point of an embedded organ) pulled to a target by a zero-rest-length spring:
 /// energy stiffness / 2 |sum_k b_k x_k - target|^2.
@@ -41,7 +56,8 @@ struct PointConstraint {
 /// constraints, vertices held in place (Dirichlet: the solvers never move them), and external
 /// forces. The objective of one step (docs/method.md section 2.1) is
 ///   E(p) = a/2 (p - s)^T M (p - s) - f . p + sum_tets [ws/2 |F - P_strain(F)|^2 + wv/2 |F - P_volume(F)|^2]
-///          + sum_surfaces w/2 |F - P(F)|^2 + sum_volumes w/2 |X - P(X)|^2 + sum_points k/2 |b . x - t|^2
+///          + sum_surfaces w/2 |F - P(F)|^2 + sum_tet_groups w/2 |F_g - P_volume(F_g)|^2
+///          + sum_volumes w/2 |X - P(X)|^2 + sum_points k/2 |b . x - t|^2
 ///          + sum_free vertices sum_obstacles kc/2 dist(x, allowed)^2
 ///          + sum_free vertices sum_surfaces it may not enter kc/2 dist(x, outside)^2
 /// with a = 1/h^2 for a dynamic step (s the inertial target, gravity folded into s, f = 0) and
@@ -54,6 +70,7 @@ struct ElasticModel {
   SingularValueRange volume_range;      ///< {1, 1}: volume preserving
   std::vector<SurfaceElement> surfaces; ///< edge, triangle and bending constraints (sheets)
   std::vector<EnclosedVolume> volumes;  ///< volumes enclosed by closed shells (patch volume)
+  std::vector<TetGroup> tet_groups;     ///< bulk terms of groups of tets (mean dilatation)
   std::vector<PointConstraint> points;
   std::vector<char> fixed;            ///< per vertex: held where the solver finds it
   Eigen::MatrixX3d external_forces_N; ///< per vertex; may be empty (no force)
@@ -116,6 +133,9 @@ struct StepInertia {
 
 /// The deformation gradient F = X Q of a tet at positions p (one row per vertex).
 Eigen::Matrix3d deformation_gradient(const TetElement& e, const Eigen::MatrixX3d& p);
+
+/// The volume-averaged deformation gradient F_g = X G of a tet group at positions p.
+Eigen::Matrix3d group_deformation_gradient(const TetGroup& g, const Eigen::MatrixX3d& p);
 
 /// E(p) as above; p has one row per vertex, metres.
 double model_energy(const ElasticModel& model, const StepInertia& inertia, const Eigen::MatrixX3d& p);

@@ -46,6 +46,13 @@ void LocalGlobalSolver::Impl::build_adjacency() {
       volume_offsets, volume_entries);
   build(
       [&](auto&& use) {
+        for (std::size_t g = 0; g < model.tet_groups.size(); ++g)
+          for (std::size_t k = 0; k < model.tet_groups[g].vertices.size(); ++k)
+            use(model.tet_groups[g].vertices[k], static_cast<int>(g), static_cast<int>(k));
+      },
+      group_offsets, group_entries);
+  build(
+      [&](auto&& use) {
         for (std::size_t c = 0; c < model.points.size(); ++c)
           for (int k = 0; k < model.points[c].count; ++k)
             use(model.points[c].vertices[static_cast<std::size_t>(k)], static_cast<int>(c), k);
@@ -82,6 +89,12 @@ void LocalGlobalSolver::Impl::assemble_and_factor() {
     for (int a = 0; a < 4; ++a)
       for (int b = 0; b < 4; ++b)
         add(e.vertices[static_cast<std::size_t>(a)], e.vertices[static_cast<std::size_t>(b)], L(a, b));
+  }
+  for (const TetGroup& g : model.tet_groups) {
+    const Eigen::MatrixXd L = g.weight * g.G * g.G.transpose();
+    for (std::size_t a = 0; a < g.vertices.size(); ++a)
+      for (std::size_t b = 0; b < g.vertices.size(); ++b)
+        add(g.vertices[a], g.vertices[b], L(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)));
   }
   for (const SurfaceElement& e : model.surfaces) {
     const Eigen::Matrix4d L = e.weight * e.Q * e.Q.transpose();

@@ -46,6 +46,18 @@ double LocalGlobalSolver::Impl::local_step(const Eigen::MatrixX3d& p, const Eige
     surface_projections[static_cast<std::size_t>(s)] = e.weight * T;
     surface_energies[static_cast<std::size_t>(s)] = 0.5 * e.weight * (F - T).squaredNorm();
   }
+  // Tet groups: the volume projection of the averaged F (a small 3x3 problem each).
+  const auto group_count = static_cast<std::ptrdiff_t>(model.tet_groups.size());
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 64) if (group_count > 0)
+  for (std::ptrdiff_t c = 0; c < group_count; ++c) {
+    const auto i = static_cast<std::size_t>(c);
+    const TetGroup& g = model.tet_groups[i];
+    const SignedSvd svd =
+        signed_svd(group_deformation_gradient(g, p), group_rotations[i], group_eigenvectors[i]);
+    const Eigen::Vector3d closest = project_volume(svd.sigma, model.volume_range);
+    group_projections[i] = g.weight * (svd.V * closest.asDiagonal() * svd.U.transpose());
+    group_energies[i] = 0.5 * g.weight * (svd.sigma - closest).squaredNorm();
+  }
   // An enclosed volume's projection couples all its vertices: one task per volume.
   const auto volume_count = static_cast<std::ptrdiff_t>(model.volumes.size());
 #pragma omp parallel for num_threads(threads) schedule(dynamic, 1) if (volume_count > 1)
@@ -62,6 +74,8 @@ double LocalGlobalSolver::Impl::local_step(const Eigen::MatrixX3d& p, const Eige
   for (double e : volume_energies)
     energy += e;
   for (double e : tet_energies)
+    energy += e;
+  for (double e : group_energies)
     energy += e;
   for (double e : surface_energies)
     energy += e;
@@ -94,6 +108,11 @@ void LocalGlobalSolver::Impl::gather_rhs(const Eigen::MatrixX3d& target) {
       const auto t = static_cast<std::size_t>(tet_entries[2 * static_cast<std::size_t>(i)]);
       const int corner = tet_entries[2 * static_cast<std::size_t>(i) + 1];
       r.noalias() += model.tets[t].Q.row(corner) * projections[t];
+    }
+    for (int i = group_offsets[v]; i < group_offsets[v + 1]; ++i) {
+      const auto g = static_cast<std::size_t>(group_entries[2 * static_cast<std::size_t>(i)]);
+      const int corner = group_entries[2 * static_cast<std::size_t>(i) + 1];
+      r.noalias() += model.tet_groups[g].G.row(corner) * group_projections[g];
     }
     for (int i = surface_offsets[v]; i < surface_offsets[v + 1]; ++i) {
       const auto s = static_cast<std::size_t>(surface_entries[2 * static_cast<std::size_t>(i)]);
@@ -151,6 +170,10 @@ LocalGlobalSolver::LocalGlobalSolver(const ElasticModel& model, double inertia_w
   m->eigenvectors.assign(model.tets.size(), Eigen::Matrix3d::Identity());
   m->projections.assign(model.tets.size(), Eigen::Matrix3d::Zero());
   m->tet_energies.assign(model.tets.size(), 0.0);
+  m->group_rotations.assign(model.tet_groups.size(), Eigen::Quaterniond::Identity());
+  m->group_eigenvectors.assign(model.tet_groups.size(), Eigen::Quaterniond::Identity());
+  m->group_projections.assign(model.tet_groups.size(), Eigen::Matrix3d::Zero());
+  m->group_energies.assign(model.tet_groups.size(), 0.0);
   m->surface_projections.assign(model.surfaces.size(), SurfaceMatrix::Zero());
   m->surface_energies.assign(model.surfaces.size(), 0.0);
   m->volume_projections.resize(model.volumes.size());

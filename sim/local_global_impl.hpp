@@ -34,12 +34,17 @@ struct LocalGlobalSolver::Impl {
   // Per surface element: w P(F), and its energy.
   std::vector<SurfaceMatrix> surface_projections;
   std::vector<double> surface_energies;
+  // Per tet group: warm-started rotation and w T^T (T the closest point of the volume set to
+  // the averaged F), and its energy.
+  std::vector<Eigen::Quaterniond> group_rotations, group_eigenvectors;
+  std::vector<Eigen::Matrix3d> group_projections;
+  std::vector<double> group_energies;
   // Per enclosed volume: w P(X) (one row per surface vertex), and its energy.
   std::vector<Eigen::MatrixX3d> volume_projections;
   std::vector<double> volume_energies;
   // Per vertex (CSR): the tets, surface elements and point constraints (index, corner) using it.
   std::vector<int> tet_offsets, tet_entries, surface_offsets, surface_entries, point_offsets, point_entries,
-      volume_offsets, volume_entries;
+      volume_offsets, volume_entries, group_offsets, group_entries;
   Eigen::MatrixX3d rhs, coupling_rhs, solution;
 
   Impl(const ElasticModel& m, double a, int t) : model(m), alpha(a), threads(t) {}

@@ -2,6 +2,7 @@
 
 #include "core/cancellation.hpp"
 #include "core/progress.hpp"
+#include "sim/vertex_star_volumes.hpp"
 
 #include <Eigen/CholmodSupport>
 #include <Eigen/Sparse>
@@ -49,6 +50,14 @@ Eigen::SparseMatrix<double> assemble_hessian(const ElasticModel& model, const St
       for (int b = 0; b < 4; ++b)
         add_block(e.vertices[static_cast<std::size_t>(a)], e.vertices[static_cast<std::size_t>(b)],
                   H.block<3, 3>(3 * a, 3 * b));
+  }
+  // Tet groups: as a tet's volume term, on the averaged F_g = X G.
+  for (const TetGroup& g : model.tet_groups) {
+    const Eigen::MatrixXd H = tet_group_hessian(model, g, p);
+    for (std::size_t a = 0; a < g.vertices.size(); ++a)
+      for (std::size_t b = 0; b < g.vertices.size(); ++b)
+        add_block(g.vertices[a], g.vertices[b],
+                  H.block<3, 3>(3 * static_cast<Eigen::Index>(a), 3 * static_cast<Eigen::Index>(b)));
   }
   // Surface elements: the Gauss-Newton matrix w Q Q^T (x) I, positive semi-definite (their
   // exact Hessians, through the 3x2 SVD and the bending projection, are not formed): Newton

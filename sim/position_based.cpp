@@ -37,6 +37,8 @@ public:
         m_eigenvectors(2 * model.tets.size(), Eigen::Quaterniond::Identity()),
         m_tet_lambda(2 * model.tets.size(), 0.0), m_surface_lambda(model.surfaces.size(), 0.0),
         m_point_lambda(model.points.size(), 0.0), m_volume_lambda(model.volumes.size(), 0.0),
+        m_group_rotations(model.tet_groups.size(), Eigen::Quaterniond::Identity()),
+        m_group_lambda(model.tet_groups.size(), 0.0),
         m_inverse_mass(static_cast<std::size_t>(model.vertex_count()), 0.0) {
     for (Eigen::Index v = 0; v < model.vertex_count(); ++v) {
       const bool fixed = !model.fixed.empty() && model.fixed[static_cast<std::size_t>(v)];
@@ -61,6 +63,22 @@ public:
       if (e.volume_weight > 0.0)
         apply(tet_constraint(e, t, TetConstraintKind::volume, p), e.volume_weight, m_tet_lambda[2 * t + 1],
               p);
+    }
+    for (std::size_t c = 0; c < m_model.tet_groups.size(); ++c) {
+      // C = |sigma - P(sigma)| of the averaged F_g = X G: dC/dx_k = U diag(d / C) V^T G_k.
+      const TetGroup& group = m_model.tet_groups[c];
+      const SignedSvd svd = signed_svd(group_deformation_gradient(group, p), m_group_rotations[c]);
+      const Eigen::Vector3d d = svd.sigma - project_volume(svd.sigma, m_model.volume_range);
+      LinearizedMany l;
+      l.value = d.norm();
+      if (l.value > 0.0) {
+        const Eigen::Matrix3d dC = svd.U * (d / l.value).asDiagonal() * svd.V.transpose();
+        l.count = static_cast<int>(group.vertices.size());
+        l.vertices = group.vertices;
+        for (Eigen::Index k = 0; k < group.G.rows(); ++k)
+          l.gradients.push_back(dC * group.G.row(k).transpose());
+      }
+      apply(l, group.weight, m_group_lambda[c], p);
     }
     for (std::size_t s = 0; s < m_model.surfaces.size(); ++s) {
       const SurfaceElement& e = m_model.surfaces[s];
@@ -211,6 +229,8 @@ private:
   double m_alpha_scale; ///< 1/h^2
   std::vector<Eigen::Quaterniond> m_rotations, m_eigenvectors;
   std::vector<double> m_tet_lambda, m_surface_lambda, m_point_lambda, m_volume_lambda, m_contact_lambda;
+  std::vector<Eigen::Quaterniond> m_group_rotations;
+  std::vector<double> m_group_lambda;
   std::vector<double> m_inverse_mass;
   std::vector<std::vector<int>> m_opposing;
   std::unique_ptr<ContactGeometry> m_geometry;

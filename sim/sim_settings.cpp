@@ -57,6 +57,15 @@ const char* to_string(SolverMethod method) {
   return "?";
 }
 
+const char* to_string(VolumeFormulation volume) {
+  switch (volume) {
+  case VolumeFormulation::tet: return "per_tet";
+  case VolumeFormulation::vertex_star: return "vertex_stars";
+  case VolumeFormulation::tet_group: return "tet_groups";
+  }
+  return "?";
+}
+
 const char* to_string(LoadKind kind) {
   return kind == LoadKind::gravity ? "gravity" : "displacement";
 }

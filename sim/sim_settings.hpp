@@ -35,6 +35,13 @@ struct SolverSettings {
   int threads = 0; ///< 0 = all cores
 };
 
+/// Where the tets' bulk (lambda) energy lives (deformation.volume; docs/deformation.md).
+enum class VolumeFormulation {
+  tet,         ///< per tet: wv/2 |F - P_volume(F)|^2 with wv = 3 lambda V (locks as nu -> 1/2)
+  vertex_star, ///< per vertex: the volume of the union of its tets, an EnclosedVolume with K = lambda / 4
+  tet_group    ///< per group of about 5 tets: one constraint on the group's volume-averaged F
+};
+
 enum class LoadKind { gravity, displacement };
 enum class MotionProfile { constant, ramp, sine };
 
@@ -97,6 +104,8 @@ struct DeformationSettings {
   std::vector<ObstacleSettings> obstacles;
   std::vector<CollisionSettings> collisions;
   int load_steps = 1; ///< quasi-static: loads and obstacles applied in this many equal increments
+  /// where the solid bodies' bulk term lives (per_tet, tet_groups, vertex_stars)
+  VolumeFormulation volume = VolumeFormulation::tet;
   std::vector<MaterialSettings> materials; ///< the scene's materials section
   /// Per organ in scene order, set by the scene from anatomy.organs.
   std::vector<OrganMechanics> organs;
@@ -120,6 +129,7 @@ std::vector<OrganMotion> classify_organ_motion(const DeformationSettings& deform
 const char* to_string(DeformationMode mode);
 const char* to_string(SolverMethod method);
 const char* to_string(LoadKind kind);
+const char* to_string(VolumeFormulation volume); ///< the scene's words: per_tet, vertex_stars, tet_groups
 const char* to_string(MotionProfile motion);
 const char* to_string(ObstacleShape shape);
 

@@ -92,22 +92,68 @@ int move_bulk_to_tet_groups(ElasticModel& model, const std::vector<std::vector<i
   }
   int added = 0;
   for (const std::vector<int>& group : groups) {
-    double volume = 0.0, lambda_volume = 0.0;
+    TetGroup g;
     std::vector<int> bulk;
     for (int t : group) {
       const TetElement& e = model.tets[static_cast<std::size_t>(t)];
       if (!(e.volume_weight > 0.0)) continue;
       bulk.push_back(t);
-      volume += e.rest_volume_m3;
-      lambda_volume += e.volume_weight / 3.0;
+      g.rest_volume_m3 += e.rest_volume_m3;
+      g.weight += e.volume_weight;
     }
     if (bulk.empty()) continue;
-    model.volumes.push_back(union_volume(model, bulk, lambda_volume / volume));
+    // The group's vertices in order of first use, and G = sum_t V_t S_t Q_t / V_g.
+    std::map<int, int> local;
+    for (int t : bulk)
+      for (int v : model.tets[static_cast<std::size_t>(t)].vertices)
+        if (local.emplace(v, static_cast<int>(g.vertices.size())).second) g.vertices.push_back(v);
+    g.G = Eigen::Matrix<double, Eigen::Dynamic, 3>::Zero(static_cast<Eigen::Index>(g.vertices.size()), 3);
+    for (int t : bulk) {
+      const TetElement& e = model.tets[static_cast<std::size_t>(t)];
+      for (int k = 0; k < 4; ++k)
+        g.G.row(local.at(e.vertices[static_cast<std::size_t>(k)])) +=
+            (e.rest_volume_m3 / g.rest_volume_m3) * e.Q.row(k);
+    }
+    g.tets = bulk;
+    model.tet_groups.push_back(std::move(g));
     for (int t : bulk)
       model.tets[static_cast<std::size_t>(t)].volume_weight = 0.0;
     ++added;
   }
   return added;
+}
+
+Eigen::MatrixXd tet_group_hessian(const ElasticModel& model, const TetGroup& g, const Eigen::MatrixX3d& p,
+                                  bool clamp_negative) {
+  const auto n = static_cast<Eigen::Index>(g.vertices.size());
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+  const SignedSvd svd = signed_svd(group_deformation_gradient(g, p), rotation);
+  const SingularValueEnergy volume =
+      singular_value_energy(TetConstraintKind::volume, model.volume_range, g.weight, svd.sigma);
+  if (volume.value == 0.0 && volume.hessian.isZero()) return Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  const Eigen::Matrix<double, 9, 9> H_F = projected_hessian(svd, volume, clamp_negative);
+  // vec(F) = (G^T (x) I3) vec(X): column c of F is sum_k G(k, c) x_k.
+  Eigen::MatrixXd dF = Eigen::MatrixXd::Zero(3 * n, 9);
+  for (Eigen::Index k = 0; k < n; ++k)
+    for (int c = 0; c < 3; ++c)
+      dF.block<3, 3>(3 * k, 3 * c) = g.G(k, c) * Eigen::Matrix3d::Identity();
+  return dF * H_F * dF.transpose();
+}
+
+int apply_volume_formulation(ElasticModel& model, VolumeFormulation formulation, const TetMesh& mesh,
+                             std::size_t first_tet, const std::vector<int>& labels) {
+  switch (formulation) {
+  case VolumeFormulation::tet: return 0;
+  case VolumeFormulation::vertex_star: return move_bulk_to_vertex_stars(model);
+  case VolumeFormulation::tet_group: {
+    std::vector<std::vector<int>> groups = group_tets(mesh, tets_per_group, labels);
+    for (std::vector<int>& group : groups)
+      for (int& t : group)
+        t += static_cast<int>(first_tet);
+    return move_bulk_to_tet_groups(model, groups);
+  }
+  }
+  return 0;
 }
 
 } // namespace phantasm

@@ -3,18 +3,13 @@
 // with one volume constraint each lock as nu -> 1/2 (about 5-6 tets per vertex against 3
 // degrees of freedom per vertex); one constraint per vertex star does not (docs/deformation.md).
 
+#include "anatomy/tet_mesh.hpp"
 #include "sim/elastic_model.hpp"
+#include "sim/sim_settings.hpp"
 
 #include <vector>
 
 namespace phantasm {
-
-/// Where the tets' bulk (lambda) energy lives.
-enum class VolumeFormulation {
-  tet,         ///< per tet: wv/2 |F - P_volume(F)|^2 with wv = 3 lambda V (locks as nu -> 1/2)
-  vertex_star, ///< per vertex: the volume of the union of its tets, an EnclosedVolume with K = lambda / 4
-  tet_group    ///< per group of tets (e.g. the 5 tets of a hexahedral cell): one volume each, K = lambda
-};
 
 /// Moves the bulk term of every tet of the model onto vertex stars: for each vertex touched by
 /// a tet with a volume weight, the union of its tets (its star) becomes an EnclosedVolume of
@@ -29,18 +24,39 @@ enum class VolumeFormulation {
 /// @return the number of stars added
 int move_bulk_to_vertex_stars(ElasticModel& model);
 
-/// Moves the bulk term of the tets of each group onto one volume constraint for the group: the
-/// union of its tets becomes an EnclosedVolume of its boundary triangles, range
-/// model.volume_range, bulk modulus K_g = sum_t lambda_t V_t / V_g (V_g = sum_t V_t), so for a
-/// uniform volumetric strain theta its energy K_g (theta V_g)^2 / (2 V_g) = sum_t lambda_t
-/// theta^2 V_t / 2, the per-tet term's. One constraint per group of about 5 tets (a hexahedral
-/// cell: fewer constraints than vertices, as Q1/P0's one pressure per hexahedron) no longer locks
-/// where the per-tet term and vertex stars do (docs/deformation.md). The groups' tets' volume
-/// weights become 0; tets in no group keep theirs. The volumes are appended to model.volumes
-/// (flagged vertex_star: Newton's rank-one block).
+/// Moves the bulk term of the tets of each group onto one constraint for the group on its
+/// volume-averaged deformation gradient (a TetGroup, mean dilatation): F_g = sum_t V_t F_t / V_g,
+/// energy w/2 |F_g - P_volume(F_g)|^2 with w = 3 sum_t lambda_t V_t, so a uniform strain costs
+/// exactly what the per-tet terms cost. One constraint per group of about 5 tets (a hexahedral
+/// cell: fewer constraints than vertices, as Q1/P0's one pressure per hexahedron; or a cluster
+/// from group_tets) no longer locks where the per-tet term and vertex stars do
+/// (docs/deformation.md). F_g is linear in the positions, so local/global takes the group like a
+/// tet (w G G^T in its constant matrix) and Newton its projected Hessian. The groups' tets'
+/// volume weights become 0; tets in no group keep theirs. Appended to model.tet_groups.
 /// @param groups tet indices into model.tets, each tet in at most one group
-/// @return the number of volumes added (groups without a bulk term add none)
+/// @return the number of groups added (groups without a bulk term add none)
 /// @throws std::invalid_argument for a tet index out of range or in two groups
 int move_bulk_to_tet_groups(ElasticModel& model, const std::vector<std::vector<int>>& groups);
+
+/// The Hessian of a tet group's energy w/2 |F_g - P_volume(F_g)|^2 with respect to its vertices
+/// (3n x 3n, rows 3k .. 3k + 2 the coordinates of g.vertices[k]): (G (x) I3) H_F (G^T (x) I3)
+/// with H_F the 9x9 Hessian in F of tet_constraints.hpp's projected_hessian (Newton's block).
+/// @param clamp_negative false: the exact Hessian (for tests)
+Eigen::MatrixXd tet_group_hessian(const ElasticModel& model, const TetGroup& g, const Eigen::MatrixX3d& p,
+                                  bool clamp_negative = true);
+
+/// Tets per group of an unstructured body (group_tets' target size, anatomy/tet_mesh.hpp): the
+/// smallest size whose bulk term did not lock on the CGAL-meshed cantilever
+/// (docs/deformation.md, bench/volume_locking).
+inline constexpr int tets_per_group = 8;
+
+/// Applies `formulation` to the tets model.tets[first_tet ..] of one body meshed by `mesh`
+/// (tet_group: group_tets(mesh, tets_per_group, labels); vertex_star: the stars of the whole
+/// tets whose bulk term is still theirs, see move_bulk_to_vertex_stars; tet: nothing).
+/// @param labels per tet of the mesh (e.g. its organ), or empty: tets of different labels are
+///        not grouped together
+/// @return the groups or stars added
+int apply_volume_formulation(ElasticModel& model, VolumeFormulation formulation, const TetMesh& mesh,
+                             std::size_t first_tet, const std::vector<int>& labels = {});
 
 } // namespace phantasm
