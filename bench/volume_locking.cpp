@@ -5,9 +5,12 @@
 //   per vertex star and per hexahedral cell (its 5 tets); Newton to 1e-9 N at nu = 0.45, 0.49,
 //   0.499, and local/global (scene defaults, 2000 iterations at most) at 0.45 and 0.499.
 // volume_locking cgal SIZE [GROUP ...]: the same cantilever on a CGAL tet mesh of SIZE mm, per
-//   tet and in groups of GROUP tets (default 5; group_tets).
-// volume_locking head [SCENE]: the head's deformation (data-synthetic/head.yaml) with the brain's
-//   Poisson ratio at 0.45, 0.49, 0.499 and each formulation: the bodies' volume change.
+//   tet, per vertex star and in groups of GROUP tets (default 5; group_tets); cgal-groups: the
+//   groups only, Newton only (the refined reference).
+// volume_locking head [SCENE] [newton]: the head's deformation (data-synthetic/head.yaml) with the
+//   brain's Poisson ratio at 0.45, 0.49, 0.499 and each formulation (the scene's solver, or
+//   Newton): the bodies' volume change, whole and RMS over tets and over groups of 8 tets.
+// volume_locking head-gravity: the same with gravity alone (no retractor), Newton.
 // Tables go to stdout (Markdown).
 
 #include "anatomy/phantom.hpp"
@@ -19,6 +22,7 @@
 #include "sim/local_global.hpp"
 #include "sim/newton.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -123,29 +127,31 @@ int structured(int n) {
   return 0;
 }
 
-int unstructured(double size, std::vector<int> group_sizes) {
+int unstructured(double size, std::vector<int> group_sizes, bool groups_only) {
   if (group_sizes.empty()) group_sizes = {5};
   CantileverSettings s;
   s.tet_size_mm = size;
   char mesh[64];
   std::snprintf(mesh, sizeof mesh, "CGAL tets of %g mm", size);
   header(mesh);
-  s.volume = VolumeFormulation::tet;
-  cantilever_row(s, "per tet", false);
-  s.volume = VolumeFormulation::vertex_star;
-  cantilever_row(s, "vertex stars", false);
+  if (!groups_only) {
+    s.volume = VolumeFormulation::tet;
+    cantilever_row(s, "per tet", false);
+    s.volume = VolumeFormulation::vertex_star;
+    cantilever_row(s, "vertex stars", false);
+  }
   for (int g : group_sizes) {
     s.volume = VolumeFormulation::tet_group;
     s.group_size = g;
     char name[64];
     std::snprintf(name, sizeof name, "groups of %d tets", g);
-    cantilever_row(s, name, true);
+    cantilever_row(s, name, !groups_only);
   }
   beam_theory(s);
   return 0;
 }
 
-int head(const std::string& path) {
+int head(const std::string& path, bool newton, bool gravity_only) {
   SceneLoadResult loaded = load_scene(path);
   if (!loaded.scene) {
     std::fprintf(stderr, "%s", format_diagnostics(loaded.problems).c_str());
@@ -154,20 +160,29 @@ int head(const std::string& path) {
   Scene scene = *loaded.scene;
   Reporter quiet = Reporter::silent();
   const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
-  std::fprintf(
-      table, "| bulk term | brain nu | volume change | largest abs(det F - 1) | iterations | converged |\n");
-  std::fprintf(table, "|---|---|---|---|---|---|\n");
+  std::fprintf(table, "| bulk term | brain nu | volume change | RMS per tet | RMS per 8 tets | iterations | "
+                      "converged |\n");
+  std::fprintf(table, "|---|---|---|---|---|---|---|\n");
   for (VolumeFormulation v :
        {VolumeFormulation::tet, VolumeFormulation::vertex_star, VolumeFormulation::tet_group}) {
     for (double nu : {0.45, 0.49, 0.499}) {
       DeformationSettings d = scene.deformation;
       d.volume = v;
+      if (newton) d.solver.method = SolverMethod::newton;
+      if (gravity_only)
+        d.loads.erase(std::remove_if(d.loads.begin(), d.loads.end(),
+                                     [](const LoadSettings& l) { return l.kind != LoadKind::gravity; }),
+                      d.loads.end());
       for (MaterialSettings& m : d.materials)
         if (m.name == "brain") m.poisson_ratio = nu;
       StageReport report;
       const PhantomDeformation result = deform_phantom(d, scene.organs, phantom, report, quiet);
-      double rest = 0.0, deformed = 0.0, largest = 0.0;
+      // Volume changes: the whole body's, and the RMS (volume-weighted) over single tets and over
+      // groups of 8 tets (group_tets: the same partition for every formulation).
+      double rest = 0.0, deformed = 0.0, tet_sum = 0.0, group_sum = 0.0;
       for (const DeformedBody& body : result.bodies) {
+        std::vector<double> rest_volume(static_cast<std::size_t>(body.tets.rows()));
+        std::vector<double> deformed_volume(rest_volume.size());
         for (Eigen::Index t = 0; t < body.tets.rows(); ++t) {
           Eigen::Matrix3d R, D;
           for (int k = 0; k < 3; ++k) {
@@ -176,9 +191,22 @@ int head(const std::string& path) {
             D.col(k) = (body.deformed_mm.row(body.tets(t, k + 1)) - body.deformed_mm.row(body.tets(t, 0)))
                            .transpose();
           }
+          rest_volume[static_cast<std::size_t>(t)] = R.determinant() / 6.0;
+          deformed_volume[static_cast<std::size_t>(t)] = D.determinant() / 6.0;
           rest += R.determinant() / 6.0;
           deformed += D.determinant() / 6.0;
-          largest = std::max(largest, std::abs(D.determinant() / R.determinant() - 1.0));
+          tet_sum += std::pow(D.determinant() / R.determinant() - 1.0, 2) * R.determinant() / 6.0;
+        }
+        TetMesh mesh;
+        mesh.vertices = body.rest_mm;
+        mesh.tets = body.tets;
+        for (const std::vector<int>& group : group_tets(mesh, 8)) {
+          double v0 = 0.0, v = 0.0;
+          for (int t : group) {
+            v0 += rest_volume[static_cast<std::size_t>(t)];
+            v += deformed_volume[static_cast<std::size_t>(t)];
+          }
+          group_sum += std::pow(v / v0 - 1.0, 2) * v0;
         }
       }
       int iterations = 0;
@@ -187,8 +215,9 @@ int head(const std::string& path) {
         iterations += r.iterations;
         converged = converged && r.converged;
       }
-      std::fprintf(table, "| %s | %g | %+.3f %% | %.3f | %d | %s |\n", name_of(v, false), nu,
-                   100.0 * (deformed / rest - 1.0), largest, iterations, converged ? "yes" : "no");
+      std::fprintf(table, "| %s | %g | %+.3f %% | %.2f %% | %.2f %% | %d | %s |\n", name_of(v, false), nu,
+                   100.0 * (deformed / rest - 1.0), 100.0 * std::sqrt(tet_sum / rest),
+                   100.0 * std::sqrt(group_sum / rest), iterations, converged ? "yes" : "no");
       std::fflush(table);
     }
   }
@@ -202,13 +231,18 @@ int main(int argc, char** argv) {
   table = fdopen(dup(1), "w");
   dup2(2, 1);
   const std::string mode = argc > 1 ? argv[1] : "";
-  if (mode == "cgal") {
+  if (mode == "cgal" || mode == "cgal-groups") {
     std::vector<int> groups;
     for (int a = 3; a < argc; ++a)
       groups.push_back(std::atoi(argv[a]));
-    return unstructured(argc > 2 ? std::atof(argv[2]) : 5.0, groups);
+    return unstructured(argc > 2 ? std::atof(argv[2]) : 5.0, groups, mode == "cgal-groups");
   }
   if (mode == "head")
-    return head(argc > 2 ? argv[2] : std::string(PHANTASM_SOURCE_DIR) + "/data-synthetic/head.yaml");
+    return head(argc > 2 && std::string(argv[2]) != "newton"
+                    ? argv[2]
+                    : std::string(PHANTASM_SOURCE_DIR) + "/data-synthetic/head.yaml",
+                std::string(argv[argc - 1]) == "newton", false);
+  if (mode == "head-gravity")
+    return head(std::string(PHANTASM_SOURCE_DIR) + "/data-synthetic/head.yaml", true, true);
   return structured(argc > 1 ? std::atoi(argv[1]) : 4);
 }
