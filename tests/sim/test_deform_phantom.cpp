@@ -186,6 +186,27 @@ TEST(DeformPhantom, APositionBasedSolverInAQuasiStaticSceneStopsAtItsSetting) {
   }
 }
 
+// deformation.volume: tet_groups puts the body's bulk term on groups of tets (the log says how
+// many); the small head's push is met as with the per-tet term, and the solve converges.
+TEST(DeformPhantom, BulkTermOnGroupsOfTetsFromTheScene) {
+  Scene scene = load("tests/data/scenes/small-head.yaml");
+  scene.deformation.volume = VolumeFormulation::tet_group;
+  Reporter quiet = Reporter::silent();
+  const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
+  StageReport report;
+  const PhantomDeformation d = deform_phantom(scene.deformation, scene.organs, phantom, report, quiet);
+  EXPECT_EQ(report.status, "done");
+  bool logged = false;
+  for (const std::string& line : report.modelled)
+    logged = logged || line.find("groups of tets (volume-averaged F)") != std::string::npos;
+  EXPECT_TRUE(logged);
+  ASSERT_FALSE(d.solves.empty());
+  EXPECT_TRUE(d.solves.back().converged);
+  EXPECT_LT(d.attachment_error_mm, 0.01);
+  ASSERT_EQ(d.bodies.size(), 1u);
+  expect_no_inversion_and_volume_kept(d.bodies[0], 0.01);
+}
+
 // The shipped breast scene: two paddles close in by 15 mm each in four load steps, the chest
 // wall held. Nothing passes a paddle beyond the penalty's give, the paddles carry the load
 // (contacts at the end), no tet inverts and the volume is kept (nu 0.49).
