@@ -201,12 +201,12 @@ int head(const std::string& path, bool newton, bool gravity_only) {
         mesh.vertices = body.rest_mm;
         mesh.tets = body.tets;
         for (const std::vector<int>& group : group_tets(mesh, 8)) {
-          double v0 = 0.0, v = 0.0;
+          double v0 = 0.0, v1 = 0.0;
           for (int t : group) {
             v0 += rest_volume[static_cast<std::size_t>(t)];
-            v += deformed_volume[static_cast<std::size_t>(t)];
+            v1 += deformed_volume[static_cast<std::size_t>(t)];
           }
-          group_sum += std::pow(v / v0 - 1.0, 2) * v0;
+          group_sum += std::pow(v1 / v0 - 1.0, 2) * v0;
         }
       }
       int iterations = 0;
