@@ -1,13 +1,22 @@
 #include "mri/kspace.hpp"
 
 #include "core/cancellation.hpp"
+#include "mri/gaussian_noise.hpp"
 
 #include <fftw3.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <mutex>
 #include <random>
+
+#include <cstdlib>
+#include <new>
+
+#ifdef __linux__
+#include <sys/mman.h>
+#endif
 
 namespace phantasm {
 namespace {
@@ -107,6 +116,41 @@ double sinc(double x) {
   return std::abs(x) < 1e-12 ? 1.0 : std::sin(x) / x;
 }
 
+/// n rounded up to a multiple of `multiple`: strides that keep every line of a buffer at the
+/// alignment of its start (64 bytes apart), so that one FFTW plan serves all of them.
+int round_up(int n, int multiple) {
+  return (n + multiple - 1) / multiple * multiple;
+}
+
+/// Complex buffers from FFTW's allocator (its SIMD alignment), freed on scope exit.
+struct FftwBuffer {
+  explicit FftwBuffer(std::size_t count)
+      : data(reinterpret_cast<std::complex<double>*>(fftw_alloc_complex(std::max<std::size_t>(count, 1)))) {}
+  ~FftwBuffer() { fftw_free(data); }
+  FftwBuffer(const FftwBuffer&) = delete;
+  FftwBuffer& operator=(const FftwBuffer&) = delete;
+  std::complex<double>* data;
+};
+
+fftw_complex* as_fftw(std::complex<double>* data) {
+  return reinterpret_cast<fftw_complex*>(data);
+}
+
+/// `count` single-precision complex values for the planes that every coil passes through, in
+/// 2 MiB pages where the system offers them (fewer page-table misses on the strided passes).
+/// Freed with std::free.
+std::complex<float>* allocate_planes(std::size_t count) {
+  constexpr std::size_t huge_page = std::size_t{1} << 21;
+  const std::size_t bytes =
+      (std::max<std::size_t>(count, 1) * sizeof(std::complex<float>) + huge_page - 1) / huge_page * huge_page;
+  void* memory = std::aligned_alloc(huge_page, bytes);
+  if (!memory) throw std::bad_alloc();
+#ifdef MADV_HUGEPAGE
+  madvise(memory, bytes, MADV_HUGEPAGE); // advice only: ignore a refusal
+#endif
+  return static_cast<std::complex<float>*>(memory);
+}
+
 } // namespace
 
 int signed_frequency(int index, int n) {
@@ -175,6 +219,294 @@ void acquire_in_kspace(std::vector<std::complex<double>>& image, const KspaceSam
     for (int t = 0; t < dims.x(); ++t)
       line[t] *= scale;
   });
+}
+
+/// One-line out-of-place plans, each executed on many lines of the same alignment (FFTW_ESTIMATE:
+/// the same algorithm, hence the same bytes, on every run).
+struct KspacePipeline::Plans {
+  fftw_plan z_forward = nullptr;  ///< real to complex along z
+  fftw_plan x_forward = nullptr;  ///< along x
+  fftw_plan x_backward = nullptr; ///< along x
+  fftw_plan y_forward = nullptr;  ///< along y (transposed columns)
+  fftw_plan y_backward = nullptr; ///< along y
+  fftw_plan z_backward = nullptr; ///< along z
+};
+
+namespace {
+constexpr int k_real_multiple = 8;    ///< doubles per 64 bytes
+constexpr int k_complex_multiple = 4; ///< complex doubles per 64 bytes
+} // namespace
+
+KspacePipeline::KspacePipeline(const KspaceSampling& sampling) : m_sampling(sampling) {
+  const Eigen::Vector3i& dims = sampling.dims;
+  const Eigen::Vector3i& kept = sampling.acquired;
+  m_row = round_up(dims.x(), k_complex_multiple);
+  m_plane = static_cast<std::size_t>(m_row) * static_cast<std::size_t>(dims.y());
+  m_column = round_up(dims.y(), k_complex_multiple);
+  for (int i = 0; i < dims.x(); ++i)
+    if (is_kept_frequency(i, dims.x(), kept.x())) m_kept_x.push_back(i);
+  for (int j = 0; j < dims.y(); ++j)
+    m_keep_y.push_back(is_kept_frequency(j, dims.y(), kept.y()) ? 1 : 0);
+  for (int t = 0; t < dims.z(); ++t)
+    if (is_kept_frequency(t, dims.z(), kept.z())) m_kept_z.push_back(t);
+  // Kept frequencies along z run from -(kept / 2) to (kept - 1) / 2: magnitudes up to kept / 2.
+  m_half = kept.z() / 2 + 1;
+  m_spectrum = allocate_planes(static_cast<std::size_t>(m_half) * m_plane);
+  m_coil = allocate_planes(m_kept_z.size() * m_plane);
+  m_plans = new Plans;
+  std::lock_guard<std::mutex> guard(planner_lock());
+  const int longest = std::max({m_row, m_column, round_up(dims.z(), k_complex_multiple)});
+  double* real = fftw_alloc_real(static_cast<std::size_t>(round_up(dims.z(), k_real_multiple)));
+  fftw_complex* in = fftw_alloc_complex(static_cast<std::size_t>(longest));
+  fftw_complex* out = fftw_alloc_complex(static_cast<std::size_t>(longest));
+  m_plans->z_forward = fftw_plan_dft_r2c_1d(dims.z(), real, out, FFTW_ESTIMATE);
+  m_plans->x_forward = fftw_plan_dft_1d(dims.x(), in, out, FFTW_FORWARD, FFTW_ESTIMATE);
+  m_plans->x_backward = fftw_plan_dft_1d(dims.x(), in, out, FFTW_BACKWARD, FFTW_ESTIMATE);
+  m_plans->y_forward = fftw_plan_dft_1d(dims.y(), in, out, FFTW_FORWARD, FFTW_ESTIMATE);
+  m_plans->y_backward = fftw_plan_dft_1d(dims.y(), in, out, FFTW_BACKWARD, FFTW_ESTIMATE);
+  m_plans->z_backward = fftw_plan_dft_1d(dims.z(), in, out, FFTW_BACKWARD, FFTW_ESTIMATE);
+  fftw_free(out);
+  fftw_free(in);
+  fftw_free(real);
+}
+
+KspacePipeline::~KspacePipeline() {
+  {
+    std::lock_guard<std::mutex> guard(planner_lock());
+    for (fftw_plan plan : {m_plans->z_forward, m_plans->x_forward, m_plans->x_backward, m_plans->y_forward,
+                           m_plans->y_backward, m_plans->z_backward})
+      if (plan) fftw_destroy_plan(plan);
+  }
+  delete m_plans;
+  std::free(m_coil);
+  std::free(m_spectrum);
+}
+
+void KspacePipeline::set_object(const std::vector<double>& object) {
+  const Eigen::Vector3i& dims = m_sampling.dims;
+  const int nx = dims.x(), ny = dims.y(), nz = dims.z();
+  const std::size_t slice = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
+  const int real_stride = round_up(nz, k_real_multiple);
+  const int half_stride = round_up(nz / 2 + 1, k_complex_multiple);
+  // The slice profile's transform is real and even: the half spectrum keeps its symmetry.
+  std::vector<double> weight(static_cast<std::size_t>(m_half), 1.0);
+  if (m_sampling.slice_thickness_voxels > 0.0)
+    for (int f = 0; f < m_half; ++f)
+      weight[static_cast<std::size_t>(f)] =
+          sinc(M_PI * static_cast<double>(f) / nz * m_sampling.slice_thickness_voxels);
+  m_row_used.assign(static_cast<std::size_t>(ny), 0);
+  const fftw_plan plan = m_plans->z_forward;
+  // One in-plane row j at a time: its nz rows of the object are read whole (far apart in memory,
+  // each contiguous), its lines along z are transformed from that copy, and its half spectrum
+  // is written whole into the planes.
+#pragma omp parallel
+  {
+    std::vector<double> rows(static_cast<std::size_t>(nz) * static_cast<std::size_t>(nx));
+    std::vector<std::complex<double>> spectrum(static_cast<std::size_t>(m_half) *
+                                               static_cast<std::size_t>(nx));
+    double* in = fftw_alloc_real(static_cast<std::size_t>(k_batch) * real_stride);
+    FftwBuffer out(static_cast<std::size_t>(k_batch) * half_stride);
+#pragma omp for schedule(static)
+    for (int j = 0; j < ny; ++j) {
+      if (cancellation_requested()) continue; // no exception may leave an OpenMP region
+      const std::size_t first = static_cast<std::size_t>(j) * static_cast<std::size_t>(nx);
+      bool used = false;
+      for (int t = 0; t < nz; ++t) {
+        const double* from = object.data() + static_cast<std::size_t>(t) * slice + first;
+        std::copy(from, from + nx, rows.data() + static_cast<std::size_t>(t) * nx);
+      }
+      for (int i0 = 0; i0 < nx; i0 += k_batch) {
+        const int count = std::min(k_batch, nx - i0);
+        for (int t = 0; t < nz; ++t)
+          for (int b = 0; b < count; ++b)
+            in[b * real_stride + t] =
+                rows[static_cast<std::size_t>(t) * nx + static_cast<std::size_t>(i0 + b)];
+        for (int b = 0; b < count; ++b) {
+          const double* line = in + b * real_stride;
+          // An empty line's transform is zero: most of a field of view around a head.
+          const bool nonzero = std::any_of(line, line + nz, [](double x) { return x != 0.0; });
+          if (nonzero) fftw_execute_dft_r2c(plan, in + b * real_stride, as_fftw(out.data + b * half_stride));
+          used = used || nonzero;
+          for (int f = 0; f < m_half; ++f)
+            spectrum[static_cast<std::size_t>(f) * nx + static_cast<std::size_t>(i0 + b)] =
+                nonzero ? out.data[b * half_stride + f] * weight[static_cast<std::size_t>(f)]
+                        : std::complex<double>(0.0);
+        }
+      }
+      for (int f = 0; f < m_half; ++f) {
+        const std::complex<double>* from = spectrum.data() + static_cast<std::size_t>(f) * nx;
+        std::complex<float>* to =
+            m_spectrum + static_cast<std::size_t>(f) * m_plane + static_cast<std::size_t>(j) * m_row;
+        for (int i = 0; i < nx; ++i)
+          to[i] = std::complex<float>(from[i]);
+      }
+      m_row_used[static_cast<std::size_t>(j)] = used ? 1 : 0;
+    }
+    fftw_free(in);
+  }
+  throw_if_cancelled(); // a cut-short spectrum is garbage: nobody may read it
+}
+
+template <class Deliver>
+void KspacePipeline::acquire_coil(const std::complex<double>* sensitivity, double noise_sigma,
+                                  std::uint64_t noise_seed, const Deliver& deliver) {
+  const Eigen::Vector3i& dims = m_sampling.dims;
+  const int nx = dims.x(), ny = dims.y(), nz = dims.z();
+  const auto kept_x = static_cast<int>(m_kept_x.size());
+  const auto kept_z = static_cast<int>(m_kept_z.size());
+  const double total = static_cast<double>(nx) * ny * nz;
+  const double kept_count = static_cast<double>(m_sampling.acquired.prod());
+  // Per part noise of each kept sample for sigma per part in the reconstructed voxel (the
+  // inverse transform is scaled by 1 / total), as in acquire_in_kspace().
+  const double sample_sigma = noise_sigma * total / std::sqrt(kept_count);
+  constexpr int k_block = 8; // rows moved together by the transposes
+
+  // In-plane, one kept plane along z at a time (it stays in cache): multiply, transform along
+  // x, move the kept columns aside, transform them along y, truncate, add noise, transform back
+  // along y, and along x into the coil's plane. All transforms out of place: faster in FFTW.
+#pragma omp parallel
+  {
+    FftwBuffer columns(static_cast<std::size_t>(kept_x) * m_column);
+    FftwBuffer rows(static_cast<std::size_t>(k_block) * m_row);
+    FftwBuffer staged(static_cast<std::size_t>(std::max(m_row, m_column)));
+#pragma omp for schedule(dynamic, 1)
+    for (int q = 0; q < kept_z; ++q) {
+      if (cancellation_requested()) continue; // no exception may leave an OpenMP region
+      const int t = m_kept_z[static_cast<std::size_t>(q)];
+      const int f = signed_frequency(t, nz);
+      // The object is real: its spectrum at -f is the conjugate of the one at f.
+      const std::complex<float>* source = m_spectrum + static_cast<std::size_t>(std::abs(f)) * m_plane;
+      std::complex<float>* plane = m_coil + static_cast<std::size_t>(q) * m_plane;
+      for (int j0 = 0; j0 < ny; j0 += k_block) {
+        const int count = std::min(k_block, ny - j0);
+        for (int r = 0; r < count; ++r) {
+          const int j = j0 + r;
+          std::complex<double>* row = rows.data + static_cast<std::size_t>(r) * m_row;
+          if (!m_row_used[static_cast<std::size_t>(j)]) { // the object never reaches it: zero
+            std::fill_n(row, nx, std::complex<double>(0.0));
+            continue;
+          }
+          const std::complex<float>* from = source + static_cast<std::size_t>(j) * m_row;
+          if (f < 0)
+            for (int i = 0; i < nx; ++i)
+              staged.data[i] = std::conj(std::complex<double>(from[i]));
+          else
+            for (int i = 0; i < nx; ++i)
+              staged.data[i] = std::complex<double>(from[i]);
+          if (sensitivity) {
+            const std::complex<double>* s = sensitivity + static_cast<std::size_t>(j) * nx;
+            for (int i = 0; i < nx; ++i)
+              staged.data[i] *= s[i];
+          }
+          fftw_execute_dft(m_plans->x_forward, as_fftw(staged.data), as_fftw(row));
+        }
+        for (int c = 0; c < kept_x; ++c) {
+          std::complex<double>* column = columns.data + static_cast<std::size_t>(c) * m_column + j0;
+          const auto i = static_cast<std::size_t>(m_kept_x[static_cast<std::size_t>(c)]);
+          for (int r = 0; r < count; ++r)
+            column[r] = rows.data[static_cast<std::size_t>(r) * m_row + i];
+        }
+      }
+      for (int c = 0; c < kept_x; ++c) {
+        std::complex<double>* column = columns.data + static_cast<std::size_t>(c) * m_column;
+        fftw_execute_dft(m_plans->y_forward, as_fftw(column), as_fftw(staged.data));
+        const int i = m_kept_x[static_cast<std::size_t>(c)];
+        // One stream per kept k-space column, named by its frequencies along x and z.
+        NormalStream noise(
+            mix_seed(noise_seed, static_cast<std::uint64_t>(t) * nx + static_cast<std::uint64_t>(i)));
+        for (int j = 0; j < ny; ++j) {
+          if (!m_keep_y[static_cast<std::size_t>(j)]) {
+            staged.data[j] = 0.0;
+          } else if (noise_sigma > 0.0) {
+            const double re = noise(), im = noise();
+            staged.data[j] += sample_sigma * std::complex<double>(re, im);
+          }
+        }
+        fftw_execute_dft(m_plans->y_backward, as_fftw(staged.data), as_fftw(column));
+      }
+      for (int j0 = 0; j0 < ny; j0 += k_block) {
+        const int count = std::min(k_block, ny - j0);
+        for (int r = 0; r < count; ++r)
+          std::fill_n(rows.data + static_cast<std::size_t>(r) * m_row, nx, std::complex<double>(0.0));
+        for (int c = 0; c < kept_x; ++c) {
+          const std::complex<double>* column = columns.data + static_cast<std::size_t>(c) * m_column + j0;
+          const auto i = static_cast<std::size_t>(m_kept_x[static_cast<std::size_t>(c)]);
+          for (int r = 0; r < count; ++r)
+            rows.data[static_cast<std::size_t>(r) * m_row + i] = column[r];
+        }
+        for (int r = 0; r < count; ++r) {
+          fftw_execute_dft(m_plans->x_backward, as_fftw(rows.data + static_cast<std::size_t>(r) * m_row),
+                           as_fftw(staged.data));
+          std::complex<float>* to = plane + static_cast<std::size_t>(j0 + r) * m_row;
+          for (int i = 0; i < nx; ++i)
+            to[i] = std::complex<float>(staged.data[i]);
+        }
+      }
+    }
+  }
+  throw_if_cancelled(); // a cut-short coil image is garbage: nobody may read it
+
+  // Along z, one in-plane row j at a time: its kept planes' rows are read whole (far apart in
+  // memory, each contiguous), its lines are zero-filled and transformed back from that copy, and
+  // the voxels are delivered row by row.
+  const double scale = 1.0 / total;
+  const std::size_t slice = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
+  const int line_stride = round_up(nz, k_complex_multiple);
+#pragma omp parallel
+  {
+    std::vector<std::complex<double>> kept_rows(static_cast<std::size_t>(kept_z) * nx);
+    std::vector<std::complex<double>> image_rows(static_cast<std::size_t>(nz) * nx);
+    FftwBuffer lines(static_cast<std::size_t>(k_batch) * line_stride);
+    FftwBuffer out(static_cast<std::size_t>(k_batch) * line_stride);
+    // Frequencies that are not kept stay zero: only the kept ones are ever written.
+    std::fill_n(lines.data, static_cast<std::size_t>(k_batch) * line_stride, std::complex<double>(0.0));
+#pragma omp for schedule(static)
+    for (int j = 0; j < ny; ++j) {
+      if (cancellation_requested()) continue;
+      for (int q = 0; q < kept_z; ++q) {
+        const std::complex<float>* from =
+            m_coil + static_cast<std::size_t>(q) * m_plane + static_cast<std::size_t>(j) * m_row;
+        std::complex<double>* to = kept_rows.data() + static_cast<std::size_t>(q) * nx;
+        for (int i = 0; i < nx; ++i)
+          to[i] = std::complex<double>(from[i]);
+      }
+      for (int i0 = 0; i0 < nx; i0 += k_batch) {
+        const int count = std::min(k_batch, nx - i0);
+        for (int q = 0; q < kept_z; ++q) {
+          const std::complex<double>* from = kept_rows.data() + static_cast<std::size_t>(q) * nx + i0;
+          const int t = m_kept_z[static_cast<std::size_t>(q)];
+          for (int b = 0; b < count; ++b)
+            lines.data[b * line_stride + t] = from[b];
+        }
+        for (int b = 0; b < count; ++b)
+          fftw_execute_dft(m_plans->z_backward, as_fftw(lines.data + b * line_stride),
+                           as_fftw(out.data + b * line_stride));
+        for (int t = 0; t < nz; ++t)
+          for (int b = 0; b < count; ++b)
+            image_rows[static_cast<std::size_t>(t) * nx + static_cast<std::size_t>(i0 + b)] =
+                out.data[b * line_stride + t];
+      }
+      const std::size_t first = static_cast<std::size_t>(j) * static_cast<std::size_t>(nx);
+      for (int t = 0; t < nz; ++t)
+        for (int i = 0; i < nx; ++i)
+          deliver(static_cast<std::size_t>(t) * slice + first + static_cast<std::size_t>(i),
+                  image_rows[static_cast<std::size_t>(t) * nx + static_cast<std::size_t>(i)] * scale);
+    }
+  }
+  throw_if_cancelled();
+}
+
+void KspacePipeline::acquire(const std::complex<double>* sensitivity, double noise_sigma,
+                             std::uint64_t noise_seed, std::vector<std::complex<double>>& image) {
+  image.resize(static_cast<std::size_t>(m_sampling.dims.prod()));
+  acquire_coil(sensitivity, noise_sigma, noise_seed,
+               [&image](std::size_t v, std::complex<double> value) { image[v] = value; });
+}
+
+void KspacePipeline::add_squared_magnitude(const std::complex<double>* sensitivity, double noise_sigma,
+                                           std::uint64_t noise_seed, std::vector<double>& energy) {
+  acquire_coil(sensitivity, noise_sigma, noise_seed,
+               [&energy](std::size_t v, std::complex<double> value) { energy[v] += std::norm(value); });
 }
 
 } // namespace phantasm

@@ -27,6 +27,10 @@ public:
   std::complex<double> sensitivity(int coil, int i, int j) const {
     return m_count == 1 ? std::complex<double>(1.0) : m_planes[static_cast<std::size_t>(coil)][index(i, j)];
   }
+  /// Coil `coil`'s in-plane sensitivities (nx x ny, x fastest), or nullptr for the uniform body coil.
+  const std::complex<double>* sensitivity_plane(int coil) const {
+    return m_count == 1 ? nullptr : m_planes[static_cast<std::size_t>(coil)].data();
+  }
   /// Root sum of squares of all coils' sensitivities at in-plane voxel (i, j).
   double root_sum_of_squares(int i, int j) const;
 

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <memory>
 #include <random>
 
 namespace phantasm {
@@ -77,6 +78,7 @@ struct Acquisition {
   const ReceiveCoils& coils;
   std::optional<KspaceSampling> kspace;
   double bias_percent;
+  KspacePipeline* pipeline; ///< k-space through the pipeline; nullptr: per coil (or no k-space)
 };
 
 MrImage image_of(const Acquisition& acquisition, const SequenceSettings& sequence, std::uint64_t seed,
@@ -100,12 +102,30 @@ MrImage image_of(const Acquisition& acquisition, const SequenceSettings& sequenc
     object[v] = sum * bias[v];
   }
 
+  const int coils = acquisition.coils.count();
+  image.magnitude.resize(count);
+  if (acquisition.pipeline) {
+    // The sum of squares (one coil: the squared magnitude) over the coils.
+    acquisition.pipeline->set_object(object);
+    std::vector<double> energy(count, 0.0);
+    for (int c = 0; c < coils; ++c) {
+      throw_if_cancelled();
+      if (coils > 1 && progress_detail_due())
+        progress_detail("coil " + std::to_string(c + 1) + "/" + std::to_string(coils));
+      acquisition.pipeline->add_squared_magnitude(acquisition.coils.sensitivity_plane(c), noise_sigma,
+                                                  mix_seed(seed, static_cast<std::uint64_t>(c) + 1), energy);
+    }
+#pragma omp parallel for schedule(static)
+    for (std::int64_t n = 0; n < voxels; ++n)
+      image.magnitude[static_cast<std::size_t>(n)] =
+          static_cast<float>(std::sqrt(energy[static_cast<std::size_t>(n)]));
+    return image;
+  }
+
   const int nx = grid.dims.x(), ny = grid.dims.y();
   const std::int64_t rows = std::int64_t{ny} * grid.dims.z();
-  const int coils = acquisition.coils.count();
   std::vector<double> sum_of_squares(coils > 1 ? count : 0, 0.0);
   std::vector<std::complex<double>> coil_image(count);
-  image.magnitude.resize(count);
   for (int c = 0; c < coils; ++c) {
     throw_if_cancelled();
     if (coils > 1 && progress_detail_due())
@@ -156,7 +176,7 @@ std::optional<KspaceSampling> kspace_sampling(const AcquisitionSettings& a, cons
 } // namespace
 
 MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, const VoxelizedPhantom& volumes,
-                           StageReport& report, Reporter& reporter) {
+                           StageReport& report, Reporter& reporter, KspaceMethod method) {
   MrImages images;
   const auto parameters = resolve_tissue_parameters(mri, organs);
   auto relaxation_of = [&](const std::string& tissue) {
@@ -171,7 +191,11 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
   for (std::size_t v = 0; v < object_mask.size(); ++v)
     object_mask[v] = volumes.reference.background[v] < 0.5f;
   const ReceiveCoils coils(grid, settings.coils, object_mask);
-  const Acquisition acquisition{grid, coils, kspace_sampling(settings, grid), settings.bias_percent};
+  const std::optional<KspaceSampling> sampling = kspace_sampling(settings, grid);
+  // Plans and buffers made once for every coil, sequence and state.
+  std::unique_ptr<KspacePipeline> pipeline;
+  if (sampling && method == KspaceMethod::pipeline) pipeline = std::make_unique<KspacePipeline>(*sampling);
+  const Acquisition acquisition{grid, coils, sampling, settings.bias_percent, pipeline.get()};
   images.kspace = acquisition.kspace;
   images.coils = coils.count();
   if (acquisition.kspace) {

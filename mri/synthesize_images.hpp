@@ -11,6 +11,16 @@
 
 namespace phantasm {
 
+/// How synthesize_images() acquires in k-space. Both give the same images up to rounding, noise
+/// apart (the same statistics, other deviates).
+enum class KspaceMethod {
+  /// KspacePipeline: the object's transform along the coils' axis once per image, plans and
+  /// buffers shared by every coil, sequence and state, in-plane work one plane at a time.
+  pipeline,
+  /// acquire_in_kspace() on each coil's complex image: the former method, kept for comparison.
+  per_coil,
+};
+
 /// MR images of every sequence of the settings, for each state the volumes hold: each voxel's
 /// signal is the fraction-weighted sum of its tissues' signed closed-form signals (so partial
 /// volume can cancel at an inversion null), times a smooth multiplicative bias field (a seeded
@@ -24,7 +34,9 @@ namespace phantasm {
 /// The images point at settings.sequences: keep the settings alive.
 /// @param settings field strength, tissue values, sequences, acquisition, seed, parameter maps
 /// @param organs the organ table (the tissues whose parameters are resolved)
+/// @param method how k-space is acquired (benchmarks compare the two)
 MrImages synthesize_images(const MriSettings& settings, const OrganTable& organs,
-                           const VoxelizedPhantom& volumes, StageReport& report, Reporter& reporter);
+                           const VoxelizedPhantom& volumes, StageReport& report, Reporter& reporter,
+                           KspaceMethod method = KspaceMethod::pipeline);
 
 } // namespace phantasm
