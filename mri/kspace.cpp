@@ -237,7 +237,8 @@ constexpr int k_real_multiple = 8;    ///< doubles per 64 bytes
 constexpr int k_complex_multiple = 4; ///< complex doubles per 64 bytes
 } // namespace
 
-KspacePipeline::KspacePipeline(const KspaceSampling& sampling) : m_sampling(sampling) {
+KspacePipeline::KspacePipeline(const KspaceSampling& sampling, int coils_together)
+    : m_sampling(sampling), m_coils_together(std::max(1, coils_together)) {
   const Eigen::Vector3i& dims = sampling.dims;
   const Eigen::Vector3i& kept = sampling.acquired;
   m_row = round_up(dims.x(), k_complex_multiple);
@@ -252,7 +253,7 @@ KspacePipeline::KspacePipeline(const KspaceSampling& sampling) : m_sampling(samp
   // Kept frequencies along z run from -(kept / 2) to (kept - 1) / 2: magnitudes up to kept / 2.
   m_half = kept.z() / 2 + 1;
   m_spectrum = allocate_planes(static_cast<std::size_t>(m_half) * m_plane);
-  m_coil = allocate_planes(m_kept_z.size() * m_plane);
+  m_coil = allocate_planes(static_cast<std::size_t>(m_coils_together) * m_kept_z.size() * m_plane);
   m_plans = new Plans;
   std::lock_guard<std::mutex> guard(planner_lock());
   const int longest = std::max({m_row, m_column, round_up(dims.z(), k_complex_multiple)});
@@ -347,23 +348,20 @@ void KspacePipeline::set_object(const std::vector<double>& object) {
   throw_if_cancelled(); // a cut-short spectrum is garbage: nobody may read it
 }
 
-template <class Deliver>
-void KspacePipeline::acquire_coil(const std::complex<double>* sensitivity, double noise_sigma,
-                                  std::uint64_t noise_seed, const Deliver& deliver) {
+void KspacePipeline::acquire_coils(const KspaceCoil* coils, int count, std::complex<double>* image,
+                                   double* energy) {
   const Eigen::Vector3i& dims = m_sampling.dims;
   const int nx = dims.x(), ny = dims.y(), nz = dims.z();
   const auto kept_x = static_cast<int>(m_kept_x.size());
   const auto kept_z = static_cast<int>(m_kept_z.size());
   const double total = static_cast<double>(nx) * ny * nz;
   const double kept_count = static_cast<double>(m_sampling.acquired.prod());
-  // Per part noise of each kept sample for sigma per part in the reconstructed voxel (the
-  // inverse transform is scaled by 1 / total), as in acquire_in_kspace().
-  const double sample_sigma = noise_sigma * total / std::sqrt(kept_count);
+  const std::size_t coil_planes = static_cast<std::size_t>(kept_z) * m_plane;
   constexpr int k_block = 8; // rows moved together by the transposes
 
-  // In-plane, one kept plane along z at a time (it stays in cache): multiply, transform along
-  // x, move the kept columns aside, transform them along y, truncate, add noise, transform back
-  // along y, and along x into the coil's plane. All transforms out of place: faster in FFTW.
+  // In-plane, one kept plane along z at a time (it stays in cache), for each coil: multiply,
+  // transform along x, move the kept columns aside, transform them along y, truncate, add noise,
+  // transform back along y, and along x into the coil's plane. Out-of-place transforms: faster.
 #pragma omp parallel
   {
     FftwBuffer columns(static_cast<std::size_t>(kept_x) * m_column);
@@ -376,86 +374,94 @@ void KspacePipeline::acquire_coil(const std::complex<double>* sensitivity, doubl
       const int f = signed_frequency(t, nz);
       // The object is real: its spectrum at -f is the conjugate of the one at f.
       const std::complex<float>* source = m_spectrum + static_cast<std::size_t>(std::abs(f)) * m_plane;
-      std::complex<float>* plane = m_coil + static_cast<std::size_t>(q) * m_plane;
-      for (int j0 = 0; j0 < ny; j0 += k_block) {
-        const int count = std::min(k_block, ny - j0);
-        for (int r = 0; r < count; ++r) {
-          const int j = j0 + r;
-          std::complex<double>* row = rows.data + static_cast<std::size_t>(r) * m_row;
-          if (!m_row_used[static_cast<std::size_t>(j)]) { // the object never reaches it: zero
-            std::fill_n(row, nx, std::complex<double>(0.0));
-            continue;
+      for (int p = 0; p < count; ++p) {
+        const std::complex<double>* sensitivity = coils[p].sensitivity;
+        // Per part noise of each kept sample for sigma per part in the reconstructed voxel (the
+        // inverse transform is scaled by 1 / total), as in acquire_in_kspace().
+        const double sample_sigma = coils[p].noise_sigma * total / std::sqrt(kept_count);
+        std::complex<float>* plane =
+            m_coil + static_cast<std::size_t>(p) * coil_planes + static_cast<std::size_t>(q) * m_plane;
+        for (int j0 = 0; j0 < ny; j0 += k_block) {
+          const int block = std::min(k_block, ny - j0);
+          for (int r = 0; r < block; ++r) {
+            const int j = j0 + r;
+            std::complex<double>* row = rows.data + static_cast<std::size_t>(r) * m_row;
+            if (!m_row_used[static_cast<std::size_t>(j)]) { // the object never reaches it: zero
+              std::fill_n(row, nx, std::complex<double>(0.0));
+              continue;
+            }
+            const std::complex<float>* from = source + static_cast<std::size_t>(j) * m_row;
+            if (f < 0)
+              for (int i = 0; i < nx; ++i)
+                staged.data[i] = std::conj(std::complex<double>(from[i]));
+            else
+              for (int i = 0; i < nx; ++i)
+                staged.data[i] = std::complex<double>(from[i]);
+            if (sensitivity) {
+              const std::complex<double>* s = sensitivity + static_cast<std::size_t>(j) * nx;
+              for (int i = 0; i < nx; ++i)
+                staged.data[i] *= s[i];
+            }
+            fftw_execute_dft(m_plans->x_forward, as_fftw(staged.data), as_fftw(row));
           }
-          const std::complex<float>* from = source + static_cast<std::size_t>(j) * m_row;
-          if (f < 0)
-            for (int i = 0; i < nx; ++i)
-              staged.data[i] = std::conj(std::complex<double>(from[i]));
-          else
-            for (int i = 0; i < nx; ++i)
-              staged.data[i] = std::complex<double>(from[i]);
-          if (sensitivity) {
-            const std::complex<double>* s = sensitivity + static_cast<std::size_t>(j) * nx;
-            for (int i = 0; i < nx; ++i)
-              staged.data[i] *= s[i];
+          for (int c = 0; c < kept_x; ++c) {
+            std::complex<double>* column = columns.data + static_cast<std::size_t>(c) * m_column + j0;
+            const auto i = static_cast<std::size_t>(m_kept_x[static_cast<std::size_t>(c)]);
+            for (int r = 0; r < block; ++r)
+              column[r] = rows.data[static_cast<std::size_t>(r) * m_row + i];
           }
-          fftw_execute_dft(m_plans->x_forward, as_fftw(staged.data), as_fftw(row));
         }
         for (int c = 0; c < kept_x; ++c) {
-          std::complex<double>* column = columns.data + static_cast<std::size_t>(c) * m_column + j0;
-          const auto i = static_cast<std::size_t>(m_kept_x[static_cast<std::size_t>(c)]);
-          for (int r = 0; r < count; ++r)
-            column[r] = rows.data[static_cast<std::size_t>(r) * m_row + i];
-        }
-      }
-      for (int c = 0; c < kept_x; ++c) {
-        std::complex<double>* column = columns.data + static_cast<std::size_t>(c) * m_column;
-        fftw_execute_dft(m_plans->y_forward, as_fftw(column), as_fftw(staged.data));
-        const int i = m_kept_x[static_cast<std::size_t>(c)];
-        // One stream per kept k-space column, named by its frequencies along x and z.
-        NormalStream noise(
-            mix_seed(noise_seed, static_cast<std::uint64_t>(t) * nx + static_cast<std::uint64_t>(i)));
-        for (int j = 0; j < ny; ++j) {
-          if (!m_keep_y[static_cast<std::size_t>(j)]) {
-            staged.data[j] = 0.0;
-          } else if (noise_sigma > 0.0) {
-            const double re = noise(), im = noise();
-            staged.data[j] += sample_sigma * std::complex<double>(re, im);
+          std::complex<double>* column = columns.data + static_cast<std::size_t>(c) * m_column;
+          fftw_execute_dft(m_plans->y_forward, as_fftw(column), as_fftw(staged.data));
+          const int i = m_kept_x[static_cast<std::size_t>(c)];
+          // One stream per coil and kept k-space column, named by its frequencies along x and z.
+          NormalStream noise(mix_seed(coils[p].noise_seed,
+                                      static_cast<std::uint64_t>(t) * nx + static_cast<std::uint64_t>(i)));
+          for (int j = 0; j < ny; ++j) {
+            if (!m_keep_y[static_cast<std::size_t>(j)]) {
+              staged.data[j] = 0.0;
+            } else if (coils[p].noise_sigma > 0.0) {
+              const double re = noise(), im = noise();
+              staged.data[j] += sample_sigma * std::complex<double>(re, im);
+            }
           }
+          fftw_execute_dft(m_plans->y_backward, as_fftw(staged.data), as_fftw(column));
         }
-        fftw_execute_dft(m_plans->y_backward, as_fftw(staged.data), as_fftw(column));
-      }
-      for (int j0 = 0; j0 < ny; j0 += k_block) {
-        const int count = std::min(k_block, ny - j0);
-        for (int r = 0; r < count; ++r)
-          std::fill_n(rows.data + static_cast<std::size_t>(r) * m_row, nx, std::complex<double>(0.0));
-        for (int c = 0; c < kept_x; ++c) {
-          const std::complex<double>* column = columns.data + static_cast<std::size_t>(c) * m_column + j0;
-          const auto i = static_cast<std::size_t>(m_kept_x[static_cast<std::size_t>(c)]);
-          for (int r = 0; r < count; ++r)
-            rows.data[static_cast<std::size_t>(r) * m_row + i] = column[r];
-        }
-        for (int r = 0; r < count; ++r) {
-          fftw_execute_dft(m_plans->x_backward, as_fftw(rows.data + static_cast<std::size_t>(r) * m_row),
-                           as_fftw(staged.data));
-          std::complex<float>* to = plane + static_cast<std::size_t>(j0 + r) * m_row;
-          for (int i = 0; i < nx; ++i)
-            to[i] = std::complex<float>(staged.data[i]);
+        for (int j0 = 0; j0 < ny; j0 += k_block) {
+          const int block = std::min(k_block, ny - j0);
+          for (int r = 0; r < block; ++r)
+            std::fill_n(rows.data + static_cast<std::size_t>(r) * m_row, nx, std::complex<double>(0.0));
+          for (int c = 0; c < kept_x; ++c) {
+            const std::complex<double>* column = columns.data + static_cast<std::size_t>(c) * m_column + j0;
+            const auto i = static_cast<std::size_t>(m_kept_x[static_cast<std::size_t>(c)]);
+            for (int r = 0; r < block; ++r)
+              rows.data[static_cast<std::size_t>(r) * m_row + i] = column[r];
+          }
+          for (int r = 0; r < block; ++r) {
+            fftw_execute_dft(m_plans->x_backward, as_fftw(rows.data + static_cast<std::size_t>(r) * m_row),
+                             as_fftw(staged.data));
+            std::complex<float>* to = plane + static_cast<std::size_t>(j0 + r) * m_row;
+            for (int i = 0; i < nx; ++i)
+              to[i] = std::complex<float>(staged.data[i]);
+          }
         }
       }
     }
   }
   throw_if_cancelled(); // a cut-short coil image is garbage: nobody may read it
 
-  // Along z, one in-plane row j at a time: its kept planes' rows are read whole (far apart in
-  // memory, each contiguous), its lines are zero-filled and transformed back from that copy, and
-  // the voxels are delivered row by row.
+  // Along z, one in-plane row j at a time: each coil's kept planes' rows are read whole (far
+  // apart in memory, each contiguous), its lines are zero-filled and transformed back from that
+  // copy, and the row's voxels are delivered once for all the coils.
   const double scale = 1.0 / total;
   const std::size_t slice = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
   const int line_stride = round_up(nz, k_complex_multiple);
 #pragma omp parallel
   {
     std::vector<std::complex<double>> kept_rows(static_cast<std::size_t>(kept_z) * nx);
-    std::vector<std::complex<double>> image_rows(static_cast<std::size_t>(nz) * nx);
+    std::vector<std::complex<double>> image_rows(image ? static_cast<std::size_t>(nz) * nx : 0);
+    std::vector<double> energy_rows(energy ? static_cast<std::size_t>(nz) * nx : 0);
     FftwBuffer lines(static_cast<std::size_t>(k_batch) * line_stride);
     FftwBuffer out(static_cast<std::size_t>(k_batch) * line_stride);
     // Frequencies that are not kept stay zero: only the kept ones are ever written.
@@ -463,34 +469,48 @@ void KspacePipeline::acquire_coil(const std::complex<double>* sensitivity, doubl
 #pragma omp for schedule(static)
     for (int j = 0; j < ny; ++j) {
       if (cancellation_requested()) continue;
-      for (int q = 0; q < kept_z; ++q) {
-        const std::complex<float>* from =
-            m_coil + static_cast<std::size_t>(q) * m_plane + static_cast<std::size_t>(j) * m_row;
-        std::complex<double>* to = kept_rows.data() + static_cast<std::size_t>(q) * nx;
-        for (int i = 0; i < nx; ++i)
-          to[i] = std::complex<double>(from[i]);
-      }
-      for (int i0 = 0; i0 < nx; i0 += k_batch) {
-        const int count = std::min(k_batch, nx - i0);
+      std::fill(energy_rows.begin(), energy_rows.end(), 0.0);
+      for (int p = 0; p < count; ++p) {
         for (int q = 0; q < kept_z; ++q) {
-          const std::complex<double>* from = kept_rows.data() + static_cast<std::size_t>(q) * nx + i0;
-          const int t = m_kept_z[static_cast<std::size_t>(q)];
-          for (int b = 0; b < count; ++b)
-            lines.data[b * line_stride + t] = from[b];
+          const std::complex<float>* from = m_coil + static_cast<std::size_t>(p) * coil_planes +
+                                            static_cast<std::size_t>(q) * m_plane +
+                                            static_cast<std::size_t>(j) * m_row;
+          std::complex<double>* to = kept_rows.data() + static_cast<std::size_t>(q) * nx;
+          for (int i = 0; i < nx; ++i)
+            to[i] = std::complex<double>(from[i]);
         }
-        for (int b = 0; b < count; ++b)
-          fftw_execute_dft(m_plans->z_backward, as_fftw(lines.data + b * line_stride),
-                           as_fftw(out.data + b * line_stride));
-        for (int t = 0; t < nz; ++t)
-          for (int b = 0; b < count; ++b)
-            image_rows[static_cast<std::size_t>(t) * nx + static_cast<std::size_t>(i0 + b)] =
-                out.data[b * line_stride + t];
+        for (int i0 = 0; i0 < nx; i0 += k_batch) {
+          const int batch = std::min(k_batch, nx - i0);
+          for (int q = 0; q < kept_z; ++q) {
+            const std::complex<double>* from = kept_rows.data() + static_cast<std::size_t>(q) * nx + i0;
+            const int t = m_kept_z[static_cast<std::size_t>(q)];
+            for (int b = 0; b < batch; ++b)
+              lines.data[b * line_stride + t] = from[b];
+          }
+          for (int b = 0; b < batch; ++b)
+            fftw_execute_dft(m_plans->z_backward, as_fftw(lines.data + b * line_stride),
+                             as_fftw(out.data + b * line_stride));
+          for (int t = 0; t < nz; ++t)
+            for (int b = 0; b < batch; ++b) {
+              const std::complex<double> value = out.data[b * line_stride + t] * scale;
+              const std::size_t at = static_cast<std::size_t>(t) * nx + static_cast<std::size_t>(i0 + b);
+              if (image)
+                image_rows[at] = value;
+              else
+                energy_rows[at] += std::norm(value);
+            }
+        }
       }
       const std::size_t first = static_cast<std::size_t>(j) * static_cast<std::size_t>(nx);
-      for (int t = 0; t < nz; ++t)
-        for (int i = 0; i < nx; ++i)
-          deliver(static_cast<std::size_t>(t) * slice + first + static_cast<std::size_t>(i),
-                  image_rows[static_cast<std::size_t>(t) * nx + static_cast<std::size_t>(i)] * scale);
+      for (int t = 0; t < nz; ++t) {
+        const std::size_t at = static_cast<std::size_t>(t) * nx;
+        const std::size_t v = static_cast<std::size_t>(t) * slice + first;
+        if (image)
+          std::copy(image_rows.data() + at, image_rows.data() + at + nx, image + v);
+        else
+          for (int i = 0; i < nx; ++i)
+            energy[v + static_cast<std::size_t>(i)] += energy_rows[at + static_cast<std::size_t>(i)];
+      }
     }
   }
   throw_if_cancelled();
@@ -499,14 +519,16 @@ void KspacePipeline::acquire_coil(const std::complex<double>* sensitivity, doubl
 void KspacePipeline::acquire(const std::complex<double>* sensitivity, double noise_sigma,
                              std::uint64_t noise_seed, std::vector<std::complex<double>>& image) {
   image.resize(static_cast<std::size_t>(m_sampling.dims.prod()));
-  acquire_coil(sensitivity, noise_sigma, noise_seed,
-               [&image](std::size_t v, std::complex<double> value) { image[v] = value; });
+  const KspaceCoil coil{sensitivity, noise_sigma, noise_seed};
+  acquire_coils(&coil, 1, image.data(), nullptr);
 }
 
-void KspacePipeline::add_squared_magnitude(const std::complex<double>* sensitivity, double noise_sigma,
-                                           std::uint64_t noise_seed, std::vector<double>& energy) {
-  acquire_coil(sensitivity, noise_sigma, noise_seed,
-               [&energy](std::size_t v, std::complex<double> value) { energy[v] += std::norm(value); });
+void KspacePipeline::add_squared_magnitude(const std::vector<KspaceCoil>& coils,
+                                           std::vector<double>& energy) {
+  for (std::size_t first = 0; first < coils.size(); first += static_cast<std::size_t>(m_coils_together)) {
+    const auto count = static_cast<int>(std::min<std::size_t>(m_coils_together, coils.size() - first));
+    acquire_coils(coils.data() + first, count, nullptr, energy.data());
+  }
 }
 
 } // namespace phantasm

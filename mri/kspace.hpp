@@ -40,6 +40,13 @@ bool is_kept_frequency(int index, int n, int kept);
 void acquire_in_kspace(std::vector<std::complex<double>>& image, const KspaceSampling& sampling,
                        double noise_sigma, std::uint64_t noise_seed);
 
+/// One receive coil of a k-space acquisition: its in-plane sensitivities and its noise.
+struct KspaceCoil {
+  const std::complex<double>* sensitivity = nullptr; ///< nx x ny (x fastest); nullptr: uniform 1
+  double noise_sigma = 0.0;                          ///< std of each part of a reconstructed voxel's noise
+  std::uint64_t noise_seed = 0;
+};
+
 /// The k-space acquisition of many images of one grid: sensitivity (in-plane, the same on every
 /// slice) x a real object, with the same sampling, plans and buffers for every coil, sequence
 /// and state. Equal to acquire_in_kspace() of sensitivity x object up to rounding (tested to
@@ -59,12 +66,16 @@ void acquire_in_kspace(std::vector<std::complex<double>>& image, const KspaceSam
 ///   on the number of threads.
 class KspacePipeline {
 public:
-  explicit KspacePipeline(const KspaceSampling& sampling);
+  /// @param coils_together coils whose planes are held at once (memory: each holds the kept
+  ///   planes along z in single precision); the through-plane pass adds their squared
+  ///   magnitudes in one sweep over the sum of squares
+  explicit KspacePipeline(const KspaceSampling& sampling, int coils_together = 1);
   ~KspacePipeline();
   KspacePipeline(const KspacePipeline&) = delete;
   KspacePipeline& operator=(const KspacePipeline&) = delete;
 
   const KspaceSampling& sampling() const { return m_sampling; }
+  int coils_together() const { return m_coils_together; }
 
   /// Transforms the real object along the third axis and keeps its truncated, slice-weighted
   /// half spectrum for the coils that follow.
@@ -78,18 +89,18 @@ public:
   void acquire(const std::complex<double>* sensitivity, double noise_sigma, std::uint64_t noise_seed,
                std::vector<std::complex<double>>& image);
 
-  /// The same acquisition, adding the squared magnitude of each voxel to `energy` (sum of squares).
+  /// Acquires the coils' images of the object, coils_together() at a time, and adds the squared
+  /// magnitude of each voxel of each to `energy` (the sum of squares).
   /// @param energy dims.prod() values
-  void add_squared_magnitude(const std::complex<double>* sensitivity, double noise_sigma,
-                             std::uint64_t noise_seed, std::vector<double>& energy);
+  void add_squared_magnitude(const std::vector<KspaceCoil>& coils, std::vector<double>& energy);
 
 private:
   struct Plans;
-  template <class Deliver>
-  void acquire_coil(const std::complex<double>* sensitivity, double noise_sigma, std::uint64_t noise_seed,
-                    const Deliver& deliver);
+  /// `count` <= coils_together() coils: into `image` (one coil) or added to `energy`.
+  void acquire_coils(const KspaceCoil* coils, int count, std::complex<double>* image, double* energy);
 
   KspaceSampling m_sampling;
+  int m_coils_together = 1;
   int m_row = 0;                       ///< complex stride between in-plane rows (a multiple of 4)
   std::size_t m_plane = 0;             ///< complex stride between planes
   int m_column = 0;                    ///< complex stride between transposed columns

@@ -35,11 +35,11 @@ void add_image_noise(std::vector<std::complex<double>>& image, const Eigen::Vect
 }
 
 /// A linear ramp along a seeded direction spanning 1 -/+ bias_percent / 200 over the object.
-std::vector<double> bias_field(double bias_percent, std::mt19937_64& random, const ImageGrid& grid,
-                               const TissueVolumes& volumes) {
+void bias_field(double bias_percent, std::mt19937_64& random, const ImageGrid& grid,
+                const TissueVolumes& volumes, std::vector<double>& bias) {
   const auto count = static_cast<std::size_t>(grid.voxel_count());
-  std::vector<double> bias(count, 1.0);
-  if (bias_percent <= 0.0) return bias;
+  bias.assign(count, 1.0);
+  if (bias_percent <= 0.0) return;
   std::normal_distribution<double> normal;
   Eigen::Vector3d direction(normal(random), normal(random), normal(random));
   direction.normalize();
@@ -69,7 +69,6 @@ std::vector<double> bias_field(double bias_percent, std::mt19937_64& random, con
               1.0 + half_span * (2.0 * (along - low) / (high - low) - 1.0);
         }
   }
-  return bias;
 }
 
 /// What stays the same for every image of a run: the grid, the coils and the k-space sampling.
@@ -81,18 +80,27 @@ struct Acquisition {
   KspacePipeline* pipeline; ///< k-space through the pipeline; nullptr: per coil (or no k-space)
 };
 
-MrImage image_of(const Acquisition& acquisition, const SequenceSettings& sequence, std::uint64_t seed,
-                 const TissueVolumes& volumes, const std::vector<double>& tissue_signal, double noise_sigma) {
+/// Voxel buffers that every image of a run reuses: fresh ones of hundreds of megabytes per
+/// image cost their page faults and zeroing again each time.
+struct Workspace {
+  std::vector<double> bias, object, energy;
+};
+
+MrImage image_of(const Acquisition& acquisition, Workspace& workspace, const SequenceSettings& sequence,
+                 std::uint64_t seed, const TissueVolumes& volumes, const std::vector<double>& tissue_signal,
+                 double noise_sigma) {
   const ImageGrid& grid = acquisition.grid;
   MrImage image;
   image.sequence = &sequence;
   image.noise_sigma = noise_sigma;
   const auto count = static_cast<std::size_t>(grid.voxel_count());
   std::mt19937_64 random(seed);
-  const std::vector<double> bias = bias_field(acquisition.bias_percent, random, grid, volumes);
+  std::vector<double>& bias = workspace.bias;
+  bias_field(acquisition.bias_percent, random, grid, volumes, bias);
   // The object: fraction-weighted signed signals (partial volume may cancel at a null) x bias.
   const auto voxels = static_cast<std::int64_t>(count);
-  std::vector<double> object(count);
+  std::vector<double>& object = workspace.object;
+  object.resize(count);
 #pragma omp parallel for schedule(static)
   for (std::int64_t n = 0; n < voxels; ++n) {
     const auto v = static_cast<std::size_t>(n);
@@ -107,13 +115,20 @@ MrImage image_of(const Acquisition& acquisition, const SequenceSettings& sequenc
   if (acquisition.pipeline) {
     // The sum of squares (one coil: the squared magnitude) over the coils.
     acquisition.pipeline->set_object(object);
-    std::vector<double> energy(count, 0.0);
-    for (int c = 0; c < coils; ++c) {
+    std::vector<double>& energy = workspace.energy;
+    energy.assign(count, 0.0);
+    KspacePipeline& pipeline = *acquisition.pipeline;
+    for (int first = 0; first < coils; first += pipeline.coils_together()) {
       throw_if_cancelled();
+      const int last = std::min(coils, first + pipeline.coils_together());
       if (coils > 1 && progress_detail_due())
-        progress_detail("coil " + std::to_string(c + 1) + "/" + std::to_string(coils));
-      acquisition.pipeline->add_squared_magnitude(acquisition.coils.sensitivity_plane(c), noise_sigma,
-                                                  mix_seed(seed, static_cast<std::uint64_t>(c) + 1), energy);
+        progress_detail("coil " + std::to_string(first + 1) +
+                        (last > first + 1 ? "-" + std::to_string(last) : "") + "/" + std::to_string(coils));
+      std::vector<KspaceCoil> group;
+      for (int c = first; c < last; ++c)
+        group.push_back({acquisition.coils.sensitivity_plane(c), noise_sigma,
+                         mix_seed(seed, static_cast<std::uint64_t>(c) + 1)});
+      pipeline.add_squared_magnitude(group, energy);
     }
 #pragma omp parallel for schedule(static)
     for (std::int64_t n = 0; n < voxels; ++n)
@@ -194,8 +209,12 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
   const std::optional<KspaceSampling> sampling = kspace_sampling(settings, grid);
   // Plans and buffers made once for every coil, sequence and state.
   std::unique_ptr<KspacePipeline> pipeline;
-  if (sampling && method == KspaceMethod::pipeline) pipeline = std::make_unique<KspacePipeline>(*sampling);
+  // Two coils at a time: one sweep over the sum of squares for both, for the memory of one
+  // double-precision coil image.
+  if (sampling && method == KspaceMethod::pipeline)
+    pipeline = std::make_unique<KspacePipeline>(*sampling, std::min(coils.count(), 2));
   const Acquisition acquisition{grid, coils, sampling, settings.bias_percent, pipeline.get()};
+  Workspace workspace;
   images.kspace = acquisition.kspace;
   images.coils = coils.count();
   if (acquisition.kspace) {
@@ -242,12 +261,12 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
     const double sigma = settings.noise_percent / 100.0 * std::abs(reference_signal);
     // One seed per image (sequence and state): images differ, and every run repeats them.
     progress.set_detail(sequence.name + ", reference");
-    images.reference.push_back(
-        image_of(acquisition, sequence, mix_seed(mri.seed, 2 * q), volumes.reference, tissue_signal, sigma));
+    images.reference.push_back(image_of(acquisition, workspace, sequence, mix_seed(mri.seed, 2 * q),
+                                        volumes.reference, tissue_signal, sigma));
     progress.advance();
     if (volumes.deformed) {
       progress.set_detail(sequence.name + ", deformed");
-      images.deformed.push_back(image_of(acquisition, sequence, mix_seed(mri.seed, 2 * q + 1),
+      images.deformed.push_back(image_of(acquisition, workspace, sequence, mix_seed(mri.seed, 2 * q + 1),
                                          *volumes.deformed, tissue_signal, sigma));
       progress.advance();
     }
