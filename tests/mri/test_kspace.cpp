@@ -1,11 +1,14 @@
 // k-space acquisition: the identity without truncation, Gibbs ringing of a truncated step, the
-// noise level of the reconstruction, the slice profile, and independence from the thread count.
+// noise level of the reconstruction, the slice profile, independence from the thread count, the
+// pipeline against the per-coil acquisition, and the normal deviates of its noise.
 
+#include "mri/gaussian_noise.hpp"
 #include "mri/kspace.hpp"
 
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -171,4 +174,198 @@ TEST(Kspace, SameBytesOnOneAndTwoThreads) {
   auto other_seed = object;
   acquire_in_kspace(other_seed, sampling, 0.3, 6);
   EXPECT_NE(0, std::memcmp(one.data(), other_seed.data(), one.size() * sizeof(one[0])));
+}
+
+namespace {
+
+std::vector<double> random_real_object(const Eigen::Vector3i& dims, unsigned seed) {
+  std::mt19937_64 random(seed);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  std::vector<double> object(static_cast<std::size_t>(dims.prod()));
+  for (auto& value : object)
+    value = uniform(random);
+  // Empty rows and lines, as around a head: the pipeline skips their transforms.
+  for (int k = 0; k < dims.z(); ++k)
+    for (int i = 0; i < dims.x(); ++i)
+      object[static_cast<std::size_t>((k * dims.y() + 0) * dims.x() + i)] = 0.0;
+  for (int k = 0; k < dims.z(); ++k)
+    object[static_cast<std::size_t>((k * dims.y() + 1) * dims.x() + 1)] = 0.0;
+  return object;
+}
+
+} // namespace
+
+// The pipeline (real object transformed along z once, sensitivities in-plane, plane by plane)
+// equals acquire_in_kspace() of the complex product, for even and odd lengths and kept counts,
+// with and without a slice profile and a sensitivity, to 1e-6 of the largest value: the planes
+// are held in single precision between the passes (the images are single precision).
+TEST(Kspace, PipelineEqualsThePerCoilAcquisition) {
+  struct Case {
+    Eigen::Vector3i dims, acquired;
+    double slice;
+  };
+  for (const Case& c : {Case{{24, 17, 10}, {17, 12, 7}, 0.0}, Case{{40, 36, 20}, {20, 30, 11}, 2.0},
+                        Case{{16, 16, 16}, {16, 16, 16}, 0.0}, Case{{12, 9, 8}, {6, 4, 8}, 1.5},
+                        Case{{8, 8, 1}, {5, 6, 1}, 0.0}}) {
+    KspaceSampling sampling;
+    sampling.dims = c.dims;
+    sampling.acquired = c.acquired;
+    sampling.slice_thickness_voxels = c.slice;
+    const auto object = random_real_object(c.dims, 4);
+    const auto sensitivity = random_object(Eigen::Vector3i(c.dims.x(), c.dims.y(), 1), 8);
+    KspacePipeline pipeline(sampling);
+    pipeline.set_object(object);
+    for (const std::complex<double>* s :
+         {static_cast<const std::complex<double>*>(nullptr), sensitivity.data()}) {
+      std::vector<std::complex<double>> expected(object.size());
+      const std::size_t plane = static_cast<std::size_t>(c.dims.x()) * c.dims.y();
+      for (std::size_t v = 0; v < object.size(); ++v)
+        expected[v] = (s ? s[v % plane] : 1.0) * object[v];
+      acquire_in_kspace(expected, sampling, 0.0, 1);
+      std::vector<std::complex<double>> image;
+      pipeline.acquire(s, 0.0, 1, image);
+      double worst = 0.0, largest = 0.0;
+      for (std::size_t v = 0; v < image.size(); ++v) {
+        worst = std::max(worst, std::abs(image[v] - expected[v]));
+        largest = std::max(largest, std::abs(expected[v]));
+      }
+      EXPECT_LT(worst, 1e-6 * largest) << c.dims.transpose() << " / " << c.acquired.transpose();
+    }
+  }
+}
+
+// The pipeline's noise: each part of a reconstructed voxel has the requested sigma whatever the
+// truncation, pure noise has a Rayleigh magnitude, the same seed gives the same bytes on one and
+// two threads, another seed other noise, and the sum of squares of two coils at once equals the
+// one of each coil in turn.
+TEST(Kspace, PipelineNoiseHasTheRequestedSigmaOnAnyThreadCount) {
+  for (const Eigen::Vector3i& acquired : {Eigen::Vector3i(64, 64, 32), Eigen::Vector3i(32, 40, 16)}) {
+    KspaceSampling sampling;
+    sampling.dims = {64, 64, 32};
+    sampling.acquired = acquired;
+    KspacePipeline pipeline(sampling);
+    pipeline.set_object(std::vector<double>(static_cast<std::size_t>(sampling.dims.prod()), 0.0));
+    const double sigma = 2.0;
+    std::vector<std::complex<double>> image;
+    pipeline.acquire(nullptr, sigma, 77, image);
+    double re2 = 0.0, im2 = 0.0, magnitude = 0.0;
+    for (const auto& value : image) {
+      re2 += value.real() * value.real();
+      im2 += value.imag() * value.imag();
+      magnitude += std::abs(value);
+    }
+    const auto n = static_cast<double>(image.size());
+    EXPECT_NEAR(std::sqrt(re2 / n) / sigma, 1.0, 0.02) << acquired.transpose();
+    EXPECT_NEAR(std::sqrt(im2 / n) / sigma, 1.0, 0.02) << acquired.transpose();
+    EXPECT_NEAR(magnitude / n / (sigma * std::sqrt(M_PI / 2.0)), 1.0, 0.02) << acquired.transpose();
+  }
+
+  KspaceSampling sampling;
+  sampling.dims = {40, 36, 20};
+  sampling.acquired = {20, 30, 11};
+  sampling.slice_thickness_voxels = 2.0;
+  const auto object = random_real_object(sampling.dims, 9);
+  const auto sensitivity = random_object(Eigen::Vector3i(40, 36, 1), 10);
+  const int threads = omp_get_max_threads();
+  std::vector<std::complex<double>> one, two, other_seed;
+  {
+    KspacePipeline pipeline(sampling);
+    pipeline.set_object(object);
+    omp_set_num_threads(1);
+    pipeline.acquire(sensitivity.data(), 0.3, 5, one);
+    omp_set_num_threads(2);
+    pipeline.acquire(sensitivity.data(), 0.3, 5, two);
+    omp_set_num_threads(threads);
+    pipeline.acquire(sensitivity.data(), 0.3, 6, other_seed);
+  }
+  EXPECT_EQ(0, std::memcmp(one.data(), two.data(), one.size() * sizeof(one[0])));
+  EXPECT_NE(0, std::memcmp(one.data(), other_seed.data(), one.size() * sizeof(one[0])));
+
+  const std::vector<KspaceCoil> coils{{sensitivity.data(), 0.3, 5}, {sensitivity.data(), 0.3, 6}};
+  std::vector<double> in_turn(object.size(), 0.0), together(object.size(), 0.0);
+  KspacePipeline single(sampling, 1), pair(sampling, 2);
+  single.set_object(object);
+  pair.set_object(object);
+  single.add_squared_magnitude(coils, in_turn);
+  pair.add_squared_magnitude(coils, together);
+  for (std::size_t v = 0; v < object.size(); ++v) {
+    ASSERT_NEAR(together[v], in_turn[v], 1e-12 * (1.0 + in_turn[v]));
+    ASSERT_NEAR(in_turn[v], std::norm(one[v]) + std::norm(other_seed[v]), 1e-12 * (1.0 + in_turn[v]));
+  }
+}
+
+// The ziggurat's standard normal deviates (the pipeline's noise): moments, tail fractions and a
+// histogram against the normal distribution, seeded repeatability.
+
+namespace {
+
+double normal_cdf(double x) {
+  return 0.5 * std::erfc(-x / std::sqrt(2.0));
+}
+
+} // namespace
+
+// The layers of the ziggurat have equal areas and close at the top (x[128] = 0, f = 1).
+TEST(GaussianNoise, ZigguratLayersHaveEqualAreas) {
+  const NormalStream::Table& t = NormalStream::table();
+  const double v = 9.91256303526217e-3;
+  EXPECT_NEAR(t.x[1], 3.442619855899, 1e-12);
+  for (int i = 1; i < 128; ++i)
+    EXPECT_NEAR(t.x[i] * (t.f[i + 1] - t.f[i]), v, 1e-9) << i;
+  EXPECT_EQ(t.x[128], 0.0);
+  EXPECT_EQ(t.f[128], 1.0);
+}
+
+// Four million deviates: mean, variance, skewness and kurtosis within 4 standard errors, the
+// fractions beyond the ziggurat's tail start and beyond 4 within 10 %, and a chi-square over 60
+// bins of equal normal probability (59 degrees of freedom: 100 is beyond p = 0.001).
+TEST(GaussianNoise, DeviatesFollowTheStandardNormal) {
+  NormalStream normal(12345);
+  const int n = 4000000;
+  const int bins = 60;
+  std::vector<double> edges(bins - 1);
+  for (int b = 1; b < bins; ++b) {
+    // Bisection for the normal quantile of b / bins.
+    double low = -10.0, high = 10.0;
+    for (int it = 0; it < 100; ++it) {
+      const double mid = 0.5 * (low + high);
+      (normal_cdf(mid) < static_cast<double>(b) / bins ? low : high) = mid;
+    }
+    edges[static_cast<std::size_t>(b - 1)] = 0.5 * (low + high);
+  }
+  std::vector<double> counts(bins, 0.0);
+  double m1 = 0.0, m2 = 0.0, m3 = 0.0, m4 = 0.0, tail = 0.0, far = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double x = normal();
+    m1 += x;
+    m2 += x * x;
+    m3 += x * x * x;
+    m4 += x * x * x * x;
+    tail += std::abs(x) > 3.442619855899;
+    far += std::abs(x) > 4.0;
+    counts[static_cast<std::size_t>(std::upper_bound(edges.begin(), edges.end(), x) - edges.begin())] += 1.0;
+  }
+  const double sqrt_n = std::sqrt(static_cast<double>(n));
+  EXPECT_NEAR(m1 / n, 0.0, 4.0 / sqrt_n);
+  EXPECT_NEAR(m2 / n, 1.0, 4.0 * std::sqrt(2.0) / sqrt_n);
+  EXPECT_NEAR(m3 / n, 0.0, 4.0 * std::sqrt(15.0) / sqrt_n);
+  EXPECT_NEAR(m4 / n, 3.0, 4.0 * std::sqrt(96.0) / sqrt_n);
+  EXPECT_NEAR(tail / n / std::erfc(3.442619855899 / std::sqrt(2.0)), 1.0, 0.1);
+  EXPECT_NEAR(far / n / std::erfc(4.0 / std::sqrt(2.0)), 1.0, 0.1);
+  double chi_square = 0.0;
+  const double expected = static_cast<double>(n) / bins;
+  for (double c : counts)
+    chi_square += (c - expected) * (c - expected) / expected;
+  EXPECT_LT(chi_square, 100.0);
+}
+
+TEST(GaussianNoise, SameSeedSameDeviates) {
+  NormalStream a(7), b(7), c(8);
+  bool differs = false;
+  for (int i = 0; i < 1000; ++i) {
+    const double x = a(), y = b(), z = c();
+    ASSERT_EQ(x, y);
+    differs = differs || x != z;
+  }
+  EXPECT_TRUE(differs);
 }
