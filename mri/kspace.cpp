@@ -122,18 +122,18 @@ int round_up(int n, int multiple) {
   return (n + multiple - 1) / multiple * multiple;
 }
 
-/// Complex buffers from FFTW's allocator (its SIMD alignment), freed on scope exit.
-struct FftwBuffer {
-  explicit FftwBuffer(std::size_t count)
-      : data(reinterpret_cast<std::complex<double>*>(fftw_alloc_complex(std::max<std::size_t>(count, 1)))) {}
-  ~FftwBuffer() { fftw_free(data); }
-  FftwBuffer(const FftwBuffer&) = delete;
-  FftwBuffer& operator=(const FftwBuffer&) = delete;
-  std::complex<double>* data;
+/// Single-precision complex buffers from FFTW's allocator, freed on scope exit.
+struct FloatBuffer {
+  explicit FloatBuffer(std::size_t count)
+      : data(reinterpret_cast<std::complex<float>*>(fftwf_alloc_complex(std::max<std::size_t>(count, 1)))) {}
+  ~FloatBuffer() { fftwf_free(data); }
+  FloatBuffer(const FloatBuffer&) = delete;
+  FloatBuffer& operator=(const FloatBuffer&) = delete;
+  std::complex<float>* data;
 };
 
-fftw_complex* as_fftw(std::complex<double>* data) {
-  return reinterpret_cast<fftw_complex*>(data);
+fftwf_complex* as_fftwf(std::complex<float>* data) {
+  return reinterpret_cast<fftwf_complex*>(data);
 }
 
 /// `count` single-precision complex values for the planes that every coil passes through, in
@@ -224,17 +224,17 @@ void acquire_in_kspace(std::vector<std::complex<double>>& image, const KspaceSam
 /// One-line out-of-place plans, each executed on many lines of the same alignment (FFTW_ESTIMATE:
 /// the same algorithm, hence the same bytes, on every run).
 struct KspacePipeline::Plans {
-  fftw_plan z_forward = nullptr;  ///< real to complex along z
-  fftw_plan x_forward = nullptr;  ///< along x
-  fftw_plan x_backward = nullptr; ///< along x
-  fftw_plan y_forward = nullptr;  ///< along y (transposed columns)
-  fftw_plan y_backward = nullptr; ///< along y
-  fftw_plan z_backward = nullptr; ///< along z
+  fftwf_plan z_forward = nullptr;  ///< real to complex along z
+  fftwf_plan x_forward = nullptr;  ///< along x
+  fftwf_plan x_backward = nullptr; ///< along x
+  fftwf_plan y_forward = nullptr;  ///< along y (transposed columns)
+  fftwf_plan y_backward = nullptr; ///< along y
+  fftwf_plan z_backward = nullptr; ///< along z
 };
 
 namespace {
-constexpr int k_real_multiple = 8;    ///< doubles per 64 bytes
-constexpr int k_complex_multiple = 4; ///< complex doubles per 64 bytes
+constexpr int k_real_multiple = 16;   ///< floats per 64 bytes
+constexpr int k_complex_multiple = 8; ///< complex floats per 64 bytes
 } // namespace
 
 KspacePipeline::KspacePipeline(const KspaceSampling& sampling, int coils_together)
@@ -257,26 +257,26 @@ KspacePipeline::KspacePipeline(const KspaceSampling& sampling, int coils_togethe
   m_plans = new Plans;
   std::lock_guard<std::mutex> guard(planner_lock());
   const int longest = std::max({m_row, m_column, round_up(dims.z(), k_complex_multiple)});
-  double* real = fftw_alloc_real(static_cast<std::size_t>(round_up(dims.z(), k_real_multiple)));
-  fftw_complex* in = fftw_alloc_complex(static_cast<std::size_t>(longest));
-  fftw_complex* out = fftw_alloc_complex(static_cast<std::size_t>(longest));
-  m_plans->z_forward = fftw_plan_dft_r2c_1d(dims.z(), real, out, FFTW_ESTIMATE);
-  m_plans->x_forward = fftw_plan_dft_1d(dims.x(), in, out, FFTW_FORWARD, FFTW_ESTIMATE);
-  m_plans->x_backward = fftw_plan_dft_1d(dims.x(), in, out, FFTW_BACKWARD, FFTW_ESTIMATE);
-  m_plans->y_forward = fftw_plan_dft_1d(dims.y(), in, out, FFTW_FORWARD, FFTW_ESTIMATE);
-  m_plans->y_backward = fftw_plan_dft_1d(dims.y(), in, out, FFTW_BACKWARD, FFTW_ESTIMATE);
-  m_plans->z_backward = fftw_plan_dft_1d(dims.z(), in, out, FFTW_BACKWARD, FFTW_ESTIMATE);
-  fftw_free(out);
-  fftw_free(in);
-  fftw_free(real);
+  float* real = fftwf_alloc_real(static_cast<std::size_t>(round_up(dims.z(), k_real_multiple)));
+  fftwf_complex* in = fftwf_alloc_complex(static_cast<std::size_t>(longest));
+  fftwf_complex* out = fftwf_alloc_complex(static_cast<std::size_t>(longest));
+  m_plans->z_forward = fftwf_plan_dft_r2c_1d(dims.z(), real, out, FFTW_ESTIMATE);
+  m_plans->x_forward = fftwf_plan_dft_1d(dims.x(), in, out, FFTW_FORWARD, FFTW_ESTIMATE);
+  m_plans->x_backward = fftwf_plan_dft_1d(dims.x(), in, out, FFTW_BACKWARD, FFTW_ESTIMATE);
+  m_plans->y_forward = fftwf_plan_dft_1d(dims.y(), in, out, FFTW_FORWARD, FFTW_ESTIMATE);
+  m_plans->y_backward = fftwf_plan_dft_1d(dims.y(), in, out, FFTW_BACKWARD, FFTW_ESTIMATE);
+  m_plans->z_backward = fftwf_plan_dft_1d(dims.z(), in, out, FFTW_BACKWARD, FFTW_ESTIMATE);
+  fftwf_free(out);
+  fftwf_free(in);
+  fftwf_free(real);
 }
 
 KspacePipeline::~KspacePipeline() {
   {
     std::lock_guard<std::mutex> guard(planner_lock());
-    for (fftw_plan plan : {m_plans->z_forward, m_plans->x_forward, m_plans->x_backward, m_plans->y_forward,
-                           m_plans->y_backward, m_plans->z_backward})
-      if (plan) fftw_destroy_plan(plan);
+    for (fftwf_plan plan : {m_plans->z_forward, m_plans->x_forward, m_plans->x_backward, m_plans->y_forward,
+                            m_plans->y_backward, m_plans->z_backward})
+      if (plan) fftwf_destroy_plan(plan);
   }
   delete m_plans;
   std::free(m_coil);
@@ -290,23 +290,23 @@ void KspacePipeline::set_object(const std::vector<double>& object) {
   const int real_stride = round_up(nz, k_real_multiple);
   const int half_stride = round_up(nz / 2 + 1, k_complex_multiple);
   // The slice profile's transform is real and even: the half spectrum keeps its symmetry.
-  std::vector<double> weight(static_cast<std::size_t>(m_half), 1.0);
+  std::vector<float> weight(static_cast<std::size_t>(m_half), 1.0f);
   if (m_sampling.slice_thickness_voxels > 0.0)
     for (int f = 0; f < m_half; ++f)
       weight[static_cast<std::size_t>(f)] =
-          sinc(M_PI * static_cast<double>(f) / nz * m_sampling.slice_thickness_voxels);
+          static_cast<float>(sinc(M_PI * static_cast<double>(f) / nz * m_sampling.slice_thickness_voxels));
   m_row_used.assign(static_cast<std::size_t>(ny), 0);
-  const fftw_plan plan = m_plans->z_forward;
+  const fftwf_plan plan = m_plans->z_forward;
   // One in-plane row j at a time: its nz rows of the object are read whole (far apart in memory,
   // each contiguous), its lines along z are transformed from that copy, and its half spectrum
   // is written whole into the planes.
 #pragma omp parallel
   {
-    std::vector<double> rows(static_cast<std::size_t>(nz) * static_cast<std::size_t>(nx));
-    std::vector<std::complex<double>> spectrum(static_cast<std::size_t>(m_half) *
-                                               static_cast<std::size_t>(nx));
-    double* in = fftw_alloc_real(static_cast<std::size_t>(k_batch) * real_stride);
-    FftwBuffer out(static_cast<std::size_t>(k_batch) * half_stride);
+    std::vector<float> rows(static_cast<std::size_t>(nz) * static_cast<std::size_t>(nx));
+    std::vector<std::complex<float>> spectrum(static_cast<std::size_t>(m_half) *
+                                              static_cast<std::size_t>(nx));
+    float* in = fftwf_alloc_real(static_cast<std::size_t>(k_batch) * real_stride);
+    FloatBuffer out(static_cast<std::size_t>(k_batch) * half_stride);
 #pragma omp for schedule(static)
     for (int j = 0; j < ny; ++j) {
       if (cancellation_requested()) continue; // no exception may leave an OpenMP region
@@ -314,7 +314,9 @@ void KspacePipeline::set_object(const std::vector<double>& object) {
       bool used = false;
       for (int t = 0; t < nz; ++t) {
         const double* from = object.data() + static_cast<std::size_t>(t) * slice + first;
-        std::copy(from, from + nx, rows.data() + static_cast<std::size_t>(t) * nx);
+        float* to = rows.data() + static_cast<std::size_t>(t) * nx;
+        for (int i = 0; i < nx; ++i)
+          to[i] = static_cast<float>(from[i]);
       }
       for (int i0 = 0; i0 < nx; i0 += k_batch) {
         const int count = std::min(k_batch, nx - i0);
@@ -323,27 +325,26 @@ void KspacePipeline::set_object(const std::vector<double>& object) {
             in[b * real_stride + t] =
                 rows[static_cast<std::size_t>(t) * nx + static_cast<std::size_t>(i0 + b)];
         for (int b = 0; b < count; ++b) {
-          const double* line = in + b * real_stride;
+          const float* line = in + b * real_stride;
           // An empty line's transform is zero: most of a field of view around a head.
-          const bool nonzero = std::any_of(line, line + nz, [](double x) { return x != 0.0; });
-          if (nonzero) fftw_execute_dft_r2c(plan, in + b * real_stride, as_fftw(out.data + b * half_stride));
+          const bool nonzero = std::any_of(line, line + nz, [](float x) { return x != 0.0f; });
+          if (nonzero)
+            fftwf_execute_dft_r2c(plan, in + b * real_stride, as_fftwf(out.data + b * half_stride));
           used = used || nonzero;
           for (int f = 0; f < m_half; ++f)
             spectrum[static_cast<std::size_t>(f) * nx + static_cast<std::size_t>(i0 + b)] =
                 nonzero ? out.data[b * half_stride + f] * weight[static_cast<std::size_t>(f)]
-                        : std::complex<double>(0.0);
+                        : std::complex<float>(0.0f);
         }
       }
       for (int f = 0; f < m_half; ++f) {
-        const std::complex<double>* from = spectrum.data() + static_cast<std::size_t>(f) * nx;
-        std::complex<float>* to =
-            m_spectrum + static_cast<std::size_t>(f) * m_plane + static_cast<std::size_t>(j) * m_row;
-        for (int i = 0; i < nx; ++i)
-          to[i] = std::complex<float>(from[i]);
+        const std::complex<float>* from = spectrum.data() + static_cast<std::size_t>(f) * nx;
+        std::copy(from, from + nx,
+                  m_spectrum + static_cast<std::size_t>(f) * m_plane + static_cast<std::size_t>(j) * m_row);
       }
       m_row_used[static_cast<std::size_t>(j)] = used ? 1 : 0;
     }
-    fftw_free(in);
+    fftwf_free(in);
   }
   throw_if_cancelled(); // a cut-short spectrum is garbage: nobody may read it
 }
@@ -364,9 +365,9 @@ void KspacePipeline::acquire_coils(const KspaceCoil* coils, int count, std::comp
   // transform back along y, and along x into the coil's plane. Out-of-place transforms: faster.
 #pragma omp parallel
   {
-    FftwBuffer columns(static_cast<std::size_t>(kept_x) * m_column);
-    FftwBuffer rows(static_cast<std::size_t>(k_block) * m_row);
-    FftwBuffer staged(static_cast<std::size_t>(std::max(m_row, m_column)));
+    FloatBuffer columns(static_cast<std::size_t>(kept_x) * m_column);
+    FloatBuffer rows(static_cast<std::size_t>(k_block) * m_row);
+    FloatBuffer staged(static_cast<std::size_t>(std::max(m_row, m_column)));
 #pragma omp for schedule(dynamic, 1)
     for (int q = 0; q < kept_z; ++q) {
       if (cancellation_requested()) continue; // no exception may leave an OpenMP region
@@ -385,65 +386,62 @@ void KspacePipeline::acquire_coils(const KspaceCoil* coils, int count, std::comp
           const int block = std::min(k_block, ny - j0);
           for (int r = 0; r < block; ++r) {
             const int j = j0 + r;
-            std::complex<double>* row = rows.data + static_cast<std::size_t>(r) * m_row;
+            std::complex<float>* row = rows.data + static_cast<std::size_t>(r) * m_row;
             if (!m_row_used[static_cast<std::size_t>(j)]) { // the object never reaches it: zero
-              std::fill_n(row, nx, std::complex<double>(0.0));
+              std::fill_n(row, nx, std::complex<float>(0.0f));
               continue;
             }
             const std::complex<float>* from = source + static_cast<std::size_t>(j) * m_row;
             if (f < 0)
               for (int i = 0; i < nx; ++i)
-                staged.data[i] = std::conj(std::complex<double>(from[i]));
+                staged.data[i] = std::conj(from[i]);
             else
-              for (int i = 0; i < nx; ++i)
-                staged.data[i] = std::complex<double>(from[i]);
+              std::copy(from, from + nx, staged.data);
             if (sensitivity) {
               const std::complex<double>* s = sensitivity + static_cast<std::size_t>(j) * nx;
               for (int i = 0; i < nx; ++i)
-                staged.data[i] *= s[i];
+                staged.data[i] *= std::complex<float>(s[i]);
             }
-            fftw_execute_dft(m_plans->x_forward, as_fftw(staged.data), as_fftw(row));
+            fftwf_execute_dft(m_plans->x_forward, as_fftwf(staged.data), as_fftwf(row));
           }
           for (int c = 0; c < kept_x; ++c) {
-            std::complex<double>* column = columns.data + static_cast<std::size_t>(c) * m_column + j0;
+            std::complex<float>* column = columns.data + static_cast<std::size_t>(c) * m_column + j0;
             const auto i = static_cast<std::size_t>(m_kept_x[static_cast<std::size_t>(c)]);
             for (int r = 0; r < block; ++r)
               column[r] = rows.data[static_cast<std::size_t>(r) * m_row + i];
           }
         }
         for (int c = 0; c < kept_x; ++c) {
-          std::complex<double>* column = columns.data + static_cast<std::size_t>(c) * m_column;
-          fftw_execute_dft(m_plans->y_forward, as_fftw(column), as_fftw(staged.data));
+          std::complex<float>* column = columns.data + static_cast<std::size_t>(c) * m_column;
+          fftwf_execute_dft(m_plans->y_forward, as_fftwf(column), as_fftwf(staged.data));
           const int i = m_kept_x[static_cast<std::size_t>(c)];
           // One stream per coil and kept k-space column, named by its frequencies along x and z.
           NormalStream noise(mix_seed(coils[p].noise_seed,
                                       static_cast<std::uint64_t>(t) * nx + static_cast<std::uint64_t>(i)));
           for (int j = 0; j < ny; ++j) {
             if (!m_keep_y[static_cast<std::size_t>(j)]) {
-              staged.data[j] = 0.0;
+              staged.data[j] = 0.0f;
             } else if (coils[p].noise_sigma > 0.0) {
               const double re = noise(), im = noise();
-              staged.data[j] += sample_sigma * std::complex<double>(re, im);
+              staged.data[j] += std::complex<float>(static_cast<float>(sample_sigma * re),
+                                                    static_cast<float>(sample_sigma * im));
             }
           }
-          fftw_execute_dft(m_plans->y_backward, as_fftw(staged.data), as_fftw(column));
+          fftwf_execute_dft(m_plans->y_backward, as_fftwf(staged.data), as_fftwf(column));
         }
         for (int j0 = 0; j0 < ny; j0 += k_block) {
           const int block = std::min(k_block, ny - j0);
           for (int r = 0; r < block; ++r)
-            std::fill_n(rows.data + static_cast<std::size_t>(r) * m_row, nx, std::complex<double>(0.0));
+            std::fill_n(rows.data + static_cast<std::size_t>(r) * m_row, nx, std::complex<float>(0.0f));
           for (int c = 0; c < kept_x; ++c) {
-            const std::complex<double>* column = columns.data + static_cast<std::size_t>(c) * m_column + j0;
+            const std::complex<float>* column = columns.data + static_cast<std::size_t>(c) * m_column + j0;
             const auto i = static_cast<std::size_t>(m_kept_x[static_cast<std::size_t>(c)]);
             for (int r = 0; r < block; ++r)
               rows.data[static_cast<std::size_t>(r) * m_row + i] = column[r];
           }
           for (int r = 0; r < block; ++r) {
-            fftw_execute_dft(m_plans->x_backward, as_fftw(rows.data + static_cast<std::size_t>(r) * m_row),
-                             as_fftw(staged.data));
-            std::complex<float>* to = plane + static_cast<std::size_t>(j0 + r) * m_row;
-            for (int i = 0; i < nx; ++i)
-              to[i] = std::complex<float>(staged.data[i]);
+            fftwf_execute_dft(m_plans->x_backward, as_fftwf(rows.data + static_cast<std::size_t>(r) * m_row),
+                              as_fftwf(plane + static_cast<std::size_t>(j0 + r) * m_row));
           }
         }
       }
@@ -459,13 +457,13 @@ void KspacePipeline::acquire_coils(const KspaceCoil* coils, int count, std::comp
   const int line_stride = round_up(nz, k_complex_multiple);
 #pragma omp parallel
   {
-    std::vector<std::complex<double>> kept_rows(static_cast<std::size_t>(kept_z) * nx);
+    std::vector<std::complex<float>> kept_rows(static_cast<std::size_t>(kept_z) * nx);
     std::vector<std::complex<double>> image_rows(image ? static_cast<std::size_t>(nz) * nx : 0);
     std::vector<double> energy_rows(energy ? static_cast<std::size_t>(nz) * nx : 0);
-    FftwBuffer lines(static_cast<std::size_t>(k_batch) * line_stride);
-    FftwBuffer out(static_cast<std::size_t>(k_batch) * line_stride);
+    FloatBuffer lines(static_cast<std::size_t>(k_batch) * line_stride);
+    FloatBuffer out(static_cast<std::size_t>(k_batch) * line_stride);
     // Frequencies that are not kept stay zero: only the kept ones are ever written.
-    std::fill_n(lines.data, static_cast<std::size_t>(k_batch) * line_stride, std::complex<double>(0.0));
+    std::fill_n(lines.data, static_cast<std::size_t>(k_batch) * line_stride, std::complex<float>(0.0f));
 #pragma omp for schedule(static)
     for (int j = 0; j < ny; ++j) {
       if (cancellation_requested()) continue;
@@ -475,24 +473,22 @@ void KspacePipeline::acquire_coils(const KspaceCoil* coils, int count, std::comp
           const std::complex<float>* from = m_coil + static_cast<std::size_t>(p) * coil_planes +
                                             static_cast<std::size_t>(q) * m_plane +
                                             static_cast<std::size_t>(j) * m_row;
-          std::complex<double>* to = kept_rows.data() + static_cast<std::size_t>(q) * nx;
-          for (int i = 0; i < nx; ++i)
-            to[i] = std::complex<double>(from[i]);
+          std::copy(from, from + nx, kept_rows.data() + static_cast<std::size_t>(q) * nx);
         }
         for (int i0 = 0; i0 < nx; i0 += k_batch) {
           const int batch = std::min(k_batch, nx - i0);
           for (int q = 0; q < kept_z; ++q) {
-            const std::complex<double>* from = kept_rows.data() + static_cast<std::size_t>(q) * nx + i0;
+            const std::complex<float>* from = kept_rows.data() + static_cast<std::size_t>(q) * nx + i0;
             const int t = m_kept_z[static_cast<std::size_t>(q)];
             for (int b = 0; b < batch; ++b)
               lines.data[b * line_stride + t] = from[b];
           }
           for (int b = 0; b < batch; ++b)
-            fftw_execute_dft(m_plans->z_backward, as_fftw(lines.data + b * line_stride),
-                             as_fftw(out.data + b * line_stride));
+            fftwf_execute_dft(m_plans->z_backward, as_fftwf(lines.data + b * line_stride),
+                              as_fftwf(out.data + b * line_stride));
           for (int t = 0; t < nz; ++t)
             for (int b = 0; b < batch; ++b) {
-              const std::complex<double> value = out.data[b * line_stride + t] * scale;
+              const std::complex<double> value = std::complex<double>(out.data[b * line_stride + t]) * scale;
               const std::size_t at = static_cast<std::size_t>(t) * nx + static_cast<std::size_t>(i0 + b);
               if (image)
                 image_rows[at] = value;
