@@ -49,8 +49,9 @@ struct KspaceCoil {
 
 /// The k-space acquisition of many images of one grid: sensitivity (in-plane, the same on every
 /// slice) x a real object, with the same sampling, plans and buffers for every coil, sequence
-/// and state. Equal to acquire_in_kspace() of sensitivity x object up to rounding (tested to
-/// 1e-12 of the largest value), noise apart (another generator, the same statistics):
+/// and state. Equal to acquire_in_kspace() of sensitivity x object up to single-precision
+/// rounding (tested to 1e-6 of the largest value), noise apart (another generator, the same
+/// statistics):
 /// * the object is real, so its transform along the third axis is real-to-complex, and the
 ///   sensitivity does not vary along that axis, so this transform, the truncation along it and
 ///   the slice profile are done once per object (set_object()), not once per coil;
@@ -60,10 +61,13 @@ struct KspaceCoil {
 /// * the in-plane truncation stays per coil: applying it once to the object and multiplying by
 ///   the sensitivities afterwards differs from the acquisition by up to 0.4 % of the white-matter
 ///   signal at 1 mm for 8 coils (docs/volumes-and-images.md, k-space acquisition);
-/// * FFTW plans are made once (FFTW_ESTIMATE: the same bytes on every run) and used by all
-///   threads on buffers of one alignment; noise is drawn from one NormalStream per kept k-space
-///   column, seeded from the noise seed and the column's frequencies. The result does not depend
-///   on the number of threads.
+/// * transforms and buffers are single precision (fftw3f), the precision of the images: twice
+///   the transform speed and half the memory traffic of double precision; the sum of squares
+///   is accumulated in double precision;
+/// * FFTW plans are made once (FFTW_ESTIMATE: the same bytes on every run), out of place, and
+///   used by all threads on buffers of one alignment; noise is drawn from one NormalStream per
+///   coil and kept k-space column, seeded from the coil's noise seed and the column's
+///   frequencies. The result does not depend on the number of threads.
 class KspacePipeline {
 public:
   /// @param coils_together coils whose planes are held at once (memory: each holds the kept
@@ -101,16 +105,15 @@ private:
 
   KspaceSampling m_sampling;
   int m_coils_together = 1;
-  int m_row = 0;                       ///< complex stride between in-plane rows (a multiple of 4)
-  std::size_t m_plane = 0;             ///< complex stride between planes
-  int m_column = 0;                    ///< complex stride between transposed columns
-  std::vector<int> m_kept_x, m_kept_z; ///< kept DFT indices along x and along z
-  std::vector<char> m_keep_y;          ///< per DFT index along y
-  int m_half = 0;                      ///< non-negative frequencies kept along z: 0 .. m_half - 1
-  std::vector<char> m_row_used;        ///< per in-plane row: does the object reach it
-  // Single precision between passes (the images are single precision): half the memory traffic.
+  int m_row = 0;                             ///< complex stride between in-plane rows (64-byte multiple)
+  std::size_t m_plane = 0;                   ///< complex stride between planes
+  int m_column = 0;                          ///< complex stride between transposed columns
+  std::vector<int> m_kept_x, m_kept_z;       ///< kept DFT indices along x and along z
+  std::vector<char> m_keep_y;                ///< per DFT index along y
+  int m_half = 0;                            ///< non-negative frequencies kept along z: 0 .. m_half - 1
+  std::vector<char> m_row_used;              ///< per in-plane row: does the object reach it
   std::complex<float>* m_spectrum = nullptr; ///< m_half planes: the object's half spectrum along z
-  std::complex<float>* m_coil = nullptr;     ///< m_kept_z.size() planes of one coil
+  std::complex<float>* m_coil = nullptr;     ///< m_kept_z.size() planes of each of coils_together()
   Plans* m_plans = nullptr;
 };
 
