@@ -271,6 +271,10 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
       progress.advance();
     }
   }
+  // The k-space buffers and the voxel workspace are no longer needed: free them before the
+  // parameter maps, so that the stage's peak memory is not their sum.
+  pipeline.reset();
+  workspace = Workspace{};
   if (mri.parameter_maps) {
     images.reference_maps = parameter_maps(volumes.reference, volumes.tissues, parameters);
     if (volumes.deformed)
