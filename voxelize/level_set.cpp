@@ -40,7 +40,9 @@ public:
 struct PatchHeights {
   std::vector<PatchBump> bumps;                 ///< with symmetric shapes
   Eigen::Vector3d origin, edge1, edge2, normal; ///< the frame: x = origin + u edge1 + v edge2 + h normal
-  double reach_mm = 0.0;                        ///< sum |a|: no point of the patch is farther from its base
+  /// The larger of the sums of the positive and of the negative amplitudes: no point of the
+  /// patch is farther from its base (each bump's height lies between 0 and its amplitude).
+  double reach_mm = 0.0;
 
   /// Height above base point (u, v), mm, and its derivatives d/du, d/dv.
   double height(const Eigen::Vector2d& uv, Eigen::Vector2d* d_uv) const {
@@ -116,10 +118,12 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
   for (std::size_t t = 0; t < nf; ++t) {
     PatchHeights& p = patches[t];
     p.bumps = surface.bumps(static_cast<Eigen::Index>(t));
+    double up = 0.0, down = 0.0;
     for (PatchBump& b : p.bumps) {
       b.shape_uv = 0.5 * (b.shape_uv + b.shape_uv.transpose()).eval();
-      p.reach_mm += std::abs(b.amplitude_mm);
+      (b.amplitude_mm > 0.0 ? up : down) += std::abs(b.amplitude_mm);
     }
+    p.reach_mm = std::max(up, down);
     if (!p.bumps.empty()) {
       const PatchFrame f = surface.frame(static_cast<Eigen::Index>(t));
       p.origin = f.origin;
@@ -128,25 +132,23 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
       p.normal = f.normal;
     }
   }
-  double patch_reach = 0.0;
-  for (const PatchHeights& p : patches)
-    patch_reach = std::max(patch_reach, p.reach_mm);
-  // The closest base triangle of every voxel within the band plus the bumps' reach of the base
-  // (every voxel within the band of the surface is among them), triangle by triangle over the
-  // voxels near it; in triangle order with a strict comparison, so ties go to the first triangle
-  // as in SignedDistanceMesh::closest().
-  const double reach = band + patch_reach + 1e-9;
-  openvdb::DoubleGrid best_squared(std::numeric_limits<double>::infinity());
-  openvdb::Int32Grid owner(-1);
+  // Every voxel within the band of the surface lies within band + reach of the base triangle
+  // under the nearest surface point (|h| <= reach over that patch), so the candidates are the
+  // voxels near each triangle by its own patch's reach: a closed shell around the surface. Each
+  // candidate then finds its closest base triangle over the whole mesh (search tree; ties go to
+  // the lowest triangle index, as in SignedDistanceMesh::closest()). Bounding each triangle by
+  // its own reach, not the largest of the surface's, keeps the shell thin where the patches are
+  // flat: one tall bump no longer inflates every triangle's box.
+  openvdb::MaskGrid candidates(false);
   {
-    auto best_accessor = best_squared.getAccessor();
-    auto owner_accessor = owner.getAccessor();
+    auto accessor = candidates.getAccessor();
     for (std::size_t t = 0; t < nf; ++t) {
       // Built inside an OpenMP loop over organs, so a cancelled run returns (no exception may
       // leave the region) and the caller throws once the loop ends; the grid is left empty.
       if (cancellation_requested()) return;
       const auto& v = mesh.corners(static_cast<int>(t));
       const Eigen::Vector3d& n = mesh.face_normal(static_cast<int>(t));
+      const double reach = band + patches[t].reach_mm + 1e-9;
       const Eigen::Vector3d low = v[0].cwiseMin(v[1]).cwiseMin(v[2]).array() - reach;
       const Eigen::Vector3d high = v[0].cwiseMax(v[1]).cwiseMax(v[2]).array() + reach;
       int lo[3], hi[3];
@@ -158,32 +160,35 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
       const bool flat = n.squaredNorm() > 0.5;
       for (int k = lo[2]; k <= hi[2]; ++k) {
         for (int j = lo[1]; j <= hi[1]; ++j) {
-          for (int i = lo[0]; i <= hi[0]; ++i) {
+          const Eigen::Vector3d row = voxel_size_mm * Eigen::Vector3d(0, j, k);
+          // The voxels of this row within the slab |n . (x - v0)| <= reach: an interval of i.
+          int first = lo[0], last = hi[0];
+          if (flat && std::abs(n.x()) > 1e-12) {
+            const double offset = n.dot(row - v[0]);
+            const double a = (-reach - offset) / (n.x() * voxel_size_mm);
+            const double b = (reach - offset) / (n.x() * voxel_size_mm);
+            first = std::max(first, static_cast<int>(std::floor(std::min(a, b))));
+            last = std::min(last, static_cast<int>(std::ceil(std::max(a, b))));
+          }
+          for (int i = first; i <= last; ++i) {
+            const openvdb::Coord ijk(i, j, k);
+            if (accessor.isValueOn(ijk)) continue;
             const Eigen::Vector3d x = voxel_size_mm * Eigen::Vector3d(i, j, k);
             if (flat && std::abs(n.dot(x - v[0])) > reach) continue;
             const TriangleClosestPoint on_base = closest_point_on_triangle(x, v[0], v[1], v[2]);
-            const double d2 = (x - on_base.point).squaredNorm();
-            if (d2 > reach * reach) continue;
-            const openvdb::Coord ijk(i, j, k);
-            if (d2 < best_accessor.getValue(ijk)) {
-              best_accessor.setValueOn(ijk, d2);
-              owner_accessor.setValueOn(ijk, static_cast<int>(t));
-            }
+            if ((x - on_base.point).squaredNorm() > reach * reach) continue;
+            accessor.setValueOn(ijk);
           }
         }
       }
     }
   }
-  best_squared.clear();
   std::vector<openvdb::Coord> coords;
-  std::vector<int> triangles;
-  coords.reserve(static_cast<std::size_t>(owner.activeVoxelCount()));
-  triangles.reserve(coords.capacity());
-  for (auto it = owner.cbeginValueOn(); it; ++it) {
+  coords.reserve(static_cast<std::size_t>(candidates.activeVoxelCount()));
+  for (auto it = candidates.cbeginValueOn(); it; ++it)
     coords.push_back(it.getCoord());
-    triangles.push_back(*it);
-  }
-  owner.clear();
+  candidates.clear();
+  mesh.build_search_tree();
   std::vector<float> values(coords.size());
   const auto count = static_cast<std::ptrdiff_t>(coords.size());
 #pragma omp parallel for schedule(static)
@@ -191,11 +196,7 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
     if (cancellation_requested()) continue;
     const auto i = static_cast<std::size_t>(c);
     const Eigen::Vector3d x = voxel_size_mm * Eigen::Vector3d(coords[i].x(), coords[i].y(), coords[i].z());
-    MeshClosestPoint closest;
-    closest.triangle = triangles[i];
-    const auto& v = mesh.corners(closest.triangle);
-    closest.on_triangle = closest_point_on_triangle(x, v[0], v[1], v[2]);
-    closest.distance_squared = (x - closest.on_triangle.point).squaredNorm();
+    const MeshClosestPoint closest = mesh.closest(x);
     double d = std::sqrt(closest.distance_squared);
     if (mesh.inside(x, closest)) d = -d;
     const PatchHeights& p = patches[static_cast<std::size_t>(closest.triangle)];

@@ -22,8 +22,10 @@ public:
   /// @param voxel_size_mm the level set's voxel edge
   /// @param half_width_voxels narrow band half width
   LevelSet(const TriangleMesh& surface, double voxel_size_mm, double half_width_voxels = 3.0);
-  /// From a patch surface without tessellating it: each band voxel finds its closest base
-  /// triangle (voxels near each triangle, in triangle order, so ties resolve as in a scan). Where
+  /// From a patch surface without tessellating it: the candidates are the voxels within the band
+  /// plus each patch's own bump reach of its base triangle (a closed shell around the surface),
+  /// and each finds its closest base triangle through a search tree (ties go to the lowest
+  /// triangle index, as in a scan). Where
   /// that patch has bumps, the side comes from the height of the surface above the closest base
   /// point and the distance from the patch's closest point (Gauss-Newton over the triangle);
   /// elsewhere both from the base mesh (sign from pseudonormals; exact there, the bumps vanish on
