@@ -16,10 +16,17 @@ SurfaceDistance symmetric_distance(const TriangleMesh& mesh, const std::vector<E
                                    const std::vector<double>& mesh_vertex_distances_to_b) {
   SurfaceDistance result;
   const MeshDistance to_mesh(mesh);
+  // The distances in parallel, summed in sample order: the same result on any thread count.
+  std::vector<double> distances(samples_on_b.size());
+  const auto count = static_cast<std::ptrdiff_t>(samples_on_b.size());
+#pragma omp parallel for schedule(static)
+  for (std::ptrdiff_t i = 0; i < count; ++i) {
+    if (cancellation_requested()) continue; // no exception may leave an OpenMP region
+    distances[static_cast<std::size_t>(i)] = to_mesh.distance(samples_on_b[static_cast<std::size_t>(i)]);
+  }
+  throw_if_cancelled();
   double total = 0.0;
-  for (const auto& p : samples_on_b) {
-    throw_if_cancelled();
-    const double d = to_mesh.distance(p);
+  for (const double d : distances) {
     result.hausdorff_mm = std::max(result.hausdorff_mm, d);
     total += d;
   }
