@@ -165,8 +165,8 @@ Eigen::Vector3d PatchSurface::gradient(Eigen::Index t, const Eigen::Vector3d& x)
 double PatchSurface::height(Eigen::Index t, double u, double v) const {
   const auto& perturbations = m_perturbations[static_cast<std::size_t>(t)];
   if (perturbations.empty()) return 0.0;
-  const PatchFrame f = frame(t);
-  const double L = f.length_scale;
+  // frame()'s length scale, without its inverse (the tessellation asks for millions of heights).
+  const double L = m_rest_triangles[static_cast<std::size_t>(t)].length_scale;
   // g(h) = F(b + h n) = -h + sum a Q(u, v, h / L)^3; the bracket holds every root of bounded bumps.
   auto g = [&](double h, double* slope) {
     const Eigen::Vector3d uvw(u, v, h / L);
@@ -200,8 +200,11 @@ double PatchSurface::height(Eigen::Index t, double u, double v) const {
 }
 
 Eigen::Vector3d PatchSurface::surface_point(Eigen::Index t, double u, double v) const {
-  const PatchFrame f = frame(t);
-  return f.origin + u * f.edge1 + v * f.edge2 + height(t, u, v) * f.normal;
+  // frame()'s origin, edges and normal, without the inverse it also computes.
+  const Eigen::Vector3d origin = corner(m_base, t, 0), edge1 = corner(m_base, t, 1) - origin,
+                        edge2 = corner(m_base, t, 2) - origin;
+  const Eigen::Vector3d normal = edge1.cross(edge2).normalized();
+  return origin + u * edge1 + v * edge2 + height(t, u, v) * normal;
 }
 
 std::array<Plane, 3> PatchSurface::clipping_planes(Eigen::Index t) const {
