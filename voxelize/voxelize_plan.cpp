@@ -41,8 +41,21 @@ StageReport plan_voxelize(const VoxelizationSettings& settings, const OrganTable
         i < settings.organ_bounds_mm.size() ? settings.organ_bounds_mm[i] : std::optional<WorldBox>();
     if (organ_in_field_of_view(bounds, grid)) {
       report.modelled.push_back(organ.name + ": level set, reference and deformed");
+      // An organ smaller than a voxel may fill none: its label never shows (#20, warnings).
+      const double voxel = grid.spacing_mm.minCoeff();
+      if (bounds && (bounds->max_mm - bounds->min_mm).maxCoeff() < voxel) {
+        std::ostringstream warning;
+        warning << organ.name << ": spans at most " << (bounds->max_mm - bounds->min_mm).maxCoeff()
+                << " mm, less than a voxel (" << voxel
+                << " mm): it may fill no voxel of the labels; expected a finer grid.voxel_size_mm or a "
+                   "larger organ";
+        report.warnings.push_back(warning.str());
+      }
     } else {
       report.skipped.push_back(organ.name + ": outside the field of view");
+      report.warnings.push_back(
+          organ.name + ": outside the field of view at rest, so no voxel shows it; expected it inside "
+                       "grid.field_of_view_mm about grid.center_mm");
     }
   }
   const VoxelizationSettings& o = settings;

@@ -103,8 +103,9 @@ TEST(TetProjectionBatch, EqualsTheScalarSignedSvdAndProjections) {
         // The rotation, and so the projection, is unique unless the two smallest singular values
         // sum to zero (F of rank one or zero: any turn about the remaining direction is as close).
         const double scale = 1.0 + s.F.norm();
-        if (std::abs(svd.sigma[1] + svd.sigma[2]) > 1e-6 * scale)
+        if (std::abs(svd.sigma[1] + svd.sigma[2]) > 1e-6 * scale) {
           EXPECT_LT((s.projection - expected).norm(), 1e-10 * scale * 15.5) << s.F;
+        }
         EXPECT_NEAR(s.energy, energy, 1e-10 * (1.0 + energy)) << s.F;
         // The warm starts written back: a unit quaternion, a rotation V, and R = U V^T.
         EXPECT_NEAR(s.rotation.norm(), 1.0, 1e-12);
