@@ -114,7 +114,7 @@ void require_batch_folder(const std::filesystem::path& folder) {
   for (const auto& entry : std::filesystem::directory_iterator(folder, error)) {
     const std::string name = entry.path().filename().string();
     const bool ours = name == "dataset_description.json" || name == "participants.tsv" || name == "README" ||
-                      name == "derivatives" || name.rfind("sub-", 0) == 0 ||
+                      name == "derivatives" || name.rfind("sub-", 0) == 0 || SweepMark::is_mark_name(name) ||
                       is_temporary_file_name(entry.path());
     if (!ours) {
       throw InputError(
@@ -156,6 +156,9 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
   // Held until the batch returns: shards of a sweep share the folder, a run cannot enter it.
   const OutputFolderLock lock(options.output, FolderLockMode::shared);
   require_batch_folder(options.output);
+  const SweepMark mark(options.output, sha256_hex(sweep.name + "\n" + sweep.base_scene.string() + "\n" +
+                                                  participants_tsv(sweep))
+                                           .substr(0, 16));
   prepare_output_folder(options.output, true);
   write_file_atomically(options.output / "participants.tsv", participants_tsv(sweep));
 

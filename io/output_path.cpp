@@ -93,6 +93,46 @@ OutputFolderLock::OutputFolderLock(const std::filesystem::path& folder, FolderLo
   // A filesystem without flock() (some network mounts): the folder is used unlocked.
 }
 
+namespace {
+constexpr const char* k_sweep_mark_prefix = ".phantasm-sweep-";
+} // namespace
+
+bool SweepMark::is_mark_name(const std::string& file_name) {
+  return file_name.rfind(k_sweep_mark_prefix, 0) == 0;
+}
+
+SweepMark::SweepMark(const std::filesystem::path& folder, const std::string& sweep_id) {
+  const std::string own = k_sweep_mark_prefix + sweep_id;
+  const std::filesystem::path path = folder / own;
+  m_fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (m_fd < 0) return; // a folder that takes no files fails at its first file, with its own message
+  // Shared, waiting: another batch's probe below holds a mark exclusively for an instant only.
+  if (::flock(m_fd, LOCK_SH) != 0) return; // no flock() on this filesystem: unchecked
+  // Made and locked before looking at the others: of two sweeps starting at once, at least one
+  // sees the other's mark held.
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator(folder, error)) {
+    const std::string name = entry.path().filename().string();
+    if (!is_mark_name(name) || name == own) continue;
+    const int other = ::open(entry.path().c_str(), O_RDONLY | O_CLOEXEC);
+    if (other < 0) continue;
+    const bool held = ::flock(other, LOCK_EX | LOCK_NB) != 0 && errno == EWOULDBLOCK;
+    if (!held) std::filesystem::remove(entry.path(), error); // left by a batch that has ended
+    ::close(other);
+    if (held) {
+      ::close(m_fd);
+      m_fd = -1;
+      throw InputError(folder.string() +
+                       ": expected one sweep per dataset, found a batch of another sweep writing into it (" +
+                       name + "); wait for it to finish or choose another folder");
+    }
+  }
+}
+
+SweepMark::~SweepMark() {
+  if (m_fd >= 0) ::close(m_fd); // releases the lock; the mark stays for the next batch to check
+}
+
 OutputFolderLock::~OutputFolderLock() {
   if (m_fd >= 0) ::close(m_fd); // releases the lock
 }

@@ -27,6 +27,28 @@ void require_inside(const std::filesystem::path& root, const std::filesystem::pa
 /// @param what names the option in the message, e.g. "--json"
 void require_replaceable_file(const std::filesystem::path& path, std::string_view what);
 
+/// The mark of a sweep batched into a dataset: a batch of another sweep into the same folder
+/// while this one runs is refused, so two sweeps never mix their subjects in one dataset (shards of
+/// one sweep share the folder). An empty file OUT/.phantasm-sweep-<id> held with a shared flock()
+/// for the life of the object and left behind (a later batch of another sweep finds it unlocked
+/// and removes it).
+class SweepMark {
+public:
+  /// @param folder the batch's output folder (existing)
+  /// @param sweep_id names the sweep (hex digits, e.g. a hash of its name and subjects)
+  /// @throws InputError when a batch of another sweep holds its mark in the folder
+  SweepMark(const std::filesystem::path& folder, const std::string& sweep_id);
+  ~SweepMark();
+  SweepMark(const SweepMark&) = delete;
+  SweepMark& operator=(const SweepMark&) = delete;
+
+  /// True for the name of a sweep mark (a dataset's own file).
+  static bool is_mark_name(const std::string& file_name);
+
+private:
+  int m_fd = -1;
+};
+
 /// How an output folder is held: a run alone, or batches side by side (the shards of one sweep
 /// run at once into one dataset, each writing its own subjects).
 enum class FolderLockMode { exclusive, shared };

@@ -332,3 +332,26 @@ TEST(HostileInputs, SettingsThatMakeNoSignalWarnAndProvenanceRecordsIt) {
   EXPECT_NE(provenance.find("a flip angle of 0 deg makes no signal"), std::string::npos);
   EXPECT_NE(provenance.find("T1 of 1e+300 ms"), std::string::npos);
 }
+
+// Two sweeps never mix in one dataset: while a batch of one sweep holds its mark in a folder, a
+// batch of another is refused; shards of the same sweep share it; a mark left by a batch that
+// ended is removed by the next batch (#20 item 2).
+TEST(DatasetIntegrity, ASecondSweepIsRefusedWhileTheFirstWritesTheFolder) {
+  const fs::path folder = fresh_folder("sweep-marks");
+  {
+    const phantasm::SweepMark first(folder, "aaaa");
+    const phantasm::SweepMark shard(folder, "aaaa"); // the same sweep: accepted
+    try {
+      const phantasm::SweepMark other(folder, "bbbb");
+      ADD_FAILURE() << "a second sweep was let in";
+    } catch (const phantasm::InputError& error) {
+      EXPECT_NE(std::string(error.what()).find("expected one sweep per dataset"), std::string::npos)
+          << error.what();
+    }
+    EXPECT_TRUE(fs::exists(folder / ".phantasm-sweep-aaaa"));
+  }
+  // The first batch has ended: the next sweep may write, and its mark replaces the stale one.
+  const phantasm::SweepMark later(folder, "bbbb");
+  EXPECT_FALSE(fs::exists(folder / ".phantasm-sweep-aaaa"));
+  EXPECT_TRUE(fs::exists(folder / ".phantasm-sweep-bbbb"));
+}
