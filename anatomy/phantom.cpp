@@ -300,7 +300,9 @@ public:
   void matrix(const Eigen::PlainObjectBase<Derived>& m) {
     value(static_cast<std::int64_t>(m.rows()));
     value(static_cast<std::int64_t>(m.cols()));
-    m_bytes.append(reinterpret_cast<const char*>(m.data()), sizeof(typename Derived::Scalar) * m.size());
+    if (m.size() > 0) {
+      m_bytes.append(reinterpret_cast<const char*>(m.data()), sizeof(typename Derived::Scalar) * m.size());
+    }
   }
   std::string take() { return std::move(m_bytes); }
 
@@ -338,7 +340,7 @@ public:
     const std::size_t size = sizeof(typename Derived::Scalar) * static_cast<std::size_t>(rows * cols);
     need(size);
     m.resize(rows, cols);
-    std::memcpy(m.data(), m_bytes.data() + m_at, size);
+    if (size > 0) std::memcpy(m.data(), m_bytes.data() + m_at, size); // an empty array has no data()
     m_at += size;
   }
   bool done() const { return m_at == m_bytes.size(); }
