@@ -20,6 +20,7 @@ import csv
 import json
 import math
 import os
+import resource
 import subprocess
 import sys
 import time
@@ -36,10 +37,18 @@ STUDY = os.path.join(HERE, "registration_study")
 MOVED_FRACTION = 0.25
 
 
+def children_cpu_seconds():
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
 def run(command, log, seconds=None, step=None):
     """Runs a command, its output appended to `log`; stops the study with the command's own
-    message when it fails. Adds the command's wall time to seconds[step] when given."""
+    message when it fails. Adds the command's wall and processor (user + system) times to
+    seconds[step] and seconds[step + "_cpu"] when given: on a shared machine only the latter
+    says what the step costs."""
     start = time.monotonic()
+    start_cpu = children_cpu_seconds()
     with open(log, "a") as out:
         out.write("$ " + " ".join(command) + "\n")
         out.flush()
@@ -51,6 +60,7 @@ def run(command, log, seconds=None, step=None):
                  f"end of {log}:\n{tail}")
     if seconds is not None:
         seconds[step] = seconds.get(step, 0.0) + time.monotonic() - start
+        seconds[step + "_cpu"] = seconds.get(step + "_cpu", 0.0) + children_cpu_seconds() - start_cpu
 
 
 def scaled_scene(scene, magnitude):
@@ -209,7 +219,8 @@ def main():
               f"landmarks moved: {r['tre_mean_mm_moved_none'] or 0:.3f} -> "
               f"{r['tre_mean_mm_moved_elastix'] or 0:.3f} mm); "
               f"mean Dice {r['mean_dice_none']:.3f} -> {r['mean_dice_elastix']:.3f}; "
-              + ", ".join(f"{k[len('seconds_'):]} {v:.1f} s" for k, v in r.items() if k.startswith("seconds_")),
+              + ", ".join(f"{k[len('seconds_'):]} {v:.1f} s ({r[k + '_cpu']:.1f} s processor)"
+                          for k, v in r.items() if k.startswith("seconds_") and not k.endswith("_cpu")),
               flush=True)
     with open(os.path.join(args.output, "study.json"), "w") as f:
         json.dump({"scene": os.path.abspath(args.scene), "rows": rows}, f, indent=2)
