@@ -4,9 +4,12 @@
 // the displacement error of every moved organ's surface vertices against the finest size (RMS
 // and largest, mm), with the finest run's largest displacement for scale.
 // Usage: tet_size_accuracy [SCENE] [SIZE_MM ...]   (default: the head at 30 16 10 7 mm and the finest, 5)
+// PHANTASM_ANATOMY_CACHE=DIR: the anatomy cache folder (docs/batch.md), so that a heavy anatomy is built
+// once.
 
 #include "anatomy/phantom.hpp"
 #include "core/format.hpp"
+#include "pipeline/run_pipeline.hpp"
 #include "scene/scene.hpp"
 #include "sim/deform_phantom.hpp"
 
@@ -44,7 +47,12 @@ int main(int argc, char** argv) {
   }
   const Scene& scene = *loaded.scene;
   Reporter quiet = Reporter::silent();
-  Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
+  // The anatomy as a run builds it (shape files and atlases read, PHANTASM_ANATOMY_CACHE used
+  // when set, so that repeated measurements of a heavy anatomy build it once).
+  const char* cache = std::getenv("PHANTASM_ANATOMY_CACHE");
+  Phantom phantom = simulate(scene, quiet, SimulationStage::anatomy,
+                             cache != nullptr ? std::filesystem::path(cache) : std::filesystem::path())
+                        .phantom;
   std::vector<Run> runs;
   for (double size : sizes) {
     phantom.tet_size_mm = size;

@@ -4,6 +4,7 @@
 
 #include "core/error.hpp"
 #include "core/format.hpp"
+#include "core/progress.hpp"
 #include "geometry/tet_boundary.hpp"
 #include "sim/vertex_star_volumes.hpp"
 
@@ -109,6 +110,7 @@ std::shared_ptr<const TetMesh> body_mesh(const OrganTable& organs, const Phantom
     }
     return std::shared_ptr<const TetMesh>(std::shared_ptr<const TetMesh>(), &mesh);
   }
+  const TetMeshCriteria criteria = criteria_for_tet_size(phantom.tet_size_mm);
   NestedShapes nested;
   for (std::size_t k = 0; k < carried.size(); ++k) {
     nested.shapes.push_back(phantom.organs[carried[k]].target.get());
@@ -120,7 +122,9 @@ std::shared_ptr<const TetMesh> body_mesh(const OrganTable& organs, const Phantom
     }
     nested.parent.push_back(parent);
   }
-  const TetMeshCriteria criteria = criteria_for_tet_size(phantom.tet_size_mm);
+  progress_detail(organs[b].name + ": one tet mesh of it and the " + std::to_string(carried.size() - 1) +
+                  " organs nested in it (CGAL Mesh_3, tet size " + format_number(phantom.tet_size_mm) +
+                  " mm)");
   auto mesh = std::make_shared<TetMesh>(mesh_nested_solid(nested, criteria, body_mesh_seed(phantom.seed, b)));
   organ_of_tet.clear();
   for (Eigen::Index t = 0; t < mesh->tets.rows(); ++t)

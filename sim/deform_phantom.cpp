@@ -6,6 +6,7 @@
 #include "sim/loads.hpp"
 
 #include "core/format.hpp"
+#include "core/progress.hpp"
 
 #include <algorithm>
 
@@ -68,7 +69,13 @@ PhantomDeformation deform_phantom(const DeformationSettings& deformation, const 
                                   const Phantom& phantom, StageReport& report, Reporter& reporter) {
   using namespace sim_detail;
   const BodyAssignment assignment = assign_bodies(deformation, organs, phantom, report);
-  BodyModel built = build_body_model(deformation, organs, phantom, assignment, report);
+  // Building a body's conforming tet mesh of its nested organs (CGAL Mesh_3) can take minutes on
+  // real anatomy: a bar of its own says what runs and for how long.
+  BodyModel built = [&] {
+    ProgressBar meshing(reporter, "bodies", 1);
+    meshing.set_detail("building the bodies' tet meshes and constraints");
+    return build_body_model(deformation, organs, phantom, assignment, report);
+  }();
   ElasticModel& model = built.model;
   PhantomDeformation result;
   if (built.bodies.empty()) {
