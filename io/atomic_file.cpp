@@ -82,6 +82,9 @@ void AtomicFileWriter::commit() {
     throw io_error("cannot close", m_temporary_path);
   }
   m_fd = -1;
+  // A test's pause: a signal can then land between the last byte and the rename.
+  if (const int delay = g_write_delay_ms.load(); delay > 0)
+    std::this_thread::sleep_for(std::chrono::milliseconds(delay));
   if (::rename(m_temporary_path.c_str(), m_final_path.c_str()) != 0) {
     throw io_error("cannot rename to " + m_final_path.string() + " from", m_temporary_path);
   }
@@ -139,6 +142,10 @@ std::size_t remove_stale_temporaries(const std::filesystem::path& root) {
 
 void set_write_delay_for_testing(int milliseconds_per_chunk) {
   g_write_delay_ms = milliseconds_per_chunk;
+}
+
+int write_delay_for_testing() {
+  return g_write_delay_ms.load();
 }
 
 } // namespace phantasm

@@ -49,8 +49,12 @@ bool is_temporary_file_name(const std::filesystem::path& path);
 std::size_t remove_stale_temporaries(const std::filesystem::path& root);
 
 /// Slows every chunk written by AtomicFileWriter (4 KiB while a delay is set) by this many
-/// milliseconds. Only for tests that
-/// interrupt a run while it writes; 0 (the default) turns it off.
+/// milliseconds, pauses as long in commit() between closing the temporary file and renaming it,
+/// and before every block of an HDF5 export. Only for tests that interrupt a run while it
+/// writes; 0 (the default) turns it off.
 void set_write_delay_for_testing(int milliseconds_per_chunk);
+
+/// The delay set by set_write_delay_for_testing() (0: none).
+int write_delay_for_testing();
 
 } // namespace phantasm

@@ -3,6 +3,7 @@
 #include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/version.hpp"
+#include "io/atomic_file.hpp"
 #include "io/dataset_layout.hpp"
 #include "io/nifti_file.hpp"
 
@@ -11,11 +12,13 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <fstream>
 #include <map>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
 namespace phantasm {
 namespace {
@@ -38,13 +41,19 @@ hid_t check_id(hid_t id, const std::string& what) {
 /// An HDF5 handle closed by its destructor.
 class Handle {
 public:
-  Handle(hid_t id, herr_t (*close)(hid_t)) : m_id(id), m_close(close) {}
+  Handle(hid_t id, herr_t (*closer)(hid_t)) : m_id(id), m_close(closer) {}
   ~Handle() {
     if (m_id >= 0) m_close(m_id);
   }
   Handle(const Handle&) = delete;
   Handle& operator=(const Handle&) = delete;
   hid_t get() const { return m_id; }
+  /// Closes now and returns HDF5's status (a file's close writes what it still holds).
+  herr_t close() {
+    const herr_t status = m_id >= 0 ? m_close(m_id) : 0;
+    m_id = -1;
+    return status;
+  }
 
 private:
   hid_t m_id;
@@ -97,7 +106,10 @@ hid_t group_at(hid_t file, const std::string& path) {
 }
 
 /// Writes a chunked, compressed array of (i, j, k[, component]) from values stored with i fastest
-/// (component-major for vectors, as NIfTI stores them).
+/// (component-major for vectors, as NIfTI stores them). Written in blocks of whole chunks (one
+/// chunk edge along i and j, the whole k axis), with a cancellation poll between blocks: one
+/// H5Dwrite of a large array compresses for seconds without a chance to stop, and needed a
+/// transposed copy of the whole array besides.
 template <class T>
 void write_array(hid_t file, const std::string& path, const ImageGrid& grid,
                  const std::vector<double>& values, int components, hid_t memory_type,
@@ -105,12 +117,6 @@ void write_array(hid_t file, const std::string& path, const ImageGrid& grid,
   const auto nx = static_cast<std::size_t>(grid.dims.x()), ny = static_cast<std::size_t>(grid.dims.y()),
              nz = static_cast<std::size_t>(grid.dims.z());
   const std::size_t count = nx * ny * nz, nc = static_cast<std::size_t>(components);
-  std::vector<T> data(count * nc);
-  for (std::size_t c = 0; c < nc; ++c)
-    for (std::size_t z = 0; z < nz; ++z)
-      for (std::size_t y = 0; y < ny; ++y)
-        for (std::size_t x = 0; x < nx; ++x)
-          data[((x * ny + y) * nz + z) * nc + c] = static_cast<T>(values[c * count + (z * ny + y) * nx + x]);
   const int rank = components > 1 ? 4 : 3;
   const hsize_t dims[4] = {nx, ny, nz, nc};
   const hsize_t edge = static_cast<hsize_t>(std::max(1, options.chunk));
@@ -128,7 +134,30 @@ void write_array(hid_t file, const std::string& path, const ImageGrid& grid,
                                            space.get(), H5P_DEFAULT, properties.get(), H5P_DEFAULT),
                                 "create dataset " + path),
                        H5Dclose);
-  check(H5Dwrite(dataset.get(), memory_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data.data()), "write " + path);
+  const auto bx = static_cast<std::size_t>(chunks[0]), by = static_cast<std::size_t>(chunks[1]);
+  std::vector<T> block(bx * by * nz * nc);
+  for (std::size_t x0 = 0; x0 < nx; x0 += bx) {
+    for (std::size_t y0 = 0; y0 < ny; y0 += by) {
+      if (const int delay = write_delay_for_testing(); delay > 0)
+        std::this_thread::sleep_for(std::chrono::milliseconds(delay));
+      throw_if_cancelled(); // the caller removes the temporary file
+      const std::size_t sx = std::min(bx, nx - x0), sy = std::min(by, ny - y0);
+      for (std::size_t c = 0; c < nc; ++c)
+        for (std::size_t z = 0; z < nz; ++z)
+          for (std::size_t y = 0; y < sy; ++y)
+            for (std::size_t x = 0; x < sx; ++x)
+              block[((x * sy + y) * nz + z) * nc + c] =
+                  static_cast<T>(values[c * count + (z * ny + y0 + y) * nx + x0 + x]);
+      const hsize_t start[4] = {x0, y0, 0, 0};
+      const hsize_t size[4] = {sx, sy, nz, nc};
+      check(H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start, nullptr, size, nullptr),
+            "select a block of " + path);
+      const Handle memory(check_id(H5Screate_simple(rank, size, nullptr), "make a block space for " + path),
+                          H5Sclose);
+      check(H5Dwrite(dataset.get(), memory_type, memory.get(), space.get(), H5P_DEFAULT, block.data()),
+            "write " + path);
+    }
+  }
   affine_attribute(dataset.get(), grid);
   for (const auto& [name, value] : attributes)
     string_attribute(dataset.get(), name, value);
@@ -273,10 +302,10 @@ Hdf5ExportSummary export_hdf5(const std::filesystem::path& dataset, const std::f
   if (!file.parent_path().empty()) std::filesystem::create_directories(file.parent_path());
   Hdf5ExportSummary summary;
   try {
-    const Handle h5(check_id(H5Fcreate(temporary.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT),
-                             "create " + temporary.string()),
-                    H5Fclose);
-    const Handle root(check_id(H5Gopen2(h5.get(), "/", H5P_DEFAULT), "open /"), H5Gclose);
+    Handle h5(check_id(H5Fcreate(temporary.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT),
+                       "create " + temporary.string()),
+              H5Fclose);
+    Handle root(check_id(H5Gopen2(h5.get(), "/", H5P_DEFAULT), "open /"), H5Gclose);
     const DatasetLayout any(dataset, subjects.front());
     string_attribute(root.get(), "format", "phantasm HDF5 export 2");
     string_attribute(root.get(), "generated_by", std::string("phantasm ") + version);
@@ -432,6 +461,9 @@ Hdf5ExportSummary export_hdf5(const std::filesystem::path& dataset, const std::f
       if (progress) progress(subject);
     }
     check(H5Fflush(h5.get(), H5F_SCOPE_GLOBAL), "flush " + temporary.string());
+    // Every other handle is closed (a file with open objects would only close with them).
+    check(root.close(), "close /");
+    check(h5.close(), "close " + temporary.string());
   } catch (...) {
     std::error_code ignored;
     std::filesystem::remove(temporary, ignored);

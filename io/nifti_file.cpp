@@ -3,6 +3,7 @@
 
 #include "io/nifti_file.hpp"
 
+#include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
 #include "io/atomic_file.hpp"
@@ -13,15 +14,20 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <memory>
 #include <optional>
 #include <stdexcept>
+#include <thread>
 
 namespace phantasm {
 namespace {
+
+std::atomic<int> g_read_delay_ms{0};
 
 bool ends_with_gz(const std::filesystem::path& path) {
   const std::string name = path.filename().string();
@@ -237,14 +243,15 @@ void check_voxel_offset(const std::filesystem::path& path) {
                    format_number(offset));
 }
 
-/// Checks the voxels a header describes before libnifti allocates and loads them: that their
-/// count is what the dimensions multiply to, and that the file holds their bytes (a header of a
-/// few hundred bytes can claim 10^12 voxels, which libnifti would allocate before finding the file
-/// short). Refuses a float image with a NaN or infinite value: libnifti sets such values to 0 as
-/// it loads them (nifti_read_buffer), so a field or map of NaN would read as zeros without a word.
-/// An uncompressed file's size tells whether it holds the bytes; a gzipped file, and any float
-/// image, is read through once.
-void check_voxel_data(const std::filesystem::path& path, const nifti_image& header) {
+/// Reads the voxels a header describes, in pieces, and returns their bytes in this machine's
+/// byte order. Checks first that their count is what the dimensions multiply to, and that an
+/// uncompressed file holds their bytes (a header of a few hundred bytes can claim 10^12 voxels:
+/// the buffer is allocated only after that, and grows as a gzipped file's bytes arrive, so a
+/// short gzipped file is named as such, not as too large for memory). Refuses a float image with
+/// a NaN or infinite value (libnifti would have set them to 0 as it loads, so a field of NaN
+/// would read as no motion). Polls the cancellation flag between pieces of 1 MiB: decompressing
+/// a large field takes seconds, and Ctrl-C must not wait for it.
+std::vector<unsigned char> read_voxel_data(const std::filesystem::path& path, const nifti_image& header) {
   double product = 1.0;
   std::string dims;
   for (int d = 1; d <= std::clamp<int>(static_cast<int>(header.dim[0]), 0, 7); ++d) {
@@ -267,51 +274,66 @@ void check_voxel_data(const std::filesystem::path& path, const nifti_image& head
                    std::to_string(header.iname_offset) + ", found " + std::to_string(found));
   };
   const bool gzip = nifti_is_gzfile(header.iname) != 0;
-  const bool floats = header.datatype == DT_FLOAT32 || header.datatype == DT_FLOAT64;
   if (!gzip) {
     std::error_code error;
     const std::uintmax_t size = std::filesystem::file_size(header.iname, error);
     const auto offset = static_cast<std::uint64_t>(header.iname_offset);
     if (!error && size < offset + needed) short_file(size > offset ? size - offset : 0);
-    if (!floats) return;
   }
   const znzFile file = znzopen(header.iname, "rb", gzip);
-  if (znz_isnull(file)) return; // the load below says what is wrong
+  if (znz_isnull(file)) fail(path, "expected a NIfTI-1 or NIfTI-2 image, found a file libnifti cannot read");
   znzFile handle = file;
-  if (znzseek(handle, static_cast<znz_off_t>(header.iname_offset), SEEK_SET) < 0) {
-    znzclose(handle);
-    short_file(0);
-  }
+  struct Closer {
+    znzFile& handle;
+    ~Closer() { znzclose(handle); }
+  } closer{handle};
+  if (znzseek(handle, static_cast<znz_off_t>(header.iname_offset), SEEK_SET) < 0) short_file(0);
+
+  constexpr std::size_t k_piece = std::size_t{1} << 20;
+  std::vector<unsigned char> bytes;
+  if (!gzip) bytes.resize(static_cast<std::size_t>(needed));
+  const bool floats = header.datatype == DT_FLOAT32 || header.datatype == DT_FLOAT64;
   const std::size_t bytes_per_value = header.datatype == DT_FLOAT64 ? 8 : 4;
-  const bool swap = header.byteorder != nifti_short_order();
-  std::vector<unsigned char> chunk(std::size_t{1} << 20);
+  const auto swap_unit = static_cast<std::size_t>(header.swapsize);
+  const bool swap = header.byteorder != nifti_short_order() && swap_unit > 1;
   std::uint64_t done = 0;
   // The first value that is not finite, reported once the file is known to hold every voxel (a
   // short file is named as such, compressed or not).
   std::optional<std::pair<std::uint64_t, double>> first_bad;
   while (done < needed) {
-    const auto want = static_cast<std::size_t>(std::min<std::uint64_t>(needed - done, chunk.size()));
-    const std::size_t read = znzread(chunk.data(), 1, want, handle);
-    if (floats) {
-      // Chunks hold whole values (their size and the offset into the voxels are multiples of 8).
+    if (const int delay = g_read_delay_ms.load(); delay > 0)
+      std::this_thread::sleep_for(std::chrono::milliseconds(delay));
+    throw_if_cancelled();
+    const auto want = static_cast<std::size_t>(std::min<std::uint64_t>(needed - done, k_piece));
+    if (done + want > bytes.size())
+      bytes.resize(static_cast<std::size_t>(std::min<std::uint64_t>(
+          needed, std::max<std::uint64_t>(2 * bytes.size(), std::uint64_t{16} * k_piece))));
+    unsigned char* piece = bytes.data() + done;
+    const std::size_t read = znzread(piece, 1, want, handle);
+    // Pieces start at multiples of 1 MiB, so they hold whole values and whole swap units.
+    if (swap) {
+      for (std::size_t b = 0; b + swap_unit <= read; b += swap_unit)
+        std::reverse(piece + b, piece + b + swap_unit);
+    }
+    if (floats && !first_bad) {
       for (std::size_t b = 0; b + bytes_per_value <= read; b += bytes_per_value) {
-        unsigned char* at = chunk.data() + b;
-        if (swap) std::reverse(at, at + bytes_per_value);
         double value = 0.0;
         if (bytes_per_value == 4) {
           float f = 0.0f;
-          std::memcpy(&f, at, 4);
+          std::memcpy(&f, piece + b, 4);
           value = f;
         } else {
-          std::memcpy(&value, at, 8);
+          std::memcpy(&value, piece + b, 8);
         }
-        if (!std::isfinite(value) && !first_bad) first_bad = std::pair{(done + b) / bytes_per_value, value};
+        if (!std::isfinite(value)) {
+          first_bad = std::pair{(done + b) / bytes_per_value, value};
+          break;
+        }
       }
     }
     done += read;
     if (read < want) break;
   }
-  znzclose(handle);
   if (done < needed) short_file(done);
   if (first_bad) {
     fail(path, "expected finite values, found " +
@@ -319,6 +341,8 @@ void check_voxel_data(const std::filesystem::path& path, const nifti_image& head
                    std::to_string(first_bad->first) + " of " + std::to_string(header.nvox) +
                    " (i fastest, then j, k, components)");
   }
+  bytes.resize(static_cast<std::size_t>(needed));
+  return bytes;
 }
 
 /// Reads a NIfTI file holding `components` values per voxel: a 3-D volume for 1, a 5-D
@@ -327,16 +351,13 @@ NiftiVolume read_volume(const std::filesystem::path& path, int components) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error)) fail(path, "expected a NIfTI file, found no such file");
   nifti_set_debug_level(0);
-  {
-    const std::unique_ptr<nifti_image, void (*)(nifti_image*)> header(nifti_image_read(path.c_str(), 0),
-                                                                      nifti_image_free);
-    check_voxel_offset(path);
-    if (header) check_voxel_data(path, *header);
-  }
-  const std::unique_ptr<nifti_image, void (*)(nifti_image*)> image(nifti_image_read(path.c_str(), 1),
+  // The header through libnifti, the voxels by read_voxel_data (in pieces, so that a cancellation
+  // need not wait for a whole file to decompress).
+  const std::unique_ptr<nifti_image, void (*)(nifti_image*)> image(nifti_image_read(path.c_str(), 0),
                                                                    nifti_image_free);
-  if (!image || !image->data)
-    fail(path, "expected a NIfTI-1 or NIfTI-2 image, found a file libnifti cannot read");
+  check_voxel_offset(path);
+  if (!image) fail(path, "expected a NIfTI-1 or NIfTI-2 image, found a file libnifti cannot read");
+  const std::vector<unsigned char> bytes = read_voxel_data(path, *image);
   if (components == 1) {
     for (int d = 4; d <= 7; ++d) {
       if (image->dim[0] >= d && image->dim[d] > 1) {
@@ -396,21 +417,26 @@ NiftiVolume read_volume(const std::filesystem::path& path, int components) {
   volume.values.resize(count);
   const double slope = image->scl_slope != 0.0 ? image->scl_slope : 1.0;
   const double intercept = image->scl_slope != 0.0 ? image->scl_inter : 0.0;
-  auto convert = [&](auto* data) {
-    for (std::size_t i = 0; i < count; ++i)
-      volume.values[i] = slope * static_cast<double>(data[i]) + intercept;
+  // The bytes hold values of type T (memcpy: the buffer is of bytes, not of T).
+  auto convert = [&](auto type) {
+    using T = decltype(type);
+    for (std::size_t i = 0; i < count; ++i) {
+      T value;
+      std::memcpy(&value, bytes.data() + i * sizeof(T), sizeof(T));
+      volume.values[i] = slope * static_cast<double>(value) + intercept;
+    }
   };
   switch (image->datatype) {
-  case DT_UINT8: convert(static_cast<const std::uint8_t*>(image->data)); break;
-  case DT_INT8: convert(static_cast<const std::int8_t*>(image->data)); break;
-  case DT_INT16: convert(static_cast<const std::int16_t*>(image->data)); break;
-  case DT_UINT16: convert(static_cast<const std::uint16_t*>(image->data)); break;
-  case DT_INT32: convert(static_cast<const std::int32_t*>(image->data)); break;
-  case DT_UINT32: convert(static_cast<const std::uint32_t*>(image->data)); break;
-  case DT_INT64: convert(static_cast<const std::int64_t*>(image->data)); break;
-  case DT_UINT64: convert(static_cast<const std::uint64_t*>(image->data)); break;
-  case DT_FLOAT32: convert(static_cast<const float*>(image->data)); break;
-  case DT_FLOAT64: convert(static_cast<const double*>(image->data)); break;
+  case DT_UINT8: convert(std::uint8_t{}); break;
+  case DT_INT8: convert(std::int8_t{}); break;
+  case DT_INT16: convert(std::int16_t{}); break;
+  case DT_UINT16: convert(std::uint16_t{}); break;
+  case DT_INT32: convert(std::int32_t{}); break;
+  case DT_UINT32: convert(std::uint32_t{}); break;
+  case DT_INT64: convert(std::int64_t{}); break;
+  case DT_UINT64: convert(std::uint64_t{}); break;
+  case DT_FLOAT32: convert(float{}); break;
+  case DT_FLOAT64: convert(double{}); break;
   default:
     fail(path, "expected a real scalar datatype, found NIfTI datatype " + std::to_string(image->datatype) +
                    " (" + nifti_datatype_string(image->datatype) + ")");
@@ -444,6 +470,10 @@ std::vector<std::int32_t> read_nifti_labels(const std::filesystem::path& path, I
   }
   if (grid) *grid = volume.grid;
   return labels;
+}
+
+void set_read_delay_for_testing(int milliseconds_per_piece) {
+  g_read_delay_ms = milliseconds_per_piece;
 }
 
 } // namespace phantasm

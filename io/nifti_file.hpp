@@ -64,4 +64,8 @@ NiftiVolume read_nifti_vectors(const std::filesystem::path& path, int components
 /// @throws InputError as read_nifti, and naming the first voxel that is not a whole number
 std::vector<std::int32_t> read_nifti_labels(const std::filesystem::path& path, ImageGrid* grid);
 
+/// Pauses this many milliseconds before every piece (1 MiB) of voxels the read functions read.
+/// Only for tests that interrupt a command while it reads; 0 (the default) turns it off.
+void set_read_delay_for_testing(int milliseconds_per_piece);
+
 } // namespace phantasm

@@ -1,5 +1,6 @@
 #include "apps/phantasm/commands.hpp"
 #include "batch/run_batch.hpp"
+#include "io/atomic_file.hpp"
 #include "io/dataset_layout.hpp"
 #include "pipeline/cost_estimate.hpp"
 
@@ -51,6 +52,7 @@ void add_batch_command(CLI::App& app, std::function<int()>& action) {
     std::string cache;
     bool no_cache = false;
     std::string max_memory;
+    int write_delay_ms = 0;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
@@ -78,9 +80,12 @@ void add_batch_command(CLI::App& app, std::function<int()>& action) {
                       "this (4G, 512M; default: the memory available)");
   command->add_flag("--list", options->list,
                     "Print the sweep's subject labels, one per line in sweep order, and run nothing");
+  // For tests that interrupt a batch while it writes; hidden from --help.
+  command->add_option("--write-delay-ms", options->write_delay_ms)->group("")->check(CLI::NonNegativeNumber);
   command->callback([options, &action] {
     action = [options] {
       const auto start = std::chrono::steady_clock::now();
+      set_write_delay_for_testing(options->write_delay_ms);
       const Shard shard = parse_shard(options->shard);
       const Sweep sweep = load_sweep(options->sweep, options->list ? SweepDepth::labels : SweepDepth::full);
       if (options->list) {

@@ -3,6 +3,7 @@
 #include "core/safe_name.hpp"
 #include "evaluation/evaluate_registration.hpp"
 #include "io/json_file.hpp"
+#include "io/nifti_file.hpp"
 #include "io/output_path.hpp"
 
 #include <iostream>
@@ -14,6 +15,7 @@ void add_eval_command(CLI::App& app, std::function<int()>& action) {
   struct Options {
     std::string dataset, field, labels, json, subject, fixed = "ref";
     bool identity = false, quiet = false;
+    int read_delay_ms = 0;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
@@ -33,8 +35,11 @@ void add_eval_command(CLI::App& app, std::function<int()>& action) {
   command->add_option("--fixed", options->fixed, "Session of the fixed image: ref (default) or def")
       ->check(CLI::IsMember({"ref", "def"}));
   command->add_flag("-q,--quiet", options->quiet, "Do not print the table");
+  // For tests that interrupt an evaluation while it reads; hidden from --help.
+  command->add_option("--read-delay-ms", options->read_delay_ms)->group("")->check(CLI::NonNegativeNumber);
   command->callback([options, &action] {
     action = [options] {
+      set_read_delay_for_testing(options->read_delay_ms);
       // The subject label becomes part of the paths read: it obeys the scene's name rule.
       if (!options->subject.empty() && !is_safe_name(options->subject)) {
         throw InputError(std::string("--subject: expected ") + k_safe_name_rule +

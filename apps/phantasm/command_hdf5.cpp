@@ -1,5 +1,7 @@
 #include "apps/phantasm/commands.hpp"
+#include "io/atomic_file.hpp"
 #include "io/hdf5_export.hpp"
+#include "io/nifti_file.hpp"
 #include "io/output_path.hpp"
 
 #include <iostream>
@@ -12,6 +14,7 @@ void add_hdf5_command(CLI::App& app, std::function<int()>& action) {
     std::string dataset, output;
     int compression = 4, chunk = 64;
     bool quiet = false;
+    int write_delay_ms = 0, read_delay_ms = 0;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
@@ -28,8 +31,13 @@ void add_hdf5_command(CLI::App& app, std::function<int()>& action) {
       ->check(CLI::Range(8, 1024))
       ->capture_default_str();
   command->add_flag("-q,--quiet", options->quiet, "Print nothing but errors");
+  // For tests that interrupt an export while it reads or writes; hidden from --help.
+  command->add_option("--write-delay-ms", options->write_delay_ms)->group("")->check(CLI::NonNegativeNumber);
+  command->add_option("--read-delay-ms", options->read_delay_ms)->group("")->check(CLI::NonNegativeNumber);
   command->callback([options, &action] {
     action = [options] {
+      set_write_delay_for_testing(options->write_delay_ms);
+      set_read_delay_for_testing(options->read_delay_ms);
       require_replaceable_file(options->output, "--output");
       const Hdf5ExportSummary summary = export_hdf5(options->dataset, options->output,
                                                     Hdf5ExportOptions{options->compression, options->chunk},

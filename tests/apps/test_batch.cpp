@@ -256,3 +256,84 @@ TEST(BatchCommand, SubjectsWithTheSameAnatomyBuildItOnce) {
   }
   EXPECT_GT(compared, 50u);
 }
+
+namespace {
+
+/// Whether any file under `folder` has a name for which `matches` is true.
+template <class Match>
+bool any_file(const fs::path& folder, Match matches) {
+  std::error_code error;
+  if (!fs::is_directory(folder, error)) return false;
+  for (auto it = fs::recursive_directory_iterator(folder, error); it != fs::recursive_directory_iterator();
+       it.increment(error)) {
+    if (error) return false; // a folder renamed or removed under the iterator: look again
+    if (matches(it->path().filename().string())) return true;
+  }
+  return false;
+}
+
+/// Polls until `matches` holds for a file under `folder` (or the process ends, or 5 min pass).
+template <class Match>
+void wait_for_file(const fs::path& folder, BackgroundProcess& process, Match matches) {
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::minutes(5);
+  while (!process.ended() && std::chrono::steady_clock::now() < give_up && !any_file(folder, matches))
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+}
+
+bool is_temporary_name(const std::string& name) {
+  return name.find(".phantasm-tmp-") != std::string::npos;
+}
+
+} // namespace
+
+// Signals at the worst moments of a batch: between two subjects (the instant the first one's
+// completion marker appears) and while a shard writes the dataset's participants.tsv. Nothing
+// already written is damaged: the subject made before the signal stays complete (the next batch
+// skips it and leaves its bytes alone), participants.tsv keeps its bytes, no temporary is left.
+TEST(BatchCommand, ASignalBetweenTwoSubjectsOrWhileAShardWritesItsTableDamagesNothing) {
+  const fs::path out = fresh_folder("batch-worst-moments") / "out";
+  // Shard 1/3 holds two subjects; one at a time, so that the second starts when the first ends.
+  BackgroundProcess first(
+      {k_phantasm, "batch", k_sweep.string(), "-o", out.string(), "--shard", "1/3", "-j", "1", "-q"});
+  wait_for_file(out / "derivatives", first,
+                [](const std::string& name) { return name == "provenance.json"; });
+  first.send_signal(SIGINT);
+  EXPECT_EQ(first.wait(), 130);
+  const std::map<std::string, std::string> after_first = folder_contents(out);
+  EXPECT_EQ(count_ending(after_first, "provenance.json"), 1u);
+  for (const auto& [path, bytes] : after_first)
+    EXPECT_FALSE(is_temporary_name(path)) << "temporary file left: " << path;
+
+  // Shard 2/3, its writes slowed: SIGTERM while participants.tsv is written (its temporary file
+  // exists). It ends with 143, and the folder is exactly as the first batch left it.
+  BackgroundProcess second({k_phantasm, "batch", k_sweep.string(), "-o", out.string(), "--shard", "2/3", "-q",
+                            "--write-delay-ms", "1000"});
+  wait_for_file(out, second, [](const std::string& name) {
+    return name.rfind(".participants.tsv.phantasm-tmp-", 0) == 0;
+  });
+  second.send_signal(SIGTERM);
+  EXPECT_EQ(second.wait(), 143);
+  EXPECT_EQ(folder_contents(out), after_first);
+
+  // The shard started again counts the subject made before the first signal as complete (and is
+  // stopped there: making the other subject would show nothing more); its bytes stay.
+  const fs::path err = out.parent_path() / "third.txt";
+  BackgroundProcess third({k_phantasm, "batch", k_sweep.string(), "-o", out.string(), "--shard", "1/3"},
+                          err.string());
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::minutes(1);
+  while (read_file(err).find(" to run, ") == std::string::npos && !third.ended() &&
+         std::chrono::steady_clock::now() < give_up)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  third.send_signal(SIGINT);
+  EXPECT_EQ(third.wait(), 130);
+  EXPECT_NE(read_file(err).find("2 of 6 subjects in shard 1/3, 1 already complete, 1 to run"),
+            std::string::npos)
+      << read_file(err);
+  const std::map<std::string, std::string> finished = folder_contents(out);
+  for (const auto& [path, bytes] : after_first) { // a subject's files do not depend on the run
+    ASSERT_EQ(finished.count(path), 1u) << path;
+    EXPECT_EQ(finished.at(path), bytes) << path;
+  }
+  for (const auto& [path, bytes] : finished)
+    EXPECT_FALSE(is_temporary_name(path)) << "temporary file left: " << path;
+}

@@ -1,7 +1,10 @@
+#include "io/dataset_layout.hpp"
+#include "io/nifti_file.hpp"
 #include "tests/apps/cli_fixtures.hpp"
 #include "tests/support/subprocess.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <csignal>
@@ -213,4 +216,90 @@ TEST(InterruptedRun, ASignalInsideVoxelizationEndsTheRunBeforeTheStageEnds) {
     EXPECT_EQ(run.err.find("voxelize 100%"), std::string::npos) << "the stage ran to its end\n" << run.err;
     expect_no_temporary_and_no_marker(out);
   }
+}
+
+namespace {
+
+/// A dataset of one subject (sub-01) whose provenance lists one file, a large reference label
+/// map (128 x 128 x 256 uint8: 4 MiB, four pieces of a read), for the commands that read datasets.
+fs::path large_label_dataset(const fs::path& root) {
+  const fs::path dataset = root / "dataset";
+  const phantasm::DatasetLayout layout(dataset, "01");
+  phantasm::ImageGrid grid;
+  grid.dims = {128, 128, 256};
+  std::vector<std::int32_t> labels(static_cast<std::size_t>(grid.voxel_count()));
+  for (std::size_t i = 0; i < labels.size(); ++i)
+    labels[i] = static_cast<std::int32_t>(i / 4096 % 7);
+  const fs::path dseg = layout.dseg(phantasm::PhantomState::reference);
+  phantasm::write_nifti_labels(dseg, grid, labels);
+  const nlohmann::json provenance = {{"files", {dseg.lexically_relative(dataset).generic_string()}}};
+  write_text_file(layout.provenance(), provenance.dump());
+  return dataset;
+}
+
+/// Polls (every 5 ms, for at most a minute, while the process runs) until `done` holds.
+template <class Condition>
+void wait_until(BackgroundProcess& process, Condition done) {
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::minutes(1);
+  while (!process.ended() && std::chrono::steady_clock::now() < give_up && !done())
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+}
+
+} // namespace
+
+// An HDF5 export writes each array in blocks of chunks and polls between them: a signal while a
+// large array is written ends the export at once with 130, removes the temporary file, and the
+// file already under the final name (an earlier export) stays as it was.
+TEST(InterruptedExport, ASignalWhileAnArrayIsWrittenKeepsTheEarlierFileAndLeavesNoTemporary) {
+  const fs::path root = fresh_folder("interrupted-hdf5");
+  const fs::path dataset = large_label_dataset(root);
+  const std::string dseg =
+      phantasm::DatasetLayout(dataset, "01").dseg(phantasm::PhantomState::reference).string();
+  const fs::path out = root / "export";
+  fs::create_directories(out);
+  write_text_file(out / "dataset.h5", "an earlier export");
+  // The read: 4 pieces, 100 ms before each. The write: 64 blocks of 16 x 16 x 256 voxels, 50 ms
+  // before each (3.2 s).
+  BackgroundProcess hdf5({k_phantasm, "hdf5", dataset.string(), "-o", (out / "dataset.h5").string(),
+                          "--chunk", "16", "--read-delay-ms", "100", "--write-delay-ms", "50"},
+                         (root / "err.txt").string());
+  // The label map is read (open), then closed for good (open again within 50 ms: still reading).
+  wait_until(hdf5, [&] { return hdf5.has_open(dseg); });
+  wait_until(hdf5, [&] {
+    if (hdf5.has_open(dseg)) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    return !hdf5.has_open(dseg);
+  });
+  hdf5.send_signal(SIGINT);
+  EXPECT_EQ(hdf5.wait(), 130) << read_file(root / "err.txt");
+  // The subject was never exported (its progress line comes after its last array).
+  EXPECT_EQ(read_file(root / "err.txt").find("[hdf5] sub-01"), std::string::npos)
+      << read_file(root / "err.txt");
+  EXPECT_EQ(folder_contents(out), (std::map<std::string, std::string>{{"dataset.h5", "an earlier export"}}));
+}
+
+// `eval` reads its volumes in pieces and polls between them: a signal while a large label map is
+// read ends it with 143 (SIGTERM) before anything else is read or written; the --json file
+// already there stays as it was. (Unstopped, it would go on to the deformed session's missing
+// labels and fail with 2.)
+TEST(InterruptedEval, ASignalWhileALargeVolumeIsReadEndsTheEvaluation) {
+  const fs::path root = fresh_folder("interrupted-eval");
+  const fs::path dataset = large_label_dataset(root);
+  const std::string dseg =
+      phantasm::DatasetLayout(dataset, "01").dseg(phantasm::PhantomState::reference).string();
+  const fs::path json = root / "result" / "evaluation.json";
+  fs::create_directories(json.parent_path());
+  write_text_file(json, "{}\n");
+  // Four pieces, 500 ms before each: 2 s of reading.
+  BackgroundProcess eval({k_phantasm, "eval", dataset.string(), "--identity", "--subject", "01", "--json",
+                          json.string(), "--read-delay-ms", "500"},
+                         (root / "err.txt").string());
+  wait_until(eval, [&] { return eval.has_open(dseg); });
+  std::this_thread::sleep_for(std::chrono::milliseconds(300)); // past the header, into the voxels
+  eval.send_signal(SIGTERM);
+  EXPECT_EQ(eval.wait(), 143) << read_file(root / "err.txt");
+  EXPECT_NE(read_file(root / "err.txt").find("interrupted"), std::string::npos)
+      << read_file(root / "err.txt");
+  EXPECT_EQ(folder_contents(json.parent_path()),
+            (std::map<std::string, std::string>{{"evaluation.json", "{}\n"}}));
 }

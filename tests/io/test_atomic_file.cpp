@@ -7,8 +7,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
+#include <csignal>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 using namespace phantasm;
 using phantasm::testing::fresh_folder;
@@ -65,6 +68,49 @@ TEST(AtomicFile, CancellationStopsAWriteAndRemovesTheTemporaryFile) {
   reset_cancellation();
   EXPECT_EQ(read_file(folder / "f.txt"), "complete");
   EXPECT_EQ(file_count(folder), 1u);
+}
+
+// A signal at the worst moment of a commit: after the last byte, while the rename is pending
+// (the test delay pauses there). The rename of a complete file goes ahead or the old file stays;
+// no name ever holds part of a file, no temporary is left, and the next write is refused.
+TEST(AtomicFile, ACancellationDuringTheRenameLeavesTheOldOrTheNewFileWhole) {
+  const fs::path folder = fresh_folder("cancel-rename");
+  const std::string old_bytes = "complete old content", new_bytes(100000, 'n');
+  write_file_atomically(folder / "f.txt", old_bytes);
+  {
+    // Just before the rename: the commit refuses, the old file stays.
+    AtomicFileWriter writer(folder / "f.txt");
+    writer.write(new_bytes);
+    request_cancellation(SIGINT);
+    EXPECT_THROW(writer.commit(), Cancelled);
+  }
+  EXPECT_EQ(read_file(folder / "f.txt"), old_bytes);
+  EXPECT_EQ(file_count(folder), 1u);
+  reset_cancellation();
+  std::thread stop;
+  {
+    AtomicFileWriter writer(folder / "f.txt");
+    writer.write(new_bytes);
+    // The commit then pauses 300 ms between closing the temporary file and renaming it.
+    set_write_delay_for_testing(300);
+    stop = std::thread([] {
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      request_cancellation(SIGINT);
+    });
+    try {
+      writer.commit();
+    } catch (const Cancelled&) {
+    }
+  }
+  stop.join();
+  set_write_delay_for_testing(0);
+  const std::string found = read_file(folder / "f.txt");
+  EXPECT_TRUE(found == old_bytes || found == new_bytes) << found.size() << " bytes";
+  EXPECT_EQ(file_count(folder), 1u); // no temporary
+  EXPECT_THROW(write_file_atomically(folder / "f.txt", "more"), Cancelled);
+  EXPECT_EQ(read_file(folder / "f.txt"), found);
+  EXPECT_EQ(file_count(folder), 1u);
+  reset_cancellation();
 }
 
 TEST(AtomicFile, StaleTemporariesOfAKilledRunAreFoundAndRemoved) {

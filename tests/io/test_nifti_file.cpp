@@ -1,3 +1,4 @@
+#include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
 #include "io/nifti_file.hpp"
@@ -9,8 +10,10 @@
 
 #include <Eigen/Geometry>
 
+#include <chrono>
 #include <fstream>
 #include <iterator>
+#include <thread>
 
 using namespace phantasm;
 using phantasm::testing::fresh_folder;
@@ -172,4 +175,67 @@ TEST(NiftiFile, AVoxelOffsetBeyond2To31IsRefused) {
             (folder / "far.nii").string() +
                 ": expected the voxels at a whole byte offset (vox_offset) below 2^31, found " +
                 format_number(static_cast<double>(offset)));
+}
+
+// The voxels are read in pieces of 1 MiB: files of several pieces, big-endian (swapped piece by
+// piece) and little-endian, gzipped and not, written by nibabel, read back value for value.
+TEST(NiftiFile, LargeFilesOfEitherByteOrderAreReadValueForValue) {
+  const fs::path folder = fresh_folder("nifti-pieces");
+  const std::string script = R"(
+import sys, numpy as np, nibabel as nib
+folder = sys.argv[1]
+shape = (96, 80, 70)  # 537600 voxels: 2.05 MiB of float32, 4.1 MiB of float64
+i, j, k = np.indices(shape)
+for name, dtype, order in [('be_f4.nii.gz', 'f4', '>'), ('be_f8.nii', 'f8', '>'), ('be_i2.nii.gz', 'i2', '>'),
+                           ('le_f4.nii', 'f4', '<')]:
+    values = (i + 1000 * j + 100000 * k) if dtype != 'i2' else (i + 97 * j - 11 * k)
+    header = nib.Nifti1Header(endianness=order)
+    header.set_data_dtype(np.dtype(order + dtype))
+    nib.save(nib.Nifti1Image(values.astype(order + dtype), np.eye(4), header), folder + '/' + name)
+print('ok')
+)";
+  phantasm::testing::write_text_file(folder / "write.py", script);
+  const auto written =
+      phantasm::testing::run_command({PHANTASM_PYTHON, (folder / "write.py").string(), folder.string()});
+  ASSERT_EQ(written.out, "ok\n") << written.err;
+  for (const std::string name : {"be_f4.nii.gz", "be_f8.nii", "be_i2.nii.gz", "le_f4.nii"}) {
+    SCOPED_TRACE(name);
+    const NiftiVolume volume = read_nifti(folder / name);
+    ASSERT_EQ(volume.grid.dims, Eigen::Vector3i(96, 80, 70));
+    const bool labels = name == "be_i2.nii.gz";
+    std::size_t wrong = 0;
+    for (int k = 0, n = 0; k < 70; ++k)
+      for (int j = 0; j < 80; ++j)
+        for (int i = 0; i < 96; ++i, ++n) {
+          const double expected = labels ? i + 97 * j - 11 * k : i + 1000.0 * j + 100000.0 * k;
+          wrong += volume.values[static_cast<std::size_t>(n)] != expected;
+        }
+    EXPECT_EQ(wrong, 0u);
+  }
+}
+
+// Ctrl-C during a read stops it between two pieces (a large field takes seconds to decompress):
+// the read raises Cancelled long before its last piece, and reads again once the request is gone.
+TEST(NiftiFile, ACancellationStopsAReadBetweenTwoPieces) {
+  const fs::path folder = fresh_folder("nifti-cancel");
+  ImageGrid grid;
+  grid.dims = {64, 64, 256}; // 4 MiB of float32: four pieces
+  std::vector<float> values(static_cast<std::size_t>(grid.voxel_count()));
+  for (std::size_t i = 0; i < values.size(); ++i)
+    values[i] = static_cast<float>(i % 1000);
+  write_nifti(folder / "large.nii.gz", grid, values);
+  set_read_delay_for_testing(400); // 1.6 s for the whole file
+  std::thread stop([] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    request_cancellation();
+  });
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_THROW(read_nifti(folder / "large.nii.gz"), Cancelled);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  stop.join();
+  reset_cancellation();
+  set_read_delay_for_testing(0);
+  // Stopped at the first poll after the request: one or two pauses, not four.
+  EXPECT_LT(seconds, 1.2);
+  EXPECT_EQ(read_nifti(folder / "large.nii.gz").values[123456], 456.0);
 }

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <stdexcept>
 #include <thread>
 
@@ -98,6 +99,17 @@ bool BackgroundProcess::ended() {
   if (::waitpid(m_pid, &m_status, WNOHANG) != m_pid) return false;
   m_waited = true;
   return true;
+}
+
+bool BackgroundProcess::has_open(const std::string& path) const {
+  std::error_code error;
+  const std::filesystem::path wanted = std::filesystem::weakly_canonical(path, error);
+  const std::filesystem::path fds = "/proc/" + std::to_string(m_pid) + "/fd";
+  for (const auto& entry : std::filesystem::directory_iterator(fds, error)) {
+    std::error_code link_error;
+    if (std::filesystem::read_symlink(entry.path(), link_error) == wanted) return true;
+  }
+  return false;
 }
 
 int BackgroundProcess::wait() {

@@ -31,6 +31,8 @@ public:
   int wait();
   /// Whether the program has ended (without waiting).
   bool ended();
+  /// Whether the program has `path` open now (a file it reads or writes; Linux's /proc).
+  bool has_open(const std::string& path) const;
 
 private:
   int m_pid = -1;
