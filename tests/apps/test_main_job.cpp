@@ -1,4 +1,6 @@
-// The README's main job: the default scene (data-synthetic/head.yaml) end to end.
+// The procedural head (data-synthetic/head.yaml) end to end at full size, the README's second
+// scene. The main job's own scene, data-synthetic/colin-head.yaml, takes minutes at full size: its
+// coarse run is tests/atlas/test_colin_head_scene.cpp.
 
 #include "core/sha256.hpp"
 #include "io/dataset_layout.hpp"
@@ -13,7 +15,7 @@
 using namespace phantasm::testing;
 namespace fs = std::filesystem;
 
-// The README's main job on the default scene.
+// The procedural head's dataset, as the README describes it.
 TEST(RunCommand, WritesTheHeadDatasetWithOrganMeshesAndProvenance) {
   const fs::path out = fresh_folder("head") / "out";
   const CommandResult result = run_command({k_phantasm, "run", k_head_scene.string(), "-o", out.string()});
