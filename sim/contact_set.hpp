@@ -16,8 +16,8 @@ namespace phantasm::sim_detail {
 /// The contacts the local step finds and the part of the global matrix the factors hold for
 /// them. A vertex inside an obstacle costs kc/2 |x - P(x)|^2, whose Hessian is at most kc n n^T
 /// (n the obstacle's normal there): the global step holds it as the diagonal per coordinate
-/// kc |n_c| |n|_1 (the smallest diagonal above kc n n^T by Gershgorin's bound; n = e_z gives
-/// kc on z alone), with right-hand side D x - kc (x - P(x)), so the vertex may slide along the
+/// kc |n_c| |n|_1 (above kc n n^T: their difference is diagonally dominant; n = e_z gives kc
+/// on z alone), with right-hand side D x - kc (x - P(x)), so the vertex may slide along the
 /// obstacle within one step (the same fixed point as kc I with target P(x), which pins it in
 /// every direction: frictionless contacts then slid by about force / kc per iteration). A vertex
 /// inside another body's surface is the PD constraint d = x_v - sum b_k x_k (the closest point of
