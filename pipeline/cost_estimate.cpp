@@ -234,10 +234,12 @@ CostEstimate estimate_cost(const Scene& scene) {
   const double steps =
       deformed ? std::max(1, scene.deformation.frames) * std::max(1, scene.deformation.load_steps) : 0.0;
   const bool contacts = !scene.deformation.collisions.empty() || !scene.deformation.obstacles.empty();
-  e.sim_seconds =
-      (simulated_tets * k_seconds_per_tet_step + shell_triangles * k_seconds_per_shell_triangle_step +
-       (contacts ? k_seconds_per_contact_step : 0.0)) *
-      steps;
+  e.sim_seconds = (simulated_tets * k_seconds_per_tet_step +
+                   shell_triangles * (scene.deformation.solver.method == SolverMethod::newton
+                                          ? k_seconds_per_shell_triangle_newton_step
+                                          : k_seconds_per_shell_triangle_step) +
+                   (contacts ? k_seconds_per_contact_step : 0.0)) *
+                  steps;
   e.voxelize_seconds = e.dense_voxels * e.states * k_seconds_per_dense_voxel +
                        e.band_voxels * k_seconds_per_band_voxel + e.supersamples * k_seconds_per_sample +
                        (deformed ? crossed * k_seconds_per_moved_voxel : 0.0);

@@ -13,9 +13,12 @@ ContactSet::ContactSet(const ElasticModel& model, const std::vector<int>& free_i
                        const std::vector<int>& free_vertex)
     : m_model(model), m_free_index(free_index), m_free_vertex(free_vertex) {
   const std::size_t nf = free_vertex.size();
+  const auto rows = static_cast<Eigen::Index>(nf);
   m_obstacle_count.assign(nf, 0);
-  m_factored_count.assign(nf, 0);
-  m_obstacle_targets.setZero(static_cast<Eigen::Index>(nf), 3);
+  m_obstacle_positions.setZero(rows, 3);
+  m_obstacle_gradients.setZero(rows, 3);
+  m_obstacle_weights.setZero(rows, 3);
+  m_factored_weights.setZero(rows, 3);
   m_obstacle_energies.assign(nf, 0.0);
   if (!model.contact_pairs.empty()) {
     const auto opposing =
@@ -59,16 +62,20 @@ double ContactSet::find(const Eigen::MatrixX3d& p, int threads) {
     const Eigen::Vector3d x = p.row(m_free_vertex[static_cast<std::size_t>(f)]).transpose();
     int count = 0;
     double energy = 0.0;
-    Eigen::Vector3d targets = Eigen::Vector3d::Zero();
+    Eigen::Vector3d gradient = Eigen::Vector3d::Zero(), weights = Eigen::Vector3d::Zero();
     for (const Obstacle& o : m_model.obstacles) {
       if (!(o.signed_distance(x) < 0.0)) continue;
-      const Eigen::Vector3d projection = o.project(x);
+      const Eigen::Vector3d offset = x - o.project(x);
+      const Eigen::Vector3d n = o.outward_normal(x);
       ++count;
-      targets += projection;
-      energy += 0.5 * k * (x - projection).squaredNorm();
+      gradient += k * offset;
+      weights += k * n.lpNorm<1>() * n.cwiseAbs();
+      energy += 0.5 * k * offset.squaredNorm();
     }
     m_obstacle_count[static_cast<std::size_t>(f)] = count;
-    m_obstacle_targets.row(f) = targets.transpose();
+    m_obstacle_positions.row(f) = x.transpose();
+    m_obstacle_gradients.row(f) = gradient.transpose();
+    m_obstacle_weights.row(f) = weights.transpose();
     m_obstacle_energies[static_cast<std::size_t>(f)] = energy;
   }
   const auto slot_count = static_cast<std::ptrdiff_t>(m_slots.size());
@@ -94,19 +101,44 @@ double ContactSet::find(const Eigen::MatrixX3d& p, int threads) {
   return energy;
 }
 
-int ContactSet::update_factor(SparseCholesky& factor) {
+double ContactSet::factored_weight(double needed, double held) const {
+  // Rounded up to a step of kc/64 and kept while it stays within two steps above what is
+  // needed, so a contact on a curved obstacle does not change the factors at every iteration;
+  // never below the need, so the global step's matrix stays above the contact's Hessian.
+  const double step = m_model.contact_stiffness_N_m / 64.0;
+  if (needed <= 0.0) return 0.0;
+  if (held >= needed && held <= needed + 2.0 * step) return held;
+  return std::ceil(needed / step) * step;
+}
+
+int ContactSet::update_factor(CoordinateFactors& factors) {
   if (m_model.obstacles.empty() && m_model.contact_pairs.empty()) return 0;
-  std::vector<SparseCholesky::Column> add, remove;
-  const double root = std::sqrt(m_model.contact_stiffness_N_m);
+  std::array<std::vector<SparseCholesky::Column>, 3> add_obstacles, remove_obstacles;
   int changes = 0;
   for (std::size_t f = 0; f < m_obstacle_count.size(); ++f) {
-    if (m_obstacle_count[f] == m_factored_count[f]) continue;
-    const int delta = m_obstacle_count[f] - m_factored_count[f];
-    for (int k = 0; k < std::abs(delta); ++k)
-      (delta > 0 ? add : remove).push_back({{static_cast<int>(f), root}});
-    m_factored_count[f] = m_obstacle_count[f];
-    ++changes;
+    const auto row = static_cast<Eigen::Index>(f);
+    Eigen::RowVector3d needed = m_obstacle_weights.row(row);
+    if (!factors.per_coordinate()) needed.setConstant(needed.maxCoeff()); // one factor: the largest
+    bool changed = false;
+    for (int c = 0; c < 3; ++c) {
+      const double held = m_factored_weights(row, c);
+      const double weight = factored_weight(needed[c], held);
+      if (weight == held) continue;
+      const int coordinate = factors.per_coordinate() ? c : 0;
+      if (factors.per_coordinate() || c == 0)
+        (weight > held ? add_obstacles : remove_obstacles)[static_cast<std::size_t>(coordinate)].push_back(
+            {{static_cast<int>(f), std::sqrt(std::abs(weight - held))}});
+      m_factored_weights(row, c) = weight;
+      changed = true;
+    }
+    changes += changed ? 1 : 0;
   }
+  for (int c = 0; c < (factors.per_coordinate() ? 3 : 1); ++c) {
+    const auto i = static_cast<std::size_t>(c);
+    if (!add_obstacles[i].empty() || !remove_obstacles[i].empty())
+      factors[c].update_columns(add_obstacles[i], remove_obstacles[i]);
+  }
+  std::vector<SparseCholesky::Column> add, remove;
   SparseCholesky::Column column;
   for (SurfaceSlot& slot : m_slots) {
     if (!slot_changed(slot)) continue;
@@ -123,22 +155,22 @@ int ContactSet::update_factor(SparseCholesky& factor) {
     }
     ++changes;
   }
-  if (!add.empty() || !remove.empty()) factor.update_columns(add, remove);
+  if (!add.empty() || !remove.empty()) factors.update_all(add, remove);
   return changes;
 }
 
 bool ContactSet::pending() const {
-  if (m_obstacle_count != m_factored_count) return true;
+  for (Eigen::Index f = 0; f < m_factored_weights.rows(); ++f)
+    for (int c = 0; c < 3; ++c)
+      if (factored_weight(m_obstacle_weights(f, c), m_factored_weights(f, c)) != m_factored_weights(f, c))
+        return true;
   for (const SurfaceSlot& slot : m_slots)
     if (slot_changed(slot)) return true;
   return false;
 }
 
 void ContactSet::add_to_product(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& Kx) const {
-  for (std::size_t f = 0; f < m_factored_count.size(); ++f)
-    if (m_factored_count[f] > 0)
-      Kx.row(static_cast<Eigen::Index>(f)) +=
-          (m_model.contact_stiffness_N_m * m_factored_count[f]) * x.row(static_cast<Eigen::Index>(f));
+  if (!m_model.obstacles.empty()) Kx += m_factored_weights.cwiseProduct(x);
   SparseCholesky::Column column;
   for (const SurfaceSlot& slot : m_slots) {
     if (!slot.factored) continue;
@@ -151,15 +183,14 @@ void ContactSet::add_to_product(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& Kx)
   }
 }
 
-void ContactSet::add_to_diagonal(Eigen::VectorXd& d) const {
-  for (std::size_t f = 0; f < m_factored_count.size(); ++f)
-    d[static_cast<Eigen::Index>(f)] += m_model.contact_stiffness_N_m * m_factored_count[f];
+void ContactSet::add_to_diagonal(Eigen::MatrixX3d& d) const {
+  if (!m_model.obstacles.empty()) d += m_factored_weights;
   SparseCholesky::Column column;
   for (const SurfaceSlot& slot : m_slots) {
     if (!slot.factored) continue;
     slot_column(slot, column);
     for (const auto& [row, value] : column)
-      d[row] += value * value;
+      d.row(row).array() += value * value;
   }
 }
 

@@ -13,8 +13,13 @@
 
 namespace phantasm::sim_detail {
 
-/// The contacts the local step finds and the part of the global matrix the factor holds for
-/// them. A vertex inside an obstacle adds kc e_f e_f^T per obstacle to the matrix. A vertex
+/// The contacts the local step finds and the part of the global matrix the factors hold for
+/// them. A vertex inside an obstacle costs kc/2 |x - P(x)|^2, whose Hessian is at most kc n n^T
+/// (n the obstacle's normal there): the global step holds it as the diagonal per coordinate
+/// kc |n_c| |n|_1 (above kc n n^T: their difference is diagonally dominant; n = e_z gives kc
+/// on z alone), with right-hand side D x - kc (x - P(x)), so the vertex may slide along the
+/// obstacle within one step (the same fixed point as kc I with target P(x), which pins it in
+/// every direction: frictionless contacts then slid by about force / kc per iteration). A vertex
 /// inside another body's surface is the PD constraint d = x_v - sum b_k x_k (the closest point of
 /// the surface's triangle, barycentric b), projected onto the contact plane's allowed side; in
 /// the matrix it is kc c c^T with c = (1, -b_0, -b_1, -b_2) over (v, triangle). Both come and go
@@ -32,10 +37,12 @@ public:
   /// entered. Returns the contact energy (summed in vertex order), J.
   double find(const Eigen::MatrixX3d& p, int threads);
 
-  /// Brings the factor's contacts up to those of the last find() by rank-one updates and
-  /// downdates: kc e_f e_f^T per obstacle contact, kc c c^T per surface contact. Returns how many
-  /// free vertices and surface-contact slots changed.
-  int update_factor(SparseCholesky& factor);
+  /// Brings the factors' contacts up to those of the last find() by rank-one updates and
+  /// downdates: per obstacle contact its diagonal weight in each coordinate's factor (rounded up
+  /// to kc/64 and renewed when it must grow, falls by kc/32 or the contact ends), kc c c^T per
+  /// surface contact in every factor. Returns how many free vertices and surface-contact slots
+  /// changed.
+  int update_factor(CoordinateFactors& factors);
 
   /// Whether the last find() found contacts the factor does not hold yet.
   bool pending() const;
@@ -43,14 +50,14 @@ public:
   /// Kx += the contacts' part of the matrix (as the factor holds it) times x, over the free rows.
   void add_to_product(const Eigen::MatrixX3d& x, Eigen::MatrixX3d& Kx) const;
 
-  /// d += the diagonal of the contacts' part of the matrix the factor holds.
-  void add_to_diagonal(Eigen::VectorXd& d) const;
+  /// d += the diagonal of the contacts' part of the matrix the factors hold, per coordinate.
+  void add_to_diagonal(Eigen::MatrixX3d& d) const;
 
-  /// r += kc times the sum of free row f's projections onto the obstacles it is inside (right-hand
-  /// side, N), when the factor holds its obstacle contacts.
+  /// r += D x - kc sum (x - P(x)) of free row f (right-hand side, N): D the diagonal the factors
+  /// hold for its obstacle contacts, x and P(x) of the last find() (update_factor runs first).
   void add_obstacle_rhs(Eigen::Index f, Eigen::RowVector3d& r) const {
-    if (!m_obstacle_energies.empty() && m_obstacle_count[static_cast<std::size_t>(f)] > 0)
-      r += m_model.contact_stiffness_N_m * m_obstacle_targets.row(f);
+    if (m_obstacle_energies.empty()) return;
+    r += m_factored_weights.row(f).cwiseProduct(m_obstacle_positions.row(f)) - m_obstacle_gradients.row(f);
   }
 
   /// rhs += the surface contacts' part of the right-hand side, as the factor holds them
@@ -88,11 +95,15 @@ private:
   const ElasticModel& m_model;
   const std::vector<int>& m_free_index;
   const std::vector<int>& m_free_vertex;
-  // Per free row: obstacles the vertex is inside at the last find(), the sum of its projections
-  // onto them, its contact energy; and the count the factor holds (kc per contact on the
-  // diagonal).
-  std::vector<int> m_obstacle_count, m_factored_count;
-  Eigen::MatrixX3d m_obstacle_targets;
+  /// The diagonal weight the factors should hold for a needed one (0 when the contact ended),
+  /// given the one they hold.
+  double factored_weight(double needed, double held) const;
+
+  // Per free row: obstacles the vertex is inside at the last find(), its position then, its
+  // contact gradient kc sum (x - P(x)), its contact energy, the diagonal weights per coordinate
+  // its contacts need (kc |n_c| |n|_1 summed over them), and those the factors hold.
+  std::vector<int> m_obstacle_count;
+  Eigen::MatrixX3d m_obstacle_positions, m_obstacle_gradients, m_obstacle_weights, m_factored_weights;
   std::vector<double> m_obstacle_energies;
   // Contacts with other bodies' surfaces: one slot per (free vertex, surface it may not enter),
   // and the surfaces' geometry at the last find().

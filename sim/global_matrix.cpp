@@ -117,7 +117,9 @@ void LocalGlobalSolver::Impl::assemble_and_factor() {
   K_coupling.setFromTriplets(coupling.begin(), coupling.end());
   if (alpha == 0.0) check_held();
   try {
-    factor = std::make_unique<SparseCholesky>(K_free);
+    // Obstacle contacts stiffen a vertex along the obstacle's normal only: a factor per
+    // coordinate (sim/contact_set.hpp).
+    factor = std::make_unique<CoordinateFactors>(K_free, !model.obstacles.empty());
   } catch (const std::runtime_error&) {
     throw std::runtime_error("local/global: the global matrix is not positive definite (is anything holding "
                              "the model? quasi-static solves need fixed vertices or attachments)");
@@ -165,8 +167,8 @@ Eigen::MatrixX3d LocalGlobalSolver::Impl::apply_matrix(const Eigen::MatrixX3d& x
   return Kx;
 }
 
-Eigen::VectorXd LocalGlobalSolver::Impl::matrix_diagonal() const {
-  Eigen::VectorXd d = K_free.diagonal();
+Eigen::MatrixX3d LocalGlobalSolver::Impl::matrix_diagonal() const {
+  Eigen::MatrixX3d d = K_free.diagonal().replicate(1, 3);
   contacts->add_to_diagonal(d);
   return d;
 }

@@ -48,7 +48,7 @@ SolveReport LocalGlobalSolver::solve_jacobi_chebyshev(Eigen::MatrixX3d& p, const
   Eigen::MatrixX3d x = m->free_positions(p);
   Eigen::MatrixX3d x_previous = x, best = x;
   double best_energy = energy;
-  Eigen::VectorXd inverse_diagonal = m->K_free.diagonal().cwiseInverse();
+  Eigen::MatrixX3d inverse_diagonal = m->K_free.diagonal().cwiseInverse().replicate(1, 3);
   double omega = 1.0;
   int step = 0; // iterations since the acceleration (re)started
   std::optional<ResidualTest> test;
@@ -71,7 +71,7 @@ SolveReport LocalGlobalSolver::solve_jacobi_chebyshev(Eigen::MatrixX3d& p, const
       report.stopped_by = "residual";
       break;
     }
-    const Eigen::MatrixX3d jacobi = x + inverse_diagonal.asDiagonal() * (m->rhs - Kx);
+    const Eigen::MatrixX3d jacobi = x + inverse_diagonal.cwiseProduct(m->rhs - Kx);
     ++step;
     omega = step == 1 ? 1.0 : step == 2 ? 2.0 / (2.0 - rho * rho) : 4.0 / (4.0 - rho * rho * omega);
     const Eigen::MatrixX3d next = omega * (under_relaxation * (jacobi - x) + x - x_previous) + x_previous;

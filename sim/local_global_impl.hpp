@@ -24,7 +24,8 @@ struct LocalGlobalSolver::Impl {
   std::vector<int> free_vertex;           ///< per free row: the vertex
   Eigen::SparseMatrix<double> K_free;     ///< free x free
   Eigen::SparseMatrix<double> K_coupling; ///< free x all vertices, columns of fixed vertices only
-  std::unique_ptr<SparseCholesky> factor; ///< of K_free plus the contacts' part
+  std::unique_ptr<CoordinateFactors>
+      factor; ///< of K_free plus the contacts' part (per coordinate with obstacles)
   std::unique_ptr<sim_detail::ContactSet> contacts;
   // Per tet: warm-started rotation and the projection term w_s T_s^T + w_v T_v^T.
   std::vector<Eigen::Quaterniond> rotations;
@@ -63,8 +64,8 @@ struct LocalGlobalSolver::Impl {
   void check_held() const;
   /// K x over the free rows, with the contacts the factor holds.
   Eigen::MatrixX3d apply_matrix(const Eigen::MatrixX3d& x) const;
-  /// The diagonal of the matrix the factor holds.
-  Eigen::VectorXd matrix_diagonal() const;
+  /// The diagonal of the matrix the factors hold, per coordinate.
+  Eigen::MatrixX3d matrix_diagonal() const;
 
   // The steps (local_global.cpp).
 

@@ -5,8 +5,10 @@
 #include "sim/vertex_star_volumes.hpp"
 
 #include <Eigen/CholmodSupport>
+#include <Eigen/Eigenvalues>
 #include <Eigen/Sparse>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -14,11 +16,44 @@
 namespace phantasm {
 namespace {
 
+/// The Hessian of a surface element's energy w/2 |F - P(F)|^2 in F (vec(F), 3 x columns
+/// entries, column by column), w (I - dP/dF), with dP/dF by central differences of the
+/// projection (the gradient w (F - P(F)) is exact; P is smooth away from the set's kinks), and
+/// negative eigenvalues clamped to zero. Where a membrane is compressed or folded its rotational
+/// modes have no stiffness (the energy is flat there), which the Gauss-Newton matrix w I does not
+/// see: with it Newton crawled on a swinging sheet, one inertia-sized step per iteration.
+/// Up to 6 x 6 (a triangle's F has 6 entries), without heap allocation.
+using SurfaceHessian = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
+
+SurfaceHessian surface_hessian(const SurfaceElement& e, const SurfaceMatrix& F) {
+  const int n = 3 * e.columns;
+  // A flat rest state's bending target is e = 0: the energy is quadratic, its Hessian w I.
+  if (e.kind == SurfaceConstraintKind::bending && e.rest.norm() == 0.0)
+    return e.weight * SurfaceHessian::Identity(n, n);
+  const double h = 1e-6 * std::max(1.0, F.leftCols(e.columns).norm());
+  SurfaceHessian dP(n, n);
+  for (int i = 0; i < n; ++i) {
+    SurfaceMatrix plus = F, minus = F;
+    plus(i % 3, i / 3) += h;
+    minus(i % 3, i / 3) -= h;
+    const SurfaceMatrix d = (project_surface(e, plus) - project_surface(e, minus)) / (2.0 * h);
+    for (int j = 0; j < n; ++j)
+      dP(j, i) = d(j % 3, j / 3);
+  }
+  const SurfaceHessian H = e.weight * (SurfaceHessian::Identity(n, n) - 0.5 * (dP + dP.transpose()));
+  const Eigen::SelfAdjointEigenSolver<SurfaceHessian> eigen(H);
+  return eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0.0).asDiagonal() *
+         eigen.eigenvectors().transpose();
+}
+
 /// The PSD-projected Hessian over the free coordinates (3 per free vertex, lower triangle).
+/// `entries` is the triplets' workspace, kept between iterations: its memory is reused rather
+/// than faulted in anew each time (a swinging sheet's million entries cost more than the factor).
 Eigen::SparseMatrix<double> assemble_hessian(const ElasticModel& model, const StepInertia& inertia,
                                              const Eigen::MatrixX3d& p, const std::vector<int>& free_index,
-                                             Eigen::Index free_count) {
-  std::vector<Eigen::Triplet<double>> entries;
+                                             Eigen::Index free_count,
+                                             std::vector<Eigen::Triplet<double>>& entries) {
+  entries.clear();
   auto add_block = [&](int a, int b, const Eigen::Matrix3d& block) {
     const int fa = free_index[static_cast<std::size_t>(a)];
     const int fb = free_index[static_cast<std::size_t>(b)];
@@ -59,15 +94,27 @@ Eigen::SparseMatrix<double> assemble_hessian(const ElasticModel& model, const St
         add_block(g.vertices[a], g.vertices[b],
                   H.block<3, 3>(3 * static_cast<Eigen::Index>(a), 3 * static_cast<Eigen::Index>(b)));
   }
-  // Surface elements: the Gauss-Newton matrix w Q Q^T (x) I, positive semi-definite (their
-  // exact Hessians, through the 3x2 SVD and the bending projection, are not formed): Newton
-  // then converges linearly on sheets, still to the same minimizer.
-  for (const SurfaceElement& e : model.surfaces) {
-    const Eigen::Matrix4d L = e.weight * e.Q * e.Q.transpose();
+  // Surface elements: w (I - dP/dF) projected onto the PSD cone, through F = X Q.
+  // Each element's Hessian on its own (the same bits for any number of threads).
+  std::vector<SurfaceHessian> surface_hessians(model.surfaces.size());
+  const auto surface_count = static_cast<std::ptrdiff_t>(model.surfaces.size());
+#pragma omp parallel for schedule(static) if (surface_count > 256)
+  for (std::ptrdiff_t i = 0; i < surface_count; ++i) {
+    const SurfaceElement& e = model.surfaces[static_cast<std::size_t>(i)];
+    surface_hessians[static_cast<std::size_t>(i)] = surface_hessian(e, surface_deformation(e, p));
+  }
+  for (std::size_t i = 0; i < model.surfaces.size(); ++i) {
+    const SurfaceElement& e = model.surfaces[i];
+    const SurfaceHessian& H_F = surface_hessians[i];
     for (int a = 0; a < e.count; ++a)
-      for (int b = 0; b < e.count; ++b)
-        add_block(e.vertices[static_cast<std::size_t>(a)], e.vertices[static_cast<std::size_t>(b)],
-                  L(a, b) * Eigen::Matrix3d::Identity());
+      for (int b = 0; b < e.count; ++b) {
+        // vec(F) = (Q^T (x) I3) vec(X): the block of vertices a, b is sum_jk Q_aj Q_bk H_F(j, k).
+        Eigen::Matrix3d block = Eigen::Matrix3d::Zero();
+        for (int j = 0; j < e.columns; ++j)
+          for (int k = 0; k < e.columns; ++k)
+            block += (e.Q(a, j) * e.Q(b, k)) * H_F.block<3, 3>(3 * j, 3 * k);
+        add_block(e.vertices[static_cast<std::size_t>(a)], e.vertices[static_cast<std::size_t>(b)], block);
+      }
   }
   // Surface contacts: kc (c c^T) (x) (n n^T), c = (1, -b) over the vertex and the closest
   // point's triangle (Gauss-Newton: exact for a face contact, without the surface's curvature
@@ -162,6 +209,7 @@ SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, 
   // Simplicial: the supernodal factor's many small BLAS calls cost more than they save at the
   // sizes Newton is the reference for (the bar: 35 vs 57 ms per iteration, bench_sim).
   factor.setMode(Eigen::CholmodSimplicialLLt);
+  std::vector<Eigen::Triplet<double>> entries;
   Eigen::MatrixX3d gradient = model_gradient(model, inertia, p);
   const ResidualTest test(stop, free_gradient_norm(model, gradient));
   for (int iteration = 1; iteration <= stop.max_iterations; ++iteration) {
@@ -179,7 +227,7 @@ SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, 
     Eigen::VectorXd g(3 * nf);
     for (Eigen::Index f = 0; f < nf; ++f)
       g.segment<3>(3 * f) = gradient.row(free_vertex[static_cast<std::size_t>(f)]).transpose();
-    Eigen::SparseMatrix<double> H = assemble_hessian(model, inertia, p, free_index, nf);
+    Eigen::SparseMatrix<double> H = assemble_hessian(model, inertia, p, free_index, nf, entries);
     // A PSD Hessian can be singular (a quasi-static model held only in part): shift until it factors.
     double shift = 0.0;
     Eigen::VectorXd direction;

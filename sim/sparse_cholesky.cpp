@@ -164,6 +164,11 @@ void SparseCholesky::solve(const Eigen::MatrixX3d& b, Eigen::MatrixX3d& x, int t
   if (failure) std::rethrow_exception(failure);
 }
 
+void SparseCholesky::solve_column(const Eigen::MatrixX3d& b, Eigen::MatrixX3d& x, int column) {
+  const auto n = static_cast<std::size_t>(b.rows());
+  m->first.solve(m->factor, b.col(column).data(), n, 1, x.col(column).data());
+}
+
 void SparseCholesky::update_diagonal(const std::vector<std::pair<int, double>>& changes) {
   std::vector<Column> add, remove;
   for (const auto& [row, delta] : changes) {
@@ -180,6 +185,44 @@ void SparseCholesky::update_columns(const std::vector<Column>& add, const std::v
 
 long SparseCholesky::rank_changes() const {
   return m->rank_changes;
+}
+
+CoordinateFactors::CoordinateFactors(const Eigen::SparseMatrix<double>& lower, bool per_coordinate) {
+  for (int c = 0; c < (per_coordinate ? 3 : 1); ++c)
+    m_factors.push_back(std::make_unique<SparseCholesky>(lower));
+}
+
+void CoordinateFactors::solve(const Eigen::MatrixX3d& b, Eigen::MatrixX3d& x, int threads) {
+  if (!per_coordinate()) {
+    m_factors[0]->solve(b, x, threads);
+    return;
+  }
+  x.resize(b.rows(), 3);
+  const bool parallel = threads >= 2 && static_cast<std::size_t>(b.rows()) >= SparseCholesky::k_split_rows;
+  std::exception_ptr failure;
+#pragma omp parallel for num_threads(std::min(threads, 3)) schedule(static, 1) if (parallel)
+  for (int c = 0; c < 3; ++c) {
+    try { // each factor has its own workspace: the columns are independent
+      m_factors[static_cast<std::size_t>(c)]->solve_column(b, x, c);
+    } catch (...) {
+#pragma omp critical
+      failure = std::current_exception();
+    }
+  }
+  if (failure) std::rethrow_exception(failure);
+}
+
+void CoordinateFactors::update_all(const std::vector<SparseCholesky::Column>& add,
+                                   const std::vector<SparseCholesky::Column>& remove) {
+  for (auto& factor : m_factors)
+    factor->update_columns(add, remove);
+}
+
+long CoordinateFactors::rank_changes() const {
+  long changes = 0;
+  for (const auto& factor : m_factors)
+    changes += factor->rank_changes();
+  return changes;
 }
 
 } // namespace phantasm

@@ -36,6 +36,9 @@ public:
   /// another (the same results: each column's solve is independent).
   void solve(const Eigen::MatrixX3d& b, Eigen::MatrixX3d& x, int threads = 1);
 
+  /// x.col(column) = A^-1 b.col(column) (x already sized as b).
+  void solve_column(const Eigen::MatrixX3d& b, Eigen::MatrixX3d& x, int column);
+
   /// A <- A + sum of delta e_row e_row^T over `changes` (row, delta): positive deltas by a
   /// rank update, negative ones by a downdate, both in one call each.
   /// @throws std::runtime_error when a downdate leaves A not positive definite
@@ -56,6 +59,34 @@ public:
 private:
   struct Impl;
   std::unique_ptr<Impl> m;
+};
+
+/// The global matrix of the three coordinates of every vertex (K (x) I_3): one factor for all
+/// three, or one per coordinate when rank-one changes differ between coordinates (a contact
+/// with an obstacle stiffens its vertex along the obstacle's normal only).
+class CoordinateFactors {
+public:
+  /// Factors A (its lower triangle) once, or three times when per_coordinate.
+  /// @throws std::runtime_error when A is not positive definite
+  CoordinateFactors(const Eigen::SparseMatrix<double>& lower, bool per_coordinate);
+
+  /// Whether each coordinate has a factor of its own.
+  bool per_coordinate() const { return m_factors.size() == 3; }
+  /// The factor coordinate c (0..2) is solved with.
+  SparseCholesky& operator[](int c) { return *m_factors[per_coordinate() ? static_cast<std::size_t>(c) : 0]; }
+
+  /// x = A_c^-1 b_c per coordinate c (the same results for any number of threads).
+  void solve(const Eigen::MatrixX3d& b, Eigen::MatrixX3d& x, int threads);
+
+  /// The same update_columns on every coordinate's factor.
+  void update_all(const std::vector<SparseCholesky::Column>& add,
+                  const std::vector<SparseCholesky::Column>& remove);
+
+  /// Rank-one changes applied so far, over all factors.
+  long rank_changes() const;
+
+private:
+  std::vector<std::unique_ptr<SparseCholesky>> m_factors;
 };
 
 } // namespace phantasm

@@ -2,11 +2,13 @@
 // factor's rank updates and downdates, and solves that press a cantilever against obstacles.
 
 #include "anatomy/structured_mesh.hpp"
+#include "sim/build_model.hpp"
 #include "sim/elastic_model.hpp"
 #include "sim/local_global.hpp"
 #include "sim/newton.hpp"
 #include "sim/obstacles.hpp"
 #include "sim/position_based.hpp"
+#include "sim/sim_settings.hpp"
 #include "sim/sparse_cholesky.hpp"
 #include "tests/support/finite_difference.hpp"
 
@@ -299,6 +301,40 @@ TEST(LocalGlobalContacts, BallPressedIntoTheBarAgreesAcrossSolvers) {
   // contact: it stalls near 2e-4 of the displacement (local/global, which solves exactly, does
   // not).
   EXPECT_LT((p - newton.p).norm(), 1e-3 * scale);
+}
+
+// A bar squeezed between two frictionless paddles, as a breast in mammography: the material
+// under the paddles must slide out along them. The global step stiffens a vertex in contact
+// along the paddle's normal only, so local/global reaches the default tolerance (a thousandth of
+// the force that moves a vertex by the paddles' travel) within a few dozen iterations and lands
+// on Newton's minimizer; with the contact stiffness in every direction (the vertex pinned
+// where it was) it slid by force / kc per iteration and stalled near 2 % of that force.
+TEST(LocalGlobalContacts, MaterialSlidesAlongFrictionlessPaddles) {
+  ElasticModel model = cantilever();
+  model.external_forces_N.setZero();
+  const double travel = 0.002; // each paddle 2 mm into the 20 mm wide bar
+  model.obstacles = {plane(Eigen::Vector3d(0.01 - travel, 0, 0), Eigen::Vector3d(-1, 0, 0)),
+                     plane(Eigen::Vector3d(-0.01 + travel, 0, 0), Eigen::Vector3d(1, 0, 0))};
+  model.contact_stiffness_N_m =
+      1e4 * sim_detail::nominal_stiffness(model); // as the deformation stage sets it
+  StopCriteria stop;                              // the scene defaults (sim/load_schedule.cpp)
+  stop.max_iterations = SolverSettings{}.max_iterations;
+  stop.relative_residual = SolverSettings{}.relative_residual_tolerance;
+  stop.force_scale_N = sim_detail::nominal_stiffness(model) * travel;
+  LocalGlobalSolver solver(model, 0.0, 1);
+  Eigen::MatrixX3d p = model.rest_positions_m;
+  const SolveReport lg = solver.solve(p, Eigen::MatrixX3d(), stop);
+  const Solved newton = solve_newton(model, model.rest_positions_m);
+  std::printf("paddles: local/global %d iterations, relative residual %.3g, %d contacts\n", lg.iterations,
+              lg.relative_residual, lg.contacts);
+  EXPECT_TRUE(lg.converged) << lg.relative_residual;
+  EXPECT_LT(lg.iterations, 200);
+  EXPECT_GT(lg.contacts, 0);
+  // It bulged out of the paddles' way (along y and z, sliding along them), where Newton has it.
+  const double bulge = p.col(1).maxCoeff() - model.rest_positions_m.col(1).maxCoeff();
+  EXPECT_GT(bulge, 1e-4);
+  const double scale = (newton.p - model.rest_positions_m).norm();
+  EXPECT_LT((p - newton.p).norm(), 1e-2 * scale);
 }
 
 // Contacts also go: a start pushed into the table, with nothing pressing the bar down, ends
