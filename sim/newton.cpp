@@ -26,11 +26,12 @@ namespace {
 using SurfaceHessian = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
 
 SurfaceHessian surface_hessian(const SurfaceElement& e, const SurfaceMatrix& F) {
-  const int n = 3 * e.columns;
+  // F has at most SurfaceMatrix's 2 columns (the clamp also tells the compiler so).
+  const int n = 3 * std::clamp(e.columns, 1, 2);
   // A flat rest state's bending target is e = 0: the energy is quadratic, its Hessian w I.
   if (e.kind == SurfaceConstraintKind::bending && e.rest.norm() == 0.0)
     return e.weight * SurfaceHessian::Identity(n, n);
-  const double h = 1e-6 * std::max(1.0, F.leftCols(e.columns).norm());
+  const double h = 1e-6 * std::max(1.0, F.leftCols(n / 3).norm());
   SurfaceHessian dP(n, n);
   for (int i = 0; i < n; ++i) {
     SurfaceMatrix plus = F, minus = F;
