@@ -1,6 +1,7 @@
 #include "voxelize/landmarks.hpp"
 
 #include "anatomy/mesh_distance.hpp"
+#include "geometry/mesh_signed_distance.hpp"
 
 #include <Eigen/Geometry>
 
@@ -9,6 +10,7 @@
 #include <cstdio>
 #include <memory>
 #include <numeric>
+#include <optional>
 
 namespace phantasm {
 namespace {
@@ -51,27 +53,70 @@ private:
   std::vector<int> m_uses;
 };
 
+/// Which side of an organ's surface a point lies on, decided as the voxelizer decides it
+/// (voxelize/level_set.cpp): the closest triangle of the base mesh, the side of it from the base
+/// mesh's pseudonormals, and then the height of that patch's bumps above the closest base point.
+/// The tessellation's own pseudonormals cannot tell the side where it folds over itself (bumps
+/// that cross a neighbouring patch; two triangles of opposite normals on one edge): a whole cone
+/// of space beyond such a fold counted as inside the organ, and on the Colin head the compass
+/// search climbed it out of the head (the white matter's deepest point) or the deepest points
+/// fell in nested organs (the csf's and grey matter's).
+class OrganSide {
+public:
+  explicit OrganSide(const PatchSurface& surface) : m_surface(&surface), m_base(surface.base_mesh().faces) {
+    m_base.update(surface.rest_positions());
+    m_base.build_search_tree();
+  }
+
+  bool inside(const Eigen::Vector3d& x) const {
+    const MeshClosestPoint c = m_base.closest(x);
+    if (c.triangle < 0) return false;
+    const double d = std::sqrt(c.distance_squared);
+    double along_normal = m_base.inside(x, c) ? -d : d;
+    if (!m_surface->bumps(c.triangle).empty()) {
+      const Eigen::Vector2d uv = c.on_triangle.barycentric.tail<2>();
+      along_normal -= m_surface->height(c.triangle, uv.x(), uv.y());
+    }
+    return along_normal < 0.0;
+  }
+
+private:
+  const PatchSurface* m_surface;
+  SignedDistanceMesh m_base;
+};
+
 /// How far a point is inside an organ's own material: the distance to the organ's surface or to
 /// the nearest organ nested in it, whichever is closer (mm; negative outside that material).
+/// Distances from the tessellations (within 0.5 mm of the surfaces), sides from OrganSide.
 class OwnMaterial {
 public:
-  OwnMaterial(const Phantom& phantom, std::size_t o, OrganDistances& distances) : m_own(&distances.of(o)) {
+  OwnMaterial(const Phantom& phantom, std::size_t o, OrganDistances& distances)
+      : m_own{&distances.of(o), OrganSide(*phantom.organs[o].surface)} {
     for (std::size_t n = 0; n < phantom.organs.size(); ++n) {
       if (phantom.organs[n].inside == phantom.organs[o].name && phantom.organs[n].surface)
-        m_nested.push_back(&distances.of(n));
+        m_nested.push_back({&distances.of(n), OrganSide(*phantom.organs[n].surface)});
     }
   }
 
   double clearance(const Eigen::Vector3d& x) const {
-    double c = -m_own->signed_distance(x);
-    for (const MeshDistance* nested : m_nested)
-      c = std::min(c, nested->signed_distance(x));
+    double c = -m_own.signed_distance(x);
+    for (const Surface& nested : m_nested)
+      c = std::min(c, nested.signed_distance(x));
     return c;
   }
 
 private:
-  const MeshDistance* m_own;
-  std::vector<const MeshDistance*> m_nested;
+  struct Surface {
+    const MeshDistance* distance;
+    OrganSide side;
+    /// Negative inside, mm.
+    double signed_distance(const Eigen::Vector3d& x) const {
+      const double d = distance->distance(x);
+      return side.inside(x) ? -d : d;
+    }
+  };
+  Surface m_own;
+  std::vector<Surface> m_nested;
 };
 
 struct Candidate {
@@ -163,13 +208,14 @@ bool exact_around(const DeformationMap& map, const Eigen::Vector3d& x, bool move
 
 /// The deepest point of an organ's own material (inside it, outside the organs nested in it):
 /// the candidate of largest clearance, refined; with a map, the deepest whose surroundings the
-/// map moves exactly with the organ (else the deepest of all).
-Eigen::Vector3d deepest_point(const Phantom& phantom, std::size_t o, OrganDistances& distances,
-                              const DeformationMap* map, bool moved) {
+/// map moves exactly with the organ (else the deepest of all). None when no candidate lies in
+/// that material (organs nested in it fill it).
+std::optional<Eigen::Vector3d> deepest_point(const Phantom& phantom, std::size_t o, OrganDistances& distances,
+                                             const DeformationMap* map, bool moved) {
   const PatchSurface& surface = *phantom.organs[o].surface;
   const OwnMaterial material(phantom, o, distances);
   std::vector<Candidate> list = candidates(surface, material);
-  if (list.empty()) return surface.rest_positions().colwise().mean().transpose();
+  if (list.empty()) return std::nullopt;
   std::vector<std::size_t> order(list.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
   std::stable_sort(order.begin(), order.end(),
@@ -196,7 +242,7 @@ Eigen::Vector3d deepest_point(const Phantom& phantom, std::size_t o, OrganDistan
 } // namespace
 
 std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDeformation* deformation,
-                                      const DeformationMap* map) {
+                                      const DeformationMap* map, std::vector<std::string>* warnings) {
   static const char* const k_directions[6] = {"left",     "right",    "posterior",
                                               "anterior", "inferior", "superior"};
   std::vector<Landmark> out;
@@ -210,11 +256,16 @@ std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDef
     // solved tets); the others did not move.
     const bool moved_organ = deformation && (deformation->organs[o].moved_by == "solver" ||
                                              deformation->organs[o].moved_by.rfind("embedded", 0) == 0);
-    Landmark deepest{organ.name + "_deepest", organ.name,
-                     deepest_point(reference, o, distances, map, moved_organ), Eigen::Vector3d::Zero()};
+    const std::optional<Eigen::Vector3d> deepest = deepest_point(reference, o, distances, map, moved_organ);
     distances.done(o);
-    deepest.deformed_mm = moved_organ && map ? map->forward(deepest.reference_mm) : deepest.reference_mm;
-    out.push_back(deepest);
+    if (deepest) {
+      out.push_back({organ.name + "_deepest", organ.name, *deepest,
+                     moved_organ && map ? map->forward(*deepest) : *deepest});
+    } else if (warnings) {
+      warnings->push_back("landmark " + organ.name + "_deepest left out: no point of " + organ.name +
+                          "'s own material (inside its surface, outside the organs nested in it) was found; "
+                          "the nested organs fill it");
+    }
     for (int d = 0; d < 6; ++d) {
       // RAS: left is -x, posterior -y, inferior -z.
       const int axis = d / 2;

@@ -19,9 +19,13 @@ namespace phantasm {
 /// (patch base vertices). Both states are exact: an extreme point's deformed position is its
 /// vertex's solved one; the deepest point of an organ the solver moved goes through the map
 /// (barycentric in the solved tets), that of an organ that did not move stays.
+/// An organ whose own material holds no point (the organs nested in it fill it) has no deepest
+/// point: that landmark is left out, with a warning.
 /// @param map the reference-to-deformed map (nullptr without a deformation)
+/// @param warnings receives a line per landmark left out (nullptr: none kept)
 std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDeformation* deformation,
-                                      const DeformationMap* map);
+                                      const DeformationMap* map,
+                                      std::vector<std::string>* warnings = nullptr);
 
 /// CSV text of one state: "name,organ,x_mm,y_mm,z_mm" (world RAS mm), one landmark per line.
 std::string landmarks_csv(const std::vector<Landmark>& landmarks, bool deformed);

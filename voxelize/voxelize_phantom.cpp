@@ -157,7 +157,7 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
     progress.set_detail("displacement fields");
     const DeformationMap map(deformation->bodies, extension, settings.field_extension_by_search);
     out.motion = compute_motion_fields(out.grid, map);
-    out.landmarks = organ_landmarks(reference, deformation, &map);
+    out.landmarks = organ_landmarks(reference, deformation, &map, &report.warnings);
     progress.advance();
     report.modelled.push_back(
         "displacement fields both ways: barycentric in the solved tets (exact), outside "
@@ -192,7 +192,7 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
                                 ": the deformation folds tissue there (see the sim stage's loads)");
     }
   }
-  if (!deformation) out.landmarks = organ_landmarks(reference, nullptr, nullptr);
+  if (!deformation) out.landmarks = organ_landmarks(reference, nullptr, nullptr, &report.warnings);
   report.status = "done";
   return out;
 }

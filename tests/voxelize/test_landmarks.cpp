@@ -4,12 +4,14 @@
 
 #include "anatomy/mesh_distance.hpp"
 #include "anatomy/phantom.hpp"
+#include "anatomy/triangle_mesh.hpp"
 #include "core/format.hpp"
 #include "scene/scene.hpp"
 #include "sim/deform_phantom.hpp"
 #include "voxelize/landmarks.hpp"
 #include "voxelize/motion_fields.hpp"
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 using namespace phantasm;
@@ -33,7 +35,81 @@ double clearance(const Phantom& phantom, const std::string& organ, const Eigen::
   return c;
 }
 
+/// A sphere of `radius_mm` on an 80-triangle base; with a spike, one narrow inward bump
+/// `spike_mm` deep on the patch facing (1, 1, 1), deeper than the sphere is wide: it passes
+/// through the centre and leaves through the far side. Its tessellation then has walls and a tip
+/// facing out of the sphere's material beyond that side, so their pseudonormals call the space
+/// around the protruding tip inside, and a whole cone beyond the tip (the fold's kind on the
+/// Colin head's white matter), while the base mesh and the patch heights tell its side right.
+PatchSurface sphere(double radius_mm, double spike_mm = 0.0) {
+  TriangleMesh base = unit_icosphere(1);
+  base.vertices *= radius_mm;
+  PatchSurface surface(base, "sphere");
+  if (spike_mm > 0.0) {
+    Eigen::Index facing = 0;
+    double best = -1.0;
+    for (Eigen::Index t = 0; t < base.face_count(); ++t) {
+      const double c = surface.frame(t).normal.dot(Eigen::Vector3d(1, 1, 1).normalized());
+      if (c > best) best = c, facing = t;
+    }
+    const Eigen::Vector3d a = base.vertex(base.faces(facing, 0)), e1 = base.vertex(base.faces(facing, 1)) - a,
+                          e2 = base.vertex(base.faces(facing, 2)) - a;
+    Eigen::Matrix2d metric;
+    metric << e1.dot(e1), e1.dot(e2), e1.dot(e2), e2.dot(e2);
+    const double inradius = e1.cross(e2).norm() / (e1.norm() + e2.norm() + (e2 - e1).norm());
+    PatchBump spike = PatchBump::disc(Eigen::Vector2d(1.0 / 3.0, 1.0 / 3.0), 0.5 * inradius, metric);
+    spike.amplitude_mm = -spike_mm;
+    surface.set_bumps(facing, {spike});
+  }
+  return surface;
+}
+
+Organ organ(const std::string& name, const std::string& inside, PatchSurface surface) {
+  Organ o;
+  o.name = name;
+  o.inside = inside;
+  o.surface.emplace(std::move(surface));
+  return o;
+}
+
 } // namespace
+
+// A shell 4 mm thick (a sphere of 20 mm with one of 16 mm nested in it) whose outer surface
+// folds where a spike passes through it: the deepest point of the shell's own material lies in
+// the shell, about 2 mm from both of its sides, not in the cone the folded tessellation calls
+// inside (where the search climbed out of the organ).
+TEST(OrganLandmarks, DeepestPointStaysInItsOrganWhereTheTessellationFolds) {
+  Phantom phantom;
+  phantom.organs.push_back(organ("shell", "", sphere(20.0, 55.0)));
+  phantom.organs.push_back(organ("core", "shell", sphere(16.0)));
+  std::vector<std::string> warnings;
+  const std::vector<Landmark> landmarks = organ_landmarks(phantom, nullptr, nullptr, &warnings);
+  EXPECT_TRUE(warnings.empty());
+  ASSERT_EQ(landmarks.size(), 14u);
+  ASSERT_EQ(landmarks[0].name, "shell_deepest");
+  const Eigen::Vector3d x = landmarks[0].reference_mm;
+  // Between the spheres (the icosphere's faces lie up to 2 mm inside its vertices' radius)...
+  EXPECT_GT(x.norm(), 16.0) << x.transpose();
+  EXPECT_LT(x.norm(), 20.0) << x.transpose();
+  // ... and away from the spike's line through the centre.
+  EXPECT_GT(x.cross(Eigen::Vector3d(1, 1, 1).normalized()).norm(), 4.0) << x.transpose();
+}
+
+// An organ whose nested organ fills it has no material of its own: its deepest point is left
+// out with a warning, never placed in the nested organ.
+TEST(OrganLandmarks, AnOrganFilledByItsNestedOrganHasNoDeepestPointAndAWarning) {
+  Phantom phantom;
+  phantom.organs.push_back(organ("outer", "", sphere(20.0)));
+  phantom.organs.push_back(organ("filling", "outer", sphere(20.0)));
+  std::vector<std::string> warnings;
+  const std::vector<Landmark> landmarks = organ_landmarks(phantom, nullptr, nullptr, &warnings);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("outer_deepest"), std::string::npos) << warnings[0];
+  ASSERT_EQ(landmarks.size(), 13u);
+  for (const Landmark& l : landmarks)
+    EXPECT_NE(l.name, "outer_deepest");
+  EXPECT_EQ(landmarks[6].name, "filling_deepest");
+}
 
 TEST(OrganLandmarks, DeepestPointsLieInTheirOrgansOwnMaterialInBothStates) {
   const Scene scene = load("tests/data/scenes/small-head.yaml");
