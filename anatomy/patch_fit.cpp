@@ -304,7 +304,9 @@ PatchFitReport measure_fit(const PatchSurface& surface, const ImplicitShape& tar
   }
   throw_if_cancelled();
   // Target to surface: distances to a tessellation within tessellation_mm.
-  const SurfaceDistance d = symmetric_distance(surface.tessellate(tessellation_mm), samples, to_target);
+  const TriangleMesh tessellation = surface.tessellate(tessellation_mm);
+  throw_if_cancelled(); // a cancelled tessellation is empty
+  const SurfaceDistance d = symmetric_distance(tessellation, samples, to_target);
   report.hausdorff_mm = d.hausdorff_mm;
   report.mean_distance_mm = d.mean_mm;
   report.volume_error = (surface.volume() - target.volume()) / target.volume();

@@ -1,6 +1,7 @@
 // Adaptive, watertight tessellation of a patch surface.
 
 #include "anatomy/patch_surface.hpp"
+#include "core/cancellation.hpp"
 
 #include <algorithm>
 #include <map>
@@ -76,7 +77,10 @@ TriangleMesh PatchSurface::tessellate(double max_deviation_mm, TessellationStats
   const Eigen::Index nf = m_base.face_count();
   std::vector<int> level(static_cast<std::size_t>(nf));
   TessellationStats local_stats;
+  // A cancelled run gets an empty mesh at once (a real organ's tessellation takes seconds; callers
+  // may run inside OpenMP regions, which no exception may leave, and poll the flag before using it).
   for (Eigen::Index t = 0; t < nf; ++t) {
+    if (cancellation_requested()) return TriangleMesh();
     double deviation = 0.0;
     level[static_cast<std::size_t>(t)] = level_for(t, max_deviation_mm, &deviation);
     local_stats.max_level = std::max(local_stats.max_level, level[static_cast<std::size_t>(t)]);
@@ -120,6 +124,7 @@ TriangleMesh PatchSurface::tessellate(double max_deviation_mm, TessellationStats
 
   std::vector<Eigen::Vector3i> triangles;
   for (Eigen::Index t = 0; t < nf; ++t) {
+    if (cancellation_requested()) return TriangleMesh();
     const int n = 1 << level[static_cast<std::size_t>(t)];
     const int f0 = m_base.faces(t, 0), f1 = m_base.faces(t, 1), f2 = m_base.faces(t, 2);
     std::vector<int> id(static_cast<std::size_t>((n + 1) * (n + 2) / 2));

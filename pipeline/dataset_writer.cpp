@@ -169,7 +169,13 @@ void plan_organ_meshes(const Scene& scene, const Phantom& phantom, PhantomState 
     const Organ& organ = phantom.organs[index];
     if (organ.surface || organ.sheet) {
       plan.file(layout.mesh(state, organ.name), [&organ, tolerance](const std::filesystem::path& path) {
-        write_vtp(path, organ.surface ? organ.surface->tessellate(tolerance) : *organ.sheet);
+        if (!organ.surface) {
+          write_vtp(path, *organ.sheet);
+          return;
+        }
+        const TriangleMesh surface = organ.surface->tessellate(tolerance);
+        throw_if_cancelled(); // a cancelled tessellation is empty: never written
+        write_vtp(path, surface);
       });
     }
     if (organ.solid) {

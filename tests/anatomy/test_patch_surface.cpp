@@ -1,5 +1,6 @@
 #include "anatomy/patch_surface.hpp"
 #include "anatomy/triangle_mesh.hpp"
+#include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "tests/support/finite_difference.hpp"
 
@@ -268,4 +269,17 @@ TEST(BaseMeshValidation, EachKindOfDefectGetsItsOwnMessageNamingTheElement) {
   TriangleMesh nan = good;
   nan.vertices(0, 0) = std::nan("");
   EXPECT_NE(error_of(nan).find("NaN"), std::string::npos);
+}
+
+// Writing a real organ's surface mesh tessellates it for seconds: a cancelled run gets an empty
+// mesh at once (the callers poll the flag before using it), and the next call is whole again.
+TEST(PatchSurface, ACancelledTessellationStopsAtOnceAndTheNextIsWhole) {
+  const PatchSurface surface = bumpy_sphere();
+  const Eigen::Index whole = surface.tessellate(0.05).face_count();
+  ASSERT_GT(whole, surface.patch_count());
+  request_cancellation();
+  const Eigen::Index cancelled = surface.tessellate(0.05).face_count();
+  reset_cancellation();
+  EXPECT_EQ(cancelled, 0);
+  EXPECT_EQ(surface.tessellate(0.05).face_count(), whole);
 }
