@@ -3,6 +3,7 @@
 #include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "tests/support/finite_difference.hpp"
+#include "tests/support/patch_bumps.hpp"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
@@ -29,15 +30,8 @@ PatchSurface bumpy_sphere() {
   std::uniform_real_distribution<double> amplitude(-1.0, 1.0);
   for (Eigen::Index t = 0; t < surface.patch_count(); ++t) {
     const TriangleMesh& base = surface.base_mesh();
-    const Eigen::Vector3d e1 = base.vertex(base.faces(t, 1)) - base.vertex(base.faces(t, 0));
-    const Eigen::Vector3d e2 = base.vertex(base.faces(t, 2)) - base.vertex(base.faces(t, 0));
-    Eigen::Matrix2d metric;
-    metric << e1.dot(e1), e1.dot(e2), e1.dot(e2), e2.dot(e2);
-    const double inradius = e1.cross(e2).norm() / (e1.norm() + e2.norm() + (e2 - e1).norm());
-    PatchBump centre = PatchBump::disc({1.0 / 3.0, 1.0 / 3.0}, 0.9 * inradius, metric);
-    centre.amplitude_mm = amplitude(random);
-    PatchBump side = PatchBump::disc({0.5, 0.25}, 0.5 * inradius, metric);
-    side.amplitude_mm = amplitude(random);
+    const PatchBump centre = disc_in_triangle(base, t, {1.0 / 3.0, 1.0 / 3.0}, 0.9, amplitude(random));
+    const PatchBump side = disc_in_triangle(base, t, {0.5, 0.25}, 0.5, amplitude(random));
     surface.set_bumps(t, {centre, side});
   }
   return surface;

@@ -8,6 +8,7 @@
 #include "core/format.hpp"
 #include "scene/scene.hpp"
 #include "sim/deform_phantom.hpp"
+#include "tests/support/patch_bumps.hpp"
 #include "voxelize/landmarks.hpp"
 #include "voxelize/motion_fields.hpp"
 
@@ -52,14 +53,8 @@ PatchSurface sphere(double radius_mm, double spike_mm = 0.0) {
       const double c = surface.frame(t).normal.dot(Eigen::Vector3d(1, 1, 1).normalized());
       if (c > best) best = c, facing = t;
     }
-    const Eigen::Vector3d a = base.vertex(base.faces(facing, 0)), e1 = base.vertex(base.faces(facing, 1)) - a,
-                          e2 = base.vertex(base.faces(facing, 2)) - a;
-    Eigen::Matrix2d metric;
-    metric << e1.dot(e1), e1.dot(e2), e1.dot(e2), e2.dot(e2);
-    const double inradius = e1.cross(e2).norm() / (e1.norm() + e2.norm() + (e2 - e1).norm());
-    PatchBump spike = PatchBump::disc(Eigen::Vector2d(1.0 / 3.0, 1.0 / 3.0), 0.5 * inradius, metric);
-    spike.amplitude_mm = -spike_mm;
-    surface.set_bumps(facing, {spike});
+    surface.set_bumps(
+        facing, {phantasm::testing::disc_in_triangle(base, facing, {1.0 / 3.0, 1.0 / 3.0}, 0.5, -spike_mm)});
   }
   return surface;
 }

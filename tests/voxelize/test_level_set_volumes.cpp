@@ -4,6 +4,7 @@
 #include "anatomy/patch_surface.hpp"
 #include "anatomy/triangle_mesh.hpp"
 #include "tests/support/finite_difference.hpp"
+#include "tests/support/patch_bumps.hpp"
 #include "voxelize/level_set.hpp"
 #include "voxelize/tissue_volumes.hpp"
 
@@ -51,14 +52,8 @@ PatchSurface bumpy_sphere() {
   base.vertices *= 20.0;
   PatchSurface surface(base, "bumpy sphere");
   for (Eigen::Index t = 0; t < base.face_count(); ++t) {
-    const Eigen::Vector3d a = base.vertex(base.faces(t, 0)), e1 = base.vertex(base.faces(t, 1)) - a,
-                          e2 = base.vertex(base.faces(t, 2)) - a;
-    Eigen::Matrix2d metric;
-    metric << e1.dot(e1), e1.dot(e2), e1.dot(e2), e2.dot(e2);
-    const double inradius = e1.cross(e2).norm() / (e1.norm() + e2.norm() + (e2 - e1).norm());
-    PatchBump bump = PatchBump::disc(Eigen::Vector2d(1.0 / 3.0, 1.0 / 3.0), 0.8 * inradius, metric);
-    bump.amplitude_mm = t % 2 ? -0.6 : 0.6;
-    surface.set_bumps(t, {bump});
+    surface.set_bumps(
+        t, {phantasm::testing::disc_in_triangle(base, t, {1.0 / 3.0, 1.0 / 3.0}, 0.8, t % 2 ? -0.6 : 0.6)});
   }
   return surface;
 }
