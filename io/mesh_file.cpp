@@ -7,6 +7,7 @@
 #include "core/format.hpp"
 #include "geometry/tet_boundary.hpp"
 #include "io/atomic_file.hpp"
+#include "io/vtk_xml_file.hpp"
 
 #include <vtkCellArray.h>
 #include <vtkCellType.h>
@@ -23,7 +24,6 @@
 #include <vtkStringArray.h>
 #include <vtkTriangleFilter.h>
 #include <vtkUnstructuredGrid.h>
-#include <vtkXMLPolyDataReader.h>
 #include <vtkXMLPolyDataWriter.h>
 #include <vtkXMLUnstructuredGridReader.h>
 #include <vtkXMLUnstructuredGridWriter.h>
@@ -424,6 +424,26 @@ vtkSmartPointer<vtkPolyData> read_poly_data(const std::filesystem::path& path) {
   return data;
 }
 
+/// A .vtp file's points and polygons (read_vtp_polygons, which checks the indices), as VTK data.
+vtkSmartPointer<vtkPolyData> read_vtp(const std::filesystem::path& path) {
+  const VtpPolygons file = read_vtp_polygons(path);
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  const auto count = static_cast<vtkIdType>(file.points.size() / 3);
+  points->SetNumberOfPoints(count);
+  for (vtkIdType i = 0; i < count; ++i)
+    points->SetPoint(i, file.points.data() + 3 * i);
+  vtkNew<vtkCellArray> cells;
+  for (const std::vector<long long>& polygon : file.polygons) {
+    std::vector<vtkIdType> ids(polygon.begin(), polygon.end());
+    cells->InsertNextCell(static_cast<vtkIdType>(ids.size()), ids.data());
+  }
+  vtkNew<vtkPolyData> data;
+  data->SetPoints(points);
+  data->SetPolys(cells);
+  return data;
+}
+
 vtkSmartPointer<vtkPoints> make_points(const Eigen::MatrixX3d& vertices) {
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
@@ -507,11 +527,25 @@ TriangleMesh read_triangle_mesh(const std::filesystem::path& path) {
     data = read_ply(path);
   } else if (extension == ".vtp") {
     check_readable(path, what);
-    data = read_poly_data<vtkXMLPolyDataReader>(path);
+    data = read_vtp(path);
   } else {
     fail(path, std::string("expected ") + what + ", found extension '" + extension + "'");
   }
-  // Keep only polygons, as triangles (VTK keeps the points as they are).
+  // Keep only polygons, as triangles (VTK keeps the points as they are). vtkTriangleFilter reads
+  // the points of a polygon of more than three corners: indices beyond the points must not reach it.
+  if (vtkCellArray* cells = data->GetPolys()) {
+    const vtkIdType point_count = data->GetPoints() ? data->GetNumberOfPoints() : 0;
+    vtkNew<vtkIdList> ids;
+    vtkIdType c = 0;
+    for (cells->InitTraversal(); cells->GetNextCell(ids); ++c) {
+      for (vtkIdType k = 0; k < ids->GetNumberOfIds(); ++k) {
+        if (ids->GetId(k) < 0 || ids->GetId(k) >= point_count)
+          fail(path, "polygon " + std::to_string(c) + ": expected vertex indices that refer to the file's " +
+                         std::to_string(point_count) + " vertices, found index " +
+                         std::to_string(ids->GetId(k)) + " (from 0)");
+      }
+    }
+  }
   vtkNew<vtkPolyData> polygons;
   polygons->SetPoints(data->GetPoints());
   polygons->SetPolys(data->GetPolys());
@@ -604,6 +638,7 @@ void write_vtu(const std::filesystem::path& path, const TetMesh& mesh,
 
 TetMesh read_vtu(const std::filesystem::path& path) {
   check_readable(path, "a tetrahedral mesh (.vtu)");
+  check_vtk_xml_sizes(path);
   vtkNew<vtkXMLUnstructuredGridReader> reader;
   reader->SetFileName(path.c_str());
   reader->GlobalWarningDisplayOff();

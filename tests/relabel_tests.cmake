@@ -7,6 +7,9 @@
 #     parameterized test's name covers all its instances, Prefix/Suite.Test/parameter)
 #   phantasm_relabel_cmake   the cmake program
 # ctest appends labels rather than replacing them, so each test gets its label here only.
+# Each test also gets a cost by its label (heavy 100, slow 10, fast 1): a parallel ctest starts
+# the costliest first, so that a run of minutes does not start last and run alone at the end
+# (ctest replaces these by measured times once it has them, which a fresh clone has not).
 # A listed name that matches no test becomes a failing test, so that renaming or removing a
 # test cannot leave its label behind unnoticed.
 
@@ -23,7 +26,14 @@ if(DEFINED ${phantasm_relabel_target}_TESTS) # else the executable is not built 
         list(REMOVE_ITEM phantasm_relabel_unmatched "${phantasm_relabel_name}")
       endif()
     endforeach()
-    set_tests_properties("${phantasm_relabel_test}" PROPERTIES LABELS ${phantasm_relabel_label})
+    set(phantasm_relabel_cost 1)
+    if(phantasm_relabel_label STREQUAL "heavy")
+      set(phantasm_relabel_cost 100)
+    elseif(phantasm_relabel_label STREQUAL "slow")
+      set(phantasm_relabel_cost 10)
+    endif()
+    set_tests_properties("${phantasm_relabel_test}" PROPERTIES LABELS ${phantasm_relabel_label}
+                         COST ${phantasm_relabel_cost})
   endforeach()
   if(phantasm_relabel_unmatched)
     add_test("${phantasm_relabel_target}.LabelledTestsExist" "${phantasm_relabel_cmake}" -E echo

@@ -1,10 +1,15 @@
 // data-synthetic/colin-head.yaml end to end at 4 mm (small base meshes, one sequence, no
-// k-space), and a bad label volume through the CLI.
+// k-space): its dataset, and its peak memory against the cost estimate (as the other scenes' in
+// tests/apps/test_cost_estimate.cpp: one run of minutes serves both); and a bad label volume
+// through the CLI.
 
 #include "atlas/colin27_head.hpp"
 #include "io/nifti_file.hpp"
+#include "pipeline/cost_estimate.hpp"
+#include "scene/scene.hpp"
 #include "tests/support/coarse_scenes.hpp"
 #include "tests/support/files.hpp"
+#include "tests/support/measured_run.hpp"
 #include "tests/support/subprocess.hpp"
 
 #include <gtest/gtest.h>
@@ -44,13 +49,26 @@ std::map<std::string, int> dseg_table(const fs::path& path) {
   return table;
 }
 
-TEST(ColinHeadScene, CoarseRunLabelsEveryOrganKeepsTheGreyMatterAndShiftsTheBrain) {
+TEST(ColinHeadScene, CoarseRunLabelsEveryOrganShiftsTheBrainAndMeetsItsCostEstimate) {
   if (!fs::is_directory(default_colin27_templates_dir())) GTEST_SKIP() << "mricron-data is not installed";
   const fs::path folder = fresh_folder("colin-head-scene");
-  write_text_file(folder / "colin-coarse.yaml", testing::coarse_colin_head_text());
-  const auto result = run_command({k_phantasm, "run", (folder / "colin-coarse.yaml").string(), "-o",
-                                   (folder / "out").string(), "--quiet"});
-  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const fs::path scene = folder / "colin-coarse.yaml";
+  write_text_file(scene, testing::coarse_colin_head_text());
+  const SceneLoadResult loaded = load_scene(scene);
+  ASSERT_TRUE(loaded.scene) << format_diagnostics(loaded.problems);
+  const CostEstimate estimate = estimate_cost(*loaded.scene);
+  const testing::MeasuredRun measured = testing::measure_run(scene, folder / "out");
+  ASSERT_FALSE(::testing::Test::HasFailure());
+  // Peak memory within a factor of two of the estimate; processor time printed (it grows with the
+  // machine's load; see tests/apps/test_cost_estimate.cpp).
+  const double memory_ratio = estimate.peak_memory_bytes / measured.peak_bytes;
+  std::printf(
+      "colin-coarse: peak %.0f MB estimated / %.0f MB measured = %.2f; processor time %.2f s / %.2f s "
+      "(wall %.2f s)\n",
+      estimate.peak_memory_bytes / 1e6, measured.peak_bytes / 1e6, memory_ratio, estimate.cpu_seconds,
+      measured.cpu_seconds, measured.wall_seconds);
+  EXPECT_GT(memory_ratio, 0.5);
+  EXPECT_LT(memory_ratio, 2.0);
 
   const fs::path derivatives = folder / "out" / "derivatives" / "phantasm";
   const std::map<std::string, int> table = dseg_table(derivatives / "dseg.tsv");

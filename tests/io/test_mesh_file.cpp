@@ -13,6 +13,7 @@
 using namespace phantasm;
 using phantasm::testing::fresh_folder;
 using phantasm::testing::input_error_message;
+using phantasm::testing::read_file;
 using phantasm::testing::write_text_file;
 namespace fs = std::filesystem;
 
@@ -256,4 +257,160 @@ TEST(MeshFile, FacesAndCountsBeyondTheFileAreRefusedWithTheirPlace) {
       (folder / "huge.stl").string() +
           ": expected a binary STL file of 84 + 50 bytes per triangle (50000000084 bytes for the 1000000000 "
           "triangles its header counts), found 184 bytes");
+}
+
+namespace {
+
+/// Base64 as VTK writes it (RFC 4648, padded).
+std::string base64(const std::vector<unsigned char>& bytes) {
+  const char* digits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string text;
+  for (std::size_t i = 0; i < bytes.size(); i += 3) {
+    const std::uint32_t chunk = std::uint32_t{bytes[i]} << 16 |
+                                (i + 1 < bytes.size() ? std::uint32_t{bytes[i + 1]} << 8 : 0u) |
+                                (i + 2 < bytes.size() ? std::uint32_t{bytes[i + 2]} : 0u);
+    text += digits[chunk >> 18 & 63];
+    text += digits[chunk >> 12 & 63];
+    text += i + 1 < bytes.size() ? digits[chunk >> 6 & 63] : '=';
+    text += i + 2 < bytes.size() ? digits[chunk & 63] : '=';
+  }
+  return text;
+}
+
+/// A compression header of UInt32 (little-endian) or UInt64 (big-endian) words.
+std::vector<unsigned char> header_words(const std::vector<std::uint64_t>& words, bool uint64_big_endian) {
+  std::vector<unsigned char> bytes;
+  for (const std::uint64_t w : words) {
+    if (uint64_big_endian) {
+      for (int b = 7; b >= 0; --b)
+        bytes.push_back(static_cast<unsigned char>(w >> (8 * b)));
+    } else {
+      for (int b = 0; b < 4; ++b)
+        bytes.push_back(static_cast<unsigned char>(w >> (8 * b)));
+    }
+  }
+  return bytes;
+}
+
+std::string replaced(std::string text, const std::string& from, const std::string& to) {
+  const std::size_t at = text.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  if (at != std::string::npos) text.replace(at, from.size(), to);
+  return text;
+}
+
+} // namespace
+
+// VTK's XML reader allocates what a file declares (points, cells, compressed block sizes) before
+// it reads the data; a few bytes could ask for gigabytes. The fixtures were written by VTK 9.1:
+// inline base64 with zlib and UInt32 headers, and appended base64 with LZMA, UInt64 big-endian
+// headers; phantasm's own files are appended raw bytes with zlib.
+TEST(MeshFile, VtkXmlSizesBeyondTheFileAreRefusedBeforeVtkAllocatesThem) {
+  const fs::path data = fs::path(PHANTASM_SOURCE_DIR) / "tests/data/meshes";
+  const fs::path inline_zlib = data / "tetrahedron-inline-zlib.vtp";
+  const fs::path appended_lzma = data / "tetrahedron-appended-base64-lzma-bigendian.vtp";
+  for (const fs::path& good : {inline_zlib, appended_lzma}) {
+    const TriangleMesh mesh = read_triangle_mesh(good);
+    EXPECT_EQ(mesh.vertex_count(), 4) << good;
+    EXPECT_EQ(mesh.face_count(), 4) << good;
+  }
+  const fs::path folder = fresh_folder("mesh-vtk-sizes");
+  const auto message = [&](const std::string& name, const std::string& text) {
+    write_text_file(folder / name, text);
+    return input_error_message([&] { read_triangle_mesh(folder / name); });
+  };
+
+  // Inline: the points' header (1 block of 32768 bytes, a last block of 48 bytes compressed into
+  // 17) with a last block of nearly 4 GB, as a fuzzed file had.
+  const std::string inline_text = read_file(inline_zlib);
+  const std::string points_header = base64(header_words({1, 32768, 48, 17}, false));
+  ASSERT_EQ(points_header, "AQAAAACAAAAwAAAAEQAAAA==");
+  EXPECT_EQ(message("inline.vtp", replaced(inline_text, points_header,
+                                           base64(header_words({1, 32768, 3978928655u, 17}, false)))),
+            (folder / "inline.vtp").string() +
+                ": array 'Points': expected a compression header the file can hold, found block 0 of "
+                "3978928655 bytes compressed into 17 (at most 8192 times as many bytes come out of a "
+                "compressed one)");
+  EXPECT_NE(
+      message("points.vtp", replaced(inline_text, "NumberOfPoints=\"4\"", "NumberOfPoints=\"99999999999\""))
+          .find("element Piece: expected NumberOfPoints the file can hold (at most "),
+      std::string::npos);
+
+  // Appended base64: the points' header with 2^40 blocks, then a block larger than the file.
+  const std::string appended_text = read_file(appended_lzma);
+  const std::string appended_header = base64(header_words({1, 32768, 48, 68}, true));
+  ASSERT_EQ(appended_header, "AAAAAAAAAAEAAAAAAACAAAAAAAAAAAAwAAAAAAAAAEQ=");
+  EXPECT_NE(message("blocks.vtp", replaced(appended_text, appended_header,
+                                           base64(header_words({1ull << 40, 32768, 48, 68}, true))))
+                .find("array 'Points': expected a compression header the file can hold, found 1099511627776 "
+                      "blocks in a file of "),
+            std::string::npos);
+  EXPECT_NE(message("block.vtp", replaced(appended_text, appended_header,
+                                          base64(header_words({1, 32768, 48, 1ull << 33}, true))))
+                .find("found block 0 of 8589934592 compressed bytes in a file of "),
+            std::string::npos);
+
+  // Appended raw bytes (phantasm's own files): the first array's block sizes (full and partial
+  // last), little-endian UInt64 words 1 and 2, set to 2^32.
+  write_vtp(folder / "own.vtp", unit_icosphere(1));
+  std::string own = read_file(folder / "own.vtp");
+  const std::size_t start = own.find('_', own.find("<AppendedData")) + 1;
+  for (std::size_t b = 8; b < 24; ++b)
+    own[start + b] = static_cast<char>(b % 8 == 4 ? 0x01 : 0x00);
+  const std::string raw_message = message("raw.vtp", own);
+  EXPECT_NE(raw_message.find(": expected a compression header the file can hold, found block 0 of "
+                             "4294967296 bytes compressed into "),
+            std::string::npos)
+      << raw_message;
+}
+
+// .vtp files are read through VTK's XML parser but not its reader, which crashed on fuzzed files
+// (an array of unknown type, string field data read as raw bytes): the points and polygons of
+// every storage VTK writes, and polygons that leave the file's points or connectivity refused.
+TEST(MeshFile, VtpPolygonsOfEveryStorageAreReadAndBadIndicesRefused) {
+  const fs::path data = fs::path(PHANTASM_SOURCE_DIR) / "tests/data/meshes";
+  const TriangleMesh expected = read_triangle_mesh(data / "tetrahedron-ascii.vtp");
+  ASSERT_EQ(expected.vertex_count(), 4);
+  ASSERT_EQ(expected.face_count(), 4);
+  EXPECT_NEAR(enclosed_volume(expected), 1.0 / 6.0, 1e-12);
+  for (const char* name : {"tetrahedron-inline-zlib.vtp", "tetrahedron-appended-base64-lzma-bigendian.vtp"}) {
+    const TriangleMesh mesh = read_triangle_mesh(data / name);
+    EXPECT_EQ(mesh.vertices, expected.vertices) << name;
+    EXPECT_EQ(mesh.faces, expected.faces) << name;
+  }
+  const std::string text = read_file(data / "tetrahedron-ascii.vtp");
+  const fs::path folder = fresh_folder("mesh-vtp-polygons");
+  const auto message = [&](const std::string& name, const std::string& edited) {
+    write_text_file(folder / name, edited);
+    return input_error_message([&] { read_triangle_mesh(folder / name); });
+  };
+  EXPECT_EQ(message("index.vtp", replaced(text, "1 2 3 0 3 2", "1 2 3 0 3 7")),
+            (folder / "index.vtp").string() +
+                ": piece 0 polygon 3: expected vertex indices that refer to the "
+                "piece's 4 points, found 7");
+  EXPECT_NE(message("offsets.vtp", replaced(text, "3 6 9 12", "3 9 6 12"))
+                .find(": piece 0 polygon 2: expected a whole offset from 9 and at most "),
+            std::string::npos);
+  EXPECT_EQ(message("short.vtp", replaced(text, "3 6 9 12", "3 6 9 14")),
+            (folder / "short.vtp").string() + ": piece 0 polygon connectivity: expected 14 values, found 12");
+  EXPECT_EQ(message("grid.vtp", replaced(text, "type=\"PolyData\"", "type=\"UnstructuredGrid\"")),
+            (folder / "grid.vtp").string() +
+                ": expected a VTK XML file of type PolyData, found type 'UnstructuredGrid'");
+}
+
+// VTK's XML reader dereferences the array it cannot make for an unknown type (a fuzzed file).
+TEST(MeshFile, VtkXmlArraysOfUnknownTypeOrFormatAreRefused) {
+  const std::string text =
+      read_file(fs::path(PHANTASM_SOURCE_DIR) / "tests/data/meshes/tetrahedron-inline-zlib.vtp");
+  const fs::path folder = fresh_folder("mesh-vtk-types");
+  write_text_file(folder / "type.vtp", replaced(text, "type=\"Float32\"", "type=\"Str)ng\""));
+  EXPECT_EQ(
+      input_error_message([&] { read_triangle_mesh(folder / "type.vtp"); }),
+      (folder / "type.vtp").string() +
+          ": array 'Points': expected a type of Int8, UInt8, Int16, UInt16, Int32, UInt32, Int64, UInt64, "
+          "Float32, Float64 or String, found 'Str)ng'");
+  write_text_file(folder / "format.vtp", replaced(text, "format=\"binary\"", "format=\"appenhed\""));
+  EXPECT_EQ(input_error_message([&] { read_triangle_mesh(folder / "format.vtp"); }),
+            (folder / "format.vtp").string() +
+                ": array 'Points': expected the format ascii, binary or appended, found 'appenhed'");
 }

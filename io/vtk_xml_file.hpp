@@ -1,0 +1,35 @@
+// VTK XML files (.vtp, .vtu) read without trusting what they declare.
+#pragma once
+
+#include <filesystem>
+#include <vector>
+
+namespace phantasm {
+
+/// Refuses a VTK XML file (.vtp, .vtu) that declares more than its bytes can hold or that VTK's
+/// reader would crash on: VTK allocates what a file declares before it reads any data, so a file
+/// of a few hundred bytes could ask for gigabytes. Checked: every array's type (a numeric type or
+/// String) and format (ascii, binary or appended); the point and cell counts of every piece and
+/// the tuples of every array (at most what the file's bytes decode to, a compressed byte
+/// expanding at most 8192 times); and the header of every compressed array, inline or appended,
+/// raw or base64 (blocks that fit in the file, each block's size at most what its compressed
+/// bytes can expand to). Files VTK's XML parser cannot parse are left to the caller's reader.
+/// @throws InputError naming the file, the element or array, what was expected and what was found
+void check_vtk_xml_sizes(const std::filesystem::path& path);
+
+/// The points and polygons of a VTK XML PolyData file (.vtp), every piece, with their vertex
+/// indices into `points` (pieces after the first offset by the points before them).
+struct VtpPolygons {
+  std::vector<double> points; ///< x, y, z of each point, as the file holds them
+  std::vector<std::vector<long long>> polygons;
+};
+
+/// Reads the points and polygons of a .vtp file (ASCII, inline base64 or appended raw or base64
+/// data; uncompressed, zlib, LZ4 or LZMA) through VTK's XML parser and decompressors, after
+/// check_vtk_xml_sizes' checks. VTK's own reader is not used: it crashes on some damaged files
+/// (string arrays of field data, arrays of unknown types) and reads arrays a mesh does not need.
+/// Verts, lines, strips, field, point and cell data are ignored.
+/// @throws InputError naming the file, the piece or array, what was expected and what was found
+VtpPolygons read_vtp_polygons(const std::filesystem::path& path);
+
+} // namespace phantasm
