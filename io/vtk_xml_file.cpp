@@ -92,6 +92,11 @@ void check_compression_header(const std::filesystem::path& path, std::ifstream& 
   if (blocks > layout.file_size / static_cast<std::uint64_t>(layout.header_bytes))
     fail(path, where + std::to_string(blocks) + " blocks in a file of " + std::to_string(layout.file_size) +
                    " bytes");
+  // VTK divides by the block size and finds a block by dividing the offset it reads at by it: a
+  // block of no bytes, or a last block larger than the others, sends it out of its block list.
+  if (blocks > 0 && (block_size == 0 || last_size > block_size))
+    fail(path, where + "blocks of " + std::to_string(block_size) + " bytes and a last one of " +
+                   std::to_string(last_size) + " (blocks of at least a byte, the last one no larger)");
   std::vector<std::uint64_t> sizes;
   if (!read_words(*stream, static_cast<std::size_t>(blocks), layout, sizes)) return;
   stream->EndReading();

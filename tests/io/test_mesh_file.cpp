@@ -321,16 +321,27 @@ TEST(MeshFile, VtkXmlSizesBeyondTheFileAreRefusedBeforeVtkAllocatesThem) {
   };
 
   // Inline: the points' header (1 block of 32768 bytes, a last block of 48 bytes compressed into
-  // 17) with a last block of nearly 4 GB, as a fuzzed file had.
+  // 17) with blocks of nearly 4 GB, as a fuzzed file had.
   const std::string inline_text = read_file(inline_zlib);
   const std::string points_header = base64(header_words({1, 32768, 48, 17}, false));
   ASSERT_EQ(points_header, "AQAAAACAAAAwAAAAEQAAAA==");
   EXPECT_EQ(message("inline.vtp", replaced(inline_text, points_header,
-                                           base64(header_words({1, 32768, 3978928655u, 17}, false)))),
+                                           base64(header_words({1, 3978928655u, 3978928655u, 17}, false)))),
             (folder / "inline.vtp").string() +
                 ": array 'Points': expected a compression header the file can hold, found block 0 of "
                 "3978928655 bytes compressed into 17 (at most 8192 times as many bytes come out of a "
                 "compressed one)");
+  // Blocks of no bytes (VTK divided by zero), a last block larger than the others (VTK read past
+  // its list of blocks).
+  EXPECT_NE(
+      message("zero.vtp", replaced(inline_text, points_header, base64(header_words({1, 0, 48, 17}, false))))
+          .find("found blocks of 0 bytes and a last one of 48 (blocks of at least a byte, the last one "
+                "no larger)"),
+      std::string::npos);
+  EXPECT_NE(
+      message("last.vtp", replaced(inline_text, points_header, base64(header_words({1, 16, 48, 17}, false))))
+          .find("found blocks of 16 bytes and a last one of 48"),
+      std::string::npos);
   EXPECT_NE(
       message("points.vtp", replaced(inline_text, "NumberOfPoints=\"4\"", "NumberOfPoints=\"99999999999\""))
           .find("element Piece: expected NumberOfPoints the file can hold (at most "),
