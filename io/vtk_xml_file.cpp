@@ -94,18 +94,24 @@ void check_compression_header(const std::filesystem::path& path, std::ifstream& 
                    " bytes");
   // VTK divides by the block size and finds a block by dividing the offset it reads at by it: a
   // block of no bytes, or a last block larger than the others, sends it out of its block list.
+  // With no blocks, a last block makes VTK's total size wrap around below zero.
+  if (blocks == 0 && last_size != 0)
+    fail(path, where + "no blocks but a last one of " + std::to_string(last_size) + " bytes");
   if (blocks > 0 && (block_size == 0 || last_size > block_size))
     fail(path, where + "blocks of " + std::to_string(block_size) + " bytes and a last one of " +
                    std::to_string(last_size) + " (blocks of at least a byte, the last one no larger)");
   std::vector<std::uint64_t> sizes;
   if (!read_words(*stream, static_cast<std::size_t>(blocks), layout, sizes)) return;
   stream->EndReading();
+  std::uint64_t compressed_so_far = 0; // the blocks follow one another in the file
   for (std::uint64_t b = 0; b < blocks; ++b) {
     const std::uint64_t compressed = sizes[b];
     const std::uint64_t uncompressed = (b + 1 == blocks && last_size != 0) ? last_size : block_size;
-    if (compressed > layout.file_size)
+    compressed_so_far += std::min(compressed, layout.file_size + 1);
+    if (compressed_so_far > layout.file_size)
       fail(path, where + "block " + std::to_string(b) + " of " + std::to_string(compressed) +
-                     " compressed bytes in a file of " + std::to_string(layout.file_size) + " bytes");
+                     " compressed bytes, past the end of a file of " + std::to_string(layout.file_size) +
+                     " bytes");
     if (uncompressed > k_max_expansion * compressed + k_block_slack)
       fail(path, where + "block " + std::to_string(b) + " of " + std::to_string(uncompressed) +
                      " bytes compressed into " + std::to_string(compressed) + " (at most " +

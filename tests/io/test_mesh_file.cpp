@@ -332,7 +332,7 @@ TEST(MeshFile, VtkXmlSizesBeyondTheFileAreRefusedBeforeVtkAllocatesThem) {
                 "3978928655 bytes compressed into 17 (at most 8192 times as many bytes come out of a "
                 "compressed one)");
   // Blocks of no bytes (VTK divided by zero), a last block larger than the others (VTK read past
-  // its list of blocks).
+  // its list of blocks), a last block among none (VTK's total size wrapped around).
   EXPECT_NE(
       message("zero.vtp", replaced(inline_text, points_header, base64(header_words({1, 0, 48, 17}, false))))
           .find("found blocks of 0 bytes and a last one of 48 (blocks of at least a byte, the last one "
@@ -341,6 +341,10 @@ TEST(MeshFile, VtkXmlSizesBeyondTheFileAreRefusedBeforeVtkAllocatesThem) {
   EXPECT_NE(
       message("last.vtp", replaced(inline_text, points_header, base64(header_words({1, 16, 48, 17}, false))))
           .find("found blocks of 16 bytes and a last one of 48"),
+      std::string::npos);
+  EXPECT_NE(
+      message("none.vtp", replaced(inline_text, points_header, base64(header_words({0, 32768, 48}, false))))
+          .find("found no blocks but a last one of 48 bytes"),
       std::string::npos);
   EXPECT_NE(
       message("points.vtp", replaced(inline_text, "NumberOfPoints=\"4\"", "NumberOfPoints=\"99999999999\""))
@@ -358,7 +362,7 @@ TEST(MeshFile, VtkXmlSizesBeyondTheFileAreRefusedBeforeVtkAllocatesThem) {
             std::string::npos);
   EXPECT_NE(message("block.vtp", replaced(appended_text, appended_header,
                                           base64(header_words({1, 32768, 48, 1ull << 33}, true))))
-                .find("found block 0 of 8589934592 compressed bytes in a file of "),
+                .find("found block 0 of 8589934592 compressed bytes, past the end of a file of "),
             std::string::npos);
 
   // Appended raw bytes (phantasm's own files): the first array's block sizes (full and partial
