@@ -114,7 +114,8 @@ public:
   /// A triangle mesh within `max_deviation_mm` of the surface (estimated at sub-triangle edge
   /// midpoints and centroids). Each patch is subdivided as finely as it needs, up to 2^8 segments
   /// per base edge (stats->max_deviation_mm then tells what remains); shared edges are split at
-  /// the same points from both sides, so the result is watertight.
+  /// the same points from both sides, so the result is watertight. The patches' levels are found
+  /// in parallel (OpenMP); the result does not depend on the number of threads.
   TriangleMesh tessellate(double max_deviation_mm, TessellationStats* stats = nullptr) const;
   /// The points of one patch's regular subdivision of the given level, row by row
   /// ((i, j) with i + j <= 2^level, u = i / 2^level, v = j / 2^level).
@@ -131,7 +132,10 @@ private:
     double amplitude_mm;
   };
 
-  int level_for(Eigen::Index triangle, double max_deviation_mm, double* deviation) const;
+  /// The subdivision level a patch needs; `grid`, when given, receives that level's points
+  /// (patch_grid_points), or nothing when the finest level is still not enough.
+  int level_for(Eigen::Index triangle, double max_deviation_mm, double* deviation,
+                std::vector<Eigen::Vector3d>* grid = nullptr) const;
 
   std::string m_what;
   TriangleMesh m_base;

@@ -4,6 +4,7 @@
 #include "core/cancellation.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <map>
 
 namespace phantasm {
@@ -19,7 +20,8 @@ int grid_index(int i, int j, int n) {
 
 } // namespace
 
-int PatchSurface::level_for(Eigen::Index t, double max_deviation_mm, double* deviation) const {
+int PatchSurface::level_for(Eigen::Index t, double max_deviation_mm, double* deviation,
+                            std::vector<Eigen::Vector3d>* grid) const {
   *deviation = 0.0;
   if (m_perturbations[static_cast<std::size_t>(t)].empty()) return 0;
   // The grid of one level is the corner grid of the next: each level evaluates its points once.
@@ -63,7 +65,10 @@ int PatchSurface::level_for(Eigen::Index t, double max_deviation_mm, double* dev
       }
     }
     *deviation = worst;
-    if (worst <= max_deviation_mm) return level;
+    if (worst <= max_deviation_mm) {
+      if (grid) *grid = std::move(corners);
+      return level;
+    }
     corners = std::move(points);
   }
   return k_max_level; // the finest level; *deviation tells how far it still is
@@ -79,12 +84,25 @@ TriangleMesh PatchSurface::tessellate(double max_deviation_mm, TessellationStats
   TessellationStats local_stats;
   // A cancelled run gets an empty mesh at once (a real organ's tessellation takes seconds; callers
   // may run inside OpenMP regions, which no exception may leave, and poll the flag before using it).
+  // Each patch's level and the points of its grid at that level, which the triangles below take
+  // as they are (the same evaluations as surface_point's), found in parallel.
+  std::vector<std::vector<Eigen::Vector3d>> grids(static_cast<std::size_t>(nf));
+  std::vector<double> deviations(static_cast<std::size_t>(nf), 0.0);
+  std::atomic<bool> cancelled{false};
+#pragma omp parallel for schedule(dynamic, 16)
   for (Eigen::Index t = 0; t < nf; ++t) {
-    if (cancellation_requested()) return TriangleMesh();
-    double deviation = 0.0;
-    level[static_cast<std::size_t>(t)] = level_for(t, max_deviation_mm, &deviation);
-    local_stats.max_level = std::max(local_stats.max_level, level[static_cast<std::size_t>(t)]);
-    local_stats.max_deviation_mm = std::max(local_stats.max_deviation_mm, deviation);
+    if (cancelled.load(std::memory_order_relaxed)) continue;
+    if (cancellation_requested()) {
+      cancelled = true;
+      continue;
+    }
+    const auto f = static_cast<std::size_t>(t);
+    level[f] = level_for(t, max_deviation_mm, &deviations[f], &grids[f]);
+  }
+  if (cancelled) return TriangleMesh();
+  for (std::size_t f = 0; f < level.size(); ++f) {
+    local_stats.max_level = std::max(local_stats.max_level, level[f]);
+    local_stats.max_deviation_mm = std::max(local_stats.max_deviation_mm, deviations[f]);
   }
   if (stats) *stats = local_stats;
 
@@ -139,7 +157,9 @@ TriangleMesh PatchSurface::tessellate(double max_deviation_mm, TessellationStats
           global = edge_point(f1, f2, j, n);
         } else {
           global = static_cast<int>(points.size());
-          points.push_back(surface_point(t, double(i) / n, double(j) / n));
+          const std::vector<Eigen::Vector3d>& grid = grids[static_cast<std::size_t>(t)];
+          points.push_back(grid.empty() ? surface_point(t, double(i) / n, double(j) / n)
+                                        : grid[static_cast<std::size_t>(grid_index(i, j, n))]);
         }
         id[static_cast<std::size_t>(grid_index(i, j, n))] = global;
       }
@@ -193,6 +213,7 @@ TriangleMesh PatchSurface::tessellate(double max_deviation_mm, TessellationStats
         if (i + j < n - 1) emit({{{i + 1, j}, {i + 1, j + 1}, {i, j + 1}}});
       }
     }
+    std::vector<Eigen::Vector3d>().swap(grids[static_cast<std::size_t>(t)]); // copied into points
   }
 
   TriangleMesh mesh;

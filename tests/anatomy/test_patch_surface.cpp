@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <cmath>
 #include <map>
@@ -276,4 +277,19 @@ TEST(PatchSurface, ACancelledTessellationStopsAtOnceAndTheNextIsWhole) {
   reset_cancellation();
   EXPECT_EQ(cancelled, 0);
   EXPECT_EQ(surface.tessellate(0.05).face_count(), whole);
+}
+
+// The patches' levels (and their grid points) are found in parallel: one thread and two give the
+// same mesh, bit for bit.
+TEST(PatchSurface, TessellationIsTheSameOnOneAndTwoThreads) {
+  const PatchSurface surface = bumpy_sphere();
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const TriangleMesh one = surface.tessellate(0.02);
+  omp_set_num_threads(2);
+  const TriangleMesh two = surface.tessellate(0.02);
+  omp_set_num_threads(threads);
+  ASSERT_GT(one.face_count(), 8 * surface.patch_count());
+  EXPECT_EQ(one.vertices, two.vertices);
+  EXPECT_EQ(one.faces, two.faces);
 }
