@@ -4,7 +4,6 @@
 #include "core/format.hpp"
 #include "core/sha256.hpp"
 
-#include <chrono>
 #include <fstream>
 #include <iterator>
 #include <sstream>
@@ -45,11 +44,9 @@ std::vector<std::string> atlas_names() {
 
 AtlasLabels derive_atlas_labels(const std::string& atlas, const std::filesystem::path& templates_dir) {
   if (atlas != "colin27") throw InputError("atlas: expected one of colin27, found '" + atlas + "'");
-  const auto start = std::chrono::steady_clock::now();
   AtlasLabels result;
   result.head = padded(derive_colin27_head(templates_dir), 2);
   result.source = "atlas colin27 (" + templates_dir.string() + ")";
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   for (const char* name : {"ch2.nii.gz", "ch2bet.nii.gz", "aal.nii.gz"}) {
     result.provenance.push_back("colin27 input " + (templates_dir / name).string() + " sha256 " +
                                 file_sha256(templates_dir / name));
@@ -58,9 +55,11 @@ AtlasLabels derive_atlas_labels(const std::string& atlas, const std::filesystem:
   const std::string bytes(reinterpret_cast<const char*>(labels.data()), labels.size() * sizeof(labels[0]));
   const Eigen::Vector3i& dims = result.head.grid.dims;
   std::ostringstream derived;
-  derived << "colin27 labels derived (docs/anatomy-colin27.md) in " << format_number(seconds)
-          << " s: " << dims.x() << " x " << dims.y() << " x " << dims.z() << " voxels of "
-          << format_number(result.head.grid.spacing_mm.x()) << " mm (the template's grid padded by 2 "
+  // No time here: the log and provenance.json hold the same bytes on every run (the anatomy
+  // stage's time is in its stage report).
+  derived << "colin27 labels derived (docs/anatomy-colin27.md): " << dims.x() << " x " << dims.y() << " x "
+          << dims.z() << " voxels of " << format_number(result.head.grid.spacing_mm.x())
+          << " mm (the template's grid padded by 2 "
           << "voxels), int32 labels sha256 " << sha256_hex(bytes);
   result.provenance.push_back(derived.str());
   result.provenance.push_back(

@@ -19,11 +19,18 @@
 #include "voxelize/level_set.hpp"
 #include "voxelize/voxelized_phantom.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
+#include <atomic>
+#include <exception>
 #include <functional>
 #include <map>
+#include <mutex>
 #include <sstream>
+#include <thread>
 #include <utility>
+#include <vector>
 
 namespace phantasm {
 namespace {
@@ -574,6 +581,46 @@ void check_dataset_names(const Scene& scene) {
   }
 }
 
+namespace {
+
+/// Writes the files on as many threads as OpenMP may use (OMP_NUM_THREADS; a batch gives each
+/// subject its share), each thread taking the next file in plan order. The first exception (a
+/// cancellation, a full disk) stops every thread from starting another file and is rethrown
+/// once all have ended; a file being written when it came is finished or, if its own writer
+/// threw, left as no file at all (every writer writes a temporary and renames it).
+void write_in_parallel(const std::vector<const PlannedFile*>& files, ProgressBar& progress) {
+  const auto threads = static_cast<std::size_t>(std::max(1, omp_get_max_threads()));
+  std::atomic<std::size_t> next{0};
+  std::atomic<bool> failed{false};
+  std::exception_ptr failure;
+  std::mutex failure_mutex;
+  const auto work = [&] {
+    while (!failed.load()) {
+      const std::size_t i = next.fetch_add(1);
+      if (i >= files.size()) return;
+      try {
+        throw_if_cancelled();
+        progress.set_detail(files[i]->path.filename().string());
+        files[i]->write(files[i]->path);
+        progress.advance();
+      } catch (...) {
+        const std::lock_guard<std::mutex> lock(failure_mutex);
+        if (!failure) failure = std::current_exception();
+        failed = true;
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (std::size_t t = 1; t < std::min(threads, files.size()); ++t)
+    pool.emplace_back(work);
+  work();
+  for (std::thread& thread : pool)
+    thread.join();
+  if (failure) std::rethrow_exception(failure);
+}
+
+} // namespace
+
 RunSummary write_dataset(const Scene& scene, const Simulation& simulation,
                          const std::filesystem::path& output, Reporter& reporter) {
   check_dataset_names(scene);
@@ -599,10 +646,21 @@ RunSummary write_dataset(const Scene& scene, const Simulation& simulation,
     std::filesystem::create_directories(layout.anat_image(state, "T1w").parent_path());
 
   ProgressBar progress(reporter, "writing", plan.files().size());
+  // The log and provenance.json (the completion marker, which lists every file before it) are
+  // written last, in that order; the files before them depend on nothing written and go in
+  // parallel, each on one thread (a surface mesh's tessellation, a compressed volume).
+  std::vector<const PlannedFile*> independent, last;
+  for (const PlannedFile& file : plan.files())
+    (file.path == layout.log() || file.path == layout.provenance() ? last : independent).push_back(&file);
+  write_in_parallel(independent, progress);
   for (const PlannedFile& file : plan.files()) {
-    progress.set_detail(file.path.filename().string());
-    file.write(file.path);
-    summary.files.push_back(std::filesystem::relative(file.path, layout.root()));
+    if (file.path != layout.log() && file.path != layout.provenance())
+      summary.files.push_back(std::filesystem::relative(file.path, layout.root()));
+  }
+  for (const PlannedFile* file : last) {
+    progress.set_detail(file->path.filename().string());
+    file->write(file->path);
+    summary.files.push_back(std::filesystem::relative(file->path, layout.root()));
     progress.advance();
     throw_if_cancelled();
   }
