@@ -1,6 +1,7 @@
 #include "voxelize/landmarks.hpp"
 
 #include "anatomy/mesh_distance.hpp"
+#include "core/progress.hpp"
 #include "geometry/mesh_signed_distance.hpp"
 
 #include <Eigen/Geometry>
@@ -250,6 +251,8 @@ std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDef
   for (std::size_t o = 0; o < reference.organs.size(); ++o) {
     const Organ& organ = reference.organs[o];
     if (!organ.surface) continue;
+    // Seconds per organ of real anatomy (its surface tessellated for the depth search).
+    progress_detail("landmarks: " + organ.name + "'s deepest point");
     const Eigen::MatrixX3d& rest = organ.surface->rest_positions();
     const Eigen::MatrixX3d& moved = deformation ? deformation->organs[o].surface_mm : rest;
     // Organs the solver moved carry their deepest point through the map (exact inside the

@@ -157,6 +157,7 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
     progress.set_detail("displacement fields");
     const DeformationMap map(deformation->bodies, extension, settings.field_extension_by_search);
     out.motion = compute_motion_fields(out.grid, map);
+    progress.set_detail("landmarks");
     out.landmarks = organ_landmarks(reference, deformation, &map, &report.warnings);
     progress.advance();
     report.modelled.push_back(
