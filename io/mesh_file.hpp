@@ -13,9 +13,9 @@
 
 namespace phantasm {
 
-/// Reads a triangle mesh from .stl or .vtp (VTK's readers), .obj or .ply (read here: `v`
-/// and `f` statements; elements `vertex` with x, y, z and `face` with vertex_indices, ascii or
-/// binary). Polygons are split into
+/// Reads a triangle mesh from .stl (VTK's reader), .vtp (points and polygons through VTK's XML
+/// parser, io/vtk_xml_file.hpp), .obj or .ply (read here: `v` and `f` statements; elements
+/// `vertex` with x, y, z and `face` with vertex_indices, ascii or binary). Polygons are split into
 /// triangles and exactly coincident points merged (STL files repeat them per triangle); points
 /// no triangle uses are dropped; otherwise the file's order is kept. Whether the mesh is closed is checked by
 /// its user.
