@@ -531,21 +531,10 @@ TriangleMesh read_triangle_mesh(const std::filesystem::path& path) {
   } else {
     fail(path, std::string("expected ") + what + ", found extension '" + extension + "'");
   }
-  // Keep only polygons, as triangles (VTK keeps the points as they are). vtkTriangleFilter reads
-  // the points of a polygon of more than three corners: indices beyond the points must not reach it.
-  if (vtkCellArray* cells = data->GetPolys()) {
-    const vtkIdType point_count = data->GetPoints() ? data->GetNumberOfPoints() : 0;
-    vtkNew<vtkIdList> ids;
-    vtkIdType c = 0;
-    for (cells->InitTraversal(); cells->GetNextCell(ids); ++c) {
-      for (vtkIdType k = 0; k < ids->GetNumberOfIds(); ++k) {
-        if (ids->GetId(k) < 0 || ids->GetId(k) >= point_count)
-          fail(path, "polygon " + std::to_string(c) + ": expected vertex indices that refer to the file's " +
-                         std::to_string(point_count) + " vertices, found index " +
-                         std::to_string(ids->GetId(k)) + " (from 0)");
-      }
-    }
-  }
+  // Keep only polygons, as triangles (VTK keeps the points as they are). Every reader above has
+  // checked the polygons' indices against the points (vtkTriangleFilter reads the points of a
+  // polygon of more than three corners): the OBJ and PLY readers in to_poly_data, the .vtp reader
+  // in read_vtp_polygons; vtkSTLReader makes its triangles from the points it reads.
   vtkNew<vtkPolyData> polygons;
   polygons->SetPoints(data->GetPoints());
   polygons->SetPolys(data->GetPolys());
