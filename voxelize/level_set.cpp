@@ -249,9 +249,13 @@ LevelSet::LevelSet(const TriangleMesh& surface, double voxel_size_mm, double hal
   }
   const openvdb::math::Transform::Ptr transform =
       openvdb::math::Transform::createLinearTransform(voxel_size_mm);
+  // Passed as the base class, whose wasInterrupted is virtual: the call then matches the
+  // instantiation compiled into libopenvdb (declared extern in MeshToVolume.h) instead of
+  // instantiating the whole mesh-to-volume machinery in this file (minutes of compilation).
   CancellationInterrupter interrupter;
-  m->grid = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(interrupter, *transform, points, triangles,
-                                                               static_cast<float>(half_width_voxels));
+  openvdb::util::NullInterrupter& base_interrupter = interrupter;
+  m->grid = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(
+      base_interrupter, *transform, points, triangles, static_cast<float>(half_width_voxels));
   if (cancellation_requested()) return; // cut short: the caller throws before reading it
   m->grid->setGridClass(openvdb::GRID_LEVEL_SET);
 }

@@ -1,4 +1,4 @@
-// `phantasm batch` end to end on six small heads: jobs and shards give the same bytes, a
+// `phantasm batch` end to end on four small heads: jobs and shards give the same bytes, a
 // finished batch skips every subject, and a batch killed with SIGKILL at random moments and
 // restarted ends with exactly the dataset of an uninterrupted batch.
 
@@ -59,10 +59,10 @@ std::size_t count_ending(const std::map<std::string, std::string>& files, const 
 // killed one all end with the same bytes.
 TEST(BatchCommand, JobsShardsRestartsAndKillsEndWithTheSameSubjects) {
   const auto& a = reference();
-  EXPECT_EQ(count_ending(a.files, "provenance.json"), 6u);
-  EXPECT_EQ(count_ending(a.files, "_ses-def_T1w.nii.gz"), 6u);
+  EXPECT_EQ(count_ending(a.files, "provenance.json"), 4u);
+  EXPECT_EQ(count_ending(a.files, "_ses-def_T1w.nii.gz"), 4u);
   const std::string participants = a.files.at("participants.tsv");
-  EXPECT_EQ(std::count(participants.begin(), participants.end(), '\n'), 7);
+  EXPECT_EQ(std::count(participants.begin(), participants.end(), '\n'), 5);
   EXPECT_EQ(participants.rfind("participant_id\tseed\tdeformation.scale\tacquisition.noise_percent\n", 0),
             0u);
 
@@ -78,7 +78,7 @@ TEST(BatchCommand, JobsShardsRestartsAndKillsEndWithTheSameSubjects) {
   // A finished batch makes nothing again.
   const CommandResult again = run_command({k_phantasm, "batch", k_sweep.string(), "-o", a.folder.string()});
   EXPECT_EQ(again.exit_code, 0);
-  EXPECT_NE(again.err.find("0 subjects made, 6 already complete, 0 failed"), std::string::npos) << again.err;
+  EXPECT_NE(again.err.find("0 subjects made, 4 already complete, 0 failed"), std::string::npos) << again.err;
   EXPECT_EQ(folder_contents(a.folder), a.files);
 
   // Killed with SIGKILL at random moments and restarted: exactly the uninterrupted dataset.
@@ -132,8 +132,8 @@ TEST(BatchCommand, JobsShardsRestartsAndKillsEndWithTheSameSubjects) {
 
 TEST(BatchCommand, ShowsSubjectsDoneFailedAndLeftWithTheTimeLeft) {
   const std::string& err = reference().err;
-  EXPECT_NE(err.find("(1 done, 0 failed, 5 left, about "), std::string::npos) << err;
-  EXPECT_NE(err.find("(6 done, 0 failed, 0 left)"), std::string::npos) << err;
+  EXPECT_NE(err.find("(1 done, 0 failed, 3 left, about "), std::string::npos) << err;
+  EXPECT_NE(err.find("(4 done, 0 failed, 0 left)"), std::string::npos) << err;
 }
 
 TEST(BatchCommand, BadSweepsAndShardsAreReportedClearly) {
@@ -326,7 +326,7 @@ TEST(BatchCommand, ASignalBetweenTwoSubjectsOrWhileAShardWritesItsTableDamagesNo
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   third.send_signal(SIGINT);
   EXPECT_EQ(third.wait(), 130);
-  EXPECT_NE(read_file(err).find("2 of 6 subjects in shard 1/3, 1 already complete, 1 to run"),
+  EXPECT_NE(read_file(err).find("2 of 4 subjects in shard 1/3, 1 already complete, 1 to run"),
             std::string::npos)
       << read_file(err);
   const std::map<std::string, std::string> finished = folder_contents(out);

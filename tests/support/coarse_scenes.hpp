@@ -25,7 +25,7 @@ namespace phantasm::testing {
 /// millisecond of CPU per voxel near a moved boundary.
 constexpr double k_coarse_max_voxels = 1.0e5;
 /// At most this many frames of a dynamic scene.
-constexpr int k_coarse_max_frames = 20;
+constexpr int k_coarse_max_frames = 10;
 
 /// A copy of the scene that keeps its anatomy and deformation but makes few, coarse images:
 /// cubic voxels of at least 4 mm and at most k_coarse_max_voxels of them, 2^3 samples per voxel,
@@ -62,7 +62,7 @@ inline std::filesystem::path coarse_copy(const std::filesystem::path& scene,
   acquisition.remove("kspace_oversampling");
   root["acquisition"] = acquisition;
   // Dynamic scenes: their first k_coarse_max_frames frames (cloth.yaml's 60 converged frames take
-  // minutes; its first 20 are the first third of a second of its fall).
+  // minutes; its first 10 are the first sixth of a second of its fall).
   YAML::Node deformation = root["deformation"];
   if (deformation["frames"] && deformation["frames"].as<int>() > k_coarse_max_frames)
     deformation["frames"] = k_coarse_max_frames;
