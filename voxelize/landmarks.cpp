@@ -1,6 +1,7 @@
 #include "voxelize/landmarks.hpp"
 
 #include "anatomy/mesh_distance.hpp"
+#include "core/cancellation.hpp"
 #include "core/progress.hpp"
 #include "geometry/mesh_signed_distance.hpp"
 
@@ -127,21 +128,33 @@ struct Candidate {
 
 /// Candidate points of an organ's own material: a grid over its bounds (12 steps along the
 /// longest side) and, for shells thinner than that grid, points stepped inward from every base
-/// vertex along its normal until they leave the material again.
+/// vertex along its normal until they leave the material again. The clearances are evaluated in
+/// parallel (grid points, then rays); the list is in the same order on any number of threads.
 std::vector<Candidate> candidates(const PatchSurface& surface, const OwnMaterial& material) {
   const Eigen::MatrixX3d& rest = surface.rest_positions();
   const Eigen::Vector3d low = rest.colwise().minCoeff().transpose(),
                         high = rest.colwise().maxCoeff().transpose();
   const double step = (high - low).maxCoeff() / 12.0;
   std::vector<Candidate> out;
-  const Eigen::Vector3i cells = ((high - low) / step).array().ceil().cast<int>();
-  for (int k = 0; k <= cells.z(); ++k)
-    for (int j = 0; j <= cells.y(); ++j)
-      for (int i = 0; i <= cells.x(); ++i) {
-        const Eigen::Vector3d x = low + step * Eigen::Vector3d(i, j, k);
-        const double c = material.clearance(x);
-        if (c > 0.0) out.push_back({x, c});
-      }
+  const Eigen::Vector3i points = ((high - low) / step).array().ceil().cast<int>() + 1;
+  const std::ptrdiff_t grid_count = std::ptrdiff_t{points.x()} * points.y() * points.z();
+  std::vector<double> grid_clearance(static_cast<std::size_t>(grid_count));
+#pragma omp parallel for schedule(dynamic, 16)
+  for (std::ptrdiff_t n = 0; n < grid_count; ++n) {
+    if (cancellation_requested()) continue;
+    const auto i = static_cast<int>(n % points.x()), j = static_cast<int>(n / points.x() % points.y()),
+               k = static_cast<int>(n / (std::ptrdiff_t{points.x()} * points.y()));
+    grid_clearance[static_cast<std::size_t>(n)] = material.clearance(low + step * Eigen::Vector3d(i, j, k));
+  }
+  throw_if_cancelled();
+  for (std::ptrdiff_t n = 0; n < grid_count; ++n) {
+    const double c = grid_clearance[static_cast<std::size_t>(n)];
+    if (c > 0.0) {
+      const auto i = static_cast<int>(n % points.x()), j = static_cast<int>(n / points.x() % points.y()),
+                 k = static_cast<int>(n / (std::ptrdiff_t{points.x()} * points.y()));
+      out.push_back({low + step * Eigen::Vector3d(i, j, k), c});
+    }
+  }
   // Area-weighted vertex normals of the base mesh (outward).
   const Eigen::MatrixX3i& faces = surface.base_mesh().faces;
   Eigen::MatrixX3d normals = Eigen::MatrixX3d::Zero(rest.rows(), 3);
@@ -152,18 +165,25 @@ std::vector<Candidate> candidates(const PatchSurface& surface, const OwnMaterial
       normals.row(faces(f, k)) += n;
   }
   const double ray_step = step / 10.0;
-  for (Eigen::Index v = 0; v < rest.rows(); ++v) {
-    if (!(normals.row(v).norm() > 0.0)) continue;
+  std::vector<std::vector<Candidate>> rays(static_cast<std::size_t>(rest.rows()));
+  const auto vertex_count = static_cast<std::ptrdiff_t>(rest.rows());
+#pragma omp parallel for schedule(dynamic, 8)
+  for (std::ptrdiff_t v = 0; v < vertex_count; ++v) {
+    if (cancellation_requested() || !(normals.row(v).norm() > 0.0)) continue;
     const Eigen::Vector3d origin = rest.row(v).transpose(), inward = -normals.row(v).normalized().transpose();
+    std::vector<Candidate>& ray = rays[static_cast<std::size_t>(v)];
     double best = 0.0;
     for (int s = 1; s * ray_step < (high - low).norm(); ++s) {
       const Eigen::Vector3d x = origin + s * ray_step * inward;
       const double c = material.clearance(x);
-      if (c > 0.0) out.push_back({x, c});
+      if (c > 0.0) ray.push_back({x, c});
       best = std::max(best, c);
       if (best > 0.0 && c < 0.5 * best) break; // past the deepest point of this ray
     }
   }
+  throw_if_cancelled();
+  for (const std::vector<Candidate>& ray : rays)
+    out.insert(out.end(), ray.begin(), ray.end());
   return out;
 }
 
@@ -243,7 +263,8 @@ std::optional<Eigen::Vector3d> deepest_point(const Phantom& phantom, std::size_t
 } // namespace
 
 std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDeformation* deformation,
-                                      const DeformationMap* map, std::vector<std::string>* warnings) {
+                                      const DeformationMap* map, std::vector<std::string>* warnings,
+                                      const std::function<void()>& organ_done) {
   static const char* const k_directions[6] = {"left",     "right",    "posterior",
                                               "anterior", "inferior", "superior"};
   std::vector<Landmark> out;
@@ -278,6 +299,7 @@ std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDef
       out.push_back({organ.name + "_" + k_directions[d], organ.name, rest.row(best).transpose(),
                      moved.row(best).transpose()});
     }
+    if (organ_done) organ_done();
   }
   return out;
 }

@@ -7,6 +7,7 @@
 #include "voxelize/motion_fields.hpp"
 #include "voxelize/voxelized_phantom.hpp"
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -23,9 +24,10 @@ namespace phantasm {
 /// point: that landmark is left out, with a warning.
 /// @param map the reference-to-deformed map (nullptr without a deformation)
 /// @param warnings receives a line per landmark left out (nullptr: none kept)
+/// @param organ_done called after each organ with a surface (a progress step; empty: none)
 std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDeformation* deformation,
-                                      const DeformationMap* map,
-                                      std::vector<std::string>* warnings = nullptr);
+                                      const DeformationMap* map, std::vector<std::string>* warnings = nullptr,
+                                      const std::function<void()>& organ_done = {});
 
 /// CSV text of one state: "name,organ,x_mm,y_mm,z_mm" (world RAS mm), one landmark per line.
 std::string landmarks_csv(const std::vector<Landmark>& landmarks, bool deformed);

@@ -10,6 +10,7 @@
 #include "voxelize/voxelize_plan.hpp"
 
 #include <algorithm>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -105,8 +106,16 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
       out.tissues.push_back(organ.tissue);
   const double voxel_size = out.grid.spacing_mm.minCoeff();
   const int states = deformed ? 2 : 1;
+  // Steps: each organ's level set and the tissue fractions per state, the displacement fields,
+  // and each surfaced organ's landmarks (the deepest-point search takes seconds per organ of
+  // real anatomy, as long as its level sets: the time left counts them).
+  const auto landmark_organs =
+      static_cast<std::size_t>(std::count_if(reference.organs.begin(), reference.organs.end(),
+                                             [](const Organ& o) { return static_cast<bool>(o.surface); }));
   ProgressBar progress(reporter, "voxelize",
-                       static_cast<std::size_t>(states) * (reference.organs.size() + 1) + (deformed ? 1 : 0));
+                       static_cast<std::size_t>(states) * (reference.organs.size() + 1) + (deformed ? 1 : 0) +
+                           landmark_organs);
+  const std::function<void()> landmark_done = [&progress] { progress.advance(); };
   for (std::size_t o = 0; o < reference.organs.size(); ++o) {
     if (reference.organs[o].sheet)
       report.skipped.push_back(reference.organs[o].name + ": an open sheet has no inside; it fills no voxel");
@@ -157,9 +166,9 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
     progress.set_detail("displacement fields");
     const DeformationMap map(deformation->bodies, extension, settings.field_extension_by_search);
     out.motion = compute_motion_fields(out.grid, map);
-    progress.set_detail("landmarks");
-    out.landmarks = organ_landmarks(reference, deformation, &map, &report.warnings);
     progress.advance();
+    progress.set_detail("landmarks");
+    out.landmarks = organ_landmarks(reference, deformation, &map, &report.warnings, landmark_done);
     report.modelled.push_back(
         "displacement fields both ways: barycentric in the solved tets (exact), outside "
         "them a Shepard extension of the moved boundary fading out over " +
@@ -193,7 +202,8 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
                                 ": the deformation folds tissue there (see the sim stage's loads)");
     }
   }
-  if (!deformation) out.landmarks = organ_landmarks(reference, nullptr, nullptr, &report.warnings);
+  if (!deformation)
+    out.landmarks = organ_landmarks(reference, nullptr, nullptr, &report.warnings, landmark_done);
   report.status = "done";
   return out;
 }

@@ -14,6 +14,7 @@
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <omp.h>
 
 using namespace phantasm;
 
@@ -104,6 +105,25 @@ TEST(OrganLandmarks, AnOrganFilledByItsNestedOrganHasNoDeepestPointAndAWarning) 
   for (const Landmark& l : landmarks)
     EXPECT_NE(l.name, "outer_deepest");
   EXPECT_EQ(landmarks[6].name, "filling_deepest");
+}
+
+// The deepest-point search evaluates its candidates in parallel: the landmarks are the same
+// bytes on one thread and on two (on the folded shell, where the candidates' order matters).
+TEST(OrganLandmarks, AreTheSameOnOneAndTwoThreads) {
+  Phantom phantom;
+  phantom.organs.push_back(organ("shell", "", sphere(20.0, 55.0)));
+  phantom.organs.push_back(organ("core", "shell", sphere(16.0)));
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const std::vector<Landmark> one = organ_landmarks(phantom, nullptr, nullptr, nullptr);
+  omp_set_num_threads(2);
+  const std::vector<Landmark> two = organ_landmarks(phantom, nullptr, nullptr, nullptr);
+  omp_set_num_threads(threads);
+  ASSERT_EQ(one.size(), two.size());
+  for (std::size_t l = 0; l < one.size(); ++l) {
+    EXPECT_EQ(one[l].name, two[l].name);
+    EXPECT_EQ(one[l].reference_mm, two[l].reference_mm) << one[l].name;
+  }
 }
 
 TEST(OrganLandmarks, DeepestPointsLieInTheirOrgansOwnMaterialInBothStates) {
