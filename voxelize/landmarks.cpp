@@ -138,22 +138,23 @@ std::vector<Candidate> candidates(const PatchSurface& surface, const OwnMaterial
   std::vector<Candidate> out;
   const Eigen::Vector3i points = ((high - low) / step).array().ceil().cast<int>() + 1;
   const std::ptrdiff_t grid_count = std::ptrdiff_t{points.x()} * points.y() * points.z();
+  // Grid point n, x fastest.
+  auto grid_point = [&](std::ptrdiff_t n) {
+    const std::ptrdiff_t row = n / points.x();
+    return Eigen::Vector3d(low + step * Eigen::Vector3d(static_cast<double>(n % points.x()),
+                                                        static_cast<double>(row % points.y()),
+                                                        static_cast<double>(row / points.y())));
+  };
   std::vector<double> grid_clearance(static_cast<std::size_t>(grid_count));
 #pragma omp parallel for schedule(dynamic, 16)
   for (std::ptrdiff_t n = 0; n < grid_count; ++n) {
     if (cancellation_requested()) continue;
-    const auto i = static_cast<int>(n % points.x()), j = static_cast<int>(n / points.x() % points.y()),
-               k = static_cast<int>(n / (std::ptrdiff_t{points.x()} * points.y()));
-    grid_clearance[static_cast<std::size_t>(n)] = material.clearance(low + step * Eigen::Vector3d(i, j, k));
+    grid_clearance[static_cast<std::size_t>(n)] = material.clearance(grid_point(n));
   }
   throw_if_cancelled();
   for (std::ptrdiff_t n = 0; n < grid_count; ++n) {
     const double c = grid_clearance[static_cast<std::size_t>(n)];
-    if (c > 0.0) {
-      const auto i = static_cast<int>(n % points.x()), j = static_cast<int>(n / points.x() % points.y()),
-                 k = static_cast<int>(n / (std::ptrdiff_t{points.x()} * points.y()));
-      out.push_back({low + step * Eigen::Vector3d(i, j, k), c});
-    }
+    if (c > 0.0) out.push_back({grid_point(n), c});
   }
   // Area-weighted vertex normals of the base mesh (outward).
   const Eigen::MatrixX3i& faces = surface.base_mesh().faces;

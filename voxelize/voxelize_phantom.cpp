@@ -108,7 +108,7 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
   const int states = deformed ? 2 : 1;
   // Steps: each organ's level set and the tissue fractions per state, the displacement fields,
   // and each surfaced organ's landmarks (the deepest-point search takes seconds per organ of
-  // real anatomy, as long as its level sets: the time left counts them).
+  // real anatomy: the time left counts them).
   const auto landmark_organs =
       static_cast<std::size_t>(std::count_if(reference.organs.begin(), reference.organs.end(),
                                              [](const Organ& o) { return static_cast<bool>(o.surface); }));
