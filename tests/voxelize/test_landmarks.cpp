@@ -107,8 +107,10 @@ TEST(OrganLandmarks, AnOrganFilledByItsNestedOrganHasNoDeepestPointAndAWarning) 
   EXPECT_EQ(landmarks[6].name, "filling_deepest");
 }
 
-// The deepest-point search evaluates its candidates in parallel: the landmarks are the same
-// bytes on one thread and on two (on the folded shell, where the candidates' order matters).
+// The deepest-point search evaluates its candidates' clearances in parallel, reading the organs'
+// distance structures from both threads: the landmarks are the same bytes on one thread and on
+// two (on the folded shell). The candidates' order matters only between exactly equal
+// clearances, which this shell does not have.
 TEST(OrganLandmarks, AreTheSameOnOneAndTwoThreads) {
   Phantom phantom;
   phantom.organs.push_back(organ("shell", "", sphere(20.0, 55.0)));
