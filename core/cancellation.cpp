@@ -5,9 +5,15 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <csignal>
+#include <cstdio>
+#include <mutex>
+#include <string>
 #include <thread>
+#include <vector>
 
 namespace phantasm {
 namespace {
@@ -29,6 +35,23 @@ extern "C" void on_signal(int signal_number) {
 
 std::atomic<int> g_abandonable_depth{0};
 
+/// The temporary files being written (RegisteredTemporary), and the lock that keeps the
+/// watchdog from ending the process between a rename and the forgetting of its temporary.
+std::mutex& temporaries_mutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+std::vector<std::string>& temporaries() {
+  static std::vector<std::string> paths;
+  return paths;
+}
+/// Forgets a registered temporary (the caller holds temporaries_mutex()).
+void forget_temporary(const std::string& path) {
+  auto& paths = temporaries();
+  const auto it = std::find(paths.begin(), paths.end(), path);
+  if (it != paths.end()) paths.erase(it);
+}
+
 /// Waits for a cancellation; if 0.5 s later the process is inside abandonable work (which
 /// should have thrown by then), ends it (AbandonableWork). Polls every 20 ms: a sleeping thread.
 void watch_cancellation() {
@@ -38,6 +61,10 @@ void watch_cancellation() {
   std::this_thread::sleep_for(500ms);
   while (true) {
     if (g_abandonable_depth.load() > 0) {
+      // Held until the end: no temporary is renamed or registered after this.
+      temporaries_mutex().lock();
+      for (const std::string& path : temporaries())
+        ::unlink(path.c_str());
       static const char message[] = "\nphantasm: interrupted; every file written so far is complete\n";
       [[maybe_unused]] const ssize_t ignored = ::write(STDERR_FILENO, message, sizeof message - 1);
       const int signal_number = cancellation_signal();
@@ -86,6 +113,26 @@ AbandonableWork::AbandonableWork() noexcept {
 
 AbandonableWork::~AbandonableWork() {
   g_abandonable_depth.fetch_sub(1);
+}
+
+RegisteredTemporary::RegisteredTemporary(std::filesystem::path path) : m_path(std::move(path)) {
+  const std::lock_guard<std::mutex> lock(temporaries_mutex());
+  temporaries().push_back(m_path.string());
+  m_registered = true;
+}
+
+RegisteredTemporary::~RegisteredTemporary() {
+  if (!m_registered) return;
+  const std::lock_guard<std::mutex> lock(temporaries_mutex());
+  forget_temporary(m_path.string());
+}
+
+int RegisteredTemporary::rename_to(const std::filesystem::path& final_path) {
+  const std::lock_guard<std::mutex> lock(temporaries_mutex());
+  if (std::rename(m_path.c_str(), final_path.c_str()) != 0) return errno != 0 ? errno : EIO;
+  forget_temporary(m_path.string());
+  m_registered = false;
+  return 0;
 }
 
 void reset_cancellation() noexcept {

@@ -45,6 +45,7 @@ AtomicFileWriter::AtomicFileWriter(std::filesystem::path final_path) : m_final_p
   const std::string name = "." + m_final_path.filename().string() + k_temporary_marker +
                            std::to_string(::getpid()) + "-" + std::to_string(g_temporary_counter++);
   m_temporary_path = folder / name;
+  m_registration.emplace(m_temporary_path);
   m_fd = ::open(m_temporary_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (m_fd < 0) throw io_error("cannot create", m_temporary_path);
 }
@@ -85,7 +86,8 @@ void AtomicFileWriter::commit() {
   // A test's pause: a signal can then land between the last byte and the rename.
   if (const int delay = g_write_delay_ms.load(); delay > 0)
     std::this_thread::sleep_for(std::chrono::milliseconds(delay));
-  if (::rename(m_temporary_path.c_str(), m_final_path.c_str()) != 0) {
+  if (const int error = m_registration->rename_to(m_final_path); error != 0) {
+    errno = error;
     throw io_error("cannot rename to " + m_final_path.string() + " from", m_temporary_path);
   }
   m_committed = true;

@@ -2,8 +2,11 @@
 // name only ever holds a complete file; also the removal of a killed run's temporaries.
 #pragma once
 
+#include "core/abandonable_work.hpp"
+
 #include <cstddef>
 #include <filesystem>
+#include <optional>
 #include <string_view>
 
 namespace phantasm {
@@ -12,7 +15,8 @@ namespace phantasm {
 /// temporary file in the same folder (".<name>.phantasm-tmp-<pid>-<n>"); commit() flushes it to
 /// disk and renames it over the final name. A writer destroyed without commit() (an exception,
 /// a cancelled run) removes its temporary file. A killed process can leave a temporary file,
-/// but never a partial file under the final name; remove_stale_temporaries() clears those.
+/// but never a partial file under the final name; remove_stale_temporaries() clears those. A
+/// process abandoned by its cancellation watchdog removes the temporary first (AbandonableWork).
 class AtomicFileWriter {
 public:
   /// Creates missing parent folders and opens the temporary file.
@@ -34,6 +38,7 @@ public:
 private:
   std::filesystem::path m_final_path;
   std::filesystem::path m_temporary_path;
+  std::optional<RegisteredTemporary> m_registration;
   int m_fd = -1;
   bool m_committed = false;
 };

@@ -3,6 +3,7 @@
 
 #include "io/mesh_file.hpp"
 
+#include "core/abandonable_work.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
 #include "geometry/tet_boundary.hpp"
@@ -505,7 +506,12 @@ void write_xml(Writer& writer, const std::filesystem::path& path) {
   writer.SetCompressorTypeToZLib();
   writer.SetHeaderTypeToUInt64();
   writer.WriteToOutputStringOn();
-  if (writer.Write() != 1) throw std::runtime_error(path.string() + ": VTK could not encode the mesh");
+  {
+    // VTK encodes and compresses the whole mesh in one call that polls nothing (seconds for a
+    // million triangles): in memory, so a cancelled run may be abandoned inside it.
+    const AbandonableWork encoding;
+    if (writer.Write() != 1) throw std::runtime_error(path.string() + ": VTK could not encode the mesh");
+  }
   write_file_atomically(path, writer.GetOutputString());
 }
 

@@ -1,5 +1,6 @@
 #include "io/vdb_file.hpp"
 
+#include "core/abandonable_work.hpp"
 #include "io/atomic_file.hpp"
 
 #include <openvdb/io/File.h>
@@ -8,6 +9,7 @@
 #include <unistd.h>
 
 #include <stdexcept>
+#include <system_error>
 
 namespace phantasm {
 namespace {
@@ -76,12 +78,20 @@ void write_vdb(const std::filesystem::path& path, const VdbContents& contents) {
   const std::filesystem::path temporary =
       path.parent_path() /
       ("." + path.filename().string() + ".phantasm-tmp-" + std::to_string(::getpid()) + "-vdb");
+  RegisteredTemporary registration(temporary);
   try {
-    openvdb::io::File file(temporary.string());
-    file.setCompression(openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK);
-    file.write(grids);
-    file.close();
-    std::filesystem::rename(temporary, path);
+    {
+      // OpenVDB compresses and writes in one call that polls nothing: a cancelled run may be
+      // abandoned inside it (the watchdog removes the registered temporary first).
+      const AbandonableWork writing;
+      openvdb::io::File file(temporary.string());
+      file.setCompression(openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK);
+      file.write(grids);
+      file.close();
+    }
+    if (const int error = registration.rename_to(path); error != 0)
+      throw std::filesystem::filesystem_error("cannot rename", temporary, path,
+                                              std::error_code(error, std::generic_category()));
   } catch (...) {
     std::error_code ignored;
     std::filesystem::remove(temporary, ignored);

@@ -1,3 +1,4 @@
+#include "core/abandonable_work.hpp"
 #include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "io/atomic_file.hpp"
@@ -111,6 +112,57 @@ TEST(AtomicFile, ACancellationDuringTheRenameLeavesTheOldOrTheNewFileWhole) {
   EXPECT_EQ(read_file(folder / "f.txt"), found);
   EXPECT_EQ(file_count(folder), 1u);
   reset_cancellation();
+}
+
+// A process inside work that polls nothing (VTK encoding a mesh, OpenVDB compressing its grids)
+// while other threads write files: the watchdog ends it 0.5 s after the signal, and removes the
+// temporaries being written first, so that only complete files are left under final names.
+TEST(AtomicFile, AnAbandonedProcessRemovesTheTemporariesItWasWriting) {
+  const fs::path folder = fresh_folder("abandoned");
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    install_cancellation_handlers(true);
+    write_file_atomically(folder / "done.txt", "complete");
+    AtomicFileWriter open_writer(folder / "open.txt"); // never committed
+    open_writer.write("half");
+    std::thread polls_nothing([] {
+      const AbandonableWork encoding;
+      std::this_thread::sleep_for(std::chrono::seconds(60));
+    });
+    polls_nothing.join();
+    ::_exit(0); // reached only if the watchdog did not end the process
+  }
+  // Wait until the child has made its files, then signal it.
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (file_count(folder) < 2 && std::chrono::steady_clock::now() < give_up)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  ASSERT_EQ(file_count(folder), 2u);
+  std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  const auto sent = std::chrono::steady_clock::now();
+  ASSERT_EQ(::kill(child, SIGINT), 0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - sent).count();
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 128 + SIGINT);
+  // Behaviour, not timing: it ended long before its 60 s of work.
+  EXPECT_LT(seconds, 30.0);
+  EXPECT_EQ(read_file(folder / "done.txt"), "complete");
+  EXPECT_EQ(file_count(folder), 1u) << "a temporary was left";
+}
+
+TEST(AtomicFile, ARenamedTemporaryIsForgottenAndAFailedRenameKeepsItRegistered) {
+  const fs::path folder = fresh_folder("registered");
+  {
+    std::ofstream(folder / "t") << "x";
+    RegisteredTemporary registration(folder / "t");
+    EXPECT_NE(registration.rename_to(folder / "missing-folder" / "f"), 0);
+    EXPECT_TRUE(fs::exists(folder / "t"));
+    EXPECT_EQ(registration.rename_to(folder / "f"), 0);
+  }
+  EXPECT_EQ(read_file(folder / "f"), "x");
+  EXPECT_EQ(file_count(folder), 1u);
 }
 
 TEST(AtomicFile, StaleTemporariesOfAKilledRunAreFoundAndRemoved) {
