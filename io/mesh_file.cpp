@@ -26,7 +26,6 @@
 #include <vtkTriangleFilter.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLPolyDataWriter.h>
-#include <vtkXMLUnstructuredGridReader.h>
 #include <vtkXMLUnstructuredGridWriter.h>
 #include <vtksys/SystemTools.hxx>
 
@@ -634,29 +633,33 @@ void write_vtu(const std::filesystem::path& path, const TetMesh& mesh,
 TetMesh read_vtu(const std::filesystem::path& path) {
   check_readable(path, "a tetrahedral mesh (.vtu)");
   check_vtk_xml_sizes(path);
-  vtkNew<vtkXMLUnstructuredGridReader> reader;
-  reader->SetFileName(path.c_str());
-  reader->GlobalWarningDisplayOff();
-  reader->Update();
-  vtkUnstructuredGrid* grid = reader->GetOutput();
-  if (reader->GetErrorCode() != 0 || !grid || grid->GetNumberOfCells() == 0)
-    fail(path, "expected a VTK unstructured grid of tetrahedra, found none");
+  // Through phantasm's own reading of VTK XML (as .vtp files), not vtkXMLUnstructuredGridReader,
+  // which crashes on some damaged files (string field data, arrays of unknown types).
+  const VtuCells file = read_vtu_cells(path);
+  if (file.cells.empty()) fail(path, "expected a VTK unstructured grid of tetrahedra, found no cell");
   TetMesh mesh;
-  mesh.vertices.resize(grid->GetNumberOfPoints(), 3);
-  for (vtkIdType i = 0; i < grid->GetNumberOfPoints(); ++i) {
-    double p[3];
-    grid->GetPoint(i, p);
-    mesh.vertices.row(i) = Eigen::RowVector3d(p[0], p[1], p[2]);
+  const auto points = static_cast<Eigen::Index>(file.points.size() / 3);
+  if (points > std::numeric_limits<int>::max())
+    fail(path, "expected at most " + std::to_string(std::numeric_limits<int>::max()) + " points, found " +
+                   std::to_string(points));
+  mesh.vertices.resize(points, 3);
+  for (Eigen::Index i = 0; i < points; ++i) {
+    mesh.vertices.row(i) =
+        Eigen::RowVector3d(file.points[3 * i], file.points[3 * i + 1], file.points[3 * i + 2]);
+    if (!mesh.vertices.row(i).allFinite())
+      fail(path, "expected finite point coordinates, found point " + std::to_string(i) + " at " +
+                     format_number(mesh.vertices(i, 0)) + ", " + format_number(mesh.vertices(i, 1)) + ", " +
+                     format_number(mesh.vertices(i, 2)));
   }
-  mesh.tets.resize(grid->GetNumberOfCells(), 4);
-  vtkNew<vtkIdList> ids;
-  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c) {
-    if (grid->GetCellType(c) != VTK_TETRA)
-      fail(path, "expected tetrahedra, found cell " + std::to_string(c) + " of VTK type " +
-                     std::to_string(grid->GetCellType(c)));
-    grid->GetCellPoints(c, ids);
+  mesh.tets.resize(static_cast<Eigen::Index>(file.cells.size()), 4);
+  for (std::size_t c = 0; c < file.cells.size(); ++c) {
+    if (file.types[c] != VTK_TETRA || file.cells[c].size() != 4)
+      fail(path, "expected tetrahedra (VTK type 10, 4 vertices), found cell " + std::to_string(c) +
+                     " of VTK type " + std::to_string(file.types[c]) + " with " +
+                     std::to_string(file.cells[c].size()) + " vertices");
     for (int k = 0; k < 4; ++k)
-      mesh.tets(c, k) = static_cast<int>(ids->GetId(k));
+      mesh.tets(static_cast<Eigen::Index>(c), k) =
+          static_cast<int>(file.cells[c][static_cast<std::size_t>(k)]);
   }
   mesh.boundary_faces = tet_boundary_faces(mesh.vertices, mesh.tets);
   return mesh;

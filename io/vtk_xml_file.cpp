@@ -350,29 +350,50 @@ void check_vtk_xml_sizes(const std::filesystem::path& path) {
   if (parsed.root != nullptr) check_element(path, parsed.file, *parsed.root, parsed.layout);
 }
 
-VtpPolygons read_vtp_polygons(const std::filesystem::path& path) {
+namespace {
+
+/// What a .vtp or .vtu file's pieces hold: points, cells as vertex indices into all points, and
+/// (for an unstructured grid) each cell's VTK type.
+struct PieceCells {
+  std::vector<double> points;
+  std::vector<std::vector<long long>> cells;
+  std::vector<int> types;
+};
+
+/// The names one kind of VTK XML file gives its parts: PolyData with Polys, UnstructuredGrid
+/// with Cells (and their types).
+struct CellLayout {
+  const char* type;    ///< the root's type and the dataset element: PolyData, UnstructuredGrid
+  const char* count;   ///< the piece's cell count attribute: NumberOfPolys, NumberOfCells
+  const char* element; ///< the element holding offsets and connectivity: Polys, Cells
+  const char* noun;    ///< a cell in messages: polygon, cell
+  bool types;          ///< whether each cell has a VTK type (a "types" array)
+};
+
+PieceCells read_piece_cells(const std::filesystem::path& path, const CellLayout& layout) {
   ParsedFile parsed;
   parse(path, parsed);
   if (parsed.root == nullptr) fail(path, "expected a VTK XML file, found one VTK's XML parser cannot read");
   vtkXMLDataElement& root = *parsed.root;
   const char* type = root.GetAttribute("type");
-  if (type == nullptr || std::strcmp(type, "PolyData") != 0)
-    fail(path, std::string("expected a VTK XML file of type PolyData, found type ") +
+  if (type == nullptr || std::strcmp(type, layout.type) != 0)
+    fail(path, std::string("expected a VTK XML file of type ") + layout.type + ", found type " +
                    (type ? "'" + std::string(type) + "'" : std::string("none")));
   check_element(path, parsed.file, root, parsed.layout);
   parsed.parser->SetCompressor(compressor(path, root.GetAttribute("compressor")));
-  vtkXMLDataElement* poly_data = child(root, "PolyData");
-  if (poly_data == nullptr) fail(path, "expected a PolyData element, found none");
+  vtkXMLDataElement* dataset = child(root, layout.type);
+  if (dataset == nullptr) fail(path, std::string("expected a ") + layout.type + " element, found none");
+  const std::string noun = layout.noun;
 
-  VtpPolygons polygons;
+  PieceCells out;
   int piece_index = 0;
-  for (int i = 0; i < poly_data->GetNumberOfNestedElements(); ++i) {
-    vtkXMLDataElement& piece = *poly_data->GetNestedElement(i);
+  for (int i = 0; i < dataset->GetNumberOfNestedElements(); ++i) {
+    vtkXMLDataElement& piece = *dataset->GetNestedElement(i);
     if (piece.GetName() == nullptr || std::strcmp(piece.GetName(), "Piece") != 0) continue;
     const std::string where = "piece " + std::to_string(piece_index++);
     const std::size_t point_count = count_attribute(piece, "NumberOfPoints");
-    const std::size_t polygon_count = count_attribute(piece, "NumberOfPolys");
-    const std::size_t first_point = polygons.points.size() / 3;
+    const std::size_t cell_count = count_attribute(piece, layout.count);
+    const std::size_t first_point = out.points.size() / 3;
     if (point_count > 0) {
       vtkXMLDataElement* points = child(piece, "Points");
       vtkXMLDataElement* array = points ? data_array(*points, nullptr) : nullptr;
@@ -381,52 +402,73 @@ VtpPolygons read_vtp_polygons(const std::filesystem::path& path) {
       if (!array->GetScalarAttribute("NumberOfComponents", components) || components != 3)
         fail(path, where + ": expected points of 3 components, found " + std::to_string(components));
       const std::vector<double> xyz = read_values(path, parsed, *array, 3 * point_count, where + " points");
-      polygons.points.insert(polygons.points.end(), xyz.begin(), xyz.end());
+      out.points.insert(out.points.end(), xyz.begin(), xyz.end());
     }
-    if (polygon_count == 0) continue;
-    vtkXMLDataElement* polys = child(piece, "Polys");
-    vtkXMLDataElement* offsets_array = polys ? data_array(*polys, "offsets") : nullptr;
-    vtkXMLDataElement* connectivity_array = polys ? data_array(*polys, "connectivity") : nullptr;
+    if (cell_count == 0) continue;
+    vtkXMLDataElement* block = child(piece, layout.element);
+    vtkXMLDataElement* offsets_array = block ? data_array(*block, "offsets") : nullptr;
+    vtkXMLDataElement* connectivity_array = block ? data_array(*block, "connectivity") : nullptr;
     if (offsets_array == nullptr || connectivity_array == nullptr)
-      fail(path, where + ": expected the polygons' offsets and connectivity, found " +
-                     (polys ? "not both" : "no Polys element"));
+      fail(path, where + ": expected the " + noun + "s' offsets and connectivity, found " +
+                     (block ? std::string("not both") : "no " + std::string(layout.element) + " element"));
     const std::vector<double> offsets =
-        read_values(path, parsed, *offsets_array, polygon_count, where + " polygon offsets");
-    // Offsets end each polygon in the connectivity: they never fall, and the last is its length, which
+        read_values(path, parsed, *offsets_array, cell_count, where + " " + noun + " offsets");
+    // Offsets end each cell in the connectivity: they never fall, and the last is its length, which
     // the file must hold (a value takes at least a byte of ASCII, or expands a compressed byte
     // at most k_max_expansion times).
     const std::uint64_t most = parsed.layout.compressed
                                    ? k_max_expansion * parsed.layout.file_size + k_block_slack
                                    : parsed.layout.file_size;
     double previous = 0.0;
-    for (std::size_t p = 0; p < polygon_count; ++p) {
-      if (!(offsets[p] >= previous) || offsets[p] > static_cast<double>(most) ||
-          offsets[p] != std::floor(offsets[p]))
-        fail(path, where + " polygon " + std::to_string(p) + ": expected a whole offset from " +
+    for (std::size_t c = 0; c < cell_count; ++c) {
+      if (!(offsets[c] >= previous) || offsets[c] > static_cast<double>(most) ||
+          offsets[c] != std::floor(offsets[c]))
+        fail(path, where + " " + noun + " " + std::to_string(c) + ": expected a whole offset from " +
                        std::to_string(static_cast<long long>(previous)) + " and at most " +
-                       std::to_string(most) + ", found " + format_number(offsets[p]));
-      previous = offsets[p];
+                       std::to_string(most) + ", found " + format_number(offsets[c]));
+      previous = offsets[c];
     }
     const std::vector<double> connectivity =
         read_values(path, parsed, *connectivity_array, static_cast<std::size_t>(previous),
-                    where + " polygon connectivity");
+                    where + " " + noun + " connectivity");
     std::size_t begin = 0;
-    for (std::size_t p = 0; p < polygon_count; ++p) {
-      const auto end = static_cast<std::size_t>(offsets[p]);
-      std::vector<long long> polygon;
+    for (std::size_t c = 0; c < cell_count; ++c) {
+      const auto end = static_cast<std::size_t>(offsets[c]);
+      std::vector<long long> cell;
       for (std::size_t k = begin; k < end; ++k) {
         const double id = connectivity[k];
         if (!(id >= 0.0 && id < static_cast<double>(point_count)) || id != std::floor(id))
-          fail(path, where + " polygon " + std::to_string(p) +
-                         ": expected vertex indices that refer to the " + "piece's " +
+          fail(path, where + " " + noun + " " + std::to_string(c) +
+                         ": expected vertex indices that refer to the piece's " +
                          std::to_string(point_count) + " points, found " + format_number(id));
-        polygon.push_back(static_cast<long long>(first_point) + static_cast<long long>(id));
+        cell.push_back(static_cast<long long>(first_point) + static_cast<long long>(id));
       }
-      polygons.polygons.push_back(std::move(polygon));
+      out.cells.push_back(std::move(cell));
       begin = end;
     }
+    if (layout.types) {
+      vtkXMLDataElement* types_array = data_array(*block, "types");
+      if (types_array == nullptr) fail(path, where + ": expected the cells' types, found none");
+      for (const double t : read_values(path, parsed, *types_array, cell_count, where + " cell types")) {
+        if (!(t >= 0.0 && t <= 255.0) || t != std::floor(t))
+          fail(path, where + ": expected VTK cell types from 0 to 255, found " + format_number(t));
+        out.types.push_back(static_cast<int>(t));
+      }
+    }
   }
-  return polygons;
+  return out;
+}
+
+} // namespace
+
+VtpPolygons read_vtp_polygons(const std::filesystem::path& path) {
+  PieceCells read = read_piece_cells(path, {"PolyData", "NumberOfPolys", "Polys", "polygon", false});
+  return {std::move(read.points), std::move(read.cells)};
+}
+
+VtuCells read_vtu_cells(const std::filesystem::path& path) {
+  PieceCells read = read_piece_cells(path, {"UnstructuredGrid", "NumberOfCells", "Cells", "cell", true});
+  return {std::move(read.points), std::move(read.cells), std::move(read.types)};
 }
 
 } // namespace phantasm

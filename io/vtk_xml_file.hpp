@@ -32,4 +32,18 @@ struct VtpPolygons {
 /// @throws InputError naming the file, the piece or array, what was expected and what was found
 VtpPolygons read_vtp_polygons(const std::filesystem::path& path);
 
+/// The points and cells of a VTK XML UnstructuredGrid file (.vtu), every piece, with their
+/// vertex indices into `points` and each cell's VTK type.
+struct VtuCells {
+  std::vector<double> points; ///< x, y, z of each point, as the file holds them
+  std::vector<std::vector<long long>> cells;
+  std::vector<int> types; ///< VTK cell type of each cell (10: tetrahedron)
+};
+
+/// Reads the points and cells of a .vtu file as read_vtp_polygons reads a .vtp file (the same
+/// storages and checks, VTK's XML parser and decompressors, not its reader); the cell types must
+/// be whole numbers from 0 to 255. Point, cell and field data are ignored.
+/// @throws InputError naming the file, the piece or array, what was expected and what was found
+VtuCells read_vtu_cells(const std::filesystem::path& path);
+
 } // namespace phantasm

@@ -413,6 +413,57 @@ TEST(MeshFile, VtpPolygonsOfEveryStorageAreReadAndBadIndicesRefused) {
                 ": expected a VTK XML file of type PolyData, found type 'UnstructuredGrid'");
 }
 
+// Tet meshes are read by phantasm's own VTK XML reading too (not vtkXMLUnstructuredGridReader,
+// which crashes on some damaged files): ASCII and compressed appended files give the same mesh, and
+// a cell that is not a tetrahedron, an index beyond the points or missing types are named.
+TEST(MeshFile, VtuCellsAreReadWithoutVtksReaderAndBadCellsRefused) {
+  const std::string text =
+      "<?xml version=\"1.0\"?>\n"
+      "<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" "
+      "header_type=\"UInt64\">\n"
+      "<UnstructuredGrid><Piece NumberOfPoints=\"4\" NumberOfCells=\"1\">\n"
+      "<FieldData><Array type=\"String\" Name=\"note\" NumberOfTuples=\"1\" format=\"ascii\">104 105 "
+      "0</Array>"
+      "</FieldData>\n"
+      "<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">"
+      "0 0 0 1 0 0 0 1 0 0 0 1</DataArray></Points>\n"
+      "<Cells><DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">0 1 2 3</DataArray>\n"
+      "<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">4</DataArray>\n"
+      "<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">10</DataArray></Cells>\n"
+      "</Piece></UnstructuredGrid></VTKFile>\n";
+  const fs::path folder = fresh_folder("mesh-vtu-cells");
+  write_text_file(folder / "tet.vtu", text);
+  const TetMesh tet = read_vtu(folder / "tet.vtu");
+  ASSERT_EQ(tet.tets.rows(), 1);
+  EXPECT_EQ(tet.vertices.row(3), Eigen::RowVector3d(0, 0, 1));
+  EXPECT_NEAR(tet_volume(tet, 0), 1.0 / 6.0, 1e-15);
+  // The same mesh written by VTK (appended, zlib) reads back to the same numbers.
+  write_vtu(folder / "written.vtu", tet);
+  const TetMesh written = read_vtu(folder / "written.vtu");
+  EXPECT_EQ(written.vertices, tet.vertices);
+  EXPECT_EQ(written.tets, tet.tets);
+  const auto message = [&](const std::string& name, const std::string& edited) {
+    write_text_file(folder / name, edited);
+    return input_error_message([&] { read_vtu(folder / name); });
+  };
+  EXPECT_EQ(
+      message("triangle.vtu", replaced(replaced(text, ">0 1 2 3<", ">0 1 2<"), ">4<", ">3<")),
+      (folder / "triangle.vtu").string() +
+          ": expected tetrahedra (VTK type 10, 4 vertices), found cell 0 of VTK type 10 with 3 vertices");
+  EXPECT_EQ(
+      message("type.vtu", replaced(text, ">10<", ">5<")),
+      (folder / "type.vtu").string() +
+          ": expected tetrahedra (VTK type 10, 4 vertices), found cell 0 of VTK type 5 with 4 vertices");
+  EXPECT_EQ(message("index.vtu", replaced(text, ">0 1 2 3<", ">0 1 2 9<")),
+            (folder / "index.vtu").string() +
+                ": piece 0 cell 0: expected vertex indices that refer to the piece's 4 points, found 9");
+  EXPECT_EQ(message("types.vtu", replaced(text, "Name=\"types\"", "Name=\"kinds\"")),
+            (folder / "types.vtu").string() + ": piece 0: expected the cells' types, found none");
+  EXPECT_EQ(message("polydata.vtu", replaced(text, "type=\"UnstructuredGrid\"", "type=\"PolyData\"")),
+            (folder / "polydata.vtu").string() +
+                ": expected a VTK XML file of type UnstructuredGrid, found type 'PolyData'");
+}
+
 // VTK's XML reader dereferences the array it cannot make for an unknown type (a fuzzed file).
 TEST(MeshFile, VtkXmlArraysOfUnknownTypeOrFormatAreRefused) {
   const std::string text =
