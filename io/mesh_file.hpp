@@ -45,7 +45,8 @@ void write_vtp(const std::filesystem::path& path, const TriangleMesh& mesh,
 void write_vtu(const std::filesystem::path& path, const TetMesh& mesh,
                const std::vector<PointArray>& arrays = {});
 
-/// Reads a tet mesh written by write_vtu (every cell a VTK_TETRA); boundary faces are recomputed.
+/// Reads a tet mesh written by write_vtu (every cell a VTK_TETRA) through read_vtu_cells
+/// (io/vtk_xml_file.hpp), not VTK's reader; boundary faces are recomputed.
 /// @throws InputError naming the file
 TetMesh read_vtu(const std::filesystem::path& path);
 
