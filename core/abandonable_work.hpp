@@ -39,8 +39,6 @@ public:
   /// @returns 0, or the errno of a failed rename (the file is then still registered)
   int rename_to(const std::filesystem::path& final_path);
 
-  const std::filesystem::path& path() const { return m_path; }
-
 private:
   std::filesystem::path m_path;
   bool m_registered = false;

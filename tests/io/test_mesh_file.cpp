@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <limits>
 #include <sstream>
 
 using namespace phantasm;
@@ -457,6 +458,13 @@ TEST(MeshFile, VtuCellsAreReadWithoutVtksReaderAndBadCellsRefused) {
   EXPECT_EQ(message("index.vtu", replaced(text, ">0 1 2 3<", ">0 1 2 9<")),
             (folder / "index.vtu").string() +
                 ": piece 0 cell 0: expected vertex indices that refer to the piece's 4 points, found 9");
+  TetMesh not_finite = tet;
+  not_finite.vertices(1, 0) = std::numeric_limits<double>::quiet_NaN();
+  write_vtu(folder / "nan.vtu", not_finite);
+  EXPECT_NE(input_error_message([&] {
+              read_vtu(folder / "nan.vtu");
+            }).find("nan.vtu: expected finite point coordinates, found point 1 at "),
+            std::string::npos);
   EXPECT_EQ(message("types.vtu", replaced(text, "Name=\"types\"", "Name=\"kinds\"")),
             (folder / "types.vtu").string() + ": piece 0: expected the cells' types, found none");
   EXPECT_EQ(message("polydata.vtu", replaced(text, "type=\"UnstructuredGrid\"", "type=\"PolyData\"")),
