@@ -1,6 +1,6 @@
 // Building the distance structure of a fine closed surface (geometry/mesh_signed_distance.hpp):
-// the landmark search builds one per organ over its 0.5 mm tessellation (millions of triangles
-// on real anatomy), so its cost shows in every run's voxelization.
+// the landmark search builds one per organ over its tessellation within the voxel edge (millions
+// of triangles on real anatomy), so its cost shows in every run's voxelization.
 // Usage: build/release/bench/bench_geometry [--benchmark_filter=...]
 
 #include "anatomy/triangle_mesh.hpp"

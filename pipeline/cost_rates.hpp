@@ -34,8 +34,8 @@ inline constexpr double k_field_transient_bytes = 24.0;
 inline constexpr double k_image_transient_bytes = 40.0;
 /// Per organ whose shape is read from a file or an atlas, per mm^3 of the field of view: its
 /// label volume, smoothed indicator and distance samples at the label volume's resolution (about
-/// 1 mm), kept for the run (the coarse Colin head: 9 such organs, 2.6 GB).
-inline constexpr double k_file_shape_bytes_per_mm3 = 36.0;
+/// 1 mm), kept for the run (the coarse Colin head: 9 such organs, 1.3 GB at its peak).
+inline constexpr double k_file_shape_bytes_per_mm3 = 17.0;
 
 // --- Counts -------------------------------------------------------------------------------
 /// A shape known only from its file: its extent as a fraction of the field of view, and each

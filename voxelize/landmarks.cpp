@@ -17,13 +17,15 @@
 namespace phantasm {
 namespace {
 
-/// The organs' surfaces for distance queries, each tessellated once when first asked for (an
-/// organ is its own material's outer surface and the inner one of the organ it is nested in) and
-/// dropped after its last use (done() of itself and of that organ), so that few are held at once.
+/// The organs' surfaces for distance queries, each tessellated within the tolerance once when
+/// first asked for (an organ is its own material's outer surface and the inner one of the organ it
+/// is nested in) and dropped after its last use (done() of itself and of that organ), so that few are held at
+/// once.
 class OrganDistances {
 public:
-  explicit OrganDistances(const Phantom& phantom)
-      : m_phantom(phantom), m_meshes(phantom.organs.size()), m_uses(phantom.organs.size(), 1) {
+  OrganDistances(const Phantom& phantom, double tolerance_mm)
+      : m_phantom(phantom), m_tolerance_mm(tolerance_mm), m_meshes(phantom.organs.size()),
+        m_uses(phantom.organs.size(), 1) {
     for (const Organ& organ : phantom.organs)
       for (std::size_t p = 0; p < phantom.organs.size(); ++p)
         if (organ.surface && phantom.organs[p].surface && phantom.organs[p].name == organ.inside)
@@ -38,10 +40,8 @@ public:
   }
 
   const MeshDistance& of(std::size_t o) {
-    // Within 0.5 mm of the patch surface: the point's depth needs no more, and distance queries
-    // deep inside a finer tessellation visit many more triangles.
     if (!m_meshes[o])
-      m_meshes[o] = std::make_unique<MeshDistance>(m_phantom.organs[o].surface->tessellate(0.5));
+      m_meshes[o] = std::make_unique<MeshDistance>(m_phantom.organs[o].surface->tessellate(m_tolerance_mm));
     return *m_meshes[o];
   }
 
@@ -51,6 +51,7 @@ private:
   }
 
   const Phantom& m_phantom;
+  double m_tolerance_mm;
   std::vector<std::unique_ptr<MeshDistance>> m_meshes;
   std::vector<int> m_uses;
 };
@@ -89,7 +90,7 @@ private:
 
 /// How far a point is inside an organ's own material: the distance to the organ's surface or to
 /// the nearest organ nested in it, whichever is closer (mm; negative outside that material).
-/// Distances from the tessellations (within 0.5 mm of the surfaces), sides from OrganSide.
+/// Distances from the tessellations (within their tolerance of the surfaces), sides from OrganSide.
 class OwnMaterial {
 public:
   OwnMaterial(const Phantom& phantom, std::size_t o, OrganDistances& distances)
@@ -264,12 +265,13 @@ std::optional<Eigen::Vector3d> deepest_point(const Phantom& phantom, std::size_t
 } // namespace
 
 std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDeformation* deformation,
-                                      const DeformationMap* map, std::vector<std::string>* warnings,
+                                      const DeformationMap* map, double depth_tolerance_mm,
+                                      std::vector<std::string>* warnings,
                                       const std::function<void()>& organ_done) {
   static const char* const k_directions[6] = {"left",     "right",    "posterior",
                                               "anterior", "inferior", "superior"};
   std::vector<Landmark> out;
-  OrganDistances distances(reference);
+  OrganDistances distances(reference, depth_tolerance_mm);
   for (std::size_t o = 0; o < reference.organs.size(); ++o) {
     const Organ& organ = reference.organs[o];
     if (!organ.surface) continue;

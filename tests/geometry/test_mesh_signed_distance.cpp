@@ -79,6 +79,14 @@ Eigen::Vector3d random_direction(std::mt19937& random) {
   return Eigen::Vector3d(normal(random), normal(random), normal(random)).normalized();
 }
 
+/// The mesh for distance queries, searched through its tree or by scanning every triangle.
+SignedDistanceMesh distance_mesh(const Mesh& m, bool with_tree) {
+  SignedDistanceMesh mesh(m.faces);
+  mesh.update(m.vertices);
+  if (with_tree) mesh.build_search_tree();
+  return mesh;
+}
+
 } // namespace
 
 TEST(MeshSignedDistance, SphereMeshMatchesTheSphereWithinTheSagittaWithTheRightSign) {
@@ -87,11 +95,7 @@ TEST(MeshSignedDistance, SphereMeshMatchesTheSphereWithinTheSagittaWithTheRightS
   const double s = sagitta(sphere, r);
   ASSERT_GT(s, 0.0);
   ASSERT_LT(s, 0.02 * r);
-  SignedDistanceMesh scanned(sphere.faces);
-  scanned.update(sphere.vertices);
-  SignedDistanceMesh tree(sphere.faces);
-  tree.update(sphere.vertices);
-  tree.build_search_tree();
+  const SignedDistanceMesh scanned = distance_mesh(sphere, false), tree = distance_mesh(sphere, true);
   std::mt19937 random(3);
   std::uniform_real_distribution<double> radius(0.0, 2.5 * r);
   int inside = 0, outside = 0;
@@ -197,4 +201,34 @@ TEST(MeshSignedDistance, UpdateFollowsMovedPositionsAndSurfacesOfALargerModel) {
   EXPECT_GT(mesh.signed_distance(Eigen::Vector3d::Zero()), 3.0);
   EXPECT_FALSE(mesh.in_bounds(Eigen::Vector3d::Zero()));
   EXPECT_LT(mesh.signed_distance(Eigen::Vector3d(5, 0, 0)), -0.5);
+}
+
+TEST(MeshSignedDistance, ALargeMeshIsSearchedLikeAScanAndSignedByItsPseudonormals) {
+  // 81920 triangles, a deep search tree: the organs' tessellations that landmarks search have
+  // millions.
+  const double r = 30.0;
+  const Mesh sphere = icosphere(6, r);
+  ASSERT_GT(sphere.faces.rows(), 80000);
+  const SignedDistanceMesh scanned = distance_mesh(sphere, false), tree = distance_mesh(sphere, true);
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> radius(0.0, 2.0 * r);
+  for (int i = 0; i < 200; ++i) {
+    const Eigen::Vector3d x = radius(random) * random_direction(random);
+    const MeshClosestPoint expected = scanned.closest(x), found = tree.closest(x);
+    EXPECT_EQ(found.triangle, expected.triangle) << x.transpose();
+    EXPECT_EQ(found.distance_squared, expected.distance_squared) << x.transpose();
+    EXPECT_EQ(tree.signed_distance(x), scanned.signed_distance(x)) << x.transpose();
+  }
+  // Just off vertices and edge midpoints, where the sign comes from the vertices' and edges'
+  // pseudonormals: every edge and vertex of the large mesh is connected to its neighbours.
+  for (Eigen::Index f = 0; f < sphere.faces.rows(); f += 97) {
+    const Eigen::Vector3d a = sphere.vertices.row(sphere.faces(f, 0)).transpose(),
+                          b = sphere.vertices.row(sphere.faces(f, 1)).transpose();
+    for (const Eigen::Vector3d& p : {a, Eigen::Vector3d((a + b) / 2)}) {
+      for (double step : {-1e-6, 1e-6}) {
+        const Eigen::Vector3d x = p + step * p.normalized();
+        EXPECT_EQ(tree.signed_distance(x) < 0.0, step < 0.0) << x.transpose();
+      }
+    }
+  }
 }

@@ -79,7 +79,7 @@ TEST(OrganLandmarks, DeepestPointStaysInItsOrganWhereTheTessellationFolds) {
   phantom.organs.push_back(organ("shell", "", sphere(20.0, 55.0)));
   phantom.organs.push_back(organ("core", "shell", sphere(16.0)));
   std::vector<std::string> warnings;
-  const std::vector<Landmark> landmarks = organ_landmarks(phantom, nullptr, nullptr, &warnings);
+  const std::vector<Landmark> landmarks = organ_landmarks(phantom, nullptr, nullptr, 0.5, &warnings);
   EXPECT_TRUE(warnings.empty());
   ASSERT_EQ(landmarks.size(), 14u);
   ASSERT_EQ(landmarks[0].name, "shell_deepest");
@@ -98,7 +98,7 @@ TEST(OrganLandmarks, AnOrganFilledByItsNestedOrganHasNoDeepestPointAndAWarning) 
   phantom.organs.push_back(organ("outer", "", sphere(20.0)));
   phantom.organs.push_back(organ("filling", "outer", sphere(20.0)));
   std::vector<std::string> warnings;
-  const std::vector<Landmark> landmarks = organ_landmarks(phantom, nullptr, nullptr, &warnings);
+  const std::vector<Landmark> landmarks = organ_landmarks(phantom, nullptr, nullptr, 0.5, &warnings);
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_NE(warnings[0].find("outer_deepest"), std::string::npos) << warnings[0];
   ASSERT_EQ(landmarks.size(), 13u);
@@ -117,9 +117,9 @@ TEST(OrganLandmarks, AreTheSameOnOneAndTwoThreads) {
   phantom.organs.push_back(organ("core", "shell", sphere(16.0)));
   const int threads = omp_get_max_threads();
   omp_set_num_threads(1);
-  const std::vector<Landmark> one = organ_landmarks(phantom, nullptr, nullptr, nullptr);
+  const std::vector<Landmark> one = organ_landmarks(phantom, nullptr, nullptr, 0.5, nullptr);
   omp_set_num_threads(2);
-  const std::vector<Landmark> two = organ_landmarks(phantom, nullptr, nullptr, nullptr);
+  const std::vector<Landmark> two = organ_landmarks(phantom, nullptr, nullptr, 0.5, nullptr);
   omp_set_num_threads(threads);
   ASSERT_EQ(one.size(), two.size());
   for (std::size_t l = 0; l < one.size(); ++l) {
