@@ -18,9 +18,9 @@ namespace phantasm {
 namespace {
 
 /// The organs' surfaces for distance queries, each tessellated within the tolerance once when
-/// first asked for (an organ is its own material's outer surface and the inner one of the organ it
-/// is nested in) and dropped after its last use (done() of itself and of that organ), so that few are held at
-/// once.
+/// first asked for (an organ is its own material's outer surface and the inner one of the organ
+/// it is nested in) and dropped after its last use (done() of itself and of that organ), so that
+/// few are held at once.
 class OrganDistances {
 public:
   OrganDistances(const Phantom& phantom, double tolerance_mm)

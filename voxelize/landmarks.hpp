@@ -31,7 +31,7 @@ namespace phantasm {
 /// @param warnings receives a line per landmark left out (nullptr: none kept)
 /// @param organ_done called after each organ with a surface (a progress step; empty: none)
 std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDeformation* deformation,
-                                      const DeformationMap* map, double depth_tolerance_mm = 0.5,
+                                      const DeformationMap* map, double depth_tolerance_mm,
                                       std::vector<std::string>* warnings = nullptr,
                                       const std::function<void()>& organ_done = {});
 

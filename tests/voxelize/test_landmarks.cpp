@@ -136,7 +136,7 @@ TEST(OrganLandmarks, DeepestPointsLieInTheirOrgansOwnMaterialInBothStates) {
   const PhantomDeformation d = deform_phantom(scene.deformation, scene.organs, phantom, report, quiet);
   const Phantom moved = deformed_phantom(phantom, d);
   const DeformationMap map(d.bodies, 4.0);
-  const std::vector<Landmark> landmarks = organ_landmarks(phantom, &d, &map);
+  const std::vector<Landmark> landmarks = organ_landmarks(phantom, &d, &map, 0.5);
   ASSERT_EQ(landmarks.size(), 7u * phantom.organs.size());
   double moved_most = 0.0;
   for (const Landmark& l : landmarks) {
