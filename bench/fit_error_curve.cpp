@@ -4,7 +4,8 @@
 // sample on the extracted surface: a torus (R 30, r 10 mm, genus 1), a folded spheroid (spiral
 // folds rays from its centre cross up to three times) and a horseshoe (a bent capsule).
 // Plain is the base mesh as it comes (vertices on the target), fitted the patch surface.
-// Usage: fit_error_curve [shape]   (only that shape's rows)
+// Usage: fit_error_curve [shape [quick]]   (only that shape's rows; quick: without the largest base
+// mesh of each case, for the test of the plotting command)
 
 #include "anatomy/patch_fit.hpp"
 
@@ -54,7 +55,9 @@ int main(int argc, char** argv) {
       "fitted_volume_error,fit_seconds\n");
   for (const Case& c : cases) {
     if (argc > 1 && std::strcmp(argv[1], c.name) != 0) continue;
-    for (int triangles : c.sizes) {
+    const bool quick = argc > 2 && std::strcmp(argv[2], "quick") == 0;
+    for (std::size_t size = 0; size + (quick ? 1 : 0) < c.sizes.size(); ++size) {
+      const int triangles = c.sizes[size];
       PatchFitOptions options;
       options.base_triangles = triangles;
       options.base_mesh = c.source;

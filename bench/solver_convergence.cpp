@@ -5,8 +5,9 @@
 // p_0 = s (the inertial target with the prescribed ends), p* from Newton run to a gradient
 // below 1e-9 N. Prints a Markdown table (the README's); with a second argument, also writes
 // every iteration (solver, iteration, seconds, energy error, position error) as CSV there for
-// scripts/accuracy_plots.py.
-// Usage: solver_convergence [threads] [traces.csv]
+// scripts/accuracy_plots.py. With "quick" as a third argument each iterative solver stops after a
+// tenth of its iterations (the plots' shape near the start, for the test of the plotting command).
+// Usage: solver_convergence [threads] [traces.csv] [quick]
 
 #include "sim/local_global.hpp"
 #include "sim/newton.hpp"
@@ -15,6 +16,7 @@
 
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -44,6 +46,7 @@ std::string cell(const Reached& r) {
 int main(int argc, char** argv) {
   using namespace phantasm;
   const int threads = argc > 1 ? std::atoi(argv[1]) : 2;
+  const int iteration_divisor = argc > 3 && std::strcmp(argv[3], "quick") == 0 ? 10 : 1;
   const TwistingBarStep bar = twisting_bar_step({});
   Eigen::MatrixX3d reference = bar.start_m;
   StopCriteria tight;
@@ -83,7 +86,7 @@ int main(int argc, char** argv) {
     LocalGlobalSolver solver(bar.model, bar.inertia.weight, threads);
     Eigen::MatrixX3d p = bar.start_m;
     StopCriteria stop;
-    stop.max_iterations = 5000;
+    stop.max_iterations = 5000 / iteration_divisor;
     stop.relative_energy_decrease = 0.0;
     stop.position_change_m = 0.0;
     std::vector<double> position_errors;
@@ -99,7 +102,7 @@ int main(int argc, char** argv) {
     LocalGlobalSolver solver(bar.model, bar.inertia.weight, threads);
     Eigen::MatrixX3d p = bar.start_m;
     StopCriteria stop;
-    stop.max_iterations = 3000;
+    stop.max_iterations = 3000 / iteration_divisor;
     stop.relative_energy_decrease = 0.0;
     stop.position_change_m = 0.0;
     std::vector<double> position_errors;
@@ -117,7 +120,7 @@ int main(int argc, char** argv) {
     Row row{"XPBD (1 thread, Gauss-Seidel sweeps)", {}, {}};
     Eigen::MatrixX3d p = bar.start_m;
     StopCriteria stop;
-    stop.max_iterations = 1500;
+    stop.max_iterations = 1500 / iteration_divisor;
     stop.relative_energy_decrease = 0.0;
     stop.position_change_m = 0.0;
     std::vector<double> position_errors;

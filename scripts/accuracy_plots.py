@@ -5,7 +5,9 @@ Fig. 5 and 6), tissue volume error against voxel size and voxelization time, and
 against base mesh size. Runs the benchmark programs of a Release build, keeps their CSV next to
 the plots, and prints what it wrote.
 
-Usage: scripts/accuracy_plots.py -o OUT [--build build/release] [--threads 2] [--skip-voxel]
+Usage: scripts/accuracy_plots.py -o OUT [--build build/release] [--threads 2] [--skip-voxel] [--quick]
+(--quick: a tenth of the solvers' iterations and the fit without its largest base mesh, for a
+test of the command; the README's plots are made without it)
 """
 
 import argparse
@@ -111,14 +113,17 @@ def main():
     parser.add_argument("--build", default=os.path.join(HERE, "..", "build", "release"))
     parser.add_argument("--threads", default="2")
     parser.add_argument("--skip-voxel", action="store_true", help="leave out the voxel-size sweep (slowest)")
+    parser.add_argument("--quick", action="store_true",
+                        help="a tenth of the solvers' iterations, the fit without its largest base mesh")
     args = parser.parse_args()
     os.makedirs(args.output, exist_ok=True)
     bench = os.path.join(args.build, "bench")
     traces = os.path.join(args.output, "solver_traces.csv")
-    run_to_csv([os.path.join(bench, "solver_convergence"), args.threads, traces], None)
+    quick = ["quick"] if args.quick else []
+    run_to_csv([os.path.join(bench, "solver_convergence"), args.threads, traces] + quick, None)
     solver_plots(read_csv(traces), args.output)
     fit = os.path.join(args.output, "fit_error.csv")
-    run_to_csv([os.path.join(bench, "fit_error_curve"), "ellipsoid"], fit)
+    run_to_csv([os.path.join(bench, "fit_error_curve"), "ellipsoid"] + quick, fit)
     fit_plot(read_csv(fit), args.output)
     if not args.skip_voxel:
         voxel = os.path.join(args.output, "volume_error.csv")
