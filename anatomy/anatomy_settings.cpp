@@ -41,6 +41,10 @@ std::optional<WorldBox> analytic_shape_bounds(const ShapeSettings& shape) {
   return WorldBox{shape.center_mm - half_extent, shape.center_mm + half_extent};
 }
 
+const char* to_string(TetInterfaces interfaces) {
+  return interfaces == TetInterfaces::materials ? "materials" : "organs";
+}
+
 const char* to_string(ShapeKind kind) {
   switch (kind) {
   case ShapeKind::ellipsoid: return "ellipsoid";

@@ -16,6 +16,12 @@ namespace phantasm {
 
 enum class ShapeKind { ellipsoid, superquadric, box, sheet, mesh, label_volume };
 
+/// Which surfaces of the organs nested in a simulated body its conforming tet mesh follows with
+/// faces (anatomy.tet_interfaces): every nested organ's, or only those where the material changes
+/// (an organ of its container's material is meshed with the container; its surface moves with the
+/// tets around it, as every surface does).
+enum class TetInterfaces { organs, materials };
+
 /// The target shape of an organ's surface.
 struct ShapeSettings {
   ShapeKind kind = ShapeKind::ellipsoid;
@@ -58,6 +64,10 @@ struct AnatomySettings {
   /// the organs nested in it (the deformation's speed/accuracy knob); 0 (unset): the body is
   /// solved on its own organ's mesh, each tet with the material of the organ holding its centroid
   double tet_size_mm = 0.0;
+  /// upper bound of the distance between those meshes' interface triangles and the organs'
+  /// surfaces, mm; 0 (unset): a tenth of tet_size_mm
+  double tet_facet_distance_mm = 0.0;
+  TetInterfaces tet_interfaces = TetInterfaces::organs;
   std::vector<OrganSettings> organs;
   std::uint64_t seed = 0; ///< the scene's seed (size variation, tet meshing), set by the scene
 };
@@ -78,5 +88,6 @@ struct WorldBox {
 std::optional<WorldBox> analytic_shape_bounds(const ShapeSettings& shape);
 
 const char* to_string(ShapeKind kind);
+const char* to_string(TetInterfaces interfaces);
 
 } // namespace phantasm

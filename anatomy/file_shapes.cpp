@@ -139,6 +139,7 @@ public:
     }
   }
   bool star_shaped() const override { return m_star_shaped; }
+  bool smoothed_indicator() const override { return true; }
 
   double value(const Eigen::Vector3d& x) const override {
     const Eigen::Vector3d ijk = m_voxel_from_world * (x - m_origin) - m_low.cast<double>();

@@ -27,6 +27,9 @@ public:
   /// True when every ray from center() crosses the surface once (ellipsoids, superquadrics,
   /// boxes): only then may ray_from_center() stand for the surface.
   virtual bool star_shaped() const { return false; }
+  /// True when value(x) is a smoothed indicator of the solid minus 1/2 (a label volume's shape):
+  /// such values may be compared across shapes (NestedShapes::innermost).
+  virtual bool smoothed_indicator() const { return false; }
 
   /// The surface point on the ray center() + t d (d unit, t > 0), by bisection, to 1e-12 mm.
   Eigen::Vector3d ray_from_center(const Eigen::Vector3d& direction) const;

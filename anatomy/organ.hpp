@@ -2,6 +2,7 @@
 // from files, and Phantom, the list of organs every later stage reads.
 #pragma once
 
+#include "anatomy/anatomy_settings.hpp"
 #include "anatomy/implicit_shape.hpp"
 #include "anatomy/patch_fit.hpp"
 #include "anatomy/patch_surface.hpp"
@@ -55,7 +56,9 @@ struct Phantom {
   /// anatomy.tet_size_mm: the element size of the tet meshes of bodies that hold nested organs,
   /// made when the deformation stage knows its bodies (tet_mesh.hpp, mesh_nested_solid)
   double tet_size_mm = 0.0;
-  std::uint64_t seed = 0; ///< the scene's seed, for those meshes
+  double tet_facet_distance_mm = 0.0; ///< anatomy.tet_facet_distance_mm (0: a tenth of tet_size_mm)
+  TetInterfaces tet_interfaces = TetInterfaces::organs; ///< anatomy.tet_interfaces
+  std::uint64_t seed = 0;                               ///< the scene's seed, for those meshes
 
   const Organ* find(const std::string& name) const;
 };

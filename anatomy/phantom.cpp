@@ -361,6 +361,8 @@ Phantom build_phantom(const AnatomySettings& anatomy, const std::map<std::string
   const VariedTargets varied = varied_targets(anatomy, files, reporter);
   Phantom phantom;
   phantom.tet_size_mm = anatomy.tet_size_mm;
+  phantom.tet_facet_distance_mm = anatomy.tet_facet_distance_mm;
+  phantom.tet_interfaces = anatomy.tet_interfaces;
   phantom.seed = anatomy.seed;
   ProgressBar progress(reporter, "anatomy", settings.size());
   for (std::size_t o = 0; o < settings.size(); ++o) {
@@ -481,6 +483,8 @@ Phantom phantom_from_geometry(const AnatomySettings& anatomy, const std::map<std
   const VariedTargets varied = varied_targets(anatomy, files, reporter);
   Phantom phantom;
   phantom.tet_size_mm = anatomy.tet_size_mm;
+  phantom.tet_facet_distance_mm = anatomy.tet_facet_distance_mm;
+  phantom.tet_interfaces = anatomy.tet_interfaces;
   phantom.seed = anatomy.seed;
   for (std::size_t o = 0; o < settings.size(); ++o) {
     Organ organ = organ_without_geometry(settings[o], varied.targets[o]);

@@ -23,28 +23,54 @@ TetMeshCriteria criteria_for_boundary_size(double surface_area_mm2, int boundary
   return criteria;
 }
 
-TetMeshCriteria criteria_for_tet_size(double tet_size_mm) {
+TetMeshCriteria criteria_for_tet_size(double tet_size_mm, double facet_distance_mm) {
   TetMeshCriteria criteria;
   criteria.cell_size_mm = tet_size_mm;
   // Interfaces between tissues are meshed as surfaces: their triangles as large as the tets, and
   // close enough to the surface (a tenth of the size, as for the organs' own meshes) that a layer
-  // thinner than a tet keeps its thickness.
+  // thinner than a tet keeps its thickness. A folded surface (a cortex) is followed within the
+  // scene's distance instead when it gives one: within a tenth of 5 mm its every sulcus is meshed.
   criteria.facet_size_mm = tet_size_mm;
-  criteria.facet_distance_mm = 0.1 * tet_size_mm;
+  criteria.facet_distance_mm = facet_distance_mm > 0.0 ? facet_distance_mm : 0.1 * tet_size_mm;
   return criteria;
 }
 
 int NestedShapes::innermost(const Eigen::Vector3d& x) const {
-  if (shapes.empty() || shapes[0]->value(x) <= 0.0) return -1;
+  double value = shapes.empty() ? 0.0 : shapes[0]->value(x);
+  if (value <= 0.0) return -1;
   int current = 0;
   for (bool deeper = true; deeper;) {
     deeper = false;
-    for (std::size_t k = 1; k < shapes.size(); ++k) {
-      if (parent[k] == current && shapes[k]->value(x) > 0.0) {
+    // Smoothed indicators: the share of the current shape left to its own region, and the child
+    // of the largest indicator.
+    double own_share = value + 0.5;
+    bool indicators = shapes[static_cast<std::size_t>(current)]->smoothed_indicator();
+    int best = -1;
+    double best_value = 0.0;
+    for (std::size_t k = 1; k < shapes.size() && !deeper; ++k) {
+      if (parent[k] != current) continue;
+      const double v = shapes[k]->value(x);
+      if (v > 0.0) {
         current = static_cast<int>(k);
+        value = v;
         deeper = true;
-        break;
       }
+      indicators = indicators && shapes[k]->smoothed_indicator();
+      own_share -= v + 0.5;
+      if (best < 0 || v > best_value) {
+        best = static_cast<int>(k);
+        best_value = v;
+      }
+    }
+    // Outside every child. Smoothed labels that touch leave a sliver between them where each
+    // child's indicator is just under 1/2 while their container's own share is near 0: the
+    // point belongs to the child that holds most of it (the labels' argmax), so that the
+    // children share a face instead of a layer of the container as thin as the mesher's
+    // tolerance (which it would refine without end).
+    if (!deeper && indicators && best >= 0 && best_value + 0.5 > own_share) {
+      current = best;
+      value = best_value;
+      deeper = true;
     }
   }
   return current;
@@ -120,6 +146,15 @@ double min_dihedral_angle_deg(const TetMesh& mesh) {
       smallest = std::min(smallest, angle);
   }
   return smallest;
+}
+
+Eigen::Index tets_with_dihedral_below(const TetMesh& mesh, double bound_deg) {
+  Eigen::Index count = 0;
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    const std::array<double, 6> angles = tet_dihedral_angles_deg(mesh, t);
+    count += *std::min_element(angles.begin(), angles.end()) < bound_deg;
+  }
+  return count;
 }
 
 double mean_edge_length(const TetMesh& mesh) {

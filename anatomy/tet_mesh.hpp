@@ -30,7 +30,11 @@ struct NestedShapes {
   std::vector<const ImplicitShape*> shapes;
   std::vector<int> parent;
 
-  /// The innermost shape holding x (RAS mm), -1 outside shapes[0]: the shapes' own inside tests.
+  /// The innermost shape holding x (RAS mm), -1 outside shapes[0]: the shapes' own inside tests,
+  /// except that where a point of a shape lies outside all its children and every one of them is
+  /// a smoothed indicator (label volumes), it goes to the child of the largest indicator when
+  /// that exceeds the shape's own share (its indicator less its children's): the labels' argmax,
+  /// so that touching labels share an interface.
   int innermost(const Eigen::Vector3d& x) const;
 };
 
@@ -49,8 +53,9 @@ struct TetMeshCriteria {
 TetMeshCriteria criteria_for_boundary_size(double surface_area_mm2, int boundary_triangles);
 
 /// Criteria of element size `tet_size_mm` (the scene's anatomy.tet_size_mm): tet circumradii and
-/// surface Delaunay ball radii at most tet_size_mm, surface approximation error at most a tenth of it.
-TetMeshCriteria criteria_for_tet_size(double tet_size_mm);
+/// surface Delaunay ball radii at most tet_size_mm, surface approximation error at most
+/// facet_distance_mm (anatomy.tet_facet_distance_mm), or a tenth of tet_size_mm when that is 0.
+TetMeshCriteria criteria_for_tet_size(double tet_size_mm, double facet_distance_mm = 0.0);
 
 /// Tetrahedralizes the inside of an implicit shape with CGAL Mesh_3 (sequential, seeded, so the
 /// same seed gives the same mesh). Every tet is oriented positively; the boundary triangles are
@@ -80,6 +85,8 @@ double tet_volume(const TetMesh& mesh, Eigen::Index t);
 std::array<double, 6> tet_dihedral_angles_deg(const TetMesh& mesh, Eigen::Index t);
 /// Smallest dihedral angle over all tets, degrees.
 double min_dihedral_angle_deg(const TetMesh& mesh);
+/// How many tets have a dihedral angle below bound_deg (slivers, for a bound of about 10 degrees).
+Eigen::Index tets_with_dihedral_below(const TetMesh& mesh, double bound_deg);
 /// Mean length of the tets' edges (each edge once), mm.
 double mean_edge_length(const TetMesh& mesh);
 

@@ -236,12 +236,18 @@ TetMesh mesh_nested_solid(const NestedShapes& nested, const TetMeshCriteria& c, 
   CGAL::Random random(seed);
   const Domain domain(label, Kernel::Sphere_3(Point(centre.x(), centre.y(), centre.z()), radius * radius),
                       1e-6, CGAL::Null_subdomain_index(), &random);
+  // No facet may join two surfaces (across a thin layer): each facet's vertices lie on the one
+  // surface it approximates. Labels that touch (smoothed indicators, NestedShapes::innermost)
+  // meet three at a time along curves, where no facet can keep that rule without the curves
+  // meshed first as features (which Mesh_3 cannot find on an implicit domain): refinement there
+  // would not end. Such shapes only ask that a facet's vertices lie on a surface.
+  const bool touching = std::all_of(nested.shapes.begin(), nested.shapes.end(),
+                                    [](const ImplicitShape* shape) { return shape->smoothed_indicator(); });
   const Criteria criteria(p::facet_angle = c.facet_angle_deg, p::facet_size = c.facet_size_mm,
                           p::facet_distance = c.facet_distance_mm,
                           p::cell_radius_edge_ratio = c.cell_radius_edge_ratio, p::cell_size = c.cell_size_mm,
-                          // No facet may join two surfaces (across a thin layer): each facet's
-                          // vertices lie on the one surface it approximates.
-                          p::facet_topology = CGAL::FACET_VERTICES_ON_SAME_SURFACE_PATCH);
+                          p::facet_topology = touching ? CGAL::FACET_VERTICES_ON_SURFACE
+                                                       : CGAL::FACET_VERTICES_ON_SAME_SURFACE_PATCH);
   CGAL::get_default_random() = CGAL::Random(seed);
   // Mesh_3's own initial points lie on whichever surface random rays from the centre cross first,
   // so a small inner shape could be missed: start instead from points on every shape's surface,

@@ -56,8 +56,9 @@ std::string bytes_hash(const Eigen::PlainObjectBase<Derived>& m) {
 std::string settings_text(const AnatomySettings& a) {
   std::ostringstream out;
   out << "variation " << exact(a.variation) << "\nbase_mesh_triangles " << a.base_mesh_triangles
-      << "\ntet_size_mm " << exact(a.tet_size_mm) << "\nseed " << a.seed << "\norgans " << a.organs.size()
-      << "\n";
+      << "\ntet_size_mm " << exact(a.tet_size_mm) << "\ntet_facet_distance_mm "
+      << exact(a.tet_facet_distance_mm) << "\ntet_interfaces " << to_string(a.tet_interfaces) << "\nseed "
+      << a.seed << "\norgans " << a.organs.size() << "\n";
   for (const OrganSettings& o : a.organs) {
     const ShapeSettings& s = o.shape;
     out << "organ " << o.name << "\n tissue " << o.tissue << "\n material " << o.material << "\n inside "

@@ -147,6 +147,17 @@ void parse_anatomy(CheckedMap& map, const std::filesystem::path& scene_folder, A
   map.number("variation", anatomy.variation, between(0.0, 0.3, "relative size"));
   map.integer("base_mesh_triangles", anatomy.base_mesh_triangles, 20, 200000);
   map.number("tet_size_mm", anatomy.tet_size_mm, between(0.5, 500.0, "mm"));
+  map.number("tet_facet_distance_mm", anatomy.tet_facet_distance_mm, between(0.05, 100.0, "mm"));
+  std::string interfaces;
+  if (map.choice("tet_interfaces", interfaces, {"organs", "materials"}))
+    anatomy.tet_interfaces = interfaces == "materials" ? TetInterfaces::materials : TetInterfaces::organs;
+  for (const char* key : {"tet_facet_distance_mm", "tet_interfaces"}) {
+    if (map.has(key) && !(anatomy.tet_size_mm > 0.0)) {
+      map.context().problem(map.get(key), map.child_path(key),
+                            std::string(key) +
+                                " shapes the tet meshes of anatomy.tet_size_mm, which is not set");
+    }
+  }
   const YAML::Node organs = map.get("organs");
   const std::string path = map.child_path("organs");
   if (!organs.IsDefined()) {

@@ -143,6 +143,8 @@ nlohmann::json scene_settings_json(const Scene& scene) {
        {{"variation", scene.anatomy.variation},
         {"base_mesh_triangles", scene.anatomy.base_mesh_triangles},
         {"tet_size_mm", scene.anatomy.tet_size_mm},
+        {"tet_facet_distance_mm", scene.anatomy.tet_facet_distance_mm},
+        {"tet_interfaces", to_string(scene.anatomy.tet_interfaces)},
         {"organs", organs}}},
       {"deformation",
        {{"mode", to_string(d.mode)},

@@ -82,10 +82,13 @@ std::uint32_t body_mesh_seed(std::uint64_t scene_seed, std::size_t b) {
 /// The tet mesh body b is solved on, and for each of its tets the organ whose material it takes.
 /// Alone, the organ's own mesh; with organs nested in it (closed shapes carried by b), one mesh of
 /// all of them at anatomy.tet_size_mm whose tets each lie in one organ's own region (the innermost
-/// holding it), interfaces meshed as faces [docs/deformation.md, What is simulated].
-std::shared_ptr<const TetMesh> body_mesh(const OrganTable& organs, const Phantom& phantom,
-                                         const std::vector<int>& body_of, std::size_t b,
-                                         std::vector<std::size_t>& organ_of_tet, StageReport& report) {
+/// holding it), interfaces meshed as faces [docs/deformation.md, What is simulated]. With
+/// anatomy.tet_interfaces: materials, a nested organ of the same material as the meshed organ
+/// holding it is no region of its own: its tets are its holder's.
+std::shared_ptr<const TetMesh> body_mesh(const DeformationSettings& deformation, const OrganTable& organs,
+                                         const Phantom& phantom, const std::vector<int>& body_of,
+                                         std::size_t b, std::vector<std::size_t>& organ_of_tet,
+                                         StageReport& report) {
   const Organ& organ = phantom.organs[b];
   // Nested organs ordered by depth, so that each one's container comes before it.
   std::vector<std::size_t> carried{b};
@@ -110,30 +113,50 @@ std::shared_ptr<const TetMesh> body_mesh(const OrganTable& organs, const Phantom
     }
     return std::shared_ptr<const TetMesh>(std::shared_ptr<const TetMesh>(), &mesh);
   }
-  const TetMeshCriteria criteria = criteria_for_tet_size(phantom.tet_size_mm);
+  const TetMeshCriteria criteria = criteria_for_tet_size(phantom.tet_size_mm, phantom.tet_facet_distance_mm);
+  // The regions of the mesh: carried organs in depth order, each with the region holding it. With
+  // interfaces by material an organ of its holder's material is left out (merged into it).
+  std::vector<std::size_t> regions;
+  std::vector<std::string> merged;
   NestedShapes nested;
   for (std::size_t k = 0; k < carried.size(); ++k) {
-    nested.shapes.push_back(phantom.organs[carried[k]].target.get());
     int parent = -1;
     for (int j = organs[carried[k]].parent; k > 0 && parent < 0 && j >= 0;
          j = organs[static_cast<std::size_t>(j)].parent) {
-      const auto found = std::find(carried.begin(), carried.end(), static_cast<std::size_t>(j));
-      if (found != carried.end()) parent = static_cast<int>(found - carried.begin());
+      const auto found = std::find(regions.begin(), regions.end(), static_cast<std::size_t>(j));
+      if (found != regions.end()) parent = static_cast<int>(found - regions.begin());
     }
+    if (k > 0 && parent < 0) parent = 0;
+    if (k > 0 && phantom.tet_interfaces == TetInterfaces::materials &&
+        deformation.organs[carried[k]].material ==
+            deformation.organs[regions[static_cast<std::size_t>(parent)]].material) {
+      merged.push_back(organs[carried[k]].name);
+      continue;
+    }
+    regions.push_back(carried[k]);
+    nested.shapes.push_back(phantom.organs[carried[k]].target.get());
     nested.parent.push_back(parent);
   }
-  progress_detail(organs[b].name + ": one tet mesh of it and the " + std::to_string(carried.size() - 1) +
+  progress_detail(organs[b].name + ": one tet mesh of it and the " + std::to_string(regions.size() - 1) +
                   " organs nested in it (CGAL Mesh_3, tet size " + format_number(phantom.tet_size_mm) +
                   " mm)");
   auto mesh = std::make_shared<TetMesh>(mesh_nested_solid(nested, criteria, body_mesh_seed(phantom.seed, b)));
   organ_of_tet.clear();
   for (Eigen::Index t = 0; t < mesh->tets.rows(); ++t)
-    organ_of_tet.push_back(carried[static_cast<std::size_t>(mesh->subdomains[t])]);
+    organ_of_tet.push_back(regions[static_cast<std::size_t>(mesh->subdomains[t])]);
   std::ostringstream line;
-  line << organs[b].name << ": one tet mesh of it and the " << carried.size() - 1
-       << " organs nested in it (tet size " << format_number(phantom.tet_size_mm) << " mm, mean edge "
+  line << organs[b].name << ": one tet mesh of it and the " << regions.size() - 1
+       << " organs nested in it (tet size " << format_number(phantom.tet_size_mm) << " mm, interfaces within "
+       << format_number(criteria.facet_distance_mm) << " mm, mean edge "
        << format_number(mean_edge_length(*mesh)) << " mm, min dihedral "
-       << format_number(min_dihedral_angle_deg(*mesh)) << " deg; tissue interfaces are faces)";
+       << format_number(min_dihedral_angle_deg(*mesh)) << " deg, " << tets_with_dihedral_below(*mesh, 10.0)
+       << " tets under 10 deg; tissue interfaces are faces";
+  if (!merged.empty()) {
+    line << "; meshed with the organ holding them, of the same material (anatomy.tet_interfaces: materials):";
+    for (const std::string& name : merged)
+      line << " " << name;
+  }
+  line << ")";
   report.modelled.push_back(line.str());
   return mesh;
 }
@@ -146,7 +169,8 @@ Body add_solid_body(const DeformationSettings& deformation, const OrganTable& or
   const std::vector<int>& body_of = assignment.body_of;
   ElasticModel& model = built.model;
   std::vector<std::size_t> organ_of_tet;
-  std::shared_ptr<const TetMesh> shared = body_mesh(organs, phantom, body_of, b, organ_of_tet, report);
+  std::shared_ptr<const TetMesh> shared =
+      body_mesh(deformation, organs, phantom, body_of, b, organ_of_tet, report);
   const TetMesh& mesh = *shared;
   std::vector<TetMaterial> materials;
   std::map<std::string, int> tets_per_organ;

@@ -1,12 +1,19 @@
 // Tet meshes of nested shapes (mesh_nested_solid): tissue per tet, interfaces as faces, subdomain
 // volumes against the analytic ones, repeatability and quality.
+#include "anatomy/phantom.hpp"
 #include "anatomy/tet_mesh.hpp"
+#include "core/grid.hpp"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <map>
 #include <memory>
+#include <vector>
 
 using namespace phantasm;
 
@@ -136,6 +143,93 @@ TEST(NestedTetMesh, NoDihedralAngleIsBelowTheQualityBound) {
     const TetMesh mesh = mesh_nested_solid(spheres.nested, criteria_for_tet_size(size), 9);
     EXPECT_GE(min_dihedral_angle_deg(mesh), 10.0) << "tet size " << size;
   }
+}
+
+/// Label volumes as the Colin head has them: a container (label 1) holding two boxes whose labels
+/// touch along the plane x = -0.5 mm (labels 2 and 3), each shape smoothed by 1 mm, each
+/// container's labels the union of its own and those nested in it.
+struct TouchingLabels {
+  ImageGrid grid = make_centered_grid(Eigen::Vector3d::Constant(41.0), Eigen::Vector3d::Ones(),
+                                      Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity());
+  std::vector<std::int32_t> labels;
+  std::unique_ptr<ImplicitShape> container, left, right;
+  NestedShapes nested;
+  TouchingLabels() {
+    labels.assign(static_cast<std::size_t>(grid.voxel_count()), 0);
+    for (int k = 0; k < grid.dims.z(); ++k)
+      for (int j = 0; j < grid.dims.y(); ++j)
+        for (int i = 0; i < grid.dims.x(); ++i) {
+          const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
+          std::int32_t label = 0;
+          if (x.cwiseAbs().maxCoeff() <= 15.0) label = 1;
+          if (std::abs(x.y()) <= 8.0 && std::abs(x.z()) <= 8.0 && x.x() >= -10.0 && x.x() <= 9.0)
+            label = x.x() < 0.0 ? 2 : 3;
+          labels[static_cast<std::size_t>((std::int64_t{k} * grid.dims.y() + j) * grid.dims.x() + i)] = label;
+        }
+    container = make_label_shape(grid, labels, {1, 2, 3}, 1.0, "container");
+    left = make_label_shape(grid, labels, {2}, 1.0, "left");
+    right = make_label_shape(grid, labels, {3}, 1.0, "right");
+    nested = NestedShapes{{container.get(), left.get(), right.get()}, {-1, 0, 0}};
+  }
+};
+
+TEST(NestedTetMesh, TouchingLabelsMeetWithoutASliverOfTheirContainerBetweenThem) {
+  const TouchingLabels shapes;
+  ASSERT_TRUE(shapes.left->smoothed_indicator());
+  // On the plane where the labels meet, each smoothed indicator is about 1/2 and neither
+  // shape's own inside test holds; the point goes to one of the two, never to the container.
+  int left = 0, right = 0;
+  for (double dx : {-0.05, 0.0, 0.05})
+    for (double y = -5.0; y <= 5.0; y += 0.5)
+      for (double z = -5.0; z <= 5.0; z += 0.5) {
+        const Eigen::Vector3d x(-0.5 + dx, y, z);
+        const int holder = shapes.nested.innermost(x);
+        EXPECT_NE(holder, 0) << x.transpose() << ": left " << shapes.left->value(x) << ", right "
+                             << shapes.right->value(x) << ", container " << shapes.container->value(x);
+        left += holder == 1;
+        right += holder == 2;
+      }
+  EXPECT_GT(left, 0);
+  EXPECT_GT(right, 0);
+  // Well inside each shape and in the container's own layer, the shapes' own tests decide.
+  EXPECT_EQ(shapes.nested.innermost(Eigen::Vector3d(-5, 0, 0)), 1);
+  EXPECT_EQ(shapes.nested.innermost(Eigen::Vector3d(5, 0, 0)), 2);
+  EXPECT_EQ(shapes.nested.innermost(Eigen::Vector3d(12, 0, 0)), 0);
+  EXPECT_EQ(shapes.nested.innermost(Eigen::Vector3d(0, 12, 0)), 0);
+  EXPECT_EQ(shapes.nested.innermost(Eigen::Vector3d(0, 0, 18)), -1);
+}
+
+TEST(NestedTetMesh, TouchingLabelsAreMeshedWithAFaceBetweenThemAndTheirVolumes) {
+  const TouchingLabels shapes;
+  const TetMesh mesh = mesh_nested_solid(shapes.nested, criteria_for_tet_size(4.0, 0.75), 3);
+  // Faces between the two boxes' tets, and no container tet where they meet.
+  std::map<std::array<int, 3>, int> region_of_face;
+  int shared = 0;
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    ASSERT_GT(tet_volume(mesh, t), 0.0);
+    const Eigen::Vector3d c = centroid(mesh, t);
+    if (mesh.subdomains[t] == 0) {
+      EXPECT_FALSE(std::abs(c.x() + 0.5) < 0.75 && std::abs(c.y()) < 6.0 && std::abs(c.z()) < 6.0)
+          << "a container tet between the boxes at " << c.transpose();
+    }
+    for (int k = 0; k < 4; ++k) {
+      std::array<int, 3> face;
+      for (int j = 0, m = 0; j < 4; ++j)
+        if (j != k) face[static_cast<std::size_t>(m++)] = mesh.tets(t, j);
+      std::sort(face.begin(), face.end());
+      const auto [found, inserted] = region_of_face.emplace(face, mesh.subdomains[t]);
+      if (!inserted && found->second + mesh.subdomains[t] == 3 && found->second != 0 &&
+          mesh.subdomains[t] != 0)
+        ++shared;
+    }
+  }
+  EXPECT_GT(shared, 20) << "faces between the two boxes";
+  // Each box is 10 x 17 x 17 mm of labels (voxel faces at x = -10.5, -0.5, 9.5; y, z = +-8.5):
+  // its subdomain's volume within the rounding of 1 mm of smoothing at its edges.
+  const std::vector<double> volume = subdomain_volumes(mesh, 3);
+  EXPECT_NEAR(volume[1] / (10.0 * 17.0 * 17.0), 1.0, 0.1);
+  EXPECT_NEAR(volume[2] / (10.0 * 17.0 * 17.0), 1.0, 0.1);
+  EXPECT_GT(volume[0], 0.0);
 }
 
 } // namespace

@@ -100,6 +100,8 @@ TEST(AnatomyCache, EverySettingAndInputChangesTheKey) {
       [](AnatomySettings& a, auto&) { a.variation += 0.01; },
       [](AnatomySettings& a, auto&) { a.base_mesh_triangles += 1; },
       [](AnatomySettings& a, auto&) { a.tet_size_mm += 1.0; },
+      [](AnatomySettings& a, auto&) { a.tet_facet_distance_mm += 1.0; },
+      [](AnatomySettings& a, auto&) { a.tet_interfaces = TetInterfaces::materials; },
       [](AnatomySettings& a, auto&) { a.seed += 1; },
       [](AnatomySettings& a, auto&) { a.organs.pop_back(); },
       [](AnatomySettings& a, auto&) { a.organs[1].name += "x"; },

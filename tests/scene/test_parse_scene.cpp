@@ -89,6 +89,18 @@ TEST(ParseScene, OutOfRangeValuesPointAtTheElement) {
             "scene.yaml:7:22: grid.voxel_size_mm[1]: expected a number in mm greater than 0, found '-2'");
 }
 
+TEST(ParseScene, TetMeshSettingsWithoutATetSizeAreRefusedAndWithOneRead) {
+  EXPECT_EQ(only_problem(replaced(k_minimal, "anatomy:\n", "anatomy:\n  tet_interfaces: materials\n")),
+            "scene.yaml:9:19: anatomy.tet_interfaces: tet_interfaces shapes the tet meshes of "
+            "anatomy.tet_size_mm, which is not set");
+  const SceneLoadResult result = parse(
+      replaced(k_minimal, "anatomy:\n",
+               "anatomy:\n  tet_size_mm: 5\n  tet_facet_distance_mm: 1.5\n  tet_interfaces: materials\n"));
+  ASSERT_TRUE(result.scene) << format_diagnostics(result.problems);
+  EXPECT_EQ(result.scene->anatomy.tet_facet_distance_mm, 1.5);
+  EXPECT_EQ(result.scene->anatomy.tet_interfaces, TetInterfaces::materials);
+}
+
 TEST(ParseScene, MissingRequiredKeyIsReportedAtItsParent) {
   const std::string message = only_problem(replaced(k_minimal, "      tissue: white_matter\n", ""));
   EXPECT_NE(

@@ -207,6 +207,46 @@ TEST(DeformPhantom, BulkTermOnGroupsOfTetsFromTheScene) {
   expect_no_inversion_and_volume_kept(d.bodies[0], 0.01);
 }
 
+// anatomy.tet_size_mm meshes the small head's body (grey matter) with white matter nested in it.
+// By organ (the default) white matter is a region of its own; by material it is meshed with
+// grey matter, whose material it shares, unless its material differs. Either way the solve
+// converges and no tet inverts.
+TEST(DeformPhantom, TetInterfacesFollowOrgansOrOnlyMaterialChanges) {
+  struct Case {
+    TetInterfaces interfaces;
+    const char* white_material;
+    bool white_has_tets;
+  };
+  for (const Case& c :
+       {Case{TetInterfaces::organs, "brain", true}, Case{TetInterfaces::materials, "brain", false},
+        Case{TetInterfaces::materials, "scalp", true}}) {
+    Scene scene = load("tests/data/scenes/small-head.yaml");
+    scene.anatomy.tet_size_mm = 8.0;
+    scene.anatomy.tet_interfaces = c.interfaces;
+    scene.deformation.organs[2].material = c.white_material;
+    Reporter quiet = Reporter::silent();
+    const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
+    StageReport report;
+    const PhantomDeformation d = deform_phantom(scene.deformation, scene.organs, phantom, report, quiet);
+    std::string materials, mesh;
+    for (const std::string& line : report.modelled) {
+      if (line.find("materials by tet:") != std::string::npos) materials = line;
+      if (line.find("one tet mesh of it") != std::string::npos) mesh = line;
+    }
+    const std::string what = std::string(to_string(c.interfaces)) + ", white matter of " + c.white_material;
+    EXPECT_NE(materials.find("grey_matter"), std::string::npos) << what << ": " << materials;
+    EXPECT_EQ(materials.find("white_matter") != std::string::npos, c.white_has_tets)
+        << what << ": " << materials;
+    EXPECT_EQ(mesh.find("anatomy.tet_interfaces: materials): white_matter") != std::string::npos,
+              !c.white_has_tets)
+        << what << ": " << mesh;
+    ASSERT_FALSE(d.solves.empty());
+    EXPECT_TRUE(d.solves.back().converged) << what;
+    ASSERT_EQ(d.bodies.size(), 1u);
+    expect_no_inversion_and_volume_kept(d.bodies[0], 0.02);
+  }
+}
+
 // The shipped breast scene: two paddles close in by 15 mm each in four load steps, the chest
 // wall held. Nothing passes a paddle beyond the penalty's give, the paddles carry the load
 // (contacts at the end), no tet inverts and the volume is kept (nu 0.49).
