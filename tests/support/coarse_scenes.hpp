@@ -85,6 +85,7 @@ inline std::string coarse_colin_head_text() {
       {"voxel_size_mm: 1.0", "voxel_size_mm: 4.0"},
       {R"(field_of_view_mm: \[189, 217, 185\])", "field_of_view_mm: [188, 216, 184]"},
       {R"(base_mesh_triangles: \d+)", "base_mesh_triangles: 320"},
+      {R"(tet_size_mm: [0-9.]+)", "tet_size_mm: 8"},
       {"supersampling: 4", "supersampling: 1"},
       {"tessellation_tolerance_mm: 0.5", "tessellation_tolerance_mm: 1.0"},
       {"kspace: true", "kspace: false"},
