@@ -153,9 +153,10 @@ void parse_anatomy(CheckedMap& map, const std::filesystem::path& scene_folder, A
     anatomy.tet_interfaces = interfaces == "materials" ? TetInterfaces::materials : TetInterfaces::organs;
   for (const char* key : {"tet_facet_distance_mm", "tet_interfaces"}) {
     if (map.has(key) && !(anatomy.tet_size_mm > 0.0)) {
-      map.context().problem(map.get(key), map.child_path(key),
-                            std::string(key) +
-                                " shapes the tet meshes of anatomy.tet_size_mm, which is not set");
+      map.context().problem(
+          map.get(key), map.child_path(key),
+          "expected anatomy.tet_size_mm beside it (it shapes the tet meshes of that size), found "
+          "no anatomy.tet_size_mm");
     }
   }
   const YAML::Node organs = map.get("organs");

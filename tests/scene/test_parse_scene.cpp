@@ -91,8 +91,8 @@ TEST(ParseScene, OutOfRangeValuesPointAtTheElement) {
 
 TEST(ParseScene, TetMeshSettingsWithoutATetSizeAreRefusedAndWithOneRead) {
   EXPECT_EQ(only_problem(replaced(k_minimal, "anatomy:\n", "anatomy:\n  tet_interfaces: materials\n")),
-            "scene.yaml:9:19: anatomy.tet_interfaces: tet_interfaces shapes the tet meshes of "
-            "anatomy.tet_size_mm, which is not set");
+            "scene.yaml:9:19: anatomy.tet_interfaces: expected anatomy.tet_size_mm beside it (it shapes the "
+            "tet meshes of that size), found no anatomy.tet_size_mm");
   const SceneLoadResult result = parse(
       replaced(k_minimal, "anatomy:\n",
                "anatomy:\n  tet_size_mm: 5\n  tet_facet_distance_mm: 1.5\n  tet_interfaces: materials\n"));
