@@ -28,8 +28,9 @@ TetMeshCriteria criteria_for_tet_size(double tet_size_mm, double facet_distance_
   criteria.cell_size_mm = tet_size_mm;
   // Interfaces between tissues are meshed as surfaces: their triangles as large as the tets, and
   // close enough to the surface (a tenth of the size, as for the organs' own meshes) that a layer
-  // thinner than a tet keeps its thickness. A folded surface (a cortex) is followed within the
-  // scene's distance instead when it gives one: within a tenth of 5 mm its every sulcus is meshed.
+  // thinner than a tet keeps its thickness. The scene may give a coarser distance for a folded
+  // surface (a cortex), which followed within a tenth of the tet size needs far more triangles
+  // than tets of that size would.
   criteria.facet_size_mm = tet_size_mm;
   criteria.facet_distance_mm = facet_distance_mm > 0.0 ? facet_distance_mm : 0.1 * tet_size_mm;
   return criteria;
