@@ -11,11 +11,13 @@
 #include "io/vtk_xml_file.hpp"
 
 #include <vtkCellArray.h>
+#include <vtkCellData.h>
 #include <vtkCellType.h>
 #include <vtkDataObject.h>
 #include <vtkDoubleArray.h>
 #include <vtkFieldData.h>
 #include <vtkIdList.h>
+#include <vtkIntArray.h>
 #include <vtkNew.h>
 #include <vtkPointData.h>
 #include <vtkPoints.h>
@@ -471,6 +473,39 @@ void add_point_arrays(vtkPointData* data, const std::vector<PointArray>& arrays,
   }
 }
 
+void add_cell_arrays(vtkCellData* data, const std::vector<CellArray>& arrays, Eigen::Index cell_count,
+                     const std::filesystem::path& path) {
+  for (const CellArray& array : arrays) {
+    if (array.values.size() != static_cast<std::size_t>(cell_count)) {
+      throw std::invalid_argument(path.string() + ": cell array " + array.name + " has " +
+                                  std::to_string(array.values.size()) + " values for " +
+                                  std::to_string(cell_count) + " cells");
+    }
+    if (!array.integer) {
+      vtkNew<vtkDoubleArray> values;
+      values->SetName(array.name.c_str());
+      values->SetNumberOfTuples(cell_count);
+      std::copy(array.values.begin(), array.values.end(), values->GetPointer(0));
+      data->AddArray(values);
+      continue;
+    }
+    vtkNew<vtkIntArray> values;
+    values->SetName(array.name.c_str());
+    values->SetNumberOfTuples(cell_count);
+    for (std::size_t c = 0; c < array.values.size(); ++c) {
+      const double value = array.values[c];
+      if (!(value >= std::numeric_limits<int>::min() && value <= std::numeric_limits<int>::max()) ||
+          value != std::floor(value)) {
+        throw std::invalid_argument(path.string() + ": cell array " + array.name + " holds " +
+                                    format_number(value) + " at cell " + std::to_string(c) +
+                                    ", expected a whole number within Int32");
+      }
+      values->SetValue(static_cast<vtkIdType>(c), static_cast<int>(value));
+    }
+    data->AddArray(values);
+  }
+}
+
 void add_string(vtkFieldData* data, const std::string& name, const std::string& value) {
   vtkNew<vtkStringArray> array;
   array->SetName(name.c_str());
@@ -478,10 +513,11 @@ void add_string(vtkFieldData* data, const std::string& name, const std::string& 
   data->AddArray(array);
 }
 
-/// The frame and units of the points and of every point array, as field data: a mesh's
-/// displacement is in RAS like its points, while the NIfTI fields are in LPS, and only the file
-/// can tell a reader which it holds.
-void add_frames_and_units(vtkDataObject& object, const std::vector<PointArray>& arrays) {
+/// The frame and units of the points and of every point array, and the units and value names of
+/// every cell array, as field data: a mesh's displacement is in RAS like its points, while the
+/// NIfTI fields are in LPS, and only the file can tell a reader which it holds.
+void add_frames_and_units(vtkDataObject& object, const std::vector<PointArray>& arrays,
+                          const std::vector<CellArray>& cell_arrays = {}) {
   vtkFieldData* data = object.GetFieldData();
   // 3D Slicer reads the points' frame from a field named SPACE (and takes LPS without it).
   add_string(data, "SPACE", "RAS");
@@ -491,10 +527,29 @@ void add_frames_and_units(vtkDataObject& object, const std::vector<PointArray>& 
     add_string(data, array.name + "_frame", array.frame);
     add_string(data, array.name + "_units", array.units);
   }
-  add_string(data, "conventions",
-             "phantasm: points in world RAS millimetres (+x right, +y anterior, +z superior), as the NIfTI "
-             "affines; each point array's frame and units are in <array>_frame and <array>_units (vector "
-             "components in RAS, unlike the NIfTI displacement fields, whose components are LPS)");
+  for (const CellArray& array : cell_arrays) {
+    add_string(data, array.name + "_units", array.units);
+    if (array.value_names.empty()) continue;
+    vtkNew<vtkIntArray> values;
+    values->SetName((array.name + "_values").c_str());
+    vtkNew<vtkStringArray> names;
+    names->SetName((array.name + "_names").c_str());
+    for (const auto& [value, name] : array.value_names) {
+      values->InsertNextValue(value);
+      names->InsertNextValue(name);
+    }
+    data->AddArray(values);
+    data->AddArray(names);
+  }
+  std::string conventions =
+      "phantasm: points in world RAS millimetres (+x right, +y anterior, +z superior), as the NIfTI "
+      "affines; each point array's frame and units are in <array>_frame and <array>_units (vector "
+      "components in RAS, unlike the NIfTI displacement fields, whose components are LPS)";
+  // Only files with cell arrays say how theirs are described, so that the others keep their bytes.
+  if (!cell_arrays.empty())
+    conventions += "; each cell array's units are in <array>_units and, for labels, the name of each "
+                   "value in <array>_names (the value at the same place in <array>_values)";
+  add_string(data, "conventions", conventions);
 }
 
 /// Configures an XML writer for compact, deterministic output into a string.
@@ -614,8 +669,8 @@ void write_vtp(const std::filesystem::path& path, const TriangleMesh& mesh,
   write_xml(*writer, path);
 }
 
-void write_vtu(const std::filesystem::path& path, const TetMesh& mesh,
-               const std::vector<PointArray>& arrays) {
+void write_vtu(const std::filesystem::path& path, const TetMesh& mesh, const std::vector<PointArray>& arrays,
+               const std::vector<CellArray>& cell_arrays) {
   vtkNew<vtkUnstructuredGrid> grid;
   grid->SetPoints(make_points(mesh.vertices));
   grid->Allocate(mesh.tets.rows());
@@ -624,7 +679,8 @@ void write_vtu(const std::filesystem::path& path, const TetMesh& mesh,
     grid->InsertNextCell(VTK_TETRA, 4, ids);
   }
   add_point_arrays(grid->GetPointData(), arrays, mesh.vertices.rows(), path);
-  add_frames_and_units(*grid, arrays);
+  add_cell_arrays(grid->GetCellData(), cell_arrays, mesh.tets.rows(), path);
+  add_frames_and_units(*grid, arrays, cell_arrays);
   vtkNew<vtkXMLUnstructuredGridWriter> writer;
   writer->SetInputData(grid);
   write_xml(*writer, path);

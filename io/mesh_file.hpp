@@ -9,6 +9,7 @@
 
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace phantasm {
@@ -32,6 +33,18 @@ struct PointArray {
   std::string units;          ///< e.g. "mm"; empty for a unitless array
 };
 
+/// A per-cell array written with a tet mesh (ParaView shows it as cell data), one value per
+/// cell: whole numbers (Int32, e.g. labels) or reals (Float64). Its units are written into the
+/// file's field data as "<name>_units"; named values (labels) as two arrays of equal length,
+/// "<name>_values" (Int32) and "<name>_names" (String), the i-th name naming the i-th value.
+struct CellArray {
+  std::string name;
+  std::vector<double> values; ///< #cells
+  bool integer = false;       ///< written as Int32: every value must be a whole number in its range
+  std::string units;          ///< empty for a unitless array
+  std::vector<std::pair<int, std::string>> value_names; ///< e.g. a label and its organ's name
+};
+
 /// Writes a triangle mesh as VTK XML PolyData (.vtp, binary, zlib), atomically; also reads back
 /// with read_triangle_mesh. The file's field data state the frame and units of the points
 /// ("Points_frame" = "RAS", "Points_units" = "mm", and "SPACE" = "RAS" as 3D Slicer reads it) and
@@ -41,9 +54,12 @@ void write_vtp(const std::filesystem::path& path, const TriangleMesh& mesh,
                const std::vector<PointArray>& arrays = {});
 
 /// Writes a tet mesh as VTK XML UnstructuredGrid (.vtu, binary, zlib), atomically, with field
-/// data as write_vtp.
+/// data as write_vtp and, for the cell arrays, as CellArray says. read_vtu_cells
+/// (io/vtk_xml_file.hpp) reads the cell arrays back.
+/// @throws std::invalid_argument for an array of the wrong length, or an integer array holding a
+/// value that is not a whole Int32
 void write_vtu(const std::filesystem::path& path, const TetMesh& mesh,
-               const std::vector<PointArray>& arrays = {});
+               const std::vector<PointArray>& arrays = {}, const std::vector<CellArray>& cell_arrays = {});
 
 /// Reads a tet mesh written by write_vtu (every cell a VTK_TETRA) through read_vtu_cells
 /// (io/vtk_xml_file.hpp), not VTK's reader; boundary faces are recomputed.

@@ -358,6 +358,7 @@ struct PieceCells {
   std::vector<double> points;
   std::vector<std::vector<long long>> cells;
   std::vector<int> types;
+  std::vector<VtuCellArray> cell_arrays;
 };
 
 /// The names one kind of VTK XML file gives its parts: PolyData with Polys, UnstructuredGrid
@@ -368,7 +369,50 @@ struct CellLayout {
   const char* element; ///< the element holding offsets and connectivity: Polys, Cells
   const char* noun;    ///< a cell in messages: polygon, cell
   bool types;          ///< whether each cell has a VTK type (a "types" array)
+  bool cell_arrays;    ///< whether to read the numeric arrays of the cell data
 };
+
+/// The numeric arrays of a piece's CellData (`cell_count` cells) into `arrays`, each appended to
+/// the one of its name; on the first piece with cells they are created. `pieces` counts, per
+/// array, the pieces that held it.
+void read_cell_arrays(const std::filesystem::path& path, ParsedFile& parsed, vtkXMLDataElement& piece,
+                      std::size_t cell_count, std::uint64_t most, bool first, const std::string& where,
+                      std::vector<VtuCellArray>& arrays, std::vector<int>& pieces) {
+  vtkXMLDataElement* data = child(piece, "CellData");
+  if (data == nullptr) return;
+  for (int i = 0; i < data->GetNumberOfNestedElements(); ++i) {
+    vtkXMLDataElement& element = *data->GetNestedElement(i);
+    if (element.GetName() == nullptr || std::strcmp(element.GetName(), "DataArray") != 0) continue;
+    if (word_type(element.GetAttribute("type")) == 0) continue; // a string array
+    const char* name = element.GetAttribute("Name");
+    const std::string array_name = name ? name : "";
+    long long components = 1;
+    element.GetScalarAttribute("NumberOfComponents", components);
+    const std::string what = where + " cell array '" + array_name + "'";
+    // As the offsets: no more values than the file's bytes can hold.
+    if (components < 1 ||
+        static_cast<std::uint64_t>(components) > most / std::max<std::size_t>(cell_count, 1))
+      fail(path, what + ": expected 1 to " + std::to_string(most / std::max<std::size_t>(cell_count, 1)) +
+                     " components, found " + std::to_string(components));
+    auto found = std::find_if(arrays.begin(), arrays.end(),
+                              [&](const VtuCellArray& a) { return a.name == array_name; });
+    if (found == arrays.end()) {
+      if (!first) continue; // not in an earlier piece: dropped at the end anyway
+      arrays.push_back({array_name, static_cast<int>(components), {}});
+      pieces.push_back(0);
+      found = arrays.end() - 1;
+    }
+    const auto index = static_cast<std::size_t>(found - arrays.begin());
+    if (found->components != components || pieces[index] < 0) {
+      pieces[index] = -1; // components that differ between pieces: dropped
+      continue;
+    }
+    const std::vector<double> values =
+        read_values(path, parsed, element, cell_count * static_cast<std::size_t>(components), what);
+    found->values.insert(found->values.end(), values.begin(), values.end());
+    ++pieces[index];
+  }
+}
 
 PieceCells read_piece_cells(const std::filesystem::path& path, const CellLayout& layout) {
   ParsedFile parsed;
@@ -387,6 +431,8 @@ PieceCells read_piece_cells(const std::filesystem::path& path, const CellLayout&
 
   PieceCells out;
   int piece_index = 0;
+  int pieces_with_cells = 0;
+  std::vector<int> pieces_of_array; // per cell array: the pieces holding it, -1 when dropped
   for (int i = 0; i < dataset->GetNumberOfNestedElements(); ++i) {
     vtkXMLDataElement& piece = *dataset->GetNestedElement(i);
     if (piece.GetName() == nullptr || std::strcmp(piece.GetName(), "Piece") != 0) continue;
@@ -455,20 +501,30 @@ PieceCells read_piece_cells(const std::filesystem::path& path, const CellLayout&
         out.types.push_back(static_cast<int>(t));
       }
     }
+    if (layout.cell_arrays)
+      read_cell_arrays(path, parsed, piece, cell_count, most, pieces_with_cells == 0, where, out.cell_arrays,
+                       pieces_of_array);
+    ++pieces_with_cells;
   }
+  // An array some piece with cells lacks has no value for its cells: left out.
+  std::vector<VtuCellArray> complete;
+  for (std::size_t a = 0; a < out.cell_arrays.size(); ++a)
+    if (pieces_of_array[a] == pieces_with_cells) complete.push_back(std::move(out.cell_arrays[a]));
+  out.cell_arrays = std::move(complete);
   return out;
 }
 
 } // namespace
 
 VtpPolygons read_vtp_polygons(const std::filesystem::path& path) {
-  PieceCells read = read_piece_cells(path, {"PolyData", "NumberOfPolys", "Polys", "polygon", false});
+  PieceCells read = read_piece_cells(path, {"PolyData", "NumberOfPolys", "Polys", "polygon", false, false});
   return {std::move(read.points), std::move(read.cells)};
 }
 
-VtuCells read_vtu_cells(const std::filesystem::path& path) {
-  PieceCells read = read_piece_cells(path, {"UnstructuredGrid", "NumberOfCells", "Cells", "cell", true});
-  return {std::move(read.points), std::move(read.cells), std::move(read.types)};
+VtuCells read_vtu_cells(const std::filesystem::path& path, bool with_cell_arrays) {
+  PieceCells read =
+      read_piece_cells(path, {"UnstructuredGrid", "NumberOfCells", "Cells", "cell", true, with_cell_arrays});
+  return {std::move(read.points), std::move(read.cells), std::move(read.types), std::move(read.cell_arrays)};
 }
 
 } // namespace phantasm

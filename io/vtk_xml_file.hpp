@@ -2,6 +2,7 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace phantasm {
@@ -32,18 +33,28 @@ struct VtpPolygons {
 /// @throws InputError naming the file, the piece or array, what was expected and what was found
 VtpPolygons read_vtp_polygons(const std::filesystem::path& path);
 
+/// A numeric array of a file's cell data, the values of every piece in turn.
+struct VtuCellArray {
+  std::string name;
+  int components = 1;
+  std::vector<double> values; ///< #cells * components, cell-major, as doubles (exact for Int32)
+};
+
 /// The points and cells of a VTK XML UnstructuredGrid file (.vtu), every piece, with their
 /// vertex indices into `points` and each cell's VTK type.
 struct VtuCells {
   std::vector<double> points; ///< x, y, z of each point, as the file holds them
   std::vector<std::vector<long long>> cells;
-  std::vector<int> types; ///< VTK cell type of each cell (10: tetrahedron)
+  std::vector<int> types;                ///< VTK cell type of each cell (10: tetrahedron)
+  std::vector<VtuCellArray> cell_arrays; ///< only when asked for, in the file's order
 };
 
 /// Reads the points and cells of a .vtu file as read_vtp_polygons reads a .vtp file (the same
 /// storages and checks, VTK's XML parser and decompressors, not its reader); the cell types must
-/// be whole numbers from 0 to 255. Point, cell and field data are ignored.
+/// be whole numbers from 0 to 255. Point and field data are ignored, and so is cell data unless
+/// `with_cell_arrays`: then its numeric arrays are read (those every piece with cells holds, with
+/// the same components; string arrays are passed over).
 /// @throws InputError naming the file, the piece or array, what was expected and what was found
-VtuCells read_vtu_cells(const std::filesystem::path& path);
+VtuCells read_vtu_cells(const std::filesystem::path& path, bool with_cell_arrays = false);
 
 } // namespace phantasm

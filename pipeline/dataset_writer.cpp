@@ -19,12 +19,14 @@
 #include "voxelize/level_set.hpp"
 #include "voxelize/voxelized_phantom.hpp"
 
+#include <Eigen/LU>
 #include <omp.h>
 
 #include <algorithm>
 #include <atomic>
 #include <exception>
 #include <functional>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <sstream>
@@ -166,11 +168,60 @@ double mesh_export_tolerance_mm(const Scene& scene) {
       0.5, std::max(scene.voxelization.tessellation_tolerance_mm, 0.2 * scene.grid.voxel_size_mm.minCoeff()));
 }
 
+/// Each tet's det F (deformed over rest volume; NaN for a tet of no rest volume).
+std::vector<double> tet_det_F(const DeformedBody& body) {
+  std::vector<double> det_F(static_cast<std::size_t>(body.tets.rows()));
+  for (Eigen::Index t = 0; t < body.tets.rows(); ++t) {
+    const auto edges = [&](const Eigen::MatrixX3d& x) {
+      Eigen::Matrix3d D;
+      for (int k = 0; k < 3; ++k)
+        D.col(k) = (x.row(body.tets(t, k + 1)) - x.row(body.tets(t, 0))).transpose();
+      return D;
+    };
+    const double rest = edges(body.rest_mm).determinant();
+    det_F[static_cast<std::size_t>(t)] =
+        rest != 0.0 ? edges(body.deformed_mm).determinant() / rest : std::numeric_limits<double>::quiet_NaN();
+  }
+  return det_F;
+}
+
+/// A simulated body's tet mesh in one state (rest or deformed vertices) with, per tet, the dseg
+/// label of its organ ("organ_label", its organs' names in the field data) and, deformed, the
+/// displacement of each vertex and the det F of each tet.
+void write_body_tet_mesh(const std::filesystem::path& path, const Phantom& phantom, const DeformedBody& body,
+                         bool deformed) {
+  const TetMesh mesh{deformed ? body.deformed_mm : body.rest_mm, body.tets, {}, {}};
+  // dseg labels number the organs from 1 in scene order (dseg_table).
+  CellArray labels{"organ_label", {}, true, "", {}};
+  std::vector<bool> present(phantom.organs.size(), false);
+  for (const int organ : body.tet_organ) {
+    labels.values.push_back(organ + 1);
+    present[static_cast<std::size_t>(organ)] = true;
+  }
+  for (std::size_t o = 0; o < present.size(); ++o)
+    if (present[o]) labels.value_names.emplace_back(static_cast<int>(o) + 1, phantom.organs[o].name);
+  std::vector<PointArray> arrays;
+  std::vector<CellArray> cell_arrays{std::move(labels)};
+  if (deformed) {
+    const Eigen::MatrixX3d displacement = body.deformed_mm - body.rest_mm;
+    PointArray array{"displacement_mm", 3, {}, "RAS", "mm"};
+    for (Eigen::Index v = 0; v < displacement.rows(); ++v)
+      for (int c = 0; c < 3; ++c)
+        array.values.push_back(displacement(v, c));
+    arrays.push_back(std::move(array));
+    cell_arrays.push_back({"det_F", tet_det_F(body), false, "", {}});
+  }
+  write_vtu(path, mesh, arrays, cell_arrays);
+}
+
 /// Each organ's surface (.vtp: the patch surface tessellated within mesh_export_tolerance_mm, or
-/// the sheet) and tet mesh (.vtu) in one state. The deformed state's tet meshes carry each
-/// vertex's displacement from the reference (RAS mm, as the files' field data say).
+/// the sheet) and tet mesh (.vtu) in one state. A simulated body's tet mesh is the one solved
+/// (write_body_tet_mesh: with organs nested in it, one mesh of all of them), other organs' their
+/// own. The deformed state's tet meshes carry each vertex's displacement from the reference (RAS
+/// mm, as the files' field data say).
 void plan_organ_meshes(const Scene& scene, const Phantom& phantom, PhantomState state,
-                       const DatasetLayout& layout, DatasetPlan& plan, const Phantom* reference = nullptr) {
+                       const DatasetLayout& layout, DatasetPlan& plan,
+                       const std::vector<DeformedBody>* bodies, const Phantom* reference = nullptr) {
   const double tolerance = mesh_export_tolerance_mm(scene);
   for (std::size_t index = 0; index < phantom.organs.size(); ++index) {
     const Organ& organ = phantom.organs[index];
@@ -185,22 +236,31 @@ void plan_organ_meshes(const Scene& scene, const Phantom& phantom, PhantomState 
         write_vtp(path, surface);
       });
     }
-    if (organ.solid) {
+    if (!organ.solid) continue;
+    const DeformedBody* body = nullptr;
+    for (std::size_t b = 0; bodies && b < bodies->size() && !body; ++b)
+      if ((*bodies)[b].organ == organ.name) body = &(*bodies)[b];
+    if (body) {
       plan.file(layout.tet_mesh(state, organ.name),
-                [&organ, reference, index](const std::filesystem::path& path) {
-                  std::vector<PointArray> arrays;
-                  if (reference) {
-                    const Eigen::MatrixX3d displacement =
-                        organ.solid->vertices - reference->organs[index].solid->vertices;
-                    PointArray array{"displacement_mm", 3, {}, "RAS", "mm"};
-                    for (Eigen::Index v = 0; v < displacement.rows(); ++v)
-                      for (int c = 0; c < 3; ++c)
-                        array.values.push_back(displacement(v, c));
-                    arrays.push_back(std::move(array));
-                  }
-                  write_vtu(path, *organ.solid, arrays);
+                [&phantom, body, deformed = reference != nullptr](const std::filesystem::path& path) {
+                  write_body_tet_mesh(path, phantom, *body, deformed);
                 });
+      continue;
     }
+    plan.file(layout.tet_mesh(state, organ.name),
+              [&organ, reference, index](const std::filesystem::path& path) {
+                std::vector<PointArray> arrays;
+                if (reference) {
+                  const Eigen::MatrixX3d displacement =
+                      organ.solid->vertices - reference->organs[index].solid->vertices;
+                  PointArray array{"displacement_mm", 3, {}, "RAS", "mm"};
+                  for (Eigen::Index v = 0; v < displacement.rows(); ++v)
+                    for (int c = 0; c < 3; ++c)
+                      array.values.push_back(displacement(v, c));
+                  arrays.push_back(std::move(array));
+                }
+                write_vtu(path, *organ.solid, arrays);
+              });
   }
 }
 
@@ -509,9 +569,11 @@ DatasetPlan plan_dataset(const Scene& scene, const Simulation& simulation, const
   if (scene.outputs.meshes) {
     reporter.modelled("anatomy", "organ meshes for ParaView: surfaces tessellated within " +
                                      format_number(mesh_export_tolerance_mm(scene)) +
-                                     " mm, tet meshes as built");
-    plan_organ_meshes(scene, phantom, PhantomState::reference, layout, plan);
-    if (deformed) plan_organ_meshes(scene, *deformed, PhantomState::deformed, layout, plan, &phantom);
+                                     " mm, tet meshes as built (a simulated body's as solved, with the dseg "
+                                     "label of each tet's organ)");
+    const std::vector<DeformedBody>* bodies = deformation ? &deformation->bodies : nullptr;
+    plan_organ_meshes(scene, phantom, PhantomState::reference, layout, plan, bodies);
+    if (deformed) plan_organ_meshes(scene, *deformed, PhantomState::deformed, layout, plan, bodies, &phantom);
   } else {
     reporter.skipped("anatomy", "organ meshes (outputs.meshes is false)");
   }

@@ -91,8 +91,13 @@ void collect_deformations(const OrganTable& organs, const Phantom& phantom, cons
   for (const Body& body : bodies) {
     if (body.shell) continue; // the displacement fields come from solids' tets
     const TetMesh& mesh = *body.mesh;
-    result.bodies.push_back({organs[static_cast<std::size_t>(body.organ)].name, mesh.vertices,
-                             deformed_mm.middleRows(body.first_vertex, mesh.vertices.rows()), mesh.tets});
+    DeformedBody deformed;
+    deformed.organ = organs[static_cast<std::size_t>(body.organ)].name;
+    deformed.rest_mm = mesh.vertices;
+    deformed.deformed_mm = deformed_mm.middleRows(body.first_vertex, mesh.vertices.rows());
+    deformed.tets = mesh.tets;
+    deformed.tet_organ = body.tet_organ;
+    result.bodies.push_back(std::move(deformed));
   }
   for (std::size_t i = 0; i < n; ++i) {
     const Organ& organ = phantom.organs[i];

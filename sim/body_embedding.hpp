@@ -59,6 +59,8 @@ struct Body {
   /// solids: the tets solved, the organ's own mesh or, when organs are nested in it, the mesh of
   /// all of them (tissue interfaces as faces)
   std::shared_ptr<const TetMesh> mesh;
+  /// solids: for each tet of `mesh`, the organ (index in the organ table) whose material it takes
+  std::vector<int> tet_organ;
   bool shell = false; ///< a surface organ: its triangles carry the load
 };
 

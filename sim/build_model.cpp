@@ -191,6 +191,7 @@ Body add_solid_body(const DeformationSettings& deformation, const OrganTable& or
   body.first_vertex = add_body(model, k_mm * mesh.vertices, mesh.tets, materials);
   std::vector<int> organ_labels(organ_of_tet.begin(), organ_of_tet.end());
   const int bulk_terms = apply_volume_formulation(model, deformation.volume, mesh, first_tet, organ_labels);
+  body.tet_organ = std::move(organ_labels);
   body.vertex_count = mesh.vertices.rows();
   body.locator = std::make_unique<TetLocator>(mesh.vertices, mesh.tets, body.first_vertex);
   body.mesh = shared;

@@ -1,3 +1,4 @@
+#include "io/vtk_xml_file.hpp"
 #include "tests/apps/cli_fixtures.hpp"
 #include "tests/support/subprocess.hpp"
 
@@ -7,6 +8,7 @@
 #include <openvdb/openvdb.h>
 
 #include <algorithm>
+#include <map>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -218,13 +220,73 @@ TEST(InfoCommand, ShowsTheGridAndEveryStagePlan) {
   EXPECT_EQ(nlohmann::json::parse(json.out)["seed"], 1);
 }
 
-TEST(RunCommand, WritesSheetAndShellSurfacesWithoutTetMeshes) {
+TEST(RunCommand, WritesSheetAndShellSurfacesAndTheSolvedBodyTetMesh) {
   const fs::path out = fresh_folder("small") / "out";
   ASSERT_EQ(run_command({k_phantasm, "run", k_small_scene.string(), "-o", out.string(), "-q"}).exit_code, 0);
-  const fs::path meshes = out / "derivatives" / "phantasm" / "sub-01" / "ses-ref" / "meshes";
+  const fs::path derivatives = out / "derivatives" / "phantasm";
+  const fs::path meshes = derivatives / "sub-01" / "ses-ref" / "meshes";
   EXPECT_TRUE(fs::exists(meshes / "sub-01_ses-ref_organ-scalp_mesh.vtp"));
   EXPECT_FALSE(fs::exists(meshes / "sub-01_ses-ref_organ-scalp_tetmesh.vtu")); // solid: false
   EXPECT_TRUE(fs::exists(meshes / "sub-01_ses-ref_organ-greyMatter_tetmesh.vtu"));
+
+  // The grey matter is the simulated body (the white matter's sheet embedded in it): its tet mesh
+  // in both states is the one solved, as many tets as the log says, each with the dseg label of
+  // the organ whose material it took (as many per organ as the log says) and, deformed, the
+  // det F of each tet, positive.
+  std::map<std::string, int> label_of;
+  {
+    std::istringstream rows(read_file(derivatives / "dseg.tsv"));
+    std::string row;
+    std::getline(rows, row); // header
+    while (std::getline(rows, row)) {
+      std::istringstream fields(row);
+      int index = 0;
+      std::string name;
+      fields >> index >> name;
+      label_of[name] = index;
+    }
+  }
+  const std::string log = read_file(derivatives / "sub-01" / "log.txt");
+  std::smatch solved;
+  ASSERT_TRUE(std::regex_search(log, solved,
+                                std::regex(R"(grey_matter: solved as one body of (\d+) vertices and (\d+) )"
+                                           R"(tets \(materials by tet:([^)]*)\))")))
+      << log;
+  const std::size_t tets = std::stoul(solved[2]);
+  std::map<int, std::size_t> logged_per_label;
+  {
+    std::istringstream counts(solved[3].str());
+    std::string organ;
+    std::size_t count = 0;
+    while (counts >> organ >> count) {
+      ASSERT_TRUE(label_of.count(organ)) << organ;
+      logged_per_label[label_of[organ]] = count;
+    }
+  }
+  for (const char* state : {"ref", "def"}) {
+    SCOPED_TRACE(state);
+    const phantasm::VtuCells file =
+        phantasm::read_vtu_cells(derivatives / "sub-01" / (std::string("ses-") + state) / "meshes" /
+                                     (std::string("sub-01_ses-") + state + "_organ-greyMatter_tetmesh.vtu"),
+                                 true);
+    EXPECT_EQ(file.points.size() / 3, std::stoul(solved[1]));
+    ASSERT_EQ(file.cells.size(), tets);
+    ASSERT_EQ(file.cell_arrays.size(), state == std::string("ref") ? 1u : 2u);
+    const phantasm::VtuCellArray& labels = file.cell_arrays[0];
+    EXPECT_EQ(labels.name, "organ_label");
+    ASSERT_EQ(labels.values.size(), tets);
+    std::map<int, std::size_t> per_label;
+    for (const double label : labels.values)
+      ++per_label[static_cast<int>(label)];
+    EXPECT_EQ(per_label, logged_per_label);
+    if (state == std::string("def")) {
+      const phantasm::VtuCellArray& det_F = file.cell_arrays[1];
+      EXPECT_EQ(det_F.name, "det_F");
+      ASSERT_EQ(det_F.values.size(), tets);
+      EXPECT_GT(*std::min_element(det_F.values.begin(), det_F.values.end()), 0.0);
+      EXPECT_LT(*std::min_element(det_F.values.begin(), det_F.values.end()), 1.0); // it was deformed
+    }
+  }
 
   // A preview per image: a PNG of the three middle slices side by side (48 + 48 + 56 wide,
   // max(56, 52) high for the 48 x 56 x 52 grid).
@@ -347,6 +409,7 @@ TEST(Tools, DocumentedCommandsRunOnASmallRun) {
   EXPECT_NE(check.out.find("ran 4 blocks, 0 failed"), std::string::npos) << check.out;
   EXPECT_NE(check.out.find("displacement_mm: RAS mm"), std::string::npos) << check.out;
   EXPECT_NE(check.out.find("label at the origin: 3"), std::string::npos) << check.out;
+  EXPECT_NE(check.out.find("tets per organ: {'grey_matter': "), std::string::npos) << check.out;
 }
 
 // An inversion-recovery sidecar says which readout made the image; an MPRAGE sidecar also gives

@@ -1,6 +1,7 @@
 #include "anatomy/structured_mesh.hpp"
 #include "core/error.hpp"
 #include "io/mesh_file.hpp"
+#include "io/vtk_xml_file.hpp"
 #include "tests/support/error_message.hpp"
 #include "tests/support/files.hpp"
 #include "tests/support/subprocess.hpp"
@@ -147,6 +148,83 @@ TEST(MeshFile, VtuRoundTripKeepsPositiveTetsAndBoundary) {
   EXPECT_THROW(read_vtu(folder / "none.vtu"), InputError);
 }
 
+// Cell arrays (a label per tet as Int32, a real per tet as Float64) are written with the mesh,
+// read back by read_vtu_cells value for value, and leave read_vtu's mesh as it was; the file's
+// bytes are the same each time it is written.
+TEST(MeshFile, VtuCellArraysRoundTripAsInt32AndFloat64) {
+  const fs::path folder = fresh_folder("mesh-vtu-cell-arrays");
+  const TetMesh box = structured_box({20, 10, 30}, {2, 1, 3}, Eigen::Matrix3d::Identity(), {1, 2, 3});
+  const auto tets = static_cast<std::size_t>(box.tets.rows());
+  CellArray labels{"organ_label", {}, true, "", {{2, "grey_matter"}, {7, "white_matter"}}};
+  CellArray ratios{"det_F", {}, false, "", {}};
+  for (std::size_t t = 0; t < tets; ++t) {
+    labels.values.push_back(t % 3 == 0 ? 7 : 2);
+    ratios.values.push_back(1.0 + 1e-3 * static_cast<double>(t) + 1e-17);
+  }
+  std::vector<double> displacement(static_cast<std::size_t>(box.vertices.rows()) * 3, 0.5);
+  const std::vector<PointArray> points{PointArray{"displacement_mm", 3, displacement, "RAS", "mm"}};
+  write_vtu(folder / "box.vtu", box, points, {labels, ratios});
+  const std::string bytes = read_file(folder / "box.vtu");
+  write_vtu(folder / "box.vtu", box, points, {labels, ratios});
+  EXPECT_EQ(read_file(folder / "box.vtu"), bytes);
+
+  const VtuCells cells = read_vtu_cells(folder / "box.vtu", true);
+  ASSERT_EQ(cells.cell_arrays.size(), 2u);
+  EXPECT_EQ(cells.cell_arrays[0].name, "organ_label");
+  EXPECT_EQ(cells.cell_arrays[0].components, 1);
+  EXPECT_EQ(cells.cell_arrays[0].values, labels.values);
+  EXPECT_EQ(cells.cell_arrays[1].name, "det_F");
+  EXPECT_EQ(cells.cell_arrays[1].values, ratios.values);               // doubles, bit for bit
+  EXPECT_TRUE(read_vtu_cells(folder / "box.vtu").cell_arrays.empty()); // only when asked for
+  // Int32 on disk: the array's declaration in the XML header, before the appended data.
+  EXPECT_NE(bytes.find("<DataArray type=\"Int32\" Name=\"organ_label\""), std::string::npos);
+  EXPECT_NE(bytes.find("<DataArray type=\"Float64\" Name=\"det_F\""), std::string::npos);
+  const TetMesh back = read_vtu(folder / "box.vtu");
+  EXPECT_EQ(back.vertices, box.vertices);
+  EXPECT_EQ(back.tets, box.tets);
+
+  // Wrong lengths, and integers that are no whole Int32, are refused and write nothing.
+  EXPECT_THROW(write_vtu(folder / "short.vtu", box, {}, {CellArray{"short", {1.0}, true, "", {}}}),
+               std::invalid_argument);
+  std::vector<double> halves(tets, 0.5);
+  EXPECT_THROW(write_vtu(folder / "half.vtu", box, {}, {CellArray{"half", halves, true, "", {}}}),
+               std::invalid_argument);
+  std::vector<double> huge(tets, 3e9);
+  EXPECT_THROW(write_vtu(folder / "huge.vtu", box, {}, {CellArray{"huge", huge, true, "", {}}}),
+               std::invalid_argument);
+  EXPECT_FALSE(fs::exists(folder / "short.vtu"));
+  EXPECT_FALSE(fs::exists(folder / "half.vtu"));
+  EXPECT_FALSE(fs::exists(folder / "huge.vtu"));
+
+  // Pieces are concatenated; an array a piece lacks, and string arrays, are left out.
+  const std::string piece =
+      "<Piece NumberOfPoints=\"4\" NumberOfCells=\"1\">\n"
+      "<CellData><DataArray type=\"Int16\" Name=\"label\" format=\"ascii\">LABEL</DataArray>EXTRA"
+      "<DataArray type=\"String\" Name=\"note\" format=\"ascii\">104 105 0</DataArray></CellData>\n"
+      "<Points><DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">"
+      "0 0 0 1 0 0 0 1 0 0 0 1</DataArray></Points>\n"
+      "<Cells><DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">0 1 2 3</DataArray>\n"
+      "<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">4</DataArray>\n"
+      "<DataArray type=\"UInt8\" Name=\"types\" format=\"ascii\">10</DataArray></Cells>\n"
+      "</Piece>";
+  const auto replaced = [](std::string text, const std::string& from, const std::string& to) {
+    return text.replace(text.find(from), from.size(), to);
+  };
+  const std::string first =
+      replaced(replaced(piece, "LABEL", "-4"), "EXTRA",
+               "<DataArray type=\"Float32\" Name=\"only_first\" format=\"ascii\">0.5</DataArray>");
+  const std::string second = replaced(replaced(piece, "LABEL", "9"), "EXTRA", "");
+  write_text_file(folder / "pieces.vtu",
+                  "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
+                  "byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<UnstructuredGrid>" +
+                      first + second + "</UnstructuredGrid></VTKFile>\n");
+  const VtuCells pieces = read_vtu_cells(folder / "pieces.vtu", true);
+  ASSERT_EQ(pieces.cells.size(), 2u);
+  ASSERT_EQ(pieces.cell_arrays.size(), 1u);
+  EXPECT_EQ(pieces.cell_arrays[0].name, "label");
+  EXPECT_EQ(pieces.cell_arrays[0].values, (std::vector<double>{-4, 9}));
+}
+
 // Every mesh file states the frame and units of its points and point arrays in its field data
 // (a tet mesh's displacement_mm is RAS like its points, unlike the LPS NIfTI fields), read back
 // with VTK's Python module as ParaView or a script would; SPACE is the field 3D Slicer reads.
@@ -156,6 +234,12 @@ TEST(MeshFile, FieldDataStateTheFrameAndUnitsOfEveryArray) {
   std::vector<double> values(static_cast<std::size_t>(box.vertices.rows()) * 3, 0.5);
   write_vtu(folder / "box.vtu", box, {PointArray{"displacement_mm", 3, values, "RAS", "mm"}});
   write_vtp(folder / "sphere.vtp", unit_icosphere(1));
+  // A file with cell arrays also names the values of its labels, as two arrays of field data.
+  const std::vector<double> labels(static_cast<std::size_t>(box.tets.rows()), 3.0);
+  const std::vector<double> ratios(static_cast<std::size_t>(box.tets.rows()), 1.5);
+  write_vtu(folder / "labelled.vtu", box, {},
+            {CellArray{"organ_label", labels, true, "", {{3, "csf"}, {4, "grey_matter"}}},
+             CellArray{"det_F", ratios, false, "", {}}});
   write_text_file(folder / "check.py", R"(import sys
 import vtk
 from vtk.util.numpy_support import vtk_to_numpy
@@ -168,15 +252,30 @@ for name in sys.argv[1:]:
               for i in range(data.GetNumberOfArrays())}
     print(name.rsplit("/", 1)[1], sorted((k, v) for k, v in values.items() if k != "conventions"))
     print("conventions" in values)
+    if name.endswith("labelled.vtu"):
+        cells = reader.GetOutput().GetCellData()
+        for i in range(cells.GetNumberOfArrays()):
+            array = cells.GetArray(i)
+            print(array.GetName(), array.GetDataTypeAsString(), array.GetNumberOfTuples(),
+                  sorted(set(vtk_to_numpy(array).tolist())))
+        for field in ("organ_label_values", "organ_label_names"):
+            array = data.GetAbstractArray(field)
+            print(field, [array.GetValue(i) for i in range(array.GetNumberOfValues())])
 )");
-  const phantasm::testing::CommandResult result =
-      phantasm::testing::run_command({PHANTASM_PYTHON, (folder / "check.py").string(),
-                                      (folder / "box.vtu").string(), (folder / "sphere.vtp").string()});
+  const phantasm::testing::CommandResult result = phantasm::testing::run_command(
+      {PHANTASM_PYTHON, (folder / "check.py").string(), (folder / "box.vtu").string(),
+       (folder / "sphere.vtp").string(), (folder / "labelled.vtu").string()});
   ASSERT_EQ(result.exit_code, 0) << result.err;
   EXPECT_EQ(result.out,
             "box.vtu [('Points_frame', 'RAS'), ('Points_units', 'mm'), ('SPACE', 'RAS'), "
             "('displacement_mm_frame', 'RAS'), ('displacement_mm_units', 'mm')]\nTrue\n"
-            "sphere.vtp [('Points_frame', 'RAS'), ('Points_units', 'mm'), ('SPACE', 'RAS')]\nTrue\n");
+            "sphere.vtp [('Points_frame', 'RAS'), ('Points_units', 'mm'), ('SPACE', 'RAS')]\nTrue\n"
+            "labelled.vtu [('Points_frame', 'RAS'), ('Points_units', 'mm'), ('SPACE', 'RAS'), "
+            "('det_F_units', ''), ('organ_label_names', 'csf'), ('organ_label_units', ''), "
+            "('organ_label_values', 3)]\nTrue\n"
+            "organ_label int " +
+                std::to_string(box.tets.rows()) + " [3]\ndet_F double " + std::to_string(box.tets.rows()) +
+                " [1.5]\norgan_label_values [3, 4]\norgan_label_names ['csf', 'grey_matter']\n");
 }
 
 // Found by fuzz/fuzz_mesh.cpp: faces naming missing vertices (VTK's OBJ and PLY readers crashed on

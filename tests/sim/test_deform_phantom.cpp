@@ -244,6 +244,12 @@ TEST(DeformPhantom, TetInterfacesFollowOrgansOrOnlyMaterialChanges) {
     EXPECT_TRUE(d.solves.back().converged) << what;
     ASSERT_EQ(d.bodies.size(), 1u);
     expect_no_inversion_and_volume_kept(d.bodies[0], 0.02);
+    // Each tet names its organ (index 1 grey matter, 2 white matter), white matter only when it
+    // is a region of its own.
+    const std::vector<int>& tet_organ = d.bodies[0].tet_organ;
+    ASSERT_EQ(tet_organ.size(), static_cast<std::size_t>(d.bodies[0].tets.rows())) << what;
+    EXPECT_TRUE(std::all_of(tet_organ.begin(), tet_organ.end(), [](int o) { return o == 1 || o == 2; }));
+    EXPECT_EQ(std::count(tet_organ.begin(), tet_organ.end(), 2) > 0, c.white_has_tets) << what;
   }
 }
 
