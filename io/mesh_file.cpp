@@ -8,6 +8,7 @@
 #include "core/format.hpp"
 #include "geometry/tet_boundary.hpp"
 #include "io/atomic_file.hpp"
+#include "io/file_error.hpp"
 #include "io/vtk_xml_file.hpp"
 
 #include <vtkCellArray.h>
@@ -49,10 +50,6 @@
 namespace phantasm {
 namespace {
 
-[[noreturn]] void fail(const std::filesystem::path& path, const std::string& message) {
-  throw InputError(path.string() + ": " + message);
-}
-
 std::string lower_extension(const std::filesystem::path& path) {
   std::string extension = path.extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(),
@@ -63,9 +60,9 @@ std::string lower_extension(const std::filesystem::path& path) {
 void check_readable(const std::filesystem::path& path, const char* what) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error))
-    fail(path, std::string("expected ") + what + ", found no such file");
+    throw_file_error(path, std::string("expected ") + what + ", found no such file");
   if (std::filesystem::file_size(path, error) == 0)
-    fail(path, std::string("expected ") + what + ", found an empty file");
+    throw_file_error(path, std::string("expected ") + what + ", found an empty file");
 }
 
 /// Refuses a binary STL file whose triangle count (the 4 bytes after its 80-byte header) is more
@@ -83,9 +80,9 @@ void check_binary_stl_count(const std::filesystem::path& path) {
   std::error_code error;
   const std::uintmax_t size = std::filesystem::file_size(path, error);
   if (!error && 84 + 50 * count > size) {
-    fail(path, "expected a binary STL file of 84 + 50 bytes per triangle (" +
-                   std::to_string(84 + 50 * count) + " bytes for the " + std::to_string(count) +
-                   " triangles its header counts), found " + std::to_string(size) + " bytes");
+    throw_file_error(path, "expected a binary STL file of 84 + 50 bytes per triangle (" +
+                               std::to_string(84 + 50 * count) + " bytes for the " + std::to_string(count) +
+                               " triangles its header counts), found " + std::to_string(size) + " bytes");
   }
 }
 
@@ -127,9 +124,10 @@ vtkSmartPointer<vtkPolyData> to_poly_data(const std::filesystem::path& path, con
   for (std::size_t f = 0; f < polygons.faces.size(); ++f) {
     for (const vtkIdType id : polygons.faces[f]) {
       if (id < 0 || id >= count)
-        fail(path, polygons.face_places[f] + ": expected vertex indices that refer to the file's " +
-                       std::to_string(count) + " vertices, found one of vertex " + std::to_string(id) +
-                       " (counted from 0)");
+        throw_file_error(path, polygons.face_places[f] +
+                                   ": expected vertex indices that refer to the file's " +
+                                   std::to_string(count) + " vertices, found one of vertex " +
+                                   std::to_string(id) + " (counted from 0)");
     }
     cells->InsertNextCell(static_cast<vtkIdType>(polygons.faces[f].size()), polygons.faces[f].data());
   }
@@ -155,7 +153,8 @@ vtkSmartPointer<vtkPolyData> read_obj(const std::filesystem::path& path) {
       std::array<float, 3> p{};
       for (float& x : p) {
         const std::optional<double> value = words >> word ? parse_number(word) : std::nullopt;
-        if (!value) fail(path, place + ": expected 'v x y z' (three numbers), found '" + line + "'");
+        if (!value)
+          throw_file_error(path, place + ": expected 'v x y z' (three numbers), found '" + line + "'");
         x = to_float(*value);
       }
       polygons.points.push_back(p);
@@ -168,14 +167,16 @@ vtkSmartPointer<vtkPolyData> read_obj(const std::filesystem::path& path) {
             std::from_chars(index_text.data(), index_text.data() + index_text.size(), index);
         if (error != std::errc() || end != index_text.data() + index_text.size() || index == 0 ||
             index < -static_cast<long long>(polygons.points.size()) || index > (1ll << 40))
-          fail(path,
-               place + ": expected vertex indices from 1 (or back from -1, the last vertex so far), found '" +
-                   word + "'");
+          throw_file_error(
+              path,
+              place + ": expected vertex indices from 1 (or back from -1, the last vertex so far), found '" +
+                  word + "'");
         face.push_back(static_cast<vtkIdType>(
             index < 0 ? static_cast<long long>(polygons.points.size()) + index : index - 1));
       }
       if (face.size() < 3)
-        fail(path, place + ": expected a face of at least 3 vertices, found " + std::to_string(face.size()));
+        throw_file_error(path, place + ": expected a face of at least 3 vertices, found " +
+                                   std::to_string(face.size()));
       polygons.faces.push_back(std::move(face));
       polygons.face_places.push_back(place);
     }
@@ -242,13 +243,13 @@ public:
       const std::string token = m_bytes.substr(start, m_at - start);
       const std::optional<double> value = parse_number(token);
       if (!value)
-        fail(m_path, place + ": expected a number, found " +
-                         (token.empty() ? "the end of the file" : "'" + token + "'"));
+        throw_file_error(m_path, place + ": expected a number, found " +
+                                     (token.empty() ? "the end of the file" : "'" + token + "'"));
       return *value;
     }
     const std::size_t size = ply_size(type);
     if (m_bytes.size() - m_at < size)
-      fail(m_path, place + ": expected more values, found the end of the file");
+      throw_file_error(m_path, place + ": expected more values, found the end of the file");
     unsigned char raw[8];
     std::memcpy(raw, m_bytes.data() + m_at, size);
     m_at += size;
@@ -294,7 +295,8 @@ vtkSmartPointer<vtkPolyData> read_ply(const std::filesystem::path& path) {
   std::size_t at = 0;
   for (std::size_t number = 1;; ++number) {
     const std::size_t end = bytes.find('\n', at);
-    if (end == std::string::npos) fail(path, "expected a PLY header ending in 'end_header', found none");
+    if (end == std::string::npos)
+      throw_file_error(path, "expected a PLY header ending in 'end_header', found none");
     std::string line = bytes.substr(at, end - at);
     at = end + 1;
     if (!line.empty() && line.back() == '\r') line.pop_back();
@@ -303,7 +305,7 @@ vtkSmartPointer<vtkPolyData> read_ply(const std::filesystem::path& path) {
     std::string keyword;
     words >> keyword;
     if (number == 1) {
-      if (line != "ply") fail(path, "expected 'ply' on the first line, found '" + line + "'");
+      if (line != "ply") throw_file_error(path, "expected 'ply' on the first line, found '" + line + "'");
       continue;
     }
     if (keyword == "end_header") break;
@@ -313,20 +315,22 @@ vtkSmartPointer<vtkPolyData> read_ply(const std::filesystem::path& path) {
       words >> a >> b;
       format = a == "ascii" ? 0 : a == "binary_little_endian" ? 1 : a == "binary_big_endian" ? 2 : -1;
       if (format < 0 || b != "1.0")
-        fail(path, place + ": expected 'format ascii|binary_little_endian|binary_big_endian 1.0', found '" +
-                       line + "'");
+        throw_file_error(
+            path, place + ": expected 'format ascii|binary_little_endian|binary_big_endian 1.0', found '" +
+                      line + "'");
     } else if (keyword == "element") {
       words >> a >> b;
       std::uint64_t count = 0;
       const auto [end_of_count, error] = std::from_chars(b.data(), b.data() + b.size(), count);
       // Every element takes at least a byte: a count beyond the file's size is not a mesh.
       if (a.empty() || error != std::errc() || end_of_count != b.data() + b.size() || count > bytes.size())
-        fail(path, place + ": expected 'element NAME COUNT' with a count the file can hold (at most " +
-                       std::to_string(bytes.size()) + "), found '" + line + "'");
+        throw_file_error(path,
+                         place + ": expected 'element NAME COUNT' with a count the file can hold (at most " +
+                             std::to_string(bytes.size()) + "), found '" + line + "'");
       elements.push_back(PlyElement{a, count, {}});
     } else if (keyword == "property") {
       if (elements.empty())
-        fail(path, place + ": expected 'element' before its properties, found '" + line + "'");
+        throw_file_error(path, place + ": expected 'element' before its properties, found '" + line + "'");
       PlyProperty property;
       words >> a;
       if (a == "list") {
@@ -334,24 +338,27 @@ vtkSmartPointer<vtkPolyData> read_ply(const std::filesystem::path& path) {
         const auto count_type = ply_type(b), item_type = ply_type(c);
         if (!count_type || !item_type || d.empty() || *count_type == PlyType::float32 ||
             *count_type == PlyType::float64)
-          fail(path, place + ": expected 'property list COUNT_TYPE ITEM_TYPE NAME' (integer count), found '" +
-                         line + "'");
+          throw_file_error(
+              path, place + ": expected 'property list COUNT_TYPE ITEM_TYPE NAME' (integer count), found '" +
+                        line + "'");
         property = PlyProperty{d, *item_type, true, *count_type};
       } else {
         words >> b;
         const auto type = ply_type(a);
-        if (!type || b.empty()) fail(path, place + ": expected 'property TYPE NAME', found '" + line + "'");
+        if (!type || b.empty())
+          throw_file_error(path, place + ": expected 'property TYPE NAME', found '" + line + "'");
         property = PlyProperty{b, *type, false, PlyType::uint8};
       }
       elements.back().properties.push_back(property);
     } else {
-      fail(path,
-           place +
-               ": expected a PLY header keyword (format, element, property, comment, end_header), found '" +
-               keyword + "'");
+      throw_file_error(
+          path,
+          place +
+              ": expected a PLY header keyword (format, element, property, comment, end_header), found '" +
+              keyword + "'");
     }
   }
-  if (format < 0) fail(path, "expected a 'format' line in the PLY header, found none");
+  if (format < 0) throw_file_error(path, "expected a 'format' line in the PLY header, found none");
 
   Polygons polygons;
   PlyValues values(path, bytes, at, format);
@@ -371,11 +378,11 @@ vtkSmartPointer<vtkPolyData> read_ply(const std::filesystem::path& path) {
       std::string found;
       for (const PlyProperty& property : element.properties)
         found += (found.empty() ? "" : ", ") + property.name;
-      fail(path,
-           "expected properties x, y and z of element 'vertex', found " + (found.empty() ? "none" : found));
+      throw_file_error(path, "expected properties x, y and z of element 'vertex', found " +
+                                 (found.empty() ? "none" : found));
     }
     if (face && element.count > 0 && indices < 0)
-      fail(path, "expected a list property 'vertex_indices' of element 'face', found none");
+      throw_file_error(path, "expected a list property 'vertex_indices' of element 'face', found none");
     for (std::uint64_t e = 0; e < element.count; ++e) {
       const std::string place = "element " + element.name + " " + std::to_string(e);
       std::array<float, 3> point{};
@@ -390,21 +397,22 @@ vtkSmartPointer<vtkPolyData> read_ply(const std::filesystem::path& path) {
         }
         const double count = values.next(property.count_type, place);
         if (!(count >= 0.0) || count != std::floor(count) || count > static_cast<double>(values.remaining()))
-          fail(path, place + ": expected a list length the file can hold, found " + format_number(count));
+          throw_file_error(path, place + ": expected a list length the file can hold, found " +
+                                     format_number(count));
         for (std::size_t i = 0; i < static_cast<std::size_t>(count); ++i) {
           const double item = values.next(property.type, place);
           if (static_cast<int>(p) != indices) continue;
           if (!(item >= 0.0) || item != std::floor(item) || item > static_cast<double>(bytes.size()))
-            fail(path,
-                 place + ": expected vertex indices (whole numbers from 0), found " + format_number(item));
+            throw_file_error(path, place + ": expected vertex indices (whole numbers from 0), found " +
+                                       format_number(item));
           polygon.push_back(static_cast<vtkIdType>(item));
         }
       }
       if (vertex) polygons.points.push_back(point);
       if (face) {
         if (polygon.size() < 3)
-          fail(path,
-               place + ": expected a face of at least 3 vertices, found " + std::to_string(polygon.size()));
+          throw_file_error(path, place + ": expected a face of at least 3 vertices, found " +
+                                     std::to_string(polygon.size()));
         polygons.faces.push_back(std::move(polygon));
         polygons.face_places.push_back(place);
       }
@@ -422,7 +430,8 @@ vtkSmartPointer<vtkPolyData> read_poly_data(const std::filesystem::path& path) {
   reader->GlobalWarningDisplayOff();
   reader->Update();
   vtkSmartPointer<vtkPolyData> data = reader->GetOutput();
-  if (reader->GetErrorCode() != 0 || !data) fail(path, "expected a mesh file, found one VTK cannot read");
+  if (reader->GetErrorCode() != 0 || !data)
+    throw_file_error(path, "expected a mesh file, found one VTK cannot read");
   return data;
 }
 
@@ -589,7 +598,7 @@ TriangleMesh read_triangle_mesh(const std::filesystem::path& path) {
     check_readable(path, what);
     data = read_vtp(path);
   } else {
-    fail(path, std::string("expected ") + what + ", found extension '" + extension + "'");
+    throw_file_error(path, std::string("expected ") + what + ", found extension '" + extension + "'");
   }
   // Keep only polygons, as triangles (VTK keeps the points as they are). Every reader above has
   // checked the polygons' indices against the points (vtkTriangleFilter reads the points of a
@@ -605,7 +614,7 @@ TriangleMesh read_triangle_mesh(const std::filesystem::path& path) {
   triangles->Update();
   vtkPolyData* result = triangles->GetOutput();
   if (!result->GetPolys() || result->GetPolys()->GetNumberOfCells() == 0 || !result->GetPoints())
-    fail(path, "expected triangles, found none");
+    throw_file_error(path, "expected triangles, found none");
 
   // Merge exactly coincident points and drop unused ones, keeping the file's order otherwise.
   vtkCellArray* cells = result->GetPolys();
@@ -616,15 +625,17 @@ TriangleMesh read_triangle_mesh(const std::filesystem::path& path) {
   const vtkIdType point_count = result->GetNumberOfPoints();
   for (cells->InitTraversal(); cells->GetNextCell(ids);) {
     if (ids->GetNumberOfIds() != 3)
-      fail(path, "expected triangles, found a cell of " + std::to_string(ids->GetNumberOfIds()) + " points");
+      throw_file_error(path, "expected triangles, found a cell of " + std::to_string(ids->GetNumberOfIds()) +
+                                 " points");
     for (int k = 0; k < 3; ++k) {
       // VTK's readers keep the indices as the file gives them (an OBJ face "f 1 2 9" of a file
       // with three vertices).
       const vtkIdType id = ids->GetId(k);
       if (id < 0 || id >= point_count)
-        fail(path, "triangle " + std::to_string(f) + ": expected vertex indices that refer to the file's " +
-                       std::to_string(point_count) + " vertices, found index " + std::to_string(id) +
-                       " (from 0)");
+        throw_file_error(path, "triangle " + std::to_string(f) +
+                                   ": expected vertex indices that refer to the file's " +
+                                   std::to_string(point_count) + " vertices, found index " +
+                                   std::to_string(id) + " (from 0)");
       mesh.faces(f, k) = static_cast<int>(id);
     }
     ++f;
@@ -639,7 +650,8 @@ TriangleMesh read_triangle_mesh(const std::filesystem::path& path) {
     std::array<double, 3> p;
     result->GetPoint(static_cast<vtkIdType>(id), p.data());
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
-      fail(path, "expected finite coordinates, found a NaN or infinity at point " + std::to_string(id));
+      throw_file_error(path,
+                       "expected finite coordinates, found a NaN or infinity at point " + std::to_string(id));
     const auto [it, inserted] = first_of_position.try_emplace(p, static_cast<int>(kept.size()));
     if (inserted) kept.push_back(p);
     merged[id] = it->second;
@@ -692,27 +704,29 @@ TetMesh read_vtu(const std::filesystem::path& path) {
   // Through phantasm's own reading of VTK XML (as .vtp files), not vtkXMLUnstructuredGridReader,
   // which crashes on some damaged files (string field data, arrays of unknown types).
   const VtuCells file = read_vtu_cells(path);
-  if (file.cells.empty()) fail(path, "expected a VTK unstructured grid of tetrahedra, found no cell");
+  if (file.cells.empty())
+    throw_file_error(path, "expected a VTK unstructured grid of tetrahedra, found no cell");
   TetMesh mesh;
   const auto points = static_cast<Eigen::Index>(file.points.size() / 3);
   if (points > std::numeric_limits<int>::max())
-    fail(path, "expected at most " + std::to_string(std::numeric_limits<int>::max()) + " points, found " +
-                   std::to_string(points));
+    throw_file_error(path, "expected at most " + std::to_string(std::numeric_limits<int>::max()) +
+                               " points, found " + std::to_string(points));
   mesh.vertices.resize(points, 3);
   for (Eigen::Index i = 0; i < points; ++i) {
     mesh.vertices.row(i) =
         Eigen::RowVector3d(file.points[3 * i], file.points[3 * i + 1], file.points[3 * i + 2]);
     if (!mesh.vertices.row(i).allFinite())
-      fail(path, "expected finite point coordinates, found point " + std::to_string(i) + " at " +
-                     format_number(mesh.vertices(i, 0)) + ", " + format_number(mesh.vertices(i, 1)) + ", " +
-                     format_number(mesh.vertices(i, 2)));
+      throw_file_error(path, "expected finite point coordinates, found point " + std::to_string(i) + " at " +
+                                 format_number(mesh.vertices(i, 0)) + ", " +
+                                 format_number(mesh.vertices(i, 1)) + ", " +
+                                 format_number(mesh.vertices(i, 2)));
   }
   mesh.tets.resize(static_cast<Eigen::Index>(file.cells.size()), 4);
   for (std::size_t c = 0; c < file.cells.size(); ++c) {
     if (file.types[c] != VTK_TETRA || file.cells[c].size() != 4)
-      fail(path, "expected tetrahedra (VTK type 10, 4 vertices), found cell " + std::to_string(c) +
-                     " of VTK type " + std::to_string(file.types[c]) + " with " +
-                     std::to_string(file.cells[c].size()) + " vertices");
+      throw_file_error(path, "expected tetrahedra (VTK type 10, 4 vertices), found cell " +
+                                 std::to_string(c) + " of VTK type " + std::to_string(file.types[c]) +
+                                 " with " + std::to_string(file.cells[c].size()) + " vertices");
     for (int k = 0; k < 4; ++k)
       mesh.tets(static_cast<Eigen::Index>(c), k) =
           static_cast<int>(file.cells[c][static_cast<std::size_t>(k)]);

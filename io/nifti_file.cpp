@@ -7,6 +7,7 @@
 #include "core/error.hpp"
 #include "core/format.hpp"
 #include "io/atomic_file.hpp"
+#include "io/file_error.hpp"
 
 #include <nifti/nifti2_io.h>
 #include <zlib.h>
@@ -164,10 +165,6 @@ void write_volume(const std::filesystem::path& path, const ImageGrid& grid, cons
   stream.commit();
 }
 
-[[noreturn]] void fail(const std::filesystem::path& path, const std::string& message) {
-  throw InputError(path.string() + ": " + message);
-}
-
 } // namespace
 
 void write_nifti(const std::filesystem::path& path, const ImageGrid& grid, const std::vector<float>& values,
@@ -224,8 +221,9 @@ void check_voxel_offset(const std::filesystem::path& path) {
   const bool nifti1 = std::memcmp(header + 344, "n+1", 4) == 0 || std::memcmp(header + 344, "ni1", 4) == 0;
   const bool nifti2 = std::memcmp(header + 4, "n+2", 4) == 0 || std::memcmp(header + 4, "ni2", 4) == 0;
   if ((size == 348 && !nifti1) || (size == 540 && !nifti2))
-    fail(path, "expected a NIfTI-1 or NIfTI-2 header (magic \"n+1\" or \"n+2\"), found a header of " +
-                   std::to_string(size) + " bytes without it (ANALYZE 7.5?)");
+    throw_file_error(path,
+                     "expected a NIfTI-1 or NIfTI-2 header (magic \"n+1\" or \"n+2\"), found a header of " +
+                         std::to_string(size) + " bytes without it (ANALYZE 7.5?)");
   double offset = 0.0;
   if (size == 348) {
     float value = 0.0f;
@@ -239,8 +237,8 @@ void check_voxel_offset(const std::filesystem::path& path) {
     return; // not a NIfTI header: libnifti refuses it
   }
   if (!(offset >= 0.0) || offset >= 2147483648.0 || offset != std::floor(offset))
-    fail(path, "expected the voxels at a whole byte offset (vox_offset) below 2^31, found " +
-                   format_number(offset));
+    throw_file_error(path, "expected the voxels at a whole byte offset (vox_offset) below 2^31, found " +
+                               format_number(offset));
 }
 
 /// Reads the voxels a header describes, in pieces, and returns their bytes in this machine's
@@ -261,17 +259,18 @@ std::vector<unsigned char> read_voxel_data(const std::filesystem::path& path, co
   // Whole numbers up to 2^53 are exact in a double; no file of this machine holds more voxels.
   if (!(product >= 1.0) || product > 9007199254740992.0 || static_cast<double>(header.nvox) != product ||
       header.nbyper <= 0)
-    fail(path, "expected positive dimensions whose product is the voxel count, found dimensions " + dims);
+    throw_file_error(
+        path, "expected positive dimensions whose product is the voxel count, found dimensions " + dims);
   for (const std::int64_t n : {header.nx, header.ny, header.nz}) {
     if (n > std::numeric_limits<int>::max())
-      fail(path, "expected at most 2^31 - 1 voxels along an axis, found dimensions " + dims);
+      throw_file_error(path, "expected at most 2^31 - 1 voxels along an axis, found dimensions " + dims);
   }
   const std::uint64_t needed =
       static_cast<std::uint64_t>(header.nvox) * static_cast<std::uint64_t>(header.nbyper);
   const auto short_file = [&](std::uint64_t found) {
-    fail(path, "expected " + std::to_string(needed) + " bytes of voxels (dimensions " + dims + ", " +
-                   std::to_string(header.nbyper) + " bytes each) from byte " +
-                   std::to_string(header.iname_offset) + ", found " + std::to_string(found));
+    throw_file_error(path, "expected " + std::to_string(needed) + " bytes of voxels (dimensions " + dims +
+                               ", " + std::to_string(header.nbyper) + " bytes each) from byte " +
+                               std::to_string(header.iname_offset) + ", found " + std::to_string(found));
   };
   const bool gzip = nifti_is_gzfile(header.iname) != 0;
   if (!gzip) {
@@ -281,7 +280,8 @@ std::vector<unsigned char> read_voxel_data(const std::filesystem::path& path, co
     if (!error && size < offset + needed) short_file(size > offset ? size - offset : 0);
   }
   const znzFile file = znzopen(header.iname, "rb", gzip);
-  if (znz_isnull(file)) fail(path, "expected a NIfTI-1 or NIfTI-2 image, found a file libnifti cannot read");
+  if (znz_isnull(file))
+    throw_file_error(path, "expected a NIfTI-1 or NIfTI-2 image, found a file libnifti cannot read");
   znzFile handle = file;
   struct Closer {
     znzFile& handle;
@@ -336,10 +336,10 @@ std::vector<unsigned char> read_voxel_data(const std::filesystem::path& path, co
   }
   if (done < needed) short_file(done);
   if (first_bad) {
-    fail(path, "expected finite values, found " +
-                   std::string(std::isnan(first_bad->second) ? "NaN" : "infinity") + " at value " +
-                   std::to_string(first_bad->first) + " of " + std::to_string(header.nvox) +
-                   " (i fastest, then j, k, components)");
+    throw_file_error(path, "expected finite values, found " +
+                               std::string(std::isnan(first_bad->second) ? "NaN" : "infinity") +
+                               " at value " + std::to_string(first_bad->first) + " of " +
+                               std::to_string(header.nvox) + " (i fastest, then j, k, components)");
   }
   bytes.resize(static_cast<std::size_t>(needed));
   return bytes;
@@ -349,35 +349,37 @@ std::vector<unsigned char> read_voxel_data(const std::filesystem::path& path, co
 /// (X, Y, Z, 1, components) image in the ITK vector convention otherwise.
 NiftiVolume read_volume(const std::filesystem::path& path, int components) {
   std::error_code error;
-  if (!std::filesystem::is_regular_file(path, error)) fail(path, "expected a NIfTI file, found no such file");
+  if (!std::filesystem::is_regular_file(path, error))
+    throw_file_error(path, "expected a NIfTI file, found no such file");
   nifti_set_debug_level(0);
   // The header through libnifti, the voxels by read_voxel_data (in pieces, so that a cancellation
   // need not wait for a whole file to decompress).
   const std::unique_ptr<nifti_image, void (*)(nifti_image*)> image(nifti_image_read(path.c_str(), 0),
                                                                    nifti_image_free);
   check_voxel_offset(path);
-  if (!image) fail(path, "expected a NIfTI-1 or NIfTI-2 image, found a file libnifti cannot read");
+  if (!image)
+    throw_file_error(path, "expected a NIfTI-1 or NIfTI-2 image, found a file libnifti cannot read");
   const std::vector<unsigned char> bytes = read_voxel_data(path, *image);
   if (components == 1) {
     for (int d = 4; d <= 7; ++d) {
       if (image->dim[0] >= d && image->dim[d] > 1) {
-        fail(path, "expected a 3-D volume, found dimension " + std::to_string(d) + " of size " +
-                       std::to_string(image->dim[d]));
+        throw_file_error(path, "expected a 3-D volume, found dimension " + std::to_string(d) + " of size " +
+                                   std::to_string(image->dim[d]));
       }
     }
   } else {
     const std::string expected =
         "expected a 5-D vector image (X, Y, Z, 1, " + std::to_string(components) + ") in the ITK convention";
     if (image->dim[0] == 4 && image->dim[4] == components) {
-      fail(path, expected + ", found a 4-D (X, Y, Z, " + std::to_string(components) +
-                     ") volume, which ITK and elastix read as a time series");
+      throw_file_error(path, expected + ", found a 4-D (X, Y, Z, " + std::to_string(components) +
+                                 ") volume, which ITK and elastix read as a time series");
     }
     if (image->dim[0] < 5 || image->dim[4] != 1 || image->dim[5] != components ||
         (image->dim[0] >= 6 && image->dim[6] > 1) || (image->dim[0] >= 7 && image->dim[7] > 1)) {
       std::string found = "dimensions (";
       for (int d = 1; d <= image->dim[0]; ++d)
         found += (d > 1 ? ", " : "") + std::to_string(image->dim[d]);
-      fail(path, expected + ", found " + found + ")");
+      throw_file_error(path, expected + ", found " + found + ")");
     }
   }
   NiftiVolume volume;
@@ -399,12 +401,12 @@ NiftiVolume read_volume(const std::filesystem::path& path, int components) {
   const Eigen::Matrix3d linear = affine.topLeftCorner<3, 3>();
   const Eigen::Vector3d spacing = linear.colwise().norm().transpose();
   if ((spacing.array() <= 0.0).any())
-    fail(path, "expected positive voxel sizes, found a zero column in the affine");
+    throw_file_error(path, "expected positive voxel sizes, found a zero column in the affine");
   const Eigen::Matrix3d direction = linear * spacing.cwiseInverse().asDiagonal();
   const double shear =
       (direction.transpose() * direction - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
   if (shear > 1e-4) {
-    fail(
+    throw_file_error(
         path,
         "expected an affine without shear (rotation times voxel sizes), found axes whose dot products differ "
         "from 0 by " +
@@ -438,8 +440,9 @@ NiftiVolume read_volume(const std::filesystem::path& path, int components) {
   case DT_FLOAT32: convert(float{}); break;
   case DT_FLOAT64: convert(double{}); break;
   default:
-    fail(path, "expected a real scalar datatype, found NIfTI datatype " + std::to_string(image->datatype) +
-                   " (" + nifti_datatype_string(image->datatype) + ")");
+    throw_file_error(path, "expected a real scalar datatype, found NIfTI datatype " +
+                               std::to_string(image->datatype) + " (" +
+                               nifti_datatype_string(image->datatype) + ")");
   }
   return volume;
 }
@@ -462,9 +465,10 @@ std::vector<std::int32_t> read_nifti_labels(const std::filesystem::path& path, I
     const double v = volume.values[i];
     if (!std::isfinite(v) || v != std::round(v) || std::abs(v) > std::numeric_limits<std::int32_t>::max()) {
       const auto index = static_cast<std::int64_t>(i);
-      fail(path, "expected whole-number labels, found " + std::to_string(v) + " at voxel (" +
-                     std::to_string(index % d.x()) + ", " + std::to_string(index / d.x() % d.y()) + ", " +
-                     std::to_string(index / (static_cast<std::int64_t>(d.x()) * d.y())) + ")");
+      throw_file_error(path, "expected whole-number labels, found " + std::to_string(v) + " at voxel (" +
+                                 std::to_string(index % d.x()) + ", " +
+                                 std::to_string(index / d.x() % d.y()) + ", " +
+                                 std::to_string(index / (static_cast<std::int64_t>(d.x()) * d.y())) + ")");
     }
     labels[i] = static_cast<std::int32_t>(v);
   }

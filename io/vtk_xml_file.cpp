@@ -6,6 +6,7 @@
 
 #include "core/error.hpp"
 #include "core/format.hpp"
+#include "io/file_error.hpp"
 
 #include <vtkBase64InputStream.h>
 #include <vtkDataCompressor.h>
@@ -35,10 +36,6 @@ namespace {
 constexpr std::uint64_t k_max_expansion = 8192;
 /// Room for a block whose compressed form is all overhead (a few bytes of zeros).
 constexpr std::uint64_t k_block_slack = 65536;
-
-[[noreturn]] void fail(const std::filesystem::path& path, const std::string& message) {
-  throw InputError(path.string() + ": " + message);
-}
 
 /// What the file's root element says about how its binary arrays are stored.
 struct Layout {
@@ -90,16 +87,17 @@ void check_compression_header(const std::filesystem::path& path, std::ifstream& 
   const std::uint64_t blocks = head[0], block_size = head[1], last_size = head[2];
   const std::string where = "array " + array + ": expected a compression header the file can hold, found ";
   if (blocks > layout.file_size / static_cast<std::uint64_t>(layout.header_bytes))
-    fail(path, where + std::to_string(blocks) + " blocks in a file of " + std::to_string(layout.file_size) +
-                   " bytes");
+    throw_file_error(path, where + std::to_string(blocks) + " blocks in a file of " +
+                               std::to_string(layout.file_size) + " bytes");
   // VTK divides by the block size and finds a block by dividing the offset it reads at by it: a
   // block of no bytes, or a last block larger than the others, sends it out of its block list.
   // With no blocks, a last block makes VTK's total size wrap around below zero.
   if (blocks == 0 && last_size != 0)
-    fail(path, where + "no blocks but a last one of " + std::to_string(last_size) + " bytes");
+    throw_file_error(path, where + "no blocks but a last one of " + std::to_string(last_size) + " bytes");
   if (blocks > 0 && (block_size == 0 || last_size > block_size))
-    fail(path, where + "blocks of " + std::to_string(block_size) + " bytes and a last one of " +
-                   std::to_string(last_size) + " (blocks of at least a byte, the last one no larger)");
+    throw_file_error(path, where + "blocks of " + std::to_string(block_size) + " bytes and a last one of " +
+                               std::to_string(last_size) +
+                               " (blocks of at least a byte, the last one no larger)");
   std::vector<std::uint64_t> sizes;
   if (!read_words(*stream, static_cast<std::size_t>(blocks), layout, sizes)) return;
   stream->EndReading();
@@ -109,13 +107,14 @@ void check_compression_header(const std::filesystem::path& path, std::ifstream& 
     const std::uint64_t uncompressed = (b + 1 == blocks && last_size != 0) ? last_size : block_size;
     compressed_so_far += std::min(compressed, layout.file_size + 1);
     if (compressed_so_far > layout.file_size)
-      fail(path, where + "block " + std::to_string(b) + " of " + std::to_string(compressed) +
-                     " compressed bytes, past the end of a file of " + std::to_string(layout.file_size) +
-                     " bytes");
+      throw_file_error(path, where + "block " + std::to_string(b) + " of " + std::to_string(compressed) +
+                                 " compressed bytes, past the end of a file of " +
+                                 std::to_string(layout.file_size) + " bytes");
     if (uncompressed > k_max_expansion * compressed + k_block_slack)
-      fail(path, where + "block " + std::to_string(b) + " of " + std::to_string(uncompressed) +
-                     " bytes compressed into " + std::to_string(compressed) + " (at most " +
-                     std::to_string(k_max_expansion) + " times as many bytes come out of a compressed one)");
+      throw_file_error(path, where + "block " + std::to_string(b) + " of " + std::to_string(uncompressed) +
+                                 " bytes compressed into " + std::to_string(compressed) + " (at most " +
+                                 std::to_string(k_max_expansion) +
+                                 " times as many bytes come out of a compressed one)");
   }
 }
 
@@ -130,9 +129,9 @@ void check_count(const std::filesystem::path& path, vtkXMLDataElement& element, 
       (layout.compressed ? k_max_expansion * layout.file_size + k_block_slack : layout.file_size) /
       bytes_each;
   if (count < 0 || static_cast<std::uint64_t>(count) > most) {
-    fail(path, std::string("element ") + element.GetName() + ": expected " + name +
-                   " the file can hold (at most " + std::to_string(most) + " in " +
-                   std::to_string(layout.file_size) + " bytes), found " + std::to_string(count));
+    throw_file_error(path, std::string("element ") + element.GetName() + ": expected " + name +
+                               " the file can hold (at most " + std::to_string(most) + " in " +
+                               std::to_string(layout.file_size) + " bytes), found " + std::to_string(count));
   }
 }
 
@@ -177,14 +176,14 @@ void check_element(const std::filesystem::path& path, std::ifstream& file, vtkXM
     // VTK's reader dereferences the array it fails to make for a type it does not know.
     const char* type = element.GetAttribute("type");
     if (type == nullptr || !known_type(type))
-      fail(path, "array " + array +
-                     ": expected a type of Int8, UInt8, Int16, UInt16, Int32, UInt32, Int64, " +
-                     "UInt64, Float32, Float64 or String, found " +
-                     (type ? "'" + std::string(type) + "'" : std::string("none")));
+      throw_file_error(path, "array " + array +
+                                 ": expected a type of Int8, UInt8, Int16, UInt16, Int32, UInt32, Int64, " +
+                                 "UInt64, Float32, Float64 or String, found " +
+                                 (type ? "'" + std::string(type) + "'" : std::string("none")));
     if (format == nullptr || !(std::strcmp(format, "ascii") == 0 || std::strcmp(format, "binary") == 0 ||
                                std::strcmp(format, "appended") == 0))
-      fail(path, "array " + array + ": expected the format ascii, binary or appended, found " +
-                     (format ? "'" + std::string(format) + "'" : std::string("none")));
+      throw_file_error(path, "array " + array + ": expected the format ascii, binary or appended, found " +
+                                 (format ? "'" + std::string(format) + "'" : std::string("none")));
     if (layout.compressed && format != nullptr) {
       long long offset = 0;
       if (std::strcmp(format, "appended") == 0 && layout.appended >= 0 &&
@@ -291,8 +290,8 @@ std::vector<double> read_values(const std::filesystem::path& path, ParsedFile& p
   const char* type = element.GetAttribute("type");
   const int word = word_type(type);
   if (word == 0)
-    fail(path, what + ": expected a numeric type (Int8 to UInt64, Float32 or Float64), found " +
-                   (type ? "'" + std::string(type) + "'" : std::string("none")));
+    throw_file_error(path, what + ": expected a numeric type (Int8 to UInt64, Float32 or Float64), found " +
+                               (type ? "'" + std::string(type) + "'" : std::string("none")));
   const std::size_t word_size = parsed.parser->GetWordTypeSize(word);
   std::vector<unsigned char> bytes(count * word_size);
   const char* format = element.GetAttribute("format");
@@ -301,7 +300,7 @@ std::vector<double> read_values(const std::filesystem::path& path, ParsedFile& p
     if (std::strcmp(format, "appended") == 0) {
       long long offset = 0;
       if (!element.GetScalarAttribute("offset", offset) || offset < 0)
-        fail(path, what + ": expected an offset into the appended data, found none");
+        throw_file_error(path, what + ": expected an offset into the appended data, found none");
       read = parsed.parser->ReadAppendedData(offset, bytes.data(), 0, count, word);
     } else {
       read = parsed.parser->ReadInlineData(&element, std::strcmp(format, "ascii") == 0, bytes.data(), 0,
@@ -309,7 +308,8 @@ std::vector<double> read_values(const std::filesystem::path& path, ParsedFile& p
     }
   }
   if (read != count)
-    fail(path, what + ": expected " + std::to_string(count) + " values, found " + std::to_string(read));
+    throw_file_error(path,
+                     what + ": expected " + std::to_string(count) + " values, found " + std::to_string(read));
   std::vector<double> values(count);
   switch (word) {
   case VTK_SIGNED_CHAR: widen<signed char>(bytes, count, values); break;
@@ -338,8 +338,9 @@ vtkSmartPointer<vtkDataCompressor> compressor(const std::filesystem::path& path,
   if (std::strcmp(name, "vtkZLibDataCompressor") == 0) return vtkSmartPointer<vtkZLibDataCompressor>::New();
   if (std::strcmp(name, "vtkLZ4DataCompressor") == 0) return vtkSmartPointer<vtkLZ4DataCompressor>::New();
   if (std::strcmp(name, "vtkLZMADataCompressor") == 0) return vtkSmartPointer<vtkLZMADataCompressor>::New();
-  fail(path, std::string("expected the compressor vtkZLibDataCompressor, vtkLZ4DataCompressor or ") +
-                 "vtkLZMADataCompressor, found '" + name + "'");
+  throw_file_error(path,
+                   std::string("expected the compressor vtkZLibDataCompressor, vtkLZ4DataCompressor or ") +
+                       "vtkLZMADataCompressor, found '" + name + "'");
 }
 
 } // namespace
@@ -392,8 +393,9 @@ void read_cell_arrays(const std::filesystem::path& path, ParsedFile& parsed, vtk
     // As the offsets: no more values than the file's bytes can hold.
     if (components < 1 ||
         static_cast<std::uint64_t>(components) > most / std::max<std::size_t>(cell_count, 1))
-      fail(path, what + ": expected 1 to " + std::to_string(most / std::max<std::size_t>(cell_count, 1)) +
-                     " components, found " + std::to_string(components));
+      throw_file_error(path, what + ": expected 1 to " +
+                                 std::to_string(most / std::max<std::size_t>(cell_count, 1)) +
+                                 " components, found " + std::to_string(components));
     auto found = std::find_if(arrays.begin(), arrays.end(),
                               [&](const VtuCellArray& a) { return a.name == array_name; });
     if (found == arrays.end()) {
@@ -417,16 +419,18 @@ void read_cell_arrays(const std::filesystem::path& path, ParsedFile& parsed, vtk
 PieceCells read_piece_cells(const std::filesystem::path& path, const CellLayout& layout) {
   ParsedFile parsed;
   parse(path, parsed);
-  if (parsed.root == nullptr) fail(path, "expected a VTK XML file, found one VTK's XML parser cannot read");
+  if (parsed.root == nullptr)
+    throw_file_error(path, "expected a VTK XML file, found one VTK's XML parser cannot read");
   vtkXMLDataElement& root = *parsed.root;
   const char* type = root.GetAttribute("type");
   if (type == nullptr || std::strcmp(type, layout.type) != 0)
-    fail(path, std::string("expected a VTK XML file of type ") + layout.type + ", found type " +
-                   (type ? "'" + std::string(type) + "'" : std::string("none")));
+    throw_file_error(path, std::string("expected a VTK XML file of type ") + layout.type + ", found type " +
+                               (type ? "'" + std::string(type) + "'" : std::string("none")));
   check_element(path, parsed.file, root, parsed.layout);
   parsed.parser->SetCompressor(compressor(path, root.GetAttribute("compressor")));
   vtkXMLDataElement* dataset = child(root, layout.type);
-  if (dataset == nullptr) fail(path, std::string("expected a ") + layout.type + " element, found none");
+  if (dataset == nullptr)
+    throw_file_error(path, std::string("expected a ") + layout.type + " element, found none");
   const std::string noun = layout.noun;
 
   PieceCells out;
@@ -443,10 +447,11 @@ PieceCells read_piece_cells(const std::filesystem::path& path, const CellLayout&
     if (point_count > 0) {
       vtkXMLDataElement* points = child(piece, "Points");
       vtkXMLDataElement* array = points ? data_array(*points, nullptr) : nullptr;
-      if (array == nullptr) fail(path, where + ": expected the points' DataArray, found none");
+      if (array == nullptr) throw_file_error(path, where + ": expected the points' DataArray, found none");
       long long components = 0;
       if (!array->GetScalarAttribute("NumberOfComponents", components) || components != 3)
-        fail(path, where + ": expected points of 3 components, found " + std::to_string(components));
+        throw_file_error(path,
+                         where + ": expected points of 3 components, found " + std::to_string(components));
       const std::vector<double> xyz = read_values(path, parsed, *array, 3 * point_count, where + " points");
       out.points.insert(out.points.end(), xyz.begin(), xyz.end());
     }
@@ -455,8 +460,9 @@ PieceCells read_piece_cells(const std::filesystem::path& path, const CellLayout&
     vtkXMLDataElement* offsets_array = block ? data_array(*block, "offsets") : nullptr;
     vtkXMLDataElement* connectivity_array = block ? data_array(*block, "connectivity") : nullptr;
     if (offsets_array == nullptr || connectivity_array == nullptr)
-      fail(path, where + ": expected the " + noun + "s' offsets and connectivity, found " +
-                     (block ? std::string("not both") : "no " + std::string(layout.element) + " element"));
+      throw_file_error(
+          path, where + ": expected the " + noun + "s' offsets and connectivity, found " +
+                    (block ? std::string("not both") : "no " + std::string(layout.element) + " element"));
     const std::vector<double> offsets =
         read_values(path, parsed, *offsets_array, cell_count, where + " " + noun + " offsets");
     // Offsets end each cell in the connectivity: they never fall, and the last is its length, which
@@ -469,9 +475,10 @@ PieceCells read_piece_cells(const std::filesystem::path& path, const CellLayout&
     for (std::size_t c = 0; c < cell_count; ++c) {
       if (!(offsets[c] >= previous) || offsets[c] > static_cast<double>(most) ||
           offsets[c] != std::floor(offsets[c]))
-        fail(path, where + " " + noun + " " + std::to_string(c) + ": expected a whole offset from " +
-                       std::to_string(static_cast<long long>(previous)) + " and at most " +
-                       std::to_string(most) + ", found " + format_number(offsets[c]));
+        throw_file_error(path, where + " " + noun + " " + std::to_string(c) +
+                                   ": expected a whole offset from " +
+                                   std::to_string(static_cast<long long>(previous)) + " and at most " +
+                                   std::to_string(most) + ", found " + format_number(offsets[c]));
       previous = offsets[c];
     }
     const std::vector<double> connectivity =
@@ -484,9 +491,9 @@ PieceCells read_piece_cells(const std::filesystem::path& path, const CellLayout&
       for (std::size_t k = begin; k < end; ++k) {
         const double id = connectivity[k];
         if (!(id >= 0.0 && id < static_cast<double>(point_count)) || id != std::floor(id))
-          fail(path, where + " " + noun + " " + std::to_string(c) +
-                         ": expected vertex indices that refer to the piece's " +
-                         std::to_string(point_count) + " points, found " + format_number(id));
+          throw_file_error(path, where + " " + noun + " " + std::to_string(c) +
+                                     ": expected vertex indices that refer to the piece's " +
+                                     std::to_string(point_count) + " points, found " + format_number(id));
         cell.push_back(static_cast<long long>(first_point) + static_cast<long long>(id));
       }
       out.cells.push_back(std::move(cell));
@@ -494,10 +501,11 @@ PieceCells read_piece_cells(const std::filesystem::path& path, const CellLayout&
     }
     if (layout.types) {
       vtkXMLDataElement* types_array = data_array(*block, "types");
-      if (types_array == nullptr) fail(path, where + ": expected the cells' types, found none");
+      if (types_array == nullptr) throw_file_error(path, where + ": expected the cells' types, found none");
       for (const double t : read_values(path, parsed, *types_array, cell_count, where + " cell types")) {
         if (!(t >= 0.0 && t <= 255.0) || t != std::floor(t))
-          fail(path, where + ": expected VTK cell types from 0 to 255, found " + format_number(t));
+          throw_file_error(path,
+                           where + ": expected VTK cell types from 0 to 255, found " + format_number(t));
         out.types.push_back(static_cast<int>(t));
       }
     }
