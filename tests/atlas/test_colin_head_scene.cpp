@@ -124,6 +124,35 @@ TEST(ColinHeadScene, CoarseRunLabelsEveryOrganShiftsTheBrainAndMeetsItsCostEstim
   EXPECT_NE(provenance.find("colin27 labels derived"), std::string::npos);
 }
 
+// The intracranial body (csf and the organs nested in it, one conforming tet mesh meshed from the
+// labels) is meshed and solved in two processes, as two runs of the scene sharing an anatomy cache
+// would (the first builds the anatomy, the second reads it): the same vertices, tets, organ of
+// each tet and deformed vertices, bit for bit. The coarse copy's surfaces are made smaller still
+// (80 base triangles): the body is meshed from the labels, not from the surfaces.
+TEST(ColinHeadScene, TheSimulatedBodyIsTheSameInEveryProcess) {
+  if (!fs::is_directory(default_colin27_templates_dir())) GTEST_SKIP() << "mricron-data is not installed";
+  const fs::path folder = fresh_folder("colin-head-body-fingerprint");
+  const fs::path scene = folder / "colin-head.yaml";
+  write_text_file(scene,
+                  std::regex_replace(testing::coarse_colin_head_text(),
+                                     std::regex(R"(base_mesh_triangles: \d+)"), "base_mesh_triangles: 80"));
+  const fs::path cache = folder / "anatomy-cache";
+  const auto first = run_command({BODY_FINGERPRINT, scene.string(), cache.string()});
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  // "csf <vertices> <tets> <sha256>": one body, the coarse copy's 8 mm mesh of about 36 000 tets.
+  std::istringstream line(first.out);
+  std::string organ, hash;
+  long vertices = 0, tets = 0;
+  ASSERT_TRUE(static_cast<bool>(line >> organ >> vertices >> tets >> hash)) << first.out;
+  EXPECT_EQ(organ, "csf");
+  EXPECT_GT(tets, 20000);
+  EXPECT_EQ(hash.size(), 64u);
+  ASSERT_FALSE(fs::is_empty(cache)) << "the first process kept no anatomy";
+  const auto second = run_command({BODY_FINGERPRINT, scene.string(), cache.string()});
+  ASSERT_EQ(second.exit_code, 0) << second.err;
+  EXPECT_EQ(second.out, first.out);
+}
+
 TEST(ColinHeadScene, ALabelVolumeWithALabelOnItsEdgeIsABadInputAndNothingIsWritten) {
   const fs::path folder = fresh_folder("colin-head-scene-edge");
   ImageGrid grid;
