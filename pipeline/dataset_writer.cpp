@@ -19,14 +19,12 @@
 #include "voxelize/level_set.hpp"
 #include "voxelize/voxelized_phantom.hpp"
 
-#include <Eigen/LU>
 #include <omp.h>
 
 #include <algorithm>
 #include <atomic>
 #include <exception>
 #include <functional>
-#include <limits>
 #include <map>
 #include <mutex>
 #include <sstream>
@@ -168,23 +166,6 @@ double mesh_export_tolerance_mm(const Scene& scene) {
       0.5, std::max(scene.voxelization.tessellation_tolerance_mm, 0.2 * scene.grid.voxel_size_mm.minCoeff()));
 }
 
-/// Each tet's det F (deformed over rest volume; NaN for a tet of no rest volume).
-std::vector<double> tet_det_F(const DeformedBody& body) {
-  std::vector<double> det_F(static_cast<std::size_t>(body.tets.rows()));
-  for (Eigen::Index t = 0; t < body.tets.rows(); ++t) {
-    const auto edges = [&](const Eigen::MatrixX3d& x) {
-      Eigen::Matrix3d D;
-      for (int k = 0; k < 3; ++k)
-        D.col(k) = (x.row(body.tets(t, k + 1)) - x.row(body.tets(t, 0))).transpose();
-      return D;
-    };
-    const double rest = edges(body.rest_mm).determinant();
-    det_F[static_cast<std::size_t>(t)] =
-        rest != 0.0 ? edges(body.deformed_mm).determinant() / rest : std::numeric_limits<double>::quiet_NaN();
-  }
-  return det_F;
-}
-
 /// A simulated body's tet mesh in one state (rest or deformed vertices) with, per tet, the dseg
 /// label of its organ ("organ_label", its organs' names in the field data) and, deformed, the
 /// displacement of each vertex and the det F of each tet.
@@ -209,7 +190,7 @@ void write_body_tet_mesh(const std::filesystem::path& path, const Phantom& phant
       for (int c = 0; c < 3; ++c)
         array.values.push_back(displacement(v, c));
     arrays.push_back(std::move(array));
-    cell_arrays.push_back({"det_F", tet_det_F(body), false, "", {}});
+    cell_arrays.push_back({"det_F", body.det_F, false, "", {}});
   }
   write_vtu(path, mesh, arrays, cell_arrays);
 }

@@ -9,6 +9,7 @@
 #include "core/progress.hpp"
 
 #include <algorithm>
+#include <limits>
 
 namespace phantasm {
 namespace {
@@ -30,8 +31,8 @@ std::string load_names(const DeformationSettings& deformation) {
   return names.empty() ? "no load" : names;
 }
 
-/// Physical validity of every body: its smallest det F and its inverted tets (det F <= 0) into
-/// the body, the stage's accuracy figures and, for inverted tets, a warning naming the organ
+/// Physical validity of every body: each tet's det F, the smallest and the inverted tets (det F
+/// <= 0) into the body, the stage's accuracy figures and, for inverted tets, a warning naming the organ
 /// and the loads (a tet turned inside out has no physical meaning, and the displacement fields
 /// of the ground truth are not invertible there).
 void check_inversions(const DeformationSettings& deformation, PhantomDeformation& result,
@@ -39,6 +40,7 @@ void check_inversions(const DeformationSettings& deformation, PhantomDeformation
   for (DeformedBody& body : result.bodies) {
     body.smallest_det_F = 1.0;
     body.inverted_tets = 0;
+    body.det_F.assign(static_cast<std::size_t>(body.tets.rows()), std::numeric_limits<double>::quiet_NaN());
     for (Eigen::Index t = 0; t < body.tets.rows(); ++t) {
       auto edges = [&](const Eigen::MatrixX3d& x) {
         Eigen::Matrix3d D;
@@ -49,6 +51,7 @@ void check_inversions(const DeformationSettings& deformation, PhantomDeformation
       const double rest = edges(body.rest_mm).determinant();
       if (rest == 0.0) continue;
       const double det = edges(body.deformed_mm).determinant() / rest;
+      body.det_F[static_cast<std::size_t>(t)] = det;
       body.smallest_det_F = std::min(body.smallest_det_F, det);
       if (!(det > 0.0)) ++body.inverted_tets;
     }

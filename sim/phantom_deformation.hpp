@@ -23,6 +23,8 @@ struct DeformedBody {
   Eigen::MatrixX4i tets;
   double smallest_det_F = 1.0; ///< the smallest det F (deformed over rest volume) of its tets
   long inverted_tets = 0;      ///< tets with det F <= 0 (turned inside out)
+  /// For each tet, det F (deformed over rest volume; NaN for a tet of no rest volume)
+  std::vector<double> det_F;
   /// For each tet, the organ whose material it takes, as its index in the scene's organ table
   /// (the organ's dseg label minus one): the body's organ or one nested in it.
   std::vector<int> tet_organ;

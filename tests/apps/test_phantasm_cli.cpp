@@ -233,19 +233,7 @@ TEST(RunCommand, WritesSheetAndShellSurfacesAndTheSolvedBodyTetMesh) {
   // in both states is the one solved, as many tets as the log says, each with the dseg label of
   // the organ whose material it took (as many per organ as the log says) and, deformed, the
   // det F of each tet, positive.
-  std::map<std::string, int> label_of;
-  {
-    std::istringstream rows(read_file(derivatives / "dseg.tsv"));
-    std::string row;
-    std::getline(rows, row); // header
-    while (std::getline(rows, row)) {
-      std::istringstream fields(row);
-      int index = 0;
-      std::string name;
-      fields >> index >> name;
-      label_of[name] = index;
-    }
-  }
+  std::map<std::string, int> label_of = phantasm::testing::dseg_table(derivatives / "dseg.tsv");
   const std::string log = read_file(derivatives / "sub-01" / "log.txt");
   std::smatch solved;
   ASSERT_TRUE(std::regex_search(log, solved,

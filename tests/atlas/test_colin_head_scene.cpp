@@ -27,27 +27,13 @@ namespace phantasm {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::dseg_table;
 using testing::fresh_folder;
 using testing::read_file;
 using testing::run_command;
 using testing::write_text_file;
 
 const std::string k_phantasm = PHANTASM_EXECUTABLE;
-
-/// dseg.tsv: label value by organ name.
-std::map<std::string, int> dseg_table(const fs::path& path) {
-  std::map<std::string, int> table;
-  std::istringstream in(read_file(path));
-  std::string line;
-  std::getline(in, line); // header
-  while (std::getline(in, line)) {
-    std::istringstream fields(line);
-    int index = 0;
-    std::string name;
-    if (fields >> index >> name) table[name] = index;
-  }
-  return table;
-}
 
 TEST(ColinHeadScene, CoarseRunLabelsEveryOrganShiftsTheBrainAndMeetsItsCostEstimate) {
   if (!fs::is_directory(default_colin27_templates_dir())) GTEST_SKIP() << "mricron-data is not installed";

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <unistd.h>
@@ -28,6 +29,21 @@ inline std::string read_file(const std::filesystem::path& path) {
 
 inline void write_text_file(const std::filesystem::path& path, const std::string& text) {
   std::ofstream(path, std::ios::binary) << text;
+}
+
+/// A dataset's dseg.tsv: label value by organ or tissue name.
+inline std::map<std::string, int> dseg_table(const std::filesystem::path& path) {
+  std::map<std::string, int> table;
+  std::istringstream in(read_file(path));
+  std::string line;
+  std::getline(in, line); // header
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    int index = 0;
+    std::string name;
+    if (fields >> index >> name) table[name] = index;
+  }
+  return table;
 }
 
 } // namespace phantasm::testing
