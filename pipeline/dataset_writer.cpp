@@ -24,8 +24,10 @@
 #include <algorithm>
 #include <atomic>
 #include <exception>
+#include <fstream>
 #include <functional>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <sstream>
 #include <thread>
@@ -195,19 +197,67 @@ void write_body_tet_mesh(const std::filesystem::path& path, const Phantom& phant
   write_vtu(path, mesh, arrays, cell_arrays);
 }
 
+/// True when two patch surfaces are the same surface: the same base mesh at the same rest and
+/// current positions, with the same bumps (an organ the deformation held fixed).
+bool same_patch_surface(const PatchSurface& a, const PatchSurface& b) {
+  if (a.patch_count() != b.patch_count() || a.base_mesh().vertices != b.base_mesh().vertices ||
+      a.base_mesh().faces != b.base_mesh().faces || a.rest_positions() != b.rest_positions())
+    return false;
+  for (Eigen::Index t = 0; t < a.patch_count(); ++t) {
+    const std::vector<PatchBump>& x = a.bumps(t);
+    const std::vector<PatchBump>& y = b.bumps(t);
+    if (x.size() != y.size()) return false;
+    for (std::size_t k = 0; k < x.size(); ++k) {
+      if (x[k].center_uv != y[k].center_uv || x[k].shape_uv != y[k].shape_uv ||
+          x[k].amplitude_mm != y[k].amplitude_mm)
+        return false;
+    }
+  }
+  return true;
+}
+
+/// The bytes of a file this run wrote.
+/// @throws std::runtime_error naming the file when it cannot be read whole
+std::string written_file_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream bytes;
+  bytes << in.rdbuf();
+  if (!in || !bytes) throw std::runtime_error(path.string() + ": cannot read back the file this run wrote");
+  return std::move(bytes).str();
+}
+
+/// An organ's reference surface file, written once whichever of the two states' writers asks
+/// first: the deformed state of an organ that did not move copies its bytes instead of
+/// tessellating and encoding the same surface again (the skull of a head: tens of MB).
+struct ReferenceSurfaceFile {
+  std::filesystem::path path;
+  std::function<void(const std::filesystem::path&)> write;
+  std::once_flag written; // a write that throws leaves it unset: the next caller writes again
+
+  void ensure_written() {
+    std::call_once(written, [this] { write(path); });
+  }
+};
+
+/// The reference surface files of the organs, by organ index (plan_organ_meshes fills it in the
+/// reference state and reads it in the deformed one).
+using ReferenceSurfaceFiles = std::map<std::size_t, std::shared_ptr<ReferenceSurfaceFile>>;
+
 /// Each organ's surface (.vtp: the patch surface tessellated within mesh_export_tolerance_mm, or
 /// the sheet) and tet mesh (.vtu) in one state. A simulated body's tet mesh is the one solved
 /// (write_body_tet_mesh: with organs nested in it, one mesh of all of them), other organs' their
 /// own. The deformed state's tet meshes carry each vertex's displacement from the reference (RAS
-/// mm, as the files' field data say).
+/// mm, as the files' field data say); a deformed surface the same as the reference one is a copy
+/// of its file (`surfaces`, filled by the reference state's call).
 void plan_organ_meshes(const Scene& scene, const Phantom& phantom, PhantomState state,
                        const DatasetLayout& layout, DatasetPlan& plan,
-                       const std::vector<DeformedBody>* bodies, const Phantom* reference = nullptr) {
+                       const std::vector<DeformedBody>* bodies, ReferenceSurfaceFiles& surfaces,
+                       const Phantom* reference = nullptr) {
   const double tolerance = mesh_export_tolerance_mm(scene);
   for (std::size_t index = 0; index < phantom.organs.size(); ++index) {
     const Organ& organ = phantom.organs[index];
     if (organ.surface || organ.sheet) {
-      plan.file(layout.mesh(state, organ.name), [&organ, tolerance](const std::filesystem::path& path) {
+      const auto write_surface = [&organ, tolerance](const std::filesystem::path& path) {
         if (!organ.surface) {
           write_vtp(path, *organ.sheet);
           return;
@@ -215,7 +265,23 @@ void plan_organ_meshes(const Scene& scene, const Phantom& phantom, PhantomState 
         const TriangleMesh surface = organ.surface->tessellate(tolerance);
         throw_if_cancelled(); // a cancelled tessellation is empty: never written
         write_vtp(path, surface);
-      });
+      };
+      const auto shared = surfaces.find(index);
+      if (!reference && organ.surface) {
+        auto file = std::make_shared<ReferenceSurfaceFile>();
+        file->path = layout.mesh(state, organ.name);
+        file->write = write_surface;
+        surfaces[index] = file;
+        plan.file(file->path, [file](const std::filesystem::path&) { file->ensure_written(); });
+      } else if (reference && organ.surface && shared != surfaces.end() && reference->organs[index].surface &&
+                 same_patch_surface(*organ.surface, *reference->organs[index].surface)) {
+        plan.file(layout.mesh(state, organ.name), [file = shared->second](const std::filesystem::path& path) {
+          file->ensure_written();
+          write_file_atomically(path, written_file_bytes(file->path));
+        });
+      } else {
+        plan.file(layout.mesh(state, organ.name), write_surface);
+      }
     }
     if (!organ.solid) continue;
     const DeformedBody* body = nullptr;
@@ -553,8 +619,10 @@ DatasetPlan plan_dataset(const Scene& scene, const Simulation& simulation, const
                                      " mm, tet meshes as built (a simulated body's as solved, with the dseg "
                                      "label of each tet's organ)");
     const std::vector<DeformedBody>* bodies = deformation ? &deformation->bodies : nullptr;
-    plan_organ_meshes(scene, phantom, PhantomState::reference, layout, plan, bodies);
-    if (deformed) plan_organ_meshes(scene, *deformed, PhantomState::deformed, layout, plan, bodies, &phantom);
+    ReferenceSurfaceFiles surfaces;
+    plan_organ_meshes(scene, phantom, PhantomState::reference, layout, plan, bodies, surfaces);
+    if (deformed)
+      plan_organ_meshes(scene, *deformed, PhantomState::deformed, layout, plan, bodies, surfaces, &phantom);
   } else {
     reporter.skipped("anatomy", "organ meshes (outputs.meshes is false)");
   }

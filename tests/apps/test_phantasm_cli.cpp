@@ -229,6 +229,16 @@ TEST(RunCommand, WritesSheetAndShellSurfacesAndTheSolvedBodyTetMesh) {
   EXPECT_FALSE(fs::exists(meshes / "sub-01_ses-ref_organ-scalp_tetmesh.vtu")); // solid: false
   EXPECT_TRUE(fs::exists(meshes / "sub-01_ses-ref_organ-greyMatter_tetmesh.vtu"));
 
+  // The scalp is held fixed: its deformed surface file is its reference one, byte for byte (a copy,
+  // not a second tessellation); the grey matter moved, so its files differ.
+  const fs::path def_meshes = out / "derivatives" / "phantasm" / "sub-01" / "ses-def" / "meshes";
+  EXPECT_EQ(read_file(def_meshes / "sub-01_ses-def_organ-scalp_mesh.vtp"),
+            read_file(meshes / "sub-01_ses-ref_organ-scalp_mesh.vtp"));
+  const std::string grey_ref = read_file(meshes / "sub-01_ses-ref_organ-greyMatter_mesh.vtp");
+  const std::string grey_def = read_file(def_meshes / "sub-01_ses-def_organ-greyMatter_mesh.vtp");
+  EXPECT_GT(grey_def.size(), 1000u);
+  EXPECT_NE(grey_def, grey_ref);
+
   // The grey matter is the simulated body (the white matter's sheet embedded in it): its tet mesh
   // in both states is the one solved, as many tets as the log says, each with the dseg label of
   // the organ whose material it took (as many per organ as the log says) and, deformed, the
