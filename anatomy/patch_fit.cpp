@@ -270,7 +270,7 @@ PatchSurface fit_patch_surface(const ImplicitShape& target, const Eigen::Vector3
 }
 
 PatchFitReport measure_fit(const PatchSurface& surface, const ImplicitShape& target, double tessellation_mm,
-                           int target_sample_level) {
+                           int target_sample_level, int surface_sample_level) {
   PatchFitReport report;
   report.base_triangles = static_cast<int>(surface.patch_count());
   // The target as a dense mesh with vertices on it: an icosphere of target_sample_level cast
@@ -289,16 +289,19 @@ PatchFitReport measure_fit(const PatchSurface& surface, const ImplicitShape& tar
     for (Eigen::Index v = 0; v < target_mesh.vertex_count(); ++v)
       samples.push_back(target_mesh.vertex(v));
   }
-  // Surface to target: exact surface points on every patch's level-4 grid (1/16 of an edge).
-  // In parallel over patches, each into its own slots: the same numbers in the same order.
+  // Surface to target: exact surface points on every patch's grid of surface_sample_level
+  // (level 4: 1/16 of an edge). In parallel over patches, each into its own slots: the same
+  // numbers in the same order.
   const MeshDistance to_target_mesh(target_mesh);
   const Eigen::Index patches = surface.patch_count();
-  constexpr std::size_t per_patch = (16 + 1) * (16 + 2) / 2; // level 4: 2^4 segments per edge
+  const std::size_t segments = std::size_t{1} << std::clamp(surface_sample_level, 0, 8);
+  const std::size_t per_patch = (segments + 1) * (segments + 2) / 2;
   std::vector<double> to_target(static_cast<std::size_t>(patches) * per_patch);
 #pragma omp parallel for schedule(dynamic, 16)
   for (Eigen::Index t = 0; t < patches; ++t) {
     if (cancellation_requested()) continue; // no exception may leave an OpenMP region
-    const std::vector<Eigen::Vector3d> points = surface.patch_grid_points(t, 4);
+    const std::vector<Eigen::Vector3d> points =
+        surface.patch_grid_points(t, std::clamp(surface_sample_level, 0, 8));
     for (std::size_t k = 0; k < per_patch; ++k)
       to_target[static_cast<std::size_t>(t) * per_patch + k] = to_target_mesh.distance(points[k]);
   }
@@ -311,6 +314,14 @@ PatchFitReport measure_fit(const PatchSurface& surface, const ImplicitShape& tar
   report.mean_distance_mm = d.mean_mm;
   report.volume_error = (surface.volume() - target.volume()) / target.volume();
   return report;
+}
+
+int surface_sample_level_for_spacing(const PatchSurface& surface, double spacing_mm) {
+  const double edge = mean_edge_length(surface.base_mesh());
+  int level = 1;
+  while (level < 4 && edge / static_cast<double>(1 << level) > spacing_mm)
+    ++level;
+  return level;
 }
 
 } // namespace phantasm

@@ -81,11 +81,16 @@ PatchSurface fit_patch_surface(const ImplicitShape& target, const Eigen::Vector3
                                const std::string& what, PatchFitReport* report = nullptr);
 
 /// Measures a surface against its target: Hausdorff and mean distance between exact surface
-/// points (each patch's level-4 grid) and the target (as a dense mesh of 20 * 4^target_sample_level
-/// triangles with vertices on it: an icosphere cast from the centre of a star-shaped target, the
-/// extracted surface of any other), and from those target points to a tessellation within
-/// `tessellation_mm`; and the volume error.
+/// points (each patch's grid of surface_sample_level: 2^level segments per edge) and the target
+/// (as a dense mesh of 20 * 4^target_sample_level triangles with vertices on it: an icosphere
+/// cast from the centre of a star-shaped target, the extracted surface of any other), and from
+/// those target points to a tessellation within `tessellation_mm`; and the volume error.
 PatchFitReport measure_fit(const PatchSurface& surface, const ImplicitShape& target, double tessellation_mm,
-                           int target_sample_level = 6);
+                           int target_sample_level = 6, int surface_sample_level = 4);
+
+/// The surface_sample_level of measure_fit that samples a surface about every `spacing_mm`
+/// (patch edges of mean length L get 2^level >= L / spacing_mm segments), from 1 to 4: a base
+/// mesh of many small patches is measured at the density of a coarse one, not 16 times per edge.
+int surface_sample_level_for_spacing(const PatchSurface& surface, double spacing_mm);
 
 } // namespace phantasm

@@ -72,6 +72,10 @@ bool disjoint(const ImplicitShape& a, const ImplicitShape& b) {
   return true;
 }
 
+/// How densely the fit report samples each patch surface (measure_fit): about every millimetre,
+/// however small the patches.
+constexpr double k_fit_sample_spacing_mm = 1.0;
+
 /// The quality bound of solid organs' tet meshes: every tet positive, no dihedral angle below 10
 /// degrees, so no tet is near-degenerate.
 constexpr double k_min_dihedral_deg = 10.0;
@@ -247,7 +251,8 @@ void build_organ_geometry(Organ& organ, const AnatomySettings& anatomy, std::siz
   } else if (s.solid) {
     build_solid(organ, anatomy, o);
     progress.set_detail(s.name + ": measuring the fit");
-    organ.fit = measure_fit(*organ.surface, *organ.target, 5e-3 * organ.target->bounding_radius(), 4);
+    organ.fit = measure_fit(*organ.surface, *organ.target, 5e-3 * organ.target->bounding_radius(), 4,
+                            surface_sample_level_for_spacing(*organ.surface, k_fit_sample_spacing_mm));
   } else {
     PatchFitOptions options;
     options.base_triangles = base_triangles(anatomy, o);
@@ -257,7 +262,8 @@ void build_organ_geometry(Organ& organ, const AnatomySettings& anatomy, std::siz
                                      : Eigen::Vector3d(shape.radii_mm);
     organ.surface.emplace(fit_patch_surface(*organ.target, hint, rotation, options, "organ " + s.name));
     progress.set_detail(s.name + ": measuring the fit");
-    organ.fit = measure_fit(*organ.surface, *organ.target, 5e-3 * organ.target->bounding_radius(), 4);
+    organ.fit = measure_fit(*organ.surface, *organ.target, 5e-3 * organ.target->bounding_radius(), 4,
+                            surface_sample_level_for_spacing(*organ.surface, k_fit_sample_spacing_mm));
   }
 }
 

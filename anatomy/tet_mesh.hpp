@@ -9,6 +9,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace phantasm {
@@ -78,6 +79,20 @@ TetMesh mesh_nested_solid(const NestedShapes& nested, const TetMeshCriteria& cri
 /// The triangles between tets of different subdomains (each once, oriented outward of the tet
 /// of the smaller subdomain index) of a mesh with `subdomains`.
 Eigen::MatrixX3i subdomain_interface_faces(const TetMesh& mesh);
+
+/// Raises the smallest dihedral angle of tets below bound_deg (slivers) of a mesh with
+/// subdomains by moving their vertices, the way a mesher's sliver perturbation does: each vertex
+/// of a sliver tries steps of 5-35 % of its mean edge length in fixed directions and keeps the
+/// position that most raises the smallest dihedral angle of its tets, provided every one of them
+/// stays positively oriented with its centroid in its own subdomain (`label`). A vertex inside
+/// one subdomain moves freely; a vertex on an interface (between two subdomains, or one and the
+/// outside, label -1) moves in the interface's tangent plane and is put back onto it by
+/// bisection of `label` along the normal; a vertex where three meet stays. Sequential, in vertex
+/// order, up to `passes` passes: the same mesh gives the same result.
+/// @param label subdomain at a point (an index into the mesh's subdomains), -1 outside
+/// @return how many vertex moves were made
+int improve_slivers(TetMesh& mesh, const std::function<int(const Eigen::Vector3d&)>& label, double bound_deg,
+                    int passes = 4);
 
 /// Signed volume of tet t, mm^3 (positive for the orientation phantasm uses).
 double tet_volume(const TetMesh& mesh, Eigen::Index t);

@@ -298,7 +298,12 @@ TetMesh mesh_nested_solid(const NestedShapes& nested, const TetMeshCriteria& c, 
       // The refinement polls the flag too (the domain is not called while it drains stale cells).
       p::mesh_3_options(p::pointer_to_stop_atomic_boolean = &cancellation_flag()));
   exude(complex, c.sliver_bound_deg);
-  return to_tet_mesh(complex, true, c.cell_size_mm);
+  TetMesh mesh = to_tet_mesh(complex, true, c.cell_size_mm);
+  // Slivers Mesh_3 leaves where its surface vertices are pinned (thin layers, interfaces): moved
+  // along their interfaces by our own pass.
+  improve_slivers(
+      mesh, [&nested](const Eigen::Vector3d& x) { return nested.innermost(x); }, c.sliver_bound_deg);
+  return mesh;
 }
 
 } // namespace phantasm

@@ -173,3 +173,32 @@ TEST(PatchFit, AThreeMillimetreShellFitsAsTwoClosedManifoldWalls) {
   EXPECT_LT(std::abs(fitted.volume_error), 1e-9);
   EXPECT_LT(fitted.hausdorff_mm, 1.0);
 }
+
+// The fit report samples small patches more sparsely (measure_fit's surface_sample_level), about
+// every millimetre: on a torus of many small patches the sparser report measures the same fit as
+// 16 samples per edge (the Hausdorff from the target's side is the same; the surface's side is
+// sampled on a subset of the same points, so its figures can only be as large or smaller, and
+// close), with a sixteenth of the distance queries.
+TEST(PatchFit, SparserSurfaceSamplesOfSmallPatchesMeasureTheSameFit) {
+  const auto torus = make_torus({0, 0, 0}, 30.0, 10.0);
+  PatchFitOptions options;
+  options.base_triangles = 2000;
+  const PatchSurface surface =
+      fit_patch_surface(*torus, Eigen::Vector3d::Ones(), Eigen::Matrix3d::Identity(), options, "torus");
+  const double edge = mean_edge_length(surface.base_mesh());
+  // Edges of about 3 mm: 4 segments give 0.75 mm at 1 mm spacing, 2 give 1.5 mm at 2 mm spacing.
+  ASSERT_GT(edge, 2.0);
+  ASSERT_LT(edge, 4.0);
+  EXPECT_EQ(surface_sample_level_for_spacing(surface, 1.0), 2);
+  EXPECT_EQ(surface_sample_level_for_spacing(surface, 2.0), 1);
+  EXPECT_EQ(surface_sample_level_for_spacing(surface, 0.01), 4); // never finer than level 4
+  const PatchFitReport dense = measure_fit(surface, *torus, 0.1, 4, 4);
+  const PatchFitReport sparse = measure_fit(surface, *torus, 0.1, 4, 2);
+  std::printf("torus, %lld patches: Hausdorff %.4g / %.4g mm, mean %.4g / %.4g mm (level 4 / 2)\n",
+              static_cast<long long>(surface.patch_count()), dense.hausdorff_mm, sparse.hausdorff_mm,
+              dense.mean_distance_mm, sparse.mean_distance_mm);
+  EXPECT_LE(sparse.hausdorff_mm, dense.hausdorff_mm + 1e-12);
+  EXPECT_GT(sparse.hausdorff_mm, 0.8 * dense.hausdorff_mm);
+  EXPECT_NEAR(sparse.mean_distance_mm, dense.mean_distance_mm, 0.2 * dense.mean_distance_mm);
+  EXPECT_EQ(sparse.volume_error, dense.volume_error);
+}

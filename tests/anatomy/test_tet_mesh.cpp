@@ -1,6 +1,7 @@
 // Tet meshes of nested shapes (mesh_nested_solid): tissue per tet, interfaces as faces, subdomain
 // volumes against the analytic ones, repeatability and quality.
 #include "anatomy/phantom.hpp"
+#include "anatomy/structured_mesh.hpp"
 #include "anatomy/tet_mesh.hpp"
 #include "core/grid.hpp"
 
@@ -11,6 +12,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <vector>
@@ -233,3 +235,62 @@ TEST(NestedTetMesh, TouchingLabelsAreMeshedWithAFaceBetweenThemAndTheirVolumes) 
 }
 
 } // namespace
+
+/// A 4 mm cube of 1 mm cells in two subdomains, z < 0 (0) and z > 0 (1), their interface the
+/// plane z = 0 made of faces; one vertex moved to make slivers.
+struct SliverCube {
+  TetMesh mesh = structured_box(Eigen::Vector3d::Constant(4.0), Eigen::Vector3i::Constant(4),
+                                Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
+  std::function<int(const Eigen::Vector3d&)> label = [](const Eigen::Vector3d& x) {
+    if (x.cwiseAbs().maxCoeff() > 2.0) return -1;
+    return x.z() < 0.0 ? 0 : 1;
+  };
+  SliverCube() {
+    mesh.subdomains.resize(mesh.tets.rows());
+    for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t)
+      mesh.subdomains[t] = centroid(mesh, t).z() < 0.0 ? 0 : 1;
+  }
+  Eigen::Index vertex_at(const Eigen::Vector3d& x) const {
+    for (Eigen::Index v = 0; v < mesh.vertices.rows(); ++v)
+      if ((mesh.vertices.row(v).transpose() - x).norm() < 1e-9) return v;
+    return -1;
+  }
+};
+
+TEST(SliverRemoval, AnInterfaceVertexMovesAlongItsInterfaceUntilNoSliverIsLeft) {
+  SliverCube cube;
+  const Eigen::Index v = cube.vertex_at(Eigen::Vector3d::Zero());
+  ASSERT_GE(v, 0);
+  cube.mesh.vertices.row(v) = Eigen::RowVector3d(0.8, 0.1, 0.0); // in the plane, near a neighbour
+  for (Eigen::Index t = 0; t < cube.mesh.tets.rows(); ++t)
+    ASSERT_GT(tet_volume(cube.mesh, t), 0.0);
+  ASSERT_GT(tets_with_dihedral_below(cube.mesh, 10.0), 0);
+  const Eigen::VectorXi subdomains = cube.mesh.subdomains;
+  TetMesh again = cube.mesh;
+  EXPECT_GT(improve_slivers(cube.mesh, cube.label, 10.0), 0);
+  EXPECT_EQ(tets_with_dihedral_below(cube.mesh, 10.0), 0);
+  EXPECT_NEAR(cube.mesh.vertices(v, 2), 0.0, 1e-6); // still on the interface
+  EXPECT_EQ(cube.mesh.subdomains, subdomains);
+  for (Eigen::Index t = 0; t < cube.mesh.tets.rows(); ++t) {
+    EXPECT_GT(tet_volume(cube.mesh, t), 0.0);
+    EXPECT_EQ(cube.label(centroid(cube.mesh, t)), cube.mesh.subdomains[t]);
+  }
+  improve_slivers(again, cube.label, 10.0); // the same mesh gives the same result
+  EXPECT_EQ(again.vertices, cube.mesh.vertices);
+}
+
+TEST(SliverRemoval, AVertexInsideOneSubdomainMovesFreelyAndStaysInIt) {
+  SliverCube cube;
+  const Eigen::Index free = cube.vertex_at(Eigen::Vector3d(0.0, 0.0, -1.0)); // inside subdomain 0
+  ASSERT_GE(free, 0);
+  cube.mesh.vertices.row(free) = Eigen::RowVector3d(0.1, 0.1, -0.04); // nearly on the interface
+  for (Eigen::Index t = 0; t < cube.mesh.tets.rows(); ++t)
+    ASSERT_GT(tet_volume(cube.mesh, t), 0.0);
+  const double before = min_dihedral_angle_deg(cube.mesh);
+  ASSERT_LT(before, 10.0);
+  improve_slivers(cube.mesh, cube.label, 10.0);
+  EXPECT_GT(min_dihedral_angle_deg(cube.mesh), 10.0);
+  EXPECT_LT(cube.mesh.vertices(free, 2), 0.0);
+  for (Eigen::Index t = 0; t < cube.mesh.tets.rows(); ++t)
+    EXPECT_GT(tet_volume(cube.mesh, t), 0.0);
+}
