@@ -5,15 +5,21 @@
 #include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
+#include "core/parallel_tasks.hpp"
 
 #include <Eigen/Geometry>
 
+#include <omp.h>
+
+#include <algorithm>
 #include <cstring>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <stdexcept>
 #include <string_view>
 #include <type_traits>
+#include <vector>
 
 namespace phantasm {
 namespace {
@@ -371,13 +377,21 @@ Phantom build_phantom(const AnatomySettings& anatomy, const std::map<std::string
   phantom.tet_interfaces = anatomy.tet_interfaces;
   phantom.seed = anatomy.seed;
   ProgressBar progress(reporter, "anatomy", settings.size());
-  for (std::size_t o = 0; o < settings.size(); ++o) {
-    throw_if_cancelled();
-    Organ organ = organ_without_geometry(settings[o], varied.targets[o]);
-    build_organ_geometry(organ, anatomy, o, varied.shapes[o], progress);
-    reporter.modelled("anatomy", organ_line(organ));
-    phantom.organs.push_back(std::move(organ));
-    progress.advance();
+  // Organs are fitted side by side, one per thread (each fit is the same on any thread: its
+  // own parallel loops write their own slots, and each mesher reseeds its thread's generator),
+  // and logged in scene order.
+  std::vector<std::optional<Organ>> built(settings.size());
+  run_tasks_in_parallel(settings.size(), static_cast<std::size_t>(std::max(1, omp_get_max_threads())),
+                        [&](std::size_t o) {
+                          throw_if_cancelled();
+                          Organ organ = organ_without_geometry(settings[o], varied.targets[o]);
+                          build_organ_geometry(organ, anatomy, o, varied.shapes[o], progress);
+                          built[o] = std::move(organ);
+                          progress.advance();
+                        });
+  for (std::optional<Organ>& organ : built) {
+    reporter.modelled("anatomy", organ_line(*organ));
+    phantom.organs.push_back(std::move(*organ));
   }
   return phantom;
 }

@@ -3,6 +3,7 @@
 #include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
+#include "core/parallel_tasks.hpp"
 #include "core/version.hpp"
 #include "geometry/ras_lps.hpp"
 #include "io/atomic_file.hpp"
@@ -700,34 +701,13 @@ namespace {
 /// once all have ended; a file being written when it came is finished or, if its own writer
 /// threw, left as no file at all (every writer writes a temporary and renames it).
 void write_in_parallel(const std::vector<const PlannedFile*>& files, ProgressBar& progress) {
-  const auto threads = static_cast<std::size_t>(std::max(1, omp_get_max_threads()));
-  std::atomic<std::size_t> next{0};
-  std::atomic<bool> failed{false};
-  std::exception_ptr failure;
-  std::mutex failure_mutex;
-  const auto work = [&] {
-    while (!failed.load()) {
-      const std::size_t i = next.fetch_add(1);
-      if (i >= files.size()) return;
-      try {
-        throw_if_cancelled();
-        progress.set_detail(files[i]->path.filename().string());
-        files[i]->write(files[i]->path);
-        progress.advance();
-      } catch (...) {
-        const std::lock_guard<std::mutex> lock(failure_mutex);
-        if (!failure) failure = std::current_exception();
-        failed = true;
-      }
-    }
-  };
-  std::vector<std::thread> pool;
-  for (std::size_t t = 1; t < std::min(threads, files.size()); ++t)
-    pool.emplace_back(work);
-  work();
-  for (std::thread& thread : pool)
-    thread.join();
-  if (failure) std::rethrow_exception(failure);
+  run_tasks_in_parallel(files.size(), static_cast<std::size_t>(std::max(1, omp_get_max_threads())),
+                        [&](std::size_t i) {
+                          throw_if_cancelled();
+                          progress.set_detail(files[i]->path.filename().string());
+                          files[i]->write(files[i]->path);
+                          progress.advance();
+                        });
 }
 
 } // namespace
