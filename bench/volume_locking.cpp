@@ -10,7 +10,8 @@
 // volume_locking head [SCENE] [newton]: the head's deformation (data-synthetic/head.yaml) with the
 //   brain's Poisson ratio at 0.45, 0.49, 0.499 and each formulation (the scene's solver, or
 //   Newton): the bodies' volume change, whole and RMS over tets and over groups of 8 tets.
-// volume_locking head-gravity: the same with gravity alone (no retractor), Newton.
+// volume_locking head-gravity [local-global]: the same with gravity alone (no retractor), Newton
+//   (or the scene's local/global).
 // volume_locking local-global NU [cgal SIZE] [per-tet]: the cantilever with the bulk term on tet
 //   groups (the 4 x 4 x 20 structured cells, or groups of 8 on a CGAL mesh of SIZE mm; per-tet:
 //   per tet instead) at Poisson ratio NU:
@@ -283,6 +284,7 @@ int main(int argc, char** argv) {
                     : std::string(PHANTASM_SOURCE_DIR) + "/data-synthetic/head.yaml",
                 std::string(argv[argc - 1]) == "newton", false);
   if (mode == "head-gravity")
-    return head(std::string(PHANTASM_SOURCE_DIR) + "/data-synthetic/head.yaml", true, true);
+    return head(std::string(PHANTASM_SOURCE_DIR) + "/data-synthetic/head.yaml",
+                std::string(argv[argc - 1]) != "local-global", true);
   return structured(argc > 1 ? std::atoi(argv[1]) : 4);
 }

@@ -237,7 +237,8 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
   sim_detail::AndersonAcceleration anderson(nf, m->anderson_history);
   sim_detail::QuasiNewtonHistory history(m->history);
   Eigen::MatrixX3d x = m->free_positions(p);
-  Eigen::MatrixX3d gradient, direction, trial, scaled; // scaled: K^-1 y of the newest pair
+  Eigen::MatrixX3d gradient, direction, trial, candidate;
+  Eigen::MatrixX3d scaled; // K^-1 y of the newest pair
   std::optional<ResidualTest> test;
   for (int iteration = 1;; ++iteration) {
     throw_if_cancelled(); // an iteration takes milliseconds to a second: SIGINT stops here
@@ -301,12 +302,12 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
       start = Clock::now();
       trial = m->solution;
       // Anderson's proposal (phase 1), kept when it lowers the energy.
-      const bool tried = !quasi_newton && anderson.propose(m->solution, x, direction);
+      const bool tried = !quasi_newton && anderson.propose(m->solution, x, candidate);
       if (tried) {
-        m->set_free_positions(direction, p);
+        m->set_free_positions(candidate, p);
         const double candidate_energy = m->local_step(p, target);
         if (candidate_energy < previous) {
-          trial = direction;
+          trial = candidate;
           energy = candidate_energy;
           accepted = true;
         }
