@@ -320,6 +320,7 @@ TEST(TetGroupVolumes, LocalGlobalReachesNewtonsAnswer) {
 // energy (within 1 %), its tip at 0.499 is within 5 % of its tip at 0.45 (no locking) and within
 // 20 % of Timoshenko's beam (linear tets stay stiff in bending at 4 tets across); with the bulk
 // term per tet it converges to Newton's tip too (the plain iteration did not above nu = 0.45).
+// The same bits on one thread and on two.
 TEST(TetGroupVolumes, LocalGlobalConvergesToNewtonAsPoissonRatioTendsToOneHalf) {
   const std::array<double, 3> nus = {0.45, 0.49, 0.499};
   std::array<double, 3> tip{};
@@ -352,4 +353,19 @@ TEST(TetGroupVolumes, LocalGlobalConvergesToNewtonAsPoissonRatioTendsToOneHalf) 
       EXPECT_NEAR(tip[2] / tip[0], 1.0, 0.05);
     }
   }
+  // The L-BFGS phase gives the same bits on one thread and on two.
+  CantileverSettings s;
+  s.poisson_ratio = 0.499;
+  s.volume = VolumeFormulation::tet_group;
+  const ElasticModel model = cantilever_model(s);
+  StopCriteria defaults;
+  defaults.max_iterations = 2000;
+  defaults.force_scale_N = 9.81 * model.masses_kg.maxCoeff();
+  Eigen::MatrixX3d one = model.rest_positions_m, two = model.rest_positions_m;
+  LocalGlobalSolver single(model, 0.0, 1), pair(model, 0.0, 2);
+  const SolveReport a = single.solve(one, one, defaults);
+  const SolveReport b = pair.solve(two, two, defaults);
+  EXPECT_GT(a.iterations, 100);
+  EXPECT_EQ(a.iterations, b.iterations);
+  EXPECT_TRUE((one.array() == two.array()).all());
 }
