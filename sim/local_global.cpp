@@ -249,7 +249,10 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
     // The equilibrium residual at x (K x - b(x), b from the projections the last local step
     // made there): the energy's gradient, and the residual test before every step and after
     // the last.
-    gradient = m->apply_matrix(x) - m->rhs;
+    if (nf > 0)
+      gradient = m->apply_matrix(x) - m->rhs;
+    else
+      gradient.resize(0, 3);
     const double residual = nf > 0 ? gradient.rowwise().norm().maxCoeff() : 0.0;
     const bool quasi_newton = !contacts_possible && m->history > 0 && iteration > k_anderson_iterations;
     if (quasi_newton) history.add(x, gradient);
