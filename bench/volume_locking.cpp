@@ -10,7 +10,14 @@
 // volume_locking head [SCENE] [newton]: the head's deformation (data-synthetic/head.yaml) with the
 //   brain's Poisson ratio at 0.45, 0.49, 0.499 and each formulation (the scene's solver, or
 //   Newton): the bodies' volume change, whole and RMS over tets and over groups of 8 tets.
-// volume_locking head-gravity: the same with gravity alone (no retractor), Newton.
+// volume_locking head-gravity [local-global]: the same with gravity alone (no retractor), Newton
+//   (or the scene's local/global).
+// volume_locking local-global NU [cgal SIZE] [per-tet]: the cantilever with the bulk term on tet
+//   groups (the 4 x 4 x 20 structured cells, or groups of 8 on a CGAL mesh of SIZE mm; per-tet:
+//   per tet instead) at Poisson ratio NU:
+//   Newton's tip (to 1e-9 N) and local/global's with the scene defaults (relative residual 1e-3,
+//   2000 iterations at most, one thread): iterations, converged, tip, its difference from
+//   Newton's, seconds. One row per process, so that the process's time is the solve's.
 // Tables go to stdout (Markdown).
 
 #include "anatomy/phantom.hpp"
@@ -151,6 +158,31 @@ int unstructured(double size, std::vector<int> group_sizes, bool groups_only) {
   return 0;
 }
 
+int local_global_row(double nu, double tet_size_mm, bool per_tet) {
+  CantileverSettings s;
+  s.poisson_ratio = nu;
+  s.volume = per_tet ? VolumeFormulation::tet : VolumeFormulation::tet_group;
+  s.tet_size_mm = tet_size_mm;
+  if (tet_size_mm > 0.0) s.group_size = 8;
+  const ElasticModel model = cantilever_model(s);
+  const double newton = newton_tip_mm(model);
+  Eigen::MatrixX3d q = model.rest_positions_m;
+  StopCriteria defaults;
+  defaults.max_iterations = 2000;
+  defaults.force_scale_N = 9.81 * model.masses_kg.maxCoeff();
+  LocalGlobalSolver solver(model, 0.0, 1);
+  const auto start = std::chrono::steady_clock::now();
+  const SolveReport report = solver.solve(q, q, defaults);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double tip = cantilever_tip_deflection_mm(model, q);
+  std::fprintf(table, "| %s | %g | %.2f mm | %d | %s (%.2g) | %.3f mm | %+.3f %% | %.2f s |\n",
+               per_tet ? (tet_size_mm > 0.0 ? "CGAL, per tet" : "4 x 4 x 20 cells, per tet")
+                       : (tet_size_mm > 0.0 ? "CGAL, groups of 8" : "4 x 4 x 20 cells"),
+               nu, newton, report.iterations, report.converged ? "yes" : "no", report.relative_residual, tip,
+               100.0 * (tip / newton - 1.0), seconds);
+  return 0;
+}
+
 int head(const std::string& path, bool newton, bool gravity_only) {
   SceneLoadResult loaded = load_scene(path);
   if (!loaded.scene) {
@@ -237,12 +269,22 @@ int main(int argc, char** argv) {
       groups.push_back(std::atoi(argv[a]));
     return unstructured(argc > 2 ? std::atof(argv[2]) : 5.0, groups, mode == "cgal-groups");
   }
+  if (mode == "local-global") {
+    if (argc < 3) {
+      std::fprintf(stderr, "usage: volume_locking local-global NU [cgal SIZE]\n");
+      return 2;
+    }
+    return local_global_row(std::atof(argv[2]),
+                            argc > 4 && std::string(argv[3]) == "cgal" ? std::atof(argv[4]) : 0.0,
+                            std::string(argv[argc - 1]) == "per-tet");
+  }
   if (mode == "head")
     return head(argc > 2 && std::string(argv[2]) != "newton"
                     ? argv[2]
                     : std::string(PHANTASM_SOURCE_DIR) + "/data-synthetic/head.yaml",
                 std::string(argv[argc - 1]) == "newton", false);
   if (mode == "head-gravity")
-    return head(std::string(PHANTASM_SOURCE_DIR) + "/data-synthetic/head.yaml", true, true);
+    return head(std::string(PHANTASM_SOURCE_DIR) + "/data-synthetic/head.yaml",
+                std::string(argv[argc - 1]) != "local-global", true);
   return structured(argc > 1 ? std::atoi(argv[1]) : 4);
 }

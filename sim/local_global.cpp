@@ -1,11 +1,13 @@
 // The local/global solver proper: the local step (projections, energy), the right-hand side of
-// the global step, and the solve loop with its Anderson acceleration.
+// the global step, and the solve loop (Anderson acceleration, then L-BFGS with the global matrix
+// as its initial Hessian).
 #include "sim/local_global.hpp"
 
 #include "core/cancellation.hpp"
 #include "core/progress.hpp"
 #include "sim/anderson_acceleration.hpp"
 #include "sim/local_global_impl.hpp"
+#include "sim/quasi_newton_history.hpp"
 #include "sim/tet_projection_batch.hpp"
 
 #include <omp.h>
@@ -163,9 +165,10 @@ void LocalGlobalSolver::Impl::finish_report(const Eigen::MatrixX3d& x_free, cons
 }
 
 LocalGlobalSolver::LocalGlobalSolver(const ElasticModel& model, double inertia_weight, int threads,
-                                     int anderson_history)
+                                     int anderson_history, int history)
     : m(std::make_unique<Impl>(model, inertia_weight, threads > 0 ? threads : omp_get_max_threads())) {
   m->anderson_history = std::max(0, anderson_history);
+  m->history = std::max(0, history);
   m->rotations.assign(model.tets.size(), Eigen::Quaterniond::Identity());
   m->eigenvectors.assign(model.tets.size(), Eigen::Matrix3d::Identity());
   m->projections.assign(model.tets.size(), Eigen::Matrix3d::Zero());
@@ -188,6 +191,22 @@ double LocalGlobalSolver::energy(const Eigen::MatrixX3d& p, const Eigen::MatrixX
   return m->local_step(p, inertial_target);
 }
 
+namespace {
+
+/// The sum of the entrywise products of a and b (the dot product of the flattened points).
+double dot(const Eigen::MatrixX3d& a, const Eigen::MatrixX3d& b) {
+  return a.cwiseProduct(b).sum();
+}
+
+/// Iterations of local/global with Anderson acceleration before L-BFGS takes over.
+constexpr int k_anderson_iterations = 100;
+/// Energies the line search evaluates before it falls back to the plain step.
+constexpr int k_line_search_evaluations = 8;
+/// The line search's sufficient decrease: E(x + t d) <= E(x) + k_armijo t grad . d.
+constexpr double k_armijo = 1e-4;
+
+} // namespace
+
 SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d& target,
                                      const StopCriteria& stop, bool record_energies,
                                      const IterationObserver& observer) {
@@ -200,12 +219,26 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
   double energy = m->begin_solve(p, target, report, record_energies, observer);
   auto start = Clock::now();
   const auto nf = static_cast<Eigen::Index>(m->free_vertex.size());
-  // Anderson acceleration of the fixed-point map x -> G(x) (global step after local step), with
-  // Peng et al. (2018)'s energy safeguard: the accelerated point is kept only when its energy is
-  // below the current one; otherwise the plain step, which never raises the energy, is taken and
-  // the history restarts. Either way the energy never increases.
+  // Two phases on the same energy, each step lowering it:
+  // 1. Local/global with Anderson acceleration of the fixed-point map x -> G(x) (global step
+  //    after local step), with Peng et al. (2018)'s energy safeguard: the accelerated point is
+  //    kept only when its energy is below the current one; otherwise the plain step, which never
+  //    raises the energy, is taken and the history restarts. Most solves converge here in tens
+  //    of iterations.
+  // 2. After k_anderson_iterations (never with contacts, whose factor and right-hand side change
+  //    as contacts come and go), L-BFGS (Liu, Bouaziz and Kavan 2017) with the global matrix K as
+  //    the initial Hessian: the gradient is K x - b(x) (b from the local step at x), the initial
+  //    inverse Hessian gamma K^-1 with gamma = s.y / y.K^-1 y of the newest pair (Nocedal and
+  //    Wright's scaling), and a backtracking line search (Armijo) on the energy that falls back
+  //    to the plain step. K holds every constraint in all nine directions of its F with its
+  //    weight, so the plain step crawls where the volume weight dwarfs the strain weight (nu ->
+  //    1/2: docs/deformation.md); the pairs learn the curvature K gets wrong.
+  const bool contacts_possible = !m->model.obstacles.empty() || !m->model.contact_pairs.empty();
   sim_detail::AndersonAcceleration anderson(nf, m->anderson_history);
+  sim_detail::QuasiNewtonHistory history(m->history);
   Eigen::MatrixX3d x = m->free_positions(p);
+  Eigen::MatrixX3d gradient, direction, trial, candidate;
+  Eigen::MatrixX3d scaled; // K^-1 y of the newest pair
   std::optional<ResidualTest> test;
   for (int iteration = 1;; ++iteration) {
     throw_if_cancelled(); // an iteration takes milliseconds to a second: SIGINT stops here
@@ -214,8 +247,15 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
     report.contact_changes += contact_changes;                          // the right-hand side depends on it)
     m->gather_rhs(target);
     // The equilibrium residual at x (K x - b(x), b from the projections the last local step
-    // made there): the residual test before every step, and after the last.
-    const double residual = nf > 0 ? (m->apply_matrix(x) - m->rhs).rowwise().norm().maxCoeff() : 0.0;
+    // made there): the energy's gradient, and the residual test before every step and after
+    // the last.
+    if (nf > 0)
+      gradient = m->apply_matrix(x) - m->rhs;
+    else
+      gradient.resize(0, 3);
+    const double residual = nf > 0 ? gradient.rowwise().norm().maxCoeff() : 0.0;
+    const bool quasi_newton = !contacts_possible && m->history > 0 && iteration > k_anderson_iterations;
+    if (quasi_newton) history.add(x, gradient);
     report.local_seconds += seconds_since(start);
     if (!test) test.emplace(stop, residual);
     if (progress_detail_due()) progress_detail(solver_detail(iteration, residual));
@@ -224,33 +264,66 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
       break;
     }
     if (iteration > stop.max_iterations) break;
-    start = Clock::now();
-    m->factor->solve(m->rhs, m->solution, m->threads);
-    report.global_seconds += seconds_since(start);
-    start = Clock::now();
     const double previous = energy;
-    const Eigen::MatrixX3d g_matrix = m->solution;
-    Eigen::MatrixX3d accepted = g_matrix;
-    Eigen::MatrixX3d candidate;
-    bool accelerated = false;
-    const bool tried = anderson.propose(g_matrix, x, candidate);
-    if (tried) {
-      m->set_free_positions(candidate, p);
-      const double candidate_energy = m->local_step(p, target);
-      if (candidate_energy < previous) {
-        accepted = candidate;
-        energy = candidate_energy;
-        accelerated = true;
+    bool accepted = false;
+    if (quasi_newton && history.size() > 0) {
+      // The direction: the two-loop recursion around gamma K^-1.
+      start = Clock::now();
+      direction = -gradient;
+      history.first_loop(direction);
+      m->factor->solve(history.newest_y(), scaled, m->threads);
+      m->factor->solve(direction, m->solution, m->threads);
+      report.global_seconds += seconds_since(start);
+      start = Clock::now();
+      direction = (history.newest_sy() / dot(history.newest_y(), scaled)) * m->solution;
+      history.second_loop(direction);
+      const double slope = dot(gradient, direction);
+      double step = 1.0;
+      for (int evaluation = 0; slope < 0.0 && evaluation < k_line_search_evaluations && !accepted;
+           ++evaluation) {
+        trial = x + step * direction;
+        m->set_free_positions(trial, p);
+        const double trial_energy = m->local_step(p, target);
+        if (trial_energy <= previous + k_armijo * step * slope) {
+          energy = trial_energy;
+          accepted = true;
+        } else {
+          // The minimum of the parabola through E(x), the slope there and E(trial), within a
+          // tenth and a half of the step.
+          const double curvature = trial_energy - previous - step * slope;
+          const double next = curvature > 0.0 ? -0.5 * slope * step * step / curvature : 0.5 * step;
+          step = std::clamp(next, 0.1 * step, 0.5 * step);
+        }
       }
+      report.local_seconds += seconds_since(start);
+      if (!accepted) history.clear(); // the plain step below, from a fresh history
     }
-    if (!accelerated) {
-      m->set_free_positions(g_matrix, p);
-      energy = m->local_step(p, target);
-      if (tried) anderson.restart(); // rejected: restart the history from this point
+    if (!accepted) {
+      start = Clock::now();
+      m->factor->solve(m->rhs, m->solution, m->threads);
+      report.global_seconds += seconds_since(start);
+      start = Clock::now();
+      trial = m->solution;
+      // Anderson's proposal (phase 1), kept when it lowers the energy.
+      const bool tried = !quasi_newton && anderson.propose(m->solution, x, candidate);
+      if (tried) {
+        m->set_free_positions(candidate, p);
+        const double candidate_energy = m->local_step(p, target);
+        if (candidate_energy < previous) {
+          trial = candidate;
+          energy = candidate_energy;
+          accepted = true;
+        }
+      }
+      if (!accepted) {
+        m->set_free_positions(trial, p);
+        energy = m->local_step(p, target);
+        if (tried) anderson.restart(); // rejected: restart the history from this point
+      }
+      report.local_seconds += seconds_since(start);
     }
-    report.local_seconds += seconds_since(start);
-    const double change = nf > 0 ? (accepted - x).rowwise().norm().maxCoeff() : 0.0;
-    x = accepted;
+    const double change = nf > 0 ? (trial - x).rowwise().norm().maxCoeff() : 0.0;
+    x = trial;
     report.iterations = iteration;
     if (record_energies) {
       report.energies_J.push_back(energy);

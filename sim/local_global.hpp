@@ -17,7 +17,11 @@ namespace phantasm {
 /// (OpenMP, signed SVD with warm-started rotations, no allocation), finds the vertices inside
 /// obstacles, gathers the right-hand side per vertex, brings the factor up to date with the
 /// contacts by rank-one updates/downdates, and solves the three coordinates in one pass over the
-/// factor. Fixed vertices stay where they are in the positions passed to solve().
+/// factor, accelerated by Anderson's method. A solve that has not converged after 100 such
+/// iterations (and has no contacts) goes on as L-BFGS on the same energy with the factor as its
+/// initial Hessian (Liu, Bouaziz and Kavan 2017), which converges where the plain iteration
+/// crawls (nu near 1/2: docs/deformation.md). Fixed vertices stay where they are in the
+/// positions passed to solve().
 class LocalGlobalSolver {
 public:
   /// @param inertia_weight 1/h^2 of the steps to solve, or 0 for quasi-static solves (then the
@@ -26,16 +30,18 @@ public:
   /// @param anderson_history iterations Anderson acceleration remembers (0: plain local/global).
   ///        Accelerated points are kept only when they lower the energy (Peng et al. 2018), so
   ///        the energy never increases either way.
+  /// @param history pairs the L-BFGS phase of solve() remembers (0: no L-BFGS phase). Its
+  ///        steps must lower the energy enough (Armijo), else the plain step is taken.
   /// @throws std::runtime_error when the matrix cannot be factored (nothing holds the model)
   LocalGlobalSolver(const ElasticModel& model, double inertia_weight, int threads = 0,
-                    int anderson_history = 5);
+                    int anderson_history = 5, int history = 30);
   ~LocalGlobalSolver();
   LocalGlobalSolver(const LocalGlobalSolver&) = delete;
   LocalGlobalSolver& operator=(const LocalGlobalSolver&) = delete;
 
   /// Iterates from p (metres, one row per vertex) until the residual test of `stop` passes (its
-  /// residual is K x - b(x), checked before every step at the cost of one product with K), a
-  /// step moves nothing, or the iteration limit; p is replaced
+  /// residual is K x - b(x), the energy's gradient, checked before every step at the cost of one
+  /// product with K), a step moves nothing, or the iteration limit; p is replaced
   /// by the result. `inertial_target` is s (ignored for quasi-static). With record_energies, the
   /// report lists E(p_k) for every iteration (E costs nothing extra: the local step computes it).
   SolveReport solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d& inertial_target, const StopCriteria& stop,

@@ -19,7 +19,8 @@ struct LocalGlobalSolver::Impl {
   const ElasticModel& model;
   double alpha = 0.0;
   int threads = 1;
-  int anderson_history = 0;
+  int anderson_history = 0;               ///< iterations Anderson acceleration remembers (0: off)
+  int history = 0;                        ///< L-BFGS pairs remembered (0: no L-BFGS phase)
   std::vector<int> free_index;            ///< per vertex: row in the free system, -1 for fixed vertices
   std::vector<int> free_vertex;           ///< per free row: the vertex
   Eigen::SparseMatrix<double> K_free;     ///< free x free
