@@ -4,11 +4,15 @@
 #include "core/format.hpp"
 #include "pipeline/cost_rates.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <iomanip>
+#include <numeric>
 #include <sstream>
 
 namespace phantasm {
@@ -108,8 +112,9 @@ CostEstimate estimate_cost(const Scene& scene) {
   int file_shapes = 0;          // organs whose shape is read from a file or an atlas
   std::string file_shape_organ; // the last of them
   double meshed_tets = 0.0, simulated_tets = 0.0, surface_area = 0.0, shell_triangles = 0.0;
-  double fit_seconds = 0.0, fit_peak = 0.0; // organs are fitted one after the other
+  double fit_seconds = 0.0, fit_peak = 0.0; // processor time of the fits; the largest fit's memory
   std::size_t fit_peak_organ = 0;           // the organ whose fit peaks highest
+  std::vector<double> fit_peaks;            // every fitted organ's
   for (std::size_t i = 0; i < scene.anatomy.organs.size(); ++i) {
     const OrganSettings& settings = scene.anatomy.organs[i];
     const int depth = i < scene.organs.size() ? scene.organs[i].depth : 0;
@@ -180,6 +185,7 @@ CostEstimate estimate_cost(const Scene& scene) {
       const double coarseness = 320.0 / std::max(1, organ.base_mesh_triangles);
       fit_seconds += k_fit_seconds_at_320 * coarseness + k_seconds_per_patch * organ.patches;
       const double peak = k_fit_bytes_at_320 * coarseness + k_bytes_per_fitted_patch * organ.patches;
+      fit_peaks.push_back(peak);
       if (peak > fit_peak) {
         fit_peak = peak;
         fit_peak_organ = e.organs.size();
@@ -221,7 +227,13 @@ CostEstimate estimate_cost(const Scene& scene) {
   if (images) transient = std::max(transient, k_image_transient_bytes + (coils > 1 ? 8.0 : 0.0));
   e.dense_bytes_per_voxel = held + transient;
   const double dense = e.dense_voxels * e.dense_bytes_per_voxel;
-  const double meshes = e.tets * k_bytes_per_tet + fit_peak;
+  // The anatomy fits its organs side by side, one per thread (anatomy/phantom.cpp): the largest
+  // fits that can run at once add up.
+  std::sort(fit_peaks.begin(), fit_peaks.end(), std::greater<double>());
+  const auto concurrent_fits =
+      std::min(fit_peaks.size(), static_cast<std::size_t>(std::max(1, omp_get_max_threads())));
+  const double fits_at_once = std::accumulate(fit_peaks.begin(), fit_peaks.begin() + concurrent_fits, 0.0);
+  const double meshes = e.tets * k_bytes_per_tet + fits_at_once;
   const double bands = e.band_voxels * k_bytes_per_band_voxel;
   // A shape from a file is a distance field over its volume, sampled finely, kept for the run.
   const double fov_mm3 = scene.grid.field_of_view_mm.prod();

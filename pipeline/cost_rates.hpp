@@ -18,12 +18,15 @@ inline constexpr double k_base_bytes = 75e6;
 /// Per tet at the peak of meshing and solving: CGAL's triangulation during Mesh_3 (about
 /// 1 kB a cell, freed after), the solver's matrix factor and constraint data.
 inline constexpr double k_bytes_per_tet = 600.0;
-/// Fitting one organ (organs are fitted one after the other, so the largest sets the peak): this
-/// times 320 / its base size (a coarse base deviates more from its target, and measuring the
-/// fit refines more: a ball of 80 base triangles peaks at 263 MB, of 320 at 94 MB) ...
+/// Fitting one organ (organs are fitted side by side, one per thread, so the largest fits that
+/// run at once set the peak): this times 320 / its base size (a coarse base deviates more from
+/// its target, and measuring the fit refines more: a ball of 80 base triangles peaks at 263 MB,
+/// of 320 at 94 MB) ...
 inline constexpr double k_fit_bytes_at_320 = 30e6;
-/// ... plus this per patch (the samples and normal equations of the fit).
-inline constexpr double k_bytes_per_fitted_patch = 75e3;
+/// ... plus this per patch (the samples and normal equations of the fit; the Colin head's
+/// anatomy, grey and white matter of 20 000 base triangles fitted at once, peaks at 1.16 GB with
+/// its labels, at about 1 mm sample spacing of the fit report).
+inline constexpr double k_bytes_per_fitted_patch = 20e3;
 /// Per narrow-band voxel of a level set (OpenVDB leaf nodes, partly filled).
 inline constexpr double k_bytes_per_band_voxel = 8.0;
 /// Per dense voxel while the motion fields are made (the deformation map's rasterized field
