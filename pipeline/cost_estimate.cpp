@@ -4,8 +4,6 @@
 #include "core/format.hpp"
 #include "pipeline/cost_rates.hpp"
 
-#include <omp.h>
-
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -228,10 +226,11 @@ CostEstimate estimate_cost(const Scene& scene) {
   e.dense_bytes_per_voxel = held + transient;
   const double dense = e.dense_voxels * e.dense_bytes_per_voxel;
   // The anatomy fits its organs side by side, one per thread (anatomy/phantom.cpp): the largest
-  // fits that can run at once add up.
+  // fits that can run at once add up, two of them on the 2 threads the estimate assumes (as its
+  // wall time does; the estimate is part of the dataset, which is the same on any number of
+  // threads).
   std::sort(fit_peaks.begin(), fit_peaks.end(), std::greater<double>());
-  const auto concurrent_fits =
-      std::min(fit_peaks.size(), static_cast<std::size_t>(std::max(1, omp_get_max_threads())));
+  const auto concurrent_fits = std::min<std::size_t>(fit_peaks.size(), k_estimate_threads);
   const double fits_at_once = std::accumulate(fit_peaks.begin(), fit_peaks.begin() + concurrent_fits, 0.0);
   const double meshes = e.tets * k_bytes_per_tet + fits_at_once;
   const double bands = e.band_voxels * k_bytes_per_band_voxel;
@@ -342,7 +341,8 @@ std::vector<std::string> cost_lines(const CostEstimate& e) {
        << seconds_text(e.anatomy_seconds) << ", deformation " << seconds_text(e.sim_seconds)
        << ", voxelization " << seconds_text(e.voxelize_seconds) << ", images " << seconds_text(e.mri_seconds)
        << ", writing " << seconds_text(e.write_seconds) << "), wall time "
-       << seconds_text(estimated_wall_seconds(e, 2)) << " on 2 threads";
+       << seconds_text(estimated_wall_seconds(e, k_estimate_threads)) << " on " << k_estimate_threads
+       << " threads";
   lines.push_back(need.str());
   return lines;
 }

@@ -11,6 +11,11 @@ namespace phantasm::cost_rates {
 inline constexpr const char* k_rates_measured_by =
     "build/release/tests/test_cost_estimate on the 2-core development machine (README, Performance)";
 
+/// The threads the estimate assumes (its wall time, the fits that run at once): those of the
+/// 2-core machine the rates were measured on, whatever this run has, so that the estimate in the
+/// log and provenance is the same on any number of threads.
+inline constexpr int k_estimate_threads = 2;
+
 // --- Memory, bytes ------------------------------------------------------------------------
 /// The process before any stage holds data: code, libraries, OpenVDB and CGAL's pools, the
 /// worker threads' stacks (peak resident of `phantasm run` on cloth.yaml's coarse copy: 77 MB).
