@@ -62,17 +62,26 @@ double newton_tip_mm(const ElasticModel& model) {
   return cantilever_tip_deflection_mm(model, p);
 }
 
-/// Local/global with the scene defaults (relative residual 1e-3 of a vertex's weight, at most
-/// 2000 iterations): "iterations, converged or not, tip".
-std::string local_global_run(const ElasticModel& model) {
-  Eigen::MatrixX3d q = model.rest_positions_m;
+/// A quasi-static local/global solve of the model on one thread with the scene defaults (relative
+/// residual 1e-3 of a vertex's weight, at most 2000 iterations): its report, the positions
+/// reached (`q`) and the solve's seconds.
+SolveReport solve_local_global(const ElasticModel& model, Eigen::MatrixX3d& q, double& seconds) {
+  q = model.rest_positions_m;
   StopCriteria defaults;
   defaults.max_iterations = 2000;
   defaults.force_scale_N = 9.81 * model.masses_kg.maxCoeff();
   LocalGlobalSolver solver(model, 0.0, 1);
   const auto start = std::chrono::steady_clock::now();
   const SolveReport report = solver.solve(q, q, defaults);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return report;
+}
+
+/// Local/global with the scene defaults: "iterations, converged or not, tip".
+std::string local_global_run(const ElasticModel& model) {
+  Eigen::MatrixX3d q;
+  double seconds = 0.0;
+  const SolveReport report = solve_local_global(model, q, seconds);
   char text[160];
   std::snprintf(text, sizeof text, "%d it., %s, %.2f mm, %.1f s", report.iterations,
                 report.converged ? "converged" : "not converged", cantilever_tip_deflection_mm(model, q),
@@ -166,14 +175,9 @@ int local_global_row(double nu, double tet_size_mm, bool per_tet) {
   if (tet_size_mm > 0.0) s.group_size = 8;
   const ElasticModel model = cantilever_model(s);
   const double newton = newton_tip_mm(model);
-  Eigen::MatrixX3d q = model.rest_positions_m;
-  StopCriteria defaults;
-  defaults.max_iterations = 2000;
-  defaults.force_scale_N = 9.81 * model.masses_kg.maxCoeff();
-  LocalGlobalSolver solver(model, 0.0, 1);
-  const auto start = std::chrono::steady_clock::now();
-  const SolveReport report = solver.solve(q, q, defaults);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  Eigen::MatrixX3d q;
+  double seconds = 0.0;
+  const SolveReport report = solve_local_global(model, q, seconds);
   const double tip = cantilever_tip_deflection_mm(model, q);
   std::fprintf(table, "| %s | %g | %.2f mm | %d | %s (%.2g) | %.3f mm | %+.3f %% | %.2f s |\n",
                per_tet ? (tet_size_mm > 0.0 ? "CGAL, per tet" : "4 x 4 x 20 cells, per tet")
