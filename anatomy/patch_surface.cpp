@@ -5,8 +5,12 @@
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <map>
+#include <numeric>
 
 namespace phantasm {
 
@@ -37,6 +41,73 @@ double PatchBump::shape_value(const Eigen::Vector2d& uv) const {
 
 double PatchBump::uv_area() const {
   return M_PI / std::sqrt(shape_uv.determinant());
+}
+
+HeightRange patch_height_range(const std::vector<PatchBump>& bumps) {
+  // The triangle is cut into n^2 similar sub-triangles, two per cell of the lattice (a, b) / n.
+  // Over a triangle with corners p_j and barycentric weights l_j, a quadratic with Hessian H
+  // satisfies f(sum l_j p_j) = sum l_j f(p_j) - 1/2 sum_{j<k} l_j l_k (p_j - p_k)^T H (p_j - p_k);
+  // for Q = 1 - d^T S d, H = -2 S and sum_{j<k} l_j l_k <= 1/3, so on a sub-triangle
+  // min_j Q(p_j) <= Q <= max_j Q(p_j) + E / 3, E the largest edge's e^T S e (every sub-triangle
+  // has the same three edges). Each bump's share a Q^3 [Q > 0] is bounded from the corners, and
+  // only on the cells its support's bounding box meets: elsewhere it is 0.
+  constexpr int n = 32;
+  std::vector<double> upper(2 * n * n, 0.0), lower(2 * n * n, 0.0);
+  const double step = 1.0 / n;
+  const Eigen::Vector2d edges[3] = {{step, 0.0}, {0.0, step}, {step, -step}};
+  const auto cube_of_positive = [](double x) { return x > 0.0 ? x * x * x : 0.0; };
+  for (const PatchBump& bump : bumps) {
+    const Eigen::Matrix2d S = 0.5 * (bump.shape_uv + bump.shape_uv.transpose());
+    const double a = bump.amplitude_mm;
+    if (a == 0.0) continue;
+    double widest = 0.0;
+    for (const Eigen::Vector2d& e : edges)
+      widest = std::max(widest, e.dot(S * e));
+    const double slack = widest / 3.0;
+    // The support {d^T S d < 1} lies within c +- (sqrt((S^-1)_uu), sqrt((S^-1)_vv)).
+    const double det = S.determinant();
+    const Eigen::Vector2d half(std::sqrt(S(1, 1) / det), std::sqrt(S(0, 0) / det));
+    const auto cell = [](double x) { return static_cast<int>(std::clamp(std::floor(x * n), 0.0, n - 1.0)); };
+    const int a_first = cell(bump.center_uv.x() - half.x()), a_last = cell(bump.center_uv.x() + half.x());
+    const int b_first = cell(bump.center_uv.y() - half.y()), b_last = cell(bump.center_uv.y() + half.y());
+    const auto q_at = [&](int i, int j) {
+      const Eigen::Vector2d d = step * Eigen::Vector2d(i, j) - bump.center_uv;
+      return 1.0 - d.dot(S * d);
+    };
+    const auto add = [&](std::size_t id, double q0, double q1, double q2) {
+      const double q_low = std::min({q0, q1, q2});
+      const double q_high = std::min(1.0, std::max({q0, q1, q2}) + slack);
+      lower[id] += a * cube_of_positive(a > 0.0 ? q_low : q_high);
+      upper[id] += a * cube_of_positive(a > 0.0 ? q_high : q_low);
+    };
+    for (int j = b_first; j <= b_last; ++j) {
+      for (int i = a_first; i <= a_last && i + j < n; ++i) {
+        const double q00 = q_at(i, j), q10 = q_at(i + 1, j), q01 = q_at(i, j + 1);
+        const auto id = static_cast<std::size_t>(2 * (j * n + i));
+        add(id, q00, q10, q01);
+        if (i + j + 2 <= n) add(id + 1, q10, q01, q_at(i + 1, j + 1));
+      }
+    }
+  }
+  HeightRange range;
+  for (std::size_t id = 0; id < upper.size(); ++id) {
+    range.highest = std::max(range.highest, upper[id]);
+    range.lowest = std::min(range.lowest, lower[id]);
+  }
+  // Rounding of the sums above: a margin far below any voxel.
+  double total = 0.0;
+  for (const PatchBump& bump : bumps)
+    total += std::abs(bump.amplitude_mm);
+  range.lowest -= 1e-12 * total;
+  range.highest += 1e-12 * total;
+  return range;
+}
+
+std::vector<HeightRange> patch_height_ranges(const PatchSurface& surface) {
+  std::vector<HeightRange> ranges(static_cast<std::size_t>(surface.patch_count()));
+  for (Eigen::Index t = 0; t < surface.patch_count(); ++t)
+    ranges[static_cast<std::size_t>(t)] = patch_height_range(surface.bumps(t));
+  return ranges;
 }
 
 namespace {

@@ -40,6 +40,21 @@ struct PatchBump {
   double uv_area() const;
 };
 
+/// Bounds of a patch's height h(u, v) = sum_i a_i Q_i(u, v)^3 [Q_i > 0] over its base triangle
+/// (u, v >= 0, u + v <= 1), mm.
+struct HeightRange {
+  double lowest = 0.0;  ///< h >= lowest everywhere on the triangle
+  double highest = 0.0; ///< h <= highest everywhere on the triangle
+};
+
+/// Rigorous bounds of a patch's height over its triangle, near its true extremes: the sum of
+/// the amplitudes is a bound too, but fitted patches carry many narrow bumps side by side (27 per
+/// patch on the Colin head), whose heights reach about a fifth of that sum. The triangle is cut
+/// into 32^2 sub-triangles; on each, every Q (a concave quadratic) lies between its smallest
+/// corner value and its largest plus a third of the largest edge's d^T S d, and a bump counts
+/// only where its support's bounding box reaches. Both bounds enclose 0.
+HeightRange patch_height_range(const std::vector<PatchBump>& bumps);
+
 /// The local frame of one patch: x = origin + u edge1 + v edge2 + w length_scale normal.
 struct PatchFrame {
   Eigen::Vector3d origin, edge1, edge2, normal; ///< current x0, x1 - x0, x2 - x0, unit outward normal
@@ -145,5 +160,9 @@ private:
   std::vector<std::vector<Perturbation>> m_perturbations;
   Eigen::MatrixX3i m_neighbours; ///< triangle across edge k (k = 0: x0x1, 1: x1x2, 2: x2x0)
 };
+
+/// patch_height_range of every patch of a surface, in patch order. The bounds are heights over
+/// the base triangles, so they hold while the base vertices move (a deformed copy shares them).
+std::vector<HeightRange> patch_height_ranges(const PatchSurface& surface);
 
 } // namespace phantasm

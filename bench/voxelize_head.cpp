@@ -4,11 +4,13 @@
 // default: level sets from the patch surfaces, field extension by a distance transform), "old"
 // (level sets through tessellations and mesh-to-volume, the extension by a search over the moved
 // boundary faces per voxel), or "both" (old, then new, in one process: the times side by side;
-// the peak memory is then the larger of the two).
-// Usage: voxelize_head VOXEL_MM [PATH [SCENE]]
+// the peak memory is then the larger of the two). SCENE (default data-synthetic/head.yaml) may be
+// any scene, the Colin head included: its anatomy is built, or read from the anatomy cache CACHE
+// when one is given, and deformed as a run would before the voxelization is timed.
+// Usage: voxelize_head VOXEL_MM [PATH [SCENE [CACHE]]]
 
+#include "pipeline/run_pipeline.hpp"
 #include "scene/scene.hpp"
-#include "sim/deform_phantom.hpp"
 #include "voxelize/voxelize_phantom.hpp"
 
 #include <sys/resource.h>
@@ -22,7 +24,7 @@ int main(int argc, char** argv) {
   using namespace phantasm;
   const std::string path_choice = argc > 2 ? argv[2] : "new";
   if (argc < 2 || (path_choice != "new" && path_choice != "old" && path_choice != "both")) {
-    std::fprintf(stderr, "usage: voxelize_head VOXEL_MM [new|old|both [SCENE]]\n");
+    std::fprintf(stderr, "usage: voxelize_head VOXEL_MM [new|old|both [SCENE [CACHE]]]\n");
     return 2;
   }
   const std::string path =
@@ -35,10 +37,15 @@ int main(int argc, char** argv) {
   Scene scene = *loaded.scene;
   scene.grid.voxel_size_mm = Eigen::Vector3d::Constant(std::atof(argv[1]));
   Reporter quiet = Reporter::silent();
-  const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
-  StageReport sim;
-  const PhantomDeformation deformation = deform_phantom(scene.deformation, scene.organs, phantom, sim, quiet);
-  const Phantom deformed = deformed_phantom(phantom, deformation);
+  const Simulation simulation = simulate(scene, quiet, SimulationStage::deformation,
+                                         argc > 4 ? std::filesystem::path(argv[4]) : std::filesystem::path());
+  if (!simulation.deformation || !simulation.deformed) {
+    std::fprintf(stderr, "%s: the scene deforms nothing\n", path.c_str());
+    return 2;
+  }
+  const Phantom& phantom = simulation.phantom;
+  const PhantomDeformation& deformation = *simulation.deformation;
+  const Phantom& deformed = *simulation.deformed;
   for (const bool old : {true, false}) {
     if ((old && path_choice == "new") || (!old && path_choice == "old")) continue;
     VoxelizationSettings settings = scene.voxelization;

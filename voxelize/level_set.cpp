@@ -40,9 +40,9 @@ public:
 struct PatchHeights {
   std::vector<PatchBump> bumps;                 ///< with symmetric shapes
   Eigen::Vector3d origin, edge1, edge2, normal; ///< the frame: x = origin + u edge1 + v edge2 + h normal
-  /// The larger of the sums of the positive and of the negative amplitudes: no point of the
-  /// patch is farther from its base (each bump's height lies between 0 and its amplitude).
-  double reach_mm = 0.0;
+  /// Bounds of the height over the triangle (patch_height_range): -below_mm <= h <= above_mm, so
+  /// no point of the patch lies farther from its base than the larger of the two.
+  double above_mm = 0.0, below_mm = 0.0;
 
   /// Height above base point (u, v), mm, and its derivatives d/du, d/dv.
   double height(const Eigen::Vector2d& uv, Eigen::Vector2d* d_uv) const {
@@ -106,7 +106,8 @@ struct LevelSet::Impl {
   openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create();
 };
 
-LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double half_width_voxels)
+LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double half_width_voxels,
+                   const std::vector<HeightRange>* height_ranges)
     : m(std::make_unique<Impl>()), m_voxel_size(voxel_size_mm), m_half_width(half_width_voxels) {
   initialize_openvdb();
   const TriangleMesh& base = surface.base_mesh();
@@ -118,12 +119,11 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
   for (std::size_t t = 0; t < nf; ++t) {
     PatchHeights& p = patches[t];
     p.bumps = surface.bumps(static_cast<Eigen::Index>(t));
-    double up = 0.0, down = 0.0;
-    for (PatchBump& b : p.bumps) {
+    for (PatchBump& b : p.bumps)
       b.shape_uv = 0.5 * (b.shape_uv + b.shape_uv.transpose()).eval();
-      (b.amplitude_mm > 0.0 ? up : down) += std::abs(b.amplitude_mm);
-    }
-    p.reach_mm = std::max(up, down);
+    const HeightRange range = height_ranges ? (*height_ranges)[t] : patch_height_range(p.bumps);
+    p.above_mm = std::max(0.0, range.highest);
+    p.below_mm = std::max(0.0, -range.lowest);
     if (!p.bumps.empty()) {
       const PatchFrame f = surface.frame(static_cast<Eigen::Index>(t));
       p.origin = f.origin;
@@ -132,13 +132,15 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
       p.normal = f.normal;
     }
   }
-  // Every voxel within the band of the surface lies within band + reach of the base triangle
-  // under the nearest surface point (|h| <= reach over that patch), so the candidates are the
-  // voxels near each triangle by its own patch's reach: a closed shell around the surface. Each
-  // candidate then finds its closest base triangle over the whole mesh (search tree; ties go to
-  // the lowest triangle index, as in SignedDistanceMesh::closest()). Bounding each triangle by
-  // its own reach, not the largest of the surface's, keeps the shell thin where the patches are
-  // flat: one tall bump no longer inflates every triangle's box.
+  // A voxel x within the band of the surface point p = b + h n above base point b satisfies
+  // |x - b| <= band + |h| and -band - below <= n . (x - v0) <= band + above, with the patch's
+  // height bounds (patch_height_range). So the candidates are the voxels near each triangle by
+  // its own patch's bounds: a closed shell around the surface. Each candidate then finds its
+  // closest base triangle over the whole mesh (search tree; ties go to the lowest triangle
+  // index, as in SignedDistanceMesh::closest()). Bounding each triangle by its own patch's
+  // heights, not the largest of the surface's, and by the heights its bumps reach together, not
+  // the sum of their amplitudes (about 4 times the true extremes on fitted anatomy), keeps the
+  // shell thin: fewer candidates, each a closest-triangle search.
   openvdb::MaskGrid candidates(false);
   {
     auto accessor = candidates.getAccessor();
@@ -148,7 +150,8 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
       if (cancellation_requested()) return;
       const auto& v = mesh.corners(static_cast<int>(t));
       const Eigen::Vector3d& n = mesh.face_normal(static_cast<int>(t));
-      const double reach = band + patches[t].reach_mm + 1e-9;
+      const double above = band + patches[t].above_mm + 1e-9, below = band + patches[t].below_mm + 1e-9;
+      const double reach = std::max(above, below);
       const Eigen::Vector3d low = v[0].cwiseMin(v[1]).cwiseMin(v[2]).array() - reach;
       const Eigen::Vector3d high = v[0].cwiseMax(v[1]).cwiseMax(v[2]).array() + reach;
       int lo[3], hi[3];
@@ -161,12 +164,12 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
       for (int k = lo[2]; k <= hi[2]; ++k) {
         for (int j = lo[1]; j <= hi[1]; ++j) {
           const Eigen::Vector3d row = voxel_size_mm * Eigen::Vector3d(0, j, k);
-          // The voxels of this row within the slab |n . (x - v0)| <= reach: an interval of i.
+          // The voxels of this row within the slab -below <= n . (x - v0) <= above: an interval of i.
           int first = lo[0], last = hi[0];
           if (flat && std::abs(n.x()) > 1e-12) {
             const double offset = n.dot(row - v[0]);
-            const double a = (-reach - offset) / (n.x() * voxel_size_mm);
-            const double b = (reach - offset) / (n.x() * voxel_size_mm);
+            const double a = (-below - offset) / (n.x() * voxel_size_mm);
+            const double b = (above - offset) / (n.x() * voxel_size_mm);
             first = std::max(first, static_cast<int>(std::floor(std::min(a, b))));
             last = std::min(last, static_cast<int>(std::ceil(std::max(a, b))));
           }
@@ -174,7 +177,7 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
             const openvdb::Coord ijk(i, j, k);
             if (accessor.isValueOn(ijk)) continue;
             const Eigen::Vector3d x = voxel_size_mm * Eigen::Vector3d(i, j, k);
-            if (flat && std::abs(n.dot(x - v[0])) > reach) continue;
+            if (flat && (n.dot(x - v[0]) > above || n.dot(x - v[0]) < -below)) continue;
             const TriangleClosestPoint on_base = closest_point_on_triangle(x, v[0], v[1], v[2]);
             if ((x - on_base.point).squaredNorm() > reach * reach) continue;
             accessor.setValueOn(ijk);
@@ -274,8 +277,8 @@ const void* LevelSet::grid() const {
 
 struct LevelSet::Probe::Impl {
   explicit Impl(const openvdb::FloatGrid& grid, double voxel_size)
-      : accessor(grid.getConstAccessor()), sampler(accessor, grid.transform()), background(grid.background()),
-        inverse_voxel(1.0 / voxel_size) {
+      : accessor(grid.getConstAccessor()), sampler(accessor, grid.transform()), transform(grid.transform()),
+        background(grid.background()), inverse_voxel(1.0 / voxel_size) {
     // Beyond the leaves (and a margin for the trilinear stencil and rounding) every value is the
     // outside background: a closed surface's inside tiles lie within its band's leaves.
     low = Eigen::Vector3d::Constant(1e300);
@@ -290,6 +293,7 @@ struct LevelSet::Probe::Impl {
   }
   openvdb::FloatGrid::ConstAccessor accessor;
   openvdb::tools::GridSampler<openvdb::FloatGrid::ConstAccessor, openvdb::tools::BoxSampler> sampler;
+  const openvdb::math::Transform& transform;
   float background;
   double inverse_voxel;
   Eigen::Vector3d low, high; ///< index-space box beyond which the value is the background
@@ -304,6 +308,16 @@ double LevelSet::Probe::operator()(const Eigen::Vector3d& x) const {
   const Eigen::Vector3d index = x * m->inverse_voxel;
   if ((index.array() < m->low.array()).any() || (index.array() > m->high.array()).any())
     return static_cast<double>(m->background);
+  // Deep inside or outside, the trilinear stencil (the cell's 8 corners) often lies in one
+  // constant tile, 8^3 voxels or more without a leaf: its value then is the sample, bit for bit
+  // (OpenVDB's interpolation is a + w (b - a), exact when a = b), from one lookup instead of 8.
+  const openvdb::Vec3d stencil =
+      m->transform.worldToIndex(openvdb::Vec3d(x.x(), x.y(), x.z())); // as the sampler
+  const openvdb::Coord cell = openvdb::Coord::floor(stencil);
+  constexpr int last_in_leaf = openvdb::FloatGrid::TreeType::LeafNodeType::DIM - 1;
+  if ((cell.x() & last_in_leaf) != last_in_leaf && (cell.y() & last_in_leaf) != last_in_leaf &&
+      (cell.z() & last_in_leaf) != last_in_leaf && m->accessor.probeConstLeaf(cell) == nullptr)
+    return static_cast<double>(m->accessor.getValue(cell));
   return static_cast<double>(m->sampler.wsSample(openvdb::Vec3d(x.x(), x.y(), x.z())));
 }
 

@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 
 #include <memory>
+#include <vector>
 
 namespace phantasm {
 
@@ -33,7 +34,10 @@ public:
   /// @param surface closed patch surface at its current positions, RAS mm
   /// @param voxel_size_mm the level set's voxel edge
   /// @param half_width_voxels narrow band half width
-  LevelSet(const PatchSurface& surface, double voxel_size_mm, double half_width_voxels = 3.0);
+  /// @param height_ranges the patches' height bounds (patch_height_ranges) when already known,
+  ///        e.g. from the other state of the same organ; null: computed here
+  LevelSet(const PatchSurface& surface, double voxel_size_mm, double half_width_voxels = 3.0,
+           const std::vector<HeightRange>* height_ranges = nullptr);
   ~LevelSet();
   LevelSet(LevelSet&&) noexcept;
   LevelSet& operator=(LevelSet&&) noexcept;

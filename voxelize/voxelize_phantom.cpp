@@ -25,10 +25,14 @@ struct StateLevelSets {
   std::vector<VoxelizedOrgan> organs;
 };
 
+/// Each organ's patch height bounds (patch_height_ranges), found by the first state that builds
+/// its level set and reused by the other: the bumps do not change when the base moves.
+using OrganHeightRanges = std::vector<std::optional<std::vector<HeightRange>>>;
+
 StateLevelSets level_sets_of(const VoxelizationSettings& settings, const OrganTable& organs,
                              const ImageGrid& grid, const Phantom& phantom,
                              const std::vector<std::string>& tissues, double voxel_size,
-                             ProgressBar& progress) {
+                             OrganHeightRanges& height_ranges, ProgressBar& progress) {
   std::vector<std::size_t> chosen;
   for (std::size_t o = 0; o < phantom.organs.size(); ++o) {
     const auto bounds =
@@ -60,7 +64,10 @@ StateLevelSets level_sets_of(const VoxelizationSettings& settings, const OrganTa
     for (std::ptrdiff_t k = 0; k < count; ++k) {
       if (cancellation_requested()) continue; // no exception may leave an OpenMP region
       const auto i = static_cast<std::size_t>(k);
-      built[i].emplace(*phantom.organs[chosen[i]].surface, voxel_size);
+      const PatchSurface& surface = *phantom.organs[chosen[i]].surface;
+      std::optional<std::vector<HeightRange>>& ranges = height_ranges[chosen[i]]; // this iteration's alone
+      if (!ranges) ranges = patch_height_ranges(surface);
+      built[i].emplace(surface, voxel_size, 3.0, &*ranges);
       progress.advance();
     }
   }
@@ -127,7 +134,9 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
   const int gap_tissue = deformed ? gap_tissue_index(settings.gap_fill, out.tissues) : -1;
   // The reference level sets outlive the deformed state's voxelization: they are its gaps' shapes.
   progress.set_detail("reference level sets");
-  StateLevelSets sets = level_sets_of(settings, organs, grid, reference, out.tissues, voxel_size, progress);
+  OrganHeightRanges height_ranges(reference.organs.size());
+  StateLevelSets sets =
+      level_sets_of(settings, organs, grid, reference, out.tissues, voxel_size, height_ranges, progress);
   {
     std::size_t band = 0;
     for (const LevelSet& l : sets.level_sets)
@@ -146,7 +155,7 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
   if (deformed) {
     progress.set_detail("deformed level sets");
     StateLevelSets moved =
-        level_sets_of(settings, organs, grid, *deformed, out.tissues, voxel_size, progress);
+        level_sets_of(settings, organs, grid, *deformed, out.tissues, voxel_size, height_ranges, progress);
     std::vector<VoxelizedOrgan> with_gaps = moved.organs;
     if (deformation) {
       const std::vector<VoxelizedOrgan> gaps =
