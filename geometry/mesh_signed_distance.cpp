@@ -151,7 +151,16 @@ void SignedDistanceMesh::build_search_tree() {
 }
 
 MeshClosestPoint SignedDistanceMesh::closest(const Eigen::Vector3d& x) const {
-  return m_nodes.empty() ? scan(x) : search_tree(x);
+  return m_nodes.empty() ? scan(x) : search_tree(x, MeshClosestPoint{});
+}
+
+MeshClosestPoint SignedDistanceMesh::closest(const Eigen::Vector3d& x, int hint) const {
+  if (m_nodes.empty() || hint < 0 || hint >= static_cast<int>(m_triangles.size())) return closest(x);
+  // The hint's distance bounds the answer's, so every triangle at least as near (a tie of lower
+  // index included) is still visited: the answer does not depend on the hint.
+  const auto& v = m_corners[static_cast<std::size_t>(hint)];
+  const TriangleClosestPoint c = closest_point_on_triangle(x, v[0], v[1], v[2]);
+  return search_tree(x, MeshClosestPoint{hint, c, (c.point - x).squaredNorm()});
 }
 
 MeshClosestPoint SignedDistanceMesh::scan(const Eigen::Vector3d& x) const {
@@ -166,8 +175,7 @@ MeshClosestPoint SignedDistanceMesh::scan(const Eigen::Vector3d& x) const {
   return best;
 }
 
-MeshClosestPoint SignedDistanceMesh::search_tree(const Eigen::Vector3d& x) const {
-  MeshClosestPoint best;
+MeshClosestPoint SignedDistanceMesh::search_tree(const Eigen::Vector3d& x, MeshClosestPoint best) const {
   // Branch and bound, nearer child first: a box farther than the best so far cannot hold a
   // closer point (one exactly as far may hold a tie of lower index, which wins as in scan()).
   // The cost grows with log #F, not with the distance to the surface.

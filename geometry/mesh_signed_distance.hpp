@@ -48,6 +48,10 @@ public:
 
   /// The point of the mesh closest to x (x in mm). Its triangle is -1 for a mesh without triangles.
   MeshClosestPoint closest(const Eigen::Vector3d& x) const;
+  /// The same point, searched from a guess: triangle `hint` (e.g. the answer for a neighbouring
+  /// query point) bounds the search from the start, so fewer boxes are opened; the answer is
+  /// closest(x)'s, ties included. A hint of -1 is no guess.
+  MeshClosestPoint closest(const Eigen::Vector3d& x, int hint) const;
 
   /// The pseudonormal of the feature a closest point lies on (not unit length except on a face;
   /// zero for a degenerate face).
@@ -79,7 +83,7 @@ public:
 private:
   void connect();
   MeshClosestPoint scan(const Eigen::Vector3d& x) const;
-  MeshClosestPoint search_tree(const Eigen::Vector3d& x) const;
+  MeshClosestPoint search_tree(const Eigen::Vector3d& x, MeshClosestPoint best) const;
 
   std::vector<std::array<int, 3>> m_triangles;
   // Connectivity, from the constructor.

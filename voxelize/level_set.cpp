@@ -194,27 +194,34 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
   mesh.build_search_tree();
   std::vector<float> values(coords.size());
   const auto count = static_cast<std::ptrdiff_t>(coords.size());
-#pragma omp parallel for schedule(static)
-  for (std::ptrdiff_t c = 0; c < count; ++c) {
-    if (cancellation_requested()) continue;
-    const auto i = static_cast<std::size_t>(c);
-    const Eigen::Vector3d x = voxel_size_mm * Eigen::Vector3d(coords[i].x(), coords[i].y(), coords[i].z());
-    const MeshClosestPoint closest = mesh.closest(x);
-    double d = std::sqrt(closest.distance_squared);
-    if (mesh.inside(x, closest)) d = -d;
-    const PatchHeights& p = patches[static_cast<std::size_t>(closest.triangle)];
-    if (!p.bumps.empty()) {
-      // On an edge or corner of the base the bumps vanish (their ellipses lie inside the
-      // triangle), so this corrects only points above a patch's interior: the side from the
-      // height of the surface above the closest base point, the distance from the patch's
-      // closest point near the band's middle.
-      const Eigen::Vector2d uv = closest.on_triangle.barycentric.tail<2>();
-      Eigen::Vector2d d_uv;
-      const double along_normal = d - p.height(uv, &d_uv);
-      const double distance = std::abs(along_normal) < band ? p.distance(x, uv) : std::abs(along_normal);
-      d = along_normal < 0.0 ? -distance : distance;
+  // Candidates come leaf by leaf (8^3 blocks), so each one's search starts from the closest
+  // triangle of the one before (the same answer, fewer boxes opened).
+#pragma omp parallel
+  {
+    int previous = -1;
+#pragma omp for schedule(static)
+    for (std::ptrdiff_t c = 0; c < count; ++c) {
+      if (cancellation_requested()) continue;
+      const auto i = static_cast<std::size_t>(c);
+      const Eigen::Vector3d x = voxel_size_mm * Eigen::Vector3d(coords[i].x(), coords[i].y(), coords[i].z());
+      const MeshClosestPoint closest = mesh.closest(x, previous);
+      previous = closest.triangle;
+      double d = std::sqrt(closest.distance_squared);
+      if (mesh.inside(x, closest)) d = -d;
+      const PatchHeights& p = patches[static_cast<std::size_t>(closest.triangle)];
+      if (!p.bumps.empty()) {
+        // On an edge or corner of the base the bumps vanish (their ellipses lie inside the
+        // triangle), so this corrects only points above a patch's interior: the side from the
+        // height of the surface above the closest base point, the distance from the patch's
+        // closest point near the band's middle.
+        const Eigen::Vector2d uv = closest.on_triangle.barycentric.tail<2>();
+        Eigen::Vector2d d_uv;
+        const double along_normal = d - p.height(uv, &d_uv);
+        const double distance = std::abs(along_normal) < band ? p.distance(x, uv) : std::abs(along_normal);
+        d = along_normal < 0.0 ? -distance : distance;
+      }
+      values[i] = static_cast<float>(std::clamp(d, -band, band));
     }
-    values[i] = static_cast<float>(std::clamp(d, -band, band));
   }
   if (cancellation_requested()) return;
   m->grid = openvdb::FloatGrid::create(static_cast<float>(band));
@@ -308,16 +315,29 @@ double LevelSet::Probe::operator()(const Eigen::Vector3d& x) const {
   const Eigen::Vector3d index = x * m->inverse_voxel;
   if ((index.array() < m->low.array()).any() || (index.array() > m->high.array()).any())
     return static_cast<double>(m->background);
-  // Deep inside or outside, the trilinear stencil (the cell's 8 corners) often lies in one
-  // constant tile, 8^3 voxels or more without a leaf: its value then is the sample, bit for bit
-  // (OpenVDB's interpolation is a + w (b - a), exact when a = b), from one lookup instead of 8.
+  // The trilinear stencil (the cell's 8 corners) mostly lies within one 8^3 block: then it is
+  // read straight from that block's leaf, or, deep inside or outside, it is one constant tile
+  // (no leaf) whose value is the sample. Either way the value is OpenVDB's BoxSampler's, bit for
+  // bit: the same corners, the same interpolation (a + w (b - a), exact when a = b).
   const openvdb::Vec3d stencil =
       m->transform.worldToIndex(openvdb::Vec3d(x.x(), x.y(), x.z())); // as the sampler
   const openvdb::Coord cell = openvdb::Coord::floor(stencil);
-  constexpr int last_in_leaf = openvdb::FloatGrid::TreeType::LeafNodeType::DIM - 1;
+  using Leaf = openvdb::FloatGrid::TreeType::LeafNodeType;
+  constexpr int last_in_leaf = Leaf::DIM - 1;
   if ((cell.x() & last_in_leaf) != last_in_leaf && (cell.y() & last_in_leaf) != last_in_leaf &&
-      (cell.z() & last_in_leaf) != last_in_leaf && m->accessor.probeConstLeaf(cell) == nullptr)
-    return static_cast<double>(m->accessor.getValue(cell));
+      (cell.z() & last_in_leaf) != last_in_leaf) {
+    const Leaf* leaf = m->accessor.probeConstLeaf(cell);
+    if (leaf == nullptr) return static_cast<double>(m->accessor.getValue(cell));
+    const openvdb::Index corner = Leaf::coordToOffset(cell);
+    float data[2][2][2];
+    for (int i = 0; i < 2; ++i)
+      for (int j = 0; j < 2; ++j)
+        for (int k = 0; k < 2; ++k)
+          data[i][j][k] = leaf->getValue(
+              corner + static_cast<openvdb::Index>((i << (2 * Leaf::LOG2DIM)) + (j << Leaf::LOG2DIM) + k));
+    const openvdb::Vec3d uvw = stencil - openvdb::Vec3d(cell.x(), cell.y(), cell.z());
+    return static_cast<double>(openvdb::tools::BoxSampler::trilinearInterpolation(data, uvw));
+  }
   return static_cast<double>(m->sampler.wsSample(openvdb::Vec3d(x.x(), x.y(), x.z())));
 }
 

@@ -232,3 +232,33 @@ TEST(MeshSignedDistance, ALargeMeshIsSearchedLikeAScanAndSignedByItsPseudonormal
     }
   }
 }
+
+TEST(MeshSignedDistance, AHintedSearchGivesTheSameAnswerTiesIncluded) {
+  // Any hint (near, far, out of range) leaves the answer closest(x)'s. Vertices and edge
+  // midpoints are ties between triangles: the lowest index wins with or without a hint.
+  const Mesh sphere = icosphere(4, 20.0);
+  const SignedDistanceMesh tree = distance_mesh(sphere, true);
+  const auto faces = static_cast<int>(sphere.faces.rows());
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> radius(0.0, 40.0);
+  std::uniform_int_distribution<int> hint(-1, faces);
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < 300; ++i)
+    points.push_back(radius(random) * random_direction(random));
+  for (Eigen::Index f = 0; f < sphere.faces.rows(); f += 37) {
+    points.push_back(sphere.vertices.row(sphere.faces(f, 0)).transpose() * 1.01);
+    points.push_back(
+        0.5 *
+        (sphere.vertices.row(sphere.faces(f, 0)) + sphere.vertices.row(sphere.faces(f, 1))).transpose());
+  }
+  int previous = -1;
+  for (const Eigen::Vector3d& x : points) {
+    const MeshClosestPoint expected = tree.closest(x);
+    for (const int h : {hint(random), previous, expected.triangle, faces + 5}) {
+      const MeshClosestPoint found = tree.closest(x, h);
+      EXPECT_EQ(found.triangle, expected.triangle) << x.transpose() << " hint " << h;
+      EXPECT_EQ(found.distance_squared, expected.distance_squared) << x.transpose() << " hint " << h;
+    }
+    previous = expected.triangle;
+  }
+}
