@@ -202,6 +202,14 @@ SceneLoadResult parse_scene(const std::string& text, const std::filesystem::path
 }
 
 SceneLoadResult load_scene(const std::filesystem::path& file) {
+  std::error_code folder_error;
+  if (std::filesystem::is_directory(file, folder_error)) {
+    // A folder opens as an empty stream: it would read as a scene with nothing in it.
+    SceneLoadResult result;
+    result.problems.push_back(
+        Diagnostic{SourceLocation{file.string(), 0, 0}, "", "expected a scene file, found a folder"});
+    return result;
+  }
   std::ifstream stream(file, std::ios::binary);
   if (!stream) {
     SceneLoadResult result;

@@ -1,5 +1,6 @@
 #include "scene/yaml_documents.hpp"
 
+#include <yaml-cpp/depthguard.h>
 #include <yaml-cpp/eventhandler.h>
 
 #include <cctype>
@@ -26,9 +27,35 @@ public:
   void OnMapEnd() override {}
 };
 
-} // namespace
+/// The first control character of a UTF-8 text (YAML allows tab, line feed and carriage return
+/// only), as a parser error at its place. A text in UTF-16 or UTF-32 (a NUL among its first two
+/// bytes, or a byte order mark) is left to yaml-cpp, which reads those.
+void reject_control_characters(const std::string& text) {
+  if (text.size() >= 2 &&
+      (text[0] == '\0' || text[1] == '\0' || static_cast<unsigned char>(text[0]) == 0xfe ||
+       static_cast<unsigned char>(text[0]) == 0xff))
+    return;
+  YAML::Mark at;
+  at.pos = at.line = at.column = 0;
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if ((byte < 0x20 && c != '\t' && c != '\n' && c != '\r') || byte == 0x7f) {
+      static const char* digits = "0123456789abcdef";
+      throw YAML::ParserException(at, std::string("a control character (byte 0x") + digits[byte >> 4] +
+                                          digits[byte & 15] + "), which YAML text cannot hold");
+    }
+    ++at.pos;
+    if (c == '\n') {
+      ++at.line;
+      at.column = 0;
+    } else {
+      ++at.column;
+    }
+  }
+}
 
-std::vector<YAML::Node> load_yaml_documents(const std::string& text) {
+/// load_yaml_documents without its checks of the text and of the nesting.
+std::vector<YAML::Node> load_checked_documents(const std::string& text) {
   std::istringstream stream(text);
   YAML::Parser parser(stream);
   DocumentStarts documents;
@@ -45,6 +72,18 @@ std::vector<YAML::Node> load_yaml_documents(const std::string& text) {
     }
   }
   return YAML::LoadAll(text);
+}
+
+} // namespace
+
+std::vector<YAML::Node> load_yaml_documents(const std::string& text) {
+  reject_control_characters(text);
+  try {
+    return load_checked_documents(text);
+  } catch (const YAML::DeepRecursion& error) {
+    throw YAML::ParserException(error.mark, "lists or mappings nested " + std::to_string(error.depth()) +
+                                                " levels deep or more (scenes and sweeps nest a few)");
+  }
 }
 
 } // namespace phantasm
