@@ -53,9 +53,30 @@ void require_inside(const std::filesystem::path& root, const std::filesystem::pa
   }
 }
 
+std::filesystem::path file_in_the_way(const std::filesystem::path& path) {
+  for (std::filesystem::path folder = path.parent_path(); !folder.empty() && folder != folder.parent_path();
+       folder = folder.parent_path()) {
+    struct stat info {};
+    if (::stat(folder.c_str(), &info) != 0) continue;
+    if (S_ISDIR(info.st_mode)) return {};
+    return folder;
+  }
+  return {};
+}
+
 void require_replaceable_file(const std::filesystem::path& path, std::string_view what) {
   struct stat info {};
-  if (::stat(path.c_str(), &info) != 0) return; // missing (or unreadable: opening will say)
+  if (::stat(path.c_str(), &info) != 0) {
+    if (errno != ENOTDIR) return; // missing (or unreadable: opening will say)
+    const std::filesystem::path in_the_way = file_in_the_way(path);
+    if (in_the_way.empty()) return;
+    std::error_code ignored;
+    throw InputError(std::string(what) + ": " + path.string() + ": expected " + in_the_way.string() +
+                     " to be a folder (or not to exist), found " +
+                     (std::filesystem::is_regular_file(in_the_way, ignored)
+                          ? "a file"
+                          : "something that is not a folder"));
+  }
   if (S_ISREG(info.st_mode)) return;
   const char* kind = S_ISDIR(info.st_mode)                            ? "a folder"
                      : S_ISCHR(info.st_mode) || S_ISBLK(info.st_mode) ? "a device node"

@@ -21,9 +21,15 @@ std::filesystem::path output_file(const std::filesystem::path& folder, std::stri
 /// dataset writer is about to write.
 void require_inside(const std::filesystem::path& root, const std::filesystem::path& path);
 
+/// The nearest existing folder of `path` (its parent, its parent's parent, ...) that is not a
+/// folder, the reason the path cannot be made ("notes.txt" of "notes.txt/out/x.json"); empty when
+/// every existing one is a folder.
+std::filesystem::path file_in_the_way(const std::filesystem::path& path);
+
 /// Refuses (InputError) to replace an existing path that is not a regular file (a device node,
 /// a folder, a FIFO, a socket): writing "to" /dev/null must not replace the node. A missing path
-/// and a symbolic link to a regular file are accepted.
+/// and a symbolic link to a regular file are accepted. Refuses as well a path one of whose
+/// folders is a file ("notes.txt/out.json"), which could not be made.
 /// @param what names the option in the message, e.g. "--json"
 void require_replaceable_file(const std::filesystem::path& path, std::string_view what);
 
