@@ -355,3 +355,111 @@ TEST(DatasetIntegrity, ASecondSweepIsRefusedWhileTheFirstWritesTheFolder) {
   EXPECT_FALSE(fs::exists(folder / ".phantasm-sweep-aaaa"));
   EXPECT_TRUE(fs::exists(folder / ".phantasm-sweep-bbbb"));
 }
+
+// No library's own words reach the user (#20 item 4): each input of tests/data/hostile, and a few
+// made here, once got yaml-cpp's "bad conversion", "operator[] call on a scalar" or "bad file",
+// nlohmann's "[json.exception....]", "stod", or "<path>: Not a directory" with exit code 1. Each
+// now gets exit code 2 and one line naming the file, what was expected and what was found.
+TEST(HostileInputs, NoRawLibraryMessageReachesTheUser) {
+  const fs::path corpus = k_source_dir / "tests" / "data" / "hostile";
+  const fs::path datasets = corpus / "datasets";
+  const fs::path root = fresh_folder("hostile-raw");
+  const fs::path a_file = corpus / "README.md"; // a file where a folder should be
+  // `phantasm run --force` into a folder whose sub-01 is a file.
+  const fs::path ball = root / "ball.yaml";
+  write_text_file(ball, ball_scene("ball", "gray_matter"));
+  const fs::path taken = root / "taken";
+  fs::create_directories(taken);
+  write_text_file(taken / "sub-01", "notes\n");
+  const fs::path no_templates = root / "no-templates";
+  fs::create_directories(no_templates);
+  const std::string landmarks = "derivatives/phantasm/sub-01/ses-ref/landmarks/sub-01_ses-ref_landmarks.csv";
+  const std::string provenance = "derivatives/phantasm/sub-01/provenance.json";
+
+  struct Case {
+    std::vector<std::string> arguments; ///< after the program
+    std::string file;                   ///< the file the message names
+    std::string expected;               ///< a part of the message
+  };
+  const auto sweep = [&](const std::string& name) { return (corpus / name).string(); };
+  const auto base = [&](const std::string& name) { return (corpus / "base" / name).string(); };
+  const auto dataset = [&](const std::string& name) { return (datasets / name).string(); };
+  const std::vector<Case> cases = {
+      {{"validate", sweep("sweep-random-range-name-is-a-list.yaml")},
+       sweep("sweep-random-range-name-is-a-list.yaml") + ":5:9: vary.seed: ",
+       "expected a list of values or a random range such as {uniform: [a, b]}, found {[uniform]: [1, 2]}"},
+      {{"validate", sweep("sweep-sequence-name-is-a-list.yaml")},
+       sweep("sweep-sequence-name-is-a-list.yaml") + ":5:14: vary.sequences: ",
+       "expected lists of sequence names of the base scene, found [T2w] in [T1w, [T2w]]"},
+      {{"validate", sweep("sweep-sequence-name-is-a-mapping.yaml")},
+       sweep("sweep-sequence-name-is-a-mapping.yaml") + ":5:14: vary.sequences: ",
+       "expected lists of sequence names of the base scene, found {name: T1w} in [{name: T1w}]"},
+      {{"validate", sweep("sweep-base-sequence-is-not-a-mapping.yaml")},
+       base("sequence-is-not-a-mapping.yaml") + ":54:5: sequences[1]: ",
+       "expected a mapping with a name (vary.sequences picks sequences by name), found 'T2w'"},
+      {{"validate", sweep("sweep-scaled-displacement-is-not-a-number.yaml")},
+       base("displacement-is-not-a-number.yaml") + ":49:29: deformation.loads[0].displacement_mm[1]: ",
+       "expected a number in mm (vary.deformation.scale multiplies it), found 'zero'"},
+      {{"validate", sweep("sweep-scaled-load-type-is-a-list.yaml")},
+       base("load-type-is-a-list.yaml") + ":47:13: deformation.loads[0].type: ",
+       "expected one load type such as displacement, found [displacement]"},
+      {{"validate", sweep("sweep-nested-too-deep.yaml")},
+       sweep("sweep-nested-too-deep.yaml") + ":",
+       "expected valid YAML, found lists or mappings nested 500 levels deep or more"},
+      {{"hdf5", dataset("provenance-cut-short"), "-o", (root / "x.h5").string(), "-q"},
+       dataset("provenance-cut-short") + "/" + provenance + ":4:1: ",
+       "expected the JSON phantasm writes in provenance.json, found the end of the file before the JSON "
+       "ends"},
+      {{"hdf5", dataset("provenance-not-utf8"), "-o", (root / "x.h5").string(), "-q"},
+       dataset("provenance-not-utf8") + "/" + provenance + ":3:23: ",
+       "expected the JSON phantasm writes in provenance.json, found byte 0xe9, which is not UTF-8 text"},
+      {{"hdf5", dataset("provenance-without-files"), "-o", (root / "x.h5").string(), "-q"},
+       dataset("provenance-without-files") + "/" + provenance + ": files: ",
+       "expected the list of the subject's files (paths relative to the dataset), found no such key"},
+      {{"hdf5", dataset("provenance-file-not-text"), "-o", (root / "x.h5").string(), "-q"},
+       dataset("provenance-file-not-text") + "/" + provenance + ": files: ",
+       "found a JSON array with an entry that is not text"},
+      {{"hdf5", dataset("provenance-is-a-list"), "-o", (root / "x.h5").string(), "-q"},
+       dataset("provenance-is-a-list") + "/" + provenance + ": files: ",
+       "found a JSON array instead of an object"},
+      {{"hdf5", dataset("landmark-not-a-number"), "-o", (root / "x.h5").string(), "-q"},
+       dataset("landmark-not-a-number") + "/" + landmarks + ":3: ",
+       "expected three finite numbers (mm) after the name and organ, found 'ball_top,ball,0.5,-1.25,twenty'"},
+      {{"hdf5", dataset("landmark-out-of-range"), "-o", (root / "x.h5").string(), "-q"},
+       dataset("landmark-out-of-range") + "/" + landmarks + ":3: ",
+       "expected three finite numbers (mm) after the name and organ, found 'ball_top,ball,0.5,-1.25,1e400'"},
+      {{"hdf5", dataset("landmark-out-of-range"), "-o", (a_file / "x.h5").string(), "-q"},
+       "--output: " + (a_file / "x.h5").string() + ": ",
+       "expected " + a_file.string() + " to be a folder (or not to exist), found a file"},
+      {{"eval", dataset("landmark-out-of-range"), "--identity", "--json",
+        (a_file / "out" / "x.json").string()},
+       "--json: " + (a_file / "out" / "x.json").string() + ": ",
+       "expected " + a_file.string() + " to be a folder (or not to exist), found a file"},
+      {{"atlas", "colin27", "-o", (a_file / "x.nii.gz").string(), "--templates", no_templates.string(), "-q"},
+       "--output: " + (a_file / "x.nii.gz").string() + ": ",
+       "expected " + a_file.string() + " to be a folder (or not to exist), found a file"},
+      {{"run", ball.string(), "-o", taken.string(), "--force", "-q"},
+       (taken / "sub-01").string(),
+       "expected " + (taken / "sub-01").string() + " to be a folder (or not to exist), found a file"},
+      {{"validate", corpus.string()}, corpus.string() + ": ", "expected a scene file, found a folder"},
+  };
+  for (const Case& c : cases) {
+    std::vector<std::string> command{k_phantasm};
+    command.insert(command.end(), c.arguments.begin(), c.arguments.end());
+    std::string shown;
+    for (const auto& argument : c.arguments)
+      shown += " " + argument;
+    SCOPED_TRACE("phantasm" + shown);
+    const CommandResult result = run_command(command);
+    EXPECT_EQ(result.exit_code, 2) << result.err;
+    EXPECT_NE(result.err.find(c.file), std::string::npos)
+        << "expected the file " << c.file << "\nfound " << result.err;
+    EXPECT_NE(result.err.find(c.expected), std::string::npos)
+        << "expected " << c.expected << "\nfound " << result.err;
+    EXPECT_NE(result.err.find("expected"), std::string::npos) << result.err;
+    EXPECT_NE(result.err.find("found"), std::string::npos) << result.err;
+    EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+    EXPECT_EQ(raw_library_marker(result.err), "") << result.err;
+  }
+  EXPECT_FALSE(fs::exists(root / "x.h5"));
+}
