@@ -274,10 +274,9 @@ public:
 
   Sweep read_checked(SweepDepth depth) {
     std::vector<YAML::Node> documents;
-    std::ifstream sweep_file(m_file, std::ios::binary);
-    if (!sweep_file) throw InputError(m_file.string() + ": expected a sweep file, found no readable file");
-    const std::string sweep_text((std::istreambuf_iterator<char>(sweep_file)),
-                                 std::istreambuf_iterator<char>());
+    std::string sweep_text;
+    if (const std::string found = read_scene_text(m_file, sweep_text); !found.empty())
+      throw InputError(m_file.string() + ": expected a sweep file, " + found);
     try {
       documents = load_yaml_documents(sweep_text);
     } catch (const YAML::Exception& error) {
@@ -308,15 +307,10 @@ public:
     if (!top["base_scene"]) fail(top.Mark(), "base_scene", "expected the path of the base scene, found none");
     sweep.base_scene = m_file.parent_path() / scalar(top["base_scene"], "base_scene");
     m_base_scene = sweep.base_scene;
-    std::ifstream base_file(sweep.base_scene);
-    std::error_code error;
-    if (!base_file || std::filesystem::is_directory(sweep.base_scene, error)) {
-      const bool folder = std::filesystem::is_directory(sweep.base_scene, error);
+    if (const std::string found = read_scene_text(sweep.base_scene, m_base_text); !found.empty()) {
       fail(top["base_scene"].Mark(), "base_scene",
-           std::string("expected a scene file, found ") + (folder ? "a folder: " : "no such file: ") +
-               sweep.base_scene.string());
+           "expected a scene file, " + found + ": " + sweep.base_scene.string());
     }
-    m_base_text.assign((std::istreambuf_iterator<char>(base_file)), std::istreambuf_iterator<char>());
     // The base scene's own mistakes are named in the base scene (each subject's scene is made
     // from its first document only, so a second one would be dropped without a word).
     try {
@@ -492,7 +486,9 @@ private:
 } // namespace
 
 bool is_sweep_file(const std::filesystem::path& file) {
-  std::ifstream in(file);
+  std::string text;
+  if (!read_scene_text(file, text).empty()) return false; // load_scene says why
+  std::istringstream in(text);
   std::string line;
   while (std::getline(in, line))
     if (line.rfind("phantasm_sweep:", 0) == 0) return true;

@@ -358,8 +358,9 @@ TEST(DatasetIntegrity, ASecondSweepIsRefusedWhileTheFirstWritesTheFolder) {
 
 // No library's own words reach the user (#20 item 4): each input of tests/data/hostile, and a few
 // made here, once got yaml-cpp's "bad conversion", "operator[] call on a scalar" or "bad file",
-// nlohmann's "[json.exception....]", "stod", or "<path>: Not a directory" with exit code 1. Each
-// now gets exit code 2 and one line naming the file, what was expected and what was found.
+// nlohmann's "[json.exception....]", "stod", "<path>: Not a directory" with exit code 1, or (a
+// device read as a scene) "out of memory". Each now gets exit code 2 and one line naming the
+// file, what was expected and what was found.
 TEST(HostileInputs, NoRawLibraryMessageReachesTheUser) {
   const fs::path corpus = k_source_dir / "tests" / "data" / "hostile";
   const fs::path datasets = corpus / "datasets";
@@ -442,6 +443,10 @@ TEST(HostileInputs, NoRawLibraryMessageReachesTheUser) {
        (taken / "sub-01").string(),
        "expected " + (taken / "sub-01").string() + " to be a folder (or not to exist), found a file"},
       {{"validate", corpus.string()}, corpus.string() + ": ", "expected a scene file, found a folder"},
+      {{"validate", "/dev/zero"}, "/dev/zero: ", "expected a scene file, found a device node"},
+      {{"validate", sweep("sweep-base-scene-is-a-device.yaml")},
+       sweep("sweep-base-scene-is-a-device.yaml") + ":4:13: base_scene: ",
+       "expected a scene file, found a device node: /dev/zero"},
   };
   for (const Case& c : cases) {
     std::vector<std::string> command{k_phantasm};
