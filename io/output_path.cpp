@@ -64,6 +64,14 @@ std::filesystem::path file_in_the_way(const std::filesystem::path& path) {
   return {};
 }
 
+std::string file_in_the_way_message(const std::filesystem::filesystem_error& error) {
+  if (error.code() != std::errc::not_a_directory) return {};
+  const std::filesystem::path in_the_way = file_in_the_way(error.path1());
+  if (in_the_way.empty()) return {};
+  return error.path1().string() + ": expected " + in_the_way.string() +
+         " to be a folder (or not to exist), found a file";
+}
+
 void require_replaceable_file(const std::filesystem::path& path, std::string_view what) {
   struct stat info {};
   if (::stat(path.c_str(), &info) != 0) {

@@ -26,6 +26,11 @@ void require_inside(const std::filesystem::path& root, const std::filesystem::pa
 /// every existing one is a folder.
 std::filesystem::path file_in_the_way(const std::filesystem::path& path);
 
+/// The message for a folder that could not be made because a file holds its place or a parent's
+/// ("<path>: expected <file> to be a folder (or not to exist), found a file"), or "" when the
+/// error is of another kind.
+std::string file_in_the_way_message(const std::filesystem::filesystem_error& error);
+
 /// Refuses (InputError) to replace an existing path that is not a regular file (a device node,
 /// a folder, a FIFO, a socket): writing "to" /dev/null must not replace the node. A missing path
 /// and a symbolic link to a regular file are accepted. Refuses as well a path one of whose

@@ -102,13 +102,9 @@ int main(int argc, char** argv) {
   } catch (const std::filesystem::filesystem_error& error) {
     // A folder to be made where the user's output holds a file ("--force" into a folder whose
     // sub-01 is a file): the user's to fix, and the file in the way is what to name.
-    if (error.code() == std::errc::not_a_directory) {
-      if (const std::filesystem::path in_the_way = phantasm::file_in_the_way(error.path1());
-          !in_the_way.empty()) {
-        std::cerr << error.path1().string() << ": expected " << in_the_way.string()
-                  << " to be a folder (or not to exist), found a file\n";
-        return exit_bad_input;
-      }
+    if (const std::string message = phantasm::file_in_the_way_message(error); !message.empty()) {
+      std::cerr << message << '\n';
+      return exit_bad_input;
     }
     // The library's message ("filesystem error: cannot rename: ...") said what failed, not where.
     std::cerr << "phantasm: error: " << error.path1().string() << ": " << error.code().message();

@@ -467,4 +467,18 @@ TEST(HostileInputs, NoRawLibraryMessageReachesTheUser) {
     EXPECT_EQ(raw_library_marker(result.err), "") << result.err;
   }
   EXPECT_FALSE(fs::exists(root / "x.h5"));
+
+  // A batch's subject fails the same way, with the subject named (the batch then exits 1 for the
+  // subjects that failed).
+  const fs::path sweep_file = root / "one-ball.yaml";
+  write_text_file(sweep_file, "phantasm_sweep: 1\nbase_scene: ball.yaml\n");
+  const CommandResult batch =
+      run_command({k_phantasm, "batch", sweep_file.string(), "-o", taken.string(), "--no-cache", "-q"});
+  EXPECT_EQ(batch.exit_code, 1) << batch.err;
+  EXPECT_NE(batch.err.find("sub-01: " + (taken / "sub-01").string() + "/ses-ref/anat: expected " +
+                           (taken / "sub-01").string() + " to be a folder (or not to exist), found a file\n"),
+            std::string::npos)
+      << batch.err;
+  EXPECT_NE(batch.err.find("[batch] sub-01 failed (exit 2;"), std::string::npos) << batch.err;
+  EXPECT_EQ(raw_library_marker(batch.err), "") << batch.err;
 }
