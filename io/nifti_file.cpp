@@ -6,6 +6,7 @@
 #include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
+#include "core/path_kind.hpp"
 #include "io/atomic_file.hpp"
 #include "io/file_error.hpp"
 
@@ -350,7 +351,7 @@ std::vector<unsigned char> read_voxel_data(const std::filesystem::path& path, co
 NiftiVolume read_volume(const std::filesystem::path& path, int components) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error))
-    throw_file_error(path, "expected a NIfTI file, found no such file");
+    throw_file_error(path, "expected a NIfTI file, found " + path_kind(path));
   nifti_set_debug_level(0);
   // The header through libnifti, the voxels by read_voxel_data (in pieces, so that a cancellation
   // need not wait for a whole file to decompress).

@@ -364,14 +364,9 @@ TEST(DatasetIntegrity, ASecondSweepIsRefusedWhileTheFirstWritesTheFolder) {
 TEST(HostileInputs, NoRawLibraryMessageReachesTheUser) {
   const fs::path corpus = k_source_dir / "tests" / "data" / "hostile";
   const fs::path datasets = corpus / "datasets";
+  const fs::path bad_scenes = k_source_dir / "tests" / "data" / "bad-scenes";
   const fs::path root = fresh_folder("hostile-raw");
   const fs::path a_file = corpus / "README.md"; // a file where a folder should be
-  // `phantasm run --force` into a folder whose sub-01 is a file.
-  const fs::path ball = root / "ball.yaml";
-  write_text_file(ball, ball_scene("ball", "gray_matter"));
-  const fs::path taken = root / "taken";
-  fs::create_directories(taken);
-  write_text_file(taken / "sub-01", "notes\n");
   const fs::path no_templates = root / "no-templates";
   fs::create_directories(no_templates);
   const std::string landmarks = "derivatives/phantasm/sub-01/ses-ref/landmarks/sub-01_ses-ref_landmarks.csv";
@@ -439,11 +434,11 @@ TEST(HostileInputs, NoRawLibraryMessageReachesTheUser) {
       {{"atlas", "colin27", "-o", (a_file / "x.nii.gz").string(), "--templates", no_templates.string(), "-q"},
        "--output: " + (a_file / "x.nii.gz").string() + ": ",
        "expected " + a_file.string() + " to be a folder (or not to exist), found a file"},
-      {{"run", ball.string(), "-o", taken.string(), "--force", "-q"},
-       (taken / "sub-01").string(),
-       "expected " + (taken / "sub-01").string() + " to be a folder (or not to exist), found a file"},
       {{"validate", corpus.string()}, corpus.string() + ": ", "expected a scene file, found a folder"},
       {{"validate", "/dev/zero"}, "/dev/zero: ", "expected a scene file, found a device node"},
+      {{"validate", (bad_scenes / "mesh-file-is-a-folder.yaml").string()},
+       (bad_scenes / "mesh-file-is-a-folder.yaml").string() + ":14:33: anatomy.organs[0].shape.file: ",
+       "expected an existing file, found a folder at '" + (bad_scenes / ".." / "meshes").string() + "'"},
       {{"validate", sweep("sweep-base-scene-is-a-device.yaml")},
        sweep("sweep-base-scene-is-a-device.yaml") + ":4:13: base_scene: ",
        "expected a scene file, found a device node: /dev/zero"},
@@ -467,6 +462,25 @@ TEST(HostileInputs, NoRawLibraryMessageReachesTheUser) {
     EXPECT_EQ(raw_library_marker(result.err), "") << result.err;
   }
   EXPECT_FALSE(fs::exists(root / "x.h5"));
+}
+
+// A folder the dataset writer makes where the output folder holds a file of that name (sub-01):
+// run --force and a batch's subject said "phantasm: error: <path>: Not a directory" with exit
+// code 1; both now name the file in the way, with exit code 2 (for the subject, in a batch).
+TEST(HostileInputs, AFileWhereTheDatasetPutsAFolderIsNamed) {
+  const fs::path root = fresh_folder("hostile-file-in-the-way");
+  const fs::path ball = root / "ball.yaml";
+  write_text_file(ball, ball_scene("ball", "gray_matter"));
+  const fs::path taken = root / "taken";
+  fs::create_directories(taken);
+  write_text_file(taken / "sub-01", "notes\n");
+  const std::string message = (taken / "sub-01").string() + "/ses-ref/anat: expected " +
+                              (taken / "sub-01").string() +
+                              " to be a folder (or not to exist), found a file\n";
+  const CommandResult run =
+      run_command({k_phantasm, "run", ball.string(), "-o", taken.string(), "--force", "-q"});
+  EXPECT_EQ(run.exit_code, 2) << run.err;
+  EXPECT_EQ(run.err, message);
 
   // A batch's subject fails the same way, with the subject named (the batch then exits 1 for the
   // subjects that failed).
@@ -475,10 +489,8 @@ TEST(HostileInputs, NoRawLibraryMessageReachesTheUser) {
   const CommandResult batch =
       run_command({k_phantasm, "batch", sweep_file.string(), "-o", taken.string(), "--no-cache", "-q"});
   EXPECT_EQ(batch.exit_code, 1) << batch.err;
-  EXPECT_NE(batch.err.find("sub-01: " + (taken / "sub-01").string() + "/ses-ref/anat: expected " +
-                           (taken / "sub-01").string() + " to be a folder (or not to exist), found a file\n"),
-            std::string::npos)
-      << batch.err;
+  EXPECT_NE(batch.err.find("sub-01: " + message), std::string::npos) << batch.err;
   EXPECT_NE(batch.err.find("[batch] sub-01 failed (exit 2;"), std::string::npos) << batch.err;
   EXPECT_EQ(raw_library_marker(batch.err), "") << batch.err;
+  EXPECT_EQ(read_file(taken / "sub-01"), "notes\n");
 }
