@@ -445,10 +445,53 @@ public:
       std::string values;
       for (const auto& [key, text] : subject.values)
         values += (values.empty() ? "" : ", ") + key + " = " + text;
+      std::vector<Diagnostic> problems = checked.problems;
+      for (Diagnostic& problem : problems)
+        place(problem);
       throw InputError(m_file.string() + ": subject " + subject.id + " (" + values +
-                       ") gives a scene that does not validate:\n" + format_diagnostics(checked.problems));
+                       ") gives a scene that does not validate:\n" + format_diagnostics(problems));
     }
     return subject;
+  }
+
+  /// Points a problem of a subject's scene at a line the user wrote: the subject's scene is
+  /// emitted anew (its lines are not the base scene's), so a problem at a varied key is placed at
+  /// the key in the sweep file, any other at the key (or the nearest enclosing one) in the base
+  /// scene.
+  void place(Diagnostic& problem) const {
+    const std::string& path = problem.key_path;
+    const Variation* varied = nullptr;
+    for (const Variation& v : m_variations) {
+      const bool under =
+          path == v.key || (path.size() > v.key.size() && path.compare(0, v.key.size(), v.key) == 0 &&
+                            (path[v.key.size()] == '.' || path[v.key.size()] == '['));
+      if (under && (!varied || v.key.size() > varied->key.size())) varied = &v;
+    }
+    if (varied && varied->mark.line >= 0) {
+      problem.where = SourceLocation{m_file.string(), varied->mark.line + 1, varied->mark.column + 1};
+      return;
+    }
+    problem.where = SourceLocation{m_base_scene.string(), 0, 0};
+    if (path.empty()) return;
+    YAML::Node node = YAML::Load(m_base_text);
+    YAML::Mark mark = node.Mark();
+    static const std::regex element(R"(([^.\[\]]+)|\[([0-9]{1,9})\])");
+    for (std::sregex_iterator it(path.begin(), path.end(), element), end; it != end; ++it) {
+      YAML::Node child;
+      if ((*it)[1].matched && node.IsMap()) {
+        child = node[(*it)[1].str()];
+      } else if ((*it)[2].matched && node.IsSequence()) {
+        const std::size_t index = std::stoul((*it)[2].str()); // at most 9 digits
+        if (index < node.size()) child = node[index];
+      }
+      if (!child.IsDefined()) break;
+      node.reset(child);
+      mark = node.Mark();
+    }
+    if (mark.line >= 0) {
+      problem.where.line = mark.line + 1;
+      problem.where.column = mark.column + 1;
+    }
   }
 
   /// A scalar's text; anything else is named at its line.
