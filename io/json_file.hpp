@@ -11,6 +11,11 @@
 
 namespace phantasm {
 
+/// JSON text with two-space indentation (or `indent`), keys in sorted order. Text that is not
+/// UTF-8 (a path as the file system gave it, "b\xff.yaml") is written with U+FFFD in place of the
+/// bytes that are not, where nlohmann's dump() would throw after a whole run.
+std::string json_text(const nlohmann::json& value, int indent = 2);
+
 /// Writes JSON with two-space indentation and a final newline, atomically. Keys come out in
 /// sorted order, so the same content always gives the same bytes.
 void write_json_file(const std::filesystem::path& path, const nlohmann::json& value);

@@ -494,3 +494,29 @@ TEST(HostileInputs, AFileWhereTheDatasetPutsAFolderIsNamed) {
   EXPECT_EQ(raw_library_marker(batch.err), "") << batch.err;
   EXPECT_EQ(read_file(taken / "sub-01"), "notes\n");
 }
+
+// Bytes that are not UTF-8: yaml-cpp keeps them, and nlohmann's dump() refused them when
+// provenance.json was written, after the whole run ("[json.exception.type_error.316] invalid UTF-8
+// byte", exit code 1). A scene must be UTF-8 text (the byte is named at its line); a path the
+// file system gives, which need not be, is recorded with U+FFFD in its place.
+TEST(HostileInputs, TextThatIsNotUtf8IsNamedAndPathsThatAreNotAreRecorded) {
+  const fs::path root = fresh_folder("hostile-utf8");
+  fs::copy_file(k_source_dir / "tests" / "data" / "meshes" / "tetrahedron-ascii.vtp", root / "x\xff.vtp");
+  std::string scene = ball_scene("thing", "gray_matter");
+  scene.replace(scene.find("{type: ellipsoid"), std::string::npos, "{type: mesh, file: x\xff.vtp}\n");
+  write_text_file(root / "mesh.yaml", scene);
+  const CommandResult validate = run_command({k_phantasm, "validate", (root / "mesh.yaml").string()});
+  EXPECT_EQ(validate.exit_code, 2) << validate.err;
+  EXPECT_EQ(validate.err, (root / "mesh.yaml").string() +
+                              ":12:34: expected valid YAML, found a syntax error: byte 0xff, which is not "
+                              "UTF-8 text\n");
+
+  const fs::path named = root / "b\xff.yaml";
+  write_text_file(named, ball_scene("ball", "gray_matter"));
+  const fs::path out = root / "out";
+  const CommandResult run = run_command({k_phantasm, "run", named.string(), "-o", out.string(), "-q"});
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(raw_library_marker(run.err), "") << run.err;
+  const std::string provenance = read_file(out / "derivatives" / "phantasm" / "sub-01" / "provenance.json");
+  EXPECT_NE(provenance.find("b\xef\xbf\xbd.yaml"), std::string::npos); // U+FFFD
+}
