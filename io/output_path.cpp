@@ -73,6 +73,14 @@ std::string file_in_the_way_message(const std::filesystem::filesystem_error& err
 }
 
 void require_replaceable_file(const std::filesystem::path& path, std::string_view what) {
+  // An empty path, or one ending in '/', names no file: its temporary file would be "..phantasm-
+  // tmp-..." in the current folder, left there when the rename to "" fails.
+  if (path.empty())
+    throw InputError(std::string(what) + ": expected the path of a file to write, found an empty path");
+  if (!path.has_filename()) {
+    throw InputError(std::string(what) + ": " + path.string() +
+                     ": expected the path of a file to write, found a folder's path (it ends in '/')");
+  }
   struct stat info {};
   if (::stat(path.c_str(), &info) != 0) {
     if (errno != ENOTDIR) return; // missing (or unreadable: opening will say)
@@ -96,6 +104,7 @@ void require_replaceable_file(const std::filesystem::path& path, std::string_vie
 }
 
 OutputFolderLock::OutputFolderLock(const std::filesystem::path& folder, FolderLockMode mode) {
+  if (folder.empty()) throw InputError("--output: expected an output folder, found an empty path");
   std::error_code error;
   if (std::filesystem::exists(folder, error) && !std::filesystem::is_directory(folder, error))
     throw InputError(folder.string() + ": expected an output folder, found a file");

@@ -34,7 +34,8 @@ std::string file_in_the_way_message(const std::filesystem::filesystem_error& err
 /// Refuses (InputError) to replace an existing path that is not a regular file (a device node,
 /// a folder, a FIFO, a socket): writing "to" /dev/null must not replace the node. A missing path
 /// and a symbolic link to a regular file are accepted. Refuses as well a path one of whose
-/// folders is a file ("notes.txt/out.json"), which could not be made.
+/// folders is a file ("notes.txt/out.json"), which could not be made, and a path that names no
+/// file (empty, or ending in '/').
 /// @param what names the option in the message, e.g. "--json"
 void require_replaceable_file(const std::filesystem::path& path, std::string_view what);
 
