@@ -7,6 +7,7 @@
 #include "io/dataset_layout.hpp"
 #include "io/nifti_file.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -74,8 +75,17 @@ std::map<std::int32_t, std::string> read_label_names(const std::filesystem::path
   return names;
 }
 
-std::string find_subject(const std::filesystem::path& dataset) {
+/// The subject to evaluate: `requested` when the dataset holds it complete, else the only one.
+std::string find_subject(const std::filesystem::path& dataset, const std::string& requested) {
   const std::vector<std::string> subjects = complete_subjects(dataset);
+  if (!requested.empty()) {
+    if (std::find(subjects.begin(), subjects.end(), requested) != subjects.end()) return requested;
+    std::string list;
+    for (const auto& s : subjects)
+      list += (list.empty() ? "" : ", ") + s;
+    throw InputError("--subject: expected a complete subject of " + dataset.string() + " (" +
+                     (list.empty() ? std::string("it holds none") : list) + "), found " + requested);
+  }
   if (subjects.empty()) {
     throw InputError(dataset.string() + ": expected a phantasm dataset with a complete subject "
                                         "(derivatives/phantasm/sub-<id>/provenance.json), found none");
@@ -140,7 +150,7 @@ nlohmann::json evaluate_registration(const EvaluationRequest& request) {
   if ((request.field ? 1 : 0) + (request.warped_labels ? 1 : 0) + (request.identity ? 1 : 0) != 1) {
     throw InputError("expected exactly one registration result: --field, --labels or --identity");
   }
-  const std::string subject = request.subject.empty() ? find_subject(request.dataset) : request.subject;
+  const std::string subject = find_subject(request.dataset, request.subject);
   const DatasetLayout layout(request.dataset, subject);
   const PhantomState fixed =
       request.fixed_session == "ref" ? PhantomState::reference : PhantomState::deformed;
