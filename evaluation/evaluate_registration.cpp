@@ -3,6 +3,7 @@
 #include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
+#include "core/path_kind.hpp"
 #include "evaluation/registration_metrics.hpp"
 #include "io/dataset_layout.hpp"
 #include "io/nifti_file.hpp"
@@ -24,7 +25,8 @@ struct LandmarkRow {
 
 std::vector<LandmarkRow> read_landmarks(const std::filesystem::path& path) {
   std::ifstream in(path);
-  if (!in) throw InputError(path.string() + ": expected the subject's landmarks (CSV), found no such file");
+  if (!in || path_kind(path) != "a regular file")
+    throw InputError(path.string() + ": expected the subject's landmarks (CSV), found " + path_kind(path));
   std::vector<LandmarkRow> rows;
   std::string line;
   int number = 0;
@@ -57,7 +59,8 @@ std::vector<LandmarkRow> read_landmarks(const std::filesystem::path& path) {
 /// Label index -> organ name, from dseg.tsv ("index<TAB>name<TAB>tissue").
 std::map<std::int32_t, std::string> read_label_names(const std::filesystem::path& path) {
   std::ifstream in(path);
-  if (!in) throw InputError(path.string() + ": expected the dataset's label table, found no such file");
+  if (!in || path_kind(path) != "a regular file")
+    throw InputError(path.string() + ": expected the dataset's label table, found " + path_kind(path));
   std::map<std::int32_t, std::string> names;
   std::string line;
   std::getline(in, line); // header

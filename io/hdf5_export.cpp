@@ -2,6 +2,7 @@
 
 #include "core/cancellation.hpp"
 #include "core/error.hpp"
+#include "core/path_kind.hpp"
 #include "core/version.hpp"
 #include "io/atomic_file.hpp"
 #include "io/dataset_layout.hpp"
@@ -27,7 +28,14 @@
 namespace phantasm {
 namespace {
 
+/// A file of the dataset as text; "" when there is none (a sidecar or participants.tsv may be
+/// missing). A folder or a device in its place is an error: reading one threw the library's
+/// "basic_filebuf::underflow error reading the file: Is a directory".
 std::string read_text(const std::filesystem::path& path) {
+  const std::string kind = path_kind(path);
+  if (kind == "no such file") return {};
+  if (kind != "a regular file")
+    throw InputError(path.string() + ": expected a file phantasm writes, found " + kind);
   std::ifstream in(path, std::ios::binary);
   if (!in) return {};
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};

@@ -28,7 +28,7 @@ inline const std::filesystem::path k_small_scene =
 /// and what was found.
 inline const std::vector<std::string> k_raw_library_markers = {
     "stoul",          "stoi",        "stod",         "stol",
-    "bad conversion", "bad_alloc",   "basic_string", "filesystem error",
+    "bad conversion", "bad_alloc",   "basic_",       "filesystem error",
     "json.exception", "parse_error", "yaml-cpp",     "terminate called",
     "bad file",       "operator[]",  "invalid node", "unknown escape character"};
 

@@ -356,31 +356,57 @@ TEST(DatasetIntegrity, ASecondSweepIsRefusedWhileTheFirstWritesTheFolder) {
   EXPECT_TRUE(fs::exists(folder / ".phantasm-sweep-bbbb"));
 }
 
+namespace {
+
+/// A command on a hostile input and what its one line of message must hold.
+struct Refusal {
+  std::vector<std::string> arguments; ///< after the program
+  std::string file;                   ///< the file (or option) the message names
+  std::string expected;               ///< a part of the message
+};
+
+const fs::path k_hostile = k_source_dir / "tests" / "data" / "hostile";
+
+std::string hostile(const std::string& name) {
+  return (k_hostile / name).string();
+}
+
+/// Runs each command and expects exit code 2 and one line naming the file, what was expected
+/// and what was found, without a library's own words.
+void expect_clear_refusals(const std::vector<Refusal>& cases) {
+  for (const Refusal& c : cases) {
+    std::vector<std::string> command{k_phantasm};
+    command.insert(command.end(), c.arguments.begin(), c.arguments.end());
+    std::string shown;
+    for (const auto& argument : c.arguments)
+      shown += " " + argument;
+    SCOPED_TRACE("phantasm" + shown);
+    const CommandResult result = run_command(command);
+    EXPECT_EQ(result.exit_code, 2) << result.err;
+    EXPECT_NE(result.err.find(c.file), std::string::npos)
+        << "expected the file " << c.file << "\nfound " << result.err;
+    EXPECT_NE(result.err.find(c.expected), std::string::npos)
+        << "expected " << c.expected << "\nfound " << result.err;
+    EXPECT_NE(result.err.find("expected"), std::string::npos) << result.err;
+    EXPECT_NE(result.err.find("found"), std::string::npos) << result.err;
+    EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
+    EXPECT_EQ(raw_library_marker(result.err), "") << result.err;
+  }
+}
+
+} // namespace
+
 // No library's own words reach the user (#20 item 4): each input of tests/data/hostile, and a few
 // made here, once got yaml-cpp's "bad conversion", "operator[] call on a scalar" or "bad file",
 // nlohmann's "[json.exception....]", "stod", "<path>: Not a directory" with exit code 1, or (a
 // device read as a scene) "out of memory". Each now gets exit code 2 and one line naming the
-// file, what was expected and what was found.
+// file, what was expected and what was found. Sweeps and scenes here; datasets and output paths
+// below.
 TEST(HostileInputs, NoRawLibraryMessageReachesTheUser) {
-  const fs::path corpus = k_source_dir / "tests" / "data" / "hostile";
-  const fs::path datasets = corpus / "datasets";
   const fs::path bad_scenes = k_source_dir / "tests" / "data" / "bad-scenes";
-  const fs::path root = fresh_folder("hostile-raw");
-  const fs::path a_file = corpus / "README.md"; // a file where a folder should be
-  const fs::path no_templates = root / "no-templates";
-  fs::create_directories(no_templates);
-  const std::string landmarks = "derivatives/phantasm/sub-01/ses-ref/landmarks/sub-01_ses-ref_landmarks.csv";
-  const std::string provenance = "derivatives/phantasm/sub-01/provenance.json";
-
-  struct Case {
-    std::vector<std::string> arguments; ///< after the program
-    std::string file;                   ///< the file the message names
-    std::string expected;               ///< a part of the message
-  };
-  const auto sweep = [&](const std::string& name) { return (corpus / name).string(); };
-  const auto base = [&](const std::string& name) { return (corpus / "base" / name).string(); };
-  const auto dataset = [&](const std::string& name) { return (datasets / name).string(); };
-  const std::vector<Case> cases = {
+  const auto sweep = [](const std::string& name) { return hostile(name); };
+  const auto base = [](const std::string& name) { return hostile("base/" + name); };
+  expect_clear_refusals({
       {{"validate", sweep("sweep-random-range-name-is-a-list.yaml")},
        sweep("sweep-random-range-name-is-a-list.yaml") + ":5:9: vary.seed: ",
        "expected a list of values or a random range such as {uniform: [a, b]}, found {[uniform]: [1, 2]}"},
@@ -402,6 +428,27 @@ TEST(HostileInputs, NoRawLibraryMessageReachesTheUser) {
       {{"validate", sweep("sweep-nested-too-deep.yaml")},
        sweep("sweep-nested-too-deep.yaml") + ":",
        "expected valid YAML, found lists or mappings nested 500 levels deep or more"},
+      {{"validate", k_hostile.string()}, k_hostile.string() + ": ", "expected a scene file, found a folder"},
+      {{"validate", "/dev/zero"}, "/dev/zero: ", "expected a scene file, found a device node"},
+      {{"validate", (bad_scenes / "mesh-file-is-a-folder.yaml").string()},
+       (bad_scenes / "mesh-file-is-a-folder.yaml").string() + ":14:33: anatomy.organs[0].shape.file: ",
+       "expected an existing file, found a folder at '" + (bad_scenes / ".." / "meshes").string() + "'"},
+      {{"validate", sweep("sweep-base-scene-is-a-device.yaml")},
+       sweep("sweep-base-scene-is-a-device.yaml") + ":4:13: base_scene: ",
+       "expected a scene file, found a device node: /dev/zero"},
+  });
+}
+
+// The same for the files of a dataset (hdf5, eval) and for output paths that cannot be written.
+TEST(HostileInputs, NoRawLibraryMessageReachesTheUserFromADatasetOrAnOutputPath) {
+  const fs::path root = fresh_folder("hostile-raw");
+  const fs::path a_file = k_hostile / "README.md"; // a file where a folder should be
+  const fs::path no_templates = root / "no-templates";
+  fs::create_directories(no_templates);
+  const std::string landmarks = "derivatives/phantasm/sub-01/ses-ref/landmarks/sub-01_ses-ref_landmarks.csv";
+  const std::string provenance = "derivatives/phantasm/sub-01/provenance.json";
+  const auto dataset = [](const std::string& name) { return hostile("datasets/" + name); };
+  expect_clear_refusals({
       {{"hdf5", dataset("provenance-cut-short"), "-o", (root / "x.h5").string(), "-q"},
        dataset("provenance-cut-short") + "/" + provenance + ":4:1: ",
        "expected the JSON phantasm writes in provenance.json, found the end of the file before the JSON "
@@ -434,6 +481,9 @@ TEST(HostileInputs, NoRawLibraryMessageReachesTheUser) {
       {{"atlas", "colin27", "-o", (a_file / "x.nii.gz").string(), "--templates", no_templates.string(), "-q"},
        "--output: " + (a_file / "x.nii.gz").string() + ": ",
        "expected " + a_file.string() + " to be a folder (or not to exist), found a file"},
+      {{"hdf5", dataset("label-table-is-a-folder"), "-o", (root / "x.h5").string(), "-q"},
+       dataset("label-table-is-a-folder") + "/derivatives/phantasm/dseg.tsv: ",
+       "expected a file phantasm writes, found a folder"},
       {{"hdf5", dataset("landmark-out-of-range"), "-o", "", "-q"},
        "--output: ",
        "expected the path of a file to write, found an empty path"},
@@ -446,33 +496,7 @@ TEST(HostileInputs, NoRawLibraryMessageReachesTheUser) {
       {{"eval", dataset("landmark-out-of-range"), "--identity", "--subject", "99"},
        dataset("landmark-out-of-range"),
        "--subject: expected a complete subject of " + dataset("landmark-out-of-range") + " (01), found 99"},
-      {{"validate", corpus.string()}, corpus.string() + ": ", "expected a scene file, found a folder"},
-      {{"validate", "/dev/zero"}, "/dev/zero: ", "expected a scene file, found a device node"},
-      {{"validate", (bad_scenes / "mesh-file-is-a-folder.yaml").string()},
-       (bad_scenes / "mesh-file-is-a-folder.yaml").string() + ":14:33: anatomy.organs[0].shape.file: ",
-       "expected an existing file, found a folder at '" + (bad_scenes / ".." / "meshes").string() + "'"},
-      {{"validate", sweep("sweep-base-scene-is-a-device.yaml")},
-       sweep("sweep-base-scene-is-a-device.yaml") + ":4:13: base_scene: ",
-       "expected a scene file, found a device node: /dev/zero"},
-  };
-  for (const Case& c : cases) {
-    std::vector<std::string> command{k_phantasm};
-    command.insert(command.end(), c.arguments.begin(), c.arguments.end());
-    std::string shown;
-    for (const auto& argument : c.arguments)
-      shown += " " + argument;
-    SCOPED_TRACE("phantasm" + shown);
-    const CommandResult result = run_command(command);
-    EXPECT_EQ(result.exit_code, 2) << result.err;
-    EXPECT_NE(result.err.find(c.file), std::string::npos)
-        << "expected the file " << c.file << "\nfound " << result.err;
-    EXPECT_NE(result.err.find(c.expected), std::string::npos)
-        << "expected " << c.expected << "\nfound " << result.err;
-    EXPECT_NE(result.err.find("expected"), std::string::npos) << result.err;
-    EXPECT_NE(result.err.find("found"), std::string::npos) << result.err;
-    EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
-    EXPECT_EQ(raw_library_marker(result.err), "") << result.err;
-  }
+  });
   EXPECT_FALSE(fs::exists(root / "x.h5"));
 }
 
