@@ -290,6 +290,10 @@ public:
     const YAML::Node top = documents.front();
     if (!top.IsMap()) fail(top.Mark(), "sweep", "expected a mapping, found " + flow(top));
     reject_duplicate_keys(top, "");
+    if (!top["phantasm_sweep"] && top["phantasm"]) {
+      fail(top["phantasm"].Mark(), "phantasm",
+           "expected a sweep (phantasm_sweep: 1, docs/batch.md), found a scene; phantasm run runs a scene");
+    }
     for (const auto& entry : top) {
       const std::string key = scalar(entry.first, "sweep");
       if (key != "phantasm_sweep" && key != "name" && key != "base_scene" && key != "seed" &&

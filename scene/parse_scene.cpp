@@ -142,6 +142,17 @@ SceneLoadResult parse_scene(const std::string& text, const std::filesystem::path
     return result;
   }
 
+  // A sweep given where a scene belongs (phantasm run sweep.yaml) would get a line for every
+  // scene key it lacks and every sweep key it has: one says what it is and what reads it.
+  if (root.IsMap() && root["phantasm_sweep"] && !root["phantasm"]) {
+    const YAML::Mark at = root["phantasm_sweep"].Mark();
+    result.problems.push_back(
+        Diagnostic{SourceLocation{file_name, at.line + 1, at.column + 1}, "phantasm_sweep",
+                   "expected a scene (phantasm: 1, docs/scene-format.md), found a sweep; "
+                   "phantasm batch runs a sweep, phantasm validate checks one"});
+    return result;
+  }
+
   YamlContext context(file_name, result.problems, scene.locations);
   {
     CheckedMap top(context, root, "");

@@ -406,7 +406,14 @@ TEST(HostileInputs, NoRawLibraryMessageReachesTheUser) {
   const fs::path bad_scenes = k_source_dir / "tests" / "data" / "bad-scenes";
   const auto sweep = [](const std::string& name) { return hostile(name); };
   const auto base = [](const std::string& name) { return hostile("base/" + name); };
+  const std::string a_sweep = (k_source_dir / "tests" / "data" / "sweeps" / "small-sweep.yaml").string();
   expect_clear_refusals({
+      {{"info", a_sweep},
+       a_sweep + ":3:17: phantasm_sweep: ",
+       "expected a scene (phantasm: 1, docs/scene-format.md), found a sweep; phantasm batch runs a sweep"},
+      {{"batch", k_small_scene.string(), "--list"},
+       k_small_scene.string() + ":3:11: phantasm: ",
+       "expected a sweep (phantasm_sweep: 1, docs/batch.md), found a scene; phantasm run runs a scene"},
       {{"validate", sweep("sweep-random-range-name-is-a-list.yaml")},
        sweep("sweep-random-range-name-is-a-list.yaml") + ":5:9: vary.seed: ",
        "expected a list of values or a random range such as {uniform: [a, b]}, found {[uniform]: [1, 2]}"},
