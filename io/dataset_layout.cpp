@@ -189,7 +189,7 @@ void prepare_output_folder(const std::filesystem::path& folder, bool force) {
   }
   std::filesystem::create_directories(folder, error);
   if (error) {
-    throw InputError(folder.string() + ": cannot create the output folder: " + error.message());
+    throw InputError(folder.string() + ": " + folder_creation_problem(folder, error));
   }
 }
 

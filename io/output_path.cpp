@@ -64,6 +64,13 @@ std::filesystem::path file_in_the_way(const std::filesystem::path& path) {
   return {};
 }
 
+std::string folder_creation_problem(const std::filesystem::path& folder, const std::error_code& error) {
+  const std::filesystem::path in_the_way = file_in_the_way(folder);
+  if (!in_the_way.empty())
+    return "expected " + in_the_way.string() + " to be a folder (or not to exist), found a file";
+  return "expected a folder phantasm can create, found: " + error.message();
+}
+
 std::string file_in_the_way_message(const std::filesystem::filesystem_error& error) {
   if (error.code() != std::errc::not_a_directory) return {};
   const std::filesystem::path in_the_way = file_in_the_way(error.path1());
@@ -109,7 +116,7 @@ OutputFolderLock::OutputFolderLock(const std::filesystem::path& folder, FolderLo
   if (std::filesystem::exists(folder, error) && !std::filesystem::is_directory(folder, error))
     throw InputError(folder.string() + ": expected an output folder, found a file");
   std::filesystem::create_directories(folder, error);
-  if (error) throw InputError(folder.string() + ": cannot create the output folder: " + error.message());
+  if (error) throw InputError(folder.string() + ": " + folder_creation_problem(folder, error));
   m_fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (m_fd < 0) {
     throw InputError(folder.string() +

@@ -26,6 +26,11 @@ void require_inside(const std::filesystem::path& root, const std::filesystem::pa
 /// every existing one is a folder.
 std::filesystem::path file_in_the_way(const std::filesystem::path& path);
 
+/// Why a folder could not be made, after "<folder>: ": "expected <file> to be a folder (or not to
+/// exist), found a file" when a file holds the place of one of its parents, else "expected a
+/// folder phantasm can create, found: <the system's reason>".
+std::string folder_creation_problem(const std::filesystem::path& folder, const std::error_code& error);
+
 /// The message for a folder that could not be made because a file holds its place or a parent's
 /// ("<path>: expected <file> to be a folder (or not to exist), found a file"), or "" when the
 /// error is of another kind.
