@@ -60,9 +60,15 @@ namespace {
                  "at a time, found more than it holds\n";
     code = 1;
   } catch (const std::filesystem::filesystem_error& error) {
-    std::cerr << "sub-" << subject.id << ": error: " << error.path1().string() << ": "
-              << error.code().message() << '\n';
-    code = 1;
+    // A file where the subject's folders go is the user's to move, like any input error.
+    if (const std::string message = file_in_the_way_message(error); !message.empty()) {
+      std::cerr << "sub-" << subject.id << ": " << message << '\n';
+      code = 2;
+    } else {
+      std::cerr << "sub-" << subject.id << ": error: " << error.path1().string() << ": "
+                << error.code().message() << '\n';
+      code = 1;
+    }
   } catch (const std::exception& error) {
     std::cerr << "sub-" << subject.id << ": error: " << error.what() << '\n';
     code = 1;

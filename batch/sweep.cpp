@@ -42,12 +42,25 @@ public:
     throw InputError(where + ": " + key + ": " + message);
   }
 
+  /// A mistake in the base scene found while a value is set in it: named at its place there.
+  [[noreturn]] void fail_in_base(const YAML::Mark& mark, const std::string& key,
+                                 const std::string& message) const {
+    std::string where = m_base_scene.empty() ? std::string("base scene") : m_base_scene.string();
+    if (mark.line >= 0) where += ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
+    throw InputError(where + ": " + key + ": " + message);
+  }
+
   std::string flow(const YAML::Node& node) const {
     YAML::Emitter out;
     out.SetSeqFormat(YAML::Flow);
     out.SetMapFormat(YAML::Flow);
     out << node;
     return out.c_str();
+  }
+
+  /// A node as a message shows it: a scalar quoted, a list or mapping in flow style.
+  std::string shown(const YAML::Node& node) const {
+    return node.IsScalar() ? "'" + node.Scalar() + "'" : flow(node);
   }
 
   std::vector<Segment> parse_path(const Variation& v) const {
@@ -84,8 +97,8 @@ public:
         v.values.push_back(item);
       return v;
     }
-    if (value.IsMap() && value.size() == 1) {
-      v.random_kind = value.begin()->first.as<std::string>();
+    if (value.IsMap() && value.size() == 1 && value.begin()->first.IsScalar()) {
+      v.random_kind = value.begin()->first.Scalar();
       const YAML::Node range = value.begin()->second;
       if (v.random_kind != "uniform" && v.random_kind != "log_uniform" && v.random_kind != "random_integer") {
         fail(v.mark, "vary." + key,
@@ -170,15 +183,32 @@ public:
            "expected numbers (factors of the displacement loads), found " + flow(value));
     }
     bool found = false;
-    YAML::Node loads = root["deformation"]["loads"];
+    const YAML::Node deformation = root.IsMap() ? root["deformation"] : YAML::Node();
+    YAML::Node loads = deformation.IsMap() ? deformation["loads"] : YAML::Node();
     if (loads.IsSequence()) {
       for (std::size_t i = 0; i < loads.size(); ++i) {
         YAML::Node load = loads[i];
-        if (!load.IsMap() || !load["type"] || load["type"].as<std::string>() != "displacement") continue;
+        // Loads of another form are the scene check's to report.
+        if (!load.IsMap() || !load["type"]) continue;
+        if (!load["type"].IsScalar()) {
+          fail_in_base(load["type"].Mark(), "deformation.loads[" + std::to_string(i) + "].type",
+                       "expected one load type such as displacement, found " + flow(load["type"]));
+        }
+        if (load["type"].Scalar() != "displacement") continue;
         YAML::Node vector = load["displacement_mm"];
         if (!vector.IsSequence()) continue;
-        for (std::size_t c = 0; c < vector.size(); ++c)
-          vector[c] = vector[c].as<double>() * scale;
+        for (std::size_t c = 0; c < vector.size(); ++c) {
+          double component = 0.0;
+          try {
+            component = vector[c].as<double>();
+          } catch (const YAML::Exception&) {
+            fail_in_base(
+                vector[c].Mark(),
+                "deformation.loads[" + std::to_string(i) + "].displacement_mm[" + std::to_string(c) + "]",
+                "expected a number in mm (vary.deformation.scale multiplies it), found " + shown(vector[c]));
+          }
+          vector[c] = component * scale;
+        }
         found = true;
       }
     }
@@ -189,23 +219,41 @@ public:
   }
 
   void keep_sequences(YAML::Node root, const Variation& v, const YAML::Node& names) const {
-    const YAML::Node sequences = root["sequences"];
-    if (!names.IsSequence() || !sequences.IsSequence()) {
+    const YAML::Node sequences = root.IsMap() ? root["sequences"] : YAML::Node();
+    if (!names.IsSequence()) {
       fail(v.mark, "vary.sequences",
            "expected lists of sequence names of the base scene, found " + flow(names));
     }
+    if (!sequences.IsSequence()) {
+      fail(v.mark, "vary.sequences",
+           "expected a base scene with a list of sequences to choose from, found " +
+               (!sequences.IsDefined() || sequences.IsNull() ? std::string("none") : flow(sequences)));
+    }
+    for (std::size_t i = 0; i < sequences.size(); ++i) {
+      const YAML::Node sequence = sequences[i];
+      if (!sequence.IsMap() || !sequence["name"] || !sequence["name"].IsScalar()) {
+        fail_in_base(sequence.Mark(), "sequences[" + std::to_string(i) + "]",
+                     "expected a mapping with a name (vary.sequences picks sequences by name), found " +
+                         shown(sequence));
+      }
+    }
     YAML::Node kept(YAML::NodeType::Sequence);
     for (const auto& name : names) {
+      if (!name.IsScalar()) {
+        fail(v.mark, "vary.sequences",
+             "expected lists of sequence names of the base scene, found " + flow(name) + " in " +
+                 flow(names));
+      }
       bool known = false;
       for (const auto& sequence : sequences) {
-        if (sequence["name"] && sequence["name"].as<std::string>() == name.as<std::string>()) {
+        if (sequence["name"].Scalar() == name.Scalar()) {
           kept.push_back(YAML::Clone(sequence));
           known = true;
         }
       }
       if (!known) {
         fail(v.mark, "vary.sequences",
-             "expected names of the base scene's sequences, found '" + name.as<std::string>() + "'");
+             "expected names of the base scene's sequences, found '" + name.Scalar() + "'");
       }
     }
     root["sequences"] = kept;
@@ -216,17 +264,19 @@ public:
     try {
       return read_checked(depth);
     } catch (const YAML::Exception& error) {
-      // A value of the wrong kind where a reader asked for a scalar (yaml-cpp's "bad conversion").
-      fail(error.mark, "sweep", "expected a sweep as docs/batch.md describes it, found " + error.msg);
+      // A value of a kind no reader above checked for: yaml-cpp's own words ("bad conversion",
+      // "operator[] call on a scalar") would not tell the user what to write.
+      fail(error.mark, "sweep",
+           "expected a sweep as docs/batch.md describes it, found a value of another kind here (a list or "
+           "mapping where one value belongs, or one value where a list or mapping belongs)");
     }
   }
 
   Sweep read_checked(SweepDepth depth) {
     std::vector<YAML::Node> documents;
-    std::ifstream sweep_file(m_file, std::ios::binary);
-    if (!sweep_file) throw InputError(m_file.string() + ": expected a sweep file, found no readable file");
-    const std::string sweep_text((std::istreambuf_iterator<char>(sweep_file)),
-                                 std::istreambuf_iterator<char>());
+    std::string sweep_text;
+    if (const std::string found = read_scene_text(m_file, sweep_text); !found.empty())
+      throw InputError(m_file.string() + ": expected a sweep file, " + found);
     try {
       documents = load_yaml_documents(sweep_text);
     } catch (const YAML::Exception& error) {
@@ -240,6 +290,10 @@ public:
     const YAML::Node top = documents.front();
     if (!top.IsMap()) fail(top.Mark(), "sweep", "expected a mapping, found " + flow(top));
     reject_duplicate_keys(top, "");
+    if (!top["phantasm_sweep"] && top["phantasm"]) {
+      fail(top["phantasm"].Mark(), "phantasm",
+           "expected a sweep (phantasm_sweep: 1, docs/batch.md), found a scene; phantasm run runs a scene");
+    }
     for (const auto& entry : top) {
       const std::string key = scalar(entry.first, "sweep");
       if (key != "phantasm_sweep" && key != "name" && key != "base_scene" && key != "seed" &&
@@ -256,13 +310,11 @@ public:
     sweep.file = m_file;
     if (!top["base_scene"]) fail(top.Mark(), "base_scene", "expected the path of the base scene, found none");
     sweep.base_scene = m_file.parent_path() / scalar(top["base_scene"], "base_scene");
-    std::ifstream base_file(sweep.base_scene);
-    std::error_code error;
-    if (!base_file || std::filesystem::is_directory(sweep.base_scene, error)) {
+    m_base_scene = sweep.base_scene;
+    if (const std::string found = read_scene_text(sweep.base_scene, m_base_text); !found.empty()) {
       fail(top["base_scene"].Mark(), "base_scene",
-           "expected a scene file, found no such file: " + sweep.base_scene.string());
+           "expected a scene file, " + found + ": " + sweep.base_scene.string());
     }
-    m_base_text.assign((std::istreambuf_iterator<char>(base_file)), std::istreambuf_iterator<char>());
     // The base scene's own mistakes are named in the base scene (each subject's scene is made
     // from its first document only, so a second one would be dropped without a word).
     try {
@@ -397,10 +449,53 @@ public:
       std::string values;
       for (const auto& [key, text] : subject.values)
         values += (values.empty() ? "" : ", ") + key + " = " + text;
+      std::vector<Diagnostic> problems = checked.problems;
+      for (Diagnostic& problem : problems)
+        place(problem);
       throw InputError(m_file.string() + ": subject " + subject.id + " (" + values +
-                       ") gives a scene that does not validate:\n" + format_diagnostics(checked.problems));
+                       ") gives a scene that does not validate:\n" + format_diagnostics(problems));
     }
     return subject;
+  }
+
+  /// Points a problem of a subject's scene at a line the user wrote: the subject's scene is
+  /// emitted anew (its lines are not the base scene's), so a problem at a varied key is placed at
+  /// the key in the sweep file, any other at the key (or the nearest enclosing one) in the base
+  /// scene.
+  void place(Diagnostic& problem) const {
+    const std::string& path = problem.key_path;
+    const Variation* varied = nullptr;
+    for (const Variation& v : m_variations) {
+      const bool under =
+          path == v.key || (path.size() > v.key.size() && path.compare(0, v.key.size(), v.key) == 0 &&
+                            (path[v.key.size()] == '.' || path[v.key.size()] == '['));
+      if (under && (!varied || v.key.size() > varied->key.size())) varied = &v;
+    }
+    if (varied && varied->mark.line >= 0) {
+      problem.where = SourceLocation{m_file.string(), varied->mark.line + 1, varied->mark.column + 1};
+      return;
+    }
+    problem.where = SourceLocation{m_base_scene.string(), 0, 0};
+    if (path.empty()) return;
+    YAML::Node node = YAML::Load(m_base_text);
+    YAML::Mark mark = node.Mark();
+    static const std::regex element(R"(([^.\[\]]+)|\[([0-9]{1,9})\])");
+    for (std::sregex_iterator it(path.begin(), path.end(), element), end; it != end; ++it) {
+      YAML::Node child;
+      if ((*it)[1].matched && node.IsMap()) {
+        child = node[(*it)[1].str()];
+      } else if ((*it)[2].matched && node.IsSequence()) {
+        const std::size_t index = std::stoul((*it)[2].str()); // at most 9 digits
+        if (index < node.size()) child = node[index];
+      }
+      if (!child.IsDefined()) break;
+      node.reset(child);
+      mark = node.Mark();
+    }
+    if (mark.line >= 0) {
+      problem.where.line = mark.line + 1;
+      problem.where.column = mark.column + 1;
+    }
   }
 
   /// A scalar's text; anything else is named at its line.
@@ -427,6 +522,7 @@ private:
   static constexpr std::size_t k_checked_subjects = 1000;
 
   std::filesystem::path m_file;
+  std::filesystem::path m_base_scene;
   std::string m_base_text;
   std::vector<Variation> m_variations;
   std::uint64_t m_seed = 0;
@@ -437,7 +533,9 @@ private:
 } // namespace
 
 bool is_sweep_file(const std::filesystem::path& file) {
-  std::ifstream in(file);
+  std::string text;
+  if (!read_scene_text(file, text).empty()) return false; // load_scene says why
+  std::istringstream in(text);
   std::string line;
   while (std::getline(in, line))
     if (line.rfind("phantasm_sweep:", 0) == 0) return true;

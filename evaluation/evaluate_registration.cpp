@@ -3,10 +3,12 @@
 #include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
+#include "core/path_kind.hpp"
 #include "evaluation/registration_metrics.hpp"
 #include "io/dataset_layout.hpp"
 #include "io/nifti_file.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -23,7 +25,8 @@ struct LandmarkRow {
 
 std::vector<LandmarkRow> read_landmarks(const std::filesystem::path& path) {
   std::ifstream in(path);
-  if (!in) throw InputError(path.string() + ": expected the subject's landmarks (CSV), found no such file");
+  if (!in || path_kind(path) != "a regular file")
+    throw InputError(path.string() + ": expected the subject's landmarks (CSV), found " + path_kind(path));
   std::vector<LandmarkRow> rows;
   std::string line;
   int number = 0;
@@ -56,7 +59,8 @@ std::vector<LandmarkRow> read_landmarks(const std::filesystem::path& path) {
 /// Label index -> organ name, from dseg.tsv ("index<TAB>name<TAB>tissue").
 std::map<std::int32_t, std::string> read_label_names(const std::filesystem::path& path) {
   std::ifstream in(path);
-  if (!in) throw InputError(path.string() + ": expected the dataset's label table, found no such file");
+  if (!in || path_kind(path) != "a regular file")
+    throw InputError(path.string() + ": expected the dataset's label table, found " + path_kind(path));
   std::map<std::int32_t, std::string> names;
   std::string line;
   std::getline(in, line); // header
@@ -74,8 +78,17 @@ std::map<std::int32_t, std::string> read_label_names(const std::filesystem::path
   return names;
 }
 
-std::string find_subject(const std::filesystem::path& dataset) {
+/// The subject to evaluate: `requested` when the dataset holds it complete, else the only one.
+std::string find_subject(const std::filesystem::path& dataset, const std::string& requested) {
   const std::vector<std::string> subjects = complete_subjects(dataset);
+  if (!requested.empty()) {
+    if (std::find(subjects.begin(), subjects.end(), requested) != subjects.end()) return requested;
+    std::string list;
+    for (const auto& s : subjects)
+      list += (list.empty() ? "" : ", ") + s;
+    throw InputError("--subject: expected a complete subject of " + dataset.string() + " (" +
+                     (list.empty() ? std::string("it holds none") : list) + "), found " + requested);
+  }
   if (subjects.empty()) {
     throw InputError(dataset.string() + ": expected a phantasm dataset with a complete subject "
                                         "(derivatives/phantasm/sub-<id>/provenance.json), found none");
@@ -140,7 +153,7 @@ nlohmann::json evaluate_registration(const EvaluationRequest& request) {
   if ((request.field ? 1 : 0) + (request.warped_labels ? 1 : 0) + (request.identity ? 1 : 0) != 1) {
     throw InputError("expected exactly one registration result: --field, --labels or --identity");
   }
-  const std::string subject = request.subject.empty() ? find_subject(request.dataset) : request.subject;
+  const std::string subject = find_subject(request.dataset, request.subject);
   const DatasetLayout layout(request.dataset, subject);
   const PhantomState fixed =
       request.fixed_session == "ref" ? PhantomState::reference : PhantomState::deformed;

@@ -172,6 +172,7 @@ std::vector<std::string> complete_subjects(const std::filesystem::path& dataset)
 }
 
 void prepare_output_folder(const std::filesystem::path& folder, bool force) {
+  if (folder.empty()) throw InputError("expected an output folder, found an empty path");
   std::error_code error;
   if (std::filesystem::exists(folder, error)) {
     if (!std::filesystem::is_directory(folder, error)) {
@@ -188,7 +189,7 @@ void prepare_output_folder(const std::filesystem::path& folder, bool force) {
   }
   std::filesystem::create_directories(folder, error);
   if (error) {
-    throw InputError(folder.string() + ": cannot create the output folder: " + error.message());
+    throw InputError(folder.string() + ": " + folder_creation_problem(folder, error));
   }
 }
 

@@ -2,9 +2,11 @@
 
 #include "core/cancellation.hpp"
 #include "core/error.hpp"
+#include "core/path_kind.hpp"
 #include "core/version.hpp"
 #include "io/atomic_file.hpp"
 #include "io/dataset_layout.hpp"
+#include "io/json_file.hpp"
 #include "io/nifti_file.hpp"
 
 #include <hdf5.h>
@@ -12,7 +14,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
+#include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <optional>
@@ -23,7 +28,14 @@
 namespace phantasm {
 namespace {
 
+/// A file of the dataset as text; "" when there is none (a sidecar or participants.tsv may be
+/// missing). A folder or a device in its place is an error: reading one threw the library's
+/// "basic_filebuf::underflow error reading the file: Is a directory".
 std::string read_text(const std::filesystem::path& path) {
+  const std::string kind = path_kind(path);
+  if (kind == "no such file") return {};
+  if (kind != "a regular file")
+    throw InputError(path.string() + ": expected a file phantasm writes, found " + kind);
   std::ifstream in(path, std::ios::binary);
   if (!in) return {};
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
@@ -212,19 +224,33 @@ void write_landmarks(hid_t file, const std::string& path, const std::filesystem:
   std::getline(text, line); // header
   std::vector<std::string> names, organs;
   std::vector<double> positions;
+  int number = 1;
   while (std::getline(text, line)) {
+    ++number;
     if (line.empty()) continue;
     std::vector<std::string> fields;
     std::stringstream parts(line);
     std::string field;
     while (std::getline(parts, field, ','))
       fields.push_back(field);
-    if (fields.size() != 5)
-      throw InputError(csv.string() + ": expected name,organ,x_mm,y_mm,z_mm, found " + line);
+    if (fields.size() != 5) {
+      throw InputError(csv.string() + ":" + std::to_string(number) +
+                       ": expected name,organ,x_mm,y_mm,z_mm, found '" + line + "'");
+    }
     names.push_back(fields[0]);
     organs.push_back(fields[1]);
-    for (int c = 2; c < 5; ++c)
-      positions.push_back(std::stod(fields[static_cast<std::size_t>(c)]));
+    for (int c = 2; c < 5; ++c) {
+      const std::string& field = fields[static_cast<std::size_t>(c)];
+      char* end = nullptr;
+      errno = 0;
+      const double value = std::strtod(field.c_str(), &end);
+      if (field.empty() || *end != '\0' || errno != 0 || !std::isfinite(value)) {
+        throw InputError(csv.string() + ":" + std::to_string(number) +
+                         ": expected three finite numbers (mm) after the name and organ, found '" + line +
+                         "'");
+      }
+      positions.push_back(value);
+    }
   }
   const hsize_t dims[2] = {names.size(), 3};
   const Handle space(check_id(H5Screate_simple(2, dims, nullptr), "make a space for " + path), H5Sclose);
@@ -325,13 +351,22 @@ Hdf5ExportSummary export_hdf5(const std::filesystem::path& dataset, const std::f
       const DatasetLayout layout(dataset, id);
       const std::string subject = "sub-" + id;
       const std::string provenance_text = read_text(layout.provenance());
-      nlohmann::json provenance;
-      try {
-        provenance = nlohmann::json::parse(provenance_text);
-      } catch (const nlohmann::json::exception& error) {
+      const nlohmann::json provenance = parse_json_text(provenance_text, layout.provenance(),
+                                                        "the JSON phantasm writes in provenance.json");
+      const nlohmann::json files =
+          provenance.is_object() && provenance.contains("files") ? provenance["files"] : nlohmann::json();
+      if (!files.is_array() || !std::all_of(files.begin(), files.end(),
+                                            [](const nlohmann::json& entry) { return entry.is_string(); })) {
+        const std::string found =
+            !provenance.is_object()
+                ? "a JSON " + std::string(provenance.type_name()) + " instead of an object"
+            : files.is_null() ? std::string("no such key")
+                              : "a JSON " + std::string(files.type_name()) +
+                                    (files.is_array() ? " with an entry that is not text" : "");
         throw InputError(layout.provenance().string() +
-                         ": expected the JSON phantasm writes, found a file it cannot parse (" +
-                         error.what() + ")");
+                         ": files: expected the list of the subject's files (paths relative to the dataset), "
+                         "found " +
+                         found);
       }
       {
         const Handle group(group_at(h5.get(), "/" + subject), H5Gclose);
@@ -403,7 +438,7 @@ Hdf5ExportSummary export_hdf5(const std::filesystem::path& dataset, const std::f
                                                          "1 (volume ratio det(I + grad u))", scalar_axes};
       }
 
-      for (const auto& entry : provenance.at("files")) {
+      for (const auto& entry : files) {
         throw_if_cancelled(); // the temporary file is removed below
         const std::string relative = entry.get<std::string>();
         const std::filesystem::path path = dataset / relative;

@@ -6,6 +6,7 @@
 #include "core/abandonable_work.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
+#include "core/path_kind.hpp"
 #include "geometry/tet_boundary.hpp"
 #include "io/atomic_file.hpp"
 #include "io/file_error.hpp"
@@ -60,7 +61,7 @@ std::string lower_extension(const std::filesystem::path& path) {
 void check_readable(const std::filesystem::path& path, const char* what) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error))
-    throw_file_error(path, std::string("expected ") + what + ", found no such file");
+    throw_file_error(path, std::string("expected ") + what + ", found " + path_kind(path));
   if (std::filesystem::file_size(path, error) == 0)
     throw_file_error(path, std::string("expected ") + what + ", found an empty file");
 }

@@ -6,6 +6,7 @@
 #include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
+#include "core/path_kind.hpp"
 #include "io/atomic_file.hpp"
 #include "io/file_error.hpp"
 
@@ -310,6 +311,12 @@ std::vector<unsigned char> read_voxel_data(const std::filesystem::path& path, co
           needed, std::max<std::uint64_t>(2 * bytes.size(), std::uint64_t{16} * k_piece))));
     unsigned char* piece = bytes.data() + done;
     const std::size_t read = znzread(piece, 1, want, handle);
+    // znzread passes on gzread's -1 for a damaged stream, as a size_t: far more than was asked.
+    if (read > want) {
+      throw_file_error(path, "expected gzip-compressed voxels zlib can inflate, found damaged compressed "
+                             "data after " +
+                                 std::to_string(done) + " bytes of voxels");
+    }
     // Pieces start at multiples of 1 MiB, so they hold whole values and whole swap units.
     if (swap) {
       for (std::size_t b = 0; b + swap_unit <= read; b += swap_unit)
@@ -350,7 +357,7 @@ std::vector<unsigned char> read_voxel_data(const std::filesystem::path& path, co
 NiftiVolume read_volume(const std::filesystem::path& path, int components) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error))
-    throw_file_error(path, "expected a NIfTI file, found no such file");
+    throw_file_error(path, "expected a NIfTI file, found " + path_kind(path));
   nifti_set_debug_level(0);
   // The header through libnifti, the voxels by read_voxel_data (in pieces, so that a cancellation
   // need not wait for a whole file to decompress).

@@ -53,9 +53,53 @@ void require_inside(const std::filesystem::path& root, const std::filesystem::pa
   }
 }
 
+std::filesystem::path file_in_the_way(const std::filesystem::path& path) {
+  for (std::filesystem::path folder = path.parent_path(); !folder.empty() && folder != folder.parent_path();
+       folder = folder.parent_path()) {
+    struct stat info {};
+    if (::stat(folder.c_str(), &info) != 0) continue;
+    if (S_ISDIR(info.st_mode)) return {};
+    return folder;
+  }
+  return {};
+}
+
+std::string folder_creation_problem(const std::filesystem::path& folder, const std::error_code& error) {
+  const std::filesystem::path in_the_way = file_in_the_way(folder);
+  if (!in_the_way.empty())
+    return "expected " + in_the_way.string() + " to be a folder (or not to exist), found a file";
+  return "expected a folder phantasm can create, found: " + error.message();
+}
+
+std::string file_in_the_way_message(const std::filesystem::filesystem_error& error) {
+  if (error.code() != std::errc::not_a_directory) return {};
+  const std::filesystem::path in_the_way = file_in_the_way(error.path1());
+  if (in_the_way.empty()) return {};
+  return error.path1().string() + ": expected " + in_the_way.string() +
+         " to be a folder (or not to exist), found a file";
+}
+
 void require_replaceable_file(const std::filesystem::path& path, std::string_view what) {
+  // An empty path, or one ending in '/', names no file: its temporary file would be "..phantasm-
+  // tmp-..." in the current folder, left there when the rename to "" fails.
+  if (path.empty())
+    throw InputError(std::string(what) + ": expected the path of a file to write, found an empty path");
+  if (!path.has_filename()) {
+    throw InputError(std::string(what) + ": " + path.string() +
+                     ": expected the path of a file to write, found a folder's path (it ends in '/')");
+  }
   struct stat info {};
-  if (::stat(path.c_str(), &info) != 0) return; // missing (or unreadable: opening will say)
+  if (::stat(path.c_str(), &info) != 0) {
+    if (errno != ENOTDIR) return; // missing (or unreadable: opening will say)
+    const std::filesystem::path in_the_way = file_in_the_way(path);
+    if (in_the_way.empty()) return;
+    std::error_code ignored;
+    throw InputError(std::string(what) + ": " + path.string() + ": expected " + in_the_way.string() +
+                     " to be a folder (or not to exist), found " +
+                     (std::filesystem::is_regular_file(in_the_way, ignored)
+                          ? "a file"
+                          : "something that is not a folder"));
+  }
   if (S_ISREG(info.st_mode)) return;
   const char* kind = S_ISDIR(info.st_mode)                            ? "a folder"
                      : S_ISCHR(info.st_mode) || S_ISBLK(info.st_mode) ? "a device node"
@@ -67,11 +111,12 @@ void require_replaceable_file(const std::filesystem::path& path, std::string_vie
 }
 
 OutputFolderLock::OutputFolderLock(const std::filesystem::path& folder, FolderLockMode mode) {
+  if (folder.empty()) throw InputError("--output: expected an output folder, found an empty path");
   std::error_code error;
   if (std::filesystem::exists(folder, error) && !std::filesystem::is_directory(folder, error))
     throw InputError(folder.string() + ": expected an output folder, found a file");
   std::filesystem::create_directories(folder, error);
-  if (error) throw InputError(folder.string() + ": cannot create the output folder: " + error.message());
+  if (error) throw InputError(folder.string() + ": " + folder_creation_problem(folder, error));
   m_fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (m_fd < 0) {
     throw InputError(folder.string() +

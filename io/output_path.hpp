@@ -21,9 +21,26 @@ std::filesystem::path output_file(const std::filesystem::path& folder, std::stri
 /// dataset writer is about to write.
 void require_inside(const std::filesystem::path& root, const std::filesystem::path& path);
 
+/// The nearest existing folder of `path` (its parent, its parent's parent, ...) that is not a
+/// folder, the reason the path cannot be made ("notes.txt" of "notes.txt/out/x.json"); empty when
+/// every existing one is a folder.
+std::filesystem::path file_in_the_way(const std::filesystem::path& path);
+
+/// Why a folder could not be made, after "<folder>: ": "expected <file> to be a folder (or not to
+/// exist), found a file" when a file holds the place of one of its parents, else "expected a
+/// folder phantasm can create, found: <the system's reason>".
+std::string folder_creation_problem(const std::filesystem::path& folder, const std::error_code& error);
+
+/// The message for a folder that could not be made because a file holds its place or a parent's
+/// ("<path>: expected <file> to be a folder (or not to exist), found a file"), or "" when the
+/// error is of another kind.
+std::string file_in_the_way_message(const std::filesystem::filesystem_error& error);
+
 /// Refuses (InputError) to replace an existing path that is not a regular file (a device node,
 /// a folder, a FIFO, a socket): writing "to" /dev/null must not replace the node. A missing path
-/// and a symbolic link to a regular file are accepted.
+/// and a symbolic link to a regular file are accepted. Refuses as well a path one of whose
+/// folders is a file ("notes.txt/out.json"), which could not be made, and a path that names no
+/// file (empty, or ending in '/').
 /// @param what names the option in the message, e.g. "--json"
 void require_replaceable_file(const std::filesystem::path& path, std::string_view what);
 

@@ -6,6 +6,7 @@
 #include "core/error.hpp"
 #include "core/sha256.hpp"
 #include "io/atomic_file.hpp"
+#include "io/output_path.hpp"
 
 #include <cerrno>
 #include <chrono>
@@ -164,7 +165,7 @@ Phantom build_phantom_cached(const AnatomySettings& anatomy, const std::map<std:
   }
   std::error_code error;
   fs::create_directories(folder, error);
-  if (error) throw InputError(folder.string() + ": cannot make the anatomy cache folder: " + error.message());
+  if (error) throw InputError(folder.string() + ": anatomy cache: " + folder_creation_problem(folder, error));
   const fs::path entry = folder / ("anatomy-" + key + ".bin");
   const KeyLock lock(folder / ("anatomy-" + key + ".lock"));
   const std::string header = std::string(k_magic) + key + "\n";

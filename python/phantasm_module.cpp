@@ -8,6 +8,7 @@
 #include "core/progress.hpp"
 #include "geometry/ras_lps.hpp"
 #include "io/dataset_layout.hpp"
+#include "io/json_file.hpp"
 #include "pipeline/run_pipeline.hpp"
 #include "scene/scene_json.hpp"
 
@@ -45,7 +46,7 @@ std::string yaml_text(const py::object& value) {
 }
 
 py::object json_to_python(const nlohmann::json& value) {
-  return py::module_::import("json").attr("loads")(value.dump());
+  return py::module_::import("json").attr("loads")(json_text(value, -1));
 }
 
 /// A (X, Y, Z[, components]) numpy array of values stored i fastest (component-major).

@@ -1,3 +1,4 @@
+#include "core/path_kind.hpp"
 #include "scene/parse_sections.hpp"
 
 namespace phantasm::scene_detail {
@@ -122,10 +123,11 @@ void parse_shape(CheckedMap& map, const std::filesystem::path& scene_folder, Sha
     if (map.string("file", file, true)) {
       shape.file =
           std::filesystem::path(file).is_absolute() ? std::filesystem::path(file) : scene_folder / file;
-      std::error_code error;
-      if (!std::filesystem::is_regular_file(shape.file, error)) {
+      if (const std::string kind_at = path_kind(shape.file); kind_at != "a regular file") {
         map.context().problem(map.get("file"), map.child_path("file"),
-                              "expected an existing file, found no file at '" + shape.file.string() + "'");
+                              "expected an existing file, found " +
+                                  (kind_at == "no such file" ? std::string("no file") : kind_at) + " at '" +
+                                  shape.file.string() + "'");
       } else if (kind == "mesh") {
         const std::string extension = shape.file.extension().string();
         if (extension != ".stl" && extension != ".obj" && extension != ".ply" && extension != ".vtp") {

@@ -142,6 +142,17 @@ SceneLoadResult parse_scene(const std::string& text, const std::filesystem::path
     return result;
   }
 
+  // A sweep given where a scene belongs (phantasm run sweep.yaml) would get a line for every
+  // scene key it lacks and every sweep key it has: one says what it is and what reads it.
+  if (root.IsMap() && root["phantasm_sweep"] && !root["phantasm"]) {
+    const YAML::Mark at = root["phantasm_sweep"].Mark();
+    result.problems.push_back(
+        Diagnostic{SourceLocation{file_name, at.line + 1, at.column + 1}, "phantasm_sweep",
+                   "expected a scene (phantasm: 1, docs/scene-format.md), found a sweep; "
+                   "phantasm batch runs a sweep, phantasm validate checks one"});
+    return result;
+  }
+
   YamlContext context(file_name, result.problems, scene.locations);
   {
     CheckedMap top(context, root, "");
@@ -201,21 +212,43 @@ SceneLoadResult parse_scene(const std::string& text, const std::filesystem::path
   return result;
 }
 
-SceneLoadResult load_scene(const std::filesystem::path& file) {
+std::string read_scene_text(const std::filesystem::path& file, std::string& text) {
+  text.clear();
+  std::error_code error;
+  const std::filesystem::file_status status = std::filesystem::status(file, error);
+  if (!std::filesystem::exists(status)) return "found no such file";
+  // A folder opens as an empty stream (it would read as a scene with nothing in it); a device
+  // such as /dev/zero never ends.
+  if (std::filesystem::is_directory(status)) return "found a folder";
+  if (std::filesystem::is_character_file(status) || std::filesystem::is_block_file(status))
+    return "found a device node";
+  if (std::filesystem::is_socket(status)) return "found a socket";
   std::ifstream stream(file, std::ios::binary);
-  if (!stream) {
+  if (!stream) return "found a file that cannot be opened";
+  std::vector<char> buffer(std::size_t{1} << 16);
+  while (stream) {
+    stream.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+    text.append(buffer.data(), static_cast<std::size_t>(stream.gcount()));
+    if (text.size() > k_max_scene_file_bytes) {
+      text.clear();
+      return "found more than " + std::to_string(k_max_scene_file_bytes >> 20) + " MB";
+    }
+  }
+  return {};
+}
+
+SceneLoadResult load_scene(const std::filesystem::path& file) {
+  std::string text;
+  if (const std::string found = read_scene_text(file, text); !found.empty()) {
     SceneLoadResult result;
-    std::error_code error;
-    const bool exists = std::filesystem::exists(file, error);
     result.problems.push_back(
         Diagnostic{SourceLocation{file.string(), 0, 0}, "",
-                   exists ? "expected a readable scene file, found a file that cannot be opened"
-                          : "expected a scene file, found no such file"});
+                   (found == "found a file that cannot be opened" ? "expected a readable scene file, "
+                                                                  : "expected a scene file, ") +
+                       found});
     return result;
   }
-  std::ostringstream text;
-  text << stream.rdbuf();
-  return parse_scene(text.str(), file);
+  return parse_scene(text, file);
 }
 
 } // namespace phantasm

@@ -10,6 +10,7 @@
 #include "sim/sim_settings.hpp"
 #include "voxelize/voxelize_settings.hpp"
 
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -79,6 +80,17 @@ struct SceneLoadResult {
   std::optional<Scene> scene;
   std::vector<Diagnostic> problems;
 };
+
+/// The most a scene or sweep file may hold: a scene is a few kB, and a device such as /dev/zero
+/// or an endless pipe would otherwise be read until memory runs out.
+inline constexpr std::size_t k_max_scene_file_bytes = std::size_t{64} << 20;
+
+/// Reads the text of a scene or sweep file.
+/// @param text the file's bytes, when it could be read
+/// @return "" when read, or what was found instead, to follow "expected a scene file, ": "found
+/// no such file", "found a folder", "found a device node", "found a file that cannot be opened",
+/// "found more than 64 MB"
+std::string read_scene_text(const std::filesystem::path& file, std::string& text);
 
 /// Reads, parses and validates a scene file (docs/scene-format.md). Never throws for bad input.
 SceneLoadResult load_scene(const std::filesystem::path& file);

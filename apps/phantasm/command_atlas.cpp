@@ -2,6 +2,7 @@
 #include "atlas/colin27_head.hpp"
 #include "io/atomic_file.hpp"
 #include "io/nifti_file.hpp"
+#include "io/output_path.hpp"
 
 #include <chrono>
 #include <iomanip>
@@ -55,6 +56,9 @@ void add_atlas_command(CLI::App& app, std::function<int()>& action) {
   colin->callback([options, &action] {
     action = [options] {
       const auto start = std::chrono::steady_clock::now();
+      // Before the minutes of deriving the labels: a target that cannot be written is refused now.
+      require_replaceable_file(options->output, "--output");
+      require_replaceable_file(table_path(options->output), "--output");
       const HeadLabels head = derive_colin27_head(options->templates, Colin27Options{});
       NiftiWriteOptions write_options;
       write_options.intent = NiftiIntent::label;

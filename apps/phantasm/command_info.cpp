@@ -1,4 +1,5 @@
 #include "apps/phantasm/commands.hpp"
+#include "io/json_file.hpp"
 #include "pipeline/cost_estimate.hpp"
 #include "pipeline/run_pipeline.hpp"
 #include "scene/scene_json.hpp"
@@ -27,7 +28,7 @@ void add_info_command(CLI::App& app, std::function<int()>& action) {
       }
       const Scene& scene = *result.scene;
       if (options->json) {
-        std::cout << scene_settings_json(scene).dump(2) << '\n';
+        std::cout << json_text(scene_settings_json(scene)) << '\n';
         return static_cast<int>(exit_ok);
       }
       const ImageGrid grid = scene.grid.grid();

@@ -2,6 +2,7 @@
 #include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/version.hpp"
+#include "io/output_path.hpp"
 #include "pipeline/cost_estimate.hpp"
 
 #include <algorithm>
@@ -99,6 +100,12 @@ int main(int argc, char** argv) {
            "grid, fewer or smaller meshes, a smaller sweep), found more than it holds\n";
     return exit_failure;
   } catch (const std::filesystem::filesystem_error& error) {
+    // A folder to be made where the user's output holds a file ("--force" into a folder whose
+    // sub-01 is a file): the user's to fix, and the file in the way is what to name.
+    if (const std::string message = phantasm::file_in_the_way_message(error); !message.empty()) {
+      std::cerr << message << '\n';
+      return exit_bad_input;
+    }
     // The library's message ("filesystem error: cannot rename: ...") said what failed, not where.
     std::cerr << "phantasm: error: " << error.path1().string() << ": " << error.code().message();
     if (!error.path2().empty()) std::cerr << " (with " << error.path2().string() << ")";

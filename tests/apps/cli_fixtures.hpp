@@ -12,6 +12,7 @@
 #include <sstream>
 #include <string>
 #include <unistd.h>
+#include <vector>
 
 namespace phantasm::testing {
 
@@ -21,6 +22,22 @@ inline const std::filesystem::path k_head_scene = k_source_dir / "data-synthetic
 /// Three organs on coarse meshes: command tests that run many times use it.
 inline const std::filesystem::path k_small_scene =
     k_source_dir / "tests" / "data" / "scenes" / "small-head.yaml";
+
+/// Words of a library's own messages (the C++ library's, yaml-cpp's, nlohmann's, the runtime's),
+/// none of which may reach the user: a message says in the project's words what was expected
+/// and what was found.
+inline const std::vector<std::string> k_raw_library_markers = {
+    "stoul",          "stoi",        "stod",         "stol",
+    "bad conversion", "bad_alloc",   "basic_",       "filesystem error",
+    "json.exception", "parse_error", "yaml-cpp",     "terminate called",
+    "bad file",       "operator[]",  "invalid node", "unknown escape character"};
+
+/// The first library marker a message holds, or "" when it holds none.
+inline std::string raw_library_marker(const std::string& message) {
+  for (const std::string& marker : k_raw_library_markers)
+    if (message.find(marker) != std::string::npos) return marker;
+  return {};
+}
 
 /// Every regular file under a folder, by path relative to it, with its bytes.
 inline std::map<std::string, std::string> folder_contents(const std::filesystem::path& folder) {

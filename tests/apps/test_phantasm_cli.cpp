@@ -97,6 +97,7 @@ TEST(ValidateCommand, EveryMalformedSceneGetsOneMessageAtItsLocationAndExitCode2
     EXPECT_EQ(std::count(result.err.begin(), result.err.end(), '\n'), 1) << result.err;
     EXPECT_NE(result.err.find("expected"), std::string::npos) << result.err;
     EXPECT_NE(result.err.find("found"), std::string::npos) << result.err;
+    EXPECT_EQ(raw_library_marker(result.err), "") << result.err;
   }
 }
 

@@ -122,6 +122,17 @@ TEST(Sweep, MistakesAreNamedWithTheirLine) {
             std::string::npos)
       << invalid;
   EXPECT_NE(invalid.find("acquisition.noise_percent"), std::string::npos);
+  // The subject's scene is emitted anew: its problems are placed where the user wrote the value,
+  // at the varied key in the sweep or at the key in the base scene, not at lines of that text.
+  EXPECT_NE(invalid.find("/sweep.yaml:5:30: acquisition.noise_percent: expected"), std::string::npos)
+      << invalid;
+  const std::string scaled =
+      input_error_message([] { sweep_of("bad-scale", "  deformation.scale: [1, 1000]\n"); });
+  EXPECT_NE(scaled.find(k_base.string() +
+                        ":48:25: deformation.loads[0].displacement_mm[0]: expected a number in mm in "
+                        "[-1000, 1000], found '-2000'"),
+            std::string::npos)
+      << scaled;
   EXPECT_NE(input_error_message([] {
               sweep_of("bad-top", "  seed: [1]\n", "jobs: 2\n");
             }).find("jobs: expected one of phantasm_sweep, name, base_scene, seed, repeats, vary"),

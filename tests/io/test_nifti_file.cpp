@@ -11,6 +11,7 @@
 #include <Eigen/Geometry>
 
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <iterator>
 #include <thread>
@@ -111,6 +112,29 @@ TEST(NiftiFile, BadFilesGetMessagesNamingFileAndProblem) {
 
 // nibabel, the reader most users load our images with, sees the affine, shape, datatype and
 // intent docs/architecture.md specifies.
+// A gzip stream damaged in the middle: zlib's error came back from znzread as (size_t)-1, taken
+// for a read of that many bytes: the values past the voxels were scanned for NaN and the file was
+// reported as "found NaN at value 139792 of 139776" (or worse).
+TEST(NiftiFile, DamagedCompressedVoxelsAreNamedAsSuch) {
+  const fs::path folder = fresh_folder("nifti-damaged");
+  ImageGrid grid;
+  grid.dims = {40, 40, 40};
+  std::vector<float> values(static_cast<std::size_t>(grid.voxel_count()));
+  for (std::size_t v = 0; v < values.size(); ++v)
+    values[v] = static_cast<float>(std::sin(0.37 * static_cast<double>(v)));
+  write_nifti(folder / "image.nii.gz", grid, values);
+  std::string bytes = phantasm::testing::read_file(folder / "image.nii.gz");
+  bytes[bytes.size() / 2] = static_cast<char>(bytes[bytes.size() / 2] ^ 0xff);
+  phantasm::testing::write_text_file(folder / "image.nii.gz", bytes);
+  const std::string message = input_error_message([&] { read_nifti(folder / "image.nii.gz"); });
+  EXPECT_EQ(message.rfind((folder / "image.nii.gz").string() +
+                              ": expected gzip-compressed voxels zlib can inflate, found damaged compressed "
+                              "data after ",
+                          0),
+            0u)
+      << message;
+}
+
 TEST(NiftiFile, NibabelReadsAffineShapeDatatypeAndIntent) {
   const fs::path folder = fresh_folder("nifti-nibabel");
   const ImageGrid grid = oblique_grid();
