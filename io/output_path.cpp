@@ -1,6 +1,7 @@
 #include "io/output_path.hpp"
 
 #include "core/error.hpp"
+#include "core/path_kind.hpp"
 #include "core/safe_name.hpp"
 
 #include <fcntl.h>
@@ -64,10 +65,22 @@ std::filesystem::path file_in_the_way(const std::filesystem::path& path) {
   return {};
 }
 
+namespace {
+
+/// "expected F to be a folder (or not to exist), found a file": F, found by file_in_the_way,
+/// stands where a folder of the path belongs.
+std::string expected_folder(const std::filesystem::path& in_the_way) {
+  std::error_code ignored;
+  return "expected " + in_the_way.string() + " to be a folder (or not to exist), found " +
+         (std::filesystem::is_regular_file(in_the_way, ignored) ? "a file"
+                                                                : "something that is not a folder");
+}
+
+} // namespace
+
 std::string folder_creation_problem(const std::filesystem::path& folder, const std::error_code& error) {
   const std::filesystem::path in_the_way = file_in_the_way(folder);
-  if (!in_the_way.empty())
-    return "expected " + in_the_way.string() + " to be a folder (or not to exist), found a file";
+  if (!in_the_way.empty()) return expected_folder(in_the_way);
   return "expected a folder phantasm can create, found: " + error.message();
 }
 
@@ -75,8 +88,7 @@ std::string file_in_the_way_message(const std::filesystem::filesystem_error& err
   if (error.code() != std::errc::not_a_directory) return {};
   const std::filesystem::path in_the_way = file_in_the_way(error.path1());
   if (in_the_way.empty()) return {};
-  return error.path1().string() + ": expected " + in_the_way.string() +
-         " to be a folder (or not to exist), found a file";
+  return error.path1().string() + ": " + expected_folder(in_the_way);
 }
 
 void require_replaceable_file(const std::filesystem::path& path, std::string_view what) {
@@ -93,21 +105,11 @@ void require_replaceable_file(const std::filesystem::path& path, std::string_vie
     if (errno != ENOTDIR) return; // missing (or unreadable: opening will say)
     const std::filesystem::path in_the_way = file_in_the_way(path);
     if (in_the_way.empty()) return;
-    std::error_code ignored;
-    throw InputError(std::string(what) + ": " + path.string() + ": expected " + in_the_way.string() +
-                     " to be a folder (or not to exist), found " +
-                     (std::filesystem::is_regular_file(in_the_way, ignored)
-                          ? "a file"
-                          : "something that is not a folder"));
+    throw InputError(std::string(what) + ": " + path.string() + ": " + expected_folder(in_the_way));
   }
   if (S_ISREG(info.st_mode)) return;
-  const char* kind = S_ISDIR(info.st_mode)                            ? "a folder"
-                     : S_ISCHR(info.st_mode) || S_ISBLK(info.st_mode) ? "a device node"
-                     : S_ISFIFO(info.st_mode)                         ? "a FIFO"
-                     : S_ISSOCK(info.st_mode)                         ? "a socket"
-                                                                      : "something that is not a file";
   throw InputError(std::string(what) + ": " + path.string() +
-                   ": expected a new file or a regular file to replace, found " + kind);
+                   ": expected a new file or a regular file to replace, found " + path_kind(path));
 }
 
 OutputFolderLock::OutputFolderLock(const std::filesystem::path& folder, FolderLockMode mode) {
