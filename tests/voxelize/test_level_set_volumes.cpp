@@ -9,11 +9,15 @@
 #include "voxelize/tissue_volumes.hpp"
 
 #include <gtest/gtest.h>
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/Interpolation.h>
 
 #include <Eigen/Geometry>
 
 #include <cmath>
 #include <cstdio>
+#include <random>
+#include <vector>
 
 using namespace phantasm;
 using namespace phantasm::testing;
@@ -129,4 +133,30 @@ TEST(LevelSet, SignedDistanceGradientHasLengthOneInTheNarrowBand) {
   std::printf("narrow band: %zu active voxels, shell of half width %g mm: %.0f voxels\n",
               level_set.active_voxel_count(), w, shell_voxels);
   EXPECT_NEAR(static_cast<double>(level_set.active_voxel_count()) / shell_voxels, 1.0, 0.05);
+}
+
+// LevelSet::Probe reads stencils within one leaf straight from it and tiles from one lookup:
+// its value must be OpenVDB's own trilinear sample bit for bit, at random points (inside, in the
+// band, across leaf boundaries, in tiles deep inside and outside) and on the lattice itself.
+TEST(LevelSet, ProbeIsOpenVdbsTrilinearSampleBitForBit) {
+  const PatchSurface surface = bumpy_sphere();
+  const LevelSet level_set(surface, 0.7);
+  const auto& grid = *static_cast<const openvdb::FloatGrid*>(level_set.grid());
+  const openvdb::tools::GridSampler<openvdb::FloatGrid, openvdb::tools::BoxSampler> sampler(grid);
+  const LevelSet::Probe probe(level_set);
+  std::mt19937 random(17);
+  std::uniform_real_distribution<double> coordinate(-30.0, 30.0);
+  std::vector<Eigen::Vector3d> points;
+  for (int i = 0; i < 200000; ++i)
+    points.emplace_back(coordinate(random), coordinate(random), coordinate(random));
+  for (int i = -40; i <= 40; ++i)
+    for (int j = -40; j <= 40; j += 3)
+      points.emplace_back(0.7 * i, 0.7 * j, 0.7 * ((i * j) % 17)); // lattice points, leaf edges included
+  int in_band = 0;
+  for (const Eigen::Vector3d& x : points) {
+    const double expected = static_cast<double>(sampler.wsSample(openvdb::Vec3d(x.x(), x.y(), x.z())));
+    ASSERT_EQ(probe(x), expected) << x.transpose();
+    in_band += std::abs(expected) < level_set.half_width_mm();
+  }
+  EXPECT_GT(in_band, 10000); // the band itself was sampled, not only tiles
 }
