@@ -118,16 +118,18 @@ double tet_volume(const TetMesh& mesh, Eigen::Index t) {
   return (b - a).dot((c - a).cross(d - a)) / 6.0;
 }
 
-std::array<double, 6> tet_dihedral_angles_deg(const TetMesh& mesh, Eigen::Index t) {
-  Eigen::Vector3d p[4];
-  for (int k = 0; k < 4; ++k)
-    p[k] = mesh.vertices.row(mesh.tets(t, k)).transpose();
+namespace {
+
+/// The six dihedral angles of the tet with corners p, degrees.
+std::array<double, 6> dihedral_angles_deg(const std::array<Eigen::Vector3d, 4>& p) {
   // Outward face normals; face k is opposite vertex k.
   Eigen::Vector3d n[4];
   for (int k = 0; k < 4; ++k) {
-    const Eigen::Vector3d a = p[(k + 1) % 4], b = p[(k + 2) % 4], c = p[(k + 3) % 4];
+    const Eigen::Vector3d a = p[static_cast<std::size_t>((k + 1) % 4)],
+                          b = p[static_cast<std::size_t>((k + 2) % 4)],
+                          c = p[static_cast<std::size_t>((k + 3) % 4)];
     n[k] = (b - a).cross(c - a).normalized();
-    if (n[k].dot(p[k] - a) > 0.0) n[k] = -n[k];
+    if (n[k].dot(p[static_cast<std::size_t>(k)] - a) > 0.0) n[k] = -n[k];
   }
   std::array<double, 6> angles;
   int i = 0;
@@ -139,6 +141,19 @@ std::array<double, 6> tet_dihedral_angles_deg(const TetMesh& mesh, Eigen::Index 
     }
   }
   return angles;
+}
+
+std::array<Eigen::Vector3d, 4> corners(const TetMesh& mesh, const Eigen::Vector4i& tet) {
+  std::array<Eigen::Vector3d, 4> p;
+  for (int k = 0; k < 4; ++k)
+    p[static_cast<std::size_t>(k)] = mesh.vertices.row(tet[k]).transpose();
+  return p;
+}
+
+} // namespace
+
+std::array<double, 6> tet_dihedral_angles_deg(const TetMesh& mesh, Eigen::Index t) {
+  return dihedral_angles_deg(corners(mesh, mesh.tets.row(t).transpose()));
 }
 
 double min_dihedral_angle_deg(const TetMesh& mesh) {
@@ -440,7 +455,9 @@ int improve_slivers(TetMesh& mesh, const std::function<int(const Eigen::Vector3d
             ++edges;
           }
       reach /= std::max(1, edges);
-      // Directions: 26 around a free vertex; 12 in the tangent plane of an interface vertex.
+      // Directions: 26 around a free vertex; 12 in the tangent plane of an interface vertex. Both
+      // also try, for each sliver of the vertex, the way straight off the face opposite it (the
+      // one that thickens that sliver), within the tangent plane for an interface vertex.
       std::vector<Eigen::Vector3d> directions;
       Eigen::Vector3d n = Eigen::Vector3d::Zero();
       if (around.size() == 1) {
@@ -456,6 +473,18 @@ int improve_slivers(TetMesh& mesh, const std::function<int(const Eigen::Vector3d
           const double angle = 2.0 * M_PI * d / 12.0;
           directions.push_back(std::cos(angle) * u + std::sin(angle) * w);
         }
+      }
+      for (const int t : star[vi]) {
+        const std::array<double, 6> angles = tet_dihedral_angles_deg(mesh, t);
+        if (!(*std::min_element(angles.begin(), angles.end()) < bound_deg)) continue;
+        Eigen::Vector3d p[3];
+        int m = 0;
+        for (int k = 0; k < 4; ++k)
+          if (mesh.tets(t, k) != v) p[m++] = mesh.vertices.row(mesh.tets(t, k)).transpose();
+        Eigen::Vector3d off = (p[1] - p[0]).cross(p[2] - p[0]);
+        if (off.dot(x - p[0]) < 0.0) off = -off;
+        if (around.size() == 2) off -= off.dot(n) * n;
+        if (off.norm() > 0.0) directions.push_back(off.normalized());
       }
       const int below = *around.begin(), above = *around.rbegin();
       std::vector<bool> in_subdomain;
@@ -492,6 +521,367 @@ int improve_slivers(TetMesh& mesh, const std::function<int(const Eigen::Vector3d
     if (moved_in_pass == 0) break;
   }
   return moved;
+}
+
+} // namespace phantasm
+
+namespace phantasm {
+namespace {
+
+/// The faces of a positively oriented tet, each opposite one vertex, oriented outward.
+constexpr int k_outward_face[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+
+using FaceKey = std::array<int, 3>;
+
+FaceKey face_key(const TetMesh& mesh, Eigen::Index t, int opposite) {
+  FaceKey key{mesh.tets(t, k_outward_face[opposite][0]), mesh.tets(t, k_outward_face[opposite][1]),
+              mesh.tets(t, k_outward_face[opposite][2])};
+  std::sort(key.begin(), key.end());
+  return key;
+}
+
+/// The tets of every face (one for a boundary face, two inside).
+std::map<FaceKey, std::vector<int>> tets_of_faces(const TetMesh& mesh) {
+  std::map<FaceKey, std::vector<int>> faces;
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t)
+    for (int k = 0; k < 4; ++k)
+      faces[face_key(mesh, t, k)].push_back(static_cast<int>(t));
+  return faces;
+}
+
+bool is_sliver(const TetMesh& mesh, Eigen::Index t, double bound_deg) {
+  const std::array<double, 6> angles = tet_dihedral_angles_deg(mesh, t);
+  return *std::min_element(angles.begin(), angles.end()) < bound_deg;
+}
+
+double face_area(const TetMesh& mesh, const FaceKey& key) {
+  const Eigen::Vector3d a = mesh.vertices.row(key[0]), b = mesh.vertices.row(key[1]),
+                        c = mesh.vertices.row(key[2]);
+  return 0.5 * (b - a).cross(c - a).norm();
+}
+
+} // namespace
+
+int peel_boundary_slivers(TetMesh& mesh, double bound_deg) {
+  const Eigen::Index count = mesh.tets.rows();
+  std::map<FaceKey, std::vector<int>> faces = tets_of_faces(mesh);
+  std::vector<std::vector<int>> star(static_cast<std::size_t>(mesh.vertices.rows()));
+  for (Eigen::Index t = 0; t < count; ++t)
+    for (int k = 0; k < 4; ++k)
+      star[static_cast<std::size_t>(mesh.tets(t, k))].push_back(static_cast<int>(t));
+  std::vector<char> removed(static_cast<std::size_t>(count), 0);
+  std::vector<FaceKey> exposed; // faces that became boundary, in order
+  // True when a face of a remaining tet holding vertices c and d is a boundary face.
+  const auto on_boundary = [&](int c, int d) {
+    for (const int u : star[static_cast<std::size_t>(c)]) {
+      if (removed[static_cast<std::size_t>(u)]) continue;
+      for (int k = 0; k < 4; ++k) {
+        const int opposite = mesh.tets(u, k);
+        if (opposite == c || opposite == d) continue;
+        const FaceKey key = face_key(mesh, u, k);
+        if (std::find(key.begin(), key.end(), d) == key.end()) continue;
+        if (faces[key].size() == 1) return true;
+      }
+    }
+    return false;
+  };
+  int peeled = 0;
+  for (Eigen::Index t = 0; t < count; ++t) {
+    if (!is_sliver(mesh, t, bound_deg)) continue;
+    std::vector<int> outer, inner; // local vertex indices opposite boundary / inner faces
+    for (int k = 0; k < 4; ++k)
+      (faces[face_key(mesh, t, k)].size() == 1 ? outer : inner).push_back(k);
+    if (outer.size() != 2) continue;
+    // The inner faces (opposite inner[0] and inner[1]) share the edge of the vertices opposite
+    // the boundary faces: it must not be on the boundary already.
+    if (on_boundary(mesh.tets(t, outer[0]), mesh.tets(t, outer[1]))) continue;
+    removed[static_cast<std::size_t>(t)] = 1;
+    for (int k = 0; k < 4; ++k) {
+      const FaceKey key = face_key(mesh, t, k);
+      std::vector<int>& around = faces[key];
+      around.erase(std::find(around.begin(), around.end(), static_cast<int>(t)));
+      if (around.empty())
+        faces.erase(key);
+      else
+        exposed.push_back(key);
+    }
+    ++peeled;
+  }
+  if (peeled == 0) return 0;
+  Eigen::MatrixX4i tets(count - peeled, 4);
+  Eigen::VectorXi subdomains(mesh.subdomains.size() == count ? count - peeled : 0);
+  std::vector<int> new_index(static_cast<std::size_t>(count), -1);
+  Eigen::Index kept = 0;
+  for (Eigen::Index t = 0; t < count; ++t) {
+    if (removed[static_cast<std::size_t>(t)]) continue;
+    new_index[static_cast<std::size_t>(t)] = static_cast<int>(kept);
+    tets.row(kept) = mesh.tets.row(t);
+    if (subdomains.size() > 0) subdomains[kept] = mesh.subdomains[t];
+    ++kept;
+  }
+  std::vector<Eigen::Vector3i> boundary;
+  for (Eigen::Index f = 0; f < mesh.boundary_faces.rows(); ++f) {
+    FaceKey key{mesh.boundary_faces(f, 0), mesh.boundary_faces(f, 1), mesh.boundary_faces(f, 2)};
+    std::sort(key.begin(), key.end());
+    const auto found = faces.find(key);
+    if (found != faces.end() && found->second.size() == 1) boundary.push_back(mesh.boundary_faces.row(f));
+  }
+  for (const FaceKey& key : exposed) {
+    const auto found = faces.find(key);
+    if (found == faces.end() || found->second.size() != 1) continue; // peeled later itself
+    const int u = found->second.front();
+    for (int k = 0; k < 4; ++k)
+      if (face_key(mesh, u, k) == key)
+        boundary.emplace_back(mesh.tets(u, k_outward_face[k][0]), mesh.tets(u, k_outward_face[k][1]),
+                              mesh.tets(u, k_outward_face[k][2]));
+  }
+  mesh.boundary_faces.resize(static_cast<Eigen::Index>(boundary.size()), 3);
+  for (std::size_t f = 0; f < boundary.size(); ++f)
+    mesh.boundary_faces.row(static_cast<Eigen::Index>(f)) = boundary[f].transpose();
+  mesh.tets = std::move(tets);
+  mesh.subdomains = std::move(subdomains);
+  return peeled;
+}
+
+int relabel_stranded_slivers(TetMesh& mesh, double bound_deg) {
+  if (mesh.subdomains.size() != mesh.tets.rows()) return 0;
+  const std::map<FaceKey, std::vector<int>> faces = tets_of_faces(mesh);
+  int relabelled = 0;
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    if (!is_sliver(mesh, t, bound_deg)) continue;
+    const int own = mesh.subdomains[t];
+    std::map<int, std::pair<int, double>> shared; // region -> faces, their area
+    for (int k = 0; k < 4; ++k) {
+      const FaceKey key = face_key(mesh, t, k);
+      const std::vector<int>& around = faces.at(key);
+      if (around.size() != 2) continue;
+      const int other = around[0] == static_cast<int>(t) ? around[1] : around[0];
+      auto& [number, area] = shared[mesh.subdomains[other]];
+      ++number;
+      area += face_area(mesh, key);
+    }
+    shared[own]; // present, with no faces when none is shared with its own region
+    int best = own;
+    for (const auto& [region, tally] : shared) {
+      if (region == own) continue;
+      const auto& best_tally = shared[best];
+      if (best == own || tally.first > best_tally.first ||
+          (tally.first == best_tally.first && tally.second > best_tally.second))
+        best = region;
+    }
+    if (best == own || shared[best].first <= shared[own].first) continue;
+    mesh.subdomains[t] = best;
+    ++relabelled;
+  }
+  return relabelled;
+}
+
+} // namespace phantasm
+
+namespace phantasm {
+
+int flip_slivers(TetMesh& mesh, double bound_deg, int passes) {
+  const bool labelled = mesh.subdomains.size() == mesh.tets.rows();
+  std::vector<Eigen::Vector4i> tets;
+  std::vector<int> region;
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    tets.push_back(mesh.tets.row(t).transpose());
+    region.push_back(labelled ? mesh.subdomains[t] : 0);
+  }
+  std::vector<char> alive(tets.size(), 1);
+  std::map<FaceKey, std::vector<int>> faces;
+  std::vector<std::vector<int>> star(static_cast<std::size_t>(mesh.vertices.rows()));
+  const auto key_of = [](const Eigen::Vector4i& tet, int opposite) {
+    FaceKey key{};
+    int n = 0;
+    for (int k = 0; k < 4; ++k)
+      if (k != opposite) key[static_cast<std::size_t>(n++)] = tet[k];
+    std::sort(key.begin(), key.end());
+    return key;
+  };
+  const auto enter = [&](int t) {
+    for (int k = 0; k < 4; ++k) {
+      faces[key_of(tets[static_cast<std::size_t>(t)], k)].push_back(t);
+      star[static_cast<std::size_t>(tets[static_cast<std::size_t>(t)][k])].push_back(t);
+    }
+  };
+  const auto leave = [&](int t) {
+    for (int k = 0; k < 4; ++k) {
+      const FaceKey key = key_of(tets[static_cast<std::size_t>(t)], k);
+      std::vector<int>& around = faces[key];
+      around.erase(std::find(around.begin(), around.end(), t));
+      if (around.empty()) faces.erase(key);
+      std::vector<int>& at = star[static_cast<std::size_t>(tets[static_cast<std::size_t>(t)][k])];
+      at.erase(std::find(at.begin(), at.end(), t));
+    }
+  };
+  for (std::size_t t = 0; t < tets.size(); ++t)
+    enter(static_cast<int>(t));
+  const auto volume = [&](const Eigen::Vector4i& tet) {
+    const std::array<Eigen::Vector3d, 4> p = corners(mesh, tet);
+    return signed_volume(p[0], p[1], p[2], p[3]);
+  };
+  const auto quality = [&](const Eigen::Vector4i& tet) {
+    const std::array<double, 6> angles = dihedral_angles_deg(corners(mesh, tet));
+    return *std::min_element(angles.begin(), angles.end());
+  };
+  const auto oriented = [&](Eigen::Vector4i tet) {
+    if (volume(tet) < 0.0) std::swap(tet[0], tet[1]);
+    return tet;
+  };
+  struct Flip {
+    std::vector<int> old;
+    std::vector<Eigen::Vector4i> made;
+    double gain = 0.0; ///< smallest angle of the new tets less that of the old, degrees
+  };
+  // A flip is kept when its tets fill the old ones' volume (so none overlaps another or leaves a
+  // gap), none is flat, and the smallest angle rises.
+  const auto judge = [&](Flip& flip) {
+    double before = 0.0, after = 0.0, old_quality = 180.0, new_quality = 180.0;
+    for (const int t : flip.old) {
+      before += volume(tets[static_cast<std::size_t>(t)]);
+      old_quality = std::min(old_quality, quality(tets[static_cast<std::size_t>(t)]));
+    }
+    for (const Eigen::Vector4i& tet : flip.made) {
+      const double v = volume(tet);
+      if (!(v > 1e-9 * std::abs(before))) return false;
+      after += v;
+      new_quality = std::min(new_quality, quality(tet));
+    }
+    if (!(std::abs(after - before) <= 1e-9 * std::abs(before))) return false;
+    flip.gain = new_quality - old_quality;
+    return flip.gain > 1e-9;
+  };
+  const auto face_flip = [&](int t, int k, Flip& flip) { // 2-3
+    const Eigen::Vector4i& tet = tets[static_cast<std::size_t>(t)];
+    const FaceKey key = key_of(tet, k);
+    const auto found = faces.find(key);
+    if (found == faces.end() || found->second.size() != 2) return false;
+    const int u = found->second[0] == t ? found->second[1] : found->second[0];
+    if (region[static_cast<std::size_t>(u)] != region[static_cast<std::size_t>(t)]) return false;
+    const int d = tet[k];
+    int e = -1;
+    for (int j = 0; j < 4; ++j)
+      if (std::find(key.begin(), key.end(), tets[static_cast<std::size_t>(u)][j]) == key.end())
+        e = tets[static_cast<std::size_t>(u)][j];
+    flip.old = {t, u};
+    flip.made.clear();
+    for (int i = 0; i < 3; ++i)
+      flip.made.push_back(oriented(Eigen::Vector4i(key[static_cast<std::size_t>(i)],
+                                                   key[static_cast<std::size_t>((i + 1) % 3)], d, e)));
+    return judge(flip);
+  };
+  // Edge removal: the n tets around an inner edge (a, b) (n from 3, the 3-2 flip, to 7) replaced
+  // by the 2(n - 2) tets joining a and b to a fan triangulation of the ring of their other
+  // vertices; the best of the n fans.
+  const auto edge_flip = [&](int t, int a, int b, Flip& flip) {
+    std::vector<int> ring;
+    for (const int u : star[static_cast<std::size_t>(a)])
+      if ((tets[static_cast<std::size_t>(u)].array() == b).any()) ring.push_back(u);
+    if (ring.size() < 3 || ring.size() > 7) return false;
+    std::map<int, std::vector<int>> holding; // ring vertex -> the ring's tets holding it
+    for (const int u : ring) {
+      if (region[static_cast<std::size_t>(u)] != region[static_cast<std::size_t>(t)]) return false;
+      for (int j = 0; j < 4; ++j) {
+        const int w = tets[static_cast<std::size_t>(u)][j];
+        if (w != a && w != b) holding[w].push_back(u);
+      }
+    }
+    // A closed ring: as many vertices as tets, each in two of them, each face around the edge
+    // shared by two tets (inside, not boundary).
+    if (holding.size() != ring.size()) return false;
+    for (const auto& [w, held] : holding) {
+      if (held.size() != 2) return false;
+      FaceKey key{a, b, w};
+      std::sort(key.begin(), key.end());
+      const auto found = faces.find(key);
+      if (found == faces.end() || found->second.size() != 2) return false;
+    }
+    // The ring's vertices in order around the edge.
+    std::vector<int> polygon{holding.begin()->first};
+    int through = holding.begin()->second[0];
+    while (polygon.size() < ring.size()) {
+      int next = -1;
+      for (int j = 0; j < 4; ++j) {
+        const int w = tets[static_cast<std::size_t>(through)][j];
+        if (w != a && w != b && w != polygon.back()) next = w;
+      }
+      const std::vector<int>& held = holding[next];
+      through = held[0] == through ? held[1] : held[0];
+      polygon.push_back(next);
+    }
+    const auto n = static_cast<int>(polygon.size());
+    bool found = false;
+    Flip trial;
+    trial.old = ring;
+    for (int apex = 0; apex < n; ++apex) {
+      trial.made.clear();
+      for (int j = 1; j + 1 < n; ++j) {
+        const int p = polygon[static_cast<std::size_t>(apex)],
+                  q = polygon[static_cast<std::size_t>((apex + j) % n)],
+                  r = polygon[static_cast<std::size_t>((apex + j + 1) % n)];
+        trial.made.push_back(oriented(Eigen::Vector4i(p, q, r, a)));
+        trial.made.push_back(oriented(Eigen::Vector4i(p, q, r, b)));
+      }
+      if (judge(trial) && (!found || trial.gain > flip.gain)) {
+        flip = trial;
+        found = true;
+      }
+      if (n == 3) break; // one triangle: every apex gives it
+    }
+    return found;
+  };
+  int flips = 0;
+  for (int pass = 0; pass < passes; ++pass) {
+    int flips_in_pass = 0;
+    for (std::size_t t = 0; t < tets.size(); ++t) {
+      if (!alive[t] || quality(tets[t]) >= bound_deg) continue;
+      Flip best, candidate;
+      for (int k = 0; k < 4; ++k)
+        if (face_flip(static_cast<int>(t), k, candidate) && candidate.gain > best.gain) best = candidate;
+      for (int i = 0; i < 4; ++i)
+        for (int j = i + 1; j < 4; ++j)
+          if (edge_flip(static_cast<int>(t), tets[t][i], tets[t][j], candidate) && candidate.gain > best.gain)
+            best = candidate;
+      if (best.made.empty()) continue;
+      const int kept_region = region[t];
+      for (const int u : best.old) {
+        leave(u);
+        alive[static_cast<std::size_t>(u)] = 0;
+      }
+      std::vector<int> slots = best.old; // reused first, in order; more are appended
+      for (std::size_t m = 0; m < best.made.size(); ++m) {
+        int slot;
+        if (m < slots.size()) {
+          slot = slots[m];
+        } else {
+          slot = static_cast<int>(tets.size());
+          tets.emplace_back();
+          region.push_back(kept_region);
+          alive.push_back(0);
+        }
+        tets[static_cast<std::size_t>(slot)] = best.made[m];
+        region[static_cast<std::size_t>(slot)] = kept_region;
+        alive[static_cast<std::size_t>(slot)] = 1;
+        enter(slot);
+      }
+      ++flips_in_pass;
+    }
+    flips += flips_in_pass;
+    if (flips_in_pass == 0) break;
+  }
+  if (flips == 0) return 0;
+  const auto count = static_cast<Eigen::Index>(std::count(alive.begin(), alive.end(), 1));
+  mesh.tets.resize(count, 4);
+  if (labelled) mesh.subdomains.resize(count);
+  Eigen::Index next = 0;
+  for (std::size_t t = 0; t < tets.size(); ++t) {
+    if (!alive[t]) continue;
+    mesh.tets.row(next) = tets[t].transpose();
+    if (labelled) mesh.subdomains[next] = region[t];
+    ++next;
+  }
+  return flips;
 }
 
 } // namespace phantasm

@@ -71,10 +71,21 @@ TetMesh mesh_implicit_solid(const ImplicitShape& shape, const TetMeshCriteria& c
 /// gets tets of its own. Sequential and repeatable like mesh_implicit_solid; refinement starts
 /// from points on every shape's surface (so that small inner shapes are found), which makes the
 /// result independent of the seed in practice. Mesh_3's perturbation and exudation remove slivers
-/// but cannot always where a layer is thinner than the tets: measure with min_dihedral_angle_deg.
+/// but cannot always where a layer is thinner than the tets: the slivers left are mended by
+/// moving vertices (improve_slivers), peeling flat tets off the boundary, relabelling lone tets
+/// and flipping (below), then moving vertices again; measure with min_dihedral_angle_deg.
 /// The boundary triangles are the outer surface's only.
+/// What mesh_nested_solid did about the slivers Mesh_3 left (sliver_bound_deg).
+struct SliverRepairs {
+  int vertex_moves = 0; ///< improve_slivers, both passes
+  int peeled = 0;       ///< peel_boundary_slivers
+  int relabelled = 0;   ///< relabel_stranded_slivers
+  int flips = 0;        ///< flip_slivers
+};
+
 /// @throws InputError when the mesher produces no cells
-TetMesh mesh_nested_solid(const NestedShapes& nested, const TetMeshCriteria& criteria, std::uint32_t seed);
+TetMesh mesh_nested_solid(const NestedShapes& nested, const TetMeshCriteria& criteria, std::uint32_t seed,
+                          SliverRepairs* repairs = nullptr);
 
 /// The triangles between tets of different subdomains (each once, oriented outward of the tet
 /// of the smaller subdomain index) of a mesh with `subdomains`.
@@ -87,12 +98,41 @@ Eigen::MatrixX3i subdomain_interface_faces(const TetMesh& mesh);
 /// stays positively oriented with its centroid in its own subdomain (`label`). A vertex inside
 /// one subdomain moves freely; a vertex on an interface (between two subdomains, or one and the
 /// outside, label -1) moves in the interface's tangent plane and is put back onto it by
-/// bisection of `label` along the normal; a vertex where three meet stays. Sequential, in vertex
+/// bisection of `label` along the normal; a vertex where three meet stays. Besides the fixed
+/// directions, each vertex tries the way straight off the face opposite it in each of its slivers
+/// (within the tangent plane on an interface). Sequential, in vertex
 /// order, up to `passes` passes: the same mesh gives the same result.
 /// @param label subdomain at a point (an index into the mesh's subdomains), -1 outside
 /// @return how many vertex moves were made
 int improve_slivers(TetMesh& mesh, const std::function<int(const Eigen::Vector3d&)>& label, double bound_deg,
                     int passes = 4);
+
+/// Removes the slivers (a dihedral angle below bound_deg) that lie on the boundary with two of
+/// their faces, as a mesher's exudation would: their other two faces become boundary. A sliver
+/// whose removal would leave the boundary non-manifold (the edge its two inner faces share is on
+/// the boundary already) stays. A mesh's slivers there are flat tets of a layer thinner than
+/// the tets (the CSF between skull and cortex): their volume is next to nothing. The boundary
+/// faces that remain keep their order; the new ones follow, oriented outward.
+/// @return how many tets were removed
+int peel_boundary_slivers(TetMesh& mesh, double bound_deg);
+
+/// Gives each sliver that shares more of its faces with another subdomain than with its own (a
+/// lone tet of one region wedged between others, all four faces interfaces) the subdomain it
+/// shares most faces with (then the larger face area, then the smaller index): a flat tet whose
+/// vertices all lie where regions meet cannot be mended by moving them, and its region is a
+/// matter of no volume. In tet order; the mesh's vertices and tets do not change.
+/// @return how many tets changed subdomain
+int relabel_stranded_slivers(TetMesh& mesh, double bound_deg);
+
+/// Replaces slivers (a dihedral angle below bound_deg) by flips inside one subdomain: two tets
+/// sharing a face become three around the edge joining their far vertices (2-3), or the n tets
+/// around an edge (3 to 7) become 2(n - 2) around a fan of the ring of their other vertices
+/// (edge removal; the 3-2 and 4-4 flips among them), when the new tets fill the same volume
+/// and raise the smallest dihedral angle of those they replace. Faces and edges on an interface
+/// or the boundary are never flipped, so interfaces and the boundary keep their triangles; no
+/// vertex moves. In tet order, up to `passes` passes: the same mesh gives the same result.
+/// @return how many flips were made
+int flip_slivers(TetMesh& mesh, double bound_deg, int passes = 4);
 
 /// Signed volume of tet t, mm^3 (positive for the orientation phantasm uses).
 double tet_volume(const TetMesh& mesh, Eigen::Index t);

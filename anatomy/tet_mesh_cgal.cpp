@@ -223,7 +223,8 @@ TetMesh mesh_implicit_solid(const ImplicitShape& shape, const TetMeshCriteria& c
   return to_tet_mesh(complex, false, c.cell_size_mm);
 }
 
-TetMesh mesh_nested_solid(const NestedShapes& nested, const TetMeshCriteria& c, std::uint32_t seed) {
+TetMesh mesh_nested_solid(const NestedShapes& nested, const TetMeshCriteria& c, std::uint32_t seed,
+                          SliverRepairs* repairs) {
   namespace p = CGAL::parameters;
   // Label 0 is outside; shape k is subdomain k + 1.
   std::function<int(const Point&)> label = [&nested](const Point& x) {
@@ -301,8 +302,24 @@ TetMesh mesh_nested_solid(const NestedShapes& nested, const TetMeshCriteria& c, 
   TetMesh mesh = to_tet_mesh(complex, true, c.cell_size_mm);
   // Slivers Mesh_3 leaves where its surface vertices are pinned (thin layers, interfaces): moved
   // along their interfaces by our own pass.
-  improve_slivers(
-      mesh, [&nested](const Eigen::Vector3d& x) { return nested.innermost(x); }, c.sliver_bound_deg);
+  const auto region_at = [&nested](const Eigen::Vector3d& x) { return nested.innermost(x); };
+  SliverRepairs done;
+  done.vertex_moves = improve_slivers(mesh, region_at, c.sliver_bound_deg);
+  // What moving vertices cannot mend: flat tets on the boundary of a layer thinner than the tets
+  // (peeled off), lone tets wedged between other regions (given the region around them) and flat
+  // tets inside one region (flipped away); the pass then runs again on the changed mesh.
+  // Each change can open a way for another: up to four rounds.
+  for (int round = 0; round < 4; ++round) {
+    const int peeled = peel_boundary_slivers(mesh, c.sliver_bound_deg);
+    const int relabelled = relabel_stranded_slivers(mesh, c.sliver_bound_deg);
+    const int flips = flip_slivers(mesh, c.sliver_bound_deg);
+    if (peeled + relabelled + flips == 0) break;
+    done.peeled += peeled;
+    done.relabelled += relabelled;
+    done.flips += flips;
+    done.vertex_moves += improve_slivers(mesh, region_at, c.sliver_bound_deg);
+  }
+  if (repairs) *repairs = done;
   return mesh;
 }
 

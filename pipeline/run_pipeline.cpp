@@ -61,11 +61,19 @@ AtlasLoader atlas_loader(StageReport& report, Reporter& reporter) {
   };
 }
 
+} // namespace
+
+std::map<std::string, ShapeData> read_scene_shape_files(const Scene& scene, StageReport& report,
+                                                        Reporter& reporter) {
+  return read_shape_files(scene.anatomy, atlas_loader(report, reporter), scene.grid.grid());
+}
+
+namespace {
+
 /// The anatomy stage: reads the scene's shape files and builds every organ; records fit errors.
 Phantom build_anatomy(const Scene& scene, const std::filesystem::path& cache, StageReport& report,
                       Reporter& reporter) {
-  const std::map<std::string, ShapeData> files =
-      read_shape_files(scene.anatomy, atlas_loader(report, reporter), scene.grid.grid());
+  const std::map<std::string, ShapeData> files = read_scene_shape_files(scene, report, reporter);
   Phantom phantom = build_phantom_cached(scene.anatomy, files, cache, report, reporter);
   for (const Organ& organ : phantom.organs) {
     if (!organ.surface) continue;

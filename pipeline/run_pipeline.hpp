@@ -4,11 +4,13 @@
 
 #include "core/progress.hpp"
 #include "core/stage_report.hpp"
+#include "io/shape_files.hpp"
 #include "pipeline/dataset_writer.hpp"
 #include "pipeline/simulation.hpp"
 #include "scene/scene.hpp"
 
 #include <filesystem>
+#include <map>
 #include <stdexcept>
 #include <vector>
 
@@ -36,6 +38,12 @@ public:
 
 /// Each stage's plan for a scene, in data-flow order (anatomy, sim, voxelize, mri).
 std::vector<StageReport> plan_stages(const Scene& scene);
+
+/// The files a scene's organs are made of (meshes, label volumes), by organ name, as a run reads
+/// them: atlas labels are derived once, and what was derived, from which inputs, with the
+/// sources to cite, goes to `report` and the reporter.
+std::map<std::string, ShapeData> read_scene_shape_files(const Scene& scene, StageReport& report,
+                                                        Reporter& reporter);
 
 /// The last stage simulate() runs.
 enum class SimulationStage { anatomy, deformation, voxelization, mri };

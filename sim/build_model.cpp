@@ -140,7 +140,9 @@ std::shared_ptr<const TetMesh> body_mesh(const DeformationSettings& deformation,
   progress_detail(organs[b].name + ": one tet mesh of it and the " + std::to_string(regions.size() - 1) +
                   " organs nested in it (CGAL Mesh_3, tet size " + format_number(phantom.tet_size_mm) +
                   " mm)");
-  auto mesh = std::make_shared<TetMesh>(mesh_nested_solid(nested, criteria, body_mesh_seed(phantom.seed, b)));
+  SliverRepairs repairs;
+  auto mesh = std::make_shared<TetMesh>(
+      mesh_nested_solid(nested, criteria, body_mesh_seed(phantom.seed, b), &repairs));
   organ_of_tet.clear();
   for (Eigen::Index t = 0; t < mesh->tets.rows(); ++t)
     organ_of_tet.push_back(regions[static_cast<std::size_t>(mesh->subdomains[t])]);
@@ -150,7 +152,11 @@ std::shared_ptr<const TetMesh> body_mesh(const DeformationSettings& deformation,
        << format_number(criteria.facet_distance_mm) << " mm, mean edge "
        << format_number(mean_edge_length(*mesh)) << " mm, min dihedral "
        << format_number(min_dihedral_angle_deg(*mesh)) << " deg, " << tets_with_dihedral_below(*mesh, 10.0)
-       << " tets under 10 deg; tissue interfaces are faces";
+       << " tets under 10 deg after mending those under " << format_number(criteria.sliver_bound_deg)
+       << " deg: " << repairs.vertex_moves << " vertex moves, " << repairs.peeled
+       << " flat tets peeled off the boundary, " << repairs.relabelled
+       << " lone tets given the region around them, " << repairs.flips
+       << " flips; tissue interfaces are faces";
   if (!merged.empty()) {
     line << "; meshed with the organ holding them, of the same material (anatomy.tet_interfaces: materials):";
     for (const std::string& name : merged)

@@ -15,6 +15,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <set>
 #include <vector>
 
 using namespace phantasm;
@@ -293,4 +294,278 @@ TEST(SliverRemoval, AVertexInsideOneSubdomainMovesFreelyAndStaysInIt) {
   EXPECT_LT(cube.mesh.vertices(free, 2), 0.0);
   for (Eigen::Index t = 0; t < cube.mesh.tets.rows(); ++t)
     EXPECT_GT(tet_volume(cube.mesh, t), 0.0);
+}
+
+namespace {
+
+using Face = std::array<int, 3>;
+
+Face sorted_face(int a, int b, int c) {
+  Face face{a, b, c};
+  std::sort(face.begin(), face.end());
+  return face;
+}
+
+/// The faces that belong to one tet only, as sorted triples.
+std::set<Face> faces_of_one_tet(const TetMesh& mesh) {
+  std::map<Face, int> count;
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t)
+    for (int k = 0; k < 4; ++k) {
+      int v[3], m = 0;
+      for (int j = 0; j < 4; ++j)
+        if (j != k) v[m++] = mesh.tets(t, j);
+      ++count[sorted_face(v[0], v[1], v[2])];
+    }
+  std::set<Face> once;
+  for (const auto& [face, n] : count)
+    if (n == 1) once.insert(face);
+  return once;
+}
+
+std::set<Face> boundary_face_set(const TetMesh& mesh) {
+  std::set<Face> faces;
+  for (Eigen::Index f = 0; f < mesh.boundary_faces.rows(); ++f)
+    faces.insert(
+        sorted_face(mesh.boundary_faces(f, 0), mesh.boundary_faces(f, 1), mesh.boundary_faces(f, 2)));
+  return faces;
+}
+
+std::set<Face> interface_face_set(const TetMesh& mesh) {
+  const Eigen::MatrixX3i faces = subdomain_interface_faces(mesh);
+  std::set<Face> set;
+  for (Eigen::Index f = 0; f < faces.rows(); ++f)
+    set.insert(sorted_face(faces(f, 0), faces(f, 1), faces(f, 2)));
+  return set;
+}
+
+double total_volume(const TetMesh& mesh) {
+  double volume = 0.0;
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t)
+    volume += tet_volume(mesh, t);
+  return volume;
+}
+
+/// The volume the boundary faces enclose (divergence theorem): the tets' volume when they are a
+/// closed surface oriented outward.
+double enclosed_volume(const TetMesh& mesh) {
+  double volume = 0.0;
+  for (Eigen::Index f = 0; f < mesh.boundary_faces.rows(); ++f) {
+    const Eigen::Vector3d a = mesh.vertices.row(mesh.boundary_faces(f, 0));
+    const Eigen::Vector3d b = mesh.vertices.row(mesh.boundary_faces(f, 1));
+    const Eigen::Vector3d c = mesh.vertices.row(mesh.boundary_faces(f, 2));
+    volume += a.dot(b.cross(c)) / 6.0;
+  }
+  return volume;
+}
+
+/// Tets from rows of vertex indices, each turned positive.
+TetMesh mesh_of(const std::vector<Eigen::Vector3d>& points, const std::vector<Eigen::Vector4i>& tets,
+                const std::vector<int>& subdomains) {
+  TetMesh mesh;
+  mesh.vertices.resize(static_cast<Eigen::Index>(points.size()), 3);
+  for (std::size_t v = 0; v < points.size(); ++v)
+    mesh.vertices.row(static_cast<Eigen::Index>(v)) = points[v].transpose();
+  mesh.tets.resize(static_cast<Eigen::Index>(tets.size()), 4);
+  mesh.subdomains.resize(static_cast<Eigen::Index>(tets.size()));
+  for (std::size_t t = 0; t < tets.size(); ++t) {
+    const auto row = static_cast<Eigen::Index>(t);
+    mesh.tets.row(row) = tets[t].transpose();
+    if (tet_volume(mesh, row) < 0.0) std::swap(mesh.tets(row, 0), mesh.tets(row, 1));
+    mesh.subdomains[row] = subdomains[t];
+  }
+  // Boundary faces, outward: the faces of one tet, oriented away from its fourth vertex.
+  const std::set<Face> once = faces_of_one_tet(mesh);
+  std::vector<Eigen::Vector3i> boundary;
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t)
+    for (int k = 0; k < 4; ++k) {
+      int v[3], m = 0;
+      for (int j = 0; j < 4; ++j)
+        if (j != k) v[m++] = mesh.tets(t, j);
+      if (!once.count(sorted_face(v[0], v[1], v[2]))) continue;
+      const Eigen::Vector3d a = mesh.vertices.row(v[0]), b = mesh.vertices.row(v[1]),
+                            c = mesh.vertices.row(v[2]);
+      const Eigen::Vector3d apex = mesh.vertices.row(mesh.tets(t, k));
+      if ((b - a).cross(c - a).dot(apex - a) > 0.0) std::swap(v[1], v[2]);
+      boundary.emplace_back(v[0], v[1], v[2]);
+    }
+  mesh.boundary_faces.resize(static_cast<Eigen::Index>(boundary.size()), 3);
+  for (std::size_t f = 0; f < boundary.size(); ++f)
+    mesh.boundary_faces.row(static_cast<Eigen::Index>(f)) = boundary[f].transpose();
+  return mesh;
+}
+
+/// An equilateral triangle of unit circumradius in the plane z = 0, and two apexes on the line
+/// through `foot` (a point of that plane) at z = -height and +height.
+std::vector<Eigen::Vector3d> triangle_and_apexes(const Eigen::Vector3d& foot, double height) {
+  return {Eigen::Vector3d(1.0, 0.0, 0.0), Eigen::Vector3d(-0.5, std::sqrt(3.0) / 2.0, 0.0),
+          Eigen::Vector3d(-0.5, -std::sqrt(3.0) / 2.0, 0.0), foot - height * Eigen::Vector3d::UnitZ(),
+          foot + height * Eigen::Vector3d::UnitZ()};
+}
+
+} // namespace
+
+TEST(SliverRepair, AFlatTetOnTheBoundaryIsPeeledOffAndTheBoundaryStaysClosed) {
+  TetMesh cube = structured_box(Eigen::Vector3d::Constant(4.0), Eigen::Vector3i::Constant(4),
+                                Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
+  cube.subdomains = Eigen::VectorXi::Zero(cube.tets.rows());
+  // Two boundary faces on the top (z = 2) sharing an edge (a, b) inside the top face: a and b are
+  // lowered by 0.05 mm, and the valley above them filled by the flat tet (a, b, c, d).
+  int a = -1, b = -1, c = -1, d = -1;
+  const auto on_top_inside = [&](int v) {
+    return std::abs(cube.vertices(v, 2) - 2.0) < 1e-9 &&
+           cube.vertices.row(v).head<2>().cwiseAbs().maxCoeff() < 1.9;
+  };
+  for (Eigen::Index f = 0; f < cube.boundary_faces.rows() && a < 0; ++f)
+    for (Eigen::Index g = f + 1; g < cube.boundary_faces.rows() && a < 0; ++g) {
+      std::vector<int> shared, other;
+      for (int i = 0; i < 3; ++i) {
+        const int v = cube.boundary_faces(f, i);
+        if ((cube.boundary_faces.row(g).array() == v).any())
+          shared.push_back(v);
+        else
+          other.push_back(v);
+      }
+      if (shared.size() != 2 || !on_top_inside(shared[0]) || !on_top_inside(shared[1])) continue;
+      for (int i = 0; i < 3; ++i)
+        if (!(cube.boundary_faces.row(f).array() == cube.boundary_faces(g, i)).any())
+          d = cube.boundary_faces(g, i);
+      a = shared[0];
+      b = shared[1];
+      c = other[0];
+    }
+  ASSERT_GE(a, 0);
+  cube.vertices(a, 2) -= 0.05;
+  cube.vertices(b, 2) -= 0.05;
+  const TetMesh before = cube;
+  TetMesh mesh;
+  {
+    // The cube with the flat tet added last.
+    std::vector<Eigen::Vector3d> points;
+    for (Eigen::Index v = 0; v < cube.vertices.rows(); ++v)
+      points.push_back(cube.vertices.row(v).transpose());
+    std::vector<Eigen::Vector4i> tets;
+    for (Eigen::Index t = 0; t < cube.tets.rows(); ++t)
+      tets.push_back(cube.tets.row(t).transpose());
+    tets.emplace_back(a, b, c, d);
+    mesh = mesh_of(points, tets, std::vector<int>(tets.size(), 0));
+  }
+  const Eigen::Index flat = mesh.tets.rows() - 1;
+  ASSERT_GT(tet_volume(mesh, flat), 0.0);
+  ASSERT_LT(min_dihedral_angle_deg(mesh), 10.0);
+  EXPECT_NEAR(enclosed_volume(mesh), total_volume(mesh), 1e-9);
+
+  EXPECT_EQ(peel_boundary_slivers(mesh, 10.0), 1);
+  EXPECT_EQ(mesh.tets, before.tets); // the cube's tets, in their order
+  EXPECT_EQ(mesh.subdomains.size(), before.tets.rows());
+  EXPECT_EQ(boundary_face_set(mesh), boundary_face_set(before));
+  EXPECT_EQ(boundary_face_set(mesh), faces_of_one_tet(mesh));
+  EXPECT_NEAR(enclosed_volume(mesh), total_volume(mesh), 1e-9); // closed, oriented outward
+  EXPECT_EQ(peel_boundary_slivers(mesh, 10.0), 0);              // nothing flat is left there
+}
+
+TEST(SliverRepair, AFlatTetWhoseRemovalWouldPinchTheBoundaryStays) {
+  // The flat tet (0, 1, 2, 3) (apex 3 0.05 mm under the triangle) has two boundary faces, (0, 1, 2)
+  // and (0, 1, 3); its inner faces (0, 2, 3) and (1, 2, 3) lie on the tets (0, 2, 3, 5) and
+  // (1, 2, 3, 6), whose faces (2, 3, 5) and (2, 3, 6) are boundary: peeling it would leave four
+  // boundary faces at the edge (2, 3).
+  std::vector<Eigen::Vector3d> points = triangle_and_apexes(Eigen::Vector3d::Zero(), 0.05);
+  points.emplace_back(0.0, -3.0, -0.5); // 5, beyond the side (0, 2)
+  points.emplace_back(-3.0, 0.0, -0.5); // 6, beyond the side (1, 2)
+  const std::vector<Eigen::Vector4i> open = {Eigen::Vector4i(0, 1, 2, 3), Eigen::Vector4i(0, 2, 3, 5),
+                                             Eigen::Vector4i(1, 2, 3, 6)};
+  TetMesh mesh = mesh_of(points, open, {0, 0, 0});
+  ASSERT_LT(min_dihedral_angle_deg(mesh), 10.0);
+  EXPECT_EQ(peel_boundary_slivers(mesh, 10.0), 0);
+  EXPECT_EQ(mesh.tets.rows(), 3);
+  // With the tet (2, 3, 5, 6) closing the ring around the edge (2, 3), the edge is inside and
+  // the flat tet comes off.
+  std::vector<Eigen::Vector4i> closed = open;
+  closed.emplace_back(2, 3, 5, 6);
+  TetMesh ring = mesh_of(points, closed, {0, 0, 0, 0});
+  for (Eigen::Index t = 0; t < ring.tets.rows(); ++t)
+    ASSERT_GT(tet_volume(ring, t), 0.0) << t;
+  ASSERT_NEAR(enclosed_volume(ring), total_volume(ring), 1e-9);
+  EXPECT_EQ(peel_boundary_slivers(ring, 10.0), 1);
+  EXPECT_EQ(ring.tets.rows(), 3);
+  EXPECT_EQ(boundary_face_set(ring), faces_of_one_tet(ring));
+  EXPECT_NEAR(enclosed_volume(ring), total_volume(ring), 1e-9);
+}
+
+TEST(SliverRepair, ALoneFlatTetBetweenAnotherRegionsTetsTakesTheirRegion) {
+  // The flat tet (0, 1, 2, 3) (apex 3 0.05 mm under the triangle) in region 0, with a region-1 tet
+  // on each of its four faces: above the triangle, and beyond each of its three sides.
+  std::vector<Eigen::Vector3d> points = triangle_and_apexes(Eigen::Vector3d::Zero(), 0.05);
+  points.emplace_back(0.0, -3.0, -0.5); // 5, beyond the side (0, 2)
+  points.emplace_back(-3.0, 0.0, -0.5); // 6, beyond the side (1, 2)
+  points.emplace_back(2.0, 2.5, -0.5);  // 7, beyond the side (0, 1)
+  TetMesh mesh =
+      mesh_of(points,
+              {Eigen::Vector4i(0, 1, 2, 3), Eigen::Vector4i(0, 1, 2, 4), Eigen::Vector4i(0, 2, 3, 5),
+               Eigen::Vector4i(1, 2, 3, 6), Eigen::Vector4i(0, 1, 3, 7)},
+              {0, 1, 1, 1, 1});
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t)
+    ASSERT_GT(tet_volume(mesh, t), 0.0) << t;
+  const std::array<double, 6> angles = tet_dihedral_angles_deg(mesh, 0);
+  ASSERT_LT(*std::min_element(angles.begin(), angles.end()), 10.0);
+  const TetMesh before = mesh;
+  EXPECT_EQ(relabel_stranded_slivers(mesh, 10.0), 1);
+  EXPECT_EQ(mesh.subdomains[0], 1);
+  EXPECT_EQ(mesh.tets, before.tets);
+  EXPECT_EQ(mesh.vertices, before.vertices);
+  // A flat tet that shares as many faces with its own region as with another keeps its region.
+  TetMesh half = before;
+  half.subdomains << 0, 1, 0, 0, 1;
+  relabel_stranded_slivers(half, 10.0); // (the outer tets, flat too, may change: one inner face each)
+  EXPECT_EQ(half.subdomains[0], 0);
+}
+
+TEST(SliverRepair, TwoFlatTetsSharingAFaceBecomeThreeAroundTheEdgeThroughIt) {
+  // Apexes 0.05 mm off the triangle: tets (0, 1, 2, 3) and (0, 1, 2, 4) of 5.7 degrees; the three
+  // around the edge (3, 4) have 11.4.
+  TetMesh mesh = mesh_of(triangle_and_apexes(Eigen::Vector3d::Zero(), 0.05),
+                         {Eigen::Vector4i(0, 1, 2, 3), Eigen::Vector4i(0, 1, 2, 4)}, {0, 0});
+  ASSERT_LT(min_dihedral_angle_deg(mesh), 6.0);
+  const TetMesh before = mesh;
+  TetMesh again = mesh;
+  EXPECT_EQ(flip_slivers(mesh, 10.0), 1);
+  ASSERT_EQ(mesh.tets.rows(), 3);
+  EXPECT_GT(min_dihedral_angle_deg(mesh), 11.0);
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t)
+    EXPECT_TRUE((mesh.tets.row(t).array() == 3).any() && (mesh.tets.row(t).array() == 4).any());
+  EXPECT_NEAR(total_volume(mesh), total_volume(before), 1e-12);
+  EXPECT_EQ(faces_of_one_tet(mesh), faces_of_one_tet(before)); // the hull keeps its triangles
+  EXPECT_EQ(boundary_face_set(mesh), boundary_face_set(before));
+  flip_slivers(again, 10.0);
+  EXPECT_EQ(again.tets, mesh.tets); // the same mesh gives the same result
+}
+
+TEST(SliverRepair, ThreeTetsAroundAnEdgeNearlyInAFaceBecomeTwo) {
+  // The edge (3, 4) crosses the triangle near its side (0, 1): the tet (0, 1, 3, 4) is flat (4.4
+  // degrees); the two tets on the triangle have 54.
+  const Eigen::Vector3d foot = 0.9 * Eigen::Vector3d(0.25, std::sqrt(3.0) / 4.0, 0.0);
+  const std::vector<Eigen::Vector3d> points = triangle_and_apexes(foot, 1.0);
+  const std::vector<Eigen::Vector4i> ring = {Eigen::Vector4i(0, 1, 3, 4), Eigen::Vector4i(1, 2, 3, 4),
+                                             Eigen::Vector4i(2, 0, 3, 4)};
+  TetMesh mesh = mesh_of(points, ring, {0, 0, 0});
+  ASSERT_LT(min_dihedral_angle_deg(mesh), 5.0);
+  const TetMesh before = mesh;
+  EXPECT_GE(flip_slivers(mesh, 10.0), 1);
+  EXPECT_EQ(mesh.tets.rows(), 2);
+  EXPECT_GT(min_dihedral_angle_deg(mesh), 50.0);
+  EXPECT_NEAR(total_volume(mesh), total_volume(before), 1e-12);
+  EXPECT_EQ(faces_of_one_tet(mesh), faces_of_one_tet(before));
+
+  // With one of the three in another region, the faces between the regions stay faces: no flip
+  // may cross them, and each region keeps its volume.
+  TetMesh mixed = mesh_of(points, ring, {0, 0, 1});
+  const TetMesh mixed_before = mixed;
+  flip_slivers(mixed, 10.0);
+  EXPECT_EQ(interface_face_set(mixed), interface_face_set(mixed_before));
+  EXPECT_EQ(faces_of_one_tet(mixed), faces_of_one_tet(mixed_before));
+  double region_one = 0.0, region_one_before = 0.0;
+  for (Eigen::Index t = 0; t < mixed.tets.rows(); ++t)
+    if (mixed.subdomains[t] == 1) region_one += tet_volume(mixed, t);
+  for (Eigen::Index t = 0; t < mixed_before.tets.rows(); ++t)
+    if (mixed_before.subdomains[t] == 1) region_one_before += tet_volume(mixed_before, t);
+  EXPECT_NEAR(region_one, region_one_before, 1e-12);
 }
