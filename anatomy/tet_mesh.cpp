@@ -11,6 +11,13 @@
 #include <utility>
 
 namespace phantasm {
+namespace {
+
+/// A tet with a dihedral angle under this is counted as a sliver (the log's "tets under 10 deg"):
+/// the repairs may raise the smallest angle of the tets they change, but not leave more slivers.
+constexpr double k_sliver_deg = 10.0;
+
+} // namespace
 
 TetMeshCriteria criteria_for_boundary_size(double surface_area_mm2, int boundary_triangles) {
   // An equilateral triangle of edge s has area (sqrt(3)/4) s^2 and circumradius s / sqrt(3).
@@ -355,12 +362,15 @@ bool centroid_in_subdomain(const TetMesh& mesh, int t,
 
 /// The smallest dihedral angle of the tets in `star` with vertex v at x, degrees; -1 when one of
 /// them would not be positively oriented, or one whose centroid lies in its subdomain
-/// (`in_subdomain`, per tet of the star) would leave it.
+/// (`in_subdomain`, per tet of the star) would leave it. `below`: how many of them have an angle
+/// under bound_deg.
 double star_quality(TetMesh& mesh, const std::vector<int>& star, const std::vector<bool>& in_subdomain, int v,
-                    const Eigen::Vector3d& x, const std::function<int(const Eigen::Vector3d&)>& label) {
+                    const Eigen::Vector3d& x, const std::function<int(const Eigen::Vector3d&)>& label,
+                    double bound_deg, int& below) {
   const Eigen::Vector3d saved = mesh.vertices.row(v).transpose();
   mesh.vertices.row(v) = x.transpose();
   double smallest = std::numeric_limits<double>::infinity();
+  below = 0;
   for (std::size_t i = 0; i < star.size(); ++i) {
     const int t = star[i];
     Eigen::Vector3d p[4];
@@ -371,8 +381,10 @@ double star_quality(TetMesh& mesh, const std::vector<int>& star, const std::vect
       smallest = -1.0;
       break;
     }
-    for (const double angle : tet_dihedral_angles_deg(mesh, t))
-      smallest = std::min(smallest, angle);
+    const std::array<double, 6> angles = tet_dihedral_angles_deg(mesh, t);
+    const double tet_smallest = *std::min_element(angles.begin(), angles.end());
+    smallest = std::min(smallest, tet_smallest);
+    below += tet_smallest < bound_deg;
   }
   mesh.vertices.row(v) = saved.transpose();
   return smallest;
@@ -423,13 +435,6 @@ int improve_slivers(TetMesh& mesh, const std::function<int(const Eigen::Vector3d
       normal[static_cast<std::size_t>(v)] += n;
     }
   }
-  const auto quality = [&mesh](const std::vector<int>& tets) {
-    double smallest = std::numeric_limits<double>::infinity();
-    for (const int t : tets)
-      for (const double angle : tet_dihedral_angles_deg(mesh, t))
-        smallest = std::min(smallest, angle);
-    return smallest;
-  };
   int moved = 0;
   for (int pass = 0; pass < passes; ++pass) {
     std::set<int> vertices; // of the slivers, in index order
@@ -490,7 +495,9 @@ int improve_slivers(TetMesh& mesh, const std::function<int(const Eigen::Vector3d
       std::vector<bool> in_subdomain;
       for (const int t : star[vi])
         in_subdomain.push_back(centroid_in_subdomain(mesh, t, label));
-      double best = quality(star[vi]);
+      int slivers_at_x = 0, slivers = 0;
+      double best = star_quality(mesh, star[vi], in_subdomain, v, x, label, std::min(bound_deg, k_sliver_deg),
+                                 slivers_at_x);
       Eigen::Vector3d best_x = x;
       for (const double step : {0.05, 0.1, 0.2, 0.35}) {
         for (const Eigen::Vector3d& d : directions) {
@@ -505,8 +512,10 @@ int improve_slivers(TetMesh& mesh, const std::function<int(const Eigen::Vector3d
             }
             candidate += 0.5 * (lo + hi) * n;
           }
-          const double q = star_quality(mesh, star[vi], in_subdomain, v, candidate, label);
-          if (q > best + 1e-9) {
+          // A move may not leave more slivers around the vertex than it found, only better ones.
+          const double q = star_quality(mesh, star[vi], in_subdomain, v, candidate, label,
+                                        std::min(bound_deg, k_sliver_deg), slivers);
+          if (q > best + 1e-9 && slivers <= slivers_at_x) {
             best = q;
             best_x = candidate;
           }
@@ -738,17 +747,22 @@ int flip_slivers(TetMesh& mesh, double bound_deg, int passes) {
   // gap), none is flat, and the smallest angle rises.
   const auto judge = [&](Flip& flip) {
     double before = 0.0, after = 0.0, old_quality = 180.0, new_quality = 180.0;
+    int old_slivers = 0, new_slivers = 0;
     for (const int t : flip.old) {
       before += volume(tets[static_cast<std::size_t>(t)]);
-      old_quality = std::min(old_quality, quality(tets[static_cast<std::size_t>(t)]));
+      const double q = quality(tets[static_cast<std::size_t>(t)]);
+      old_quality = std::min(old_quality, q);
+      old_slivers += q < k_sliver_deg;
     }
     for (const Eigen::Vector4i& tet : flip.made) {
       const double v = volume(tet);
       if (!(v > 1e-9 * std::abs(before))) return false;
       after += v;
-      new_quality = std::min(new_quality, quality(tet));
+      const double q = quality(tet);
+      new_quality = std::min(new_quality, q);
+      new_slivers += q < k_sliver_deg;
     }
-    if (!(std::abs(after - before) <= 1e-9 * std::abs(before))) return false;
+    if (!(std::abs(after - before) <= 1e-9 * std::abs(before)) || new_slivers > old_slivers) return false;
     flip.gain = new_quality - old_quality;
     return flip.gain > 1e-9;
   };

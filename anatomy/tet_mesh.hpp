@@ -95,7 +95,8 @@ Eigen::MatrixX3i subdomain_interface_faces(const TetMesh& mesh);
 /// subdomains by moving their vertices, the way a mesher's sliver perturbation does: each vertex
 /// of a sliver tries steps of 5-35 % of its mean edge length in fixed directions and keeps the
 /// position that most raises the smallest dihedral angle of its tets, provided every one of them
-/// stays positively oriented with its centroid in its own subdomain (`label`). A vertex inside
+/// stays positively oriented with its centroid in its own subdomain (`label`) and no more of
+/// them than before have an angle under 10 degrees (a better sliver, not more of them). A vertex inside
 /// one subdomain moves freely; a vertex on an interface (between two subdomains, or one and the
 /// outside, label -1) moves in the interface's tangent plane and is put back onto it by
 /// bisection of `label` along the normal; a vertex where three meet stays. Besides the fixed
@@ -127,10 +128,10 @@ int relabel_stranded_slivers(TetMesh& mesh, double bound_deg);
 /// Replaces slivers (a dihedral angle below bound_deg) by flips inside one subdomain: two tets
 /// sharing a face become three around the edge joining their far vertices (2-3), or the n tets
 /// around an edge (3 to 7) become 2(n - 2) around a fan of the ring of their other vertices
-/// (edge removal; the 3-2 and 4-4 flips among them), when the new tets fill the same volume
-/// and raise the smallest dihedral angle of those they replace. Faces and edges on an interface
-/// or the boundary are never flipped, so interfaces and the boundary keep their triangles; no
-/// vertex moves. In tet order, up to `passes` passes: the same mesh gives the same result.
+/// (edge removal; the 3-2 and 4-4 flips among them), when the new tets fill the same volume,
+/// raise the smallest dihedral angle of those they replace and count no more under 10 degrees. Faces and
+/// edges on an interface or the boundary are never flipped, so interfaces and the boundary keep their
+/// triangles; no vertex moves. In tet order, up to `passes` passes: the same mesh gives the same result.
 /// @return how many flips were made
 int flip_slivers(TetMesh& mesh, double bound_deg, int passes = 4);
 
