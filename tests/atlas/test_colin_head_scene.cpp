@@ -108,6 +108,18 @@ TEST(ColinHeadScene, CoarseRunLabelsEveryOrganShiftsTheBrainAndMeetsItsCostEstim
   EXPECT_NE(provenance.find("J Comput Assist Tomogr 1998; 22:324"), std::string::npos);
   EXPECT_NE(provenance.find("NeuroImage 2002; 15:273"), std::string::npos);
   EXPECT_NE(provenance.find("colin27 labels derived"), std::string::npos);
+  // The simulated body, one conforming mesh of the real labels, has no sliver left: its log line
+  // gives the smallest dihedral angle and the tets under 10 degrees after the repairs.
+  const std::string log = read_file(derivatives / "sub-01" / "log.txt");
+  std::smatch quality;
+  ASSERT_TRUE(std::regex_search(
+      log, quality,
+      std::regex(R"(csf: one tet mesh[^\n]*min dihedral ([0-9.]+) deg, (\d+) tets under 10 deg)")))
+      << log;
+  std::printf("body: min dihedral %s deg, %s tets under 10 deg\n", quality[1].str().c_str(),
+              quality[2].str().c_str());
+  EXPECT_EQ(quality[2].str(), "0");
+  EXPECT_GE(std::stod(quality[1].str()), 10.0);
 }
 
 // The intracranial body (csf and the organs nested in it, one conforming tet mesh meshed from the
@@ -125,7 +137,7 @@ TEST(ColinHeadScene, TheSimulatedBodyIsTheSameInEveryProcess) {
   const fs::path cache = folder / "anatomy-cache";
   const auto first = run_command({BODY_FINGERPRINT, scene.string(), cache.string()});
   ASSERT_EQ(first.exit_code, 0) << first.err;
-  // "csf <vertices> <tets> <sha256>": one body, the coarse copy's 8 mm mesh of about 36 000 tets.
+  // "csf <vertices> <tets> <sha256>": one body, the coarse copy's 7 mm mesh of about 41 000 tets.
   std::istringstream line(first.out);
   std::string organ, hash;
   long vertices = 0, tets = 0;
