@@ -4,6 +4,11 @@
 
 namespace phantasm {
 
+std::string format_byte(unsigned char byte) {
+  static const char* digits = "0123456789abcdef";
+  return std::string("byte 0x") + digits[byte >> 4] + digits[byte & 15];
+}
+
 std::string format_number(double value) {
   std::ostringstream text;
   text << value;

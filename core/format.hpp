@@ -14,4 +14,7 @@ std::string format_vector(const Eigen::Vector3d& v);
 /// A number with up to 6 significant digits ("0.0001", "1e+10", "3").
 std::string format_number(double value);
 
+/// A byte as messages name one that cannot stand in a text: "byte 0x1f".
+std::string format_byte(unsigned char byte);
+
 } // namespace phantasm

@@ -1,6 +1,7 @@
 #include "io/json_file.hpp"
 
 #include "core/error.hpp"
+#include "core/format.hpp"
 #include "io/atomic_file.hpp"
 
 #include <algorithm>
@@ -52,8 +53,7 @@ nlohmann::json parse_json_text(const std::string& text, const std::filesystem::p
       if (byte >= 0x20 && byte < 0x7f) {
         shown = "'" + std::string(1, text[at]) + "'";
       } else {
-        static const char* digits = "0123456789abcdef";
-        shown = std::string("byte 0x") + digits[byte >> 4] + digits[byte & 15];
+        shown = format_byte(byte);
       }
       found = shown + (byte >= 0x80 ? ", which is not UTF-8 text" : ", which cannot stand there in JSON");
     }

@@ -1,5 +1,7 @@
 #include "scene/yaml_documents.hpp"
 
+#include "core/format.hpp"
+
 #include <yaml-cpp/depthguard.h>
 #include <yaml-cpp/eventhandler.h>
 
@@ -40,9 +42,7 @@ void reject_bytes_yaml_does_not_hold(const std::string& text) {
   YAML::Mark at;
   at.pos = at.line = at.column = 0;
   const auto fail = [&](unsigned char byte, const char* what) {
-    static const char* digits = "0123456789abcdef";
-    throw YAML::ParserException(at,
-                                std::string("byte 0x") + digits[byte >> 4] + digits[byte & 15] + ", " + what);
+    throw YAML::ParserException(at, format_byte(byte) + ", " + what);
   };
   for (std::size_t b = 0; b < text.size();) {
     const unsigned char byte = byte_at(b);
@@ -82,8 +82,9 @@ void reject_bytes_yaml_does_not_hold(const std::string& text) {
   }
 }
 
-/// load_yaml_documents without its checks of the text and of the nesting.
-std::vector<YAML::Node> load_checked_documents(const std::string& text) {
+/// Every document of the text, parsed (a document that starts where the one before it did is an
+/// error); load_yaml_documents checks the bytes before and the nesting's depth around it.
+std::vector<YAML::Node> parse_documents(const std::string& text) {
   std::istringstream stream(text);
   YAML::Parser parser(stream);
   DocumentStarts documents;
@@ -107,7 +108,7 @@ std::vector<YAML::Node> load_checked_documents(const std::string& text) {
 std::vector<YAML::Node> load_yaml_documents(const std::string& text) {
   reject_bytes_yaml_does_not_hold(text);
   try {
-    return load_checked_documents(text);
+    return parse_documents(text);
   } catch (const YAML::DeepRecursion& error) {
     throw YAML::ParserException(error.mark, "lists or mappings nested " + std::to_string(error.depth()) +
                                                 " levels deep or more (scenes and sweeps nest a few)");
