@@ -34,7 +34,9 @@ struct Variation {
 
 class SweepReader {
 public:
-  explicit SweepReader(std::filesystem::path file) : m_file(std::move(file)) {}
+  /// @param text the file's text when the caller read it already (a pipe can be read once)
+  explicit SweepReader(std::filesystem::path file, const std::string* text = nullptr)
+      : m_file(std::move(file)), m_text(text) {}
 
   [[noreturn]] void fail(const YAML::Mark& mark, const std::string& key, const std::string& message) const {
     std::string where = m_file.string();
@@ -275,7 +277,9 @@ public:
   Sweep read_checked(SweepDepth depth) {
     std::vector<YAML::Node> documents;
     std::string sweep_text;
-    if (const std::string found = read_scene_text(m_file, sweep_text); !found.empty())
+    if (m_text)
+      sweep_text = *m_text;
+    else if (const std::string found = read_scene_text(m_file, sweep_text); !found.empty())
       throw InputError(m_file.string() + ": expected a sweep file, " + found);
     try {
       documents = load_yaml_documents(sweep_text);
@@ -522,6 +526,7 @@ private:
   static constexpr std::size_t k_checked_subjects = 1000;
 
   std::filesystem::path m_file;
+  const std::string* m_text = nullptr;
   std::filesystem::path m_base_scene;
   std::string m_base_text;
   std::vector<Variation> m_variations;
@@ -532,9 +537,7 @@ private:
 
 } // namespace
 
-bool is_sweep_file(const std::filesystem::path& file) {
-  std::string text;
-  if (!read_scene_text(file, text).empty()) return false; // load_scene says why
+bool is_sweep_text(const std::string& text) {
   std::istringstream in(text);
   std::string line;
   while (std::getline(in, line))
@@ -542,8 +545,18 @@ bool is_sweep_file(const std::filesystem::path& file) {
   return false;
 }
 
+bool is_sweep_file(const std::filesystem::path& file) {
+  std::string text;
+  if (!read_scene_text(file, text).empty()) return false; // load_scene says why
+  return is_sweep_text(text);
+}
+
 Sweep load_sweep(const std::filesystem::path& file, SweepDepth depth) {
   return SweepReader(file).read(depth);
+}
+
+Sweep parse_sweep(const std::string& text, const std::filesystem::path& file, SweepDepth depth) {
+  return SweepReader(file, &text).read(depth);
 }
 
 std::string scene_text_with_value(const std::string& scene_text, const std::string& key,

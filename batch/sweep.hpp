@@ -39,6 +39,9 @@ enum class SweepDepth {
           ///< of each list at least once, each checked (validate)
 };
 
+/// True when the text is a sweep's (a line starting "phantasm_sweep:").
+bool is_sweep_text(const std::string& text);
+
 /// True when a YAML file is a sweep (its text has a top-level `phantasm_sweep:` key).
 bool is_sweep_file(const std::filesystem::path& file);
 
@@ -46,6 +49,11 @@ bool is_sweep_file(const std::filesystem::path& file);
 /// validate` would). The subject count is bounded (10^6) before any subject is made.
 /// @throws InputError naming the sweep file, line and key, or the subject and its scene problem
 Sweep load_sweep(const std::filesystem::path& file, SweepDepth depth = SweepDepth::full);
+
+/// load_sweep of a sweep file's text, read by the caller; `file` names it in messages and
+/// anchors its relative paths.
+Sweep parse_sweep(const std::string& text, const std::filesystem::path& file,
+                  SweepDepth depth = SweepDepth::full);
 
 /// The i-th of N disjoint slices of a sweep ("2/3"): subjects whose index modulo N is i - 1.
 struct Shard {

@@ -19,9 +19,12 @@ void add_validate_command(CLI::App& app, std::function<int()>& action) {
     action = [files] {
       int exit_code = exit_ok;
       for (const auto& file : *files) {
-        if (is_sweep_file(file)) {
+        // Read once: a pipe (`validate <(...)`) gives its text to one reader only.
+        std::string text;
+        const bool readable = read_scene_text(file, text).empty();
+        if (readable && is_sweep_text(text)) {
           try {
-            const Sweep sweep = load_sweep(file, SweepDepth::sample);
+            const Sweep sweep = parse_sweep(text, file, SweepDepth::sample);
             std::cout << file << ": valid sweep of " << sweep.subject_count << " subjects";
             if (sweep.subjects.size() < sweep.subject_count) {
               std::cout << " (" << sweep.subjects.size()
@@ -34,7 +37,7 @@ void add_validate_command(CLI::App& app, std::function<int()>& action) {
           }
           continue;
         }
-        const SceneLoadResult result = load_scene(file);
+        const SceneLoadResult result = readable ? parse_scene(text, file) : load_scene(file);
         if (result.problems.empty()) {
           std::cout << file << ": valid\n";
         } else {

@@ -120,6 +120,24 @@ TEST(ValidateCommand, ShippedScenesAreValid) {
   EXPECT_GE(study_scenes, 2u); // scene.yaml and colin-scene.yaml
 }
 
+// A scene given through a pipe (bash's <(...)) is read once: the sweep check and the scene check
+// share its text.
+TEST(ValidateCommand, ASceneFromAPipeIsChecked) {
+  const std::string scene = (k_source_dir / "data-synthetic" / "head.yaml").string();
+  const CommandResult result =
+      run_command({"/bin/bash", "-c", "exec \"$0\" validate <(cat \"$1\")", k_phantasm, scene});
+  EXPECT_EQ(result.exit_code, 0) << result.err;
+  EXPECT_NE(result.out.find(": valid\n"), std::string::npos) << result.out << result.err;
+  // A sweep through a pipe is read as a sweep; its base scene, relative to the pipe's folder, is
+  // not found there, and the message says so (not "an empty file").
+  const std::string sweep = (k_source_dir / "data-synthetic" / "head-sweep.yaml").string();
+  const CommandResult piped_sweep =
+      run_command({"/bin/bash", "-c", "exec \"$0\" validate <(cat \"$1\")", k_phantasm, sweep});
+  EXPECT_EQ(piped_sweep.exit_code, 2);
+  EXPECT_NE(piped_sweep.err.find("base_scene: expected a scene file, found no such file"), std::string::npos)
+      << piped_sweep.err;
+}
+
 TEST(ValidateCommand, AMissingSceneFileIsABadInput) {
   const CommandResult result = run_command({k_phantasm, "validate", "/no/such/scene.yaml"});
   EXPECT_EQ(result.exit_code, 2);
