@@ -542,11 +542,16 @@ constexpr int k_outward_face[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}
 
 using FaceKey = std::array<int, 3>;
 
-FaceKey face_key(const TetMesh& mesh, Eigen::Index t, int opposite) {
-  FaceKey key{mesh.tets(t, k_outward_face[opposite][0]), mesh.tets(t, k_outward_face[opposite][1]),
-              mesh.tets(t, k_outward_face[opposite][2])};
+/// The face of `tet` opposite its vertex `opposite`, its vertices sorted.
+FaceKey face_key(const Eigen::Vector4i& tet, int opposite) {
+  FaceKey key{tet[k_outward_face[opposite][0]], tet[k_outward_face[opposite][1]],
+              tet[k_outward_face[opposite][2]]};
   std::sort(key.begin(), key.end());
   return key;
+}
+
+FaceKey face_key(const TetMesh& mesh, Eigen::Index t, int opposite) {
+  return face_key(Eigen::Vector4i(mesh.tets.row(t).transpose()), opposite);
 }
 
 /// The tets of every face (one for a boundary face, two inside).
@@ -700,23 +705,15 @@ int flip_slivers(TetMesh& mesh, double bound_deg, int passes) {
   std::vector<char> alive(tets.size(), 1);
   std::map<FaceKey, std::vector<int>> faces;
   std::vector<std::vector<int>> star(static_cast<std::size_t>(mesh.vertices.rows()));
-  const auto key_of = [](const Eigen::Vector4i& tet, int opposite) {
-    FaceKey key{};
-    int n = 0;
-    for (int k = 0; k < 4; ++k)
-      if (k != opposite) key[static_cast<std::size_t>(n++)] = tet[k];
-    std::sort(key.begin(), key.end());
-    return key;
-  };
   const auto enter = [&](int t) {
     for (int k = 0; k < 4; ++k) {
-      faces[key_of(tets[static_cast<std::size_t>(t)], k)].push_back(t);
+      faces[face_key(tets[static_cast<std::size_t>(t)], k)].push_back(t);
       star[static_cast<std::size_t>(tets[static_cast<std::size_t>(t)][k])].push_back(t);
     }
   };
   const auto leave = [&](int t) {
     for (int k = 0; k < 4; ++k) {
-      const FaceKey key = key_of(tets[static_cast<std::size_t>(t)], k);
+      const FaceKey key = face_key(tets[static_cast<std::size_t>(t)], k);
       std::vector<int>& around = faces[key];
       around.erase(std::find(around.begin(), around.end(), t));
       if (around.empty()) faces.erase(key);
@@ -768,7 +765,7 @@ int flip_slivers(TetMesh& mesh, double bound_deg, int passes) {
   };
   const auto face_flip = [&](int t, int k, Flip& flip) { // 2-3
     const Eigen::Vector4i& tet = tets[static_cast<std::size_t>(t)];
-    const FaceKey key = key_of(tet, k);
+    const FaceKey key = face_key(tet, k);
     const auto found = faces.find(key);
     if (found == faces.end() || found->second.size() != 2) return false;
     const int u = found->second[0] == t ? found->second[1] : found->second[0];
@@ -896,6 +893,371 @@ int flip_slivers(TetMesh& mesh, double bound_deg, int passes) {
     ++next;
   }
   return flips;
+}
+
+} // namespace phantasm
+
+namespace phantasm {
+
+int split_slivers(TetMesh& mesh, const std::function<int(const Eigen::Vector3d&)>& label) {
+  if (mesh.subdomains.size() != mesh.tets.rows()) return 0;
+  std::vector<std::vector<int>> star(static_cast<std::size_t>(mesh.vertices.rows()));
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t)
+    for (int k = 0; k < 4; ++k)
+      star[static_cast<std::size_t>(mesh.tets(t, k))].push_back(static_cast<int>(t));
+  const auto smallest = [](const std::array<Eigen::Vector3d, 4>& p) {
+    const std::array<double, 6> angles = dihedral_angles_deg(p);
+    return *std::min_element(angles.begin(), angles.end());
+  };
+  // A split of the edge (p, q): the ring's tets with q replaced by the new vertex, then with p.
+  struct Split {
+    int p = -1, q = -1;
+    std::vector<int> ring;
+    Eigen::Vector3d at = Eigen::Vector3d::Zero();
+    double gain = 0.0;
+  };
+  const auto corners_with = [&](int t, int from, const Eigen::Vector3d& x) {
+    std::array<Eigen::Vector3d, 4> c;
+    for (int k = 0; k < 4; ++k)
+      c[static_cast<std::size_t>(k)] =
+          mesh.tets(t, k) == from ? x : Eigen::Vector3d(mesh.vertices.row(mesh.tets(t, k)).transpose());
+    return c;
+  };
+  const auto centroid_of = [](const std::array<Eigen::Vector3d, 4>& c) {
+    return 0.25 * (c[0] + c[1] + c[2] + c[3]);
+  };
+  const auto try_edge = [&](int t, int p, int q, Split& split) {
+    std::vector<int> ring;
+    for (const int u : star[static_cast<std::size_t>(p)])
+      if ((mesh.tets.row(u).array() == q).any()) ring.push_back(u);
+    std::map<int, std::vector<int>> holding; // ring vertex -> the ring's tets holding it
+    std::set<int> regions;
+    for (const int u : ring) {
+      regions.insert(mesh.subdomains[u]);
+      for (int k = 0; k < 4; ++k)
+        if (mesh.tets(u, k) != p && mesh.tets(u, k) != q) holding[mesh.tets(u, k)].push_back(u);
+    }
+    // The faces around the edge that separate two sides: boundary faces (one tet) and faces
+    // between regions. None: the edge lies inside one region and the new vertex is free. Two,
+    // and two sides: the edge lies on that surface and the new vertex stays on it. Else: no split.
+    Eigen::Vector3d normal = Eigen::Vector3d::Zero(); // from the lower label's side to the upper's
+    int separating = 0;
+    for (const auto& [w, held] : holding) {
+      if (held.size() > 2) return false;
+      const int u = held[0];
+      const int other = held.size() == 2 ? mesh.subdomains[held[1]] : -1;
+      if (other == mesh.subdomains[u]) continue;
+      ++separating;
+      const Eigen::Vector3d x0 = mesh.vertices.row(p), x1 = mesh.vertices.row(q), x2 = mesh.vertices.row(w);
+      Eigen::Vector3d n = (x1 - x0).cross(x2 - x0);
+      Eigen::Vector3d apex = Eigen::Vector3d::Zero();
+      for (int k = 0; k < 4; ++k)
+        if (mesh.tets(u, k) != p && mesh.tets(u, k) != q && mesh.tets(u, k) != w)
+          apex = mesh.vertices.row(mesh.tets(u, k)).transpose();
+      if (n.dot(apex - x0) > 0.0) n = -n;     // out of u
+      if (mesh.subdomains[u] > other) n = -n; // from the lower label to the upper
+      normal += n;
+    }
+    int lower = mesh.subdomains[t], upper = lower;
+    if (separating == 0) {
+      if (ring.size() < 3 || regions.size() != 1) return false;
+    } else {
+      if (separating != 2 || !(normal.norm() > 0.0)) return false;
+      std::set<int> sides = regions;
+      if (holding.size() != ring.size()) sides.insert(-1); // an open ring: the boundary
+      if (sides.size() != 2) return false;
+      lower = *sides.begin();
+      upper = *sides.rbegin();
+      normal.normalize();
+    }
+    double old_quality = 180.0;
+    int old_slivers = 0;
+    for (const int u : ring) {
+      const double angle = smallest(corners_with(u, -1, Eigen::Vector3d::Zero()));
+      old_quality = std::min(old_quality, angle);
+      old_slivers += angle < k_sliver_deg;
+    }
+    const Eigen::Vector3d a = mesh.vertices.row(p).transpose(), b = mesh.vertices.row(q).transpose();
+    const Eigen::Vector3d middle = 0.5 * (a + b);
+    const double length = (b - a).norm();
+    std::vector<Eigen::Vector3d> directions;
+    if (separating == 0) {
+      for (int i = -1; i <= 1; ++i)
+        for (int j = -1; j <= 1; ++j)
+          for (int k = -1; k <= 1; ++k)
+            if (i || j || k) directions.push_back(Eigen::Vector3d(i, j, k).normalized());
+    } else {
+      const Eigen::Vector3d u = normal.unitOrthogonal(), w = normal.cross(u);
+      for (int d = 0; d < 12; ++d)
+        directions.push_back(std::cos(2.0 * M_PI * d / 12.0) * u + std::sin(2.0 * M_PI * d / 12.0) * w);
+    }
+    const std::array<Eigen::Vector3d, 4> c = corners_with(t, -1, Eigen::Vector3d::Zero());
+    for (int k = 0; k < 4; ++k) { // off the sliver's faces (within the surface for a surface edge)
+      const Eigen::Vector3d o = c[static_cast<std::size_t>((k + 1) % 4)];
+      Eigen::Vector3d n =
+          (c[static_cast<std::size_t>((k + 2) % 4)] - o).cross(c[static_cast<std::size_t>((k + 3) % 4)] - o);
+      if (separating > 0) n -= n.dot(normal) * normal;
+      if (n.norm() > 0.0) {
+        directions.push_back(n.normalized());
+        directions.push_back(-n.normalized());
+      }
+    }
+    // Onto the surface: bisection along the normal between its two sides.
+    const auto onto = [&](Eigen::Vector3d& x) {
+      if (separating == 0) return true;
+      double lo = -0.5 * length, hi = 0.5 * length;
+      if (label(x + lo * normal) != lower || label(x + hi * normal) != upper) return false;
+      for (int i = 0; i < 30; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (label(x + mid * normal) == lower ? lo : hi) = mid;
+      }
+      x += 0.5 * (lo + hi) * normal;
+      return true;
+    };
+    bool found = false;
+    for (const double step : {0.0, 0.05, 0.1, 0.2, 0.35, 0.5}) {
+      for (const Eigen::Vector3d& d : directions) {
+        Eigen::Vector3d x = middle + step * length * d;
+        if (!onto(x)) continue;
+        double quality = 180.0;
+        int slivers = 0;
+        bool valid = true;
+        for (const int u : ring) {
+          for (const int from : {q, p}) {
+            const std::array<Eigen::Vector3d, 4> cut = corners_with(u, from, x);
+            if (!(signed_volume(cut[0], cut[1], cut[2], cut[3]) > 0.0) ||
+                label(centroid_of(cut)) != mesh.subdomains[u]) {
+              valid = false;
+              break;
+            }
+            const double angle = smallest(cut);
+            quality = std::min(quality, angle);
+            slivers += angle < k_sliver_deg;
+          }
+          if (!valid) break;
+        }
+        if (!valid || slivers > old_slivers || !(quality - old_quality > 1e-9)) continue;
+        if (!found || quality - old_quality > split.gain) {
+          split = Split{p, q, ring, x, quality - old_quality};
+          found = true;
+        }
+        if (step == 0.0) break; // the midpoint: one position, whatever the direction
+      }
+    }
+    return found;
+  };
+  int splits = 0;
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    if (!(smallest(corners_with(static_cast<int>(t), -1, Eigen::Vector3d::Zero())) < k_sliver_deg)) continue;
+    Split best, candidate;
+    bool any = false;
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j)
+        if (try_edge(static_cast<int>(t), mesh.tets(t, i), mesh.tets(t, j), candidate) &&
+            (!any || candidate.gain > best.gain)) {
+          best = candidate;
+          any = true;
+        }
+    if (!any) continue;
+    const int m = static_cast<int>(mesh.vertices.rows());
+    mesh.vertices.conservativeResize(m + 1, 3);
+    mesh.vertices.row(m) = best.at.transpose();
+    star.emplace_back();
+    const auto first_new = static_cast<int>(mesh.tets.rows());
+    mesh.tets.conservativeResize(first_new + static_cast<Eigen::Index>(best.ring.size()), 4);
+    mesh.subdomains.conservativeResize(mesh.tets.rows());
+    for (std::size_t r = 0; r < best.ring.size(); ++r) {
+      const int u = best.ring[r], w = first_new + static_cast<int>(r);
+      mesh.tets.row(w) = mesh.tets.row(u);
+      mesh.subdomains[w] = mesh.subdomains[u];
+      for (int k = 0; k < 4; ++k) {
+        if (mesh.tets(u, k) == best.q) mesh.tets(u, k) = m; // u keeps p
+        if (mesh.tets(w, k) == best.p) mesh.tets(w, k) = m; // w keeps q
+      }
+      std::vector<int>& at_q = star[static_cast<std::size_t>(best.q)];
+      *std::find(at_q.begin(), at_q.end(), u) = w;
+      star[static_cast<std::size_t>(m)].push_back(u);
+      star[static_cast<std::size_t>(m)].push_back(w);
+      for (int k = 0; k < 4; ++k)
+        if (mesh.tets(w, k) != m && mesh.tets(w, k) != best.q)
+          star[static_cast<std::size_t>(mesh.tets(w, k))].push_back(w);
+    }
+    // Boundary triangles on the edge are cut in two at the new vertex, as the tets are.
+    const Eigen::Index faces = mesh.boundary_faces.rows();
+    for (Eigen::Index f = 0; f < faces; ++f) {
+      const auto row = mesh.boundary_faces.row(f);
+      if (!(row.array() == best.p).any() || !(row.array() == best.q).any()) continue;
+      Eigen::RowVector3i second = row;
+      for (int k = 0; k < 3; ++k) {
+        if (mesh.boundary_faces(f, k) == best.q) mesh.boundary_faces(f, k) = m;
+        if (second[k] == best.p) second[k] = m;
+      }
+      mesh.boundary_faces.conservativeResize(mesh.boundary_faces.rows() + 1, 3);
+      mesh.boundary_faces.row(mesh.boundary_faces.rows() - 1) = second;
+    }
+    ++splits;
+  }
+  return splits;
+}
+
+} // namespace phantasm
+
+namespace phantasm {
+
+int collapse_short_sliver_edges(TetMesh& mesh) {
+  const bool labelled = mesh.subdomains.size() == mesh.tets.rows();
+  const Eigen::Index vertex_count = mesh.vertices.rows();
+  std::vector<std::vector<int>> star(static_cast<std::size_t>(vertex_count));
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t)
+    for (int k = 0; k < 4; ++k)
+      star[static_cast<std::size_t>(mesh.tets(t, k))].push_back(static_cast<int>(t));
+  // The regions around each vertex, -1 for the outside (a vertex of a boundary face).
+  std::vector<std::set<int>> regions(static_cast<std::size_t>(vertex_count));
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t)
+    for (int k = 0; k < 4; ++k)
+      regions[static_cast<std::size_t>(mesh.tets(t, k))].insert(labelled ? mesh.subdomains[t] : 0);
+  for (Eigen::Index f = 0; f < mesh.boundary_faces.rows(); ++f)
+    for (int k = 0; k < 3; ++k)
+      regions[static_cast<std::size_t>(mesh.boundary_faces(f, k))].insert(-1);
+  std::vector<char> alive(static_cast<std::size_t>(mesh.tets.rows()), 1);
+  std::vector<int> onto(static_cast<std::size_t>(vertex_count), -1); // a removed vertex's target
+  const auto smallest = [&](const Eigen::Vector4i& tet) {
+    const std::array<double, 6> angles = dihedral_angles_deg(corners(mesh, tet));
+    return *std::min_element(angles.begin(), angles.end());
+  };
+  const auto volume = [&](const Eigen::Vector4i& tet) {
+    const std::array<Eigen::Vector3d, 4> p = corners(mesh, tet);
+    return signed_volume(p[0], p[1], p[2], p[3]);
+  };
+  // Collapses p onto q when allowed and better; true when done.
+  const auto collapse = [&](int p, int q) {
+    const std::set<int>& at_p = regions[static_cast<std::size_t>(p)];
+    const std::set<int>& at_q = regions[static_cast<std::size_t>(q)];
+    if (!std::includes(at_q.begin(), at_q.end(), at_p.begin(), at_p.end())) return false;
+    std::vector<int> affected; // alive tets of p or q
+    for (const int v : {p, q})
+      for (const int t : star[static_cast<std::size_t>(v)])
+        if (alive[static_cast<std::size_t>(t)] &&
+            std::find(affected.begin(), affected.end(), t) == affected.end())
+          affected.push_back(t);
+    std::sort(affected.begin(), affected.end());
+    double old_quality = 180.0, new_quality = 180.0;
+    int old_slivers = 0, new_slivers = 0;
+    std::vector<std::pair<int, Eigen::Vector4i>> kept; // tet and its new vertices
+    std::vector<int> gone;
+    for (const int t : affected) {
+      const Eigen::Vector4i tet = mesh.tets.row(t).transpose();
+      const double before = smallest(tet);
+      old_quality = std::min(old_quality, before);
+      old_slivers += before < k_sliver_deg;
+      const bool has_p = (tet.array() == p).any(), has_q = (tet.array() == q).any();
+      if (has_p && has_q) {
+        gone.push_back(t);
+        continue;
+      }
+      Eigen::Vector4i changed = tet;
+      for (int k = 0; k < 4; ++k)
+        if (changed[k] == p) changed[k] = q;
+      if (!(volume(changed) > 0.0)) return false;
+      const double after = smallest(changed);
+      new_quality = std::min(new_quality, after);
+      new_slivers += after < k_sliver_deg;
+      kept.emplace_back(t, changed);
+    }
+    if (!(new_quality - old_quality > 1e-9) || new_slivers > old_slivers) return false;
+    // Faces through q: at most two tets each, and the boundary around q a manifold (each edge
+    // of q on none or two faces of one tet). Faces not through q are those of unchanged tets.
+    std::map<FaceKey, int> count;
+    for (const auto& [t, tet] : kept)
+      for (int k = 0; k < 4; ++k) {
+        if (tet[k] == q) continue;
+        if (++count[face_key(tet, k)] > 2) return false;
+      }
+    std::map<int, int> boundary_faces_at; // other vertex of an edge of q -> boundary faces on it
+    for (const auto& [key, n] : count) {
+      if (n != 1) continue;
+      for (const int v : key)
+        if (v != q) ++boundary_faces_at[v];
+    }
+    for (const auto& [v, n] : boundary_faces_at)
+      if (n != 2) return false;
+    // Two tets of the same four vertices would be a fold.
+    std::set<std::array<int, 4>> seen;
+    for (const auto& [t, tet] : kept) {
+      std::array<int, 4> sorted{tet[0], tet[1], tet[2], tet[3]};
+      std::sort(sorted.begin(), sorted.end());
+      if (!seen.insert(sorted).second) return false;
+    }
+    for (const int t : gone)
+      alive[static_cast<std::size_t>(t)] = 0;
+    for (const auto& [t, tet] : kept) {
+      mesh.tets.row(t) = tet.transpose();
+      star[static_cast<std::size_t>(q)].push_back(t);
+    }
+    onto[static_cast<std::size_t>(p)] = q;
+    return true;
+  };
+  int collapses = 0;
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    if (!alive[static_cast<std::size_t>(t)]) continue;
+    const Eigen::Vector4i tet = mesh.tets.row(t).transpose();
+    if (!(smallest(tet) < k_sliver_deg)) continue;
+    double shortest = std::numeric_limits<double>::infinity(), longest = 0.0;
+    int a = -1, b = -1;
+    for (int i = 0; i < 4; ++i)
+      for (int j = i + 1; j < 4; ++j) {
+        const double length = (mesh.vertices.row(tet[i]) - mesh.vertices.row(tet[j])).norm();
+        longest = std::max(longest, length);
+        if (length < shortest) {
+          shortest = length;
+          a = tet[i];
+          b = tet[j];
+        }
+      }
+    if (!(shortest < longest / 3.0)) continue;
+    if (collapse(a, b) || collapse(b, a)) ++collapses;
+  }
+  if (collapses == 0) return 0;
+  // Drop the collapsed tets and vertices; renumber.
+  std::vector<int> index(static_cast<std::size_t>(vertex_count), -1);
+  Eigen::Index next = 0;
+  for (Eigen::Index v = 0; v < vertex_count; ++v)
+    if (onto[static_cast<std::size_t>(v)] < 0) index[static_cast<std::size_t>(v)] = static_cast<int>(next++);
+  Eigen::MatrixX3d vertices(next, 3);
+  for (Eigen::Index v = 0; v < vertex_count; ++v)
+    if (index[static_cast<std::size_t>(v)] >= 0)
+      vertices.row(index[static_cast<std::size_t>(v)]) = mesh.vertices.row(v);
+  const auto count = static_cast<Eigen::Index>(std::count(alive.begin(), alive.end(), 1));
+  Eigen::MatrixX4i tets(count, 4);
+  Eigen::VectorXi subdomains(labelled ? count : 0);
+  Eigen::Index row = 0;
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    if (!alive[static_cast<std::size_t>(t)]) continue;
+    for (int k = 0; k < 4; ++k)
+      tets(row, k) = index[static_cast<std::size_t>(mesh.tets(t, k))];
+    if (labelled) subdomains[row] = mesh.subdomains[t];
+    ++row;
+  }
+  // Boundary faces: a removed vertex's become its target's; those on the collapsed edge vanish.
+  const auto final_vertex = [&](int v) {
+    while (onto[static_cast<std::size_t>(v)] >= 0)
+      v = onto[static_cast<std::size_t>(v)];
+    return index[static_cast<std::size_t>(v)];
+  };
+  std::vector<Eigen::Vector3i> boundary;
+  for (Eigen::Index f = 0; f < mesh.boundary_faces.rows(); ++f) {
+    const Eigen::Vector3i face(final_vertex(mesh.boundary_faces(f, 0)),
+                               final_vertex(mesh.boundary_faces(f, 1)),
+                               final_vertex(mesh.boundary_faces(f, 2)));
+    if (face[0] != face[1] && face[1] != face[2] && face[0] != face[2]) boundary.push_back(face);
+  }
+  mesh.vertices = std::move(vertices);
+  mesh.tets = std::move(tets);
+  mesh.subdomains = std::move(subdomains);
+  mesh.boundary_faces.resize(static_cast<Eigen::Index>(boundary.size()), 3);
+  for (std::size_t f = 0; f < boundary.size(); ++f)
+    mesh.boundary_faces.row(static_cast<Eigen::Index>(f)) = boundary[f].transpose();
+  return collapses;
 }
 
 } // namespace phantasm

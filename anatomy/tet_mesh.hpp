@@ -81,6 +81,8 @@ struct SliverRepairs {
   int peeled = 0;       ///< peel_boundary_slivers
   int relabelled = 0;   ///< relabel_stranded_slivers
   int flips = 0;        ///< flip_slivers
+  int splits = 0;       ///< split_slivers
+  int collapses = 0;    ///< collapse_short_sliver_edges
 };
 
 /// @throws InputError when the mesher produces no cells
@@ -134,6 +136,31 @@ int relabel_stranded_slivers(TetMesh& mesh, double bound_deg);
 /// triangles; no vertex moves. In tet order, up to `passes` passes: the same mesh gives the same result.
 /// @return how many flips were made
 int flip_slivers(TetMesh& mesh, double bound_deg, int passes = 4);
+
+/// Splits slivers (a dihedral angle under 10 degrees) that the other repairs leave: one edge of
+/// the sliver gets a new vertex, every tet around the edge is cut in two at it, and the vertex is
+/// placed where the smallest angle of those tets is largest (steps of 5-50 % of the edge's length
+/// in 26 fixed directions and off the sliver's faces; each tet positive and its centroid in its
+/// subdomain). An edge inside one subdomain places its vertex freely; an edge on an interface or
+/// on the boundary (two separating faces around it, two sides) moves it within that surface and
+/// puts it back onto the surface by bisection of `label` along the surface's normal, and the
+/// boundary faces on the edge are split too. The split is kept when it raises the smallest angle
+/// around the edge and leaves no more tets under 10 degrees; the best of the sliver's edges is
+/// taken. In tet order: the same mesh gives the same result.
+/// @param label subdomain at a point, -1 outside
+/// @return how many vertices were inserted
+int split_slivers(TetMesh& mesh, const std::function<int(const Eigen::Vector3d&)>& label);
+
+/// Collapses the shortest edge of each sliver (a dihedral angle under 10 degrees) whose edge is
+/// under a third of the sliver's longest: a vertex where Mesh_3 put two points of one surface or
+/// curve next to each other (0.4 mm apart among 5 mm edges). The edge's one vertex goes onto the
+/// other, provided the other lies on every surface the first does (its regions, the outside
+/// included, hold the first's), every tet stays positive, no face gets more than two tets, the
+/// boundary stays a manifold, and the smallest angle of the changed tets rises without more of
+/// them under 10 degrees. The tets on the edge go; the vertex left without tets is removed (later
+/// vertices are renumbered). In tet order: the same mesh gives the same result.
+/// @return how many edges were collapsed
+int collapse_short_sliver_edges(TetMesh& mesh);
 
 /// Signed volume of tet t, mm^3 (positive for the orientation phantasm uses).
 double tet_volume(const TetMesh& mesh, Eigen::Index t);

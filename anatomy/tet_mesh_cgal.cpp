@@ -313,10 +313,14 @@ TetMesh mesh_nested_solid(const NestedShapes& nested, const TetMeshCriteria& c, 
     const int peeled = peel_boundary_slivers(mesh, c.sliver_bound_deg);
     const int relabelled = relabel_stranded_slivers(mesh, c.sliver_bound_deg);
     const int flips = flip_slivers(mesh, c.sliver_bound_deg);
-    if (peeled + relabelled + flips == 0) break;
+    const int splits = split_slivers(mesh, region_at);
+    const int collapses = collapse_short_sliver_edges(mesh);
+    if (peeled + relabelled + flips + splits + collapses == 0) break;
+    done.collapses += collapses;
     done.peeled += peeled;
     done.relabelled += relabelled;
     done.flips += flips;
+    done.splits += splits;
     done.vertex_moves += improve_slivers(mesh, region_at, c.sliver_bound_deg);
   }
   if (repairs) *repairs = done;

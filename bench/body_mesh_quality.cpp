@@ -1,7 +1,8 @@
 // The quality of a scene's body tet meshes (the deformation stage's bodies, meshed as a run meshes
 // them): per body, tets, smallest dihedral angle, tets under 10 degrees, and each of those
 // slivers described by where it lies (how many of its faces are tissue interfaces or the body's
-// boundary, how many of its vertices lie where three regions meet), with the time of the stage.
+// boundary, how many of its vertices lie where three regions meet), whether the mesh is sound
+// (tets positive, faces on at most two tets, no vertex without a tet), and the time of the stage.
 // Usage: body_mesh_quality SCENE [GEOMETRY_FILE]
 // GEOMETRY_FILE: the organs' geometry as the anatomy cache encodes it; read when it exists,
 // written otherwise. Unlike the anatomy cache (docs/batch.md), whose entries belong to one build
@@ -19,6 +20,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -31,28 +33,11 @@ namespace {
 
 using namespace phantasm;
 
-double smallest_dihedral_deg(const Eigen::MatrixX3d& v, const Eigen::MatrixX4i& tets, Eigen::Index t) {
-  static const int edge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
-  double smallest = 180.0;
-  for (const auto& e : edge) {
-    int others[2], n = 0;
-    for (int k = 0; k < 4; ++k)
-      if (k != e[0] && k != e[1]) others[n++] = k;
-    const Eigen::Vector3d a = v.row(tets(t, e[0])), b = v.row(tets(t, e[1]));
-    const Eigen::Vector3d c = v.row(tets(t, others[0])), d = v.row(tets(t, others[1]));
-    const Eigen::Vector3d axis = (b - a).normalized();
-    Eigen::Vector3d p = c - a, q = d - a;
-    p -= p.dot(axis) * axis;
-    q -= q.dot(axis) * axis;
-    const double cosine = std::clamp(p.normalized().dot(q.normalized()), -1.0, 1.0);
-    smallest = std::min(smallest, std::acos(cosine) * 180.0 / M_PI);
-  }
-  return smallest;
-}
-
 void describe(const DeformedBody& body) {
-  const Eigen::MatrixX4i& tets = body.tets;
-  const Eigen::MatrixX3d& v = body.rest_mm;
+  TetMesh mesh;
+  mesh.vertices = body.rest_mm;
+  mesh.tets = body.tets;
+  const Eigen::MatrixX4i& tets = mesh.tets;
   static const int face_of[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
   std::map<std::array<int, 3>, std::vector<int>> face_tets;
   for (Eigen::Index t = 0; t < tets.rows(); ++t)
@@ -61,7 +46,7 @@ void describe(const DeformedBody& body) {
       std::sort(key.begin(), key.end());
       face_tets[key].push_back(static_cast<int>(t));
     }
-  std::vector<std::set<int>> regions(static_cast<std::size_t>(v.rows()));
+  std::vector<std::set<int>> regions(static_cast<std::size_t>(mesh.vertices.rows()));
   for (Eigen::Index t = 0; t < tets.rows(); ++t)
     for (int k = 0; k < 4; ++k)
       regions[static_cast<std::size_t>(tets(t, k))].insert(body.tet_organ[static_cast<std::size_t>(t)]);
@@ -72,7 +57,8 @@ void describe(const DeformedBody& body) {
   double smallest = 180.0;
   long slivers = 0;
   for (Eigen::Index t = 0; t < tets.rows(); ++t) {
-    const double angle = smallest_dihedral_deg(v, tets, t);
+    const std::array<double, 6> angles = tet_dihedral_angles_deg(mesh, t);
+    const double angle = *std::min_element(angles.begin(), angles.end());
     smallest = std::min(smallest, angle);
     if (angle >= 10.0) continue;
     ++slivers;
@@ -97,6 +83,16 @@ void describe(const DeformedBody& body) {
   }
   std::printf("%s: %ld tets, min dihedral %.2f deg, %ld tets under 10 deg\n", body.organ.c_str(),
               static_cast<long>(tets.rows()), smallest, slivers);
+  // A sound mesh: every tet positive, every face on one or two tets, every vertex in a tet.
+  long flat = 0, crowded = 0, unused = 0;
+  for (Eigen::Index t = 0; t < tets.rows(); ++t)
+    flat += !(tet_volume(mesh, t) > 0.0);
+  for (const auto& [key, around] : face_tets)
+    crowded += around.size() > 2;
+  for (const std::set<int>& around : regions)
+    unused += around.empty();
+  std::printf("%s: %ld tets not positive, %ld faces on more than two tets, %ld vertices in no tet\n",
+              body.organ.c_str(), flat, crowded, unused);
 }
 
 } // namespace

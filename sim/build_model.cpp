@@ -155,8 +155,8 @@ std::shared_ptr<const TetMesh> body_mesh(const DeformationSettings& deformation,
        << " tets under 10 deg after mending those under " << format_number(criteria.sliver_bound_deg)
        << " deg: " << repairs.vertex_moves << " vertex moves, " << repairs.peeled
        << " flat tets peeled off the boundary, " << repairs.relabelled
-       << " lone tets given the region around them, " << repairs.flips
-       << " flips; tissue interfaces are faces";
+       << " lone tets given the region around them, " << repairs.flips << " flips, " << repairs.splits
+       << " edges split, " << repairs.collapses << " short edges collapsed; tissue interfaces are faces";
   if (!merged.empty()) {
     line << "; meshed with the organ holding them, of the same material (anatomy.tet_interfaces: materials):";
     for (const std::string& name : merged)

@@ -569,3 +569,120 @@ TEST(SliverRepair, ThreeTetsAroundAnEdgeNearlyInAFaceBecomeTwo) {
     if (mixed_before.subdomains[t] == 1) region_one_before += tet_volume(mixed_before, t);
   EXPECT_NEAR(region_one, region_one_before, 1e-12);
 }
+
+namespace {
+
+/// Every face on at most two tets, the boundary faces exactly those on one (closed, outward: the
+/// volume they enclose is the tets'), every tet positive, every vertex in a tet.
+void expect_valid_mesh(const TetMesh& mesh) {
+  std::map<Face, int> count;
+  std::vector<int> used(static_cast<std::size_t>(mesh.vertices.rows()), 0);
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+    EXPECT_GT(tet_volume(mesh, t), 0.0) << "tet " << t;
+    for (int k = 0; k < 4; ++k) {
+      ++used[static_cast<std::size_t>(mesh.tets(t, k))];
+      int v[3], m = 0;
+      for (int j = 0; j < 4; ++j)
+        if (j != k) v[m++] = mesh.tets(t, j);
+      ++count[sorted_face(v[0], v[1], v[2])];
+    }
+  }
+  for (const auto& [face, n] : count)
+    EXPECT_LE(n, 2) << face[0] << " " << face[1] << " " << face[2];
+  EXPECT_EQ(std::count(used.begin(), used.end(), 0), 0) << "a vertex in no tet";
+  EXPECT_EQ(boundary_face_set(mesh), faces_of_one_tet(mesh));
+  EXPECT_NEAR(enclosed_volume(mesh), total_volume(mesh), 1e-9 * std::max(1.0, total_volume(mesh)));
+}
+
+double region_volume(const TetMesh& mesh, int region) {
+  double volume = 0.0;
+  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t)
+    if (mesh.subdomains[t] == region) volume += tet_volume(mesh, t);
+  return volume;
+}
+
+} // namespace
+
+TEST(SliverRepair, ASplitEdgeGetsAVertexThatThickensItsSlivers) {
+  // The two-region cube with its interface vertex moved next to a neighbour (slivers on both
+  // sides of the plane z = 0).
+  SliverCube cube;
+  const Eigen::Index v = cube.vertex_at(Eigen::Vector3d::Zero());
+  ASSERT_GE(v, 0);
+  cube.mesh.vertices.row(v) = Eigen::RowVector3d(0.8, 0.1, 0.0);
+  const Eigen::Index before = tets_with_dihedral_below(cube.mesh, 10.0);
+  const double smallest = min_dihedral_angle_deg(cube.mesh);
+  ASSERT_GT(before, 0);
+  const TetMesh original = cube.mesh;
+  const int splits = split_slivers(cube.mesh, cube.label);
+  EXPECT_GT(splits, 0);
+  EXPECT_EQ(cube.mesh.vertices.rows(), original.vertices.rows() + splits);
+  EXPECT_LT(tets_with_dihedral_below(cube.mesh, 10.0), before);
+  EXPECT_GT(min_dihedral_angle_deg(cube.mesh), smallest);
+  expect_valid_mesh(cube.mesh);
+  // New vertices on the interface stay on it: each region keeps its volume.
+  EXPECT_NEAR(region_volume(cube.mesh, 0), region_volume(original, 0), 1e-6);
+  EXPECT_NEAR(region_volume(cube.mesh, 1), region_volume(original, 1), 1e-6);
+  for (Eigen::Index t = 0; t < cube.mesh.tets.rows(); ++t)
+    EXPECT_EQ(cube.label(centroid(cube.mesh, t)), cube.mesh.subdomains[t]) << t;
+  TetMesh again = original;
+  split_slivers(again, cube.label);
+  EXPECT_EQ(again.vertices, cube.mesh.vertices); // the same mesh gives the same result
+  EXPECT_EQ(again.tets, cube.mesh.tets);
+}
+
+TEST(SliverRepair, AnEdgeFarShorterThanItsSliversIsCollapsed) {
+  // An inner vertex of a one-region box moved to 0.05 mm from a neighbour: the tets around their
+  // edge are flat needles.
+  TetMesh box = structured_box(Eigen::Vector3d::Constant(4.0), Eigen::Vector3i::Constant(4),
+                               Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
+  box.subdomains = Eigen::VectorXi::Zero(box.tets.rows());
+  Eigen::Index inner = -1, neighbour = -1;
+  for (Eigen::Index v = 0; v < box.vertices.rows(); ++v) {
+    if ((box.vertices.row(v) - Eigen::RowVector3d(0.0, 0.0, 0.0)).norm() < 1e-9) inner = v;
+    if ((box.vertices.row(v) - Eigen::RowVector3d(1.0, 0.0, 0.0)).norm() < 1e-9) neighbour = v;
+  }
+  ASSERT_GE(inner, 0);
+  ASSERT_GE(neighbour, 0);
+  bool joined = false; // the two share an edge of the structured box
+  for (Eigen::Index t = 0; t < box.tets.rows(); ++t)
+    joined |= (box.tets.row(t).array() == inner).any() && (box.tets.row(t).array() == neighbour).any();
+  ASSERT_TRUE(joined);
+  box.vertices.row(inner) = Eigen::RowVector3d(0.95, 0.0, 0.0);
+  ASSERT_LT(min_dihedral_angle_deg(box), 10.0);
+  const double volume = total_volume(box);
+  const Eigen::Index vertices = box.vertices.rows();
+  EXPECT_EQ(collapse_short_sliver_edges(box), 1);
+  EXPECT_EQ(box.vertices.rows(), vertices - 1);
+  EXPECT_EQ(tets_with_dihedral_below(box, 10.0), 0);
+  EXPECT_NEAR(total_volume(box), volume, 1e-9);
+  expect_valid_mesh(box);
+
+  // A boundary vertex next to an inner one: the inner one goes onto it, never the reverse (the
+  // boundary keeps its place).
+  TetMesh edge = structured_box(Eigen::Vector3d::Constant(4.0), Eigen::Vector3i::Constant(4),
+                                Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
+  edge.subdomains = Eigen::VectorXi::Zero(edge.tets.rows());
+  Eigen::Index below = -1, top = -1;
+  for (Eigen::Index v = 0; v < edge.vertices.rows(); ++v) {
+    if ((edge.vertices.row(v) - Eigen::RowVector3d(0.0, 0.0, 1.0)).norm() < 1e-9) below = v;
+    if ((edge.vertices.row(v) - Eigen::RowVector3d(0.0, 0.0, 2.0)).norm() < 1e-9) top = v;
+  }
+  ASSERT_GE(below, 0);
+  ASSERT_GE(top, 0);
+  edge.vertices.row(below) = Eigen::RowVector3d(0.0, 0.0, 1.95);
+  const Eigen::RowVector3d top_at = edge.vertices.row(top);
+  const std::set<Face> surface_before = boundary_face_set(edge);
+  const double enclosed = enclosed_volume(edge);
+  const Eigen::Index edge_vertices = edge.vertices.rows();
+  EXPECT_EQ(collapse_short_sliver_edges(edge), 1);
+  EXPECT_EQ(edge.vertices.rows(), edge_vertices - 1);
+  // The top vertex is still there, the boundary where it was.
+  bool kept = false;
+  for (Eigen::Index v = 0; v < edge.vertices.rows(); ++v)
+    kept |= edge.vertices.row(v) == top_at;
+  EXPECT_TRUE(kept);
+  EXPECT_EQ(boundary_face_set(edge).size(), surface_before.size());
+  EXPECT_NEAR(enclosed_volume(edge), enclosed, 1e-9);
+  expect_valid_mesh(edge);
+}
