@@ -278,16 +278,38 @@ std::size_t LevelSet::active_voxel_count() const {
   return static_cast<std::size_t>(m->grid->activeVoxelCount());
 }
 
+std::vector<Eigen::AlignedBox3d> LevelSet::block_reach_mm() const {
+  std::vector<Eigen::AlignedBox3d> out;
+  out.reserve(static_cast<std::size_t>(m->grid->tree().leafCount()));
+  const openvdb::math::Transform& transform = m->grid->transform();
+  for (auto leaf = m->grid->tree().cbeginLeaf(); leaf; ++leaf) {
+    // A sample's stencil reaches one voxel past the block; two more for rounding, as the probe.
+    const openvdb::CoordBBox box = leaf->getNodeBoundingBox().expandBy(2);
+    Eigen::AlignedBox3d reach;
+    for (const openvdb::Coord& corner : {box.min(), box.max()}) {
+      const openvdb::Vec3d x = transform.indexToWorld(corner);
+      reach.extend(Eigen::Vector3d(x.x(), x.y(), x.z()));
+    }
+    out.push_back(reach);
+  }
+  return out;
+}
+
 const void* LevelSet::grid() const {
   return m->grid.get();
 }
 
 struct LevelSet::Probe::Impl {
   explicit Impl(const openvdb::FloatGrid& grid, double voxel_size)
-      : accessor(grid.getConstAccessor()), sampler(accessor, grid.transform()), transform(grid.transform()),
-        background(grid.background()), inverse_voxel(1.0 / voxel_size) {
+      : accessor(grid.getConstAccessor()), transform(grid.transform()), background(grid.background()),
+        inverse_voxel(1.0 / voxel_size) {
     // Beyond the leaves (and a margin for the trilinear stencil and rounding) every value is the
     // outside background: a closed surface's inside tiles lie within its band's leaves.
+    // A uniform scale (every level set here) maps world to index by one product, the same
+    // product OpenVDB's map computes: then the stencil needs no call through the map.
+    const openvdb::Vec3d unit = transform.worldToIndex(openvdb::Vec3d(1.0, 1.0, 1.0));
+    scale_only = transform.mapType() == openvdb::math::UniformScaleMap::mapType() &&
+                 unit == openvdb::Vec3d(inverse_voxel, inverse_voxel, inverse_voxel);
     low = Eigen::Vector3d::Constant(1e300);
     high = -low;
     for (auto leaf = grid.tree().cbeginLeaf(); leaf; ++leaf) {
@@ -299,11 +321,14 @@ struct LevelSet::Probe::Impl {
     }
   }
   openvdb::FloatGrid::ConstAccessor accessor;
-  openvdb::tools::GridSampler<openvdb::FloatGrid::ConstAccessor, openvdb::tools::BoxSampler> sampler;
   const openvdb::math::Transform& transform;
   float background;
   double inverse_voxel;
+  bool scale_only = false;   ///< world to index is x * inverse_voxel
   Eigen::Vector3d low, high; ///< index-space box beyond which the value is the background
+  /// The last stencil read: samples close together (a voxel's supersamples) mostly share it.
+  openvdb::Coord cached_cell = openvdb::Coord::max();
+  float cached[2][2][2] = {};
 };
 
 LevelSet::Probe::Probe(const LevelSet& level_set)
@@ -319,26 +344,38 @@ double LevelSet::Probe::operator()(const Eigen::Vector3d& x) const {
   // read straight from that block's leaf, or, deep inside or outside, it is one constant tile
   // (no leaf) whose value is the sample. Either way the value is OpenVDB's BoxSampler's, bit for
   // bit: the same corners, the same interpolation (a + w (b - a), exact when a = b).
-  const openvdb::Vec3d stencil =
-      m->transform.worldToIndex(openvdb::Vec3d(x.x(), x.y(), x.z())); // as the sampler
+  const openvdb::Vec3d stencil = m->scale_only
+                                     ? openvdb::Vec3d(index.x(), index.y(), index.z())
+                                     : m->transform.worldToIndex(openvdb::Vec3d(x.x(), x.y(), x.z()));
   const openvdb::Coord cell = openvdb::Coord::floor(stencil);
-  using Leaf = openvdb::FloatGrid::TreeType::LeafNodeType;
-  constexpr int last_in_leaf = Leaf::DIM - 1;
-  if ((cell.x() & last_in_leaf) != last_in_leaf && (cell.y() & last_in_leaf) != last_in_leaf &&
-      (cell.z() & last_in_leaf) != last_in_leaf) {
-    const Leaf* leaf = m->accessor.probeConstLeaf(cell);
-    if (leaf == nullptr) return static_cast<double>(m->accessor.getValue(cell));
-    const openvdb::Index corner = Leaf::coordToOffset(cell);
-    float data[2][2][2];
-    for (int i = 0; i < 2; ++i)
-      for (int j = 0; j < 2; ++j)
-        for (int k = 0; k < 2; ++k)
-          data[i][j][k] = leaf->getValue(
-              corner + static_cast<openvdb::Index>((i << (2 * Leaf::LOG2DIM)) + (j << Leaf::LOG2DIM) + k));
-    const openvdb::Vec3d uvw = stencil - openvdb::Vec3d(cell.x(), cell.y(), cell.z());
-    return static_cast<double>(openvdb::tools::BoxSampler::trilinearInterpolation(data, uvw));
+  float(&data)[2][2][2] = m->cached;
+  if (cell != m->cached_cell) {
+    using Leaf = openvdb::FloatGrid::TreeType::LeafNodeType;
+    constexpr int last_in_leaf = Leaf::DIM - 1;
+    if ((cell.x() & last_in_leaf) != last_in_leaf && (cell.y() & last_in_leaf) != last_in_leaf &&
+        (cell.z() & last_in_leaf) != last_in_leaf) {
+      const Leaf* leaf = m->accessor.probeConstLeaf(cell);
+      if (leaf == nullptr) {
+        const float tile = m->accessor.getValue(cell);
+        for (int i = 0; i < 2; ++i)
+          for (int j = 0; j < 2; ++j)
+            for (int k = 0; k < 2; ++k)
+              data[i][j][k] = tile;
+      } else {
+        const openvdb::Index corner = Leaf::coordToOffset(cell);
+        for (int i = 0; i < 2; ++i)
+          for (int j = 0; j < 2; ++j)
+            for (int k = 0; k < 2; ++k)
+              data[i][j][k] = leaf->getValue(corner + static_cast<openvdb::Index>((i << (2 * Leaf::LOG2DIM)) +
+                                                                                  (j << Leaf::LOG2DIM) + k));
+      }
+    } else {
+      openvdb::tools::BoxSampler::probeValues(data, m->accessor, cell); // the sampler's own read
+    }
+    m->cached_cell = cell;
   }
-  return static_cast<double>(m->sampler.wsSample(openvdb::Vec3d(x.x(), x.y(), x.z())));
+  const openvdb::Vec3d uvw = stencil - openvdb::Vec3d(cell.x(), cell.y(), cell.z());
+  return static_cast<double>(openvdb::tools::BoxSampler::trilinearInterpolation(data, uvw));
 }
 
 } // namespace phantasm

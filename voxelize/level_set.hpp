@@ -6,6 +6,7 @@
 #include "anatomy/triangle_mesh.hpp"
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include <memory>
 #include <vector>
@@ -46,6 +47,11 @@ public:
   double half_width_mm() const { return m_half_width * m_voxel_size; }
   /// Voxels of the narrow band (the sparse storage; memory follows the surface area).
   std::size_t active_voxel_count() const;
+  /// World boxes (mm), one per 8^3 block of stored voxels, each grown by the reach of a
+  /// trilinear sample and a margin: at any point outside all of them a probe reads constant
+  /// tiles only and returns exactly the band width, negative inside the surface, positive
+  /// outside. The blocks hold the whole band, so a region no box reaches lies on one side.
+  std::vector<Eigen::AlignedBox3d> block_reach_mm() const;
 
   /// Trilinear samples with a cached tree accessor; one probe per thread.
   class Probe {

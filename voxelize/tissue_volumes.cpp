@@ -5,19 +5,142 @@
 
 #include <omp.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <string>
 
 namespace phantasm {
+namespace {
+
+constexpr int k_block = 8; ///< voxels along each edge of a block
+
+/// Per block of k_block^3 voxels and per organ (organ fastest): whether the organ's level set
+/// stores values near the block, and where it does not, its one value over the block (plus or
+/// minus the band width: which side the block lies on).
+struct BlockValues {
+  Eigen::Vector3i blocks = Eigen::Vector3i::Zero();
+  std::size_t organs = 0;
+  std::vector<std::uint8_t> varies;
+  std::vector<float> value;
+
+  std::size_t block_of(int i, int j, int k) const {
+    return static_cast<std::size_t>(i / k_block) +
+           static_cast<std::size_t>(blocks.x()) *
+               (static_cast<std::size_t>(j / k_block) +
+                static_cast<std::size_t>(blocks.y()) * static_cast<std::size_t>(k / k_block));
+  }
+};
+
+BlockValues block_values(const ImageGrid& grid, const std::vector<VoxelizedOrgan>& organs) {
+  BlockValues out;
+  out.blocks = (grid.dims.array() + k_block - 1) / k_block;
+  out.organs = organs.size();
+  const auto block_count = static_cast<std::size_t>(out.blocks.prod());
+  out.varies.assign(block_count * organs.size(), 0);
+  out.value.assign(block_count * organs.size(), 0.0f);
+  const auto organ_count = static_cast<std::ptrdiff_t>(organs.size());
+#pragma omp parallel for schedule(dynamic, 1)
+  for (std::ptrdiff_t n = 0; n < organ_count; ++n) {
+    if (cancellation_requested()) continue; // no exception may leave an OpenMP region
+    const auto o = static_cast<std::size_t>(n);
+    // Every voxel whose cell (where its samples lie) meets a box's reach, in voxel indices: the
+    // box's corners mapped onto the grid, widened by a voxel for the cell and rounding.
+    for (const Eigen::AlignedBox3d& box : organs[o].level_set->block_reach_mm()) {
+      Eigen::Vector3d low = Eigen::Vector3d::Constant(1e300), high = -low;
+      for (int c = 0; c < 8; ++c) {
+        const Eigen::Vector3d index =
+            grid.index_from_world(box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(c)));
+        low = low.cwiseMin(index);
+        high = high.cwiseMax(index);
+      }
+      Eigen::Vector3i first, last;
+      bool outside = false;
+      for (int a = 0; a < 3; ++a) {
+        const double lo = std::max(std::floor(low[a]) - 1.0, 0.0);
+        const double hi = std::min(std::ceil(high[a]) + 1.0, static_cast<double>(grid.dims[a] - 1));
+        if (lo > hi) outside = true;
+        first[a] = static_cast<int>(lo) / k_block;
+        last[a] = static_cast<int>(hi) / k_block;
+      }
+      if (outside) continue;
+      for (int c = first.z(); c <= last.z(); ++c)
+        for (int b = first.y(); b <= last.y(); ++b)
+          for (int a = first.x(); a <= last.x(); ++a)
+            out.varies[out.block_of(a * k_block, b * k_block, c * k_block) * organs.size() + o] = 1;
+    }
+    // Elsewhere one probe gives the block's value (any point of it: a constant tile).
+    const LevelSet::Probe probe(*organs[o].level_set);
+    for (int c = 0; c < out.blocks.z(); ++c)
+      for (int b = 0; b < out.blocks.y(); ++b)
+        for (int a = 0; a < out.blocks.x(); ++a) {
+          const std::size_t at = out.block_of(a * k_block, b * k_block, c * k_block) * organs.size() + o;
+          if (!out.varies[at])
+            out.value[at] = static_cast<float>(
+                probe(grid.world_from_index(Eigen::Vector3d(a * k_block, b * k_block, c * k_block))));
+        }
+  }
+  throw_if_cancelled();
+  return out;
+}
+
+/// Per block: whether every organ takes the same values there as in the other state, so that
+/// the other state's voxels are this one's (TissuesToReuse).
+std::vector<std::uint8_t> blocks_alike(const std::vector<VoxelizedOrgan>& organs, const BlockValues& values,
+                                       const std::vector<VoxelizedOrgan>& other_organs,
+                                       const BlockValues& other_values) {
+  constexpr int none = -1;
+  // The other state's organ of each organ (same label, depth and tissue), and the other way.
+  std::vector<int> match(organs.size(), none), other_match(other_organs.size(), none);
+  for (std::size_t o = 0; o < organs.size(); ++o)
+    for (std::size_t p = 0; p < other_organs.size(); ++p)
+      if (other_match[p] == none && organs[o].label == other_organs[p].label &&
+          organs[o].depth == other_organs[p].depth && organs[o].tissue == other_organs[p].tissue) {
+        match[o] = static_cast<int>(p);
+        other_match[p] = static_cast<int>(o);
+        break;
+      }
+  const auto block_count = static_cast<std::size_t>(values.blocks.prod());
+  std::vector<std::uint8_t> alike(block_count, 1);
+  for (std::size_t b = 0; b < block_count; ++b) {
+    const auto outside = [](const BlockValues& v, std::size_t at) {
+      return !v.varies[at] && v.value[at] > 0.0f;
+    };
+    bool same = true;
+    for (std::size_t o = 0; o < organs.size() && same; ++o) {
+      const std::size_t at = b * organs.size() + o;
+      if (match[o] == none) {
+        same = outside(values, at); // an organ of this state alone (a gap) must hold none of it
+        continue;
+      }
+      const auto p = static_cast<std::size_t>(match[o]);
+      const std::size_t other_at = b * other_organs.size() + p;
+      same = organs[o].level_set == other_organs[p].level_set ||
+             (!values.varies[at] && !other_values.varies[other_at] &&
+              values.value[at] == other_values.value[other_at]);
+    }
+    for (std::size_t p = 0; p < other_organs.size() && same; ++p)
+      if (other_match[p] == none) same = outside(other_values, b * other_organs.size() + p);
+    alike[b] = same ? 1 : 0;
+  }
+  return alike;
+}
+
+} // namespace
 
 TissueVolumes voxelize_tissues(const ImageGrid& grid, const std::vector<VoxelizedOrgan>& organs,
-                               int tissue_count, int supersampling) {
+                               int tissue_count, int supersampling, const TissuesToReuse& reuse) {
   const auto count = static_cast<std::size_t>(grid.voxel_count());
   TissueVolumes out;
   out.labels.assign(count, 0);
   out.background.assign(count, 0.0f);
   out.fractions.assign(static_cast<std::size_t>(tissue_count), std::vector<float>(count, 0.0f));
+  const BlockValues blocks = block_values(grid, organs);
+  std::vector<std::uint8_t> copied; // per block: the other state's voxels are this one's
+  if (reuse.volumes && reuse.organs && reuse.volumes->labels.size() == count &&
+      reuse.volumes->fractions.size() == out.fractions.size())
+    copied = blocks_alike(organs, blocks, *reuse.organs, block_values(grid, *reuse.organs));
   const int n = std::max(1, supersampling);
   const double half_diagonal = 0.5 * grid.spacing_mm.norm();
   const Eigen::Matrix3d axes = grid.world_from_voxel.topLeftCorner<3, 3>();
@@ -31,6 +154,7 @@ TissueVolumes voxelize_tissues(const ImageGrid& grid, const std::vector<Voxelize
       probes.emplace_back(*organ.level_set);
     std::vector<double> centre_distance(organs.size());
     std::vector<double> organ_share(organs.size());
+    std::vector<std::uint8_t> varies(organs.size());
 #pragma omp for schedule(dynamic, 1)
     for (int k = 0; k < nz; ++k) {
       if (cancellation_requested()) continue; // no exception may leave an OpenMP region
@@ -40,10 +164,20 @@ TissueVolumes voxelize_tissues(const ImageGrid& grid, const std::vector<Voxelize
       for (int j = 0; j < ny; ++j) {
         for (int i = 0; i < nx; ++i) {
           const std::size_t index = voxel_index(grid.dims, i, j, k);
+          const std::size_t block = blocks.block_of(i, j, k);
+          if (!copied.empty() && copied[block]) {
+            out.labels[index] = reuse.volumes->labels[index];
+            out.background[index] = reuse.volumes->background[index];
+            for (std::size_t t = 0; t < out.fractions.size(); ++t)
+              out.fractions[t][index] = reuse.volumes->fractions[t][index];
+            continue;
+          }
           const Eigen::Vector3d centre = grid.world_from_index(Eigen::Vector3d(i, j, k));
           bool decided = true;
           for (std::size_t o = 0; o < organs.size(); ++o) {
-            centre_distance[o] = probes[o](centre);
+            const std::size_t at = block * organs.size() + o;
+            varies[o] = blocks.varies[at];
+            centre_distance[o] = varies[o] ? probes[o](centre) : static_cast<double>(blocks.value[at]);
             if (std::abs(centre_distance[o]) < half_diagonal) decided = false;
           }
           auto deepest = [&](auto&& inside) {
@@ -67,9 +201,12 @@ TissueVolumes voxelize_tissues(const ImageGrid& grid, const std::vector<Voxelize
                 for (int a = 0; a < n; ++a) {
                   const Eigen::Vector3d offset((a + 0.5) / n - 0.5, (b + 0.5) / n - 0.5, (c + 0.5) / n - 0.5);
                   const Eigen::Vector3d x = centre + axes * offset;
+                  // An organ far from the centre, or with one value over the block, is on the
+                  // centre's side at every sample.
                   const int owner = deepest([&](std::size_t o) {
-                    return std::abs(centre_distance[o]) >= half_diagonal ? centre_distance[o] < 0.0
-                                                                         : probes[o](x) < 0.0;
+                    return std::abs(centre_distance[o]) >= half_diagonal || !varies[o]
+                               ? centre_distance[o] < 0.0
+                               : probes[o](x) < 0.0;
                   });
                   (owner < 0 ? background : organ_share[static_cast<std::size_t>(owner)]) += weight;
                 }

@@ -18,11 +18,27 @@ struct VoxelizedOrgan {
   int tissue = 0; ///< index into the tissue list; -1: no tissue (a gap of air), counted as background
 };
 
+/// The result of another state on the same grid, and the organs it came from: where every organ
+/// takes the same values in both states (the organs that did not move, and the moved ones away
+/// from their surfaces in both states), the voxels are copied from it instead of sampled again.
+struct TissuesToReuse {
+  const TissueVolumes* volumes = nullptr;
+  const std::vector<VoxelizedOrgan>* organs = nullptr;
+};
+
 /// Each voxel's fraction of every tissue: voxels whose centre is farther than half a voxel
 /// diagonal from every surface belong whole to the deepest organ holding the centre; the others
 /// are sampled at supersampling^3 points (the deepest organ holding each sample counts it).
-/// Parallel over slices (OpenMP); the result does not depend on the number of threads.
+/// The grid is taken in blocks of 8^3 voxels: an organ whose level set stores nothing near a
+/// block (LevelSet::block_reach_mm) has one value over all of it, read once, so each organ is
+/// probed only in the blocks its band reaches; the values, hence the result, are the same as
+/// probing every organ at every point. Parallel over slices (OpenMP); the result does not depend
+/// on the number of threads.
+/// @param reuse another state's result: its voxels are copied in every block where each organ
+///        (matched by label, depth and tissue) has the same level set or the same one value in
+///        both, and the organs without a match (gaps) lie wholly outside; the same bytes as
+///        sampling them again
 TissueVolumes voxelize_tissues(const ImageGrid& grid, const std::vector<VoxelizedOrgan>& organs,
-                               int tissue_count, int supersampling);
+                               int tissue_count, int supersampling, const TissuesToReuse& reuse = {});
 
 } // namespace phantasm

@@ -19,20 +19,31 @@ namespace phantasm {
 namespace {
 
 /// Level sets of every organ of one state that the grid needs, and the organs as the voxelizer
-/// sees them.
+/// sees them. Shared: an organ that did not move has one level set for both states.
 struct StateLevelSets {
-  std::vector<LevelSet> level_sets;
+  std::vector<std::shared_ptr<const LevelSet>> level_sets;
   std::vector<VoxelizedOrgan> organs;
 };
+
+/// Whether an organ's surface is the same in both states: the same base positions (its patches'
+/// bumps are the reference's in both), so the same level set.
+bool same_surface(const Organ& reference, const Organ& deformed) {
+  return reference.surface && deformed.surface &&
+         reference.surface->base_mesh().vertices.rows() == deformed.surface->base_mesh().vertices.rows() &&
+         reference.surface->base_mesh().vertices == deformed.surface->base_mesh().vertices;
+}
 
 /// Each organ's patch height bounds (patch_height_ranges), found by the first state that builds
 /// its level set and reused by the other: the bumps do not change when the base moves.
 using OrganHeightRanges = std::vector<std::optional<std::vector<HeightRange>>>;
 
+/// @param unmoved_from the reference phantom and its level sets, for the deformed state: the
+///        organs whose surface did not move take the reference's level set (null: build all)
 StateLevelSets level_sets_of(const VoxelizationSettings& settings, const OrganTable& organs,
                              const ImageGrid& grid, const Phantom& phantom,
                              const std::vector<std::string>& tissues, double voxel_size,
-                             OrganHeightRanges& height_ranges, ProgressBar& progress) {
+                             OrganHeightRanges& height_ranges, ProgressBar& progress,
+                             const std::pair<const Phantom*, const StateLevelSets*>& unmoved_from = {}) {
   std::vector<std::size_t> chosen;
   for (std::size_t o = 0; o < phantom.organs.size(); ++o) {
     const auto bounds =
@@ -42,20 +53,30 @@ StateLevelSets level_sets_of(const VoxelizationSettings& settings, const OrganTa
   // Level sets in parallel over organs (each is independent and deterministic). From the patch
   // surfaces directly, or (settings.level_sets_from_tessellation, the former path kept for
   // benchmarks) from tessellations within the tolerance through OpenVDB's mesh-to-volume.
-  std::vector<std::optional<LevelSet>> built(chosen.size());
+  std::vector<std::shared_ptr<const LevelSet>> built(chosen.size());
+  if (const auto [reference, reference_sets] = unmoved_from; reference && reference_sets) {
+    for (std::size_t k = 0; k < chosen.size(); ++k) {
+      const std::size_t o = chosen[k];
+      for (std::size_t r = 0; r < reference_sets->organs.size(); ++r)
+        if (static_cast<std::size_t>(reference_sets->organs[r].label - 1) == o &&
+            same_surface(reference->organs[o], phantom.organs[o]))
+          built[k] = reference_sets->level_sets[r];
+    }
+  }
   const auto count = static_cast<std::ptrdiff_t>(chosen.size());
   if (settings.level_sets_from_tessellation) {
     std::vector<TriangleMesh> meshes(chosen.size());
 #pragma omp parallel for schedule(dynamic, 1)
     for (std::ptrdiff_t k = 0; k < count; ++k) {
-      if (cancellation_requested()) continue; // no exception may leave an OpenMP region
+      if (cancellation_requested() || built[static_cast<std::size_t>(k)])
+        continue; // no exception may leave an OpenMP region
       meshes[static_cast<std::size_t>(k)] =
           phantom.organs[chosen[static_cast<std::size_t>(k)]].surface->tessellate(
               settings.tessellation_tolerance_mm);
     }
     for (std::size_t k = 0; k < chosen.size(); ++k) {
       throw_if_cancelled();
-      built[k].emplace(meshes[k], voxel_size);
+      if (!built[k]) built[k] = std::make_shared<const LevelSet>(meshes[k], voxel_size);
       meshes[k] = TriangleMesh();
       progress.advance();
     }
@@ -64,10 +85,12 @@ StateLevelSets level_sets_of(const VoxelizationSettings& settings, const OrganTa
     for (std::ptrdiff_t k = 0; k < count; ++k) {
       if (cancellation_requested()) continue; // no exception may leave an OpenMP region
       const auto i = static_cast<std::size_t>(k);
-      const PatchSurface& surface = *phantom.organs[chosen[i]].surface;
-      std::optional<std::vector<HeightRange>>& ranges = height_ranges[chosen[i]]; // this iteration's alone
-      if (!ranges) ranges = patch_height_ranges(surface);
-      built[i].emplace(surface, voxel_size, 3.0, &*ranges);
+      if (!built[i]) {
+        const PatchSurface& surface = *phantom.organs[chosen[i]].surface;
+        std::optional<std::vector<HeightRange>>& ranges = height_ranges[chosen[i]]; // this iteration's alone
+        if (!ranges) ranges = patch_height_ranges(surface);
+        built[i] = std::make_shared<const LevelSet>(surface, voxel_size, 3.0, &*ranges);
+      }
       progress.advance();
     }
   }
@@ -77,9 +100,9 @@ StateLevelSets level_sets_of(const VoxelizationSettings& settings, const OrganTa
   out.level_sets.reserve(chosen.size());
   for (std::size_t k = 0; k < chosen.size(); ++k) {
     const std::size_t o = chosen[k];
-    out.level_sets.push_back(std::move(*built[k]));
+    out.level_sets.push_back(built[k]);
     VoxelizedOrgan v;
-    v.level_set = &out.level_sets.back();
+    v.level_set = out.level_sets.back().get();
     // Even depths for organs, so that a gap (odd, voxelize/gap_fill.hpp) sits between its
     // container and the organs the container holds.
     v.depth = 2 * organs[o].depth;
@@ -92,11 +115,11 @@ StateLevelSets level_sets_of(const VoxelizationSettings& settings, const OrganTa
   return out;
 }
 
-void keep_level_sets(const Phantom& phantom, StateLevelSets&& sets,
+void keep_level_sets(const Phantom& phantom, const StateLevelSets& sets,
                      std::vector<std::pair<std::string, std::shared_ptr<const LevelSet>>>& kept) {
   for (std::size_t k = 0; k < sets.organs.size(); ++k) {
     const auto organ = static_cast<std::size_t>(sets.organs[k].label - 1);
-    kept.emplace_back(phantom.organs[organ].name, std::make_shared<LevelSet>(std::move(sets.level_sets[k])));
+    kept.emplace_back(phantom.organs[organ].name, sets.level_sets[k]);
   }
 }
 
@@ -139,8 +162,8 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
       level_sets_of(settings, organs, grid, reference, out.tissues, voxel_size, height_ranges, progress);
   {
     std::size_t band = 0;
-    for (const LevelSet& l : sets.level_sets)
-      band += l.active_voxel_count();
+    for (const auto& l : sets.level_sets)
+      band += l->active_voxel_count();
     report.modelled.push_back(
         "reference: " + std::to_string(sets.level_sets.size()) + " level sets, " + std::to_string(band) +
         " narrow-band voxels of " + format_number(voxel_size) + " mm, " +
@@ -154,8 +177,14 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
   }
   if (deformed) {
     progress.set_detail("deformed level sets");
-    StateLevelSets moved =
-        level_sets_of(settings, organs, grid, *deformed, out.tissues, voxel_size, height_ranges, progress);
+    StateLevelSets moved = level_sets_of(settings, organs, grid, *deformed, out.tissues, voxel_size,
+                                         height_ranges, progress, {&reference, &sets});
+    std::size_t shared = 0;
+    for (std::size_t k = 0; k < moved.level_sets.size(); ++k)
+      shared += std::count(sets.level_sets.begin(), sets.level_sets.end(), moved.level_sets[k]) > 0 ? 1 : 0;
+    report.modelled.push_back("deformed: " + std::to_string(moved.level_sets.size() - shared) +
+                              " level sets of moved organs; the " + std::to_string(shared) +
+                              " organs that did not move keep their reference level set");
     std::vector<VoxelizedOrgan> with_gaps = moved.organs;
     if (deformation) {
       const std::vector<VoxelizedOrgan> gaps =
@@ -163,12 +192,14 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
       with_gaps.insert(with_gaps.end(), gaps.begin(), gaps.end());
     }
     progress.set_detail("deformed tissue fractions");
-    out.deformed =
-        voxelize_tissues(out.grid, with_gaps, static_cast<int>(out.tissues.size()), settings.supersampling);
+    // Where no organ differs from the reference state (blocks away from the moved surfaces and
+    // the gaps), the reference voxels are the deformed ones: copied, the same bytes.
+    out.deformed = voxelize_tissues(out.grid, with_gaps, static_cast<int>(out.tissues.size()),
+                                    settings.supersampling, TissuesToReuse{&out.reference, &sets.organs});
     progress.advance();
-    if (settings.keep_level_sets) keep_level_sets(*deformed, std::move(moved), out.deformed_level_sets);
+    if (settings.keep_level_sets) keep_level_sets(*deformed, moved, out.deformed_level_sets);
   }
-  if (settings.keep_level_sets) keep_level_sets(reference, std::move(sets), out.reference_level_sets);
+  if (settings.keep_level_sets) keep_level_sets(reference, sets, out.reference_level_sets);
   report.modelled.push_back("fractions from " + std::to_string(settings.supersampling) +
                             "^3 samples in the " + std::to_string(out.reference.supersampled_voxels) +
                             " voxels within half a voxel diagonal of a surface");

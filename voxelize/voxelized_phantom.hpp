@@ -32,7 +32,8 @@ struct TissueVolumes {
                                     ///< background, organs + 1 the gap
   std::vector<std::vector<float>> fractions; ///< per tissue, voxel_count(); with background they sum to 1
   std::vector<float> background;             ///< voxel_count()
-  std::size_t supersampled_voxels = 0;       ///< voxels near a surface, where samples were taken
+  std::size_t supersampled_voxels = 0;       ///< voxels near a surface sampled by this pass (not those
+                                             ///< copied from the other state)
 };
 
 /// Dense displacement fields both ways on one grid (RAS mm, x_to = x + u(x)), their exact-masks,

@@ -14,6 +14,7 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -152,6 +153,15 @@ TEST(LevelSet, ProbeIsOpenVdbsTrilinearSampleBitForBit) {
   for (int i = -40; i <= 40; ++i)
     for (int j = -40; j <= 40; j += 3)
       points.emplace_back(0.7 * i, 0.7 * j, 0.7 * ((i * j) % 17)); // lattice points, leaf edges included
+  // Clusters of 4^3 samples a voxel apart, as the tissue fractions take them: most share the
+  // previous sample's stencil, which the probe keeps.
+  for (int c = 0; c < 3000; ++c) {
+    const Eigen::Vector3d centre(coordinate(random), coordinate(random), coordinate(random));
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b)
+        for (int d = 0; d < 4; ++d)
+          points.push_back(centre + 0.25 * Eigen::Vector3d(a - 1.5, b - 1.5, d - 1.5));
+  }
   int in_band = 0;
   for (const Eigen::Vector3d& x : points) {
     const double expected = static_cast<double>(sampler.wsSample(openvdb::Vec3d(x.x(), x.y(), x.z())));
@@ -159,4 +169,63 @@ TEST(LevelSet, ProbeIsOpenVdbsTrilinearSampleBitForBit) {
     in_band += std::abs(expected) < level_set.half_width_mm();
   }
   EXPECT_GT(in_band, 10000); // the band itself was sampled, not only tiles
+}
+
+// Outside every box of LevelSet::block_reach_mm a probe reads constant tiles: exactly the band
+// width, negative inside. The tissue fractions rely on it to read an organ once per block.
+TEST(LevelSet, OutsideEveryBlockReachTheProbeIsTheBandWidth) {
+  const PatchSurface surface = bumpy_sphere();
+  const LevelSet level_set(surface, 0.7);
+  const std::vector<Eigen::AlignedBox3d> reach = level_set.block_reach_mm();
+  ASSERT_FALSE(reach.empty());
+  const LevelSet::Probe probe(level_set);
+  const auto band = static_cast<double>(static_cast<float>(level_set.half_width_mm()));
+  std::mt19937 random(5);
+  std::uniform_real_distribution<double> coordinate(-30.0, 30.0);
+  int inside = 0, outside = 0;
+  for (int i = 0; i < 100000; ++i) {
+    const Eigen::Vector3d x(coordinate(random), coordinate(random), coordinate(random));
+    if (std::any_of(reach.begin(), reach.end(), [&](const Eigen::AlignedBox3d& b) { return b.contains(x); }))
+      continue;
+    const double value = probe(x);
+    ASSERT_EQ(std::abs(value), band) << x.transpose();
+    // The side: the sphere's radius is 20 mm, its bumps 0.6 mm high.
+    EXPECT_EQ(value < 0.0, x.norm() < 20.0) << x.transpose();
+    (value < 0.0 ? inside : outside) += 1;
+  }
+  EXPECT_GT(inside, 1000);
+  EXPECT_GT(outside, 10000);
+}
+
+// The deformed state reuses the reference's voxels where no organ differs: an outer organ that
+// stays (one level set for both states), an inner one that moves, and the gap it leaves. The
+// result must be the bytes of sampling every voxel again, and fewer voxels are sampled.
+TEST(TissueFractions, ReusingTheOtherStatesVoxelsGivesTheSameBytes) {
+  const auto sphere = [](double radius, const Eigen::Vector3d& centre) {
+    TriangleMesh mesh = unit_icosphere(4);
+    mesh.vertices = (mesh.vertices * radius).rowwise() + centre.transpose();
+    return LevelSet(mesh, 1.0);
+  };
+  const LevelSet outer = sphere(25.0, Eigen::Vector3d::Zero());
+  const LevelSet inner = sphere(6.0, Eigen::Vector3d(-2.0, 0.0, 0.0));
+  const LevelSet inner_moved = sphere(6.0, Eigen::Vector3d(2.0, 1.0, 0.0));
+  ImageGrid grid;
+  grid.dims = {64, 60, 62};
+  grid.world_from_voxel.topRightCorner<3, 1>() = Eigen::Vector3d(-31.7, -29.4, -30.5);
+  // depth, label, tissue: the outer organ at depth 0, the inner at 2, the gap between them.
+  const std::vector<VoxelizedOrgan> reference_organs{{&outer, 0, 1, 0}, {&inner, 2, 2, 1}};
+  const std::vector<VoxelizedOrgan> deformed_organs{
+      {&outer, 0, 1, 0}, {&inner_moved, 2, 2, 1}, {&inner, 1, 3, 2}};
+  const TissueVolumes reference = voxelize_tissues(grid, reference_organs, 3, 4);
+  const TissueVolumes fresh = voxelize_tissues(grid, deformed_organs, 3, 4);
+  const TissueVolumes reused = voxelize_tissues(grid, deformed_organs, 3, 4, {&reference, &reference_organs});
+  EXPECT_EQ(reused.labels, fresh.labels);
+  EXPECT_EQ(reused.background, fresh.background);
+  EXPECT_EQ(reused.fractions, fresh.fractions);
+  EXPECT_NE(fresh.labels, reference.labels); // the inner organ moved and left a gap
+  EXPECT_GT(std::count(fresh.labels.begin(), fresh.labels.end(), 3), 100);
+  std::printf("voxels sampled: %zu fresh, %zu with the reference's reused\n", fresh.supersampled_voxels,
+              reused.supersampled_voxels);
+  EXPECT_LT(10 * reused.supersampled_voxels,
+            7 * fresh.supersampled_voxels); // most of the outer surface copied
 }
