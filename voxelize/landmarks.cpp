@@ -1,6 +1,6 @@
 #include "voxelize/landmarks.hpp"
 
-#include "anatomy/mesh_distance.hpp"
+#include "anatomy/triangle_mesh.hpp"
 #include "core/cancellation.hpp"
 #include "core/progress.hpp"
 #include "geometry/mesh_signed_distance.hpp"
@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <memory>
 #include <numeric>
 #include <optional>
@@ -18,9 +19,11 @@ namespace phantasm {
 namespace {
 
 /// The organs' surfaces for distance queries, each tessellated within the tolerance once when
-/// first asked for (an organ is its own material's outer surface and the inner one of the organ
-/// it is nested in) and dropped after its last use (done() of itself and of that organ), so that
-/// few are held at once.
+/// first needed (an organ is its own material's outer surface and the inner one of the organ it
+/// is nested in) and dropped after its last use (done() of itself and of that organ), so that
+/// few are held at once. prepare() builds an organ's missing surfaces and the next organ's
+/// together, one per thread: a tessellation and its search tree are built largely serially (on
+/// the Colin head up to 2 s per surface), so two at once keep both cores busy.
 class OrganDistances {
 public:
   OrganDistances(const Phantom& phantom, double tolerance_mm)
@@ -39,20 +42,64 @@ public:
       if (m_phantom.organs[n].inside == m_phantom.organs[o].name && m_phantom.organs[n].surface) release(n);
   }
 
-  const MeshDistance& of(std::size_t o) {
-    if (!m_meshes[o])
-      m_meshes[o] = std::make_unique<MeshDistance>(m_phantom.organs[o].surface->tessellate(m_tolerance_mm));
+  /// Builds the surfaces organ o's material needs (its own and those nested in it) that are not
+  /// built yet and, when there are any, those the next organ with a surface needs, in parallel.
+  /// Each surface is built the same way on any thread: the distances do not depend on the
+  /// thread count. Throws Cancelled when cancellation was requested.
+  void prepare(std::size_t o) {
+    std::vector<std::size_t> missing;
+    const auto add_missing = [&](std::size_t k) {
+      for (std::size_t n = 0; n < m_phantom.organs.size(); ++n) {
+        const bool needed = n == k || (m_phantom.organs[n].inside == m_phantom.organs[k].name);
+        if (needed && m_phantom.organs[n].surface && !m_meshes[n] &&
+            std::find(missing.begin(), missing.end(), n) == missing.end())
+          missing.push_back(n);
+      }
+    };
+    add_missing(o);
+    if (missing.empty()) return;
+    std::size_t next = o + 1;
+    while (next < m_phantom.organs.size() && !m_phantom.organs[next].surface)
+      ++next;
+    if (next < m_phantom.organs.size()) add_missing(next);
+    // No exception may leave the OpenMP region: each surface's is kept and the first rethrown.
+    std::vector<std::exception_ptr> failures(missing.size());
+    const auto count = static_cast<std::ptrdiff_t>(missing.size());
+#pragma omp parallel for schedule(dynamic, 1) if (count > 1)
+    for (std::ptrdiff_t i = 0; i < count; ++i) {
+      if (cancellation_requested()) continue;
+      try {
+        m_meshes[missing[static_cast<std::size_t>(i)]] = build(missing[static_cast<std::size_t>(i)]);
+      } catch (...) {
+        failures[static_cast<std::size_t>(i)] = std::current_exception();
+      }
+    }
+    for (const std::exception_ptr& failure : failures)
+      if (failure) std::rethrow_exception(failure);
+    throw_if_cancelled();
+  }
+
+  const SignedDistanceMesh& of(std::size_t o) {
+    if (!m_meshes[o]) m_meshes[o] = build(o);
     return *m_meshes[o];
   }
 
 private:
+  std::unique_ptr<SignedDistanceMesh> build(std::size_t o) const {
+    const TriangleMesh mesh = m_phantom.organs[o].surface->tessellate(m_tolerance_mm);
+    auto out = std::make_unique<SignedDistanceMesh>(mesh.faces);
+    out->update(mesh.vertices);
+    out->build_search_tree();
+    return out;
+  }
+
   void release(std::size_t o) {
     if (m_uses[o] > 0 && --m_uses[o] == 0) m_meshes[o].reset();
   }
 
   const Phantom& m_phantom;
   double m_tolerance_mm;
-  std::vector<std::unique_ptr<MeshDistance>> m_meshes;
+  std::vector<std::unique_ptr<SignedDistanceMesh>> m_meshes;
   std::vector<int> m_uses;
 };
 
@@ -71,8 +118,10 @@ public:
     m_base.build_search_tree();
   }
 
-  bool inside(const Eigen::Vector3d& x) const {
-    const MeshClosestPoint c = m_base.closest(x);
+  /// @param hint the closest base triangle of a point asked for before, -1 for none; set to x's
+  bool inside(const Eigen::Vector3d& x, int& hint) const {
+    const MeshClosestPoint c = m_base.closest(x, hint);
+    hint = c.triangle;
     if (c.triangle < 0) return false;
     const double d = std::sqrt(c.distance_squared);
     double along_normal = m_base.inside(x, c) ? -d : d;
@@ -91,6 +140,9 @@ private:
 /// How far a point is inside an organ's own material: the distance to the organ's surface or to
 /// the nearest organ nested in it, whichever is closer (mm; negative outside that material).
 /// Distances from the tessellations (within their tolerance of the surfaces), sides from OrganSide.
+/// Each query starts from the closest triangles of the point asked before with the same hints
+/// (a neighbour along a ray or the grid, or the compass search's last point): fewer boxes are
+/// opened, and the answers, ties included, are those of a search without hints.
 class OwnMaterial {
 public:
   OwnMaterial(const Phantom& phantom, std::size_t o, OrganDistances& distances)
@@ -101,21 +153,29 @@ public:
     }
   }
 
-  double clearance(const Eigen::Vector3d& x) const {
-    double c = -m_own.signed_distance(x);
-    for (const Surface& nested : m_nested)
-      c = std::min(c, nested.signed_distance(x));
+  /// The closest triangles of the last point asked for: two per surface (its tessellation's and
+  /// its base mesh's), the organ's own first; -1 for none yet. One set per thread.
+  using Hints = std::vector<int>;
+  Hints no_hints() const { return Hints(2 * (1 + m_nested.size()), -1); }
+
+  double clearance(const Eigen::Vector3d& x, Hints& hints) const {
+    double c = -m_own.signed_distance(x, &hints[0]);
+    for (std::size_t n = 0; n < m_nested.size(); ++n)
+      c = std::min(c, m_nested[n].signed_distance(x, &hints[2 * (n + 1)]));
     return c;
   }
 
 private:
   struct Surface {
-    const MeshDistance* distance;
+    const SignedDistanceMesh* distance;
     OrganSide side;
-    /// Negative inside, mm.
-    double signed_distance(const Eigen::Vector3d& x) const {
-      const double d = distance->distance(x);
-      return side.inside(x) ? -d : d;
+    /// Negative inside, mm. hint[0] and hint[1]: the closest triangles of the tessellation and
+    /// of the base mesh, updated to x's.
+    double signed_distance(const Eigen::Vector3d& x, int* hint) const {
+      const MeshClosestPoint closest = distance->closest(x, hint[0]);
+      hint[0] = closest.triangle;
+      const double d = std::sqrt(closest.distance_squared);
+      return side.inside(x, hint[1]) ? -d : d;
     }
   };
   Surface m_own;
@@ -147,10 +207,14 @@ std::vector<Candidate> candidates(const PatchSurface& surface, const OwnMaterial
                                                         static_cast<double>(row / points.y())));
   };
   std::vector<double> grid_clearance(static_cast<std::size_t>(grid_count));
-#pragma omp parallel for schedule(dynamic, 16)
-  for (std::ptrdiff_t n = 0; n < grid_count; ++n) {
-    if (cancellation_requested()) continue;
-    grid_clearance[static_cast<std::size_t>(n)] = material.clearance(grid_point(n));
+#pragma omp parallel
+  {
+    OwnMaterial::Hints hints = material.no_hints();
+#pragma omp for schedule(dynamic, 16)
+    for (std::ptrdiff_t n = 0; n < grid_count; ++n) {
+      if (cancellation_requested()) continue;
+      grid_clearance[static_cast<std::size_t>(n)] = material.clearance(grid_point(n), hints);
+    }
   }
   throw_if_cancelled();
   for (std::ptrdiff_t n = 0; n < grid_count; ++n) {
@@ -169,18 +233,23 @@ std::vector<Candidate> candidates(const PatchSurface& surface, const OwnMaterial
   const double ray_step = step / 10.0;
   std::vector<std::vector<Candidate>> rays(static_cast<std::size_t>(rest.rows()));
   const auto vertex_count = static_cast<std::ptrdiff_t>(rest.rows());
-#pragma omp parallel for schedule(dynamic, 8)
-  for (std::ptrdiff_t v = 0; v < vertex_count; ++v) {
-    if (cancellation_requested() || !(normals.row(v).norm() > 0.0)) continue;
-    const Eigen::Vector3d origin = rest.row(v).transpose(), inward = -normals.row(v).normalized().transpose();
-    std::vector<Candidate>& ray = rays[static_cast<std::size_t>(v)];
-    double best = 0.0;
-    for (int s = 1; s * ray_step < (high - low).norm(); ++s) {
-      const Eigen::Vector3d x = origin + s * ray_step * inward;
-      const double c = material.clearance(x);
-      if (c > 0.0) ray.push_back({x, c});
-      best = std::max(best, c);
-      if (best > 0.0 && c < 0.5 * best) break; // past the deepest point of this ray
+#pragma omp parallel
+  {
+    OwnMaterial::Hints hints = material.no_hints();
+#pragma omp for schedule(dynamic, 8)
+    for (std::ptrdiff_t v = 0; v < vertex_count; ++v) {
+      if (cancellation_requested() || !(normals.row(v).norm() > 0.0)) continue;
+      const Eigen::Vector3d origin = rest.row(v).transpose(),
+                            inward = -normals.row(v).normalized().transpose();
+      std::vector<Candidate>& ray = rays[static_cast<std::size_t>(v)];
+      double best = 0.0;
+      for (int s = 1; s * ray_step < (high - low).norm(); ++s) {
+        const Eigen::Vector3d x = origin + s * ray_step * inward;
+        const double c = material.clearance(x, hints);
+        if (c > 0.0) ray.push_back({x, c});
+        best = std::max(best, c);
+        if (best > 0.0 && c < 0.5 * best) break; // past the deepest point of this ray
+      }
     }
   }
   throw_if_cancelled();
@@ -192,13 +261,14 @@ std::vector<Candidate> candidates(const PatchSurface& surface, const OwnMaterial
 /// Moves x uphill in clearance by a compass search (steps halved down to 0.01 mm), so the point
 /// is the local deepest point whatever the candidate spacing was.
 Candidate refine(Candidate best, const OwnMaterial& material, double step) {
+  OwnMaterial::Hints hints = material.no_hints();
   while (step > 0.01) {
     bool improved = false;
     for (int axis = 0; axis < 3 && !improved; ++axis) {
       for (const double sign : {1.0, -1.0}) {
         Eigen::Vector3d x = best.x;
         x[axis] += sign * step;
-        const double c = material.clearance(x);
+        const double c = material.clearance(x, hints);
         if (c > best.clearance) {
           best = {x, c};
           improved = true;
@@ -236,6 +306,7 @@ bool exact_around(const DeformationMap& map, const Eigen::Vector3d& x, bool move
 std::optional<Eigen::Vector3d> deepest_point(const Phantom& phantom, std::size_t o, OrganDistances& distances,
                                              const DeformationMap* map, bool moved) {
   const PatchSurface& surface = *phantom.organs[o].surface;
+  distances.prepare(o);
   const OwnMaterial material(phantom, o, distances);
   std::vector<Candidate> list = candidates(surface, material);
   if (list.empty()) return std::nullopt;

@@ -16,6 +16,9 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <algorithm>
+#include <string>
+
 using namespace phantasm;
 
 namespace {
@@ -126,6 +129,26 @@ TEST(OrganLandmarks, AreTheSameOnOneAndTwoThreads) {
     EXPECT_EQ(one[l].name, two[l].name);
     EXPECT_EQ(one[l].reference_mm, two[l].reference_mm) << one[l].name;
   }
+}
+
+// The surfaces are tessellated several at once (an organ's own and nested ones, with the next
+// organ's), one per thread: on three levels of nesting (the first organ's step builds all four
+// surfaces), the landmarks CSV is the same text on one thread and on two.
+TEST(OrganLandmarks, AreTheSameOnOneAndTwoThreadsWhenSurfacesAreBuiltTogether) {
+  Phantom phantom;
+  phantom.organs.push_back(organ("shell", "", sphere(20.0, 55.0)));
+  phantom.organs.push_back(organ("core", "shell", sphere(16.0)));
+  phantom.organs.push_back(organ("kernel", "core", sphere(8.0)));
+  phantom.organs.push_back(organ("pit", "core", sphere(4.0)));
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const std::string one = landmarks_csv(organ_landmarks(phantom, nullptr, nullptr, 0.5, nullptr), false);
+  omp_set_num_threads(2);
+  const std::string two = landmarks_csv(organ_landmarks(phantom, nullptr, nullptr, 0.5, nullptr), false);
+  omp_set_num_threads(threads);
+  EXPECT_EQ(one.substr(0, one.find('\n')), "name,organ,x_mm,y_mm,z_mm");
+  EXPECT_EQ(std::count(one.begin(), one.end(), '\n'), 1 + 7 * 4) << one;
+  EXPECT_EQ(one, two);
 }
 
 TEST(OrganLandmarks, DeepestPointsLieInTheirOrgansOwnMaterialInBothStates) {
