@@ -22,6 +22,9 @@ public:
   double distance(const Eigen::Vector3d& x) const { return m_mesh.distance(x); }
   /// Signed distance: negative inside a closed, outward-oriented mesh, mm.
   double signed_distance(const Eigen::Vector3d& x) const { return m_mesh.signed_distance(x); }
+  /// The closest point, its search started from triangle `hint` (-1: none); the same answer,
+  /// ties included (SignedDistanceMesh::closest).
+  MeshClosestPoint closest(const Eigen::Vector3d& x, int hint) const { return m_mesh.closest(x, hint); }
 
 private:
   SignedDistanceMesh m_mesh;

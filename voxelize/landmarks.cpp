@@ -1,6 +1,6 @@
 #include "voxelize/landmarks.hpp"
 
-#include "anatomy/triangle_mesh.hpp"
+#include "anatomy/mesh_distance.hpp"
 #include "core/cancellation.hpp"
 #include "core/progress.hpp"
 #include "geometry/mesh_signed_distance.hpp"
@@ -79,18 +79,14 @@ public:
     throw_if_cancelled();
   }
 
-  const SignedDistanceMesh& of(std::size_t o) {
+  const MeshDistance& of(std::size_t o) {
     if (!m_meshes[o]) m_meshes[o] = build(o);
     return *m_meshes[o];
   }
 
 private:
-  std::unique_ptr<SignedDistanceMesh> build(std::size_t o) const {
-    const TriangleMesh mesh = m_phantom.organs[o].surface->tessellate(m_tolerance_mm);
-    auto out = std::make_unique<SignedDistanceMesh>(mesh.faces);
-    out->update(mesh.vertices);
-    out->build_search_tree();
-    return out;
+  std::unique_ptr<MeshDistance> build(std::size_t o) const {
+    return std::make_unique<MeshDistance>(m_phantom.organs[o].surface->tessellate(m_tolerance_mm));
   }
 
   void release(std::size_t o) {
@@ -99,7 +95,7 @@ private:
 
   const Phantom& m_phantom;
   double m_tolerance_mm;
-  std::vector<std::unique_ptr<SignedDistanceMesh>> m_meshes;
+  std::vector<std::unique_ptr<MeshDistance>> m_meshes;
   std::vector<int> m_uses;
 };
 
@@ -167,7 +163,7 @@ public:
 
 private:
   struct Surface {
-    const SignedDistanceMesh* distance;
+    const MeshDistance* distance;
     OrganSide side;
     /// Negative inside, mm. hint[0] and hint[1]: the closest triangles of the tessellation and
     /// of the base mesh, updated to x's.
