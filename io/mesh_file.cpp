@@ -568,6 +568,9 @@ void write_xml(Writer& writer, const std::filesystem::path& path) {
   writer.SetDataModeToAppended();
   writer.EncodeAppendedDataOff();
   writer.SetCompressorTypeToZLib();
+  // Level 1 of 9: two to three times as fast as the default 5 on vertex and index arrays, for a
+  // few percent more bytes.
+  writer.SetCompressionLevel(1);
   writer.SetHeaderTypeToUInt64();
   writer.WriteToOutputStringOn();
   {

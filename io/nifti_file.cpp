@@ -1,8 +1,9 @@
-// NIfTI-1 writing (our own header and zlib stream, so writes are atomic and byte-identical) and
+// NIfTI-1 writing (our own header and gzip by libdeflate, so writes are atomic and byte-identical) and
 // NIfTI-1/2 reading through libnifti2.
 
 #include "io/nifti_file.hpp"
 
+#include "core/abandonable_work.hpp"
 #include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
@@ -10,8 +11,8 @@
 #include "io/atomic_file.hpp"
 #include "io/file_error.hpp"
 
+#include <libdeflate.h>
 #include <nifti/nifti2_io.h>
-#include <zlib.h>
 
 #include <Eigen/Dense>
 
@@ -25,6 +26,7 @@
 #include <optional>
 #include <stdexcept>
 #include <thread>
+#include <vector>
 
 namespace phantasm {
 namespace {
@@ -91,20 +93,21 @@ nifti_1_header make_header(const ImageGrid& grid, int components, int datatype, 
   return h;
 }
 
-/// Streams bytes to an atomic file, through a gzip stream (mtime 0, so identical input gives
-/// identical bytes) or as they are.
+/// Streams bytes to an atomic file, gzip-compressed or as they are. The gzip file is a series of
+/// members (RFC 1952, section 2.2) of up to 16 MiB of input each, compressed by libdeflate at level
+/// 1 in one call per member (mtime 0, so identical input gives identical bytes): these volumes are
+/// large and smooth, and speed matters more than the last 10 %. libdeflate compresses them 2 to 3
+/// times as fast as zlib's level 1, and a little smaller; members bound the memory it needs, and
+/// every gzip reader (zlib's gzread, Python's gzip, hence libnifti, ITK and nibabel) reads them
+/// as one stream.
 class NiftiStream {
 public:
-  NiftiStream(const std::filesystem::path& path) : m_file(path), m_gzip(ends_with_gz(path)) {
-    if (m_gzip) {
-      std::memset(&m_zs, 0, sizeof m_zs);
-      // Level 1: these volumes are large and smooth, and speed matters more than the last 10 %.
-      if (deflateInit2(&m_zs, 1, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK)
-        throw std::runtime_error("zlib: deflateInit2 failed");
-    }
-  }
-  ~NiftiStream() {
-    if (m_gzip) deflateEnd(&m_zs);
+  static constexpr std::size_t k_member_bytes = std::size_t{1} << 24;
+
+  explicit NiftiStream(const std::filesystem::path& path)
+      : m_file(path), m_gzip(ends_with_gz(path)),
+        m_compressor(m_gzip ? libdeflate_alloc_compressor(1) : nullptr, free_compressor) {
+    if (m_gzip && !m_compressor) throw std::runtime_error("libdeflate: cannot allocate a compressor");
   }
   NiftiStream(const NiftiStream&) = delete;
   NiftiStream& operator=(const NiftiStream&) = delete;
@@ -115,37 +118,54 @@ public:
       return;
     }
     const auto* bytes = static_cast<const unsigned char*>(data);
-    constexpr std::size_t k_chunk = 1u << 24;
     while (size > 0) {
-      const std::size_t part = std::min(size, k_chunk);
-      m_zs.next_in = const_cast<unsigned char*>(bytes);
-      m_zs.avail_in = static_cast<uInt>(part);
-      drain(Z_NO_FLUSH);
+      if (m_pending.empty() && size >= k_member_bytes) { // a whole member straight from the caller
+        write_member(bytes, k_member_bytes);
+        bytes += k_member_bytes;
+        size -= k_member_bytes;
+        continue;
+      }
+      const std::size_t part = std::min(size, k_member_bytes - m_pending.size());
+      m_pending.insert(m_pending.end(), bytes, bytes + part);
       bytes += part;
       size -= part;
+      if (m_pending.size() == k_member_bytes) flush_pending();
     }
   }
   void commit() {
-    if (m_gzip) drain(Z_FINISH);
+    if (m_gzip && (!m_pending.empty() || !m_wrote_member)) flush_pending();
     m_file.commit();
   }
 
 private:
-  void drain(int flush) {
-    unsigned char out[1 << 16];
-    int status = Z_OK;
-    do {
-      m_zs.next_out = out;
-      m_zs.avail_out = sizeof out;
-      status = deflate(&m_zs, flush);
-      if (status == Z_STREAM_ERROR) throw std::runtime_error("zlib: deflate failed");
-      m_file.write(out, sizeof out - m_zs.avail_out);
-    } while (m_zs.avail_out == 0 || (flush == Z_FINISH && status != Z_STREAM_END));
+  static void free_compressor(libdeflate_compressor* compressor) {
+    if (compressor != nullptr) libdeflate_free_compressor(compressor);
+  }
+  void flush_pending() {
+    write_member(m_pending.data(), m_pending.size());
+    m_pending.clear();
+  }
+  void write_member(const unsigned char* bytes, std::size_t size) {
+    throw_if_cancelled();
+    m_compressed.resize(libdeflate_gzip_compress_bound(m_compressor.get(), size));
+    std::size_t compressed = 0;
+    {
+      // One call that polls nothing (about 0.1 s), into memory: a cancelled run may be
+      // abandoned inside it.
+      const AbandonableWork compressing;
+      compressed =
+          libdeflate_gzip_compress(m_compressor.get(), bytes, size, m_compressed.data(), m_compressed.size());
+    }
+    if (compressed == 0) throw std::runtime_error("libdeflate: gzip compression failed");
+    m_file.write(m_compressed.data(), compressed);
+    m_wrote_member = true;
   }
 
   AtomicFileWriter m_file;
   bool m_gzip;
-  z_stream m_zs;
+  std::unique_ptr<libdeflate_compressor, void (*)(libdeflate_compressor*)> m_compressor;
+  std::vector<unsigned char> m_pending, m_compressed;
+  bool m_wrote_member = false;
 };
 
 template <typename T>
