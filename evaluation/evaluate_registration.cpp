@@ -30,9 +30,16 @@ std::vector<LandmarkRow> read_landmarks(const std::filesystem::path& path) {
   std::vector<LandmarkRow> rows;
   std::string line;
   int number = 0;
+  constexpr const char* k_header = "name,organ,x_mm,y_mm,z_mm";
   while (std::getline(in, line)) {
     ++number;
-    if (number == 1 || line.empty()) continue;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (number == 1) {
+      if (line != k_header)
+        throw InputError(path.string() + ":1: expected the header " + k_header + ", found '" + line + "'");
+      continue;
+    }
+    if (line.empty()) continue;
     std::stringstream fields(line);
     LandmarkRow row;
     std::string x, y, z;
@@ -53,6 +60,9 @@ std::vector<LandmarkRow> read_landmarks(const std::filesystem::path& path) {
     }
     rows.push_back(row);
   }
+  if (number == 0)
+    throw InputError(path.string() + ": expected the header " + std::string(k_header) +
+                     " and a line per landmark, found an empty file");
   return rows;
 }
 
@@ -307,18 +317,22 @@ std::string evaluation_table(const nlohmann::json& e) {
   out << "registration of " << e["moving_session"].get<std::string>() << " onto "
       << e["fixed_session"].get<std::string>() << ", subject " << e["subject"].get<std::string>() << " ("
       << e["result"]["kind"].get<std::string>() << ")\n";
-  auto summary_line = [&](const std::string& what, const nlohmann::json& s) {
+  auto summary_line = [&](const std::string& what, const nlohmann::json& s, const std::string& if_none) {
     out << "  " << what;
     if (s.is_null()) {
       out << "  -\n";
       return;
     }
+    if (s["count"].get<std::size_t>() == 0) {
+      out << "  none (" << if_none << ")\n";
+      return;
+    }
     out << "  mean " << number(s["mean"]) << "  sd " << number(s["sd"]) << "  p95 " << number(s["p95"])
         << "  max " << number(s["max"]) << "  (" << s["count"].get<std::size_t>() << ")\n";
   };
-  summary_line("landmark motion mm   ", e["landmark_displacement_mm"]);
-  summary_line("TRE mm               ", e["tre_mm"]);
-  summary_line("endpoint error mm    ", e["endpoint_error_mm"]);
+  summary_line("landmark motion mm   ", e["landmark_displacement_mm"], "no landmarks in the dataset");
+  summary_line("TRE mm               ", e["tre_mm"], "no landmarks in the dataset");
+  summary_line("endpoint error mm    ", e["endpoint_error_mm"], "no voxel in both exact masks");
   if (!e["jacobian"].is_null()) {
     out << "  log-Jacobian sd        " << number(e["jacobian"]["log_jacobian_sd"]) << "\n"
         << "  folding voxels         " << e["jacobian"]["folding_voxels"].get<std::int64_t>() << " ("

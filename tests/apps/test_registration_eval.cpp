@@ -234,3 +234,32 @@ TEST(EvalCommand, BadResultsGetClearMessages) {
             std::string::npos)
       << run.err;
 }
+
+// The landmark files are read strictly: an empty file or another header is an error naming the
+// file (and line); a header alone is a dataset without landmarks, reported as such.
+TEST(EvalCommand, LandmarkFilesWithoutAHeaderAreRefusedAndNoLandmarksAreSaidSo) {
+  const fs::path copy = fresh_folder("eval-landmarks") / "out";
+  fs::copy(small_dataset(), copy, fs::copy_options::recursive);
+  const fs::path csv =
+      copy / "derivatives" / "phantasm" / "sub-01" / "ses-ref" / "landmarks" / "sub-01_ses-ref_landmarks.csv";
+  ASSERT_TRUE(fs::exists(csv));
+  write_text_file(csv, "");
+  CommandResult run = run_command({k_phantasm, "eval", copy.string(), "--identity"});
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("sub-01_ses-ref_landmarks.csv: expected the header name,organ,x_mm,y_mm,z_mm and a "
+                         "line per landmark, found an empty file"),
+            std::string::npos)
+      << run.err;
+  write_text_file(csv, "label,x,y,z\nscalp,1,2,3\n");
+  run = run_command({k_phantasm, "eval", copy.string(), "--identity"});
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("sub-01_ses-ref_landmarks.csv:1: expected the header name,organ,x_mm,y_mm,z_mm, "
+                         "found 'label,x,y,z'"),
+            std::string::npos)
+      << run.err;
+  write_text_file(csv, "name,organ,x_mm,y_mm,z_mm\n");
+  run = run_command({k_phantasm, "eval", copy.string(), "--identity"});
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("TRE mm                 none (no landmarks in the dataset)"), std::string::npos)
+      << run.out;
+}
