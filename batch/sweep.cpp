@@ -39,6 +39,8 @@ public:
       : m_file(std::move(file)), m_text(text) {}
 
   [[noreturn]] void fail(const YAML::Mark& mark, const std::string& key, const std::string& message) const {
+    // A value set in a scene (scene_text_with_value) has no sweep file: the key path alone.
+    if (m_file.empty()) throw InputError((key.rfind("vary.", 0) == 0 ? key.substr(5) : key) + ": " + message);
     std::string where = m_file.string();
     if (mark.line >= 0) where += ":" + std::to_string(mark.line + 1) + ":" + std::to_string(mark.column + 1);
     throw InputError(where + ": " + key + ": " + message);
@@ -561,7 +563,7 @@ Sweep parse_sweep(const std::string& text, const std::filesystem::path& file, Sw
 
 std::string scene_text_with_value(const std::string& scene_text, const std::string& key,
                                   const std::string& value_yaml) {
-  const SweepReader reader("scene value");
+  const SweepReader reader{std::filesystem::path()};
   Variation v;
   v.key = key;
   v.mark = YAML::Mark::null_mark();

@@ -69,6 +69,12 @@ class PythonModule(unittest.TestCase):
             scene.set("acquisition.noise_percent", 500)
         self.assertIn("setting acquisition.noise_percent = 500", str(raised.exception))
         self.assertIn("expected a number in percent in [0, 100]", str(raised.exception))
+        # A key path the scene cannot take is named as the caller wrote it, not as a sweep's vary key.
+        with self.assertRaises(phantasm.InputError) as raised:
+            scene.set("deformation.loads[9].displacement_mm", 1)
+        self.assertIn("\ndeformation.loads[9].displacement_mm: expected list element [9] of 'loads'",
+                      str(raised.exception))
+        self.assertNotIn("vary.", str(raised.exception))
         with self.assertRaises(ValueError):
             self.simulation.image("T1w", "sideways")
         with self.assertRaises(KeyError):
