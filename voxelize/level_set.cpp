@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <mutex>
 
@@ -44,11 +45,59 @@ struct PatchHeights {
   /// no point of the patch lies farther from its base than the larger of the two.
   double above_mm = 0.0, below_mm = 0.0;
 
+  /// The bumps that may reach each cell of a k_cells^2 lattice over the (u, v) unit square, in
+  /// bump order: a patch carries tens of narrow bumps, a few of which cover any one point. After
+  /// the cells, one list of every bump (for a point that is not a number).
+  static constexpr int k_cells = 8;
+  std::vector<std::uint32_t> cell_bumps;
+  std::vector<std::uint32_t> cell_first; ///< cell c's bumps: cell_bumps[cell_first[c], cell_first[c + 1])
+
+  /// Lists each bump in the cells its support's bounding box meets (every cell when its shape is
+  /// not positive definite), the box widened well beyond rounding: a bump left out of a point's
+  /// cell has Q <= 0 there, as computed, so the height sums the same terms in the same order.
+  void index_bumps() {
+    std::vector<std::vector<std::uint32_t>> cells(k_cells * k_cells + 1);
+    const auto cell = [](double x) {
+      return static_cast<int>(std::clamp(std::floor(x * k_cells), 0.0, k_cells - 1.0));
+    };
+    for (std::size_t i = 0; i < bumps.size(); ++i) {
+      const Eigen::Matrix2d& S = bumps[i].shape_uv;
+      const double det = S.determinant();
+      int first[2] = {0, 0}, last[2] = {k_cells - 1, k_cells - 1};
+      // Well conditioned (det S / (S_uu S_vv) = 1 - rho^2 >= 1e-6): then d^T S d is computed to
+      // a relative 1e-8 at worst, far within the margin.
+      if (S(0, 0) > 0.0 && S(1, 1) > 0.0 && det > 1e-6 * S(0, 0) * S(1, 1)) {
+        // The support {d^T S d < 1} lies within c +- (sqrt((S^-1)_uu), sqrt((S^-1)_vv)).
+        const Eigen::Vector2d half(std::sqrt(S(1, 1) / det), std::sqrt(S(0, 0) / det));
+        for (int a = 0; a < 2; ++a) {
+          const double margin = 1e-6 * half[a] + 1e-9;
+          first[a] = cell(bumps[i].center_uv[a] - half[a] - margin);
+          last[a] = cell(bumps[i].center_uv[a] + half[a] + margin);
+        }
+      }
+      for (int v = first[1]; v <= last[1]; ++v)
+        for (int u = first[0]; u <= last[0]; ++u)
+          cells[static_cast<std::size_t>(v * k_cells + u)].push_back(static_cast<std::uint32_t>(i));
+      cells.back().push_back(static_cast<std::uint32_t>(i));
+    }
+    cell_first.assign(1, 0);
+    for (const auto& c : cells) {
+      cell_bumps.insert(cell_bumps.end(), c.begin(), c.end());
+      cell_first.push_back(static_cast<std::uint32_t>(cell_bumps.size()));
+    }
+  }
+
   /// Height above base point (u, v), mm, and its derivatives d/du, d/dv.
   double height(const Eigen::Vector2d& uv, Eigen::Vector2d* d_uv) const {
     double h = 0.0;
     d_uv->setZero();
-    for (const PatchBump& b : bumps) {
+    const auto cell = [](double x) {
+      return static_cast<std::size_t>(std::clamp(std::floor(x * k_cells), 0.0, k_cells - 1.0));
+    };
+    const std::size_t c =
+        uv.allFinite() ? cell(uv.y()) * k_cells + cell(uv.x()) : static_cast<std::size_t>(k_cells * k_cells);
+    for (std::uint32_t n = cell_first[c]; n < cell_first[c + 1]; ++n) {
+      const PatchBump& b = bumps[cell_bumps[n]];
       const Eigen::Vector2d d = uv - b.center_uv;
       const Eigen::Vector2d Sd = b.shape_uv * d;
       const double q = 1.0 - d.dot(Sd);
@@ -125,6 +174,7 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
     p.above_mm = std::max(0.0, range.highest);
     p.below_mm = std::max(0.0, -range.lowest);
     if (!p.bumps.empty()) {
+      p.index_bumps();
       const PatchFrame f = surface.frame(static_cast<Eigen::Index>(t));
       p.origin = f.origin;
       p.edge1 = f.edge1;
@@ -329,7 +379,86 @@ struct LevelSet::Probe::Impl {
   /// The last stencil read: samples close together (a voxel's supersamples) mostly share it.
   openvdb::Coord cached_cell = openvdb::Coord::max();
   float cached[2][2][2] = {};
+
+  /// Scratch of lattice(): per axis the points' cells and weights, the corners' values and the
+  /// interpolations along z and then y.
+  struct Axis {
+    std::vector<int> cell;
+    std::vector<double> weight;
+    int first = 0, count = 0; ///< the corners' index range: first .. first + count - 1
+  };
+  Axis axes[3];
+  std::vector<float> corners, along_z, along_y, values;
+
+  /// Each point's cell and weight along one axis, as operator() computes them; false when a
+  /// point lies beyond the stored blocks (its value is the background) or the map is not a
+  /// uniform scale.
+  bool set_axis(int a, const double* x, int n) {
+    Axis& axis = axes[a];
+    axis.cell.resize(static_cast<std::size_t>(n));
+    axis.weight.resize(static_cast<std::size_t>(n));
+    int low_cell = std::numeric_limits<int>::max(), high_cell = std::numeric_limits<int>::min();
+    for (int i = 0; i < n; ++i) {
+      const double index = x[i] * inverse_voxel;
+      if (!(index >= low[a] && index <= high[a])) return false;
+      const int cell = openvdb::math::Floor(index);
+      axis.cell[static_cast<std::size_t>(i)] = cell;
+      axis.weight[static_cast<std::size_t>(i)] = index - static_cast<double>(cell);
+      low_cell = std::min(low_cell, cell);
+      high_cell = std::max(high_cell, cell);
+    }
+    axis.first = low_cell;
+    axis.count = high_cell - low_cell + 2;
+    return true;
+  }
+
+  /// set_axis for the three axes, then read_corners; false: no lattice (see set_axis).
+  bool prepare_lattice(const double* xs, int nx, const double* ys, int ny, const double* zs, int nz);
+  /// The lattice's values from the corners read, into out[a + nx (b + ny c)].
+  void interpolate_lattice(float* out);
+
+  /// Reads the corners of every stencil (the box spanned by the axes' cells) into `corners`
+  /// (z fastest): the values OpenVDB's accessor gives, as operator() reads them.
+  void read_corners() {
+    const int cx = axes[0].count, cy = axes[1].count, cz = axes[2].count;
+    corners.resize(static_cast<std::size_t>(cx * cy * cz));
+    const openvdb::Coord origin(axes[0].first, axes[1].first, axes[2].first);
+    const openvdb::Coord last = origin + openvdb::Coord(cx - 1, cy - 1, cz - 1);
+    using Leaf = openvdb::FloatGrid::TreeType::LeafNodeType;
+    constexpr int mask = ~static_cast<int>(Leaf::DIM - 1);
+    if ((origin.x() & mask) == (last.x() & mask) && (origin.y() & mask) == (last.y() & mask) &&
+        (origin.z() & mask) == (last.z() & mask)) {
+      // Within one 8^3 block: its leaf's values, or one constant tile.
+      if (const Leaf* leaf = accessor.probeConstLeaf(origin)) {
+        const openvdb::Index base = Leaf::coordToOffset(origin);
+        std::size_t at = 0;
+        for (int i = 0; i < cx; ++i)
+          for (int j = 0; j < cy; ++j)
+            for (int k = 0; k < cz; ++k)
+              corners[at++] = leaf->getValue(
+                  base + static_cast<openvdb::Index>((i << (2 * Leaf::LOG2DIM)) + (j << Leaf::LOG2DIM) + k));
+      } else {
+        std::fill(corners.begin(), corners.end(), accessor.getValue(origin));
+      }
+      return;
+    }
+    std::size_t at = 0;
+    for (int i = 0; i < cx; ++i)
+      for (int j = 0; j < cy; ++j)
+        for (int k = 0; k < cz; ++k)
+          corners[at++] = accessor.getValue(origin + openvdb::Coord(i, j, k));
+  }
 };
+
+namespace {
+
+/// OpenVDB's BoxSampler's step between two values (its _interpolate), the same arithmetic.
+inline float interpolate(float a, float b, double weight) {
+  const double temp = (b - a) * weight;
+  return static_cast<float>(a + static_cast<float>(temp));
+}
+
+} // namespace
 
 LevelSet::Probe::Probe(const LevelSet& level_set)
     : m(std::make_unique<Impl>(*level_set.m->grid, level_set.m_voxel_size)) {}
@@ -376,6 +505,97 @@ double LevelSet::Probe::operator()(const Eigen::Vector3d& x) const {
   }
   const openvdb::Vec3d uvw = stencil - openvdb::Vec3d(cell.x(), cell.y(), cell.z());
   return static_cast<double>(openvdb::tools::BoxSampler::trilinearInterpolation(data, uvw));
+}
+
+bool LevelSet::Probe::Impl::prepare_lattice(const double* xs, int nx, const double* ys, int ny,
+                                            const double* zs, int nz) {
+  if (!scale_only || !set_axis(0, xs, nx) || !set_axis(1, ys, ny) || !set_axis(2, zs, nz)) return false;
+  read_corners();
+  return true;
+}
+
+void LevelSet::Probe::Impl::interpolate_lattice(float* out) {
+  const Axis &x = axes[0], &y = axes[1], &z = axes[2];
+  const std::size_t sx = x.cell.size(), sy = y.cell.size(), sz = z.cell.size();
+  const auto cx = static_cast<std::size_t>(x.count), cy = static_cast<std::size_t>(y.count),
+             cz = static_cast<std::size_t>(z.count);
+  // Along z at every corner column (i, j) and point c, then along y at (i, b, c), then along x:
+  // the order of BoxSampler::trilinearInterpolation, each step on the same two values.
+  along_z.resize(cx * cy * sz);
+  for (std::size_t ij = 0; ij < cx * cy; ++ij)
+    for (std::size_t c = 0; c < sz; ++c) {
+      const auto k = static_cast<std::size_t>(z.cell[c] - z.first);
+      along_z[ij * sz + c] = interpolate(corners[ij * cz + k], corners[ij * cz + k + 1], z.weight[c]);
+    }
+  along_y.resize(cx * sy * sz);
+  for (std::size_t i = 0; i < cx; ++i)
+    for (std::size_t b = 0; b < sy; ++b) {
+      const auto j = static_cast<std::size_t>(y.cell[b] - y.first);
+      const float* below = &along_z[(i * cy + j) * sz];
+      const float* above = below + sz;
+      float* row = &along_y[(i * sy + b) * sz];
+      for (std::size_t c = 0; c < sz; ++c)
+        row[c] = interpolate(below[c], above[c], y.weight[b]);
+    }
+  for (std::size_t a = 0; a < sx; ++a) {
+    const auto i = static_cast<std::size_t>(x.cell[a] - x.first);
+    for (std::size_t b = 0; b < sy; ++b) {
+      const float* below = &along_y[(i * sy + b) * sz];
+      const float* above = below + sy * sz;
+      for (std::size_t c = 0; c < sz; ++c)
+        out[a + sx * (b + sy * c)] = interpolate(below[c], above[c], x.weight[a]);
+    }
+  }
+}
+
+void LevelSet::Probe::lattice(const double* xs, int nx, const double* ys, int ny, const double* zs, int nz,
+                              float* values) const {
+  if (nx <= 0 || ny <= 0 || nz <= 0) return;
+  if (m->prepare_lattice(xs, nx, ys, ny, zs, nz)) {
+    m->interpolate_lattice(values);
+    return;
+  }
+  // Beyond the blocks, or a map other than a scale: point by point.
+  for (int c = 0; c < nz; ++c)
+    for (int b = 0; b < ny; ++b)
+      for (int a = 0; a < nx; ++a)
+        values[a + nx * (b + ny * c)] = static_cast<float>((*this)(Eigen::Vector3d(xs[a], ys[b], zs[c])));
+}
+
+void LevelSet::Probe::lattice_inside(const double* xs, int nx, const double* ys, int ny, const double* zs,
+                                     int nz, std::uint8_t* inside) const {
+  if (nx <= 0 || ny <= 0 || nz <= 0) return;
+  const std::size_t count =
+      static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny) * static_cast<std::size_t>(nz);
+  Impl& p = *m;
+  p.values.resize(count);
+  if (p.prepare_lattice(xs, nx, ys, ny, zs, nz)) {
+    // Each step a + (b - a) w (w in [0, 1]) lies between a and b, rounded, when both are >= 0
+    // or both <= 0: each rounding is monotone and a and b are representable. So corners all
+    // >= 0 give values >= 0: none inside. Corners all in [-B, -m] give values within
+    // 3 * 2^-22 B of that range (each step errs by at most 2^-22 B before its last rounding,
+    // which keeps the sign), so all below zero when m >= 1e-5 B.
+    float smallest = p.corners.front(), largest = smallest;
+    bool finite = true;
+    for (const float v : p.corners) {
+      finite = finite && std::isfinite(v);
+      smallest = std::min(smallest, v);
+      largest = std::max(largest, v);
+    }
+    if (finite && smallest >= 0.0f) {
+      std::fill(inside, inside + count, std::uint8_t{0});
+      return;
+    }
+    if (finite && largest <= -std::max(1e-5f * -smallest, 1e-20f)) {
+      std::fill(inside, inside + count, std::uint8_t{1});
+      return;
+    }
+    p.interpolate_lattice(p.values.data());
+  } else {
+    lattice(xs, nx, ys, ny, zs, nz, p.values.data());
+  }
+  for (std::size_t s = 0; s < count; ++s)
+    inside[s] = p.values[s] < 0.0f ? 1 : 0;
 }
 
 } // namespace phantasm

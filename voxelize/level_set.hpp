@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -61,6 +62,19 @@ public:
     Probe(Probe&&) noexcept;
     /// Signed distance at a world point, mm (negative inside), clamped to the band.
     double operator()(const Eigen::Vector3d& x) const;
+    /// The values at the points (xs[a], ys[b], zs[c]) of an axis-aligned lattice of world
+    /// points, into values[a + nx (b + ny c)]: each the same, bit for bit, as operator() at that
+    /// point (as a float), but the stencils' shared corners read once and the interpolation
+    /// taken axis by axis (z, then y, then x, as OpenVDB's BoxSampler), each partial result
+    /// shared by the points that need it: a voxel's supersamples.
+    void lattice(const double* xs, int nx, const double* ys, int ny, const double* zs, int nz,
+                 float* values) const;
+    /// Whether each point of the lattice lies inside (its value as lattice() gives it is
+    /// negative), into inside[a + nx (b + ny c)]. When every corner of the stencils is
+    /// positive, or every one negative and well away from zero, so is every value: then
+    /// nothing is interpolated.
+    void lattice_inside(const double* xs, int nx, const double* ys, int ny, const double* zs, int nz,
+                        std::uint8_t* inside) const;
 
   private:
     struct Impl;

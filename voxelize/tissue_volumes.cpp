@@ -132,104 +132,192 @@ std::vector<std::uint8_t> blocks_alike(const std::vector<VoxelizedOrgan>& organs
 TissueVolumes voxelize_tissues(const ImageGrid& grid, const std::vector<VoxelizedOrgan>& organs,
                                int tissue_count, int supersampling, const TissuesToReuse& reuse) {
   const auto count = static_cast<std::size_t>(grid.voxel_count());
-  TissueVolumes out;
-  out.labels.assign(count, 0);
-  out.background.assign(count, 0.0f);
-  out.fractions.assign(static_cast<std::size_t>(tissue_count), std::vector<float>(count, 0.0f));
   const BlockValues blocks = block_values(grid, organs);
   std::vector<std::uint8_t> copied; // per block: the other state's voxels are this one's
   if (reuse.volumes && reuse.organs && reuse.volumes->labels.size() == count &&
-      reuse.volumes->fractions.size() == out.fractions.size())
+      reuse.volumes->fractions.size() == static_cast<std::size_t>(tissue_count))
     copied = blocks_alike(organs, blocks, *reuse.organs, block_values(grid, *reuse.organs));
+  TissueVolumes out;
+  if (!copied.empty()) {
+    // The other state's voxels whole; the blocks that are not copied are written over below.
+    out.labels = reuse.volumes->labels;
+    out.background = reuse.volumes->background;
+    out.fractions = reuse.volumes->fractions;
+  } else {
+    out.labels.assign(count, 0);
+    out.background.assign(count, 0.0f);
+    out.fractions.assign(static_cast<std::size_t>(tissue_count), std::vector<float>(count, 0.0f));
+  }
   const int n = std::max(1, supersampling);
+  const auto samples =
+      static_cast<std::size_t>(n) * static_cast<std::size_t>(n) * static_cast<std::size_t>(n);
+  std::vector<Eigen::Vector3d> offsets; // a fastest, then b, then c
+  offsets.reserve(samples);
+  for (int c = 0; c < n; ++c)
+    for (int b = 0; b < n; ++b)
+      for (int a = 0; a < n; ++a)
+        offsets.emplace_back((a + 0.5) / n - 0.5, (b + 0.5) / n - 0.5, (c + 0.5) / n - 0.5);
   const double half_diagonal = 0.5 * grid.spacing_mm.norm();
   const Eigen::Matrix3d axes = grid.world_from_voxel.topLeftCorner<3, 3>();
+  const double weight = 1.0 / (n * n * n);
   std::size_t sampled = 0;
   std::atomic<int> slabs_done{0};
   const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
+  constexpr std::size_t block_voxels = k_block * k_block * k_block;
+  const std::size_t organ_count = organs.size();
 #pragma omp parallel reduction(+ : sampled)
   {
     std::vector<LevelSet::Probe> probes;
     for (const VoxelizedOrgan& organ : organs)
       probes.emplace_back(*organ.level_set);
-    std::vector<double> centre_distance(organs.size());
-    std::vector<double> organ_share(organs.size());
-    std::vector<std::uint8_t> varies(organs.size());
+    std::vector<double> centre_distance(organ_count);
+    std::vector<double> organ_share(organ_count);
+    std::vector<std::uint8_t> varies(organ_count);
+    // A block's voxel centres (i fastest), and the varying organs' values there.
+    std::vector<Eigen::Vector3d> centres(block_voxels);
+    std::vector<float> centre_values(organ_count * block_voxels);
+    // A sampled voxel's samples, and per organ whether each lies inside.
+    std::vector<Eigen::Vector3d> points(samples);
+    std::vector<std::uint8_t> sample_inside(organ_count * samples);
+    std::vector<double> lattice[3];
+    // Whether the points p[a + na (b + nb c)] form a lattice: x depends on a alone, y on b alone
+    // and z on c alone (a grid whose axes are the world's), bit for bit. Then the lattice's
+    // coordinates along each axis go to `lattice`, for LevelSet::Probe::lattice, which gives
+    // the same values as probing point by point.
+    const auto form_lattice = [&lattice](const Eigen::Vector3d* p, int na, int nb, int nc) {
+      lattice[0].resize(static_cast<std::size_t>(na));
+      lattice[1].resize(static_cast<std::size_t>(nb));
+      lattice[2].resize(static_cast<std::size_t>(nc));
+      for (int a = 0; a < na; ++a)
+        lattice[0][static_cast<std::size_t>(a)] = p[a].x();
+      for (int b = 0; b < nb; ++b)
+        lattice[1][static_cast<std::size_t>(b)] = p[na * b].y();
+      for (int c = 0; c < nc; ++c)
+        lattice[2][static_cast<std::size_t>(c)] = p[na * nb * c].z();
+      for (int c = 0; c < nc; ++c)
+        for (int b = 0; b < nb; ++b)
+          for (int a = 0; a < na; ++a) {
+            const Eigen::Vector3d& x = *p++;
+            if (!(x.x() == lattice[0][static_cast<std::size_t>(a)] &&
+                  x.y() == lattice[1][static_cast<std::size_t>(b)] &&
+                  x.z() == lattice[2][static_cast<std::size_t>(c)]))
+              return false;
+          }
+      return true;
+    };
+    // The grid in blocks of k_block^3 voxels, a slab of blocks at a time: each organ that varies
+    // over a block is read there once, at all its voxel centres together.
 #pragma omp for schedule(dynamic, 1)
-    for (int k = 0; k < nz; ++k) {
+    for (int kb = 0; kb < blocks.blocks.z(); ++kb) {
       if (cancellation_requested()) continue; // no exception may leave an OpenMP region
       const int slab = slabs_done.fetch_add(1) + 1;
       if (progress_detail_due())
-        progress_detail("tissue fractions, slab " + std::to_string(slab) + "/" + std::to_string(nz));
-      for (int j = 0; j < ny; ++j) {
-        for (int i = 0; i < nx; ++i) {
-          const std::size_t index = voxel_index(grid.dims, i, j, k);
-          const std::size_t block = blocks.block_of(i, j, k);
-          if (!copied.empty() && copied[block]) {
-            out.labels[index] = reuse.volumes->labels[index];
-            out.background[index] = reuse.volumes->background[index];
-            for (std::size_t t = 0; t < out.fractions.size(); ++t)
-              out.fractions[t][index] = reuse.volumes->fractions[t][index];
-            continue;
-          }
-          const Eigen::Vector3d centre = grid.world_from_index(Eigen::Vector3d(i, j, k));
-          bool decided = true;
-          for (std::size_t o = 0; o < organs.size(); ++o) {
-            const std::size_t at = block * organs.size() + o;
-            varies[o] = blocks.varies[at];
-            centre_distance[o] = varies[o] ? probes[o](centre) : static_cast<double>(blocks.value[at]);
-            if (std::abs(centre_distance[o]) < half_diagonal) decided = false;
-          }
-          auto deepest = [&](auto&& inside) {
-            int best = -1;
-            for (std::size_t o = 0; o < organs.size(); ++o) {
-              if (inside(o) && (best < 0 || organs[o].depth >= organs[static_cast<std::size_t>(best)].depth))
-                best = static_cast<int>(o);
+        progress_detail("tissue fractions, slab " + std::to_string(slab) + "/" +
+                        std::to_string(blocks.blocks.z()));
+      for (int jb = 0; jb < blocks.blocks.y(); ++jb) {
+        for (int ib = 0; ib < blocks.blocks.x(); ++ib) {
+          const int i0 = ib * k_block, j0 = jb * k_block, k0 = kb * k_block;
+          const std::size_t block = blocks.block_of(i0, j0, k0);
+          if (!copied.empty() && copied[block]) continue;
+          const int bx = std::min(k_block, nx - i0), by = std::min(k_block, ny - j0),
+                    bz = std::min(k_block, nz - k0);
+          const auto voxels = static_cast<std::size_t>(bx * by * bz);
+          std::size_t v = 0;
+          for (int k = k0; k < k0 + bz; ++k)
+            for (int j = j0; j < j0 + by; ++j)
+              for (int i = i0; i < i0 + bx; ++i)
+                centres[v++] = grid.world_from_index(Eigen::Vector3d(i, j, k));
+          bool centres_form_lattice = false, formed = false;
+          for (std::size_t o = 0; o < organ_count; ++o) {
+            if (!blocks.varies[block * organ_count + o]) continue;
+            if (!formed) {
+              centres_form_lattice = form_lattice(centres.data(), bx, by, bz);
+              formed = true;
             }
-            return best;
-          };
-          std::fill(organ_share.begin(), organ_share.end(), 0.0);
-          double background = 0.0;
-          if (decided) {
-            const int owner = deepest([&](std::size_t o) { return centre_distance[o] < 0.0; });
-            (owner < 0 ? background : organ_share[static_cast<std::size_t>(owner)]) = 1.0;
-          } else {
-            ++sampled;
-            const double weight = 1.0 / (n * n * n);
-            for (int c = 0; c < n; ++c) {
-              for (int b = 0; b < n; ++b) {
-                for (int a = 0; a < n; ++a) {
-                  const Eigen::Vector3d offset((a + 0.5) / n - 0.5, (b + 0.5) / n - 0.5, (c + 0.5) / n - 0.5);
-                  const Eigen::Vector3d x = centre + axes * offset;
-                  // An organ far from the centre, or with one value over the block, is on the
-                  // centre's side at every sample.
-                  const int owner = deepest([&](std::size_t o) {
-                    return std::abs(centre_distance[o]) >= half_diagonal || !varies[o]
-                               ? centre_distance[o] < 0.0
-                               : probes[o](x) < 0.0;
-                  });
-                  (owner < 0 ? background : organ_share[static_cast<std::size_t>(owner)]) += weight;
+            float* values = &centre_values[o * block_voxels];
+            if (centres_form_lattice) {
+              probes[o].lattice(lattice[0].data(), bx, lattice[1].data(), by, lattice[2].data(), bz, values);
+            } else {
+              for (std::size_t w = 0; w < voxels; ++w)
+                values[w] = static_cast<float>(probes[o](centres[w]));
+            }
+          }
+          v = 0;
+          for (int k = k0; k < k0 + bz; ++k) {
+            for (int j = j0; j < j0 + by; ++j) {
+              for (int i = i0; i < i0 + bx; ++i, ++v) {
+                const std::size_t index = voxel_index(grid.dims, i, j, k);
+                const Eigen::Vector3d& centre = centres[v];
+                bool decided = true;
+                for (std::size_t o = 0; o < organ_count; ++o) {
+                  const std::size_t at = block * organ_count + o;
+                  varies[o] = blocks.varies[at];
+                  centre_distance[o] =
+                      static_cast<double>(varies[o] ? centre_values[o * block_voxels + v] : blocks.value[at]);
+                  if (std::abs(centre_distance[o]) < half_diagonal) decided = false;
                 }
+                auto deepest = [&](auto&& inside) {
+                  int best = -1;
+                  for (std::size_t o = 0; o < organ_count; ++o) {
+                    if (inside(o) &&
+                        (best < 0 || organs[o].depth >= organs[static_cast<std::size_t>(best)].depth))
+                      best = static_cast<int>(o);
+                  }
+                  return best;
+                };
+                std::fill(organ_share.begin(), organ_share.end(), 0.0);
+                double background = 0.0;
+                if (decided) {
+                  const int owner = deepest([&](std::size_t o) { return centre_distance[o] < 0.0; });
+                  (owner < 0 ? background : organ_share[static_cast<std::size_t>(owner)]) = 1.0;
+                } else {
+                  ++sampled;
+                  for (std::size_t s = 0; s < samples; ++s)
+                    points[s] = centre + axes * offsets[s];
+                  const bool samples_form_lattice = form_lattice(points.data(), n, n, n);
+                  for (std::size_t o = 0; o < organ_count; ++o) {
+                    std::uint8_t* in = &sample_inside[o * samples];
+                    if (std::abs(centre_distance[o]) >= half_diagonal || !varies[o]) {
+                      // An organ far from the centre, or with one value over the block, is on
+                      // the centre's side at every sample.
+                      std::fill(in, in + samples,
+                                static_cast<std::uint8_t>(centre_distance[o] < 0.0 ? 1 : 0));
+                    } else if (samples_form_lattice) {
+                      probes[o].lattice_inside(lattice[0].data(), n, lattice[1].data(), n, lattice[2].data(),
+                                               n, in);
+                    } else {
+                      for (std::size_t s = 0; s < samples; ++s)
+                        in[s] = probes[o](points[s]) < 0.0 ? 1 : 0;
+                    }
+                  }
+                  for (std::size_t s = 0; s < samples; ++s) {
+                    const int owner =
+                        deepest([&](std::size_t o) { return sample_inside[o * samples + s] != 0; });
+                    (owner < 0 ? background : organ_share[static_cast<std::size_t>(owner)]) += weight;
+                  }
+                }
+                int label = 0;
+                double largest = background;
+                double empty = background; // outside every organ, or in a gap filled with air
+                for (std::vector<float>& fraction : out.fractions)
+                  fraction[index] = 0.0f; // a block copied whole from the other state is written over
+                for (std::size_t o = 0; o < organ_count; ++o) {
+                  if (organs[o].tissue < 0) {
+                    empty += organ_share[o];
+                  } else {
+                    out.fractions[static_cast<std::size_t>(organs[o].tissue)][index] +=
+                        static_cast<float>(organ_share[o]);
+                  }
+                  if (organ_share[o] > largest) {
+                    largest = organ_share[o];
+                    label = organs[o].label;
+                  }
+                }
+                out.background[index] = static_cast<float>(empty);
+                out.labels[index] = label;
               }
             }
           }
-          int label = 0;
-          double largest = background;
-          double empty = background; // outside every organ, or in a gap filled with air
-          for (std::size_t o = 0; o < organs.size(); ++o) {
-            if (organs[o].tissue < 0) {
-              empty += organ_share[o];
-            } else {
-              out.fractions[static_cast<std::size_t>(organs[o].tissue)][index] +=
-                  static_cast<float>(organ_share[o]);
-            }
-            if (organ_share[o] > largest) {
-              largest = organ_share[o];
-              label = organs[o].label;
-            }
-          }
-          out.background[index] = static_cast<float>(empty);
-          out.labels[index] = label;
         }
       }
     }

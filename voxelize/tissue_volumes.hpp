@@ -31,9 +31,11 @@ struct TissuesToReuse {
 /// are sampled at supersampling^3 points (the deepest organ holding each sample counts it).
 /// The grid is taken in blocks of 8^3 voxels: an organ whose level set stores nothing near a
 /// block (LevelSet::block_reach_mm) has one value over all of it, read once, so each organ is
-/// probed only in the blocks its band reaches; the values, hence the result, are the same as
-/// probing every organ at every point. Parallel over slices (OpenMP); the result does not depend
-/// on the number of threads.
+/// probed only in the blocks its band reaches. There it is read at all the block's voxel centres
+/// at once, and at a voxel's samples at once, as lattices (LevelSet::Probe::lattice) where the
+/// grid's axes are the world's, point by point elsewhere. The values, hence the result, are the
+/// same as probing every organ at every point. Parallel over slabs of blocks (OpenMP); the result
+/// does not depend on the number of threads.
 /// @param reuse another state's result: its voxels are copied in every block where each organ
 ///        (matched by label, depth and tissue) has the same level set or the same one value in
 ///        both, and the organs without a match (gaps) lie wholly outside; the same bytes as

@@ -16,7 +16,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <random>
 #include <vector>
 
@@ -61,6 +63,83 @@ PatchSurface bumpy_sphere() {
         t, {phantasm::testing::disc_in_triangle(base, t, {1.0 / 3.0, 1.0 / 3.0}, 0.8, t % 2 ? -0.6 : 0.6)});
   }
   return surface;
+}
+
+/// The float's bits, so that comparisons tell -0 from +0.
+std::uint32_t bits(float x) {
+  std::uint32_t b = 0;
+  std::memcpy(&b, &x, sizeof b);
+  return b;
+}
+
+/// voxelize_tissues as it was first written, for comparison: every voxel's centre probed in
+/// every organ, and each supersample of a voxel near a surface probed in every organ near it.
+TissueVolumes probe_every_sample(const ImageGrid& grid, const std::vector<VoxelizedOrgan>& organs,
+                                 int tissue_count, int n) {
+  const auto count = static_cast<std::size_t>(grid.voxel_count());
+  TissueVolumes out;
+  out.labels.assign(count, 0);
+  out.background.assign(count, 0.0f);
+  out.fractions.assign(static_cast<std::size_t>(tissue_count), std::vector<float>(count, 0.0f));
+  std::vector<LevelSet::Probe> probes;
+  for (const VoxelizedOrgan& organ : organs)
+    probes.emplace_back(*organ.level_set);
+  const double half_diagonal = 0.5 * grid.spacing_mm.norm();
+  const Eigen::Matrix3d axes = grid.world_from_voxel.topLeftCorner<3, 3>();
+  std::vector<double> centre_distance(organs.size()), share(organs.size());
+  for (int k = 0; k < grid.dims.z(); ++k)
+    for (int j = 0; j < grid.dims.y(); ++j)
+      for (int i = 0; i < grid.dims.x(); ++i) {
+        const std::size_t index = voxel_index(grid.dims, i, j, k);
+        const Eigen::Vector3d centre = grid.world_from_index(Eigen::Vector3d(i, j, k));
+        bool decided = true;
+        for (std::size_t o = 0; o < organs.size(); ++o) {
+          centre_distance[o] = probes[o](centre);
+          decided = decided && std::abs(centre_distance[o]) >= half_diagonal;
+        }
+        const auto deepest = [&](auto&& inside) {
+          int best = -1;
+          for (std::size_t o = 0; o < organs.size(); ++o)
+            if (inside(o) && (best < 0 || organs[o].depth >= organs[static_cast<std::size_t>(best)].depth))
+              best = static_cast<int>(o);
+          return best;
+        };
+        std::fill(share.begin(), share.end(), 0.0);
+        double background = 0.0;
+        if (decided) {
+          const int owner = deepest([&](std::size_t o) { return centre_distance[o] < 0.0; });
+          (owner < 0 ? background : share[static_cast<std::size_t>(owner)]) = 1.0;
+        } else {
+          ++out.supersampled_voxels;
+          for (int c = 0; c < n; ++c)
+            for (int b = 0; b < n; ++b)
+              for (int a = 0; a < n; ++a) {
+                const Eigen::Vector3d x =
+                    centre +
+                    axes * Eigen::Vector3d((a + 0.5) / n - 0.5, (b + 0.5) / n - 0.5, (c + 0.5) / n - 0.5);
+                const int owner = deepest([&](std::size_t o) {
+                  return std::abs(centre_distance[o]) >= half_diagonal ? centre_distance[o] < 0.0
+                                                                       : probes[o](x) < 0.0;
+                });
+                (owner < 0 ? background : share[static_cast<std::size_t>(owner)]) += 1.0 / (n * n * n);
+              }
+        }
+        int label = 0;
+        double largest = background, empty = background;
+        for (std::size_t o = 0; o < organs.size(); ++o) {
+          if (organs[o].tissue < 0)
+            empty += share[o];
+          else
+            out.fractions[static_cast<std::size_t>(organs[o].tissue)][index] += static_cast<float>(share[o]);
+          if (share[o] > largest) {
+            largest = share[o];
+            label = organs[o].label;
+          }
+        }
+        out.background[index] = static_cast<float>(empty);
+        out.labels[index] = label;
+      }
+  return out;
 }
 
 } // namespace
@@ -169,6 +248,149 @@ TEST(LevelSet, ProbeIsOpenVdbsTrilinearSampleBitForBit) {
     in_band += std::abs(expected) < level_set.half_width_mm();
   }
   EXPECT_GT(in_band, 10000); // the band itself was sampled, not only tiles
+}
+
+// LevelSet::Probe::lattice reads a lattice's stencils once and interpolates axis by axis; each
+// value must be the probe's at that point bit for bit, and lattice_inside (which skips the
+// interpolation where every corner has one sign) the probe's sign. Lattices of 1 to 6 points a
+// side, spaced from a tenth of a voxel to two voxels (stencils spanning up to 12 cells), in the
+// band, across leaf boundaries, in tiles deep inside and outside, and reaching beyond the blocks.
+TEST(LevelSet, LatticeIsTheProbeAtEachPointBitForBit) {
+  const PatchSurface surface = bumpy_sphere();
+  const LevelSet level_set(surface, 0.7);
+  const LevelSet::Probe probe(level_set), lattice_probe(level_set);
+  std::mt19937 random(23);
+  std::uniform_real_distribution<double> coordinate(-32.0, 32.0), spacing(0.07, 1.4), radius(17.0, 23.0);
+  std::uniform_int_distribution<int> side(1, 6);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  int compared = 0, in_band = 0, inside = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    Eigen::Vector3d origin(coordinate(random), coordinate(random), coordinate(random));
+    if (trial % 2) // half of them near the surface
+      origin = radius(random) * Eigen::Vector3d(unit(random), unit(random), unit(random)).normalized();
+    const int n[3] = {side(random), side(random), side(random)};
+    std::vector<double> axis[3];
+    for (int a = 0; a < 3; ++a) {
+      const double step = spacing(random);
+      for (int i = 0; i < n[a]; ++i)
+        axis[a].push_back(origin[a] + step * (i - 0.5 * (n[a] - 1)));
+    }
+    const std::size_t count = static_cast<std::size_t>(n[0] * n[1] * n[2]);
+    std::vector<float> values(count);
+    std::vector<std::uint8_t> signs(count);
+    lattice_probe.lattice(axis[0].data(), n[0], axis[1].data(), n[1], axis[2].data(), n[2], values.data());
+    lattice_probe.lattice_inside(axis[0].data(), n[0], axis[1].data(), n[1], axis[2].data(), n[2],
+                                 signs.data());
+    for (int c = 0; c < n[2]; ++c)
+      for (int b = 0; b < n[1]; ++b)
+        for (int a = 0; a < n[0]; ++a) {
+          const Eigen::Vector3d x(axis[0][static_cast<std::size_t>(a)], axis[1][static_cast<std::size_t>(b)],
+                                  axis[2][static_cast<std::size_t>(c)]);
+          const double expected = probe(x);
+          const std::size_t at = static_cast<std::size_t>(a + n[0] * (b + n[1] * c));
+          ASSERT_EQ(bits(values[at]), bits(static_cast<float>(expected))) << x.transpose();
+          ASSERT_EQ(signs[at] != 0, expected < 0.0) << x.transpose();
+          ++compared;
+          in_band += std::abs(expected) < level_set.half_width_mm();
+          inside += expected < 0.0;
+        }
+  }
+  EXPECT_GT(in_band, 50000);
+  EXPECT_GT(inside, 50000);
+  EXPECT_GT(compared - inside, 50000);
+}
+
+// Many bumps on every patch, off centre and elongated, as fitted anatomy carries them (there,
+// 27 per patch): the level set built from the patches, whose heights sum only the bumps that
+// reach the point's cell of the patch, is near zero on the surface, over the crests and between
+// them. (A bump left out where it reaches would leave an error of its amplitude, 0.3 to 0.6 mm.)
+TEST(PatchLevelSet, ManyBumpsPerPatchAreAllOnTheSurface) {
+  TriangleMesh base = unit_icosphere(0);
+  base.vertices *= 20.0;
+  PatchSurface surface(base, "many bumps");
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<std::vector<Eigen::Vector2d>> centres(static_cast<std::size_t>(base.face_count()));
+  for (Eigen::Index t = 0; t < base.face_count(); ++t) {
+    std::vector<PatchBump> bumps;
+    for (int i = 0; i < 16; ++i) {
+      // Centres well inside the triangle, radii small enough that the support stays inside.
+      double u = 0.0, v = 0.0;
+      do {
+        u = unit(random);
+        v = unit(random);
+      } while (u < 0.25 || v < 0.25 || u + v > 0.75);
+      const double amplitude = (i % 2 ? -1.0 : 1.0) * (0.3 + 0.3 * unit(random));
+      PatchBump bump = disc_in_triangle(base, t, {u, v}, 0.2 + 0.1 * unit(random), amplitude);
+      bump.shape_uv(0, 0) *= 1.0 + unit(random); // narrower along u: still inside the disc
+      bumps.push_back(bump);
+      centres[static_cast<std::size_t>(t)].emplace_back(u, v);
+    }
+    surface.set_bumps(t, bumps);
+  }
+  const double h = 0.25;
+  const LevelSet level_set(surface, h);
+  const LevelSet::Probe probe(level_set);
+  double worst = 0.0;
+  for (Eigen::Index t = 0; t < surface.patch_count(); ++t) {
+    std::vector<Eigen::Vector2d> uvs = centres[static_cast<std::size_t>(t)];
+    for (int i = 0; i < 200; ++i) {
+      const double u = unit(random), v = unit(random);
+      if (u + v < 1.0) uvs.emplace_back(u, v);
+    }
+    for (const Eigen::Vector2d& uv : uvs)
+      worst = std::max(worst, std::abs(probe(surface.surface_point(t, uv.x(), uv.y()))));
+  }
+  std::printf("largest |distance| on the surface: %.3f mm\n", worst);
+  EXPECT_LT(worst, 0.3 * h);
+}
+
+// The tissue fractions read each organ at a block's voxel centres, and at a voxel's samples,
+// as lattices where the grid's axes are the world's; they must be the bytes of probing every
+// point one by one (probe_every_sample), on such grids and on oblique ones (point by point),
+// with anisotropic voxels and 1 to 5 samples a side. Two overlapping organs at one depth
+// (the later one wins) inside a third, and a gap organ (no tissue) within it.
+TEST(TissueFractions, LatticesGiveTheBytesOfProbingEverySample) {
+  const auto sphere = [](double radius, const Eigen::Vector3d& centre) {
+    TriangleMesh mesh = unit_icosphere(4);
+    mesh.vertices = (mesh.vertices * radius).rowwise() + centre.transpose();
+    return LevelSet(mesh, 0.8);
+  };
+  const LevelSet outer = sphere(11.0, Eigen::Vector3d::Zero());
+  const LevelSet left = sphere(4.5, Eigen::Vector3d(-2.5, 0.3, 0.0));
+  const LevelSet right = sphere(4.0, Eigen::Vector3d(2.0, -0.4, 0.7));
+  const LevelSet gap = sphere(2.0, Eigen::Vector3d(0.0, 6.0, 0.0));
+  const std::vector<VoxelizedOrgan> organs{
+      {&outer, 0, 1, 0}, {&left, 2, 2, 1}, {&right, 2, 3, 2}, {&gap, 1, 4, -1}};
+  const Eigen::Matrix3d oblique =
+      Eigen::AngleAxisd(0.3, Eigen::Vector3d(1.0, 2.0, 0.5).normalized()).toRotationMatrix();
+  struct Case {
+    Eigen::Vector3d spacing;
+    bool rotated;
+    int supersampling;
+  };
+  for (const Case& c :
+       {Case{{0.8, 0.8, 0.8}, false, 4}, Case{{1.0, 0.7, 2.1}, false, 3}, Case{{0.5, 0.5, 0.5}, false, 5},
+        Case{{0.9, 0.9, 0.9}, true, 4}, Case{{1.3, 0.6, 0.8}, false, 1}, Case{{0.8, 0.8, 1.6}, true, 2}}) {
+    ImageGrid grid;
+    grid.spacing_mm = c.spacing;
+    grid.dims = (Eigen::Vector3d::Constant(26.0).cwiseQuotient(c.spacing)).cast<int>();
+    const Eigen::Matrix3d axes = (c.rotated ? oblique : Eigen::Matrix3d::Identity()) * c.spacing.asDiagonal();
+    grid.world_from_voxel.topLeftCorner<3, 3>() = axes;
+    grid.world_from_voxel.topRightCorner<3, 1>() =
+        -axes * (0.5 * grid.dims.cast<double>()) + Eigen::Vector3d(0.31, -0.17, 0.05);
+    const TissueVolumes expected = probe_every_sample(grid, organs, 3, c.supersampling);
+    const TissueVolumes v = voxelize_tissues(grid, organs, 3, c.supersampling);
+    SCOPED_TRACE(::testing::Message() << "spacing " << c.spacing.transpose() << (c.rotated ? ", oblique" : "")
+                                      << ", " << c.supersampling << "^3 samples");
+    EXPECT_EQ(v.labels, expected.labels);
+    EXPECT_EQ(v.background, expected.background);
+    EXPECT_EQ(v.fractions, expected.fractions);
+    EXPECT_EQ(v.supersampled_voxels, expected.supersampled_voxels);
+    EXPECT_GT(expected.supersampled_voxels, 1000u);
+    for (int label = 1; label <= 4; ++label)
+      EXPECT_GT(std::count(v.labels.begin(), v.labels.end(), label), 5) << label;
+  }
 }
 
 // Outside every box of LevelSet::block_reach_mm a probe reads constant tiles: exactly the band
