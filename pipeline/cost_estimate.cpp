@@ -253,13 +253,15 @@ CostEstimate estimate_cost(const Scene& scene) {
                   steps;
   e.voxelize_seconds = e.dense_voxels * e.states * k_seconds_per_dense_voxel +
                        e.band_voxels * k_seconds_per_band_voxel + e.supersamples * k_seconds_per_sample +
+                       e.patches * e.states * k_seconds_per_level_set_patch_at_1mm / voxel_area +
                        (deformed ? crossed * k_seconds_per_moved_voxel : 0.0);
   e.mri_seconds = images ? e.dense_voxels * e.images *
                                (k_seconds_per_image_voxel + (kspace ? coils * k_seconds_per_coil_voxel : 0.0))
                          : 0.0;
   const double volumes_written = held / 4.0; // float volumes written, roughly
   e.write_seconds = e.dense_voxels * volumes_written * k_seconds_per_written_voxel +
-                    e.patches * e.states * k_seconds_per_written_patch;
+                    e.patches * e.states * k_seconds_per_written_patch *
+                        (k_written_patch_tolerance_mm / export_tolerance_mm(scene));
   e.cpu_seconds = k_base_seconds + e.anatomy_seconds + e.sim_seconds + e.voxelize_seconds + e.mri_seconds +
                   e.write_seconds;
 
@@ -308,11 +310,11 @@ CostEstimate estimate_cost(const Scene& scene) {
 }
 
 double estimated_wall_seconds(const CostEstimate& e, int threads) {
-  // The meshing and fitting run mostly on one thread; the voxel stages and the solver's local
-  // step on all of them, at k_parallel_efficiency each.
+  // The meshing and fitting run mostly on one thread; the voxel stages, the solver's local step
+  // and the writer (files side by side) on all of them, at k_parallel_efficiency each.
   const double parallel = 1.0 + k_parallel_efficiency * (std::max(1, threads) - 1);
-  return k_base_seconds + e.anatomy_seconds + e.write_seconds +
-         (e.sim_seconds + e.voxelize_seconds + e.mri_seconds) / parallel;
+  return k_base_seconds + e.anatomy_seconds +
+         (e.sim_seconds + e.voxelize_seconds + e.mri_seconds + e.write_seconds) / parallel;
 }
 
 std::vector<std::string> cost_lines(const CostEstimate& e) {

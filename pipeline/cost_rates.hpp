@@ -85,22 +85,34 @@ inline constexpr double k_seconds_per_shell_triangle_newton_step = 700e-6;
 /// Per frame and load step of a scene with obstacles or collisions: contact detection and the
 /// factor's updates (tests/data/scenes/two-balls.yaml, breast.yaml).
 inline constexpr double k_seconds_per_contact_step = 0.1;
+// The voxelization's rates below were fitted to two measured runs on one thread (bench/
+// voxelize_head 1.0 new): data-synthetic/head.yaml, 2240 patches, 7.7 s of CPU, and
+// data-synthetic/colin-head.yaml, 54 000 patches (folded grey and white matter), 38.9 s.
 /// Per dense voxel and state: labels, fractions away from surfaces, gap fill.
-inline constexpr double k_seconds_per_dense_voxel = 0.3e-6;
+inline constexpr double k_seconds_per_dense_voxel = 0.11e-6;
 /// Per narrow-band voxel: the closest patch point of each level-set voxel.
-inline constexpr double k_seconds_per_band_voxel = 0.5e-6;
+inline constexpr double k_seconds_per_band_voxel = 0.19e-6;
+/// Per patch and state at 1 mm voxels (over the voxel area in mm^2 at other sizes): its candidate
+/// voxels' closest-triangle searches and patch distances (the patches of a folded surface
+/// overlap, so their voxels are tried by several).
+inline constexpr double k_seconds_per_level_set_patch_at_1mm = 0.3e-3;
 /// Per partial-volume sample.
-inline constexpr double k_seconds_per_sample = 50e-9;
+inline constexpr double k_seconds_per_sample = 19e-9;
 /// Per voxel a moved surface crosses: the motion fields' boundary search and extension.
-inline constexpr double k_seconds_per_moved_voxel = 20e-6;
-/// Per dense voxel and image: the signal equations, bias and noise.
-inline constexpr double k_seconds_per_image_voxel = 80e-9;
+inline constexpr double k_seconds_per_moved_voxel = 7.4e-6;
+/// Per dense voxel and image: the signal equations, bias and noise (data-synthetic/head.yaml at
+/// full size: 6 images of 7.0e6 voxels with 8 coils in about 6.8 s on one thread).
+inline constexpr double k_seconds_per_image_voxel = 60e-9;
 /// Per dense voxel, image and receive coil when acquired in k-space: FFTs both ways.
-inline constexpr double k_seconds_per_coil_voxel = 50e-9;
-/// Per dense voxel of each float volume written: gzip-compressed NIfTI.
-inline constexpr double k_seconds_per_written_voxel = 130e-9;
-/// Per patch and state of the surface meshes written (tessellation and .vtp).
-inline constexpr double k_seconds_per_written_patch = 0.5e-4;
+inline constexpr double k_seconds_per_coil_voxel = 12e-9;
+/// Per dense voxel of each float volume written: gzip-compressed NIfTI (libdeflate level 1; the
+/// full-size head writes its 112 files in about 7.5 s of processor time).
+inline constexpr double k_seconds_per_written_voxel = 24e-9;
+/// Per patch and state of the surface meshes written (tessellation and .vtp) at the export
+/// tolerance k_written_patch_tolerance_mm; a patch's triangles, hence its time, go as one over the
+/// tolerance (0.2 x the voxel edge, 0.5 mm at most).
+inline constexpr double k_seconds_per_written_patch = 3e-4;
+inline constexpr double k_written_patch_tolerance_mm = 0.2;
 /// The fraction of a second thread the parallel stages use.
 inline constexpr double k_parallel_efficiency = 0.7;
 
