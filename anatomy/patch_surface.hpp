@@ -36,6 +36,20 @@ struct PatchBump {
                         const Eigen::Matrix2d& rest_metric);
   /// Q at (u, v).
   double shape_value(const Eigen::Vector2d& uv) const;
+  /// Adds the bump's height a Q^3 [Q > 0] at (u, v) to `height`, its gradient
+  /// -6 a Q^2 S d to `gradient` and, when given, its Hessian a Q (24 (S d)(S d)^T - 6 Q S) to
+  /// `hessian` (d = (u, v) - c; S taken as symmetric). Inline: the level sets call it for every
+  /// bump near every narrow-band point.
+  void add_height(const Eigen::Vector2d& uv, double& height, Eigen::Vector2d& gradient,
+                  Eigen::Matrix2d* hessian) const {
+    const Eigen::Vector2d d = uv - center_uv;
+    const Eigen::Vector2d Sd = shape_uv * d;
+    const double q = 1.0 - d.dot(Sd);
+    if (q <= 0.0) return;
+    height += amplitude_mm * q * q * q;
+    gradient += -6.0 * amplitude_mm * q * q * Sd;
+    if (hessian) *hessian += amplitude_mm * q * (24.0 * Sd * Sd.transpose() - 6.0 * q * shape_uv);
+  }
   /// The ellipse's area in (u, v) coordinates: pi / sqrt(det S).
   double uv_area() const;
 };

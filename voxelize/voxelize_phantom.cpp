@@ -1,5 +1,6 @@
 #include "voxelize/voxelize_phantom.hpp"
 
+#include "anatomy/triangle_mesh.hpp"
 #include "core/cancellation.hpp"
 #include "core/format.hpp"
 #include "voxelize/gap_fill.hpp"
@@ -81,10 +82,21 @@ StateLevelSets level_sets_of(const VoxelizationSettings& settings, const OrganTa
       progress.advance();
     }
   } else {
+    // Largest base surface first: a level set's work follows its surface area (the band's
+    // voxels), and the last organ to start sets when the loop ends. In organ order, the Colin
+    // head's largest surface came last and one core idled while it was built.
+    std::vector<std::size_t> order(chosen.size());
+    std::vector<double> area(chosen.size());
+    for (std::size_t k = 0; k < chosen.size(); ++k) {
+      order[k] = k;
+      area[k] = surface_area(phantom.organs[chosen[k]].surface->base_mesh());
+    }
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return area[a] > area[b]; });
 #pragma omp parallel for schedule(dynamic, 1)
     for (std::ptrdiff_t k = 0; k < count; ++k) {
       if (cancellation_requested()) continue; // no exception may leave an OpenMP region
-      const auto i = static_cast<std::size_t>(k);
+      const std::size_t i = order[static_cast<std::size_t>(k)];
       if (!built[i]) {
         const PatchSurface& surface = *phantom.organs[chosen[i]].surface;
         std::optional<std::vector<HeightRange>>& ranges = height_ranges[chosen[i]]; // this iteration's alone

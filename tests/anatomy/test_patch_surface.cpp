@@ -324,6 +324,61 @@ double sum_of_amplitudes(const std::vector<PatchBump>& bumps, double sign) {
 
 } // namespace
 
+// A bump's height, gradient and Hessian (PatchBump::add_height, the level sets' closest-point
+// search) against central differences at random points inside the support of random round and
+// elongated bumps, and nothing added outside it.
+TEST(PatchBump, HeightGradientAndHessianMatchCentralFiniteDifferences) {
+  std::mt19937 random(23);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  int inside = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    PatchBump b;
+    b.center_uv = {0.2 + 0.4 * unit(random), 0.2 + 0.4 * unit(random)};
+    const Eigen::Matrix2d R = Eigen::Rotation2Dd(M_PI * unit(random)).toRotationMatrix();
+    const Eigen::Vector2d eigenvalues(4.0 * std::pow(100.0, unit(random)),
+                                      4.0 * std::pow(100.0, unit(random)));
+    b.shape_uv = R * eigenvalues.asDiagonal() * R.transpose();
+    b.amplitude_mm = 4.0 * unit(random) - 1.5;
+    const Eigen::Vector2d uv = b.center_uv + 0.6 * Eigen::Vector2d(unit(random) - 0.5, unit(random) - 0.5);
+    const auto height = [&b](const Eigen::Vector2d& at) {
+      double h = 0.0;
+      Eigen::Vector2d g = Eigen::Vector2d::Zero();
+      b.add_height(at, h, g, nullptr);
+      return h;
+    };
+    const auto gradient = [&b](const Eigen::Vector2d& at) {
+      double h = 0.0;
+      Eigen::Vector2d g = Eigen::Vector2d::Zero();
+      b.add_height(at, h, g, nullptr);
+      return g;
+    };
+    double h = 1.0; // added to, not overwritten
+    Eigen::Vector2d g = Eigen::Vector2d::Ones();
+    Eigen::Matrix2d H = Eigen::Matrix2d::Identity();
+    b.add_height(uv, h, g, &H);
+    const double q = b.shape_value(uv);
+    if (q <= 0.0) {
+      EXPECT_EQ(h, 1.0);
+      EXPECT_EQ(g, Eigen::Vector2d::Ones());
+      EXPECT_EQ(H, Eigen::Matrix2d::Identity());
+      continue;
+    }
+    if (q < 1e-3) continue; // the Hessian is only continuous at the support's edge (Q^3: C2)
+    ++inside;
+    EXPECT_NEAR(h - 1.0, b.amplitude_mm * q * q * q, 1e-14);
+    const double step = 1e-6 / std::sqrt(eigenvalues.maxCoeff());
+    EXPECT_TRUE(matches_finite_differences(g - Eigen::Vector2d::Ones(),
+                                           central_difference_gradient(height, uv, step), 1e-5,
+                                           1e-6 * std::abs(b.amplitude_mm) * eigenvalues.maxCoeff()))
+        << "trial " << trial;
+    EXPECT_TRUE(matches_finite_differences(H - Eigen::Matrix2d::Identity(),
+                                           central_difference_jacobian(gradient, uv, step), 1e-5,
+                                           1e-6 * std::abs(b.amplitude_mm) * eigenvalues.maxCoeff()))
+        << "trial " << trial;
+  }
+  EXPECT_GT(inside, 100);
+}
+
 TEST(PatchHeightRange, EnclosesEveryHeightOfRandomBumps) {
   // 1-12 bumps of both signs, round and elongated, wide and narrow (the eigenvalues of S from 4
   // to 400), centred anywhere in the triangle.

@@ -3,6 +3,7 @@
 
 #include "anatomy/patch_surface.hpp"
 #include "anatomy/triangle_mesh.hpp"
+#include "geometry/mesh_signed_distance.hpp"
 #include "tests/support/finite_difference.hpp"
 #include "tests/support/patch_bumps.hpp"
 #include "voxelize/level_set.hpp"
@@ -61,6 +62,36 @@ PatchSurface bumpy_sphere() {
   for (Eigen::Index t = 0; t < base.face_count(); ++t) {
     surface.set_bumps(
         t, {phantasm::testing::disc_in_triangle(base, t, {1.0 / 3.0, 1.0 / 3.0}, 0.8, t % 2 ? -0.6 : 0.6)});
+  }
+  return surface;
+}
+
+/// An icosahedron of radius 20 mm with 16 bumps on every patch, off centre and elongated, as
+/// fitted anatomy carries them (there, 27 per patch), 0.3 to 0.6 mm out and in by turns, each
+/// inside its triangle. `centres` gets each patch's bump centres (u, v).
+PatchSurface many_bumps_surface(std::vector<std::vector<Eigen::Vector2d>>* centres) {
+  TriangleMesh base = unit_icosphere(0);
+  base.vertices *= 20.0;
+  PatchSurface surface(base, "many bumps");
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  centres->assign(static_cast<std::size_t>(base.face_count()), {});
+  for (Eigen::Index t = 0; t < base.face_count(); ++t) {
+    std::vector<PatchBump> bumps;
+    for (int i = 0; i < 16; ++i) {
+      // Centres well inside the triangle, radii small enough that the support stays inside.
+      double u = 0.0, v = 0.0;
+      do {
+        u = unit(random);
+        v = unit(random);
+      } while (u < 0.25 || v < 0.25 || u + v > 0.75);
+      const double amplitude = (i % 2 ? -1.0 : 1.0) * (0.3 + 0.3 * unit(random));
+      PatchBump bump = disc_in_triangle(base, t, {u, v}, 0.2 + 0.1 * unit(random), amplitude);
+      bump.shape_uv(0, 0) *= 1.0 + unit(random); // narrower along u: still inside the disc
+      bumps.push_back(bump);
+      (*centres)[static_cast<std::size_t>(t)].emplace_back(u, v);
+    }
+    surface.set_bumps(t, bumps);
   }
   return surface;
 }
@@ -305,29 +336,10 @@ TEST(LevelSet, LatticeIsTheProbeAtEachPointBitForBit) {
 // reach the point's cell of the patch, is near zero on the surface, over the crests and between
 // them. (A bump left out where it reaches would leave an error of its amplitude, 0.3 to 0.6 mm.)
 TEST(PatchLevelSet, ManyBumpsPerPatchAreAllOnTheSurface) {
-  TriangleMesh base = unit_icosphere(0);
-  base.vertices *= 20.0;
-  PatchSurface surface(base, "many bumps");
-  std::mt19937 random(3);
+  std::vector<std::vector<Eigen::Vector2d>> centres;
+  const PatchSurface surface = many_bumps_surface(&centres);
+  std::mt19937 random(5);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  std::vector<std::vector<Eigen::Vector2d>> centres(static_cast<std::size_t>(base.face_count()));
-  for (Eigen::Index t = 0; t < base.face_count(); ++t) {
-    std::vector<PatchBump> bumps;
-    for (int i = 0; i < 16; ++i) {
-      // Centres well inside the triangle, radii small enough that the support stays inside.
-      double u = 0.0, v = 0.0;
-      do {
-        u = unit(random);
-        v = unit(random);
-      } while (u < 0.25 || v < 0.25 || u + v > 0.75);
-      const double amplitude = (i % 2 ? -1.0 : 1.0) * (0.3 + 0.3 * unit(random));
-      PatchBump bump = disc_in_triangle(base, t, {u, v}, 0.2 + 0.1 * unit(random), amplitude);
-      bump.shape_uv(0, 0) *= 1.0 + unit(random); // narrower along u: still inside the disc
-      bumps.push_back(bump);
-      centres[static_cast<std::size_t>(t)].emplace_back(u, v);
-    }
-    surface.set_bumps(t, bumps);
-  }
   const double h = 0.25;
   const LevelSet level_set(surface, h);
   const LevelSet::Probe probe(level_set);
@@ -343,6 +355,44 @@ TEST(PatchLevelSet, ManyBumpsPerPatchAreAllOnTheSurface) {
   }
   std::printf("largest |distance| on the surface: %.3f mm\n", worst);
   EXPECT_LT(worst, 0.3 * h);
+}
+
+// The values the level set stores in its band are the signed distance to the patch surface, not
+// only their sign: against the distance to a tessellation within 0.005 mm, at every stored voxel
+// of the many-bumps surface within 2 voxels of it (narrow, elongated bumps 0.3 to 0.6 mm high
+// on 1.5 to 2.5 mm wide supports, the hardest case for the closest-point search on a patch).
+TEST(PatchLevelSet, BandValuesAreTheDistanceToTheSurface) {
+  std::vector<std::vector<Eigen::Vector2d>> centres;
+  const PatchSurface surface = many_bumps_surface(&centres);
+  const double h = 0.25;
+  const LevelSet level_set(surface, h);
+  const TriangleMesh fine = surface.tessellate(0.005);
+  SignedDistanceMesh exact(fine.faces);
+  exact.update(fine.vertices);
+  exact.build_search_tree();
+  const auto& grid = *static_cast<const openvdb::FloatGrid*>(level_set.grid());
+  std::vector<double> errors;
+  for (auto it = grid.cbeginValueOn(); it; ++it) {
+    if (std::abs(*it) > 2.0 * h) continue;
+    const openvdb::Coord c = it.getCoord();
+    const Eigen::Vector3d x = h * Eigen::Vector3d(c.x(), c.y(), c.z());
+    errors.push_back(std::abs(static_cast<double>(*it) - exact.signed_distance(x)));
+  }
+  ASSERT_GT(errors.size(), 10000u);
+  std::sort(errors.begin(), errors.end());
+  const double p99 = errors[errors.size() * 99 / 100], worst = errors.back();
+  std::size_t far = 0;
+  for (double e : errors)
+    far += e > 0.02 ? 1 : 0;
+  std::printf("%zu band voxels: distance error median %.4f, 99th percentile %.4f, largest %.4f mm; "
+              "%zu over 0.02 mm\n",
+              errors.size(), errors[errors.size() / 2], p99, worst, far);
+  // Measured: 99th percentile 0.0016 mm, largest 0.037 mm (a point whose closest surface point
+  // lies on a neighbouring patch: each voxel is measured to the patch of its closest base
+  // triangle). Newton steps from the start instead of after two Gauss-Newton steps: largest
+  // 0.18 mm, a farther local minimum of the distance to a bump.
+  EXPECT_LT(p99, 0.005);
+  EXPECT_LT(worst, 0.2 * h);
 }
 
 // The tissue fractions read each organ at a block's voxel centres, and at a voxel's samples,
