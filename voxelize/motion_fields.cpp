@@ -305,9 +305,12 @@ void check_compositions(const ImageGrid& grid, MotionFields& f) {
             static_cast<std::size_t>(i) +
             static_cast<std::size_t>(nx) *
                 (static_cast<std::size_t>(j) + static_cast<std::size_t>(ny) * static_cast<std::size_t>(k));
-        const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
         const Eigen::Vector3d to_def(f.ref_to_def[v], f.ref_to_def[count + v], f.ref_to_def[2 * count + v]);
         const Eigen::Vector3d to_ref(f.def_to_ref[v], f.def_to_ref[count + v], f.def_to_ref[2 * count + v]);
+        // Both maps leave the voxel where it is (tissue that does not move, most of a head):
+        // each composition is the identity, exactly, with nothing to sample.
+        if (to_def.isZero(0.0) && to_ref.isZero(0.0)) continue;
+        const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
         if (f.ref_to_def_exact[v]) {
           const double miss = (sample_field(grid, f.def_to_ref, x + to_def) + to_def).norm();
           if (miss > tolerance) {
