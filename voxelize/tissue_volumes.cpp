@@ -139,6 +139,7 @@ TissueVolumes voxelize_tissues(const ImageGrid& grid, const std::vector<Voxelize
     copied = blocks_alike(organs, blocks, *reuse.organs, block_values(grid, *reuse.organs));
   TissueVolumes out;
   out.tissue_count = tissue_count;
+  out.label_tissues.assign(1, -1); // 0, the background, even when no organ is voxelized
   for (const VoxelizedOrgan& organ : organs) {
     const auto label = static_cast<std::size_t>(organ.label);
     if (out.label_tissues.size() <= label) out.label_tissues.resize(label + 1, -1);

@@ -36,8 +36,8 @@ inline constexpr const char* k_gap_label_name = "gap";
 struct TissueVolumes {
   std::vector<std::int32_t> labels; ///< voxel_count(): the organ (dseg index) of the largest fraction, 0
                                     ///< background, organs + 1 the gap
-  /// Per label value: the tissue (index into the tissue list) that fills a voxel of that label
-  /// whole, -1 for none (0, background; a gap of air).
+  /// Per label value, every value in `labels` included (0 always): the tissue (index into the
+  /// tissue list) that fills a voxel of that label whole, -1 for none (0, background; a gap of air).
   std::vector<int> label_tissues;
   int tissue_count = 0;
   /// The voxels whose fractions are not their label's alone, ascending.

@@ -147,3 +147,21 @@ TEST(TissueVolumes, VoxelizedFractionsSumToOneAndEveryAccessorAgrees) {
   for (int label = 1; label <= 4; ++label)
     EXPECT_GT(std::count(v.labels.begin(), v.labels.end(), label), 5) << label;
 }
+
+// No organ in the grid (a scene of open sheets): every voxel is whole background, read through
+// every accessor.
+TEST(TissueVolumes, AGridWithoutOrgansIsWholeBackground) {
+  ImageGrid grid;
+  grid.dims = {9, 8, 7};
+  const TissueVolumes v = voxelize_tissues(grid, {}, 2, 4);
+  EXPECT_EQ(v.label_tissues, std::vector<int>{-1});
+  EXPECT_TRUE(v.partial_voxels.empty());
+  const auto count = static_cast<std::size_t>(grid.voxel_count());
+  EXPECT_EQ(v.fraction_volume(2), std::vector<float>(count, 1.0f));
+  EXPECT_EQ(v.fraction_volume(0), std::vector<float>(count, 0.0f));
+  EXPECT_EQ(v.fraction_sum(2), static_cast<double>(count));
+  for (std::size_t voxel = 0; voxel < count; ++voxel) {
+    EXPECT_EQ(v.background(voxel), 1.0f);
+    EXPECT_EQ(v.fraction(1, voxel), 0.0f);
+  }
+}
