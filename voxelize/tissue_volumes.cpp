@@ -380,8 +380,8 @@ TissueVolumes voxelize_tissues(const ImageGrid& grid, const std::vector<Voxelize
     out.partial_voxels.insert(out.partial_voxels.end(), slab_voxels[slab].begin(), slab_voxels[slab].end());
     out.partial_fractions.insert(out.partial_fractions.end(), slab_fractions[slab].begin(),
                                  slab_fractions[slab].end());
-    slab_voxels[slab] = {};
-    slab_fractions[slab] = {};
+    slab_voxels[slab] = std::vector<std::size_t>(); // freed as it is taken over
+    slab_fractions[slab] = std::vector<float>();
   }
   out.supersampled_voxels = sampled;
   return out;
