@@ -153,7 +153,7 @@ int main(int argc, char** argv) {
   for (std::size_t t = 0; t < volumes.tissues.size(); ++t) {
     const std::string& tissue = volumes.tissues[t];
     std::int64_t a = 0, b = 0, both = 0;
-    double fraction_sum = 0.0;
+    const double fraction_sum = volumes.reference.fraction_sum(static_cast<int>(t));
     for (std::size_t n = 0; n < count; ++n) {
       const std::int32_t l = volumes.reference.labels[n];
       const bool in_a = l > 0 && l <= static_cast<std::int32_t>(phantom.organs.size()) &&
@@ -162,7 +162,6 @@ int main(int argc, char** argv) {
       a += in_a;
       b += in_b;
       both += in_a && in_b;
-      fraction_sum += volumes.reference.fractions[t][n];
     }
     std::printf("%-16s %8.4f %10.1f %12.1f %10.1f %7.2f%%\n", tissue.c_str(), dice(both, a, b),
                 static_cast<double>(a) * voxel_ml, fraction_sum * voxel_ml, static_cast<double>(b) * voxel_ml,

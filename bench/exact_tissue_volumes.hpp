@@ -46,9 +46,7 @@ inline double largest_volume_error(const VoxelizedPhantom& v, const std::map<std
   const double voxel = v.grid.spacing_mm.prod();
   double worst = 0.0;
   for (std::size_t t = 0; t < v.tissues.size(); ++t) {
-    double sum = 0.0;
-    for (float f : v.reference.fractions[t])
-      sum += f;
+    const double sum = v.reference.fraction_sum(static_cast<int>(t));
     worst = std::max(worst, std::abs(sum * voxel / exact.at(v.tissues[t]) - 1.0));
   }
   return worst;

@@ -33,9 +33,9 @@ VoxelizedPhantom nested_ellipsoids(int size) {
   v.grid.world_from_voxel.topLeftCorner<3, 3>() = Eigen::Matrix3d::Identity() * (256.0 / size);
   v.tissues = {"csf", "grey_matter", "white_matter"};
   const auto count = static_cast<std::size_t>(v.grid.voxel_count());
-  v.reference.fractions.assign(3, std::vector<float>(count, 0.0f));
-  v.reference.background.assign(count, 0.0f);
-  v.reference.labels.assign(count, 0);
+  // Every tissue's fractions, then the background's; the label (tissue + 1) of the largest.
+  std::vector<std::vector<float>> fractions(4, std::vector<float>(count, 0.0f));
+  std::vector<std::int32_t> labels(count, 0);
   const double radii[3][3] = {{75, 90, 80}, {70, 85, 75}, {50, 65, 55}};
   for (int k = 0, n = 0; k < size; ++k)
     for (int j = 0; j < size; ++j)
@@ -50,11 +50,16 @@ VoxelizedPhantom nested_ellipsoids(int size) {
           inside[t] = std::clamp(0.5 - distance_mm / (256.0 / size), 0.0, 1.0);
         }
         const auto u = static_cast<std::size_t>(n);
-        v.reference.fractions[0][u] = static_cast<float>(inside[0] - inside[1]);
-        v.reference.fractions[1][u] = static_cast<float>(inside[1] - inside[2]);
-        v.reference.fractions[2][u] = static_cast<float>(inside[2]);
-        v.reference.background[u] = static_cast<float>(1.0 - inside[0]);
+        fractions[0][u] = static_cast<float>(inside[0] - inside[1]);
+        fractions[1][u] = static_cast<float>(inside[1] - inside[2]);
+        fractions[2][u] = static_cast<float>(inside[2]);
+        fractions[3][u] = static_cast<float>(1.0 - inside[0]);
+        std::size_t largest = 3; // the background
+        for (std::size_t t = 0; t < 3; ++t)
+          if (fractions[t][u] > fractions[largest][u]) largest = t;
+        labels[u] = largest == 3 ? 0 : static_cast<std::int32_t>(largest) + 1;
       }
+  v.reference = compact_tissue_volumes(std::move(labels), {-1, 0, 1, 2}, fractions);
   return v;
 }
 

@@ -64,11 +64,16 @@ int main(int argc, char** argv) {
       return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
              1e-6 * static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
     };
-    // CPU time too: on a shared machine it tells the work apart from the waiting.
+    // CPU time too: on a shared machine it tells the work apart from the waiting. The partial
+    // voxels are those whose fractions are stored (TissueVolumes::partial_voxels).
+    const auto voxels = static_cast<double>(volumes.grid.voxel_count());
+    const auto partial = [&](const TissueVolumes& v) { return static_cast<double>(v.partial_voxels.size()); };
     std::printf(
-        "voxel %s mm, %s path: grid %d x %d x %d, voxelize %.2f s (%.2f s CPU), peak resident %.0f MB\n",
+        "voxel %s mm, %s path: grid %d x %d x %d, voxelize %.2f s (%.2f s CPU), peak resident %.0f MB; "
+        "partial voxels %.2f %% (reference) and %.2f %% (deformed) of the grid\n",
         argv[1], old ? "old" : "new", volumes.grid.dims.x(), volumes.grid.dims.y(), volumes.grid.dims.z(),
-        seconds, cpu(usage) - cpu(before), static_cast<double>(usage.ru_maxrss) / 1024.0);
+        seconds, cpu(usage) - cpu(before), static_cast<double>(usage.ru_maxrss) / 1024.0,
+        100.0 * partial(volumes.reference) / voxels, 100.0 * partial(*volumes.deformed) / voxels);
     std::fflush(stdout);
   }
   return 0;

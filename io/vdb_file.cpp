@@ -68,7 +68,7 @@ void write_vdb(const std::filesystem::path& path, const VdbContents& contents) {
     grids.push_back(labels);
   }
   for (const auto& [tissue, fractions] : contents.fractions) {
-    auto grid = sparse_grid<openvdb::FloatGrid>(*contents.grid, *fractions, "fraction_" + tissue);
+    auto grid = sparse_grid<openvdb::FloatGrid>(*contents.grid, fractions(), "fraction_" + tissue);
     describe(*grid, "1", "fraction of each voxel's volume that is " + tissue + " (0 to 1)");
     grids.push_back(grid);
   }

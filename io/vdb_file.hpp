@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -21,7 +22,9 @@ struct VdbContents {
   const ImageGrid* grid = nullptr; ///< of the dense volumes
   /// "labels", a FloatGrid of the dseg label values (exact: labels are small integers)
   const std::vector<std::int32_t>* labels = nullptr;
-  std::vector<std::pair<std::string, const std::vector<float>*>> fractions; ///< "fraction_<tissue>"
+  /// "fraction_<tissue>": by tissue, what makes its dense fractions (voxel_count() floats), called
+  /// when its grid is built, so that one dense volume at a time is held
+  std::vector<std::pair<std::string, std::function<std::vector<float>()>>> fractions;
 };
 
 /// Writes an OpenVDB file (atomically: a temporary file, then rename): every organ's level set

@@ -9,20 +9,16 @@ namespace {
 /// `additive`.
 std::vector<float> mixed(const TissueVolumes& volumes, const std::vector<std::optional<double>>& values,
                          bool additive) {
-  const std::size_t count = volumes.background.size();
-  std::vector<double> sum(count, 0.0), weight(count, 0.0);
-  for (std::size_t t = 0; t < values.size(); ++t) {
-    if (!values[t]) continue;
-    const std::vector<float>& f = volumes.fractions[t];
-    for (std::size_t v = 0; v < count; ++v) {
-      sum[v] += f[v] * *values[t];
-      weight[v] += f[v];
+  std::vector<float> map(volumes.labels.size(), 0.0f);
+  volumes.for_each_voxel(0, map.size(), [&](std::size_t voxel, const float* fractions) {
+    double sum = 0.0, weight = 0.0;
+    for (std::size_t t = 0; t < values.size(); ++t) {
+      if (!values[t]) continue;
+      sum += fractions[t] * *values[t];
+      weight += fractions[t];
     }
-  }
-  std::vector<float> map(count, 0.0f);
-  for (std::size_t v = 0; v < count; ++v) {
-    if (weight[v] > 0.0) map[v] = static_cast<float>(additive ? sum[v] : sum[v] / weight[v]);
-  }
+    if (weight > 0.0) map[voxel] = static_cast<float>(additive ? sum : sum / weight);
+  });
   return map;
 }
 

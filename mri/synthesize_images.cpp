@@ -47,17 +47,21 @@ void bias_field(double bias_percent, std::mt19937_64& random, const ImageGrid& g
   const Eigen::Vector3d a = grid.world_from_voxel.topLeftCorner<3, 3>().transpose() * direction;
   const double offset = direction.dot(grid.world_from_voxel.topRightCorner<3, 1>());
   const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
+  const auto layer = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
+  const std::size_t background = volumes.fractions_per_voxel() - 1;
   double low = std::numeric_limits<double>::infinity(), high = -low;
 #pragma omp parallel for reduction(min : low) reduction(max : high) schedule(static)
   for (int k = 0; k < nz; ++k)
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i) {
-        const std::size_t v = voxel_index(grid.dims, i, j, k);
-        if (volumes.background[v] >= 0.5f) continue;
-        const double along = a.x() * i + a.y() * j + a.z() * k + offset;
-        low = std::min(low, along);
-        high = std::max(high, along);
-      }
+    volumes.for_each_voxel(static_cast<std::size_t>(k) * layer, static_cast<std::size_t>(k + 1) * layer,
+                           [&](std::size_t v, const float* fractions) {
+                             if (fractions[background] >= 0.5f) return;
+                             const std::size_t in_layer = v % layer;
+                             const auto i = static_cast<int>(in_layer % static_cast<std::size_t>(nx));
+                             const auto j = static_cast<int>(in_layer / static_cast<std::size_t>(nx));
+                             const double along = a.x() * i + a.y() * j + a.z() * k + offset;
+                             low = std::min(low, along);
+                             high = std::max(high, along);
+                           });
   if (high > low) {
     const double half_span = bias_percent / 200.0;
 #pragma omp parallel for schedule(static)
@@ -101,14 +105,17 @@ MrImage image_of(const Acquisition& acquisition, Workspace& workspace, const Seq
   const auto voxels = static_cast<std::int64_t>(count);
   std::vector<double>& object = workspace.object;
   object.resize(count);
+  const int layers = grid.dims.z();
+  const auto layer = static_cast<std::size_t>(grid.dims.x()) * static_cast<std::size_t>(grid.dims.y());
 #pragma omp parallel for schedule(static)
-  for (std::int64_t n = 0; n < voxels; ++n) {
-    const auto v = static_cast<std::size_t>(n);
-    double sum = 0.0;
-    for (std::size_t t = 0; t < tissue_signal.size(); ++t)
-      sum += volumes.fractions[t][v] * tissue_signal[t];
-    object[v] = sum * bias[v];
-  }
+  for (int k = 0; k < layers; ++k)
+    volumes.for_each_voxel(static_cast<std::size_t>(k) * layer, static_cast<std::size_t>(k + 1) * layer,
+                           [&](std::size_t v, const float* fractions) {
+                             double sum = 0.0;
+                             for (std::size_t t = 0; t < tissue_signal.size(); ++t)
+                               sum += fractions[t] * tissue_signal[t];
+                             object[v] = sum * bias[v];
+                           });
 
   const int coils = acquisition.coils.count();
   image.magnitude.resize(count);
@@ -202,9 +209,11 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
   };
   const ImageGrid& grid = volumes.grid;
   const AcquisitionSettings& settings = mri.acquisition;
-  std::vector<bool> object_mask(volumes.reference.background.size());
-  for (std::size_t v = 0; v < object_mask.size(); ++v)
-    object_mask[v] = volumes.reference.background[v] < 0.5f;
+  std::vector<bool> object_mask(volumes.reference.labels.size());
+  const std::size_t background = volumes.reference.fractions_per_voxel() - 1;
+  volumes.reference.for_each_voxel(0, object_mask.size(), [&](std::size_t v, const float* fractions) {
+    object_mask[v] = fractions[background] < 0.5f;
+  });
   const ReceiveCoils coils(grid, settings.coils, object_mask);
   const std::optional<KspaceSampling> sampling = kspace_sampling(settings, grid);
   // Plans and buffers made once for every coil, sequence and state.

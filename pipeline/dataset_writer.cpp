@@ -489,7 +489,7 @@ void plan_volumes(const Scene& scene, const VoxelizedPhantom& v, const DatasetLa
       for (std::size_t t = 0; t < v.tissues.size(); ++t) {
         plan.file(layout.probseg(state, v.tissues[t]),
                   [&v, volumes = volumes, t](const std::filesystem::path& p) {
-                    write_nifti(p, v.grid, volumes->fractions[t],
+                    write_nifti(p, v.grid, volumes->fraction_volume(static_cast<int>(t)),
                                 {NiftiIntent::none, 1, "fraction of " + v.tissues[t]});
                   });
         plan.json(sidecar_path(layout.probseg(state, v.tissues[t])), [&v, t] {
@@ -512,7 +512,8 @@ void plan_volumes(const Scene& scene, const VoxelizedPhantom& v, const DatasetLa
         contents.grid = &v.grid;
         contents.labels = &volumes->labels;
         for (std::size_t t = 0; t < v.tissues.size(); ++t)
-          contents.fractions.emplace_back(v.tissues[t], &volumes->fractions[t]);
+          contents.fractions.emplace_back(
+              v.tissues[t], [volumes = volumes, t] { return volumes->fraction_volume(static_cast<int>(t)); });
         write_vdb(p, contents);
       });
     }

@@ -242,9 +242,8 @@ PYBIND11_MODULE(phantasm, m) {
             const auto& tissues = s.result.volumes.tissues;
             const auto found = std::find(tissues.begin(), tissues.end(), tissue);
             if (found == tissues.end()) throw py::key_error("no tissue '" + tissue + "'");
-            return volume_array<float>(
-                s.result.volumes.grid,
-                s.volumes(state).fractions[static_cast<std::size_t>(found - tissues.begin())]);
+            return volume_array<float>(s.result.volumes.grid, s.volumes(state).fraction_volume(
+                                                                  static_cast<int>(found - tissues.begin())));
           },
           py::arg("tissue"), py::arg("state") = "ref", "Tissue fraction (X, Y, Z) float32")
       .def(

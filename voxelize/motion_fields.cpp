@@ -293,9 +293,9 @@ void check_compositions(const ImageGrid& grid, MotionFields& f) {
   const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
   long inconsistent = 0;
   double worst = 0.0;
-  // First both masks from the compositions (each voxel reads only the fields), then the
-  // Jacobian check against the final mask.
-  std::vector<std::uint8_t> keep_ref(f.ref_to_def_exact), keep_def(f.def_to_ref_exact);
+  // First both masks from the compositions, then the Jacobian check against the final mask. A
+  // voxel's compositions read only the fields, and its masks only at itself, so the masks are
+  // narrowed in place (no copy of them is held).
 #pragma omp parallel for schedule(static) reduction(+ : inconsistent) reduction(max : worst)
   for (int k = 0; k < nz; ++k) {
     if (cancellation_requested()) continue; // no exception may leave an OpenMP region
@@ -314,7 +314,7 @@ void check_compositions(const ImageGrid& grid, MotionFields& f) {
         if (f.ref_to_def_exact[v]) {
           const double miss = (sample_field(grid, f.def_to_ref, x + to_def) + to_def).norm();
           if (miss > tolerance) {
-            keep_ref[v] = 0;
+            f.ref_to_def_exact[v] = 0;
             ++inconsistent;
           } else {
             worst = std::max(worst, miss);
@@ -323,7 +323,7 @@ void check_compositions(const ImageGrid& grid, MotionFields& f) {
         if (f.def_to_ref_exact[v]) {
           const double miss = (sample_field(grid, f.ref_to_def, x + to_ref) + to_ref).norm();
           if (miss > tolerance) {
-            keep_def[v] = 0;
+            f.def_to_ref_exact[v] = 0;
             ++inconsistent;
           } else {
             worst = std::max(worst, miss);
@@ -332,8 +332,6 @@ void check_compositions(const ImageGrid& grid, MotionFields& f) {
       }
     }
   }
-  f.ref_to_def_exact = std::move(keep_ref);
-  f.def_to_ref_exact = std::move(keep_def);
   f.inconsistent_voxels = inconsistent;
   f.max_composition_error_mm = worst;
   long folded = 0;
@@ -430,6 +428,10 @@ MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& 
       }
     }
   }
+  // The marks of the voxels inside are not needed any more: freed before the Jacobians and the
+  // compositions.
+  inside_ref = std::vector<std::uint8_t>();
+  inside_def = std::vector<std::uint8_t>();
   f.min_jacobian = jacobian_determinants(grid, f.ref_to_def, f.jacobian);
   jacobian_determinants(grid, f.def_to_ref, f.def_to_ref_jacobian);
   double max_displacement = 0.0;

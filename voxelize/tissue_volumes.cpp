@@ -135,18 +135,21 @@ TissueVolumes voxelize_tissues(const ImageGrid& grid, const std::vector<Voxelize
   const BlockValues blocks = block_values(grid, organs);
   std::vector<std::uint8_t> copied; // per block: the other state's voxels are this one's
   if (reuse.volumes && reuse.organs && reuse.volumes->labels.size() == count &&
-      reuse.volumes->fractions.size() == static_cast<std::size_t>(tissue_count))
+      reuse.volumes->tissue_count == tissue_count)
     copied = blocks_alike(organs, blocks, *reuse.organs, block_values(grid, *reuse.organs));
   TissueVolumes out;
+  out.tissue_count = tissue_count;
+  out.label_tissues.assign(1, -1); // 0, the background, even when no organ is voxelized
+  for (const VoxelizedOrgan& organ : organs) {
+    const auto label = static_cast<std::size_t>(organ.label);
+    if (out.label_tissues.size() <= label) out.label_tissues.resize(label + 1, -1);
+    out.label_tissues[label] = organ.tissue;
+  }
   if (!copied.empty()) {
-    // The other state's voxels whole; the blocks that are not copied are written over below.
+    // The other state's labels whole; the blocks that are not copied are written over below.
     out.labels = reuse.volumes->labels;
-    out.background = reuse.volumes->background;
-    out.fractions = reuse.volumes->fractions;
   } else {
     out.labels.assign(count, 0);
-    out.background.assign(count, 0.0f);
-    out.fractions.assign(static_cast<std::size_t>(tissue_count), std::vector<float>(count, 0.0f));
   }
   const int n = std::max(1, supersampling);
   const auto samples =
@@ -165,8 +168,17 @@ TissueVolumes voxelize_tissues(const ImageGrid& grid, const std::vector<Voxelize
   const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
   constexpr std::size_t block_voxels = k_block * k_block * k_block;
   const std::size_t organ_count = organs.size();
+  const std::size_t stride = out.fractions_per_voxel();
+  // Per slab of blocks: its partial voxels (TissueVolumes::partial_voxels), ascending, and their
+  // fractions. A slab's voxels are the indices from its first voxel layer to its last, so the
+  // slabs in order give the ascending list.
+  const auto slab_count = static_cast<std::size_t>(blocks.blocks.z());
+  std::vector<std::vector<std::size_t>> slab_voxels(slab_count);
+  std::vector<std::vector<float>> slab_fractions(slab_count);
 #pragma omp parallel reduction(+ : sampled)
   {
+    std::vector<float> row(stride); // a voxel's fractions: every tissue's, then the background's
+    std::vector<std::size_t> order; // a slab's partial voxels in ascending order
     std::vector<LevelSet::Probe> probes;
     for (const VoxelizedOrgan& organ : organs)
       probes.emplace_back(*organ.level_set);
@@ -214,6 +226,8 @@ TissueVolumes voxelize_tissues(const ImageGrid& grid, const std::vector<Voxelize
       if (progress_detail_due())
         progress_detail("tissue fractions, slab " + std::to_string(slab) + "/" +
                         std::to_string(blocks.blocks.z()));
+      std::vector<std::size_t> voxels_found; // this slab's partial voxels, in block order
+      std::vector<float> fractions_found;
       for (int jb = 0; jb < blocks.blocks.y(); ++jb) {
         for (int ib = 0; ib < blocks.blocks.x(); ++ib) {
           const int i0 = ib * k_block, j0 = jb * k_block, k0 = kb * k_block;
@@ -299,30 +313,76 @@ TissueVolumes voxelize_tissues(const ImageGrid& grid, const std::vector<Voxelize
                 int label = 0;
                 double largest = background;
                 double empty = background; // outside every organ, or in a gap filled with air
-                for (std::vector<float>& fraction : out.fractions)
-                  fraction[index] = 0.0f; // a block copied whole from the other state is written over
+                std::fill(row.begin(), row.end(), 0.0f);
                 for (std::size_t o = 0; o < organ_count; ++o) {
                   if (organs[o].tissue < 0) {
                     empty += organ_share[o];
                   } else {
-                    out.fractions[static_cast<std::size_t>(organs[o].tissue)][index] +=
-                        static_cast<float>(organ_share[o]);
+                    row[static_cast<std::size_t>(organs[o].tissue)] += static_cast<float>(organ_share[o]);
                   }
                   if (organ_share[o] > largest) {
                     largest = organ_share[o];
                     label = organs[o].label;
                   }
                 }
-                out.background[index] = static_cast<float>(empty);
+                row[stride - 1] = static_cast<float>(empty);
                 out.labels[index] = label;
+                if (!out.whole(label, row.data())) {
+                  voxels_found.push_back(index);
+                  fractions_found.insert(fractions_found.end(), row.begin(), row.end());
+                }
               }
             }
           }
         }
       }
+      if (!copied.empty()) {
+        // The other state's partial voxels in this slab's copied blocks.
+        const std::vector<std::size_t>& other = reuse.volumes->partial_voxels;
+        const auto layer = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
+        const auto first =
+            std::lower_bound(other.begin(), other.end(), static_cast<std::size_t>(kb) * k_block * layer);
+        const auto last = std::lower_bound(
+            first, other.end(), static_cast<std::size_t>(std::min(nz, (kb + 1) * k_block)) * layer);
+        for (auto at = first; at != last; ++at) {
+          const auto i = static_cast<int>(*at % static_cast<std::size_t>(nx));
+          const auto j = static_cast<int>(*at / static_cast<std::size_t>(nx) % static_cast<std::size_t>(ny));
+          if (!copied[blocks.block_of(i, j, kb * k_block)]) continue;
+          voxels_found.push_back(*at);
+          const float* from =
+              &reuse.volumes->partial_fractions[static_cast<std::size_t>(at - other.begin()) * stride];
+          fractions_found.insert(fractions_found.end(), from, from + stride);
+        }
+      }
+      order.resize(voxels_found.size());
+      for (std::size_t p = 0; p < order.size(); ++p)
+        order[p] = p;
+      std::sort(order.begin(), order.end(),
+                [&](std::size_t a, std::size_t b) { return voxels_found[a] < voxels_found[b]; });
+      std::vector<std::size_t>& voxels = slab_voxels[static_cast<std::size_t>(kb)];
+      std::vector<float>& fractions = slab_fractions[static_cast<std::size_t>(kb)];
+      voxels.reserve(order.size());
+      fractions.reserve(order.size() * stride);
+      for (const std::size_t p : order) {
+        voxels.push_back(voxels_found[p]);
+        fractions.insert(fractions.end(), fractions_found.begin() + static_cast<std::ptrdiff_t>(p * stride),
+                         fractions_found.begin() + static_cast<std::ptrdiff_t>((p + 1) * stride));
+      }
     }
   }
   throw_if_cancelled();
+  std::size_t partial = 0;
+  for (const std::vector<std::size_t>& voxels : slab_voxels)
+    partial += voxels.size();
+  out.partial_voxels.reserve(partial);
+  out.partial_fractions.reserve(partial * stride);
+  for (std::size_t slab = 0; slab < slab_count; ++slab) {
+    out.partial_voxels.insert(out.partial_voxels.end(), slab_voxels[slab].begin(), slab_voxels[slab].end());
+    out.partial_fractions.insert(out.partial_fractions.end(), slab_fractions[slab].begin(),
+                                 slab_fractions[slab].end());
+    slab_voxels[slab] = std::vector<std::size_t>(); // freed as it is taken over
+    slab_fractions[slab] = std::vector<float>();
+  }
   out.supersampled_voxels = sampled;
   return out;
 }

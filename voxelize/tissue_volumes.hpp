@@ -26,8 +26,9 @@ struct TissuesToReuse {
   const std::vector<VoxelizedOrgan>* organs = nullptr;
 };
 
-/// Each voxel's fraction of every tissue: voxels whose centre is farther than half a voxel
-/// diagonal from every surface belong whole to the deepest organ holding the centre; the others
+/// Each voxel's fraction of every tissue, held as TissueVolumes holds them (each label's tissue,
+/// and the fractions of the voxels that are not whole): voxels whose centre is farther than half
+/// a voxel diagonal from every surface belong whole to the deepest organ holding the centre; the others
 /// are sampled at supersampling^3 points (the deepest organ holding each sample counts it).
 /// The grid is taken in blocks of 8^3 voxels: an organ whose level set stores nothing near a
 /// block (LevelSet::block_reach_mm) has one value over all of it, read once, so each organ is

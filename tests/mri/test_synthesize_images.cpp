@@ -37,20 +37,17 @@ MriSettings noisy_scene(double noise_percent, double bias_percent) {
   return scene;
 }
 
-/// A 64^3 grid; white matter fills the voxels with i < filled_columns.
+/// A 64^3 grid; white matter (label 1) fills the voxels with i < filled_columns, whole.
 VoxelizedPhantom volumes(int filled_columns) {
   VoxelizedPhantom v;
   v.grid.dims = {64, 64, 64};
   v.tissues = {"white_matter"};
   const auto count = static_cast<std::size_t>(v.grid.voxel_count());
-  v.reference.fractions.assign(1, std::vector<float>(count, 0.0f));
-  v.reference.background.assign(count, 1.0f);
+  v.reference.tissue_count = 1;
+  v.reference.label_tissues = {-1, 0};
   v.reference.labels.assign(count, 0);
   for (std::size_t i = 0; i < count; ++i) {
-    if (static_cast<int>(i % 64) < filled_columns) {
-      v.reference.fractions[0][i] = 1.0f;
-      v.reference.background[i] = 0.0f;
-    }
+    if (static_cast<int>(i % 64) < filled_columns) v.reference.labels[i] = 1;
   }
   return v;
 }
@@ -113,21 +110,18 @@ TEST(SynthesizeImages, CoilsCombineBySumOfSquares) {
   Reporter quiet = Reporter::silent();
   // A cylinder of radius 24 voxels along k in the 64^3 grid.
   VoxelizedPhantom object = volumes(0);
-  for (std::size_t v = 0; v < object.reference.background.size(); ++v) {
+  for (std::size_t v = 0; v < object.reference.labels.size(); ++v) {
     const double x = static_cast<double>(v % 64) - 31.5, y = static_cast<double>((v / 64) % 64) - 31.5;
-    if (std::hypot(x, y) < 24.0) {
-      object.reference.fractions[0][v] = 1.0f;
-      object.reference.background[v] = 0.0f;
-    }
+    if (std::hypot(x, y) < 24.0) object.reference.labels[v] = 1;
   }
   const MrImages one = synthesize_images(noisy_scene(0.0, 0.0), block(), object, report, quiet);
   MriSettings scene = noisy_scene(0.0, 0.0);
   scene.acquisition.coils = 8;
   const MrImages eight = synthesize_images(scene, block(), object, report, quiet);
   EXPECT_EQ(eight.coils, 8);
-  std::vector<bool> mask(object.reference.background.size());
+  std::vector<bool> mask(object.reference.labels.size());
   for (std::size_t v = 0; v < mask.size(); ++v)
-    mask[v] = object.reference.background[v] < 0.5f;
+    mask[v] = object.reference.background(v) < 0.5f;
   const ReceiveCoils coils(object.grid, 8, mask);
   double ratio_sum = 0.0, low = 1e9, high = 0.0, voxels = 0.0;
   for (std::size_t v = 0; v < mask.size(); ++v) {
@@ -194,11 +188,13 @@ TEST(SynthesizeImages, KspaceAcquisitionOnTheGrid) {
 }
 
 // Parameter maps: PD adds up over a voxel's tissues, relaxation times are fraction-weighted means
-// over the tissue present, and background holds 0.
+// over the tissue present, and background holds 0. Voxels 0 and 2 are whole (their label's
+// tissue, a, and the background), 1 and 3 partial.
 TEST(SynthesizeImages, ParameterMapsMixByFraction) {
-  TissueVolumes v;
-  v.fractions = {{1.0f, 0.5f, 0.0f, 0.25f}, {0.0f, 0.5f, 0.0f, 0.25f}};
-  v.background = {0.0f, 0.0f, 1.0f, 0.5f};
+  const TissueVolumes v = compact_tissue_volumes(
+      {1, 1, 0, 0}, {-1, 0},
+      {{1.0f, 0.5f, 0.0f, 0.25f}, {0.0f, 0.5f, 0.0f, 0.25f}, {0.0f, 0.0f, 1.0f, 0.5f}});
+  ASSERT_EQ(v.partial_voxels, (std::vector<std::size_t>{1, 3}));
   std::map<std::string, TissueParameters> parameters;
   parameters["a"] = {"a", 800.0, 80.0, 60.0, 0.7, "", "", "", ""};
   parameters["b"] = {"b", 1200.0, 100.0, std::nullopt, 0.9, "", "", "", ""};

@@ -6,6 +6,7 @@
 #include "geometry/mesh_signed_distance.hpp"
 #include "tests/support/finite_difference.hpp"
 #include "tests/support/patch_bumps.hpp"
+#include "tests/support/sphere_level_set.hpp"
 #include "voxelize/level_set.hpp"
 #include "voxelize/tissue_volumes.hpp"
 
@@ -47,10 +48,7 @@ double fraction_volume(const LevelSet& level_set, double voxel_mm, double extent
       Eigen::Vector3d::Constant(-0.5 * (n - 1) * voxel_mm + voxel_mm / 3.0);
   const VoxelizedOrgan organ{&level_set, 0, 1, 0};
   const TissueVolumes v = voxelize_tissues(grid, {organ}, 1, 4);
-  double sum = 0.0;
-  for (float f : v.fractions[0])
-    sum += f;
-  return sum * voxel_mm * voxel_mm * voxel_mm;
+  return v.fraction_sum(0) * voxel_mm * voxel_mm * voxel_mm;
 }
 
 /// A sphere of radius 20 mm on an 80-triangle base with one round bump per patch, 0.6 mm out
@@ -103,15 +101,48 @@ std::uint32_t bits(float x) {
   return b;
 }
 
+/// The bits of every float of a volume, so that comparisons tell -0 from +0.
+std::vector<std::uint32_t> bits(const std::vector<float>& volume) {
+  std::vector<std::uint32_t> out(volume.size());
+  std::transform(volume.begin(), volume.end(), out.begin(), [](float x) { return bits(x); });
+  return out;
+}
+
+/// Labels and fractions held densely, as the voxelizer first held them: per tissue, then the
+/// background, a float for every voxel.
+struct DenseTissues {
+  std::vector<std::int32_t> labels;
+  std::vector<std::vector<float>> fractions; ///< tissue_count + 1 volumes, the background's last
+  std::size_t supersampled_voxels = 0;
+};
+
+/// Every tissue's fraction volume of `v`, then the background's.
+std::vector<std::vector<float>> dense_fractions(const TissueVolumes& v) {
+  std::vector<std::vector<float>> out;
+  for (int t = 0; t <= v.tissue_count; ++t)
+    out.push_back(v.fraction_volume(t));
+  return out;
+}
+
+/// `v` holds the bytes of `expected`: its labels, and its fractions read back densely bit for
+/// bit; only voxels sampled near a surface (or copied from another state) are stored.
+void expect_same_bytes(const TissueVolumes& v, const DenseTissues& expected) {
+  EXPECT_EQ(v.labels, expected.labels);
+  const std::vector<std::vector<float>> fractions = dense_fractions(v);
+  ASSERT_EQ(fractions.size(), expected.fractions.size());
+  for (std::size_t t = 0; t < fractions.size(); ++t)
+    EXPECT_EQ(bits(fractions[t]), bits(expected.fractions[t])) << "tissue " << t;
+}
+
 /// voxelize_tissues as it was first written, for comparison: every voxel's centre probed in
 /// every organ, and each supersample of a voxel near a surface probed in every organ near it.
-TissueVolumes probe_every_sample(const ImageGrid& grid, const std::vector<VoxelizedOrgan>& organs,
-                                 int tissue_count, int n) {
+DenseTissues probe_every_sample(const ImageGrid& grid, const std::vector<VoxelizedOrgan>& organs,
+                                int tissue_count, int n) {
   const auto count = static_cast<std::size_t>(grid.voxel_count());
-  TissueVolumes out;
+  DenseTissues out;
   out.labels.assign(count, 0);
-  out.background.assign(count, 0.0f);
-  out.fractions.assign(static_cast<std::size_t>(tissue_count), std::vector<float>(count, 0.0f));
+  out.fractions.assign(static_cast<std::size_t>(tissue_count) + 1, std::vector<float>(count, 0.0f));
+  std::vector<float>& background_fraction = out.fractions.back();
   std::vector<LevelSet::Probe> probes;
   for (const VoxelizedOrgan& organ : organs)
     probes.emplace_back(*organ.level_set);
@@ -167,7 +198,7 @@ TissueVolumes probe_every_sample(const ImageGrid& grid, const std::vector<Voxeli
             label = organs[o].label;
           }
         }
-        out.background[index] = static_cast<float>(empty);
+        background_fraction[index] = static_cast<float>(empty);
         out.labels[index] = label;
       }
   return out;
@@ -402,9 +433,7 @@ TEST(PatchLevelSet, BandValuesAreTheDistanceToTheSurface) {
 // (the later one wins) inside a third, and a gap organ (no tissue) within it.
 TEST(TissueFractions, LatticesGiveTheBytesOfProbingEverySample) {
   const auto sphere = [](double radius, const Eigen::Vector3d& centre) {
-    TriangleMesh mesh = unit_icosphere(4);
-    mesh.vertices = (mesh.vertices * radius).rowwise() + centre.transpose();
-    return LevelSet(mesh, 0.8);
+    return sphere_level_set(radius, centre, 0.8);
   };
   const LevelSet outer = sphere(11.0, Eigen::Vector3d::Zero());
   const LevelSet left = sphere(4.5, Eigen::Vector3d(-2.5, 0.3, 0.0));
@@ -429,14 +458,19 @@ TEST(TissueFractions, LatticesGiveTheBytesOfProbingEverySample) {
     grid.world_from_voxel.topLeftCorner<3, 3>() = axes;
     grid.world_from_voxel.topRightCorner<3, 1>() =
         -axes * (0.5 * grid.dims.cast<double>()) + Eigen::Vector3d(0.31, -0.17, 0.05);
-    const TissueVolumes expected = probe_every_sample(grid, organs, 3, c.supersampling);
+    const DenseTissues expected = probe_every_sample(grid, organs, 3, c.supersampling);
     const TissueVolumes v = voxelize_tissues(grid, organs, 3, c.supersampling);
     SCOPED_TRACE(::testing::Message() << "spacing " << c.spacing.transpose() << (c.rotated ? ", oblique" : "")
                                       << ", " << c.supersampling << "^3 samples");
-    EXPECT_EQ(v.labels, expected.labels);
-    EXPECT_EQ(v.background, expected.background);
-    EXPECT_EQ(v.fractions, expected.fractions);
+    expect_same_bytes(v, expected);
     EXPECT_EQ(v.supersampled_voxels, expected.supersampled_voxels);
+    // Only sampled voxels can be partial, and the dense fractions compacted are what is held.
+    EXPECT_LE(v.partial_voxels.size(), v.supersampled_voxels);
+    EXPECT_EQ(v.label_tissues, (std::vector<int>{-1, 0, 1, 2, -1}));
+    const TissueVolumes compacted =
+        compact_tissue_volumes(expected.labels, v.label_tissues, expected.fractions);
+    EXPECT_EQ(v.partial_voxels, compacted.partial_voxels);
+    EXPECT_EQ(bits(v.partial_fractions), bits(compacted.partial_fractions));
     EXPECT_GT(expected.supersampled_voxels, 1000u);
     for (int label = 1; label <= 4; ++label)
       EXPECT_GT(std::count(v.labels.begin(), v.labels.end(), label), 5) << label;
@@ -474,9 +508,7 @@ TEST(LevelSet, OutsideEveryBlockReachTheProbeIsTheBandWidth) {
 // result must be the bytes of sampling every voxel again, and fewer voxels are sampled.
 TEST(TissueFractions, ReusingTheOtherStatesVoxelsGivesTheSameBytes) {
   const auto sphere = [](double radius, const Eigen::Vector3d& centre) {
-    TriangleMesh mesh = unit_icosphere(4);
-    mesh.vertices = (mesh.vertices * radius).rowwise() + centre.transpose();
-    return LevelSet(mesh, 1.0);
+    return sphere_level_set(radius, centre, 1.0);
   };
   const LevelSet outer = sphere(25.0, Eigen::Vector3d::Zero());
   const LevelSet inner = sphere(6.0, Eigen::Vector3d(-2.0, 0.0, 0.0));
@@ -492,12 +524,14 @@ TEST(TissueFractions, ReusingTheOtherStatesVoxelsGivesTheSameBytes) {
   const TissueVolumes fresh = voxelize_tissues(grid, deformed_organs, 3, 4);
   const TissueVolumes reused = voxelize_tissues(grid, deformed_organs, 3, 4, {&reference, &reference_organs});
   EXPECT_EQ(reused.labels, fresh.labels);
-  EXPECT_EQ(reused.background, fresh.background);
-  EXPECT_EQ(reused.fractions, fresh.fractions);
-  EXPECT_NE(fresh.labels, reference.labels); // the inner organ moved and left a gap
+  EXPECT_EQ(reused.label_tissues, fresh.label_tissues);
+  EXPECT_EQ(reused.partial_voxels, fresh.partial_voxels);
+  EXPECT_EQ(bits(reused.partial_fractions), bits(fresh.partial_fractions));
+  EXPECT_GT(reused.partial_voxels.size(), reused.supersampled_voxels); // partial voxels copied too
+  EXPECT_NE(fresh.labels, reference.labels);                           // the inner organ moved and left a gap
   EXPECT_GT(std::count(fresh.labels.begin(), fresh.labels.end(), 3), 100);
-  std::printf("voxels sampled: %zu fresh, %zu with the reference's reused\n", fresh.supersampled_voxels,
-              reused.supersampled_voxels);
+  std::printf("voxels sampled: %zu fresh, %zu with the reference's reused; %zu partial voxels\n",
+              fresh.supersampled_voxels, reused.supersampled_voxels, reused.partial_voxels.size());
   EXPECT_LT(10 * reused.supersampled_voxels,
             7 * fresh.supersampled_voxels); // most of the outer surface copied
 }
