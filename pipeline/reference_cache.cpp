@@ -8,6 +8,7 @@
 #include "io/output_path.hpp"
 #include "io/vdb_file.hpp"
 #include "pipeline/cache_entry.hpp"
+#include "voxelize/voxelize_phantom.hpp"
 
 #include <optional>
 #include <sstream>

@@ -10,13 +10,16 @@
 #include "core/progress.hpp"
 #include "core/stage_report.hpp"
 #include "sim/phantom_deformation.hpp"
-#include "voxelize/voxelize_phantom.hpp"
+#include "voxelize/voxelize_settings.hpp"
+#include "voxelize/voxelized_phantom.hpp"
 
 #include <filesystem>
 #include <string>
 #include <string_view>
 
 namespace phantasm {
+
+struct ReferenceVoxelization; // voxelize/voxelize_phantom.hpp: the voxelizer stays private here
 
 /// The content hash (SHA-256, hex) that names a reference state: the anatomy's key
 /// (anatomy_cache_key: the anatomy settings, the shape files and the build id of the code), the
