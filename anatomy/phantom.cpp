@@ -297,74 +297,6 @@ std::string organ_line(const Organ& organ) {
 // its dimensions. Bumped whenever the layout or what an organ holds changes.
 constexpr std::uint32_t k_geometry_format = 2;
 
-class ByteWriter {
-public:
-  template <typename T>
-  void value(const T& v) {
-    static_assert(std::is_trivially_copyable_v<T>);
-    m_bytes.append(reinterpret_cast<const char*>(&v), sizeof v);
-  }
-  void text(const std::string& s) {
-    value(static_cast<std::uint64_t>(s.size()));
-    m_bytes += s;
-  }
-  template <typename Derived>
-  void matrix(const Eigen::PlainObjectBase<Derived>& m) {
-    value(static_cast<std::int64_t>(m.rows()));
-    value(static_cast<std::int64_t>(m.cols()));
-    if (m.size() > 0) {
-      m_bytes.append(reinterpret_cast<const char*>(m.data()), sizeof(typename Derived::Scalar) * m.size());
-    }
-  }
-  std::string take() { return std::move(m_bytes); }
-
-private:
-  std::string m_bytes;
-};
-
-class ByteReader {
-public:
-  explicit ByteReader(std::string_view bytes) : m_bytes(bytes) {}
-  template <typename T>
-  T value() {
-    static_assert(std::is_trivially_copyable_v<T>);
-    need(sizeof(T));
-    T v;
-    std::memcpy(&v, m_bytes.data() + m_at, sizeof v);
-    m_at += sizeof v;
-    return v;
-  }
-  std::string text() {
-    const auto size = value<std::uint64_t>();
-    need(size);
-    std::string s(m_bytes.substr(m_at, size));
-    m_at += size;
-    return s;
-  }
-  template <typename Derived>
-  void matrix(Eigen::PlainObjectBase<Derived>& m) {
-    const auto rows = value<std::int64_t>();
-    const auto cols = value<std::int64_t>();
-    if (rows < 0 || cols < 0 ||
-        (Derived::ColsAtCompileTime != Eigen::Dynamic && cols != Derived::ColsAtCompileTime) ||
-        (Derived::RowsAtCompileTime != Eigen::Dynamic && rows != Derived::RowsAtCompileTime))
-      throw DamagedGeometry("organ geometry: an array of unexpected shape");
-    const std::size_t size = sizeof(typename Derived::Scalar) * static_cast<std::size_t>(rows * cols);
-    need(size);
-    m.resize(rows, cols);
-    if (size > 0) std::memcpy(m.data(), m_bytes.data() + m_at, size); // an empty array has no data()
-    m_at += size;
-  }
-  bool done() const { return m_at == m_bytes.size(); }
-
-private:
-  void need(std::size_t size) const {
-    if (size > m_bytes.size() - m_at) throw DamagedGeometry("organ geometry: the bytes end early");
-  }
-  std::string_view m_bytes;
-  std::size_t m_at = 0;
-};
-
 } // namespace
 
 Phantom build_phantom(const AnatomySettings& anatomy, const std::map<std::string, ShapeData>& files,
@@ -448,7 +380,7 @@ std::string encode_organ_geometry(const Phantom& phantom) {
 Phantom phantom_from_geometry(const AnatomySettings& anatomy, const std::map<std::string, ShapeData>& files,
                               std::string_view bytes, Reporter& reporter) {
   const auto& settings = anatomy.organs;
-  ByteReader in(bytes);
+  ByteReader in(bytes, "organ geometry");
   if (in.value<std::uint32_t>() != k_geometry_format)
     throw DamagedGeometry("organ geometry: written in another format");
   if (in.value<std::uint64_t>() != settings.size())

@@ -5,6 +5,7 @@
 #include "anatomy/anatomy_settings.hpp"
 #include "anatomy/implicit_shape.hpp"
 #include "anatomy/organ.hpp"
+#include "core/byte_codec.hpp"
 #include "core/grid.hpp"
 #include "core/progress.hpp"
 
@@ -28,10 +29,7 @@ Phantom build_phantom(const AnatomySettings& anatomy, const std::map<std::string
                       Reporter& reporter);
 
 /// Bytes that do not hold the geometry of the organs they were read for.
-class DamagedGeometry : public std::runtime_error {
-public:
-  using std::runtime_error::runtime_error;
-};
+using DamagedGeometry = DamagedBytes;
 
 /// The geometry of a built phantom's organs (patch surfaces with their bumps, sheets, tet
 /// meshes, fit reports) as bytes, everything but the target shapes, which phantom_from_geometry

@@ -102,14 +102,15 @@ std::string batch_status(const BatchSummary& summary, std::size_t to_run, double
 
 /// Refuses a batch into a folder that holds anything but a dataset phantasm writes (a batch
 /// resumes into its own folder; it must not scatter subjects among unrelated files).
-/// Entries of an anatomy cache folder (pipeline/anatomy_cache.hpp).
-std::size_t anatomy_cache_entries(const std::filesystem::path& folder) {
+/// Entries of a cache folder whose names start with `prefix`: "anatomy-" (pipeline/anatomy_cache.hpp)
+/// or "reference-" (pipeline/reference_cache.hpp).
+std::size_t cache_entries(const std::filesystem::path& folder, const std::string& prefix) {
   std::size_t entries = 0;
   std::error_code error;
   if (folder.empty() || !std::filesystem::is_directory(folder, error)) return 0;
   for (const auto& entry : std::filesystem::directory_iterator(folder, error)) {
     const std::string name = entry.path().filename().string();
-    entries += name.rfind("anatomy-", 0) == 0 && entry.path().extension() == ".bin";
+    entries += name.rfind(prefix, 0) == 0 && entry.path().extension() == ".bin";
   }
   return entries;
 }
@@ -187,7 +188,8 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
         << summary.skipped << " already complete, " << pending.size() << " to run, " << options.jobs
         << " at a time with " << threads << " threads each\n";
   }
-  const std::size_t cache_entries = anatomy_cache_entries(options.anatomy_cache);
+  const std::size_t anatomies_before = cache_entries(options.anatomy_cache, "anatomy-");
+  const std::size_t references_before = cache_entries(options.anatomy_cache, "reference-");
   std::map<pid_t, Running> running;
   std::size_t next = 0;
   double subject_seconds = 0.0; // summed over the subjects made, for the time left
@@ -249,10 +251,13 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
   }
   if (cancellation_requested()) summary.interrupted = true;
   if (!options.quiet && !options.anatomy_cache.empty()) {
-    const std::size_t entries = anatomy_cache_entries(options.anatomy_cache);
-    log << "[batch] anatomy cache " << options.anatomy_cache.string() << ": " << entries << " anatomies, "
-        << entries - std::min(entries, cache_entries)
-        << " built by this batch (subjects with the same anatomy settings, inputs and seed share one)\n";
+    const std::size_t anatomies = cache_entries(options.anatomy_cache, "anatomy-");
+    const std::size_t references = cache_entries(options.anatomy_cache, "reference-");
+    log << "[batch] anatomy cache " << options.anatomy_cache.string() << ": " << anatomies << " anatomies, "
+        << anatomies - std::min(anatomies, anatomies_before)
+        << " built by this batch (subjects with the same anatomy settings, inputs and seed share one); "
+        << references << " reference states, " << references - std::min(references, references_before)
+        << " voxelized by this batch (subjects that also share the grid and the voxelization share one)\n";
   }
   // Processes of an earlier, killed batch may have ended only after this one started (and every
   // subject of this one has ended: what is left of theirs is stale too).

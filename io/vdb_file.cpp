@@ -1,13 +1,16 @@
 #include "io/vdb_file.hpp"
 
 #include "core/abandonable_work.hpp"
+#include "core/byte_codec.hpp"
 #include "io/atomic_file.hpp"
 
 #include <openvdb/io/File.h>
+#include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 
 #include <unistd.h>
 
+#include <sstream>
 #include <stdexcept>
 #include <system_error>
 
@@ -97,6 +100,59 @@ void write_vdb(const std::filesystem::path& path, const VdbContents& contents) {
     std::filesystem::remove(temporary, ignored);
     throw;
   }
+}
+
+std::string encode_float_grids(const std::vector<const void*>& grids) {
+  openvdb::initialize();
+  openvdb::GridCPtrVec named;
+  for (std::size_t g = 0; g < grids.size(); ++g) {
+    // A copy that shares the tree, named by its position so that the reader finds the order.
+    const openvdb::FloatGrid::Ptr copy =
+        std::const_pointer_cast<openvdb::FloatGrid>(static_cast<const openvdb::FloatGrid*>(grids[g])->copy());
+    copy->setName(std::to_string(g));
+    named.push_back(copy);
+  }
+  std::ostringstream out(std::ios::binary);
+  openvdb::io::Stream stream(out);
+  // Lossless: inactive values that are not the background are stored (no half floats).
+  stream.setCompression(openvdb::io::COMPRESS_ACTIVE_MASK);
+  stream.setGridStatsMetadataEnabled(false);
+  stream.write(named);
+  // The header holds a random UUID per write; the nil UUID in its place makes the bytes a
+  // function of the grids (the reader takes any UUID), so that caches written by shards and
+  // restarts are the same files.
+  std::string bytes = std::move(out).str();
+  const std::string tag = stream.getUniqueTag();
+  const std::string nil = "00000000-0000-0000-0000-000000000000";
+  if (const std::size_t at = bytes.find(tag); tag.size() == nil.size() && at != std::string::npos)
+    bytes.replace(at, nil.size(), nil);
+  return bytes;
+}
+
+std::vector<std::shared_ptr<void>> decode_float_grids(std::string_view bytes) {
+  openvdb::initialize();
+  openvdb::GridPtrVecPtr read;
+  try {
+    std::istringstream in(std::string(bytes), std::ios::binary);
+    openvdb::io::Stream stream(in);
+    read = stream.getGrids();
+  } catch (const openvdb::Exception& error) {
+    throw DamagedBytes(std::string("level-set grids: ") + error.what());
+  }
+  std::vector<std::shared_ptr<void>> out(read ? read->size() : 0);
+  for (const openvdb::GridBase::Ptr& grid : read ? *read : openvdb::GridPtrVec()) {
+    const openvdb::FloatGrid::Ptr floats = openvdb::gridPtrCast<openvdb::FloatGrid>(grid);
+    std::size_t position = out.size();
+    try {
+      position = std::stoul(grid->getName());
+    } catch (const std::exception&) {
+    }
+    if (!floats || position >= out.size() || out[position])
+      throw DamagedBytes("level-set grids: a grid that is not the float grid '" + grid->getName() +
+                         "' of the order written");
+    out[position] = floats;
+  }
+  return out;
 }
 
 } // namespace phantasm

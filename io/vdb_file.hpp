@@ -8,7 +8,9 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -33,5 +35,15 @@ struct VdbContents {
 /// an Int32Grid, because pyopenvdb cannot read Int32Grid and then refuses the whole file. Each
 /// grid carries string metadata "frame" (RAS), "units" and "description".
 void write_vdb(const std::filesystem::path& path, const VdbContents& contents);
+
+/// Float grids (openvdb::FloatGrid, opaque as LevelSet::grid() gives them) as bytes, in order,
+/// for the reference cache: each tree exactly (its topology and every value, active or not) and
+/// the transform; no metadata.
+std::string encode_float_grids(const std::vector<const void*>& grids);
+
+/// The grids of encode_float_grids() bytes, in order, each an openvdb::FloatGrid (opaque; a
+/// LevelSet is made from it).
+/// @throws DamagedBytes (core/byte_codec.hpp) when the bytes do not hold such grids
+std::vector<std::shared_ptr<void>> decode_float_grids(std::string_view bytes);
 
 } // namespace phantasm

@@ -2,22 +2,13 @@
 
 #include "anatomy/phantom.hpp"
 #include "core/build_id.hpp"
-#include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/sha256.hpp"
 #include "io/atomic_file.hpp"
 #include "io/output_path.hpp"
+#include "pipeline/cache_entry.hpp"
 
-#include <cerrno>
-#include <chrono>
-#include <cstring>
-#include <fcntl.h>
-#include <fstream>
-#include <iterator>
 #include <sstream>
-#include <sys/file.h>
-#include <thread>
-#include <unistd.h>
 
 namespace phantasm {
 
@@ -27,22 +18,6 @@ namespace fs = std::filesystem;
 
 // The file's first line; the key follows on the second, the geometry after it.
 constexpr const char* k_magic = "phantasm anatomy cache 1\n";
-
-/// Doubles as hex floats: the key changes with any bit of a setting.
-std::string exact(double value) {
-  std::ostringstream out;
-  out << std::hexfloat << value;
-  return out.str();
-}
-
-template <typename Derived>
-std::string exact(const Eigen::MatrixBase<Derived>& m) {
-  std::string out = "[";
-  for (Eigen::Index c = 0; c < m.cols(); ++c)
-    for (Eigen::Index r = 0; r < m.rows(); ++r)
-      out += (r + c > 0 ? " " : "") + exact(static_cast<double>(m(r, c)));
-  return out + "]";
-}
 
 template <typename Derived>
 std::string bytes_hash(const Eigen::PlainObjectBase<Derived>& m) {
@@ -56,23 +31,23 @@ std::string bytes_hash(const Eigen::PlainObjectBase<Derived>& m) {
 /// changes each and expects another key).
 std::string settings_text(const AnatomySettings& a) {
   std::ostringstream out;
-  out << "variation " << exact(a.variation) << "\nbase_mesh_triangles " << a.base_mesh_triangles
-      << "\ntet_size_mm " << exact(a.tet_size_mm) << "\ntet_facet_distance_mm "
-      << exact(a.tet_facet_distance_mm) << "\ntet_interfaces " << to_string(a.tet_interfaces) << "\nseed "
-      << a.seed << "\norgans " << a.organs.size() << "\n";
+  out << "variation " << exact_text(a.variation) << "\nbase_mesh_triangles " << a.base_mesh_triangles
+      << "\ntet_size_mm " << exact_text(a.tet_size_mm) << "\ntet_facet_distance_mm "
+      << exact_text(a.tet_facet_distance_mm) << "\ntet_interfaces " << to_string(a.tet_interfaces)
+      << "\nseed " << a.seed << "\norgans " << a.organs.size() << "\n";
   for (const OrganSettings& o : a.organs) {
     const ShapeSettings& s = o.shape;
     out << "organ " << o.name << "\n tissue " << o.tissue << "\n material " << o.material << "\n inside "
         << o.inside << "\n solid " << o.solid << "\n base_mesh_triangles " << o.base_mesh_triangles
-        << "\n thickness_mm " << exact(o.thickness_mm) << "\n enclosed_volume_tolerance "
-        << (o.enclosed_volume_tolerance ? exact(*o.enclosed_volume_tolerance) : "none") << "\n shape "
-        << to_string(s.kind) << " center " << exact(s.center_mm) << " radii " << exact(s.radii_mm)
-        << " rotation " << exact(s.rotation_deg) << " exponents " << exact(s.exponent_1) << " "
-        << exact(s.exponent_2) << " size " << exact(s.size_mm) << " cells " << exact(s.cells) << " file "
-        << s.file.string() << " atlas " << s.atlas << " label " << s.label << " labels";
+        << "\n thickness_mm " << exact_text(o.thickness_mm) << "\n enclosed_volume_tolerance "
+        << (o.enclosed_volume_tolerance ? exact_text(*o.enclosed_volume_tolerance) : "none") << "\n shape "
+        << to_string(s.kind) << " center " << exact_text(s.center_mm) << " radii " << exact_text(s.radii_mm)
+        << " rotation " << exact_text(s.rotation_deg) << " exponents " << exact_text(s.exponent_1) << " "
+        << exact_text(s.exponent_2) << " size " << exact_text(s.size_mm) << " cells " << exact_text(s.cells)
+        << " file " << s.file.string() << " atlas " << s.atlas << " label " << s.label << " labels";
     for (const std::string& l : s.labels)
       out << " " << l;
-    out << " smoothing " << exact(s.smoothing_mm) << "\n";
+    out << " smoothing " << exact_text(s.smoothing_mm) << "\n";
   }
   return out.str();
 }
@@ -86,8 +61,8 @@ std::string files_text(const std::map<std::string, ShapeData>& files) {
     if (data.mesh)
       out << " mesh " << bytes_hash(data.mesh->vertices) << " " << bytes_hash(data.mesh->faces) << "\n";
     if (data.label_grid) {
-      out << " grid " << exact(data.label_grid->dims) << " " << exact(data.label_grid->spacing_mm) << " "
-          << exact(data.label_grid->world_from_voxel) << "\n";
+      out << " grid " << exact_text(data.label_grid->dims) << " " << exact_text(data.label_grid->spacing_mm)
+          << " " << exact_text(data.label_grid->world_from_voxel) << "\n";
     }
     if (data.labels) {
       std::string& hash = label_hashes[data.labels.get()];
@@ -105,30 +80,6 @@ std::string files_text(const std::map<std::string, ShapeData>& files) {
   return out.str();
 }
 
-/// An exclusive flock on a key's lock file, taken by polling so that a cancelled run stops waiting.
-class KeyLock {
-public:
-  explicit KeyLock(const fs::path& path) {
-    m_fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-    if (m_fd < 0)
-      throw InputError(path.string() +
-                       ": cannot open the anatomy cache's lock file: " + std::strerror(errno));
-    while (::flock(m_fd, LOCK_EX | LOCK_NB) != 0) {
-      if (errno != EWOULDBLOCK && errno != EINTR) break; // no flock on this filesystem: unlocked
-      throw_if_cancelled();
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
-  }
-  ~KeyLock() {
-    if (m_fd >= 0) ::close(m_fd);
-  }
-  KeyLock(const KeyLock&) = delete;
-  KeyLock& operator=(const KeyLock&) = delete;
-
-private:
-  int m_fd = -1;
-};
-
 /// The entry's line of the log and the provenance: the same whether this run built the entry or
 /// read it (log lines are deterministic; which it did is a screen note).
 void record_entry(const std::string& key, StageReport& report, Reporter& reporter) {
@@ -136,11 +87,6 @@ void record_entry(const std::string& key, StageReport& report, Reporter& reporte
                            " (the first run with these settings and inputs builds it, the others read it)";
   report.modelled.push_back(line);
   reporter.modelled("anatomy", line);
-}
-
-std::string read_whole(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
 } // namespace
@@ -167,10 +113,10 @@ Phantom build_phantom_cached(const AnatomySettings& anatomy, const std::map<std:
   fs::create_directories(folder, error);
   if (error) throw InputError(folder.string() + ": anatomy cache: " + folder_creation_problem(folder, error));
   const fs::path entry = folder / ("anatomy-" + key + ".bin");
-  const KeyLock lock(folder / ("anatomy-" + key + ".lock"));
+  const CacheKeyLock lock(folder / ("anatomy-" + key + ".lock"), "anatomy cache");
   const std::string header = std::string(k_magic) + key + "\n";
   if (fs::exists(entry)) {
-    const std::string bytes = read_whole(entry);
+    const std::string bytes = read_cache_entry(entry);
     try {
       if (bytes.compare(0, header.size(), header) != 0) throw DamagedGeometry("another key or format");
       Phantom phantom =

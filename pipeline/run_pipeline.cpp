@@ -11,9 +11,9 @@
 #include "mri/synthesize_images.hpp"
 #include "pipeline/anatomy_cache.hpp"
 #include "pipeline/cost_estimate.hpp"
+#include "pipeline/reference_cache.hpp"
 #include "sim/deform_phantom.hpp"
 #include "sim/sim_plan.hpp"
-#include "voxelize/voxelize_phantom.hpp"
 #include "voxelize/voxelize_plan.hpp"
 
 #include <filesystem>
@@ -71,9 +71,12 @@ std::map<std::string, ShapeData> read_scene_shape_files(const Scene& scene, Stag
 namespace {
 
 /// The anatomy stage: reads the scene's shape files and builds every organ; records fit errors.
+/// @param anatomy_key receives the anatomy's cache key when there is a cache (the reference
+///        cache's key starts from it)
 Phantom build_anatomy(const Scene& scene, const std::filesystem::path& cache, StageReport& report,
-                      Reporter& reporter) {
+                      Reporter& reporter, std::string& anatomy_key) {
   const std::map<std::string, ShapeData> files = read_scene_shape_files(scene, report, reporter);
+  if (!cache.empty()) anatomy_key = anatomy_cache_key(scene.anatomy, files);
   Phantom phantom = build_phantom_cached(scene.anatomy, files, cache, report, reporter);
   for (const Organ& organ : phantom.organs) {
     if (!organ.surface) continue;
@@ -112,7 +115,8 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
     for (const auto& line : stage.skipped)
       reporter.skipped(stage.stage, line);
   }
-  result.phantom = build_anatomy(scene, cache, result.stages[0], reporter);
+  std::string anatomy_key;
+  result.phantom = build_anatomy(scene, cache, result.stages[0], reporter, anatomy_key);
   if (until == SimulationStage::anatomy) return;
 
   StageReport& sim = result.stages[1];
@@ -126,9 +130,12 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
 
   StageReport& voxelize = result.stages[2];
   const StageLines voxelize_lines(voxelize);
-  result.volumes = voxelize_phantom(scene.voxelization, scene.organs, scene.grid.grid(), result.phantom,
-                                    result.deformed ? &*result.deformed : nullptr,
-                                    result.deformation ? &*result.deformation : nullptr, voxelize, reporter);
+  // The reference state is the same for every subject of this anatomy, grid and voxelization:
+  // kept beside the anatomy, so that it is voxelized once.
+  result.volumes =
+      voxelize_phantom_cached(anatomy_key, scene.voxelization, scene.organs, scene.grid.grid(),
+                              result.phantom, result.deformed ? &*result.deformed : nullptr,
+                              result.deformation ? &*result.deformation : nullptr, cache, voxelize, reporter);
   voxelize_lines.print_new(voxelize, reporter);
   if (until == SimulationStage::voxelization) return;
 

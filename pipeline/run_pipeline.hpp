@@ -25,8 +25,9 @@ struct RunOptions {
   /// the caller made the output folder for this run (to lock it): a run that fails on its input
   /// removes it again when it is still empty, as one that made it itself
   bool output_created = false;
-  /// the anatomy cache folder (pipeline/anatomy_cache.hpp): runs with the same anatomy build it
-  /// once; empty: no cache
+  /// the anatomy cache folder (pipeline/anatomy_cache.hpp), which also holds the reference cache
+  /// (pipeline/reference_cache.hpp): runs with the same anatomy build it once, and with the same
+  /// grid and voxelization too voxelize the reference state once; empty: no cache
   std::filesystem::path anatomy_cache;
 };
 
@@ -48,8 +49,9 @@ std::map<std::string, ShapeData> read_scene_shape_files(const Scene& scene, Stag
 /// The last stage simulate() runs.
 enum class SimulationStage { anatomy, deformation, voxelization, mri };
 
-/// Runs a scene's stages in data-flow order up to `until`, writing nothing but the anatomy cache.
-/// @param anatomy_cache the anatomy cache folder (pipeline/anatomy_cache.hpp); empty: none
+/// Runs a scene's stages in data-flow order up to `until`, writing nothing but the caches.
+/// @param anatomy_cache the folder of the anatomy and reference caches (pipeline/anatomy_cache.hpp,
+///        pipeline/reference_cache.hpp); empty: none
 Simulation simulate(const Scene& scene, Reporter& reporter, SimulationStage until = SimulationStage::mri,
                     const std::filesystem::path& anatomy_cache = {});
 

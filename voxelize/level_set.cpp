@@ -333,6 +333,16 @@ LevelSet::LevelSet(const TriangleMesh& surface, double voxel_size_mm, double hal
   m->grid->setGridClass(openvdb::GRID_LEVEL_SET);
 }
 
+LevelSet::LevelSet(std::shared_ptr<void> grid, double voxel_size_mm, double half_width_voxels)
+    : m(std::make_unique<Impl>()), m_voxel_size(voxel_size_mm), m_half_width(half_width_voxels) {
+  initialize_openvdb();
+  // A grid of its own around the stored tree: the transform and class as built, and none of the
+  // metadata that storing may have added (a .vdb file written from it is then the same).
+  m->grid = openvdb::FloatGrid::create(std::static_pointer_cast<openvdb::FloatGrid>(grid)->treePtr());
+  m->grid->setTransform(openvdb::math::Transform::createLinearTransform(voxel_size_mm));
+  m->grid->setGridClass(openvdb::GRID_LEVEL_SET);
+}
+
 LevelSet::~LevelSet() = default;
 LevelSet::LevelSet(LevelSet&&) noexcept = default;
 LevelSet& LevelSet::operator=(LevelSet&&) noexcept = default;

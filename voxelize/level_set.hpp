@@ -40,12 +40,18 @@ public:
   ///        e.g. from the other state of the same organ; null: computed here
   LevelSet(const PatchSurface& surface, double voxel_size_mm, double half_width_voxels = 3.0,
            const std::vector<HeightRange>* height_ranges = nullptr);
+  /// A level set stored before (io/vdb_file.hpp, decode_float_grids): the stored tree as it is,
+  /// on the transform that the other constructors give voxel_size_mm; the same values, probes and
+  /// blocks as the level set it was stored from.
+  /// @param grid an openvdb::FloatGrid (opaque, so that callers need no OpenVDB), taken over
+  LevelSet(std::shared_ptr<void> grid, double voxel_size_mm, double half_width_voxels);
   ~LevelSet();
   LevelSet(LevelSet&&) noexcept;
   LevelSet& operator=(LevelSet&&) noexcept;
 
   double voxel_size_mm() const { return m_voxel_size; }
   double half_width_mm() const { return m_half_width * m_voxel_size; }
+  double half_width_voxels() const { return m_half_width; }
   /// Voxels of the narrow band (the sparse storage; memory follows the surface area).
   std::size_t active_voxel_count() const;
   /// World boxes (mm), one per 8^3 block of stored voxels, each grown by the reach of a

@@ -15,6 +15,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <stdexcept>
 
 namespace phantasm {
 namespace {
@@ -34,23 +35,49 @@ bool same_surface(const Organ& reference, const Organ& deformed) {
          reference.surface->base_mesh().vertices == deformed.surface->base_mesh().vertices;
 }
 
-/// Each organ's patch height bounds (patch_height_ranges), found by the first state that builds
-/// its level set and reused by the other: the bumps do not change when the base moves.
-using OrganHeightRanges = std::vector<std::optional<std::vector<HeightRange>>>;
-
 /// @param unmoved_from the reference phantom and its level sets, for the deformed state: the
 ///        organs whose surface did not move take the reference's level set (null: build all)
-StateLevelSets level_sets_of(const VoxelizationSettings& settings, const OrganTable& organs,
-                             const ImageGrid& grid, const Phantom& phantom,
-                             const std::vector<std::string>& tissues, double voxel_size,
-                             OrganHeightRanges& height_ranges, ProgressBar& progress,
-                             const std::pair<const Phantom*, const StateLevelSets*>& unmoved_from = {}) {
+/// The organs that get a level set: those with a closed surface in the field of view.
+std::vector<std::size_t> organs_to_voxelize(const VoxelizationSettings& settings, const ImageGrid& grid,
+                                            const Phantom& phantom) {
   std::vector<std::size_t> chosen;
   for (std::size_t o = 0; o < phantom.organs.size(); ++o) {
     const auto bounds =
         o < settings.organ_bounds_mm.size() ? settings.organ_bounds_mm[o] : std::optional<WorldBox>();
     if (phantom.organs[o].surface && organ_in_field_of_view(bounds, grid)) chosen.push_back(o);
   }
+  return chosen;
+}
+
+/// The level sets of the chosen organs (by phantom index), with the organs as the voxelizer sees them.
+StateLevelSets state_level_sets(const OrganTable& organs, const Phantom& phantom,
+                                const std::vector<std::string>& tissues,
+                                const std::vector<std::size_t>& chosen,
+                                const std::vector<std::shared_ptr<const LevelSet>>& built) {
+  StateLevelSets out;
+  out.level_sets.reserve(chosen.size());
+  for (std::size_t k = 0; k < chosen.size(); ++k) {
+    const std::size_t o = chosen[k];
+    out.level_sets.push_back(built[k]);
+    VoxelizedOrgan v;
+    v.level_set = out.level_sets.back().get();
+    // Even depths for organs, so that a gap (odd, voxelize/gap_fill.hpp) sits between its
+    // container and the organs the container holds.
+    v.depth = 2 * organs[o].depth;
+    v.label = static_cast<int>(o) + 1;
+    v.tissue = static_cast<int>(std::find(tissues.begin(), tissues.end(), phantom.organs[o].tissue) -
+                                tissues.begin());
+    out.organs.push_back(v);
+  }
+  return out;
+}
+
+StateLevelSets level_sets_of(const VoxelizationSettings& settings, const OrganTable& organs,
+                             const ImageGrid& grid, const Phantom& phantom,
+                             const std::vector<std::string>& tissues, double voxel_size,
+                             OrganHeightRanges& height_ranges, ProgressBar& progress,
+                             const std::pair<const Phantom*, const StateLevelSets*>& unmoved_from = {}) {
+  const std::vector<std::size_t> chosen = organs_to_voxelize(settings, grid, phantom);
   // Level sets in parallel over organs (each is independent and deterministic). From the patch
   // surfaces directly, or (settings.level_sets_from_tessellation, the former path kept for
   // benchmarks) from tessellations within the tolerance through OpenVDB's mesh-to-volume.
@@ -108,23 +135,25 @@ StateLevelSets level_sets_of(const VoxelizationSettings& settings, const OrganTa
   }
   // A level set cut short by cancellation is incomplete: stop before anything reads it.
   throw_if_cancelled();
-  StateLevelSets out;
-  out.level_sets.reserve(chosen.size());
-  for (std::size_t k = 0; k < chosen.size(); ++k) {
-    const std::size_t o = chosen[k];
-    out.level_sets.push_back(built[k]);
-    VoxelizedOrgan v;
-    v.level_set = out.level_sets.back().get();
-    // Even depths for organs, so that a gap (odd, voxelize/gap_fill.hpp) sits between its
-    // container and the organs the container holds.
-    v.depth = 2 * organs[o].depth;
-    v.label = static_cast<int>(o) + 1;
-    v.tissue = static_cast<int>(std::find(tissues.begin(), tissues.end(), phantom.organs[o].tissue) -
-                                tissues.begin());
-    out.organs.push_back(v);
-  }
   progress.advance(phantom.organs.size() - chosen.size());
-  return out;
+  return state_level_sets(organs, phantom, tissues, chosen, built);
+}
+
+/// The reference state's level sets and volumes as given (a run with the same inputs built them).
+StateLevelSets given_reference(const VoxelizationSettings& settings, const OrganTable& organs,
+                               const ImageGrid& grid, const Phantom& reference,
+                               const std::vector<std::string>& tissues, ReferenceVoxelization& given,
+                               OrganHeightRanges& height_ranges, TissueVolumes& volumes) {
+  const std::vector<std::size_t> chosen = organs_to_voxelize(settings, grid, reference);
+  if (given.organs.size() != chosen.size() || given.level_sets.size() != chosen.size() ||
+      !std::equal(chosen.begin(), chosen.end(), given.organs.begin(),
+                  [](std::size_t o, int g) { return static_cast<int>(o) == g; }) ||
+      given.height_ranges.size() != reference.organs.size() ||
+      given.volumes.labels.size() != static_cast<std::size_t>(grid.voxel_count()))
+    throw std::logic_error("voxelize_phantom: a reference state of other organs or another grid");
+  height_ranges = std::move(given.height_ranges);
+  volumes = std::move(given.volumes);
+  return state_level_sets(organs, reference, tissues, chosen, given.level_sets);
 }
 
 void keep_level_sets(const Phantom& phantom, const StateLevelSets& sets,
@@ -140,7 +169,7 @@ void keep_level_sets(const Phantom& phantom, const StateLevelSets& sets,
 VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const OrganTable& organs,
                                   const ImageGrid& grid, const Phantom& reference, const Phantom* deformed,
                                   const PhantomDeformation* deformation, StageReport& report,
-                                  Reporter& reporter) {
+                                  Reporter& reporter, std::optional<ReferenceVoxelization>* reference_state) {
   VoxelizedPhantom out;
   out.grid = grid;
   for (const Organ& organ : reference.organs)
@@ -170,8 +199,23 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
   // The reference level sets outlive the deformed state's voxelization: they are its gaps' shapes.
   progress.set_detail("reference level sets");
   OrganHeightRanges height_ranges(reference.organs.size());
-  StateLevelSets sets =
-      level_sets_of(settings, organs, grid, reference, out.tissues, voxel_size, height_ranges, progress);
+  const bool given = reference_state && reference_state->has_value();
+  StateLevelSets sets;
+  if (given) {
+    sets = given_reference(settings, organs, grid, reference, out.tissues, **reference_state, height_ranges,
+                           out.reference);
+    reference_state->reset();
+    progress.advance(reference.organs.size());
+  } else {
+    sets = level_sets_of(settings, organs, grid, reference, out.tissues, voxel_size, height_ranges, progress);
+  }
+  if (reference_state && !given) {
+    ReferenceVoxelization& built = reference_state->emplace();
+    for (const VoxelizedOrgan& organ : sets.organs)
+      built.organs.push_back(organ.label - 1);
+    built.level_sets = sets.level_sets;
+    built.height_ranges = height_ranges; // before the deformed state adds any
+  }
   {
     std::size_t band = 0;
     for (const auto& l : sets.level_sets)
@@ -182,9 +226,11 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
         (settings.level_sets_from_tessellation
              ? "surfaces tessellated within " + format_number(settings.tessellation_tolerance_mm) + " mm"
              : std::string("from the patch surfaces directly")));
-    progress.set_detail("reference tissue fractions");
-    out.reference =
-        voxelize_tissues(out.grid, sets.organs, static_cast<int>(out.tissues.size()), settings.supersampling);
+    if (!given) {
+      progress.set_detail("reference tissue fractions");
+      out.reference = voxelize_tissues(out.grid, sets.organs, static_cast<int>(out.tissues.size()),
+                                       settings.supersampling);
+    }
     progress.advance();
   }
   if (deformed) {

@@ -8,10 +8,31 @@
 #include "core/progress.hpp"
 #include "core/stage_report.hpp"
 #include "sim/phantom_deformation.hpp"
+#include "voxelize/level_set.hpp"
 #include "voxelize/voxelize_settings.hpp"
 #include "voxelize/voxelized_phantom.hpp"
 
+#include <memory>
+#include <optional>
+#include <vector>
+
 namespace phantasm {
+
+/// Each organ's patch height bounds (patch_height_ranges), by organ index of the phantom; none
+/// where not computed. Found by the state that builds an organ's level set first and reused by
+/// the other: the bumps do not change when the base moves.
+using OrganHeightRanges = std::vector<std::optional<std::vector<HeightRange>>>;
+
+/// The voxelized reference state: the same for every run with the same reference phantom, grid,
+/// organ table and the settings that shape it, whatever the deformation (pipeline/reference_cache.hpp
+/// keeps it across runs).
+struct ReferenceVoxelization {
+  /// the phantom's organ index of each level set (the closed organs in the field of view), ascending
+  std::vector<int> organs;
+  std::vector<std::shared_ptr<const LevelSet>> level_sets;
+  OrganHeightRanges height_ranges; ///< the deformed state's level sets reuse them
+  TissueVolumes volumes;           ///< labels and fractions
+};
 
 /// Voxelizes the reference phantom (and the deformed one with the motion fields when given) on
 /// the grid: each closed organ in the field of view becomes a level set of its patch surface
@@ -25,11 +46,17 @@ namespace phantasm {
 /// @param organs the organ table, in the phantom's organ order
 /// @param grid the imaging grid (RAS mm)
 /// @param deformation how each organ moved (the gaps and motion fields need it), with `deformed`
+/// @param reference_state holding a state: the reference state is that one (its volumes are
+///        moved into the result) instead of being built; it must be what this call builds (the
+///        same reference phantom, grid, organ table and settings), and the result is then the
+///        same, bit for bit. Empty: receives the reference state this call built, all but its
+///        volumes, which are the result's `reference`. Null: built and not given back.
 /// @throws SettingError naming deformation.gap_tissue when settings.gap_fill is neither air nor a
 ///         tissue of the organs
 VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const OrganTable& organs,
                                   const ImageGrid& grid, const Phantom& reference, const Phantom* deformed,
                                   const PhantomDeformation* deformation, StageReport& report,
-                                  Reporter& reporter);
+                                  Reporter& reporter,
+                                  std::optional<ReferenceVoxelization>* reference_state = nullptr);
 
 } // namespace phantasm

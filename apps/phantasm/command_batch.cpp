@@ -72,8 +72,9 @@ void add_batch_command(CLI::App& app, std::function<int()>& action) {
   command->add_option(
       "--cache", options->cache,
       "Anatomy cache folder: subjects with the same anatomy settings, inputs and seed fit and "
-      "mesh it once (default: derivatives/phantasm/cache in the dataset)");
-  command->add_flag("--no-cache", options->no_cache, "Build every subject's anatomy anew")
+      "mesh it once, and with the same grid and voxelization voxelize the reference state once "
+      "(default: derivatives/phantasm/cache in the dataset)");
+  command->add_flag("--no-cache", options->no_cache, "Build every subject's anatomy and reference state anew")
       ->excludes("--cache");
   command->add_option("--max-memory", options->max_memory,
                       "Refuse a sweep whose largest subject's estimated peak memory times --jobs exceeds "

@@ -38,7 +38,8 @@ void add_run_command(CLI::App& app, std::function<int()>& action) {
       "mask) is an error: exit 1, nothing of the subject written");
   command->add_option("--cache", options->cache,
                       "Anatomy cache folder: a run whose anatomy settings, inputs and seed match an earlier "
-                      "one's reads its organs from there instead of fitting and meshing them again");
+                      "one's reads its organs from there instead of fitting and meshing them again, and "
+                      "with the same grid and voxelization its voxelized reference state too");
   command->add_option("--max-memory", options->max_memory,
                       "Refuse a scene whose estimated peak memory exceeds this (4G, 512M; default: the "
                       "memory available, MemAvailable and the cgroup's limit)");

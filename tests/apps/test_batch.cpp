@@ -221,8 +221,9 @@ TEST(BatchCommand, UnconvergedSubjectsAreListedAndStrictFailsThem) {
   EXPECT_EQ(count_ending(folder_contents(folder / "strict"), "provenance.json"), 1u);
 }
 
-// Subjects that differ only in what comes after the anatomy share one anatomy cache entry: the
-// batch builds it once (#17 item 4), and their datasets are those of runs without the cache.
+// Subjects that differ only in what comes after the anatomy share one anatomy cache entry and one
+// reference cache entry: the batch builds the anatomy and voxelizes the reference state once (#17
+// item 4), and their datasets are those of runs without the cache.
 TEST(BatchCommand, SubjectsWithTheSameAnatomyBuildItOnce) {
   const fs::path folder = fresh_folder("batch-anatomy-cache");
   write_text_file(folder / "sweep.yaml",
@@ -232,8 +233,9 @@ TEST(BatchCommand, SubjectsWithTheSameAnatomyBuildItOnce) {
       {k_phantasm, "batch", (folder / "sweep.yaml").string(), "-o", (folder / "out").string(), "-j", "2"});
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_NE(run.err.find(": 1 anatomies, 1 built by this batch"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("; 1 reference states, 1 voxelized by this batch"), std::string::npos) << run.err;
   const auto files = folder_contents(folder / "out");
-  EXPECT_EQ(count_ending(files, ".bin"), 1u);
+  EXPECT_EQ(count_ending(files, ".bin"), 2u); // the anatomy and the voxelized reference state
   EXPECT_EQ(count_ending(files, "provenance.json"), 3u);
   // A run of the first subject's scene without the cache writes the same files.
   const fs::path alone = folder / "alone";
@@ -250,6 +252,7 @@ TEST(BatchCommand, SubjectsWithTheSameAnatomyBuildItOnce) {
     if (path.find("log.txt") != std::string::npos || path.find("provenance.json") != std::string::npos) {
       // The batch's subject says where its organs came from; the rest of the record is the same.
       EXPECT_NE(in_batch.find("kept in the anatomy cache as entry"), std::string::npos) << path;
+      EXPECT_NE(in_batch.find("kept in the reference cache as entry"), std::string::npos) << path;
       continue;
     }
     EXPECT_TRUE(in_batch == bytes) << path;

@@ -5,6 +5,7 @@
 #include "io/shape_files.hpp"
 #include "pipeline/anatomy_cache.hpp"
 #include "scene/scene.hpp"
+#include "tests/pipeline/cache_fixtures.hpp"
 #include "tests/support/files.hpp"
 
 #include <gtest/gtest.h>
@@ -20,17 +21,6 @@ namespace fs = std::filesystem;
 namespace {
 
 const fs::path k_source = PHANTASM_SOURCE_DIR;
-
-Scene scene_of(const fs::path& file) {
-  const SceneLoadResult loaded = load_scene(file);
-  if (!loaded.scene) throw std::runtime_error(format_diagnostics(loaded.problems));
-  return *loaded.scene;
-}
-
-bool contains(const std::vector<std::string>& lines, const std::string& text) {
-  return std::any_of(lines.begin(), lines.end(),
-                     [&](const std::string& line) { return line.find(text) != std::string::npos; });
-}
 
 } // namespace
 

@@ -1,0 +1,47 @@
+// What the caches a run keeps across runs share (the anatomy cache, the reference cache): keys
+// that change with any bit of a setting, a lock per key so that concurrent processes build an
+// entry once, and reading an entry whole.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <filesystem>
+#include <string>
+
+namespace phantasm {
+
+/// A double as a hex float: a key changes with any bit of a setting.
+std::string exact_text(double value);
+
+/// A matrix's values as hex floats, column by column: "[a b c]".
+template <typename Derived>
+std::string exact_text(const Eigen::MatrixBase<Derived>& m) {
+  std::string out = "[";
+  for (Eigen::Index c = 0; c < m.cols(); ++c)
+    for (Eigen::Index r = 0; r < m.rows(); ++r)
+      out += (r + c > 0 ? " " : "") + exact_text(static_cast<double>(m(r, c)));
+  return out + "]";
+}
+
+/// An exclusive flock on a key's lock file, held for the object's life: the first process that
+/// needs an entry builds it while the others wait, polling so that a cancelled run stops waiting.
+/// On a filesystem without flock it locks nothing (each process then builds the entry itself;
+/// the atomic rename keeps every entry whole).
+class CacheKeyLock {
+public:
+  /// @param what names the cache in errors ("anatomy cache")
+  /// @throws InputError when the lock file cannot be opened
+  /// @throws Cancelled when cancellation is requested while waiting
+  CacheKeyLock(const std::filesystem::path& path, const std::string& what);
+  ~CacheKeyLock();
+  CacheKeyLock(const CacheKeyLock&) = delete;
+  CacheKeyLock& operator=(const CacheKeyLock&) = delete;
+
+private:
+  int m_fd = -1;
+};
+
+/// The whole of a file's bytes (empty when it cannot be read).
+std::string read_cache_entry(const std::filesystem::path& path);
+
+} // namespace phantasm

@@ -1,0 +1,65 @@
+// The reference cache: the voxelized reference state (level sets, the patches' height bounds,
+// labels and fractions) stored under the content hash of everything that shapes it, so that the
+// subjects of a sweep that share anatomy and seed and differ in what comes after (the
+// deformation, the noise, the sequences) voxelize the reference state once.
+#pragma once
+
+#include "anatomy/organ.hpp"
+#include "core/grid.hpp"
+#include "core/organ_table.hpp"
+#include "core/progress.hpp"
+#include "core/stage_report.hpp"
+#include "sim/phantom_deformation.hpp"
+#include "voxelize/voxelize_settings.hpp"
+#include "voxelize/voxelized_phantom.hpp"
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+
+namespace phantasm {
+
+struct ReferenceVoxelization; // voxelize/voxelize_phantom.hpp: the voxelizer stays private here
+
+/// The content hash (SHA-256, hex) that names a reference state: the anatomy's key
+/// (anatomy_cache_key: the anatomy settings, the shape files and the build id of the code), the
+/// grid (dimensions, spacing and affine, bit for bit), the voxelization settings the reference
+/// state depends on (supersampling, how level sets are made, the organs' nominal bounds), the
+/// organ table (names, tissues, nesting) and the entry's format. Settings of the deformed state
+/// alone (gap fill, field extension) and of the outputs leave it unchanged. Empty when the
+/// anatomy key is (no build id: nothing may be kept across runs).
+std::string reference_cache_key(const std::string& anatomy_key, const VoxelizationSettings& settings,
+                                const OrganTable& organs, const ImageGrid& grid);
+
+/// Tissue volumes as bytes: the one place that knows TissueVolumes' members.
+std::string encode_tissue_volumes(const TissueVolumes& volumes);
+
+/// The tissue volumes of encode_tissue_volumes() bytes.
+/// @throws DamagedBytes when the bytes do not hold them
+TissueVolumes decode_tissue_volumes(std::string_view bytes);
+
+/// A reference state as bytes: its level sets (every value of their trees), the organs they
+/// belong to, the patches' height bounds and the tissue volumes (given apart: voxelize_phantom
+/// gives them back in its result).
+std::string encode_reference_state(const ReferenceVoxelization& state, const TissueVolumes& volumes);
+
+/// The reference state of encode_reference_state() bytes; voxelize_phantom given it makes the
+/// same result, bit for bit, as when it built it.
+/// @throws DamagedBytes when the bytes do not hold one
+ReferenceVoxelization decode_reference_state(std::string_view bytes);
+
+/// voxelize_phantom() through a cache folder: the reference state stored under the key of these
+/// inputs is read when there, else built and stored (atomically, compressed). Processes that need
+/// the same key at once build it once: the others wait on the key's lock file (cancellable) and
+/// read what the first stored. A damaged entry is built again, with a warning. The entry's line
+/// goes to the report (the same whether the state was built or read); which it was, to the screen.
+/// @param anatomy_key the reference phantom's anatomy_cache_key(); empty: no cache
+/// @param folder the cache folder (made when missing); empty: no cache, voxelize_phantom() alone
+VoxelizedPhantom voxelize_phantom_cached(const std::string& anatomy_key, const VoxelizationSettings& settings,
+                                         const OrganTable& organs, const ImageGrid& grid,
+                                         const Phantom& reference, const Phantom* deformed,
+                                         const PhantomDeformation* deformation,
+                                         const std::filesystem::path& folder, StageReport& report,
+                                         Reporter& reporter);
+
+} // namespace phantasm
