@@ -207,3 +207,32 @@ TEST(DeformationMap, FaceBucketsGiveTheFieldsOfTheFullScanBitForBit) {
     EXPECT_EQ(exact_a, exact_b);
   }
 }
+
+// The composition check: where neither field moves a voxel, both compositions are the identity
+// and the voxel stays in both masks; a voxel one field moves and the other does not is left out
+// of both (each composition misses identity by the displacement), and only it.
+TEST(MotionFields, CompositionsLeaveOutTheVoxelOneFieldMovesAndKeepTheStillOnes) {
+  ImageGrid grid;
+  grid.dims = {8, 8, 8};
+  grid.spacing_mm = Eigen::Vector3d::Ones();
+  const auto count = static_cast<std::size_t>(grid.voxel_count());
+  MotionFields f;
+  f.ref_to_def.assign(3 * count, 0.0f);
+  f.def_to_ref.assign(3 * count, 0.0f);
+  f.ref_to_def_exact.assign(count, 1);
+  f.def_to_ref_exact.assign(count, 1);
+  f.jacobian.assign(count, 1.0f);
+  f.def_to_ref_jacobian.assign(count, 1.0f);
+  const std::size_t v = voxel_index(grid.dims, 3, 4, 5);
+  f.def_to_ref[v] = 2.0f; // x component: def_to_ref moves v by 2 mm, ref_to_def leaves it
+  check_compositions(grid, f);
+  EXPECT_EQ(f.inconsistent_voxels, 2);
+  EXPECT_EQ(f.ref_to_def_exact[v], 0);
+  EXPECT_EQ(f.def_to_ref_exact[v], 0);
+  std::size_t kept = 0;
+  for (std::size_t w = 0; w < count; ++w)
+    kept += (f.ref_to_def_exact[w] ? 1 : 0) + (f.def_to_ref_exact[w] ? 1 : 0);
+  EXPECT_EQ(kept, 2 * count - 2);
+  EXPECT_EQ(f.max_composition_error_mm, 0.0);
+  EXPECT_EQ(f.folded_exact_voxels, 0);
+}
