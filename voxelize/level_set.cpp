@@ -130,7 +130,7 @@ struct PatchHeights {
       const Eigen::Matrix2d H = JtJ - r.dot(normal) * dd_uv;
       const bool convex = iteration >= 2 && H(0, 0) > 0.0 && H.determinant() > 1e-12 * H(0, 0) * H(1, 1);
       const Eigen::Vector2d step = convex ? solve_2x2(H, g) : solve_2x2(JtJ, g);
-      bool accepted = false;
+      bool accepted = false, full_step = false;
       for (double scale = 1.0; scale > 1.0 / 64.0 && !accepted; scale *= 0.5) {
         Eigen::Vector2d next = uv + scale * step;
         next = next.cwiseMax(0.0);
@@ -141,6 +141,7 @@ struct PatchHeights {
         const Eigen::Vector3d next_r = x - point(next, next_h);
         if (next_r.squaredNorm() < best) {
           accepted = true;
+          full_step = scale == 1.0;
           best = next_r.squaredNorm();
           uv = next;
           d_uv = next_d_uv;
@@ -149,6 +150,9 @@ struct PatchHeights {
         }
       }
       if (!accepted || step.squaredNorm() < 1e-16) break;
+      // Newton converges quadratically: after a whole Newton step of under 1e-4 mm the next one
+      // would move p by about 1e-8 mm, and the distance (stationary there) by far less.
+      if (convex && full_step && (J * step).squaredNorm() < 1e-8) break;
     }
     return std::sqrt(best);
   }
