@@ -3,9 +3,10 @@
 // and without the k-space acquisition and with a ring of coils. OMP_NUM_THREADS sets the threads.
 // The k-space cases run through the pipeline (KspaceMethod::pipeline) and through the former
 // per-coil acquisition (KspaceMethod::per_coil) alternately, ROUNDS times, in one process, and
-// report each round's time, the median, a hash of the images' bytes (the last round's; the same
-// hash from two builds means the same images), and the largest difference between the two methods'
-// noise-free images (relative to the brightest voxel).
+// report each round's time, the median, the median processor time (user and system, all
+// threads), a hash of the images' bytes (the last round's; the same hash from two builds means
+// the same images), and the largest difference between the two methods' noise-free images
+// (relative to the brightest voxel).
 // Usage: mri_images [SIZE [ROUNDS [COMPARE [CASES [METHODS]]]]]   (SIZE voxels per axis, 256 by
 // default; ROUNDS 1 by default; COMPARE 0 skips the noise-free comparison, which runs each k-space
 // case twice more; CASES the letters of the cases to run, d (sampled directly), k (k-space, one
@@ -23,6 +24,8 @@
 #include <cstdlib>
 #include <string>
 #include <vector>
+
+#include <sys/resource.h>
 
 using namespace phantasm;
 
@@ -112,6 +115,14 @@ double median(std::vector<double> values) {
   return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
+/// User and system time of the process so far, all threads.
+double process_cpu_seconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
 /// FNV-1a of the bytes of every image: equal hashes across builds mean the same images.
 std::uint64_t bytes_hash(const MrImages& images) {
   std::uint64_t hash = 0xcbf29ce484222325ULL;
@@ -155,11 +166,13 @@ int main(int argc, char** argv) {
   std::printf("%d^3 grid, three contrasts, noise 3 %%, bias 20 %%, %d threads, %d rounds\n", size,
               omp_get_max_threads(), rounds);
   Reporter quiet = Reporter::silent();
-  auto run = [&](const MriSettings& scene, KspaceMethod method, double& seconds) {
+  auto run = [&](const MriSettings& scene, KspaceMethod method, double& seconds, double& cpu) {
     StageReport report;
     const auto start = std::chrono::steady_clock::now();
+    const double cpu_start = process_cpu_seconds();
     MrImages images = synthesize_images(scene, three_organs(), volumes, report, quiet, method);
     seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    cpu = process_cpu_seconds() - cpu_start;
     return images;
   };
   for (const Case& c :
@@ -172,17 +185,18 @@ int main(int argc, char** argv) {
     auto wanted = [&](int m) {
       return !c.kspace || methods_wanted == "both" || methods_wanted == (m == 0 ? "pipeline" : "per_coil");
     };
-    std::vector<double> times[2];
+    std::vector<double> times[2], cpu_times[2];
     std::uint64_t hashes[2] = {0, 0};
     for (int round = 0; round < rounds; ++round)
       for (int m = 0; m < methods; ++m) {
         // Alternate which method goes first, so that neither always meets a warm or cold machine.
         const int which = (m + round) % methods;
         if (!wanted(which)) continue;
-        double seconds = 0.0;
+        double seconds = 0.0, cpu = 0.0;
         const MrImages images =
-            run(scene, which == 0 ? KspaceMethod::pipeline : KspaceMethod::per_coil, seconds);
+            run(scene, which == 0 ? KspaceMethod::pipeline : KspaceMethod::per_coil, seconds, cpu);
         times[which].push_back(seconds);
+        cpu_times[which].push_back(cpu);
         hashes[which] = bytes_hash(images);
       }
     for (int m = 0; m < methods; ++m) {
@@ -191,16 +205,16 @@ int main(int argc, char** argv) {
       for (double t : times[m])
         each += " " + std::to_string(t).substr(0, 5);
       const char* method = !c.kspace ? "" : m == 0 ? ", pipeline" : ", per coil (former)";
-      std::printf("%-46s median %6.2f s  (rounds:%s)  bytes %016llx\n",
+      std::printf("%-46s median %6.2f s  (rounds:%s)  processor %.2f s  bytes %016llx\n",
                   (std::string(c.name) + method).c_str(), median(times[m]), each.c_str(),
-                  static_cast<unsigned long long>(hashes[m]));
+                  median(cpu_times[m]), static_cast<unsigned long long>(hashes[m]));
     }
     if (c.kspace && compare && methods_wanted == "both") {
       // The methods differ in their noise deviates; without noise they must agree to rounding.
       const MriSettings clean = scene_of(c, size, 0.0);
-      double unused = 0.0;
-      const MrImages a = run(clean, KspaceMethod::pipeline, unused);
-      const MrImages b = run(clean, KspaceMethod::per_coil, unused);
+      double unused = 0.0, unused_cpu = 0.0;
+      const MrImages a = run(clean, KspaceMethod::pipeline, unused, unused_cpu);
+      const MrImages b = run(clean, KspaceMethod::per_coil, unused, unused_cpu);
       double worst = 0.0, brightest = 0.0;
       for (std::size_t q = 0; q < a.reference.size(); ++q)
         for (std::size_t v = 0; v < a.reference[q].magnitude.size(); ++v) {
