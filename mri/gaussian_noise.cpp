@@ -27,7 +27,7 @@ std::uint64_t splitmix64(std::uint64_t& state) {
 double with_sign(double x, std::uint64_t bits) {
   std::uint64_t magnitude;
   std::memcpy(&magnitude, &x, sizeof x);
-  magnitude ^= (bits & 128u) << 56;
+  magnitude ^= (bits >> 7) << 63; // bit 7 of the draw to the sign bit
   std::memcpy(&x, &magnitude, sizeof x);
   return x;
 }
@@ -56,7 +56,7 @@ const NormalStream::Table& NormalStream::table() {
 }
 
 double NormalStream::slow_path(int layer, double x) {
-  const Table& t = table();
+  const Table& t = *m_table;
   if (layer == 0) {
     // Beyond r: r + a with a exponential of rate r, accepted with probability exp(-a^2 / 2).
     for (;;) {
@@ -71,7 +71,8 @@ double NormalStream::slow_path(int layer, double x) {
 }
 
 void NormalStream::fill(double* out, std::size_t count) {
-  const Table& t = *m_table;
+  const double* const width = m_table->x;    // x[layer]
+  const double* const edge = m_table->x + 1; // x[layer + 1]
   std::uint64_t s0 = m_s[0], s1 = m_s[1], s2 = m_s[2], s3 = m_s[3];
   for (std::size_t n = 0; n < count;) {
     // next_bits() on the local state.
@@ -84,16 +85,16 @@ void NormalStream::fill(double* out, std::size_t count) {
     s2 ^= shifted;
     s3 = rotate(s3, 45);
     // operator()'s draw from these bits.
-    const auto layer = static_cast<int>(bits & 127u);
+    const std::size_t layer = bits & 127u;
     const double u = static_cast<double>(bits >> 11) * 0x1.0p-53; // [0, 1)
-    const double x = u * t.x[layer];
-    if (x < t.x[layer + 1]) {
+    const double x = u * width[layer];
+    if (x < edge[layer]) {
       out[n++] = with_sign(x, bits);
       continue;
     }
-    // Outside the layer's rectangle (rare): the slow path continues the stream from its state.
+    // Outside the layer's rectangle (one draw in 36): the slow path continues the stream.
     m_s[0] = s0, m_s[1] = s1, m_s[2] = s2, m_s[3] = s3;
-    const double y = slow_path(layer, x);
+    const double y = slow_path(static_cast<int>(layer), x);
     s0 = m_s[0], s1 = m_s[1], s2 = m_s[2], s3 = m_s[3];
     if (y >= 0.0) out[n++] = with_sign(y, bits);
   }

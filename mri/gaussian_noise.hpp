@@ -33,7 +33,7 @@ public:
 
   /// Writes the next `count` deviates to `out`: the same values as `count` calls of operator(),
   /// drawn with the generator's state in registers and the sign applied without a branch (a
-  /// random sign is a branch that no predictor learns), about twice as fast per deviate.
+  /// random sign is a branch that no predictor learns), more than twice as fast per deviate.
   void fill(double* out, std::size_t count);
 
   /// The next 64 random bits.

@@ -5,6 +5,10 @@
 
 #include <fftw3.h>
 
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -144,6 +148,22 @@ inline void move_complex(std::complex<float>* to, const std::complex<float>* fro
   std::uint64_t bits;
   std::memcpy(&bits, from, sizeof bits);
   std::memcpy(static_cast<void*>(to), &bits, sizeof bits);
+}
+
+/// out[i] = float(sqrt(sum[i] + add[i])) for i < n, and float(sqrt(0.0 + add[i])) without `sum`:
+/// two values at a time with SSE2, where the compiler takes one at a time (std::sqrt may set
+/// errno, so it checks each value). The square root is correctly rounded either way, and the
+/// conversions to float round alike: the same values.
+void root_of_sum(const double* sum, const double* add, int n, float* out) {
+  int i = 0;
+#ifdef __SSE2__
+  for (; i + 2 <= n; i += 2) {
+    const __m128d total = _mm_add_pd(sum ? _mm_loadu_pd(sum + i) : _mm_setzero_pd(), _mm_loadu_pd(add + i));
+    _mm_store_sd(reinterpret_cast<double*>(out + i), _mm_castps_pd(_mm_cvtpd_ps(_mm_sqrt_pd(total))));
+  }
+#endif
+  for (; i < n; ++i)
+    out[i] = static_cast<float>(std::sqrt((sum ? sum[i] : 0.0) + add[i]));
 }
 
 /// out[i] = a[i] x s[i] (conj(a[i]) x s[i] when `conjugate`) for i < n, with the formula that
@@ -578,14 +598,7 @@ void KspacePipeline::acquire_coils(const KspaceCoil* coils, int count, const Del
         if (image) {
           std::copy(image_rows.data() + at, image_rows.data() + at + nx, image + v);
         } else if (magnitude) { // the last group: the root of the sum, which is not stored
-          if (first)
-            for (int i = 0; i < nx; ++i)
-              magnitude[v + static_cast<std::size_t>(i)] =
-                  static_cast<float>(std::sqrt(0.0 + energy_rows[at + static_cast<std::size_t>(i)]));
-          else
-            for (int i = 0; i < nx; ++i)
-              magnitude[v + static_cast<std::size_t>(i)] = static_cast<float>(std::sqrt(
-                  energy[v + static_cast<std::size_t>(i)] + energy_rows[at + static_cast<std::size_t>(i)]));
+          root_of_sum(first ? nullptr : energy + v, energy_rows.data() + at, nx, magnitude + v);
         } else if (first) {
           for (int i = 0; i < nx; ++i)
             energy[v + static_cast<std::size_t>(i)] = 0.0 + energy_rows[at + static_cast<std::size_t>(i)];

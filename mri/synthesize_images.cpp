@@ -34,6 +34,31 @@ void add_image_noise(std::vector<std::complex<double>>& image, const Eigen::Vect
   }
 }
 
+/// for_each_voxel() over layer k of the grid, handing `visit` each voxel's (i, j) as well:
+/// followed along from voxel to voxel (for_each_voxel() visits them in order), not divided out.
+template <class Visit>
+void for_each_voxel_of_layer(const TissueVolumes& volumes, const Eigen::Vector3i& dims, int k,
+                             Visit&& visit) {
+  const int nx = dims.x();
+  const auto layer = static_cast<std::size_t>(nx) * static_cast<std::size_t>(dims.y());
+  const std::size_t first = static_cast<std::size_t>(k) * layer;
+  std::size_t next = first;
+  int i = 0, j = 0;
+  volumes.for_each_voxel(first, first + layer, [&](std::size_t v, const float* fractions) {
+    if (v != next) { // not the next one after all: find it
+      const std::size_t in_layer = v - first;
+      i = static_cast<int>(in_layer % static_cast<std::size_t>(nx));
+      j = static_cast<int>(in_layer / static_cast<std::size_t>(nx));
+    }
+    visit(v, i, j, fractions);
+    next = v + 1;
+    if (++i == nx) {
+      i = 0;
+      ++j;
+    }
+  });
+}
+
 /// A linear ramp along a seeded direction spanning 1 -/+ bias_percent / 200 over the object,
 /// evaluated where it is needed rather than stored: a volume of doubles less to fault in, write
 /// and read back for every image.
@@ -48,24 +73,19 @@ public:
     // The position along the direction is affine in the voxel index: a . (i, j, k) + offset.
     m_a = grid.world_from_voxel.topLeftCorner<3, 3>().transpose() * direction;
     m_offset = direction.dot(grid.world_from_voxel.topRightCorner<3, 1>());
-    const int nx = grid.dims.x(), nz = grid.dims.z();
-    const auto layer = static_cast<std::size_t>(nx) * static_cast<std::size_t>(grid.dims.y());
+    const int nz = grid.dims.z();
     const std::size_t background = volumes.fractions_per_voxel() - 1;
     const Eigen::Vector3d a = m_a;
     const double offset = m_offset;
     double low = std::numeric_limits<double>::infinity(), high = -low;
 #pragma omp parallel for reduction(min : low) reduction(max : high) schedule(dynamic, 1)
     for (int k = 0; k < nz; ++k)
-      volumes.for_each_voxel(static_cast<std::size_t>(k) * layer, static_cast<std::size_t>(k + 1) * layer,
-                             [&](std::size_t v, const float* fractions) {
-                               if (fractions[background] >= 0.5f) return;
-                               const std::size_t in_layer = v % layer;
-                               const auto i = static_cast<int>(in_layer % static_cast<std::size_t>(nx));
-                               const auto j = static_cast<int>(in_layer / static_cast<std::size_t>(nx));
-                               const double along = a.x() * i + a.y() * j + a.z() * k + offset;
-                               low = std::min(low, along);
-                               high = std::max(high, along);
-                             });
+      for_each_voxel_of_layer(volumes, grid.dims, k, [&](std::size_t, int i, int j, const float* fractions) {
+        if (fractions[background] >= 0.5f) return;
+        const double along = a.x() * i + a.y() * j + a.z() * k + offset;
+        low = std::min(low, along);
+        high = std::max(high, along);
+      });
     if (high > low) {
       m_varies = true;
       m_half_span = bias_percent / 200.0;
@@ -78,10 +98,12 @@ public:
   bool varies() const {
     return m_varies;
   }
-  /// The field at voxel (i, j, k), when it varies.
-  double at(int i, int j, int k) const {
-    const double along = m_a.x() * i + m_a.y() * j + m_a.z() * k + m_offset;
-    return 1.0 + m_half_span * (2.0 * (along - m_low) / (m_high - m_low) - 1.0);
+  /// The field along row (j, k), n voxels, when it varies.
+  void row(int j, int k, int n, double* field) const {
+    for (int i = 0; i < n; ++i) {
+      const double along = m_a.x() * i + m_a.y() * j + m_a.z() * k + m_offset;
+      field[i] = 1.0 + m_half_span * (2.0 * (along - m_low) / (m_high - m_low) - 1.0);
+    }
   }
 
 private:
@@ -111,27 +133,18 @@ struct Workspace {
 template <class Value>
 void object_layer(const TissueVolumes& volumes, const std::vector<double>& tissue_signal,
                   const BiasField& bias, const Eigen::Vector3i& dims, int k, Value* object) {
-  const int nx = dims.x();
-  const auto layer = static_cast<std::size_t>(nx) * static_cast<std::size_t>(dims.y());
-  const std::size_t first = static_cast<std::size_t>(k) * layer;
-  // for_each_voxel() visits the voxels in order: (i, j) follow them without a division each.
-  std::size_t next = first;
-  int i = 0, j = 0;
-  volumes.for_each_voxel(first, first + layer, [&](std::size_t v, const float* fractions) {
-    if (v != next) { // not the next one after all: find it
-      const std::size_t in_layer = v - first;
-      i = static_cast<int>(in_layer % static_cast<std::size_t>(nx));
-      j = static_cast<int>(in_layer / static_cast<std::size_t>(nx));
+  // The field one row at a time (a loop the compiler vectorizes), 1 where it does not vary.
+  std::vector<double> field(static_cast<std::size_t>(dims.x()), 1.0);
+  int field_row = -1;
+  for_each_voxel_of_layer(volumes, dims, k, [&](std::size_t v, int i, int j, const float* fractions) {
+    if (bias.varies() && j != field_row) {
+      bias.row(j, k, dims.x(), field.data());
+      field_row = j;
     }
     double sum = 0.0;
     for (std::size_t t = 0; t < tissue_signal.size(); ++t)
       sum += fractions[t] * tissue_signal[t];
-    object[v] = static_cast<Value>(sum * (bias.varies() ? bias.at(i, j, k) : 1.0));
-    next = v + 1;
-    if (++i == nx) {
-      i = 0;
-      ++j;
-    }
+    object[v] = static_cast<Value>(sum * field[static_cast<std::size_t>(i)]);
   });
 }
 

@@ -424,3 +424,39 @@ TEST(SynthesizeImages, KspaceImagesAreThePlainCompositionByteForByte) {
       }
     }
 }
+
+// The parameter maps are, byte for byte, the fraction-weighted mixture of each voxel on its own
+// (whole voxels side by side share their arithmetic in the stage): partial volume at two
+// surfaces, a tissue without T2*.
+TEST(SynthesizeImages, ParameterMapsAreThePlainMixtureByteForByte) {
+  const VoxelizedPhantom object = nested_tissues({20, 18, 14});
+  std::map<std::string, TissueParameters> parameters;
+  parameters["white_matter"] = {"white_matter", 810.0, 80.0, 53.2, 0.7, "", "", "", ""};
+  parameters["gray_matter"] = {"gray_matter", 1350.0, 110.0, std::nullopt, 0.8, "", "", "", ""};
+  for (const TissueVolumes* volumes : {&object.reference, &*object.deformed}) {
+    const ParameterMaps maps = parameter_maps(*volumes, object.tissues, parameters);
+    auto plain = [&](std::optional<double> TissueParameters::*member, bool additive) {
+      std::vector<float> map(volumes->labels.size(), 0.0f);
+      volumes->for_each_voxel(0, map.size(), [&](std::size_t v, const float* fractions) {
+        double sum = 0.0, weight = 0.0;
+        for (std::size_t t = 0; t < object.tissues.size(); ++t) {
+          const std::optional<double> value = parameters.at(object.tissues[t]).*member;
+          if (!value) continue;
+          sum += fractions[t] * *value;
+          weight += fractions[t];
+        }
+        if (weight > 0.0) map[v] = static_cast<float>(additive ? sum : sum / weight);
+      });
+      return map;
+    };
+    const std::pair<const std::vector<float>*, std::vector<float>> cases[] = {
+        {&maps.PD, plain(&TissueParameters::PD, true)},
+        {&maps.T1_ms, plain(&TissueParameters::T1_ms, false)},
+        {&maps.T2_ms, plain(&TissueParameters::T2_ms, false)},
+        {&maps.T2star_ms, plain(&TissueParameters::T2star_ms, false)}};
+    for (const auto& [map, expected] : cases) {
+      ASSERT_EQ(map->size(), expected.size());
+      EXPECT_EQ(0, std::memcmp(map->data(), expected.data(), expected.size() * sizeof(float)));
+    }
+  }
+}
