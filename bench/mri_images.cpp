@@ -3,10 +3,15 @@
 // and without the k-space acquisition and with a ring of coils. OMP_NUM_THREADS sets the threads.
 // The k-space cases run through the pipeline (KspaceMethod::pipeline) and through the former
 // per-coil acquisition (KspaceMethod::per_coil) alternately, ROUNDS times, in one process, and
-// report each round's time, the median, and the largest difference between the two methods'
-// noise-free images (relative to the brightest voxel).
-// Usage: mri_images [SIZE [ROUNDS [COMPARE]]]   (SIZE voxels per axis, 256 by default; ROUNDS 1
-// by default; COMPARE 0 skips the noise-free comparison, which runs each k-space case twice more)
+// report each round's time, the median, the median processor time (user and system, all
+// threads), a hash of the images' bytes (the last round's; the same hash from two builds means
+// the same images), and the largest difference between the two methods' noise-free images
+// (relative to the brightest voxel).
+// Usage: mri_images [SIZE [ROUNDS [COMPARE [CASES [METHODS]]]]]   (SIZE voxels per axis, 256 by
+// default; ROUNDS 1 by default; COMPARE 0 skips the noise-free comparison, which runs each k-space
+// case twice more; CASES the letters of the cases to run, d (sampled directly), k (k-space, one
+// coil) and c (k-space, 8 coils), all by default; METHODS pipeline, per_coil or both, both by
+// default, e.g. `mri_images 256 3 0 c pipeline` times the 8-coil pipeline alone)
 
 #include "mri/synthesize_images.hpp"
 
@@ -19,6 +24,8 @@
 #include <cstdlib>
 #include <string>
 #include <vector>
+
+#include <sys/resource.h>
 
 using namespace phantasm;
 
@@ -108,10 +115,30 @@ double median(std::vector<double> values) {
   return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
+/// User and system time of the process so far, all threads.
+double process_cpu_seconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
+/// FNV-1a of the bytes of every image: equal hashes across builds mean the same images.
+std::uint64_t bytes_hash(const MrImages& images) {
+  std::uint64_t hash = 0xcbf29ce484222325ULL;
+  for (const MrImage& image : images.reference) {
+    const auto* bytes = reinterpret_cast<const unsigned char*>(image.magnitude.data());
+    for (std::size_t b = 0; b < image.magnitude.size() * sizeof(float); ++b)
+      hash = (hash ^ bytes[b]) * 0x100000001b3ULL;
+  }
+  return hash;
+}
+
 struct Case {
   const char* name;
   bool kspace;
   int coils;
+  char letter; ///< selects the case on the command line
 };
 
 MriSettings scene_of(const Case& c, int size, double noise_percent) {
@@ -129,44 +156,65 @@ int main(int argc, char** argv) {
   const int size = argc > 1 ? std::atoi(argv[1]) : 256;
   const int rounds = argc > 2 ? std::max(1, std::atoi(argv[2])) : 1;
   const bool compare = argc > 3 ? std::atoi(argv[3]) != 0 : true;
+  const std::string cases = argc > 4 ? argv[4] : "dkc";
+  const std::string methods_wanted = argc > 5 ? argv[5] : "both";
+  if (methods_wanted != "both" && methods_wanted != "pipeline" && methods_wanted != "per_coil") {
+    std::fprintf(stderr, "METHODS: pipeline, per_coil or both\n");
+    return 2;
+  }
   const VoxelizedPhantom volumes = nested_ellipsoids(size);
   std::printf("%d^3 grid, three contrasts, noise 3 %%, bias 20 %%, %d threads, %d rounds\n", size,
               omp_get_max_threads(), rounds);
   Reporter quiet = Reporter::silent();
-  auto run = [&](const MriSettings& scene, KspaceMethod method, double& seconds) {
+  auto run = [&](const MriSettings& scene, KspaceMethod method, double& seconds, double& cpu) {
     StageReport report;
     const auto start = std::chrono::steady_clock::now();
+    const double cpu_start = process_cpu_seconds();
     MrImages images = synthesize_images(scene, three_organs(), volumes, report, quiet, method);
     seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    cpu = process_cpu_seconds() - cpu_start;
     return images;
   };
-  for (const Case& c : {Case{"sampled directly", false, 1}, Case{"k-space (acquired 1.25x coarser)", true, 1},
-                        Case{"k-space, 8 coils", true, 8}}) {
+  for (const Case& c :
+       {Case{"sampled directly", false, 1, 'd'}, Case{"k-space (acquired 1.25x coarser)", true, 1, 'k'},
+        Case{"k-space, 8 coils", true, 8, 'c'}}) {
+    if (cases.find(c.letter) == std::string::npos) continue;
     const MriSettings scene = scene_of(c, size, 3.0);
     const int methods = c.kspace ? 2 : 1;
-    std::vector<double> times[2];
+    // Without k-space there is one method (it runs as "pipeline").
+    auto wanted = [&](int m) {
+      return !c.kspace || methods_wanted == "both" || methods_wanted == (m == 0 ? "pipeline" : "per_coil");
+    };
+    std::vector<double> times[2], cpu_times[2];
+    std::uint64_t hashes[2] = {0, 0};
     for (int round = 0; round < rounds; ++round)
       for (int m = 0; m < methods; ++m) {
         // Alternate which method goes first, so that neither always meets a warm or cold machine.
         const int which = (m + round) % methods;
-        double seconds = 0.0;
-        run(scene, which == 0 ? KspaceMethod::pipeline : KspaceMethod::per_coil, seconds);
+        if (!wanted(which)) continue;
+        double seconds = 0.0, cpu = 0.0;
+        const MrImages images =
+            run(scene, which == 0 ? KspaceMethod::pipeline : KspaceMethod::per_coil, seconds, cpu);
         times[which].push_back(seconds);
+        cpu_times[which].push_back(cpu);
+        hashes[which] = bytes_hash(images);
       }
     for (int m = 0; m < methods; ++m) {
+      if (!wanted(m)) continue;
       std::string each;
       for (double t : times[m])
         each += " " + std::to_string(t).substr(0, 5);
       const char* method = !c.kspace ? "" : m == 0 ? ", pipeline" : ", per coil (former)";
-      std::printf("%-46s median %6.2f s  (rounds:%s)\n", (std::string(c.name) + method).c_str(),
-                  median(times[m]), each.c_str());
+      std::printf("%-46s median %6.2f s  (rounds:%s)  processor %.2f s  bytes %016llx\n",
+                  (std::string(c.name) + method).c_str(), median(times[m]), each.c_str(),
+                  median(cpu_times[m]), static_cast<unsigned long long>(hashes[m]));
     }
-    if (c.kspace && compare) {
+    if (c.kspace && compare && methods_wanted == "both") {
       // The methods differ in their noise deviates; without noise they must agree to rounding.
       const MriSettings clean = scene_of(c, size, 0.0);
-      double unused = 0.0;
-      const MrImages a = run(clean, KspaceMethod::pipeline, unused);
-      const MrImages b = run(clean, KspaceMethod::per_coil, unused);
+      double unused = 0.0, unused_cpu = 0.0;
+      const MrImages a = run(clean, KspaceMethod::pipeline, unused, unused_cpu);
+      const MrImages b = run(clean, KspaceMethod::per_coil, unused, unused_cpu);
       double worst = 0.0, brightest = 0.0;
       for (std::size_t q = 0; q < a.reference.size(); ++q)
         for (std::size_t v = 0; v < a.reference[q].magnitude.size(); ++v) {

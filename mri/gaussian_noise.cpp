@@ -1,6 +1,7 @@
 #include "mri/gaussian_noise.hpp"
 
 #include <cmath>
+#include <cstring>
 
 namespace phantasm {
 namespace {
@@ -19,6 +20,16 @@ std::uint64_t splitmix64(std::uint64_t& state) {
   z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
   z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
   return z ^ (z >> 31);
+}
+
+/// A deviate's magnitude with the sign of its draw: negative ? -x : x for bit 7 of the draw's
+/// bits, as a flip of the sign bit (what negation is), without a branch that no predictor learns.
+double with_sign(double x, std::uint64_t bits) {
+  std::uint64_t magnitude;
+  std::memcpy(&magnitude, &x, sizeof x);
+  magnitude ^= (bits >> 7) << 63; // bit 7 of the draw to the sign bit
+  std::memcpy(&x, &magnitude, sizeof x);
+  return x;
 }
 
 } // namespace
@@ -45,7 +56,7 @@ const NormalStream::Table& NormalStream::table() {
 }
 
 double NormalStream::slow_path(int layer, double x) {
-  const Table& t = table();
+  const Table& t = *m_table;
   if (layer == 0) {
     // Beyond r: r + a with a exponential of rate r, accepted with probability exp(-a^2 / 2).
     for (;;) {
@@ -57,6 +68,37 @@ double NormalStream::slow_path(int layer, double x) {
   // The wedge of an upper layer between f(x[layer]) and f(x[layer + 1]).
   const double y = t.f[layer] + uniform_open() * (t.f[layer + 1] - t.f[layer]);
   return y < f(x) ? x : -1.0;
+}
+
+void NormalStream::fill(double* out, std::size_t count) {
+  const double* const width = m_table->x;    // x[layer]
+  const double* const edge = m_table->x + 1; // x[layer + 1]
+  std::uint64_t s0 = m_s[0], s1 = m_s[1], s2 = m_s[2], s3 = m_s[3];
+  for (std::size_t n = 0; n < count;) {
+    // next_bits() on the local state.
+    const std::uint64_t bits = rotate(s0 + s3, 23) + s0;
+    const std::uint64_t shifted = s1 << 17;
+    s2 ^= s0;
+    s3 ^= s1;
+    s1 ^= s2;
+    s0 ^= s3;
+    s2 ^= shifted;
+    s3 = rotate(s3, 45);
+    // operator()'s draw from these bits.
+    const std::size_t layer = bits & 127u;
+    const double u = static_cast<double>(bits >> 11) * 0x1.0p-53; // [0, 1)
+    const double x = u * width[layer];
+    if (x < edge[layer]) {
+      out[n++] = with_sign(x, bits);
+      continue;
+    }
+    // Outside the layer's rectangle (one draw in 36): the slow path continues the stream.
+    m_s[0] = s0, m_s[1] = s1, m_s[2] = s2, m_s[3] = s3;
+    const double y = slow_path(static_cast<int>(layer), x);
+    s0 = m_s[0], s1 = m_s[1], s2 = m_s[2], s3 = m_s[3];
+    if (y >= 0.0) out[n++] = with_sign(y, bits);
+  }
+  m_s[0] = s0, m_s[1] = s1, m_s[2] = s2, m_s[3] = s3;
 }
 
 } // namespace phantasm

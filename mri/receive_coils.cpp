@@ -30,18 +30,21 @@ ReceiveCoils::ReceiveCoils(const ImageGrid& grid, int count, const std::vector<b
     }
   }
   // Scale: the root sum of squares averages 1 over the object (over the whole grid without one).
-  double sum = 0.0, voxels = 0.0;
+  // The in-plane roots once, not once per voxel of the object; added in voxel order.
   const std::size_t plane = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
-  for (std::size_t v = 0; v < object_mask.size(); ++v) {
+  std::vector<double> root(plane);
+  for (std::size_t p = 0; p < plane; ++p)
+    root[p] = root_sum_of_squares(static_cast<int>(p % m_nx), static_cast<int>(p / m_nx));
+  double sum = 0.0, voxels = 0.0;
+  for (std::size_t v = 0, p = 0; v < object_mask.size(); ++v, ++p) {
+    if (p == plane) p = 0;
     if (!object_mask[v]) continue;
-    const auto i = static_cast<int>(v % m_nx),
-               j = static_cast<int>((v / m_nx) % static_cast<std::size_t>(ny));
-    sum += root_sum_of_squares(i, j);
+    sum += root[p];
     voxels += 1.0;
   }
   if (voxels == 0.0) {
     for (std::size_t p = 0; p < plane; ++p)
-      sum += root_sum_of_squares(static_cast<int>(p % m_nx), static_cast<int>(p / m_nx));
+      sum += root[p];
     voxels = static_cast<double>(plane);
   }
   const double scale = voxels / sum;

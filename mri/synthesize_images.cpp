@@ -34,46 +34,83 @@ void add_image_noise(std::vector<std::complex<double>>& image, const Eigen::Vect
   }
 }
 
-/// A linear ramp along a seeded direction spanning 1 -/+ bias_percent / 200 over the object.
-void bias_field(double bias_percent, std::mt19937_64& random, const ImageGrid& grid,
-                const TissueVolumes& volumes, std::vector<double>& bias) {
-  const auto count = static_cast<std::size_t>(grid.voxel_count());
-  bias.assign(count, 1.0);
-  if (bias_percent <= 0.0) return;
-  std::normal_distribution<double> normal;
-  Eigen::Vector3d direction(normal(random), normal(random), normal(random));
-  direction.normalize();
-  // The position along the direction is affine in the voxel index: a . (i, j, k) + offset.
-  const Eigen::Vector3d a = grid.world_from_voxel.topLeftCorner<3, 3>().transpose() * direction;
-  const double offset = direction.dot(grid.world_from_voxel.topRightCorner<3, 1>());
-  const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
-  const auto layer = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
-  const std::size_t background = volumes.fractions_per_voxel() - 1;
-  double low = std::numeric_limits<double>::infinity(), high = -low;
-#pragma omp parallel for reduction(min : low) reduction(max : high) schedule(static)
-  for (int k = 0; k < nz; ++k)
-    volumes.for_each_voxel(static_cast<std::size_t>(k) * layer, static_cast<std::size_t>(k + 1) * layer,
-                           [&](std::size_t v, const float* fractions) {
-                             if (fractions[background] >= 0.5f) return;
-                             const std::size_t in_layer = v % layer;
-                             const auto i = static_cast<int>(in_layer % static_cast<std::size_t>(nx));
-                             const auto j = static_cast<int>(in_layer / static_cast<std::size_t>(nx));
-                             const double along = a.x() * i + a.y() * j + a.z() * k + offset;
-                             low = std::min(low, along);
-                             high = std::max(high, along);
-                           });
-  if (high > low) {
-    const double half_span = bias_percent / 200.0;
-#pragma omp parallel for schedule(static)
-    for (int k = 0; k < nz; ++k)
-      for (int j = 0; j < ny; ++j)
-        for (int i = 0; i < nx; ++i) {
-          const double along = a.x() * i + a.y() * j + a.z() * k + offset;
-          bias[voxel_index(grid.dims, i, j, k)] =
-              1.0 + half_span * (2.0 * (along - low) / (high - low) - 1.0);
-        }
-  }
+/// for_each_voxel() over layer k of the grid, handing `visit` each voxel's (i, j) as well:
+/// followed along from voxel to voxel (for_each_voxel() visits them in order), not divided out.
+template <class Visit>
+void for_each_voxel_of_layer(const TissueVolumes& volumes, const Eigen::Vector3i& dims, int k,
+                             Visit&& visit) {
+  const int nx = dims.x();
+  const auto layer = static_cast<std::size_t>(nx) * static_cast<std::size_t>(dims.y());
+  const std::size_t first = static_cast<std::size_t>(k) * layer;
+  std::size_t next = first;
+  int i = 0, j = 0;
+  volumes.for_each_voxel(first, first + layer, [&](std::size_t v, const float* fractions) {
+    if (v != next) { // not the next one after all: find it
+      const std::size_t in_layer = v - first;
+      i = static_cast<int>(in_layer % static_cast<std::size_t>(nx));
+      j = static_cast<int>(in_layer / static_cast<std::size_t>(nx));
+    }
+    visit(v, i, j, fractions);
+    next = v + 1;
+    if (++i == nx) {
+      i = 0;
+      ++j;
+    }
+  });
 }
+
+/// A linear ramp along a seeded direction spanning 1 -/+ bias_percent / 200 over the object,
+/// evaluated where it is needed rather than stored: a volume of doubles less to fault in, write
+/// and read back for every image.
+class BiasField {
+public:
+  BiasField(double bias_percent, std::mt19937_64& random, const ImageGrid& grid,
+            const TissueVolumes& volumes) {
+    if (bias_percent <= 0.0) return;
+    std::normal_distribution<double> normal;
+    Eigen::Vector3d direction(normal(random), normal(random), normal(random));
+    direction.normalize();
+    // The position along the direction is affine in the voxel index: a . (i, j, k) + offset.
+    m_a = grid.world_from_voxel.topLeftCorner<3, 3>().transpose() * direction;
+    m_offset = direction.dot(grid.world_from_voxel.topRightCorner<3, 1>());
+    const int nz = grid.dims.z();
+    const std::size_t background = volumes.fractions_per_voxel() - 1;
+    const Eigen::Vector3d a = m_a;
+    const double offset = m_offset;
+    double low = std::numeric_limits<double>::infinity(), high = -low;
+#pragma omp parallel for reduction(min : low) reduction(max : high) schedule(dynamic, 1)
+    for (int k = 0; k < nz; ++k)
+      for_each_voxel_of_layer(volumes, grid.dims, k, [&](std::size_t, int i, int j, const float* fractions) {
+        if (fractions[background] >= 0.5f) return;
+        const double along = a.x() * i + a.y() * j + a.z() * k + offset;
+        low = std::min(low, along);
+        high = std::max(high, along);
+      });
+    if (high > low) {
+      m_varies = true;
+      m_half_span = bias_percent / 200.0;
+      m_low = low;
+      m_high = high;
+    }
+  }
+
+  /// False when the field is 1 everywhere.
+  bool varies() const {
+    return m_varies;
+  }
+  /// The field along row (j, k), n voxels, when it varies.
+  void row(int j, int k, int n, double* field) const {
+    for (int i = 0; i < n; ++i) {
+      const double along = m_a.x() * i + m_a.y() * j + m_a.z() * k + m_offset;
+      field[i] = 1.0 + m_half_span * (2.0 * (along - m_low) / (m_high - m_low) - 1.0);
+    }
+  }
+
+private:
+  bool m_varies = false;
+  Eigen::Vector3d m_a = Eigen::Vector3d::Zero();
+  double m_offset = 0.0, m_half_span = 0.0, m_low = 0.0, m_high = 0.0;
+};
 
 /// What stays the same for every image of a run: the grid, the coils and the k-space sampling.
 struct Acquisition {
@@ -87,8 +124,29 @@ struct Acquisition {
 /// Voxel buffers that every image of a run reuses: fresh ones of hundreds of megabytes per
 /// image cost their page faults and zeroing again each time.
 struct Workspace {
-  std::vector<double> bias, object, energy;
+  std::vector<double> object, energy; ///< the object (not through the pipeline), the sum of squares
+  std::vector<float> object_float;    ///< the object for the pipeline, in its precision
 };
+
+/// Writes the object of every voxel of layer k, the fraction-weighted signed signals (partial
+/// volume may cancel at a null) times the bias field, converted to Value.
+template <class Value>
+void object_layer(const TissueVolumes& volumes, const std::vector<double>& tissue_signal,
+                  const BiasField& bias, const Eigen::Vector3i& dims, int k, Value* object) {
+  // The field one row at a time (a loop the compiler vectorizes), 1 where it does not vary.
+  std::vector<double> field(static_cast<std::size_t>(dims.x()), 1.0);
+  int field_row = -1;
+  for_each_voxel_of_layer(volumes, dims, k, [&](std::size_t v, int i, int j, const float* fractions) {
+    if (bias.varies() && j != field_row) {
+      bias.row(j, k, dims.x(), field.data());
+      field_row = j;
+    }
+    double sum = 0.0;
+    for (std::size_t t = 0; t < tissue_signal.size(); ++t)
+      sum += fractions[t] * tissue_signal[t];
+    object[v] = static_cast<Value>(sum * field[static_cast<std::size_t>(i)]);
+  });
+}
 
 MrImage image_of(const Acquisition& acquisition, Workspace& workspace, const SequenceSettings& sequence,
                  std::uint64_t seed, const TissueVolumes& volumes, const std::vector<double>& tissue_signal,
@@ -99,35 +157,29 @@ MrImage image_of(const Acquisition& acquisition, Workspace& workspace, const Seq
   image.noise_sigma = noise_sigma;
   const auto count = static_cast<std::size_t>(grid.voxel_count());
   std::mt19937_64 random(seed);
-  std::vector<double>& bias = workspace.bias;
-  bias_field(acquisition.bias_percent, random, grid, volumes, bias);
-  // The object: fraction-weighted signed signals (partial volume may cancel at a null) x bias.
+  const BiasField bias(acquisition.bias_percent, random, grid, volumes);
   const auto voxels = static_cast<std::int64_t>(count);
-  std::vector<double>& object = workspace.object;
-  object.resize(count);
   const int layers = grid.dims.z();
-  const auto layer = static_cast<std::size_t>(grid.dims.x()) * static_cast<std::size_t>(grid.dims.y());
-#pragma omp parallel for schedule(static)
-  for (int k = 0; k < layers; ++k)
-    volumes.for_each_voxel(static_cast<std::size_t>(k) * layer, static_cast<std::size_t>(k + 1) * layer,
-                           [&](std::size_t v, const float* fractions) {
-                             double sum = 0.0;
-                             for (std::size_t t = 0; t < tissue_signal.size(); ++t)
-                               sum += fractions[t] * tissue_signal[t];
-                             object[v] = sum * bias[v];
-                           });
-
   const int coils = acquisition.coils.count();
   image.magnitude.resize(count);
   if (acquisition.pipeline) {
-    // The sum of squares (one coil: the squared magnitude) over the coils.
-    acquisition.pipeline->set_object(object);
-    std::vector<double>& energy = workspace.energy;
-    energy.assign(count, 0.0);
+    // The object in single precision, the precision of the pipeline's transforms.
+    std::vector<float>& object = workspace.object_float;
+    object.resize(count);
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int k = 0; k < layers; ++k)
+      object_layer(volumes, tissue_signal, bias, grid.dims, k, object.data());
     KspacePipeline& pipeline = *acquisition.pipeline;
-    for (int first = 0; first < coils; first += pipeline.coils_together()) {
+    pipeline.set_object(object.data());
+    // The sum of squares (one coil: the squared magnitude) over the coils, a group of coils at a
+    // time: the first group starts the sum, the last writes its root; the sum is stored between
+    // groups only.
+    const int together = pipeline.coils_together();
+    std::vector<double>& energy = workspace.energy;
+    if (coils > together) energy.resize(count);
+    for (int first = 0; first < coils; first += together) {
       throw_if_cancelled();
-      const int last = std::min(coils, first + pipeline.coils_together());
+      const int last = std::min(coils, first + together);
       if (coils > 1 && progress_detail_due())
         progress_detail("coil " + std::to_string(first + 1) +
                         (last > first + 1 ? "-" + std::to_string(last) : "") + "/" + std::to_string(coils));
@@ -135,15 +187,18 @@ MrImage image_of(const Acquisition& acquisition, Workspace& workspace, const Seq
       for (int c = first; c < last; ++c)
         group.push_back({acquisition.coils.sensitivity_plane(c), noise_sigma,
                          mix_seed(seed, static_cast<std::uint64_t>(c) + 1)});
-      pipeline.add_squared_magnitude(group, energy);
+      pipeline.add_squared_magnitude(group.data(), last - first, first == 0,
+                                     coils > together ? energy.data() : nullptr,
+                                     last == coils ? image.magnitude.data() : nullptr);
     }
-#pragma omp parallel for schedule(static)
-    for (std::int64_t n = 0; n < voxels; ++n)
-      image.magnitude[static_cast<std::size_t>(n)] =
-          static_cast<float>(std::sqrt(energy[static_cast<std::size_t>(n)]));
     return image;
   }
 
+  std::vector<double>& object = workspace.object;
+  object.resize(count);
+#pragma omp parallel for schedule(static)
+  for (int k = 0; k < layers; ++k)
+    object_layer(volumes, tissue_signal, bias, grid.dims, k, object.data());
   const int nx = grid.dims.x(), ny = grid.dims.y();
   const std::int64_t rows = std::int64_t{ny} * grid.dims.z();
   std::vector<double> sum_of_squares(coils > 1 ? count : 0, 0.0);

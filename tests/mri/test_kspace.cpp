@@ -5,6 +5,7 @@
 #include "mri/gaussian_noise.hpp"
 #include "mri/kspace.hpp"
 
+#include <fftw3.h>
 #include <gtest/gtest.h>
 #include <omp.h>
 
@@ -234,6 +235,253 @@ TEST(Kspace, PipelineEqualsThePerCoilAcquisition) {
   }
 }
 
+namespace {
+
+/// The pipeline's arithmetic written out plainly, one coil, one plane and one line at a time,
+/// with FFTW plans of the same sizes, kinds and flags on buffers of FFTW's alignment (what
+/// decides which codelets run): the pipeline must give these bytes, however it schedules,
+/// batches, transposes and delivers its work.
+class PlainAcquisition {
+public:
+  explicit PlainAcquisition(const KspaceSampling& sampling) : m_sampling(sampling) {
+    const Eigen::Vector3i& d = sampling.dims;
+    auto* real = fftwf_alloc_real(static_cast<std::size_t>(d.z()));
+    auto* in = fftwf_alloc_complex(static_cast<std::size_t>(d.maxCoeff()));
+    auto* out = fftwf_alloc_complex(static_cast<std::size_t>(d.maxCoeff()));
+    m_z_forward = fftwf_plan_dft_r2c_1d(d.z(), real, out, FFTW_ESTIMATE);
+    for (int axis = 0; axis < 3; ++axis)
+      for (int direction : {FFTW_FORWARD, FFTW_BACKWARD})
+        m_plan[axis][direction == FFTW_FORWARD ? 0 : 1] =
+            fftwf_plan_dft_1d(d[axis], in, out, direction, FFTW_ESTIMATE);
+    fftwf_free(out);
+    fftwf_free(in);
+    fftwf_free(real);
+    m_in =
+        reinterpret_cast<std::complex<float>*>(fftwf_alloc_complex(static_cast<std::size_t>(d.maxCoeff())));
+    m_out =
+        reinterpret_cast<std::complex<float>*>(fftwf_alloc_complex(static_cast<std::size_t>(d.maxCoeff())));
+  }
+  ~PlainAcquisition() {
+    fftwf_destroy_plan(m_z_forward);
+    for (auto& pair : m_plan)
+      for (fftwf_plan plan : pair)
+        fftwf_destroy_plan(plan);
+    fftwf_free(m_in);
+    fftwf_free(m_out);
+  }
+  PlainAcquisition(const PlainAcquisition&) = delete;
+  PlainAcquisition& operator=(const PlainAcquisition&) = delete;
+
+  /// The half spectrum along z of the real object, truncated and slice-weighted.
+  void set_object(const std::vector<double>& object) {
+    const Eigen::Vector3i& d = m_sampling.dims;
+    const int nx = d.x(), ny = d.y(), nz = d.z(), half = m_sampling.acquired.z() / 2 + 1;
+    m_spectrum.assign(static_cast<std::size_t>(half) * nx * ny, 0.0f);
+    m_row_used.assign(static_cast<std::size_t>(ny), false);
+    auto* real = fftwf_alloc_real(static_cast<std::size_t>(nz));
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        bool nonzero = false;
+        for (int t = 0; t < nz; ++t) {
+          real[t] = static_cast<float>(object[at(i, j, t)]);
+          nonzero = nonzero || real[t] != 0.0f;
+        }
+        if (!nonzero) continue; // an empty line's spectrum is zero, untransformed
+        m_row_used[static_cast<std::size_t>(j)] = true;
+        fftwf_execute_dft_r2c(m_z_forward, real, reinterpret_cast<fftwf_complex*>(m_out));
+        for (int f = 0; f < half; ++f) {
+          const float weight =
+              m_sampling.slice_thickness_voxels > 0.0 && f > 0
+                  ? static_cast<float>(std::sin(M_PI * f / nz * m_sampling.slice_thickness_voxels) /
+                                       (M_PI * f / nz * m_sampling.slice_thickness_voxels))
+                  : 1.0f;
+          m_spectrum[(static_cast<std::size_t>(f) * ny + j) * nx + i] = m_out[f] * weight;
+        }
+      }
+    fftwf_free(real);
+  }
+
+  /// One coil's image, as KspacePipeline::acquire() delivers it.
+  std::vector<std::complex<double>> acquire(const std::complex<double>* sensitivity, double sigma,
+                                            std::uint64_t seed) {
+    const Eigen::Vector3i& d = m_sampling.dims;
+    const int nx = d.x(), ny = d.y(), nz = d.z();
+    const double total = static_cast<double>(nx) * ny * nz;
+    const double sample_sigma = sigma * total / std::sqrt(static_cast<double>(m_sampling.acquired.prod()));
+    auto kept = [&](int axis, int index) {
+      return is_kept_frequency(index, d[axis], m_sampling.acquired[axis]);
+    };
+    // Per kept frequency along z, the plane of the coil's image after the in-plane passes.
+    std::vector<std::vector<std::complex<float>>> planes(static_cast<std::size_t>(nz));
+    std::vector<std::complex<float>> x_spectrum(static_cast<std::size_t>(nx) * ny), column(ny);
+    for (int t = 0; t < nz; ++t) {
+      if (!kept(2, t)) continue;
+      const int f = signed_frequency(t, nz);
+      const std::complex<float>* source = m_spectrum.data() + static_cast<std::size_t>(std::abs(f)) * nx * ny;
+      // Along x: the object's spectrum (its conjugate for f < 0) times the sensitivities.
+      for (int j = 0; j < ny; ++j) {
+        std::complex<float>* row = x_spectrum.data() + static_cast<std::size_t>(j) * nx;
+        if (!m_row_used[static_cast<std::size_t>(j)]) {
+          std::fill_n(row, nx, 0.0f);
+          continue;
+        }
+        for (int i = 0; i < nx; ++i) {
+          m_in[i] = source[static_cast<std::size_t>(j) * nx + i];
+          if (f < 0) m_in[i] = std::conj(m_in[i]);
+          if (sensitivity) m_in[i] *= std::complex<float>(sensitivity[static_cast<std::size_t>(j) * nx + i]);
+        }
+        transform(0, FFTW_FORWARD, row, nx);
+      }
+      // Along y, the kept columns: truncation and noise, then back.
+      std::vector<std::complex<float>> truncated(static_cast<std::size_t>(nx) * ny, 0.0f);
+      for (int i = 0; i < nx; ++i) {
+        if (!kept(0, i)) continue;
+        for (int j = 0; j < ny; ++j)
+          m_in[j] = x_spectrum[static_cast<std::size_t>(j) * nx + i];
+        transform(1, FFTW_FORWARD, column.data(), ny);
+        NormalStream noise(
+            mix_seed(seed, static_cast<std::uint64_t>(t) * nx + static_cast<std::uint64_t>(i)));
+        for (int j = 0; j < ny; ++j) {
+          if (!kept(1, j)) {
+            column[static_cast<std::size_t>(j)] = 0.0f;
+          } else if (sigma > 0.0) {
+            const double re = noise(), im = noise();
+            column[static_cast<std::size_t>(j)] += std::complex<float>(static_cast<float>(sample_sigma * re),
+                                                                       static_cast<float>(sample_sigma * im));
+          }
+        }
+        std::copy(column.begin(), column.end(), m_in);
+        transform(1, FFTW_BACKWARD, column.data(), ny);
+        for (int j = 0; j < ny; ++j)
+          truncated[static_cast<std::size_t>(j) * nx + i] = column[static_cast<std::size_t>(j)];
+      }
+      std::vector<std::complex<float>>& plane = planes[static_cast<std::size_t>(t)];
+      plane.resize(static_cast<std::size_t>(nx) * ny);
+      for (int j = 0; j < ny; ++j) {
+        std::copy_n(truncated.data() + static_cast<std::size_t>(j) * nx, nx, m_in);
+        transform(0, FFTW_BACKWARD, plane.data() + static_cast<std::size_t>(j) * nx, nx);
+      }
+    }
+    // Along z: the kept frequencies, zero-filled, back onto the grid.
+    std::vector<std::complex<double>> image(static_cast<std::size_t>(d.prod()));
+    std::vector<std::complex<float>> line(static_cast<std::size_t>(nz));
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        for (int t = 0; t < nz; ++t)
+          m_in[t] = kept(2, t) ? planes[static_cast<std::size_t>(t)][static_cast<std::size_t>(j) * nx + i]
+                               : std::complex<float>(0.0f);
+        transform(2, FFTW_BACKWARD, line.data(), nz);
+        for (int t = 0; t < nz; ++t)
+          image[at(i, j, t)] = std::complex<double>(line[static_cast<std::size_t>(t)]) * (1.0 / total);
+      }
+    return image;
+  }
+
+  /// The sum of squares of the coils' images, `together` coils added up at a time and each
+  /// group's sum added to the total, as KspacePipeline::add_squared_magnitude() adds them.
+  std::vector<double> sum_of_squares(const std::vector<KspaceCoil>& coils, int together) {
+    std::vector<double> energy(static_cast<std::size_t>(m_sampling.dims.prod()), 0.0);
+    for (std::size_t first = 0; first < coils.size(); first += static_cast<std::size_t>(together)) {
+      std::vector<double> group(energy.size(), 0.0);
+      for (std::size_t c = first; c < std::min(coils.size(), first + together); ++c) {
+        const auto image = acquire(coils[c].sensitivity, coils[c].noise_sigma, coils[c].noise_seed);
+        for (std::size_t v = 0; v < image.size(); ++v)
+          group[v] += std::norm(image[v]);
+      }
+      for (std::size_t v = 0; v < energy.size(); ++v)
+        energy[v] += group[v];
+    }
+    return energy;
+  }
+
+private:
+  std::size_t at(int i, int j, int t) const {
+    return (static_cast<std::size_t>(t) * m_sampling.dims.y() + j) * m_sampling.dims.x() + i;
+  }
+  /// The transform of the n values in m_in along `axis` into `out`.
+  void transform(int axis, int direction, std::complex<float>* out, int n) {
+    fftwf_execute_dft(m_plan[axis][direction == FFTW_FORWARD ? 0 : 1], reinterpret_cast<fftwf_complex*>(m_in),
+                      reinterpret_cast<fftwf_complex*>(m_out));
+    std::copy_n(m_out, n, out);
+  }
+
+  KspaceSampling m_sampling;
+  fftwf_plan m_z_forward;
+  fftwf_plan m_plan[3][2];
+  std::complex<float>* m_in;
+  std::complex<float>* m_out;
+  std::vector<std::complex<float>> m_spectrum; ///< half x ny x nx
+  std::vector<bool> m_row_used;
+};
+
+bool same_bytes(const void* a, const void* b, std::size_t bytes) {
+  return std::memcmp(a, b, bytes) == 0;
+}
+
+} // namespace
+
+// The pipeline gives, byte for byte, the plain acquisition above: one coil's complex image and
+// the sum of squares of several, in groups of 1 to 3 coils through the call that adds to a sum
+// and through the one that starts it, adds to it and ends with its root, for even and odd
+// lengths, with and without a slice profile, sensitivities and noise, on one and two threads.
+TEST(Kspace, PipelineGivesTheBytesOfThePlainAcquisition) {
+  struct Case {
+    Eigen::Vector3i dims, acquired;
+    double slice;
+  };
+  const int threads = omp_get_max_threads();
+  for (const Case& c : {Case{{24, 17, 10}, {17, 12, 7}, 0.0}, Case{{20, 18, 12}, {10, 15, 7}, 2.0},
+                        Case{{9, 12, 8}, {9, 12, 8}, 1.5}, Case{{8, 8, 1}, {5, 6, 1}, 0.0}}) {
+    KspaceSampling sampling;
+    sampling.dims = c.dims;
+    sampling.acquired = c.acquired;
+    sampling.slice_thickness_voxels = c.slice;
+    const auto object = random_real_object(c.dims, 4);
+    const auto s1 = random_object(Eigen::Vector3i(c.dims.x(), c.dims.y(), 1), 8);
+    const auto s2 = random_object(Eigen::Vector3i(c.dims.x(), c.dims.y(), 1), 9);
+    PlainAcquisition plain(sampling);
+    plain.set_object(object);
+    const std::size_t voxels = object.size();
+    for (int t : {1, 2}) {
+      omp_set_num_threads(t);
+      KspacePipeline pipeline(sampling, 3);
+      pipeline.set_object(object);
+      for (const std::complex<double>* s : {static_cast<const std::complex<double>*>(nullptr), s1.data()})
+        for (double sigma : {0.0, 0.4}) {
+          std::vector<std::complex<double>> image;
+          pipeline.acquire(s, sigma, 21, image);
+          const auto expected = plain.acquire(s, sigma, 21);
+          EXPECT_TRUE(same_bytes(image.data(), expected.data(), voxels * sizeof(image[0])))
+              << c.dims.transpose() << " / " << c.acquired.transpose() << ", " << t << " threads, "
+              << (s ? "" : "no ") << "sensitivity, sigma " << sigma;
+        }
+      const std::vector<KspaceCoil> coils{{s1.data(), 0.3, 5}, {nullptr, 0.3, 6}, {s2.data(), 0.0, 7}};
+      for (int together : {1, 2, 3}) {
+        const std::vector<double> expected = plain.sum_of_squares(coils, together);
+        KspacePipeline grouped(sampling, together);
+        grouped.set_object(object);
+        std::vector<double> energy(voxels, 0.0);
+        grouped.add_squared_magnitude(coils, energy);
+        EXPECT_TRUE(same_bytes(energy.data(), expected.data(), voxels * sizeof(double)))
+            << c.dims.transpose() << ", " << together << " coils together, " << t << " threads";
+        // Started, added to and ended in one pass each: the root of the same sum.
+        std::vector<double> running(voxels, -1.0);
+        std::vector<float> magnitude(voxels, -1.0f), root(voxels);
+        for (int first = 0; first < 3; first += together) {
+          const int count = std::min(together, 3 - first);
+          grouped.add_squared_magnitude(coils.data() + first, count, first == 0, running.data(),
+                                        first + count == 3 ? magnitude.data() : nullptr);
+        }
+        for (std::size_t v = 0; v < voxels; ++v)
+          root[v] = static_cast<float>(std::sqrt(expected[v]));
+        EXPECT_TRUE(same_bytes(magnitude.data(), root.data(), voxels * sizeof(float)))
+            << c.dims.transpose() << ", " << together << " coils together, " << t << " threads";
+      }
+    }
+    omp_set_num_threads(threads);
+  }
+}
+
 // The pipeline's noise: each part of a reconstructed voxel has the requested sigma whatever the
 // truncation, pure noise has a Rayleigh magnitude, the same seed gives the same bytes on one and
 // two threads, another seed other noise, and the sum of squares of two coils at once equals the
@@ -357,6 +605,27 @@ TEST(GaussianNoise, DeviatesFollowTheStandardNormal) {
   for (double c : counts)
     chi_square += (c - expected) * (c - expected) / expected;
   EXPECT_LT(chi_square, 100.0);
+}
+
+// fill() writes the deviates that one call after another gives, bit for bit (through the slow
+// paths of the wedges and the tail, which millions of deviates reach), and leaves the stream
+// where those calls would.
+TEST(GaussianNoise, FillGivesTheDeviatesOfOneCallAfterAnother) {
+  for (std::uint64_t seed : {1ull, 42ull, 0x9e3779b97f4a7c15ull})
+    for (std::size_t count :
+         {std::size_t{0}, std::size_t{1}, std::size_t{7}, std::size_t{346}, std::size_t{3000000}}) {
+      NormalStream calls(seed), filled(seed);
+      std::vector<double> expected(count), values(count);
+      for (double& x : expected)
+        x = calls();
+      filled.fill(values.data(), count);
+      ASSERT_EQ(0, std::memcmp(expected.data(), values.data(), count * sizeof(double)))
+          << "seed " << seed << ", " << count << " deviates";
+      for (int k = 0; k < 10; ++k) {
+        const double a = calls(), b = filled();
+        ASSERT_EQ(0, std::memcmp(&a, &b, sizeof a)) << "seed " << seed << ", after " << count;
+      }
+    }
 }
 
 TEST(GaussianNoise, SameSeedSameDeviates) {

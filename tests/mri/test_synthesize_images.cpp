@@ -1,15 +1,22 @@
 // Images from tissue fractions: Rician noise statistics on an empty background, the bias
 // field's span, partial-volume mixing, and seeded repeatability.
 
+#include "mri/kspace.hpp"
 #include "mri/parameter_maps.hpp"
 #include "mri/receive_coils.hpp"
 #include "mri/signal_equations.hpp"
 #include "mri/synthesize_images.hpp"
+#include "mri/tissue_parameters.hpp"
 
 #include <gtest/gtest.h>
+#include <omp.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <iostream>
+#include <limits>
+#include <random>
 
 using namespace phantasm;
 
@@ -247,5 +254,209 @@ TEST(SynthesizeImages, KspacePipelineMatchesThePerCoilAcquisition) {
     const double sigma = background.reference[0].noise_sigma;
     const double expected = sigma * std::sqrt(2.0) * std::exp(std::lgamma(n + 0.5) - std::lgamma(n));
     EXPECT_NEAR(mean / expected, 1.0, 0.02);
+  }
+}
+
+namespace {
+
+/// Two tissues in nested ellipsoids with partial-volume fractions over a voxel at their
+/// surfaces, on a grid placed off the origin; the deformed state is the reference shifted by a
+/// voxel along i.
+VoxelizedPhantom nested_tissues(const Eigen::Vector3i& dims) {
+  VoxelizedPhantom v;
+  v.grid.dims = dims;
+  v.grid.spacing_mm = {1.0, 1.2, 1.5};
+  v.grid.world_from_voxel.topLeftCorner<3, 3>() = v.grid.spacing_mm.asDiagonal();
+  v.grid.world_from_voxel.topRightCorner<3, 1>() = Eigen::Vector3d(-10.0, 5.0, 2.5);
+  v.tissues = {"white_matter", "gray_matter"};
+  auto state = [&](double shift) {
+    const auto count = static_cast<std::size_t>(dims.prod());
+    std::vector<std::vector<float>> fractions(3, std::vector<float>(count, 0.0f));
+    std::vector<std::int32_t> labels(count, 0);
+    for (int k = 0, n = 0; k < dims.z(); ++k)
+      for (int j = 0; j < dims.y(); ++j)
+        for (int i = 0; i < dims.x(); ++i, ++n) {
+          const Eigen::Vector3d x((i - shift - 0.5 * dims.x()) / (0.35 * dims.x()),
+                                  (j - 0.5 * dims.y()) / (0.4 * dims.y()),
+                                  (k - 0.5 * dims.z()) / (0.3 * dims.z()));
+          const double r = x.norm();
+          const double outer = std::clamp(0.5 - (r - 1.0) * 0.3 * dims.x(), 0.0, 1.0);
+          const double inner = std::clamp(0.5 - (r - 0.6) * 0.3 * dims.x(), 0.0, 1.0);
+          const auto u = static_cast<std::size_t>(n);
+          fractions[0][u] = static_cast<float>(inner);
+          fractions[1][u] = static_cast<float>(outer - inner);
+          fractions[2][u] = static_cast<float>(1.0 - outer);
+          labels[u] = fractions[2][u] >= 0.5f ? 0 : fractions[0][u] >= fractions[1][u] ? 1 : 2;
+        }
+    return compact_tissue_volumes(std::move(labels), {-1, 0, 1}, fractions);
+  };
+  v.reference = state(0.0);
+  v.deformed = state(1.0);
+  return v;
+}
+
+/// The object of one image, as the stage defines it: fraction-weighted tissue signals times a
+/// linear bias ramp along a direction drawn from the image's seed, spanning 1 -/+ bias / 200
+/// over the voxels that are not mostly background.
+std::vector<double> plain_object(const ImageGrid& grid, const TissueVolumes& volumes,
+                                 const std::vector<double>& signal, double bias_percent, std::uint64_t seed) {
+  const int nx = grid.dims.x(), ny = grid.dims.y();
+  std::vector<double> bias(static_cast<std::size_t>(grid.voxel_count()), 1.0);
+  std::mt19937_64 random(seed);
+  if (bias_percent > 0.0) {
+    std::normal_distribution<double> normal;
+    Eigen::Vector3d direction(normal(random), normal(random), normal(random));
+    direction.normalize();
+    const Eigen::Vector3d a = grid.world_from_voxel.topLeftCorner<3, 3>().transpose() * direction;
+    const double offset = direction.dot(grid.world_from_voxel.topRightCorner<3, 1>());
+    auto along = [&](std::size_t v) {
+      const auto i = static_cast<int>(v % nx), j = static_cast<int>(v / nx % ny),
+                 k = static_cast<int>(v / nx / ny);
+      return a.x() * i + a.y() * j + a.z() * k + offset;
+    };
+    double low = std::numeric_limits<double>::infinity(), high = -low;
+    volumes.for_each_voxel(0, bias.size(), [&](std::size_t v, const float* fractions) {
+      if (fractions[signal.size()] >= 0.5f) return;
+      low = std::min(low, along(v));
+      high = std::max(high, along(v));
+    });
+    if (high > low)
+      for (std::size_t v = 0; v < bias.size(); ++v)
+        bias[v] = 1.0 + bias_percent / 200.0 * (2.0 * (along(v) - low) / (high - low) - 1.0);
+  }
+  std::vector<double> object(bias.size());
+  volumes.for_each_voxel(0, object.size(), [&](std::size_t v, const float* fractions) {
+    double sum = 0.0;
+    for (std::size_t t = 0; t < signal.size(); ++t)
+      sum += fractions[t] * signal[t];
+    object[v] = sum * bias[v];
+  });
+  return object;
+}
+
+} // namespace
+
+// The stage's k-space images are, byte for byte, the plain composition of the public pieces:
+// the object (signals, bias), the receive coils, and the pipeline's sum of squares accumulated
+// over the coils in a separate sum and rooted afterwards; two sequences, both states, one and
+// three coils, with and without a bias field, on one and two threads.
+TEST(SynthesizeImages, KspaceImagesAreThePlainCompositionByteForByte) {
+  StageReport report;
+  Reporter quiet = Reporter::silent();
+  const VoxelizedPhantom object = nested_tissues({20, 18, 14});
+  ASSERT_GT(object.reference.partial_voxels.size(), 100u); // partial volume at both surfaces
+  const OrganTable organs({{"inner", "white_matter", ""}, {"outer", "gray_matter", ""}});
+  const int threads = omp_get_max_threads();
+  for (int coils : {1, 3})
+    for (double bias : {0.0, 20.0}) {
+      MriSettings scene = noisy_scene(3.0, bias);
+      SequenceSettings t2;
+      t2.name = "T2w";
+      t2.kind = SequenceKind::spin_echo;
+      t2.TR_ms = 4000;
+      t2.TE_ms = 100;
+      scene.sequences.push_back(t2);
+      scene.acquisition.kspace = true;
+      scene.acquisition.acquired_voxel_mm = Eigen::Vector3d(1.25, 1.5, 2.0);
+      scene.acquisition.slice_thickness_mm = 2.0;
+      scene.acquisition.coils = coils;
+
+      // The plain composition.
+      const auto parameters = resolve_tissue_parameters(scene, organs);
+      auto signal_of = [&](const SequenceSettings& sequence, const std::string& tissue) {
+        const TissueParameters& p = parameters.at(tissue);
+        return sequence_signal(sequence, {p.PD.value_or(0.0), p.T1_ms.value_or(1.0), p.T2_ms.value_or(0.0),
+                                          p.T2star_ms.value_or(p.T2_ms.value_or(0.0))});
+      };
+      std::vector<bool> mask(object.reference.labels.size());
+      for (std::size_t v = 0; v < mask.size(); ++v)
+        mask[v] = object.reference.background(v) < 0.5f;
+      const ReceiveCoils ring(object.grid, coils, mask);
+      KspaceSampling sampling;
+      sampling.dims = object.grid.dims;
+      for (int axis = 0; axis < 3; ++axis)
+        sampling.acquired[axis] =
+            std::clamp(static_cast<int>(std::lround(object.grid.dims[axis] * object.grid.spacing_mm[axis] /
+                                                    (*scene.acquisition.acquired_voxel_mm)[axis])),
+                       1, object.grid.dims[axis]);
+      sampling.slice_thickness_voxels = scene.acquisition.slice_thickness_mm / object.grid.spacing_mm.z();
+      KspacePipeline pipeline(sampling, std::min(coils, 2));
+      std::vector<std::vector<float>> expected;
+      for (std::size_t q = 0; q < scene.sequences.size(); ++q) {
+        std::vector<double> signal;
+        for (const std::string& tissue : object.tissues)
+          signal.push_back(signal_of(scene.sequences[q], tissue));
+        const double sigma =
+            scene.acquisition.noise_percent / 100.0 *
+            std::abs(signal_of(scene.sequences[q], scene.acquisition.noise_reference_tissue));
+        for (int state = 0; state < 2; ++state) {
+          const std::uint64_t seed = mix_seed(scene.seed, 2 * q + static_cast<std::uint64_t>(state));
+          pipeline.set_object(
+              plain_object(object.grid, state ? *object.deformed : object.reference, signal, bias, seed));
+          std::vector<KspaceCoil> list;
+          for (int c = 0; c < coils; ++c)
+            list.push_back(
+                {ring.sensitivity_plane(c), sigma, mix_seed(seed, static_cast<std::uint64_t>(c) + 1)});
+          std::vector<double> energy(mask.size(), 0.0);
+          pipeline.add_squared_magnitude(list, energy);
+          std::vector<float> magnitude(energy.size());
+          for (std::size_t v = 0; v < energy.size(); ++v)
+            magnitude[v] = static_cast<float>(std::sqrt(energy[v]));
+          expected.push_back(std::move(magnitude));
+        }
+      }
+
+      for (int t : {1, 2}) {
+        omp_set_num_threads(t);
+        const MrImages images = synthesize_images(scene, organs, object, report, quiet);
+        omp_set_num_threads(threads);
+        ASSERT_EQ(images.reference.size(), 2u);
+        ASSERT_EQ(images.deformed.size(), 2u);
+        for (std::size_t q = 0; q < 2; ++q)
+          for (int state = 0; state < 2; ++state) {
+            const std::vector<float>& m = (state ? images.deformed : images.reference)[q].magnitude;
+            const std::vector<float>& e = expected[2 * q + static_cast<std::size_t>(state)];
+            ASSERT_EQ(m.size(), e.size());
+            EXPECT_EQ(0, std::memcmp(m.data(), e.data(), m.size() * sizeof(float)))
+                << coils << " coils, bias " << bias << ", sequence " << q << ", state " << state << ", " << t
+                << " threads";
+          }
+      }
+    }
+}
+
+// The parameter maps are, byte for byte, the fraction-weighted mixture of each voxel on its own
+// (whole voxels side by side share their arithmetic in the stage): partial volume at two
+// surfaces, a tissue without T2*.
+TEST(SynthesizeImages, ParameterMapsAreThePlainMixtureByteForByte) {
+  const VoxelizedPhantom object = nested_tissues({20, 18, 14});
+  std::map<std::string, TissueParameters> parameters;
+  parameters["white_matter"] = {"white_matter", 810.0, 80.0, 53.2, 0.7, "", "", "", ""};
+  parameters["gray_matter"] = {"gray_matter", 1350.0, 110.0, std::nullopt, 0.8, "", "", "", ""};
+  for (const TissueVolumes* volumes : {&object.reference, &*object.deformed}) {
+    const ParameterMaps maps = parameter_maps(*volumes, object.tissues, parameters);
+    auto plain = [&](std::optional<double> TissueParameters::*member, bool additive) {
+      std::vector<float> map(volumes->labels.size(), 0.0f);
+      volumes->for_each_voxel(0, map.size(), [&](std::size_t v, const float* fractions) {
+        double sum = 0.0, weight = 0.0;
+        for (std::size_t t = 0; t < object.tissues.size(); ++t) {
+          const std::optional<double> value = parameters.at(object.tissues[t]).*member;
+          if (!value) continue;
+          sum += fractions[t] * *value;
+          weight += fractions[t];
+        }
+        if (weight > 0.0) map[v] = static_cast<float>(additive ? sum : sum / weight);
+      });
+      return map;
+    };
+    const std::pair<const std::vector<float>*, std::vector<float>> cases[] = {
+        {&maps.PD, plain(&TissueParameters::PD, true)},
+        {&maps.T1_ms, plain(&TissueParameters::T1_ms, false)},
+        {&maps.T2_ms, plain(&TissueParameters::T2_ms, false)},
+        {&maps.T2star_ms, plain(&TissueParameters::T2star_ms, false)}};
+    for (const auto& [map, expected] : cases) {
+      ASSERT_EQ(map->size(), expected.size());
+      EXPECT_EQ(0, std::memcmp(map->data(), expected.data(), expected.size() * sizeof(float)));
+    }
   }
 }
