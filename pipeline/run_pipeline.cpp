@@ -8,10 +8,10 @@
 #include "io/dataset_layout.hpp"
 #include "io/shape_files.hpp"
 #include "mri/mri_plan.hpp"
-#include "mri/synthesize_images.hpp"
 #include "pipeline/anatomy_cache.hpp"
 #include "pipeline/cost_estimate.hpp"
 #include "pipeline/reference_cache.hpp"
+#include "pipeline/reference_images_cache.hpp"
 #include "sim/deform_phantom.hpp"
 #include "sim/sim_plan.hpp"
 #include "voxelize/voxelize_plan.hpp"
@@ -142,7 +142,13 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
   StageReport& mri = result.stages[3];
   if (scene.mri.images && !scene.mri.sequences.empty()) {
     const StageLines mri_lines(mri);
-    result.images = synthesize_images(scene.mri, scene.organs, result.volumes, mri, reporter);
+    // So are the reference state's images with the same MRI settings: kept beside it, so that
+    // only the deformed state's images are synthesized per subject.
+    const std::string reference_key =
+        cache.empty() ? std::string()
+                      : reference_cache_key(anatomy_key, scene.voxelization, scene.organs, scene.grid.grid());
+    result.images = synthesize_images_cached(reference_key, scene.mri, scene.organs, result.volumes, cache,
+                                             mri, reporter);
     mri_lines.print_new(mri, reporter);
   }
 }

@@ -235,7 +235,8 @@ TEST(BatchCommand, SubjectsWithTheSameAnatomyBuildItOnce) {
   EXPECT_NE(run.err.find(": 1 anatomies, 1 built by this batch"), std::string::npos) << run.err;
   EXPECT_NE(run.err.find("; 1 reference states, 1 voxelized by this batch"), std::string::npos) << run.err;
   const auto files = folder_contents(folder / "out");
-  EXPECT_EQ(count_ending(files, ".bin"), 2u); // the anatomy and the voxelized reference state
+  // The anatomy, the voxelized reference state and its images at each noise level.
+  EXPECT_EQ(count_ending(files, ".bin"), 5u);
   EXPECT_EQ(count_ending(files, "provenance.json"), 3u);
   // A run of the first subject's scene without the cache writes the same files.
   const fs::path alone = folder / "alone";
