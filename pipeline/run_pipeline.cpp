@@ -128,6 +128,11 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
   }
   if (until == SimulationStage::deformation) return;
 
+  if (!cache.empty()) {
+    result.reference_entries.folder = cache;
+    result.reference_entries.state_key =
+        reference_cache_key(anatomy_key, scene.voxelization, scene.organs, scene.grid.grid());
+  }
   StageReport& voxelize = result.stages[2];
   const StageLines voxelize_lines(voxelize);
   // The reference state is the same for every subject of this anatomy, grid and voxelization:
@@ -144,11 +149,9 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
     const StageLines mri_lines(mri);
     // So are the reference state's images with the same MRI settings: kept beside it, so that
     // only the deformed state's images are synthesized per subject.
-    const std::string reference_key =
-        cache.empty() ? std::string()
-                      : reference_cache_key(anatomy_key, scene.voxelization, scene.organs, scene.grid.grid());
-    result.images = synthesize_images_cached(reference_key, scene.mri, scene.organs, result.volumes, cache,
-                                             mri, reporter);
+    result.images = synthesize_images_cached(result.reference_entries.state_key, scene.mri, scene.organs,
+                                             result.volumes, cache, mri, reporter);
+    result.reference_entries.images_key = reference_images_key(result.reference_entries.state_key, scene.mri);
     mri_lines.print_new(mri, reporter);
   }
 }

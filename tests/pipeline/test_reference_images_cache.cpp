@@ -85,14 +85,26 @@ bool is_record(const std::string& path) {
   return path.find("log.txt") != std::string::npos || path.find("provenance.json") != std::string::npos;
 }
 
-/// The reference images entries of a cache folder.
-std::vector<fs::path> images_entries(const fs::path& cache) {
+/// The entries of a cache folder whose names start with `prefix`: "images-" (the reference
+/// images), "file-" (the reference session's files).
+std::vector<fs::path> entries_named(const fs::path& cache, const std::string& prefix) {
   std::vector<fs::path> entries;
   for (const auto& entry : fs::directory_iterator(cache))
-    if (entry.path().filename().string().rfind("images-", 0) == 0 && entry.path().extension() == ".bin")
+    if (entry.path().filename().string().rfind(prefix, 0) == 0 && entry.path().extension() == ".bin")
       entries.push_back(entry.path());
   std::sort(entries.begin(), entries.end());
   return entries;
+}
+
+std::vector<fs::path> images_entries(const fs::path& cache) {
+  return entries_named(cache, "images-");
+}
+
+/// The path of a subject-01 file in subject `id`'s folders.
+std::string of_subject(std::string path, const std::string& id) {
+  for (std::size_t at = path.find("sub-01"); at != std::string::npos; at = path.find("sub-01", at))
+    path.replace(at + 4, 2, id);
+  return path;
 }
 
 } // namespace
@@ -270,19 +282,42 @@ TEST(ReferenceImagesCache, RunsWithTheCacheColdWarmAndWithoutWriteTheSameFiles) 
   }
   EXPECT_TRUE(contains(warm_summary.stages[3].modelled, line));
   EXPECT_EQ(images_entries(cache), entries);
+  // The reference session's images, previews, maps, labels, fractions and meshes: their bytes
+  // stored by the cold run, copied by the warm one (the same bytes, checked above).
+  std::size_t reference_files = 0;
+  for (const auto& [path, bytes] : none) {
+    const bool reference = path.find("ses-ref") != std::string::npos;
+    const auto ends = [&path = path](const std::string& end) {
+      return path.size() > end.size() && path.compare(path.size() - end.size(), end.size(), end) == 0;
+    };
+    reference_files += reference && (ends(".nii.gz") || ends(".png") || ends(".vtp") ||
+                                     (ends("_tetmesh.vtu") && path.find("greyMatter") == std::string::npos));
+  }
+  const std::vector<fs::path> file_entries = entries_named(cache, "file-");
+  EXPECT_EQ(reference_files, 15u); // 2 images, 2 previews, 4 maps, dseg, 3 probseg, 3 surfaces
+  EXPECT_EQ(file_entries.size(), reference_files); // the simulated body's tet mesh is the subject's
 
-  // What a deformation sweep varies, and outputs the images do not depend on: the same entry,
-  // the same reference images; the deformed ones differ.
-  const std::string ref_t1w = "sub-01/ses-ref/anat/sub-01_ses-ref_T1w.nii.gz";
+  // What a deformation sweep varies, another subject, and outputs the reference session does
+  // not depend on: the same entries, every reference-session file the same bytes as without the
+  // cache (copied from the entries); the deformed images differ.
   const std::string def_t1w = "sub-01/ses-def/anat/sub-01_ses-def_T1w.nii.gz";
-  ASSERT_TRUE(none.count(ref_t1w) && none.count(def_t1w));
+  ASSERT_TRUE(none.count(def_t1w));
   const std::string shifted_text =
       replaced(replaced(text, "displacement_mm: [-2, 0, -3]", "displacement_mm: [-4, 0, -6]"),
-               "subject: \"01\"", "subject: \"01\"\n  previews: false\n  meshes: false\n  landmarks: false");
+               "subject: \"01\"", "subject: \"02\"\n  landmarks: false\n  jacobian: false");
   const auto [shifted_summary, shifted] = run("shifted", shifted_text, cache);
   EXPECT_EQ(images_entries(cache), entries);
-  EXPECT_TRUE(shifted.at(ref_t1w) == none.at(ref_t1w));
-  EXPECT_FALSE(shifted.at(def_t1w) == none.at(def_t1w));
+  EXPECT_EQ(entries_named(cache, "file-"), file_entries);
+  std::size_t compared = 0;
+  for (const auto& [path, bytes] : none) {
+    if (path.find("ses-ref") == std::string::npos || path.find("landmarks") != std::string::npos) continue;
+    SCOPED_TRACE(path);
+    ASSERT_TRUE(shifted.count(of_subject(path, "02")));
+    EXPECT_TRUE(shifted.at(of_subject(path, "02")) == bytes);
+    ++compared;
+  }
+  EXPECT_GT(compared, reference_files);
+  EXPECT_FALSE(shifted.at(of_subject(def_t1w, "02")) == none.at(def_t1w));
   EXPECT_TRUE(contains(shifted_summary.stages[3].modelled, line));
 
   // Another noise level, sequence timing or seed: entries of their own.
