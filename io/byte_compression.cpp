@@ -18,9 +18,9 @@ constexpr std::size_t k_piece_bytes = std::size_t{1} << 24;
 
 } // namespace
 
-std::string compress_bytes(std::string_view bytes) {
+std::string compress_bytes(std::string_view bytes, int level) {
   const std::unique_ptr<libdeflate_compressor, void (*)(libdeflate_compressor*)> compressor(
-      libdeflate_alloc_compressor(1), libdeflate_free_compressor);
+      libdeflate_alloc_compressor(level), libdeflate_free_compressor);
   if (!compressor) throw std::runtime_error("libdeflate: cannot allocate a compressor");
   ByteWriter out;
   out.value(static_cast<std::uint64_t>(bytes.size()));

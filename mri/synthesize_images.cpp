@@ -13,6 +13,7 @@
 #include <complex>
 #include <memory>
 #include <random>
+#include <stdexcept>
 
 namespace phantasm {
 namespace {
@@ -253,8 +254,19 @@ std::optional<KspaceSampling> kspace_sampling(const AcquisitionSettings& a, cons
 } // namespace
 
 MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, const VoxelizedPhantom& volumes,
-                           StageReport& report, Reporter& reporter, KspaceMethod method) {
+                           StageReport& report, Reporter& reporter, SynthesisOptions options) {
   MrImages images;
+  // The states to make: the reference unless given, the deformed one unless passed over.
+  std::optional<ReferenceImages>& given = options.reference;
+  const TissueVolumes* deformed = volumes.deformed && !options.reference_only ? &*volumes.deformed : nullptr;
+  if (given) {
+    bool matches =
+        given->images.size() == mri.sequences.size() && given->maps.has_value() == mri.parameter_maps;
+    for (const MrImage& image : given->images)
+      matches = matches && image.magnitude.size() == volumes.reference.labels.size();
+    if (!matches)
+      throw std::invalid_argument("synthesize_images: reference images of other settings or another grid");
+  }
   const auto parameters = resolve_tissue_parameters(mri, organs);
   auto relaxation_of = [&](const std::string& tissue) {
     const TissueParameters& p = parameters.at(tissue);
@@ -275,7 +287,7 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
   std::unique_ptr<KspacePipeline> pipeline;
   // Two coils at a time: one sweep over the sum of squares for both, for the memory of one
   // double-precision coil image.
-  if (sampling && method == KspaceMethod::pipeline)
+  if (sampling && options.method == KspaceMethod::pipeline && (!given || deformed))
     pipeline = std::make_unique<KspacePipeline>(*sampling, std::min(coils.count(), 2));
   const Acquisition acquisition{grid, coils, sampling, settings.bias_percent, pipeline.get()};
   Workspace workspace;
@@ -303,7 +315,7 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
         std::to_string(coils.count()) +
         " receive coils on a ring (sensitivity ~ 1/distance), noise per coil, sum of squares");
   }
-  ProgressBar progress(reporter, "mri", mri.sequences.size() * (volumes.deformed ? 2 : 1));
+  ProgressBar progress(reporter, "mri", mri.sequences.size() * ((given ? 0 : 1) + (deformed ? 1 : 0)));
   for (std::size_t q = 0; q < mri.sequences.size(); ++q) {
     throw_if_cancelled();
     const SequenceSettings& sequence = mri.sequences[q];
@@ -324,14 +336,19 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
     }
     const double sigma = settings.noise_percent / 100.0 * std::abs(reference_signal);
     // One seed per image (sequence and state): images differ, and every run repeats them.
-    progress.set_detail(sequence.name + ", reference");
-    images.reference.push_back(image_of(acquisition, workspace, sequence, mix_seed(mri.seed, 2 * q),
-                                        volumes.reference, tissue_signal, sigma));
-    progress.advance();
-    if (volumes.deformed) {
+    if (given) {
+      images.reference.push_back(std::move(given->images[q]));
+      images.reference.back().sequence = &sequence;
+    } else {
+      progress.set_detail(sequence.name + ", reference");
+      images.reference.push_back(image_of(acquisition, workspace, sequence, mix_seed(mri.seed, 2 * q),
+                                          volumes.reference, tissue_signal, sigma));
+      progress.advance();
+    }
+    if (deformed) {
       progress.set_detail(sequence.name + ", deformed");
       images.deformed.push_back(image_of(acquisition, workspace, sequence, mix_seed(mri.seed, 2 * q + 1),
-                                         *volumes.deformed, tissue_signal, sigma));
+                                         *deformed, tissue_signal, sigma));
       progress.advance();
     }
   }
@@ -340,9 +357,9 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
   pipeline.reset();
   workspace = Workspace{};
   if (mri.parameter_maps) {
-    images.reference_maps = parameter_maps(volumes.reference, volumes.tissues, parameters);
-    if (volumes.deformed)
-      images.deformed_maps = parameter_maps(*volumes.deformed, volumes.tissues, parameters);
+    images.reference_maps =
+        given ? std::move(given->maps) : parameter_maps(volumes.reference, volumes.tissues, parameters);
+    if (deformed) images.deformed_maps = parameter_maps(*deformed, volumes.tissues, parameters);
     report.modelled.push_back(
         "parameter maps PD, T1, T2, T2* (fraction-weighted; PD summed, times averaged)");
   }

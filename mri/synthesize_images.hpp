@@ -9,6 +9,10 @@
 #include "mri/mri_settings.hpp"
 #include "voxelize/voxelized_phantom.hpp"
 
+#include <optional>
+#include <utility>
+#include <vector>
+
 namespace phantasm {
 
 /// How synthesize_images() acquires in k-space. Both give the same images up to rounding, noise
@@ -19,6 +23,30 @@ enum class KspaceMethod {
   pipeline,
   /// acquire_in_kspace() on each coil's complex image: the former method, kept for comparison.
   per_coil,
+};
+
+/// The reference state's part of synthesize_images()'s result: one image per sequence and, with
+/// settings.parameter_maps, the state's parameter maps. They are made from the settings, the
+/// organ table and the reference volumes alone (the coils are placed and normalized over the
+/// reference state's object; each image's bias and noise are seeded by the settings' seed, the
+/// sequence's index and the state), so that a caller may keep them for later calls with the
+/// same inputs.
+struct ReferenceImages {
+  std::vector<MrImage> images;       ///< one per sequence of the settings, in their order
+  std::optional<ParameterMaps> maps; ///< when settings.parameter_maps
+};
+
+/// What synthesize_images() makes besides the settings.
+struct SynthesisOptions {
+  KspaceMethod method = KspaceMethod::pipeline;
+  /// The reference state alone: a deformed state the volumes hold is passed over (its images,
+  /// its maps). The report gets the same lines as when both are made.
+  bool reference_only = false;
+  /// The reference state's images and maps as an earlier call with the same settings, organs and
+  /// reference volumes made them: taken as they are (the images' sequences pointed at these
+  /// settings), so that only the deformed state is synthesized. The report gets the same lines as
+  /// when they are made. Their counts and sizes must match the settings and the grid.
+  std::optional<ReferenceImages> reference;
 };
 
 /// MR images of every sequence of the settings, for each state the volumes hold: each voxel's
@@ -34,9 +62,20 @@ enum class KspaceMethod {
 /// The images point at settings.sequences: keep the settings alive.
 /// @param settings field strength, tissue values, sequences, acquisition, seed, parameter maps
 /// @param organs the organ table (the tissues whose parameters are resolved)
-/// @param method how k-space is acquired (benchmarks compare the two)
+/// @param options which states are made, and how k-space is acquired
+/// @throws std::invalid_argument when options.reference does not match the settings and the grid
 MrImages synthesize_images(const MriSettings& settings, const OrganTable& organs,
                            const VoxelizedPhantom& volumes, StageReport& report, Reporter& reporter,
-                           KspaceMethod method = KspaceMethod::pipeline);
+                           SynthesisOptions options);
+
+/// synthesize_images() of every state the volumes hold.
+/// @param method how k-space is acquired (benchmarks compare the two)
+inline MrImages synthesize_images(const MriSettings& settings, const OrganTable& organs,
+                                  const VoxelizedPhantom& volumes, StageReport& report, Reporter& reporter,
+                                  KspaceMethod method = KspaceMethod::pipeline) {
+  SynthesisOptions options;
+  options.method = method;
+  return synthesize_images(settings, organs, volumes, report, reporter, std::move(options));
+}
 
 } // namespace phantasm

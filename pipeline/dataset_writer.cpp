@@ -15,6 +15,7 @@
 #include "io/preview_png.hpp"
 #include "io/vdb_file.hpp"
 #include "pipeline/cost_estimate.hpp"
+#include "pipeline/reference_files_cache.hpp"
 #include "scene/scene_json.hpp"
 #include "voxelize/landmarks.hpp"
 #include "voxelize/level_set.hpp"
@@ -45,13 +46,36 @@ struct PlannedFile {
   std::function<void(const std::filesystem::path&)> write;
 };
 
+/// What a file's bytes follow from besides the code. A reference-session file's are the same in
+/// every subject that shares the reference state (and, for images, the MRI settings): a run with
+/// a cache copies the bytes an earlier subject stored (pipeline/reference_files_cache.hpp).
+enum class FileSource {
+  subject,          ///< this subject's deformation, or the scene as a whole
+  reference_state,  ///< the reference state's key: its labels, fractions and meshes
+  reference_images, ///< its images' key: their images, previews and parameter maps
+};
+
 /// The dataset's files in the order they are written. The one list is both the progress count
 /// and what is written, so the two cannot drift apart.
 class DatasetPlan {
 public:
+  DatasetPlan(const ReferenceEntries& entries, const DatasetLayout& layout, Reporter& reporter)
+      : m_entries(entries), m_subject_prefix("sub-" + layout.subject() + "_"), m_reporter(reporter) {}
+
   /// A file made by one of io's format writers.
-  void file(std::filesystem::path path, std::function<void(const std::filesystem::path&)> write) {
+  void file(std::filesystem::path path, FileWriter write, FileSource source = FileSource::subject) {
+    write = from(path, std::move(write), source);
     m_files.push_back({std::move(path), std::move(write)});
+  }
+  /// `write` of a file at `path`, through the cache when its bytes follow from a reference entry.
+  FileWriter from(const std::filesystem::path& path, FileWriter write, FileSource source) const {
+    if (source == FileSource::subject) return write;
+    // The file's name without the subject: the same in every subject.
+    std::string role = path.filename().string();
+    if (role.rfind(m_subject_prefix, 0) == 0) role.erase(0, m_subject_prefix.size());
+    return write_through_cache(
+        m_entries.folder, source == FileSource::reference_state ? m_entries.state_key : m_entries.images_key,
+        role, std::move(write), m_reporter);
   }
   void text(std::filesystem::path path, std::function<std::string()> content) {
     file(std::move(path), [content = std::move(content)](const std::filesystem::path& p) {
@@ -66,7 +90,15 @@ public:
 
 private:
   std::vector<PlannedFile> m_files;
+  ReferenceEntries m_entries;
+  std::string m_subject_prefix;
+  Reporter& m_reporter;
 };
+
+/// The source of a file of `state` whose reference-session bytes follow from `reference`.
+FileSource source_in(PhantomState state, FileSource reference) {
+  return state == PhantomState::reference ? reference : FileSource::subject;
+}
 
 nlohmann::json stage_json(const StageReport& report) {
   return {{"stage", report.stage},     {"status", report.status},     {"modelled", report.modelled},
@@ -271,7 +303,7 @@ void plan_organ_meshes(const Scene& scene, const Phantom& phantom, PhantomState 
       if (!reference && organ.surface) {
         auto file = std::make_shared<ReferenceSurfaceFile>();
         file->path = layout.mesh(state, organ.name);
-        file->write = write_surface;
+        file->write = plan.from(file->path, write_surface, FileSource::reference_state);
         surfaces[index] = file;
         plan.file(file->path, [file](const std::filesystem::path&) { file->ensure_written(); });
       } else if (reference && organ.surface && shared != surfaces.end() && reference->organs[index].surface &&
@@ -281,7 +313,8 @@ void plan_organ_meshes(const Scene& scene, const Phantom& phantom, PhantomState 
           write_file_atomically(path, written_file_bytes(file->path));
         });
       } else {
-        plan.file(layout.mesh(state, organ.name), write_surface);
+        plan.file(layout.mesh(state, organ.name), write_surface,
+                  source_in(state, FileSource::reference_state));
       }
     }
     if (!organ.solid) continue;
@@ -295,20 +328,22 @@ void plan_organ_meshes(const Scene& scene, const Phantom& phantom, PhantomState 
                 });
       continue;
     }
-    plan.file(layout.tet_mesh(state, organ.name),
-              [&organ, reference, index](const std::filesystem::path& path) {
-                std::vector<PointArray> arrays;
-                if (reference) {
-                  const Eigen::MatrixX3d displacement =
-                      organ.solid->vertices - reference->organs[index].solid->vertices;
-                  PointArray array{"displacement_mm", 3, {}, "RAS", "mm"};
-                  for (Eigen::Index v = 0; v < displacement.rows(); ++v)
-                    for (int c = 0; c < 3; ++c)
-                      array.values.push_back(displacement(v, c));
-                  arrays.push_back(std::move(array));
-                }
-                write_vtu(path, *organ.solid, arrays);
-              });
+    plan.file(
+        layout.tet_mesh(state, organ.name),
+        [&organ, reference, index](const std::filesystem::path& path) {
+          std::vector<PointArray> arrays;
+          if (reference) {
+            const Eigen::MatrixX3d displacement =
+                organ.solid->vertices - reference->organs[index].solid->vertices;
+            PointArray array{"displacement_mm", 3, {}, "RAS", "mm"};
+            for (Eigen::Index v = 0; v < displacement.rows(); ++v)
+              for (int c = 0; c < 3; ++c)
+                array.values.push_back(displacement(v, c));
+            arrays.push_back(std::move(array));
+          }
+          write_vtu(path, *organ.solid, arrays);
+        },
+        source_in(state, FileSource::reference_state));
   }
 }
 
@@ -404,12 +439,15 @@ void plan_parameter_maps(const ImageGrid& grid, const ParameterMaps& maps, Phant
        "T2*: fraction-weighted mean over the voxel's tissues that have one", 1e-3f}};
   for (const Map& map : list) {
     const std::filesystem::path path = layout.parameter_map(state, map.suffix);
-    plan.file(path, [&grid, map](const std::filesystem::path& p) {
-      std::vector<float> values(*map.values);
-      for (float& value : values)
-        value *= map.scale;
-      write_nifti(p, grid, values, {NiftiIntent::none, 1, std::string("phantasm ") + map.suffix});
-    });
+    plan.file(
+        path,
+        [&grid, map](const std::filesystem::path& p) {
+          std::vector<float> values(*map.values);
+          for (float& value : values)
+            value *= map.scale;
+          write_nifti(p, grid, values, {NiftiIntent::none, 1, std::string("phantasm ") + map.suffix});
+        },
+        source_in(state, FileSource::reference_images));
     plan.json(sidecar_path(path), [map] {
       return nlohmann::json{{"Units", map.units},
                             {"Description", map.description},
@@ -428,15 +466,19 @@ void plan_images(const ImageGrid& grid, const Scene& scene, const MrImages& imag
   for (PhantomState state : {PhantomState::reference, PhantomState::deformed}) {
     for (const MrImage& image : state == PhantomState::reference ? images.reference : images.deformed) {
       const std::filesystem::path path = layout.anat_image(state, image.sequence->name);
-      plan.file(path, [&grid, &image](const std::filesystem::path& p) {
-        write_nifti(p, grid, image.magnitude, {NiftiIntent::none, 1, "phantasm " + image.sequence->name});
-      });
+      plan.file(
+          path,
+          [&grid, &image](const std::filesystem::path& p) {
+            write_nifti(p, grid, image.magnitude, {NiftiIntent::none, 1, "phantasm " + image.sequence->name});
+          },
+          source_in(state, FileSource::reference_images));
       plan.json(sidecar_path(path),
                 [&scene, &images, &image] { return image_sidecar(scene, images, image); });
       if (scene.outputs.previews) {
         plan.file(
             layout.preview(state, image.sequence->name),
-            [&grid, &image](const std::filesystem::path& p) { write_preview_png(p, grid, image.magnitude); });
+            [&grid, &image](const std::filesystem::path& p) { write_preview_png(p, grid, image.magnitude); },
+            source_in(state, FileSource::reference_images));
       }
     }
   }
@@ -475,9 +517,12 @@ void plan_volumes(const Scene& scene, const VoxelizedPhantom& v, const DatasetLa
   for (const auto& [state, volumes] : states) {
     if (!volumes) continue;
     if (scene.outputs.labels) {
-      plan.file(layout.dseg(state), [&v, volumes = volumes](const std::filesystem::path& p) {
-        write_nifti_labels(p, v.grid, volumes->labels, {NiftiIntent::label, 1, "phantasm dseg"});
-      });
+      plan.file(
+          layout.dseg(state),
+          [&v, volumes = volumes](const std::filesystem::path& p) {
+            write_nifti_labels(p, v.grid, volumes->labels, {NiftiIntent::label, 1, "phantasm dseg"});
+          },
+          source_in(state, FileSource::reference_state));
       plan.json(sidecar_path(layout.dseg(state)), [] {
         return nlohmann::json{{"Description", "organ of the largest fraction in each voxel; the values are "
                                               "the index column of dseg.tsv (0 background)"},
@@ -487,11 +532,13 @@ void plan_volumes(const Scene& scene, const VoxelizedPhantom& v, const DatasetLa
     }
     if (scene.outputs.fractions) {
       for (std::size_t t = 0; t < v.tissues.size(); ++t) {
-        plan.file(layout.probseg(state, v.tissues[t]),
-                  [&v, volumes = volumes, t](const std::filesystem::path& p) {
-                    write_nifti(p, v.grid, volumes->fraction_volume(static_cast<int>(t)),
-                                {NiftiIntent::none, 1, "fraction of " + v.tissues[t]});
-                  });
+        plan.file(
+            layout.probseg(state, v.tissues[t]),
+            [&v, volumes = volumes, t](const std::filesystem::path& p) {
+              write_nifti(p, v.grid, volumes->fraction_volume(static_cast<int>(t)),
+                          {NiftiIntent::none, 1, "fraction of " + v.tissues[t]});
+            },
+            source_in(state, FileSource::reference_state));
         plan.json(sidecar_path(layout.probseg(state, v.tissues[t])), [&v, t] {
           return nlohmann::json{{"Description", "fraction of each voxel's volume taken by the tissue"},
                                 {"Tissue", v.tissues[t]},
@@ -593,7 +640,7 @@ DatasetPlan plan_dataset(const Scene& scene, const Simulation& simulation, const
   const std::optional<Phantom>& deformed = simulation.deformed;
   const std::optional<PhantomDeformation>& deformation = simulation.deformation;
 
-  DatasetPlan plan;
+  DatasetPlan plan(simulation.reference_entries, layout, reporter);
   // Authors: the program that made the data (the scene file names no people).
   plan.json(layout.dataset_description(), [&scene] {
     return nlohmann::json{{"Name", scene.name},

@@ -8,10 +8,10 @@
 #include "io/dataset_layout.hpp"
 #include "io/shape_files.hpp"
 #include "mri/mri_plan.hpp"
-#include "mri/synthesize_images.hpp"
 #include "pipeline/anatomy_cache.hpp"
 #include "pipeline/cost_estimate.hpp"
 #include "pipeline/reference_cache.hpp"
+#include "pipeline/reference_images_cache.hpp"
 #include "sim/deform_phantom.hpp"
 #include "sim/sim_plan.hpp"
 #include "voxelize/voxelize_plan.hpp"
@@ -128,6 +128,11 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
   }
   if (until == SimulationStage::deformation) return;
 
+  if (!cache.empty()) {
+    result.reference_entries.folder = cache;
+    result.reference_entries.state_key =
+        reference_cache_key(anatomy_key, scene.voxelization, scene.organs, scene.grid.grid());
+  }
   StageReport& voxelize = result.stages[2];
   const StageLines voxelize_lines(voxelize);
   // The reference state is the same for every subject of this anatomy, grid and voxelization:
@@ -142,7 +147,11 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
   StageReport& mri = result.stages[3];
   if (scene.mri.images && !scene.mri.sequences.empty()) {
     const StageLines mri_lines(mri);
-    result.images = synthesize_images(scene.mri, scene.organs, result.volumes, mri, reporter);
+    // So are the reference state's images with the same MRI settings: kept beside it, so that
+    // only the deformed state's images are synthesized per subject.
+    result.images = synthesize_images_cached(result.reference_entries.state_key, scene.mri, scene.organs,
+                                             result.volumes, cache, mri, reporter);
+    result.reference_entries.images_key = reference_images_key(result.reference_entries.state_key, scene.mri);
     mri_lines.print_new(mri, reporter);
   }
 }
