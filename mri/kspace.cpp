@@ -432,17 +432,16 @@ void KspacePipeline::acquire_coils(const KspaceCoil* coils, int count, const Del
 
   // The sensitivities rounded to single precision once per coil, not once per plane: the
   // values that the products take.
-  std::vector<std::complex<float>> sensitivities;
-  for (int p = 0; p < count; ++p)
-    if (coils[p].sensitivity) sensitivities.resize(static_cast<std::size_t>(count) * slice);
-  for (int p = 0; p < count; ++p)
+  std::vector<std::complex<float>> sensitivities(static_cast<std::size_t>(count) * slice);
+  for (int p = 0; p < count; ++p) {
     if (const std::complex<double>* s = coils[p].sensitivity)
       std::transform(s, s + slice, sensitivities.begin() + static_cast<std::ptrdiff_t>(p * slice),
                      [](const std::complex<double>& value) { return std::complex<float>(value); });
+  }
 
-      // In-plane, one kept plane along z at a time (it stays in cache), for each coil: multiply,
-      // transform along x, move the kept columns aside, transform them along y, truncate, add noise,
-      // transform back along y, and along x into the coil's plane. Out-of-place transforms: faster.
+  // In-plane, one kept plane along z at a time (it stays in cache), for each coil: multiply,
+  // transform along x, move the kept columns aside, transform them along y, truncate, add noise,
+  // transform back along y, and along x into the coil's plane. Out-of-place transforms: faster.
 #pragma omp parallel
   {
     FloatBuffer columns(static_cast<std::size_t>(kept_x) * m_column);

@@ -124,6 +124,7 @@ private:
   };
   /// `count` <= coils_together() coils, delivered as `to` says.
   void acquire_coils(const KspaceCoil* coils, int count, const Delivery& to);
+  /// set_object() from values of either precision.
   template <class Value>
   void transform_object(const Value* object);
 
