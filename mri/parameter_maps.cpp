@@ -8,6 +8,17 @@
 namespace phantasm {
 namespace {
 
+/// Whether the n floats of a and b are the same bit for bit (a handful: inline, not memcmp()).
+bool same_bits(const float* a, const float* b, std::size_t n) {
+  for (std::size_t t = 0; t < n; ++t) {
+    std::uint32_t x, y;
+    std::memcpy(&x, a + t, sizeof x);
+    std::memcpy(&y, b + t, sizeof y);
+    if (x != y) return false;
+  }
+  return true;
+}
+
 /// Fraction-weighted mean of one quantity over the tissues that have it; the sum instead when
 /// `additive`. Each voxel on its own: in parallel over runs of voxels, the same values. A voxel
 /// whose fractions are bit for bit those of the voxel before it (most of them: whole voxels of
@@ -24,22 +35,23 @@ std::vector<float> mixed(const TissueVolumes& volumes, const std::vector<std::op
     std::vector<float> previous(stride);
     bool have_previous = false, previous_set = false;
     float previous_value = 0.0f;
-    volumes.for_each_voxel(
-        first, std::min(map.size(), first + k_run), [&](std::size_t voxel, const float* fractions) {
-          if (!have_previous || std::memcmp(fractions, previous.data(), stride * sizeof(float)) != 0) {
-            double sum = 0.0, weight = 0.0;
-            for (std::size_t t = 0; t < values.size(); ++t) {
-              if (!values[t]) continue;
-              sum += fractions[t] * *values[t];
-              weight += fractions[t];
-            }
-            previous_set = weight > 0.0;
-            if (previous_set) previous_value = static_cast<float>(additive ? sum : sum / weight);
-            std::copy(fractions, fractions + stride, previous.begin());
-            have_previous = true;
-          }
-          if (previous_set) map[voxel] = previous_value;
-        });
+    volumes.for_each_voxel(first, std::min(map.size(), first + k_run),
+                           [&](std::size_t voxel, const float* fractions) {
+                             if (!have_previous || !same_bits(fractions, previous.data(), stride)) {
+                               double sum = 0.0, weight = 0.0;
+                               for (std::size_t t = 0; t < values.size(); ++t) {
+                                 if (!values[t]) continue;
+                                 sum += fractions[t] * *values[t];
+                                 weight += fractions[t];
+                               }
+                               previous_set = weight > 0.0;
+                               if (previous_set)
+                                 previous_value = static_cast<float>(additive ? sum : sum / weight);
+                               std::copy(fractions, fractions + stride, previous.begin());
+                               have_previous = true;
+                             }
+                             if (previous_set) map[voxel] = previous_value;
+                           });
   }
   return map;
 }
