@@ -60,7 +60,8 @@ enum class FileSource {
 class DatasetPlan {
 public:
   DatasetPlan(const ReferenceEntries& entries, const DatasetLayout& layout, Reporter& reporter)
-      : m_entries(entries), m_subject_prefix("sub-" + layout.subject() + "_"), m_reporter(reporter) {}
+      : m_entries(entries), m_root(layout.root()), m_subject("sub-" + layout.subject()),
+        m_reporter(reporter) {}
 
   /// A file made by one of io's format writers.
   void file(std::filesystem::path path, FileWriter write, FileSource source = FileSource::subject) {
@@ -70,9 +71,11 @@ public:
   /// `write` of a file at `path`, through the cache when its bytes follow from a reference entry.
   FileWriter from(const std::filesystem::path& path, FileWriter write, FileSource source) const {
     if (source == FileSource::subject) return write;
-    // The file's name without the subject: the same in every subject.
-    std::string role = path.filename().string();
-    if (role.rfind(m_subject_prefix, 0) == 0) role.erase(0, m_subject_prefix.size());
+    // The file's path in the dataset without the subject: the same in every subject (its folder
+    // too, since an image and a parameter map may have one name).
+    std::string role = path.lexically_relative(m_root).generic_string();
+    for (std::size_t at = role.find(m_subject); at != std::string::npos; at = role.find(m_subject, at))
+      role.replace(at, m_subject.size(), "sub-");
     return write_through_cache(
         m_entries.folder, source == FileSource::reference_state ? m_entries.state_key : m_entries.images_key,
         role, std::move(write), m_reporter);
@@ -91,7 +94,8 @@ public:
 private:
   std::vector<PlannedFile> m_files;
   ReferenceEntries m_entries;
-  std::string m_subject_prefix;
+  std::filesystem::path m_root;
+  std::string m_subject; ///< "sub-<label>"
   Reporter& m_reporter;
 };
 

@@ -25,8 +25,8 @@ using FileWriter = std::function<void(const std::filesystem::path&)>;
 /// @param folder the cache folder (it exists: the reference cache made it); empty: `write` alone
 /// @param key the cache key the file's bytes follow from (reference_cache_key,
 ///        reference_images_key); empty: `write` alone
-/// @param role what the file is in its session, the same in every subject (its file name
-///        without the subject: "ses-ref_T1w.nii.gz")
+/// @param role what the file is, the same in every subject (its path in the dataset without the
+///        subject: "sub-/ses-ref/anat/sub-_ses-ref_T1w.nii.gz")
 FileWriter write_through_cache(const std::filesystem::path& folder, const std::string& key,
                                const std::string& role, FileWriter write, Reporter& reporter);
 

@@ -30,10 +30,15 @@ namespace {
 const fs::path k_small_head = fs::path(PHANTASM_SOURCE_DIR) / "tests" / "data" / "scenes" / "small-head.yaml";
 
 /// The small head acquired as the sweeps' heads are: in k-space, with coils, noise and bias (each
-/// seeded per image), so that a reference image made again with another seed or state differs.
+/// seeded per image), so that a reference image made again with another seed or state differs;
+/// a third sequence is named as a parameter map (T1map), so that an image and a map have one
+/// file name in two folders.
 std::string acquired_small_head_text() {
-  return read_file(k_small_head) + "\nacquisition: {kspace: true, acquired_voxel_mm: 2.4, coils: 4, "
-                                   "noise_percent: 3, bias_percent: 20}\n";
+  std::string text = read_file(k_small_head);
+  const std::string t2w = "  - {name: T2w, type: spin_echo, TR_ms: 4000, TE_ms: 100}\n";
+  text.insert(text.find(t2w) + t2w.size(), "  - {name: T1map, type: spin_echo, TR_ms: 500, TE_ms: 10}\n");
+  return text + "\nacquisition: {kspace: true, acquired_voxel_mm: 2.4, coils: 4, noise_percent: 3, "
+                "bias_percent: 20}\n";
 }
 
 /// A scene of the text, loaded from a file of that name in `folder`.
@@ -120,7 +125,7 @@ TEST(ReferenceImagesCache, GivenReferenceImagesMakeTheSameResultAndDecodeToTheSa
   ASSERT_TRUE(sim.volumes.deformed.has_value());
   StageReport whole_report, alone_report, given_report;
   const MrImages whole = synthesize_images(scene.mri, scene.organs, sim.volumes, whole_report, quiet);
-  ASSERT_EQ(whole.reference.size(), 2u);
+  ASSERT_EQ(whole.reference.size(), 3u);
   ASSERT_TRUE(whole.reference_maps.has_value());
 
   SynthesisOptions alone_options;
@@ -136,18 +141,18 @@ TEST(ReferenceImagesCache, GivenReferenceImagesMakeTheSameResultAndDecodeToTheSa
   const std::size_t voxels = sim.volumes.reference.labels.size();
   ReferenceImages kept{std::move(alone.reference), std::move(alone.reference_maps)};
   const std::string bytes = encode_reference_images(kept);
-  ReferenceImages read = decode_reference_images(bytes, 2, true, voxels);
+  ReferenceImages read = decode_reference_images(bytes, 3, true, voxels);
   expect_same_images(read.images, kept.images);
   expect_same_maps(read.maps, kept.maps);
   EXPECT_TRUE(encode_reference_images(read) == bytes); // an entry is a function of its images
-  EXPECT_THROW(decode_reference_images(bytes.substr(0, bytes.size() - 1), 2, true, voxels), DamagedBytes);
-  EXPECT_THROW(decode_reference_images(bytes.substr(0, bytes.size() / 2), 2, true, voxels), DamagedBytes);
-  EXPECT_THROW(decode_reference_images(bytes, 3, true, voxels), DamagedBytes);
-  EXPECT_THROW(decode_reference_images(bytes, 2, false, voxels), DamagedBytes);
-  EXPECT_THROW(decode_reference_images(bytes, 2, true, voxels + 1), DamagedBytes);
+  EXPECT_THROW(decode_reference_images(bytes.substr(0, bytes.size() - 1), 3, true, voxels), DamagedBytes);
+  EXPECT_THROW(decode_reference_images(bytes.substr(0, bytes.size() / 2), 3, true, voxels), DamagedBytes);
+  EXPECT_THROW(decode_reference_images(bytes, 4, true, voxels), DamagedBytes);
+  EXPECT_THROW(decode_reference_images(bytes, 3, false, voxels), DamagedBytes);
+  EXPECT_THROW(decode_reference_images(bytes, 3, true, voxels + 1), DamagedBytes);
   std::string flipped = bytes;
   flipped[bytes.size() / 4] ^= 0x10; // inside the first image's stored floats: its check fails
-  EXPECT_THROW(decode_reference_images(flipped, 2, true, voxels), DamagedBytes);
+  EXPECT_THROW(decode_reference_images(flipped, 3, true, voxels), DamagedBytes);
 
   SynthesisOptions given_options;
   given_options.reference = std::move(read);
@@ -187,7 +192,7 @@ TEST(ReferenceImagesCache, EveryMriSettingOfTheReferenceImagesChangesTheKey) {
       {"FLAIR", SequenceKind::inversion_recovery, 9000, 120, 90, 2500, Readout::spin_echo, 0, 0});
   base.mri.sequences.push_back(
       {"MPRAGE", SequenceKind::mprage, 2300, 3, 9, 900, Readout::gradient_echo, 7.1, 176});
-  ASSERT_EQ(base.mri.sequences.size(), 4u);
+  ASSERT_EQ(base.mri.sequences.size(), 5u);
   ASSERT_FALSE(base.mri.tissues.empty());
   const auto key_of = [](const Inputs& in) { return reference_images_key(in.reference_key, in.mri); };
   using Change = std::function<void(Inputs&)>;
@@ -207,10 +212,10 @@ TEST(ReferenceImagesCache, EveryMriSettingOfTheReferenceImagesChangesTheKey) {
       [&](Inputs& in) { sequence(in, 0).TR_ms += 1e-12; },
       [&](Inputs& in) { sequence(in, 1).TE_ms += 1e-12; },
       [&](Inputs& in) { sequence(in, 0).flip_deg += 1.0; },
-      [&](Inputs& in) { sequence(in, 2).TI_ms += 1.0; },
-      [&](Inputs& in) { sequence(in, 2).readout = Readout::gradient_echo; },
-      [&](Inputs& in) { sequence(in, 3).echo_spacing_ms += 0.1; },
-      [&](Inputs& in) { sequence(in, 3).turbo_factor += 1; },
+      [&](Inputs& in) { sequence(in, 3).TI_ms += 1.0; },
+      [&](Inputs& in) { sequence(in, 3).readout = Readout::gradient_echo; },
+      [&](Inputs& in) { sequence(in, 4).echo_spacing_ms += 0.1; },
+      [&](Inputs& in) { sequence(in, 4).turbo_factor += 1; },
       [](Inputs& in) { std::swap(in.mri.sequences[0], in.mri.sequences[1]); }, // the noise seeds' order
       [](Inputs& in) { in.mri.sequences.pop_back(); },
       [](Inputs& in) { in.mri.acquisition.kspace = !in.mri.acquisition.kspace; },
@@ -294,7 +299,7 @@ TEST(ReferenceImagesCache, RunsWithTheCacheColdWarmAndWithoutWriteTheSameFiles) 
                                      (ends("_tetmesh.vtu") && path.find("greyMatter") == std::string::npos));
   }
   const std::vector<fs::path> file_entries = entries_named(cache, "file-");
-  EXPECT_EQ(reference_files, 15u); // 2 images, 2 previews, 4 maps, dseg, 3 probseg, 3 surfaces
+  EXPECT_EQ(reference_files, 17u); // 3 images, 3 previews, 4 maps, dseg, 3 probseg, 3 surfaces
   EXPECT_EQ(file_entries.size(), reference_files); // the simulated body's tet mesh is the subject's
 
   // What a deformation sweep varies, another subject, and outputs the reference session does
