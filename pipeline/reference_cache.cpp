@@ -122,10 +122,15 @@ std::string encode_reference_state(const ReferenceVoxelization& state, const Tis
   return out.take();
 }
 
-ReferenceVoxelization decode_reference_state(std::string_view bytes) {
+ReferenceVoxelization decode_reference_state(std::string_view bytes, std::size_t voxels,
+                                             std::size_t phantom_organs) {
   ByteReader in(bytes, "reference state");
   ReferenceVoxelization state;
   in.array(state.organs);
+  for (std::size_t k = 0; k < state.organs.size(); ++k)
+    if (state.organs[k] < 0 || static_cast<std::size_t>(state.organs[k]) >= phantom_organs ||
+        (k > 0 && state.organs[k] <= state.organs[k - 1]))
+      in.damaged("level sets of organs the phantom does not have, or out of order");
   std::vector<std::pair<double, double>> sizes(state.organs.size());
   for (auto& [voxel_size, half_width] : sizes) {
     voxel_size = in.value<double>();
@@ -137,7 +142,7 @@ ReferenceVoxelization decode_reference_state(std::string_view bytes) {
     state.level_sets.push_back(
         std::make_shared<const LevelSet>(std::move(grids[k]), sizes[k].first, sizes[k].second));
   const auto organs = in.value<std::uint64_t>();
-  if (organs > bytes.size()) in.damaged("more organs than bytes");
+  if (organs != phantom_organs) in.damaged("height bounds of another number of organs than the phantom's");
   state.height_ranges.resize(organs);
   for (auto& ranges : state.height_ranges) {
     const auto present = in.value<std::uint8_t>();
@@ -145,6 +150,7 @@ ReferenceVoxelization decode_reference_state(std::string_view bytes) {
     if (present) in.array(ranges.emplace());
   }
   state.volumes = decode_tissue_volumes(in.view());
+  if (state.volumes.labels.size() != voxels) in.damaged("volumes of another voxel count than the grid");
   if (!in.done()) in.damaged("bytes after the state");
   return state;
 }
@@ -171,7 +177,8 @@ VoxelizedPhantom voxelize_phantom_cached(const std::string& anatomy_key, const V
     const std::string bytes = read_cache_entry(entry);
     try {
       if (bytes.compare(0, header.size(), header) != 0) throw DamagedBytes("another key or format");
-      state = decode_reference_state(decompress_bytes(std::string_view(bytes).substr(header.size())));
+      state = decode_reference_state(decompress_bytes(std::string_view(bytes).substr(header.size())),
+                                     static_cast<std::size_t>(grid.voxel_count()), reference.organs.size());
     } catch (const DamagedBytes& damaged) {
       const std::string line =
           entry.string() + ": a damaged reference cache entry (" + damaged.what() + "); voxelized again";

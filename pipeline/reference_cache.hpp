@@ -13,6 +13,7 @@
 #include "voxelize/voxelize_settings.hpp"
 #include "voxelize/voxelized_phantom.hpp"
 
+#include <cstddef>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -45,8 +46,13 @@ std::string encode_reference_state(const ReferenceVoxelization& state, const Tis
 
 /// The reference state of encode_reference_state() bytes; voxelize_phantom given it makes the
 /// same result, bit for bit, as when it built it.
-/// @throws DamagedBytes when the bytes do not hold one
-ReferenceVoxelization decode_reference_state(std::string_view bytes);
+/// @param voxels the grid's voxel count: the volumes must hold as many
+/// @param phantom_organs the reference phantom's organ count: the level sets' organs (ascending)
+///        must be among them, and every organ must have its height bounds' place
+/// @throws DamagedBytes when the bytes do not hold such a state (a stored entry that does not fit
+///         the run is voxelized again, never handed to voxelize_phantom)
+ReferenceVoxelization decode_reference_state(std::string_view bytes, std::size_t voxels,
+                                             std::size_t phantom_organs);
 
 /// voxelize_phantom() through a cache folder: the reference state stored under the key of these
 /// inputs is read when there, else built and stored (atomically, compressed). Processes that need

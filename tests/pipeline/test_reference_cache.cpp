@@ -41,18 +41,6 @@ void expect_same_volumes(const TissueVolumes& a, const TissueVolumes& b) {
   EXPECT_EQ(a.supersampled_voxels, b.supersampled_voxels);
 }
 
-/// Every file of a run, by its path in the dataset, with its bytes.
-std::map<std::string, std::string> files_of(const RunSummary& run, const fs::path& folder) {
-  std::map<std::string, std::string> files;
-  for (const fs::path& file : run.files)
-    files[file.generic_string()] = read_file(folder / file);
-  return files;
-}
-
-bool is_record(const std::string& path) {
-  return path.find("log.txt") != std::string::npos || path.find("provenance.json") != std::string::npos;
-}
-
 } // namespace
 
 // The state a deformed small head's voxelization built, stored and read back, gives the same
@@ -75,7 +63,9 @@ TEST(ReferenceCache, DecodedStateVoxelizesTheSameBytes) {
   EXPECT_TRUE(built_state->volumes.labels.empty()); // they are the result's reference
   const std::string bytes = encode_reference_state(*built_state, built.reference);
 
-  std::optional<ReferenceVoxelization> read_state = decode_reference_state(bytes);
+  const auto voxels = static_cast<std::size_t>(scene.grid.grid().voxel_count());
+  const std::size_t organs = sim.phantom.organs.size();
+  std::optional<ReferenceVoxelization> read_state = decode_reference_state(bytes, voxels, organs);
   ASSERT_EQ(read_state->organs, built_state->organs);
   // Every value of every tree, the height bounds and the volumes: encoded again, the same bytes
   // (and an entry is a function of its state: shards and restarts store the same files).
@@ -129,8 +119,14 @@ TEST(ReferenceCache, DecodedStateVoxelizesTheSameBytes) {
   const std::string volume_bytes = encode_tissue_volumes(built.reference);
   expect_same_volumes(decode_tissue_volumes(volume_bytes), built.reference);
   EXPECT_THROW(decode_tissue_volumes(volume_bytes.substr(0, volume_bytes.size() - 1)), DamagedBytes);
-  EXPECT_THROW(decode_reference_state(bytes.substr(0, bytes.size() / 2)), DamagedBytes);
-  EXPECT_THROW(decode_reference_state(bytes.substr(0, 100)), DamagedBytes);
+  EXPECT_THROW(decode_reference_state(bytes.substr(0, bytes.size() / 2), voxels, organs), DamagedBytes);
+  EXPECT_THROW(decode_reference_state(bytes.substr(0, 100), voxels, organs), DamagedBytes);
+  // A whole state that does not fit the run (another grid, another phantom) is refused too: it is
+  // voxelized again instead of reaching voxelize_phantom, which would stop the run.
+  EXPECT_THROW(decode_reference_state(bytes, voxels + 1, organs), DamagedBytes);
+  EXPECT_THROW(decode_reference_state(bytes, voxels, organs + 1), DamagedBytes);
+  EXPECT_THROW(decode_reference_state(bytes, voxels, static_cast<std::size_t>(read_state->organs.back())),
+               DamagedBytes);
 }
 
 // A change of anything the reference state is made from gives another key; a change of what
@@ -253,5 +249,7 @@ TEST(ReferenceCache, RunsWithTheCacheColdWarmAndWithoutWriteTheSameFiles) {
   // Stored anew, whole: after its two header lines (format, key), the state.
   const std::string restored = read_file(entries[0]);
   const std::size_t header = restored.find('\n', restored.find('\n') + 1) + 1;
-  EXPECT_NO_THROW(decode_reference_state(decompress_bytes(std::string_view(restored).substr(header))));
+  EXPECT_NO_THROW(decode_reference_state(decompress_bytes(std::string_view(restored).substr(header)),
+                                         static_cast<std::size_t>(scene.grid.grid().voxel_count()),
+                                         scene.organs.size()));
 }
