@@ -1,11 +1,14 @@
 #pragma once
 
-// Helpers shared by the tests of the caches (anatomy, reference state).
+// Helpers shared by the tests of the caches (anatomy, reference state, reference images).
 
+#include "pipeline/dataset_writer.hpp"
 #include "scene/scene.hpp"
+#include "tests/support/files.hpp"
 
 #include <algorithm>
 #include <filesystem>
+#include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -23,6 +26,20 @@ inline Scene scene_of(const std::filesystem::path& file) {
 inline bool contains(const std::vector<std::string>& lines, const std::string& text) {
   return std::any_of(lines.begin(), lines.end(),
                      [&](const std::string& line) { return line.find(text) != std::string::npos; });
+}
+
+/// Every file of a run, by its path in the dataset, with its bytes.
+inline std::map<std::string, std::string> files_of(const RunSummary& run,
+                                                   const std::filesystem::path& folder) {
+  std::map<std::string, std::string> files;
+  for (const std::filesystem::path& file : run.files)
+    files[file.generic_string()] = read_file(folder / file);
+  return files;
+}
+
+/// Whether a dataset file is the run's record (log, provenance), not its data.
+inline bool is_record(const std::string& path) {
+  return path.find("log.txt") != std::string::npos || path.find("provenance.json") != std::string::npos;
 }
 
 } // namespace phantasm::testing

@@ -78,18 +78,6 @@ void expect_same_maps(const std::optional<ParameterMaps>& a, const std::optional
   EXPECT_TRUE(same_floats(a->T2star_ms, b->T2star_ms));
 }
 
-/// Every file of a run, by its path in the dataset, with its bytes.
-std::map<std::string, std::string> files_of(const RunSummary& run, const fs::path& folder) {
-  std::map<std::string, std::string> files;
-  for (const fs::path& file : run.files)
-    files[file.generic_string()] = read_file(folder / file);
-  return files;
-}
-
-bool is_record(const std::string& path) {
-  return path.find("log.txt") != std::string::npos || path.find("provenance.json") != std::string::npos;
-}
-
 /// The entries of a cache folder whose names start with `prefix`: "images-" (the reference
 /// images), "file-" (the reference session's files).
 std::vector<fs::path> entries_named(const fs::path& cache, const std::string& prefix) {
