@@ -39,6 +39,19 @@ double PatchBump::shape_value(const Eigen::Vector2d& uv) const {
   return 1.0 - d.dot(shape_uv * d);
 }
 
+Quadric PatchBump::quadric() const {
+  const double s11 = shape_uv(0, 0), s12 = 0.5 * (shape_uv(0, 1) + shape_uv(1, 0)), s22 = shape_uv(1, 1);
+  const double cu = center_uv.x(), cv = center_uv.y();
+  Quadric q;
+  q.c[0] = 1.0 - (s11 * cu * cu + 2.0 * s12 * cu * cv + s22 * cv * cv);
+  q.c[1] = 2.0 * (s11 * cu + s12 * cv);
+  q.c[2] = 2.0 * (s22 * cv + s12 * cu);
+  q.c[4] = -s11;
+  q.c[5] = -2.0 * s12;
+  q.c[6] = -s22;
+  return q;
+}
+
 double PatchBump::uv_area() const {
   return M_PI / std::sqrt(shape_uv.determinant());
 }
@@ -112,21 +125,6 @@ std::vector<HeightRange> patch_height_ranges(const PatchSurface& surface) {
 
 namespace {
 
-/// Q = 1 - d^T S d with d = (u, v) - c, expanded into quadric coefficients.
-Quadric bump_quadric(const PatchBump& bump) {
-  const double s11 = bump.shape_uv(0, 0), s12 = 0.5 * (bump.shape_uv(0, 1) + bump.shape_uv(1, 0)),
-               s22 = bump.shape_uv(1, 1);
-  const double cu = bump.center_uv.x(), cv = bump.center_uv.y();
-  Quadric q;
-  q.c[0] = 1.0 - (s11 * cu * cu + 2.0 * s12 * cu * cv + s22 * cv * cv);
-  q.c[1] = 2.0 * (s11 * cu + s12 * cv);
-  q.c[2] = 2.0 * (s22 * cv + s12 * cu);
-  q.c[4] = -s11;
-  q.c[5] = -2.0 * s12;
-  q.c[6] = -s22;
-  return q;
-}
-
 Eigen::Vector3d corner(const TriangleMesh& mesh, Eigen::Index t, int k) {
   return mesh.vertex(mesh.faces(t, k));
 }
@@ -141,6 +139,7 @@ PatchSurface::PatchSurface(TriangleMesh base, const std::string& what)
   m_rest_triangles.resize(static_cast<std::size_t>(n));
   m_bumps.assign(static_cast<std::size_t>(n), {});
   m_perturbations.assign(static_cast<std::size_t>(n), {});
+  m_lattices.assign(static_cast<std::size_t>(n), BumpLattice());
   std::map<std::pair<int, int>, std::pair<Eigen::Index, int>> directed;
   for (Eigen::Index t = 0; t < n; ++t) {
     const Eigen::Vector3d x0 = corner(m_base, t, 0), e1 = corner(m_base, t, 1) - x0,
@@ -167,8 +166,12 @@ void PatchSurface::set_bumps(Eigen::Index t, std::vector<PatchBump> bumps) {
     const PatchBump& b = bumps[i];
     const std::string where = m_what + ": triangle " + std::to_string(t) + ", bump " + std::to_string(i);
     const Eigen::Matrix2d S = 0.5 * (b.shape_uv + b.shape_uv.transpose());
-    if (!std::isfinite(b.amplitude_mm) || !(S(0, 0) > 0.0) || !(S.determinant() > 0.0)) {
+    if (!std::isfinite(b.amplitude_mm) || !(S(0, 0) > 0.0) || !(S.determinant() > 0.0) || !S.allFinite()) {
       throw InputError(where + ": expected a positive definite shape and a finite amplitude");
+    }
+    if (!b.center_uv.allFinite()) {
+      throw InputError(where + ": expected a finite centre, found (" + std::to_string(b.center_uv.x()) +
+                       ", " + std::to_string(b.center_uv.y()) + ")");
     }
     // The ellipse {d^T S d <= 1} around c lies inside u >= 0, v >= 0, u + v <= 1 when each
     // linear function g . p stays on the inner side at its extreme, g . c -+ sqrt(g^T S^-1 g).
@@ -179,8 +182,9 @@ void PatchSurface::set_bumps(Eigen::Index t, std::vector<PatchBump> bumps) {
         1.0 - c.sum() - std::sqrt(inverse.sum()) < -slack) {
       throw InputError(where + ": expected its ellipse inside the triangle, found it crossing an edge");
     }
-    perturbations.push_back({bump_quadric(b), b.amplitude_mm});
+    perturbations.push_back({b.quadric(), b.amplitude_mm});
   }
+  m_lattices[static_cast<std::size_t>(t)] = BumpLattice(bumps);
   m_bumps[static_cast<std::size_t>(t)] = std::move(bumps);
   m_perturbations[static_cast<std::size_t>(t)] = std::move(perturbations);
 }
@@ -215,7 +219,9 @@ double PatchSurface::value(Eigen::Index t, const Eigen::Vector3d& x) const {
   const PatchFrame f = frame(t);
   const Eigen::Vector3d uvw = f.local_from_world * (x - f.origin);
   double F = -f.length_scale * uvw.z();
-  for (const auto& p : m_perturbations[static_cast<std::size_t>(t)]) {
+  const auto& perturbations = m_perturbations[static_cast<std::size_t>(t)];
+  for (const std::uint32_t n : m_lattices[static_cast<std::size_t>(t)].at(uvw.x(), uvw.y())) {
+    const Perturbation& p = perturbations[n];
     const double q = p.quadric.value(uvw);
     if (q > 0.0) F += p.amplitude_mm * q * q * q;
   }
@@ -226,7 +232,9 @@ Eigen::Vector3d PatchSurface::gradient(Eigen::Index t, const Eigen::Vector3d& x)
   const PatchFrame f = frame(t);
   const Eigen::Vector3d uvw = f.local_from_world * (x - f.origin);
   Eigen::Vector3d d_local(0.0, 0.0, -f.length_scale);
-  for (const auto& p : m_perturbations[static_cast<std::size_t>(t)]) {
+  const auto& perturbations = m_perturbations[static_cast<std::size_t>(t)];
+  for (const std::uint32_t n : m_lattices[static_cast<std::size_t>(t)].at(uvw.x(), uvw.y())) {
+    const Perturbation& p = perturbations[n];
     const double q = p.quadric.value(uvw);
     if (q > 0.0) d_local += 3.0 * p.amplitude_mm * q * q * p.quadric.gradient(uvw);
   }
@@ -239,10 +247,12 @@ double PatchSurface::height(Eigen::Index t, double u, double v) const {
   // frame()'s length scale, without its inverse (the tessellation asks for millions of heights).
   const double L = m_rest_triangles[static_cast<std::size_t>(t)].length_scale;
   // g(h) = F(b + h n) = -h + sum a Q(u, v, h / L)^3; the bracket holds every root of bounded bumps.
+  const BumpLattice::Bumps near = m_lattices[static_cast<std::size_t>(t)].at(u, v);
   auto g = [&](double h, double* slope) {
     const Eigen::Vector3d uvw(u, v, h / L);
     double value = -h, derivative = -1.0;
-    for (const auto& p : perturbations) {
+    for (const std::uint32_t n : near) {
+      const Perturbation& p = perturbations[n];
       const double q = p.quadric.value(uvw);
       if (q <= 0.0) continue;
       value += p.amplitude_mm * q * q * q;

@@ -2,6 +2,7 @@
 // own frame, so the surface follows its base vertices, the only thing the simulation moves.
 #pragma once
 
+#include "anatomy/bump_lattice.hpp"
 #include "anatomy/triangle_mesh.hpp"
 
 #include <Eigen/Core>
@@ -36,6 +37,9 @@ struct PatchBump {
                         const Eigen::Matrix2d& rest_metric);
   /// Q at (u, v).
   double shape_value(const Eigen::Vector2d& uv) const;
+  /// Q expanded into a quadric in (u, v, w) (no w terms; S taken as symmetric): the form the
+  /// patch function F sums (PatchSurface::value, gradient and height).
+  Quadric quadric() const;
   /// Adds the bump's height a Q^3 [Q > 0] at (u, v) to `height`, its gradient
   /// -6 a Q^2 S d to `gradient` and, when given, its Hessian a Q (24 (S d)(S d)^T - 6 Q S) to
   /// `hessian` (d = (u, v) - c; S taken as symmetric). Inline: the level sets call it for every
@@ -106,6 +110,11 @@ public:
   const std::vector<PatchBump>& bumps(Eigen::Index triangle) const {
     return m_bumps[static_cast<std::size_t>(triangle)];
   }
+  /// Which of a patch's bumps may reach each part of its triangle (value, gradient and height sum
+  /// only those, bit for bit the sums over every bump).
+  const BumpLattice& bump_lattice(Eigen::Index triangle) const {
+    return m_lattices[static_cast<std::size_t>(triangle)];
+  }
 
   /// Moves the base vertices (#V by 3, RAS mm); the patches follow.
   void set_positions(const Eigen::MatrixX3d& positions);
@@ -172,6 +181,7 @@ private:
   std::vector<RestTriangle> m_rest_triangles;
   std::vector<std::vector<PatchBump>> m_bumps;
   std::vector<std::vector<Perturbation>> m_perturbations;
+  std::vector<BumpLattice> m_lattices;
   Eigen::MatrixX3i m_neighbours; ///< triangle across edge k (k = 0: x0x1, 1: x1x2, 2: x2x0)
 };
 

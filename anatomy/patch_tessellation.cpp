@@ -29,7 +29,16 @@ int PatchSurface::level_for(Eigen::Index t, double max_deviation_mm, double* dev
   for (int level = 0; level <= k_max_level; ++level) {
     // Deviation of the level-`level` interpolation, measured at the midpoints of its edges.
     const int fine = 2 << level;
-    auto points = patch_grid_points(t, level + 1);
+    // The next level's grid: its even points are this level's (i / n = 2i / 2n exactly), only
+    // the others are new.
+    std::vector<Eigen::Vector3d> points(static_cast<std::size_t>((fine + 1) * (fine + 2) / 2));
+    for (int j = 0; j <= fine; ++j) {
+      for (int i = 0; i + j <= fine; ++i) {
+        points[static_cast<std::size_t>(grid_index(i, j, fine))] =
+            i % 2 == 0 && j % 2 == 0 ? corners[static_cast<std::size_t>(grid_index(i / 2, j / 2, fine / 2))]
+                                     : surface_point(t, double(i) / fine, double(j) / fine);
+      }
+    }
     double worst = 0.0;
     for (int j = 0; j <= fine; ++j) {
       for (int i = 0; i + j <= fine; ++i) {
@@ -89,7 +98,7 @@ TriangleMesh PatchSurface::tessellate(double max_deviation_mm, TessellationStats
   std::vector<std::vector<Eigen::Vector3d>> grids(static_cast<std::size_t>(nf));
   std::vector<double> deviations(static_cast<std::size_t>(nf), 0.0);
   std::atomic<bool> cancelled{false};
-#pragma omp parallel for schedule(dynamic, 16)
+#pragma omp parallel for schedule(dynamic, 1)
   for (Eigen::Index t = 0; t < nf; ++t) {
     if (cancelled.load(std::memory_order_relaxed)) continue;
     if (cancellation_requested()) {

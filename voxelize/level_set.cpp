@@ -43,47 +43,9 @@ struct PatchHeights {
   /// no point of the patch lies farther from its base than the larger of the two.
   double above_mm = 0.0, below_mm = 0.0;
 
-  /// The bumps that may reach each cell of a k_cells^2 lattice over the (u, v) unit square, in
-  /// bump order: a patch carries tens of narrow bumps, a few of which cover any one point. After
-  /// the cells, one list of every bump (for a point that is not a number).
-  static constexpr int k_cells = 8;
-  std::vector<std::uint32_t> cell_bumps;
-  std::vector<std::uint32_t> cell_first; ///< cell c's bumps: cell_bumps[cell_first[c], cell_first[c + 1])
-
-  /// Lists each bump in the cells its support's bounding box meets (every cell when its shape is
-  /// not positive definite), the box widened well beyond rounding: a bump left out of a point's
-  /// cell has Q <= 0 there, as computed, so the height sums the same terms in the same order.
-  void index_bumps() {
-    std::vector<std::vector<std::uint32_t>> cells(k_cells * k_cells + 1);
-    const auto cell = [](double x) {
-      return static_cast<int>(std::clamp(std::floor(x * k_cells), 0.0, k_cells - 1.0));
-    };
-    for (std::size_t i = 0; i < bumps.size(); ++i) {
-      const Eigen::Matrix2d& S = bumps[i].shape_uv;
-      const double det = S.determinant();
-      int first[2] = {0, 0}, last[2] = {k_cells - 1, k_cells - 1};
-      // Well conditioned (det S / (S_uu S_vv) = 1 - rho^2 >= 1e-6): then d^T S d is computed to
-      // a relative 1e-8 at worst, far within the margin.
-      if (S(0, 0) > 0.0 && S(1, 1) > 0.0 && det > 1e-6 * S(0, 0) * S(1, 1)) {
-        // The support {d^T S d < 1} lies within c +- (sqrt((S^-1)_uu), sqrt((S^-1)_vv)).
-        const Eigen::Vector2d half(std::sqrt(S(1, 1) / det), std::sqrt(S(0, 0) / det));
-        for (int a = 0; a < 2; ++a) {
-          const double margin = 1e-6 * half[a] + 1e-9;
-          first[a] = cell(bumps[i].center_uv[a] - half[a] - margin);
-          last[a] = cell(bumps[i].center_uv[a] + half[a] + margin);
-        }
-      }
-      for (int v = first[1]; v <= last[1]; ++v)
-        for (int u = first[0]; u <= last[0]; ++u)
-          cells[static_cast<std::size_t>(v * k_cells + u)].push_back(static_cast<std::uint32_t>(i));
-      cells.back().push_back(static_cast<std::uint32_t>(i));
-    }
-    cell_first.assign(1, 0);
-    for (const auto& c : cells) {
-      cell_bumps.insert(cell_bumps.end(), c.begin(), c.end());
-      cell_first.push_back(static_cast<std::uint32_t>(cell_bumps.size()));
-    }
-  }
+  /// Which bumps may reach each part of the triangle (the surface's BumpLattice): the height
+  /// sums those, the same terms in the same order as a sum over every bump.
+  BumpLattice lattice;
 
   /// Height above base point (u, v), mm, its derivatives d/du, d/dv and, when `dd_uv` is
   /// given, its second derivatives (PatchBump::add_height, in bump order).
@@ -91,13 +53,8 @@ struct PatchHeights {
     double h = 0.0;
     d_uv->setZero();
     if (dd_uv) dd_uv->setZero();
-    const auto cell = [](double x) {
-      return static_cast<std::size_t>(std::clamp(std::floor(x * k_cells), 0.0, k_cells - 1.0));
-    };
-    const std::size_t c =
-        uv.allFinite() ? cell(uv.y()) * k_cells + cell(uv.x()) : static_cast<std::size_t>(k_cells * k_cells);
-    for (std::uint32_t n = cell_first[c]; n < cell_first[c + 1]; ++n)
-      bumps[cell_bumps[n]].add_height(uv, h, *d_uv, dd_uv);
+    for (const std::uint32_t n : lattice.at(uv.x(), uv.y()))
+      bumps[n].add_height(uv, h, *d_uv, dd_uv);
     return h;
   }
 
@@ -191,7 +148,7 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
     p.above_mm = std::max(0.0, range.highest);
     p.below_mm = std::max(0.0, -range.lowest);
     if (!p.bumps.empty()) {
-      p.index_bumps();
+      p.lattice = surface.bump_lattice(static_cast<Eigen::Index>(t));
       const PatchFrame f = surface.frame(static_cast<Eigen::Index>(t));
       p.origin = f.origin;
       p.edge1 = f.edge1;

@@ -10,6 +10,7 @@
 #include <omp.h>
 
 #include <cmath>
+#include <limits>
 #include <map>
 #include <random>
 
@@ -183,6 +184,22 @@ TEST(PatchSurface, BumpsThatLeaveTheirTriangleAreRejected) {
   EXPECT_THROW(surface.set_bumps(0, {PatchBump::disc({1.0 / 3.0, 1.0 / 3.0}, 0.30 * e1.norm(), metric)}),
                InputError);
   EXPECT_THROW(surface.set_bumps(0, {PatchBump::disc({0.05, 0.5}, 0.1 * e1.norm(), metric)}), InputError);
+  // A centre that is not a number passed every edge test (each comparison with NaN is false).
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const Eigen::Vector2d& centre : {Eigen::Vector2d(nan, 0.3), Eigen::Vector2d(0.3, nan)}) {
+    try {
+      surface.set_bumps(0, {PatchBump::disc(centre, 0.1 * e1.norm(), metric)});
+      ADD_FAILURE() << "a centre of NaN was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("bump 0: expected a finite centre"), std::string::npos)
+          << e.what();
+    }
+  }
+  Eigen::Matrix2d infinite = metric;
+  infinite(0, 0) = std::numeric_limits<double>::infinity();
+  PatchBump endless = PatchBump::disc({1.0 / 3.0, 1.0 / 3.0}, 0.1 * e1.norm(), metric);
+  endless.shape_uv = infinite;
+  EXPECT_THROW(surface.set_bumps(0, {endless}), InputError);
 }
 
 namespace {
@@ -417,19 +434,8 @@ TEST(PatchHeightRange, StaysNearTheExtremesOfAFittedPatchsBumps) {
   const int patches = 50;
   for (int patch = 0; patch < patches; ++patch) {
     std::vector<PatchBump> bumps;
-    for (int level = 0; level <= 2; ++level) {
-      const int n = 1 << level;
-      for (int j = 0; j < n; ++j) {
-        for (int i = 0; i + j < n; ++i) {
-          const Eigen::Vector2d p(double(i) / n, double(j) / n);
-          bumps.push_back(
-              PatchBump::disc(p + Eigen::Vector2d(1.0, 1.0) / (3.0 * n), 0.999 * inradius / n, metric));
-          if (i + j < n - 1)
-            bumps.push_back(
-                PatchBump::disc(p + Eigen::Vector2d(2.0, 2.0) / (3.0 * n), 0.999 * inradius / n, metric));
-        }
-      }
-    }
+    for (const BasisDisc& disc : fitting_basis_discs(2))
+      bumps.push_back(PatchBump::disc(disc.center_uv, 0.999 * inradius / disc.subdivisions, metric));
     for (PatchBump& b : bumps)
       b.amplitude_mm = amplitude(random);
     const HeightRange range = patch_height_range(bumps), sampled = sampled_height_range(bumps);

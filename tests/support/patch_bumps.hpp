@@ -7,6 +7,8 @@
 
 #include <Eigen/Geometry>
 
+#include <vector>
+
 namespace phantasm::testing {
 
 /// A round bump in triangle t of `base`: centred at `center_uv` (affine coordinates over the
@@ -22,6 +24,30 @@ inline PatchBump disc_in_triangle(const TriangleMesh& base, Eigen::Index t, cons
   PatchBump bump = PatchBump::disc(center_uv, fraction * inradius, metric);
   bump.amplitude_mm = amplitude_mm;
   return bump;
+}
+
+/// A disc of the fitting basis of anatomy/patch_fit: centred on a sub-triangle of the triangle cut
+/// into `subdivisions`^2, whose incircle is 1 / `subdivisions` of the triangle's.
+struct BasisDisc {
+  Eigen::Vector2d center_uv;
+  int subdivisions = 1;
+};
+
+/// The fitting basis's discs of levels 0 to `last_level` (2^level subdivisions), sub-triangle by
+/// sub-triangle: levels 0-2 give 21 nested discs.
+inline std::vector<BasisDisc> fitting_basis_discs(int last_level) {
+  std::vector<BasisDisc> discs;
+  for (int level = 0; level <= last_level; ++level) {
+    const int n = 1 << level;
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i + j < n; ++i) {
+        const Eigen::Vector2d p(double(i) / n, double(j) / n);
+        discs.push_back({p + Eigen::Vector2d(1.0, 1.0) / (3.0 * n), n});
+        if (i + j < n - 1) discs.push_back({p + Eigen::Vector2d(2.0, 2.0) / (3.0 * n), n});
+      }
+    }
+  }
+  return discs;
 }
 
 } // namespace phantasm::testing
