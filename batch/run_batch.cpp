@@ -6,6 +6,7 @@
 #include "io/atomic_file.hpp"
 #include "io/dataset_layout.hpp"
 #include "io/output_path.hpp"
+#include "pipeline/cost_estimate.hpp"
 #include "pipeline/run_pipeline.hpp"
 
 #include <nlohmann/json.hpp>
@@ -104,15 +105,30 @@ std::string batch_status(const BatchSummary& summary, std::size_t to_run, double
 /// resumes into its own folder; it must not scatter subjects among unrelated files).
 /// Entries of a cache folder whose names start with `prefix`: "anatomy-" (pipeline/anatomy_cache.hpp)
 /// or "reference-" (pipeline/reference_cache.hpp).
-std::size_t cache_entries(const std::filesystem::path& folder, const std::string& prefix) {
-  std::size_t entries = 0;
+/// The entries of a cache folder by kind (pipeline/anatomy_cache.hpp, reference_cache.hpp,
+/// reference_images_cache.hpp, reference_files_cache.hpp) and their bytes.
+struct CacheCounts {
+  std::size_t anatomies = 0, states = 0, images = 0, files = 0;
+  double bytes = 0.0;
+};
+
+CacheCounts cache_counts(const std::filesystem::path& folder) {
+  CacheCounts counts;
   std::error_code error;
-  if (folder.empty() || !std::filesystem::is_directory(folder, error)) return 0;
+  if (folder.empty() || !std::filesystem::is_directory(folder, error)) return counts;
   for (const auto& entry : std::filesystem::directory_iterator(folder, error)) {
+    if (entry.path().extension() != ".bin") continue;
     const std::string name = entry.path().filename().string();
-    entries += name.rfind(prefix, 0) == 0 && entry.path().extension() == ".bin";
+    const auto starts = [&](const char* prefix) { return name.rfind(prefix, 0) == 0; };
+    counts.anatomies += starts("anatomy-");
+    counts.states += starts("reference-");
+    counts.images += starts("images-");
+    counts.files += starts("file-");
+    std::error_code size_error;
+    const auto size = entry.file_size(size_error);
+    if (!size_error) counts.bytes += static_cast<double>(size);
   }
-  return entries;
+  return counts;
 }
 
 void require_batch_folder(const std::filesystem::path& folder) {
@@ -188,8 +204,7 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
         << summary.skipped << " already complete, " << pending.size() << " to run, " << options.jobs
         << " at a time with " << threads << " threads each\n";
   }
-  const std::size_t anatomies_before = cache_entries(options.anatomy_cache, "anatomy-");
-  const std::size_t references_before = cache_entries(options.anatomy_cache, "reference-");
+  const CacheCounts cache_before = cache_counts(options.anatomy_cache);
   std::map<pid_t, Running> running;
   std::size_t next = 0;
   double subject_seconds = 0.0; // summed over the subjects made, for the time left
@@ -251,13 +266,17 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
   }
   if (cancellation_requested()) summary.interrupted = true;
   if (!options.quiet && !options.anatomy_cache.empty()) {
-    const std::size_t anatomies = cache_entries(options.anatomy_cache, "anatomy-");
-    const std::size_t references = cache_entries(options.anatomy_cache, "reference-");
-    log << "[batch] anatomy cache " << options.anatomy_cache.string() << ": " << anatomies << " anatomies, "
-        << anatomies - std::min(anatomies, anatomies_before)
+    const CacheCounts after = cache_counts(options.anatomy_cache);
+    const auto added = [](std::size_t now, std::size_t before) { return now - std::min(now, before); };
+    log << "[batch] anatomy cache " << options.anatomy_cache.string() << ": " << after.anatomies
+        << " anatomies, " << added(after.anatomies, cache_before.anatomies)
         << " built by this batch (subjects with the same anatomy settings, inputs and seed share one); "
-        << references << " reference states, " << references - std::min(references, references_before)
-        << " voxelized by this batch (subjects that also share the grid and the voxelization share one)\n";
+        << after.states << " reference states, " << added(after.states, cache_before.states)
+        << " voxelized by this batch (subjects that also share the grid and the voxelization share one); "
+        << after.images << " reference image sets, " << added(after.images, cache_before.images)
+        << " made by this batch (subjects that also share the MRI settings share one); " << after.files
+        << " reference-session files, " << added(after.files, cache_before.files) << " stored by this batch; "
+        << format_bytes(after.bytes) << " in all\n";
   }
   // Processes of an earlier, killed batch may have ended only after this one started (and every
   // subject of this one has ended: what is left of theirs is stale too).

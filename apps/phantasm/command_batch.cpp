@@ -72,7 +72,8 @@ void add_batch_command(CLI::App& app, std::function<int()>& action) {
   command->add_option(
       "--cache", options->cache,
       "Anatomy cache folder: subjects with the same anatomy settings, inputs and seed fit and "
-      "mesh it once, and with the same grid and voxelization voxelize the reference state once "
+      "mesh it once, with the same grid and voxelization voxelize the reference state once, and "
+      "with the same MRI settings make the reference state's images and its session's files once "
       "(default: derivatives/phantasm/cache in the dataset)");
   command->add_flag("--no-cache", options->no_cache, "Build every subject's anatomy and reference state anew")
       ->excludes("--cache");

@@ -38,8 +38,9 @@ void add_run_command(CLI::App& app, std::function<int()>& action) {
       "mask) is an error: exit 1, nothing of the subject written");
   command->add_option("--cache", options->cache,
                       "Anatomy cache folder: a run whose anatomy settings, inputs and seed match an earlier "
-                      "one's reads its organs from there instead of fitting and meshing them again, and "
-                      "with the same grid and voxelization its voxelized reference state too");
+                      "one's reads its organs from there instead of fitting and meshing them again; "
+                      "with the same grid and voxelization its voxelized reference state too, and with "
+                      "the same MRI settings the reference state's images and its session's files");
   command->add_option("--max-memory", options->max_memory,
                       "Refuse a scene whose estimated peak memory exceeds this (4G, 512M; default: the "
                       "memory available, MemAvailable and the cgroup's limit)");

@@ -237,17 +237,25 @@ TEST(BatchCommand, SubjectsWithTheSameAnatomyBuildItOnce) {
   const auto files = folder_contents(folder / "out");
   // The anatomy, the voxelized reference state and its images at each noise level; beside them
   // the reference session's files (pipeline/reference_files_cache.hpp).
-  std::size_t anatomies = 0, states = 0, images = 0;
+  std::size_t anatomies = 0, states = 0, images = 0, stored_files = 0;
   for (const auto& [path, bytes] : files) {
     const std::string name = fs::path(path).filename().string();
     if (fs::path(path).extension() != ".bin") continue;
     anatomies += name.rfind("anatomy-", 0) == 0;
     states += name.rfind("reference-", 0) == 0;
     images += name.rfind("images-", 0) == 0;
+    stored_files += name.rfind("file-", 0) == 0;
   }
   EXPECT_EQ(anatomies, 1u);
   EXPECT_EQ(states, 1u);
   EXPECT_EQ(images, 3u);
+  EXPECT_GT(stored_files, 0u);
+  // The summary counts the images and the stored files too, and what they hold in all.
+  EXPECT_NE(run.err.find("; 3 reference image sets, 3 made by this batch"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("; " + std::to_string(stored_files) + " reference-session files, " +
+                         std::to_string(stored_files) + " stored by this batch; "),
+            std::string::npos)
+      << run.err;
   EXPECT_EQ(count_ending(files, "provenance.json"), 3u);
   // A run of the first subject's scene without the cache writes the same files.
   const fs::path alone = folder / "alone";
