@@ -6,6 +6,7 @@
 #include "core/cancellation.hpp"
 #include "geometry/mesh_signed_distance.hpp"
 
+#include <omp.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/LevelSetUtil.h>
@@ -220,12 +221,10 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
   const auto count = static_cast<std::ptrdiff_t>(coords.size());
   // Candidates come leaf by leaf (8^3 blocks), so each one's search starts from the closest
   // triangle of the one before (the same answer, fewer boxes opened).
-#pragma omp parallel
-  {
+  const auto evaluate = [&](std::ptrdiff_t first, std::ptrdiff_t last) {
     int previous = -1;
-#pragma omp for schedule(static)
-    for (std::ptrdiff_t c = 0; c < count; ++c) {
-      if (cancellation_requested()) continue;
+    for (std::ptrdiff_t c = first; c < last; ++c) {
+      if (cancellation_requested()) return;
       const auto i = static_cast<std::size_t>(c);
       const Eigen::Vector3d x = voxel_size_mm * Eigen::Vector3d(coords[i].x(), coords[i].y(), coords[i].z());
       const MeshClosestPoint closest = mesh.closest(x, previous);
@@ -246,6 +245,20 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
       }
       values[i] = static_cast<float>(std::clamp(d, -band, band));
     }
+  };
+  // In pieces, each value its own (the result does not depend on the threads). Inside the
+  // voxelizer's loop over organs the pieces are tasks: a thread done with its own organs takes
+  // them up while it waits at the loop's end, instead of idling while the last organ is built.
+  constexpr std::ptrdiff_t k_piece = 4096;
+  const std::ptrdiff_t pieces = (count + k_piece - 1) / k_piece;
+  if (omp_in_parallel()) {
+#pragma omp taskloop grainsize(1)
+    for (std::ptrdiff_t piece = 0; piece < pieces; ++piece)
+      evaluate(piece * k_piece, std::min(count, (piece + 1) * k_piece));
+  } else {
+#pragma omp parallel for schedule(dynamic, 1)
+    for (std::ptrdiff_t piece = 0; piece < pieces; ++piece)
+      evaluate(piece * k_piece, std::min(count, (piece + 1) * k_piece));
   }
   if (cancellation_requested()) return;
   m->grid = openvdb::FloatGrid::create(static_cast<float>(band));

@@ -158,6 +158,25 @@ Eigen::Vector3d DeformationMap::extension(const Eigen::Vector3d& x) const {
   return s * s * (3.0 - 2.0 * s) * u;
 }
 
+bool DeformationMap::far_from_moved_boundary(const Eigen::Vector3d& x) const {
+  if (m_search_all) return m_moved_faces.empty();
+  // moved_boundary_distance's look-up: no face in x's cell (or x beyond the cells) in either
+  // state means infinity from both, so no extension and no doubt about exactness.
+  for (const FaceBuckets& b : m_buckets) {
+    if (b.faces.empty()) continue;
+    std::size_t cell = 0, stride = 1;
+    bool within = true;
+    for (int a = 0; a < 3 && within; ++a) {
+      const double c = std::floor((x[a] - b.origin[a]) / b.cell_mm);
+      within = c >= 0.0 && c < b.cells[a];
+      if (within) cell += stride * static_cast<std::size_t>(c);
+      stride *= static_cast<std::size_t>(b.cells[a]);
+    }
+    if (within && b.offsets[cell] != b.offsets[cell + 1]) return false;
+  }
+  return true;
+}
+
 bool DeformationMap::near_moved_boundary(const Eigen::Vector3d& x) const {
   return moved_boundary_distance(x, false, nullptr) < m_extension ||
          moved_boundary_distance(x, true, nullptr) < m_extension;
@@ -403,15 +422,26 @@ MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& 
   // Inside the bodies: tet by tet. Outside: the extension, voxel by voxel in parallel (each
   // voxel's value depends on nothing else, so the result does not depend on the threads).
   std::vector<std::uint8_t> inside_ref(count, 0), inside_def(count, 0);
-  map.rasterize(grid, false, f.ref_to_def, inside_ref);
-  map.rasterize(grid, true, f.def_to_ref, inside_def);
+  // The two directions write separate arrays: one thread each (each one tet by tet, in order,
+  // so a voxel on a face shared by two tets takes the first one's value, as on one thread).
+#pragma omp parallel sections
+  {
+#pragma omp section
+    map.rasterize(grid, false, f.ref_to_def, inside_ref);
+#pragma omp section
+    map.rasterize(grid, true, f.def_to_ref, inside_def);
+  }
 #pragma omp parallel for schedule(dynamic, 1)
   for (int k = 0; k < nz; ++k) {
     if (cancellation_requested()) continue; // no exception may leave an OpenMP region
     for (int j = 0; j < ny; ++j) {
       for (int i = 0; i < nx; ++i) {
         const std::size_t v = at(i, j, k);
+        if (inside_ref[v] && inside_def[v]) continue;
         const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
+        // No moved face near: both maps are the identity there, exactly: the zero displacement
+        // and the exact mark the fields start with.
+        if (map.far_from_moved_boundary(x)) continue;
         bool exact = true;
         if (!inside_ref[v]) {
           const Eigen::Vector3d to_def = map.forward_outside(x, &exact) - x;

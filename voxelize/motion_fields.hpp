@@ -44,6 +44,11 @@ public:
   /// The extension part of forward() and inverse(), for points outside every body.
   Eigen::Vector3d forward_outside(const Eigen::Vector3d& x_ref, bool* exact) const;
   Eigen::Vector3d inverse_outside(const Eigen::Vector3d& x_def, bool* exact) const;
+  /// True when no moved face lies within extension_mm of x in either state, as far as one look
+  /// at x's bucket in each state tells (false when in doubt): then forward_outside and
+  /// inverse_outside give x itself, exactly, and the zero displacement there is exact. Most of
+  /// a grid lies there; the fields skip those voxels.
+  bool far_from_moved_boundary(const Eigen::Vector3d& x) const;
 
   const std::vector<DeformedBody>& bodies() const { return m_bodies; }
   double extension_mm() const { return m_extension; }

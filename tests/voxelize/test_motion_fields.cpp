@@ -198,6 +198,7 @@ TEST(DeformationMap, FaceBucketsGiveTheFieldsOfTheFullScanBitForBit) {
   // Off the grid too, both ways.
   std::mt19937 random(7);
   std::uniform_real_distribution<double> coordinate(-12.0, 35.0);
+  int far = 0;
   for (int n = 0; n < 2000; ++n) {
     const Eigen::Vector3d x(coordinate(random), coordinate(random), coordinate(random));
     bool exact_a = false, exact_b = false;
@@ -205,7 +206,18 @@ TEST(DeformationMap, FaceBucketsGiveTheFieldsOfTheFullScanBitForBit) {
     EXPECT_EQ(exact_a, exact_b);
     EXPECT_EQ(fast.inverse(x, &exact_a), scan.inverse(x, &exact_b)) << x.transpose();
     EXPECT_EQ(exact_a, exact_b);
+    // Far from the moved faces by the buckets: the full scan's maps are the identity there,
+    // exactly (what the fields skip).
+    if (fast.far_from_moved_boundary(x)) {
+      ++far;
+      EXPECT_EQ(scan.forward_outside(x, &exact_b), x) << x.transpose();
+      EXPECT_TRUE(exact_b);
+      EXPECT_EQ(scan.inverse_outside(x, &exact_b), x) << x.transpose();
+      EXPECT_TRUE(exact_b);
+    }
   }
+  EXPECT_GT(far, 100); // the test reaches the fast path
+  EXPECT_LT(far, 1900);
 }
 
 // The composition check: where neither field moves a voxel, both compositions are the identity
