@@ -69,6 +69,7 @@ HeightRange patch_height_range(const std::vector<PatchBump>& bumps) {
   const double step = 1.0 / n;
   const Eigen::Vector2d edges[3] = {{step, 0.0}, {0.0, step}, {step, -step}};
   const auto cube_of_positive = [](double x) { return x > 0.0 ? x * x * x : 0.0; };
+  std::vector<double> q_grid;
   for (const PatchBump& bump : bumps) {
     const Eigen::Matrix2d S = 0.5 * (bump.shape_uv + bump.shape_uv.transpose());
     const double a = bump.amplitude_mm;
@@ -83,9 +84,18 @@ HeightRange patch_height_range(const std::vector<PatchBump>& bumps) {
     const auto cell = [](double x) { return static_cast<int>(std::clamp(std::floor(x * n), 0.0, n - 1.0)); };
     const int a_first = cell(bump.center_uv.x() - half.x()), a_last = cell(bump.center_uv.x() + half.x());
     const int b_first = cell(bump.center_uv.y() - half.y()), b_last = cell(bump.center_uv.y() + half.y());
+    // Q at the lattice points of the box, each computed once (a point is a corner of up to six
+    // sub-triangles): row j - b_first, column i - a_first, one more of each for the far corners.
+    const int columns = a_last - a_first + 2;
+    q_grid.resize(static_cast<std::size_t>(columns * (b_last - b_first + 2)));
+    for (int j = b_first; j <= b_last + 1; ++j) {
+      for (int i = a_first; i <= a_last + 1; ++i) {
+        const Eigen::Vector2d d = step * Eigen::Vector2d(i, j) - bump.center_uv;
+        q_grid[static_cast<std::size_t>((j - b_first) * columns + (i - a_first))] = 1.0 - d.dot(S * d);
+      }
+    }
     const auto q_at = [&](int i, int j) {
-      const Eigen::Vector2d d = step * Eigen::Vector2d(i, j) - bump.center_uv;
-      return 1.0 - d.dot(S * d);
+      return q_grid[static_cast<std::size_t>((j - b_first) * columns + (i - a_first))];
     };
     const auto add = [&](std::size_t id, double q0, double q1, double q2) {
       const double q_low = std::min({q0, q1, q2});
