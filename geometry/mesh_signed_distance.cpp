@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <map>
 #include <numeric>
 #include <utility>
 
@@ -39,28 +38,53 @@ SignedDistanceMesh::SignedDistanceMesh(const Eigen::MatrixX3i& faces) : m_triang
 }
 
 void SignedDistanceMesh::connect() {
-  // Vertices numbered by first use, edges by their sorted vertex pair: the normals are summed
-  // per vertex and per edge in triangle order, then read per corner and per triangle edge.
+  // Vertices numbered by first use, edges by their vertex pair: the normals are summed per vertex
+  // and per edge in triangle order, then read per corner and per triangle edge (the numbering
+  // only names the sums, so any numbering gives the same normals). Each edge is found among the
+  // half-edges of its lower-numbered vertex (a handful each), after a counting sort of the
+  // half-edges by that vertex: linear in the triangles, where a map of vertex pairs cost about
+  // a microsecond per half-edge on the millions of triangles of a fine tessellation.
   int largest = -1;
   for (const auto& t : m_triangles)
     largest = std::max({largest, t[0], t[1], t[2]});
   std::vector<int> local(static_cast<std::size_t>(largest + 1), -1);
-  std::map<std::pair<int, int>, int> edges;
   int vertices = 0;
   m_corner_vertex.resize(m_triangles.size());
   m_edge.resize(m_triangles.size());
   for (std::size_t t = 0; t < m_triangles.size(); ++t) {
-    const auto& v = m_triangles[t];
     for (std::size_t k = 0; k < 3; ++k) {
-      int& id = local[static_cast<std::size_t>(v[k])];
+      int& id = local[static_cast<std::size_t>(m_triangles[t][k])];
       if (id < 0) id = vertices++;
       m_corner_vertex[t][k] = id;
-      const int next = static_cast<int>(edges.size());
-      m_edge[t][k] = edges.try_emplace(std::minmax(v[k], v[(k + 1) % 3]), next).first->second;
+    }
+  }
+  // Half-edge h = 3 t + k runs from corner k to corner k + 1 of triangle t.
+  const std::size_t half_edges = 3 * m_triangles.size();
+  const auto ends = [&](std::size_t h) -> std::pair<int, int> {
+    const std::array<int, 3>& c = m_corner_vertex[h / 3];
+    const int a = c[h % 3], b = c[(h % 3 + 1) % 3];
+    return {std::min(a, b), std::max(a, b)};
+  };
+  std::vector<std::size_t> first(static_cast<std::size_t>(vertices) + 1, 0);
+  for (std::size_t h = 0; h < half_edges; ++h)
+    ++first[static_cast<std::size_t>(ends(h).first) + 1];
+  std::partial_sum(first.begin(), first.end(), first.begin());
+  std::vector<std::size_t> by_lower(half_edges), next_slot(first.begin(), first.end() - 1);
+  for (std::size_t h = 0; h < half_edges; ++h)
+    by_lower[next_slot[static_cast<std::size_t>(ends(h).first)]++] = h;
+  int edges = 0;
+  for (std::size_t v = 0; v + 1 < first.size(); ++v) {
+    for (std::size_t i = first[v]; i < first[v + 1]; ++i) {
+      const std::size_t h = by_lower[i];
+      const int upper = ends(h).second;
+      int id = -1;
+      for (std::size_t j = first[v]; j < i && id < 0; ++j)
+        if (ends(by_lower[j]).second == upper) id = m_edge[by_lower[j] / 3][by_lower[j] % 3];
+      m_edge[h / 3][h % 3] = id >= 0 ? id : edges++;
     }
   }
   m_vertex_normals.assign(static_cast<std::size_t>(vertices), Eigen::Vector3d::Zero());
-  m_edge_normals.assign(edges.size(), Eigen::Vector3d::Zero());
+  m_edge_normals.assign(static_cast<std::size_t>(edges), Eigen::Vector3d::Zero());
 }
 
 void SignedDistanceMesh::update(const Eigen::MatrixX3d& p) {
