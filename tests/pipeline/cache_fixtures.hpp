@@ -6,9 +6,13 @@
 #include "scene/scene.hpp"
 #include "tests/support/files.hpp"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <filesystem>
+#include <functional>
 #include <map>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -40,6 +44,23 @@ inline std::map<std::string, std::string> files_of(const RunSummary& run,
 /// Whether a dataset file is the run's record (log, provenance), not its data.
 inline bool is_record(const std::string& path) {
   return path.find("log.txt") != std::string::npos || path.find("provenance.json") != std::string::npos;
+}
+
+/// A cache key is a SHA-256 (64 hex digits), the same for the same inputs, and different for
+/// each one of `changes` applied to `base` (from the key of every other change too).
+template <class Inputs>
+void expect_every_change_changes_the_key(const Inputs& base,
+                                         const std::vector<std::function<void(Inputs&)>>& changes,
+                                         const std::function<std::string(const Inputs&)>& key_of) {
+  const std::string base_key = key_of(base);
+  ASSERT_EQ(base_key.size(), 64u);
+  EXPECT_EQ(key_of(base), base_key);
+  std::set<std::string> keys{base_key};
+  for (std::size_t c = 0; c < changes.size(); ++c) {
+    Inputs changed = base;
+    changes[c](changed);
+    EXPECT_TRUE(keys.insert(key_of(changed)).second) << "change " << c;
+  }
 }
 
 } // namespace phantasm::testing

@@ -18,7 +18,6 @@
 #include <algorithm>
 #include <cstring>
 #include <functional>
-#include <set>
 
 using namespace phantasm;
 using namespace phantasm::testing;
@@ -168,15 +167,8 @@ TEST(ReferenceCache, EveryInputOfTheReferenceStateChangesTheKey) {
       [](Inputs& in) { in.anatomy.organs[2].inside = in.anatomy.organs[0].name; }, // another depth
       [](Inputs& in) { in.anatomy.organs.pop_back(); },
   };
+  expect_every_change_changes_the_key<Inputs>(base, changes, key_of);
   const std::string base_key = key_of(base);
-  ASSERT_EQ(base_key.size(), 64u);
-  EXPECT_EQ(key_of(base), base_key);
-  std::set<std::string> keys{base_key};
-  for (std::size_t c = 0; c < changes.size(); ++c) {
-    Inputs changed = base;
-    changes[c](changed);
-    EXPECT_TRUE(keys.insert(key_of(changed)).second) << "change " << c;
-  }
   const std::vector<Change> kept = {
       [](Inputs& in) { in.settings.gap_tissue = "csf"; },
       [](Inputs& in) { in.settings.gap_fill = "csf"; },
