@@ -7,13 +7,16 @@
 // waiting). It prints the seconds after each organ of the first repeat, the peak resident memory
 // the landmarks add, and a hash (FNV-1a) of each state's landmarks CSV, so that two builds can be
 // checked for the same landmarks; with CSV_PREFIX, the CSVs are also written to
-// CSV_PREFIX-reference.csv and CSV_PREFIX-deformed.csv.
-// Usage: landmarks_time SCENE [CACHE [VOXEL_MM [REPEATS [CSV_PREFIX]]]]
+// CSV_PREFIX-reference.csv and CSV_PREFIX-deformed.csv. DEPTH says how depths are measured:
+// "labels" (the default, as a run does: the reference state is voxelized first, during the set-up,
+// and its labels given) or "surfaces" (every depth from the tessellated surfaces).
+// Usage: landmarks_time SCENE [CACHE [VOXEL_MM [REPEATS [CSV_PREFIX [DEPTH]]]]]
 
 #include "pipeline/run_pipeline.hpp"
 #include "scene/scene.hpp"
 #include "voxelize/landmarks.hpp"
 #include "voxelize/motion_fields.hpp"
+#include "voxelize/voxelize_phantom.hpp"
 
 #include <sys/resource.h>
 
@@ -66,7 +69,7 @@ std::uint64_t fnv1a(const std::string& text) {
 int main(int argc, char** argv) {
   using namespace phantasm;
   if (argc < 2) {
-    std::fprintf(stderr, "usage: landmarks_time SCENE [CACHE [VOXEL_MM [REPEATS [CSV_PREFIX]]]]\n");
+    std::fprintf(stderr, "usage: landmarks_time SCENE [CACHE [VOXEL_MM [REPEATS [CSV_PREFIX [DEPTH]]]]]\n");
     return 2;
   }
   const std::string path = argv[1];
@@ -91,8 +94,19 @@ int main(int argc, char** argv) {
   const double tolerance_mm = std::clamp(spacing.minCoeff(), 0.5, 2.0);
   std::optional<DeformationMap> map;
   if (deformation) map.emplace(deformation->bodies, 2.0 * spacing.maxCoeff());
-  std::printf("%s: %zu organs, voxel %.3g mm, tolerance %.3g mm, set up in %.1f s\n", path.c_str(),
-              phantom.organs.size(), spacing.minCoeff(), tolerance_mm,
+  const bool from_labels = argc <= 6 || std::string(argv[6]) != "surfaces";
+  // The reference labels, as voxelize_phantom has them when it comes to the landmarks.
+  std::optional<VoxelizedPhantom> voxelized;
+  ReferenceLabels labels;
+  if (from_labels) {
+    StageReport report;
+    voxelized.emplace(voxelize_phantom(scene.voxelization, scene.organs, scene.grid.grid(), phantom, nullptr,
+                                       nullptr, report, quiet));
+    labels = {&voxelized->grid, &voxelized->reference.labels};
+  }
+  std::printf("%s: %zu organs, voxel %.3g mm, depths from the %s (tolerance %.3g mm), set up in %.1f s\n",
+              path.c_str(), phantom.organs.size(), spacing.minCoeff(), from_labels ? "labels" : "surfaces",
+              tolerance_mm,
               std::chrono::duration<double>(std::chrono::steady_clock::now() - setup_start).count());
   std::fflush(stdout);
 
@@ -108,8 +122,8 @@ int main(int argc, char** argv) {
           std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     };
     std::vector<std::string> warnings;
-    landmarks =
-        organ_landmarks(phantom, deformation, map ? &*map : nullptr, tolerance_mm, &warnings, organ_done);
+    landmarks = organ_landmarks(phantom, deformation, map ? &*map : nullptr, tolerance_mm, &warnings,
+                                organ_done, labels);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const double cpu = cpu_seconds() - cpu_before;
     if (r == 0) {
@@ -129,7 +143,7 @@ int main(int argc, char** argv) {
   std::printf("%zu landmarks, reference CSV %016llx, deformed CSV %016llx\n", landmarks.size(),
               static_cast<unsigned long long>(fnv1a(reference_csv)),
               static_cast<unsigned long long>(fnv1a(deformed_csv)));
-  if (argc > 5) {
+  if (argc > 5 && std::string(argv[5]) != "-") {
     std::ofstream(std::string(argv[5]) + "-reference.csv", std::ios::binary) << reference_csv;
     std::ofstream(std::string(argv[5]) + "-deformed.csv", std::ios::binary) << deformed_csv;
   }

@@ -42,11 +42,6 @@ Summary summarize(std::vector<double> values);
 std::vector<std::int32_t> warp_labels(const std::vector<std::int32_t>& moving, const ImageGrid& moving_grid,
                                       const DisplacementField& field);
 
-/// Exact Euclidean distance (mm, the grid's spacing) from every voxel to the nearest voxel where
-/// `feature` is set; infinity everywhere when none is. Separable lower-envelope algorithm
-/// (Felzenszwalb and Huttenlocher), parallel over lines.
-std::vector<double> distance_to(const std::vector<bool>& feature, const ImageGrid& grid);
-
 /// Overlap of one label between the fixed labels and a warped moving label map.
 struct LabelOverlap {
   std::int32_t label = 0;

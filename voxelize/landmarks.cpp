@@ -3,6 +3,7 @@
 #include "anatomy/mesh_distance.hpp"
 #include "core/cancellation.hpp"
 #include "core/progress.hpp"
+#include "geometry/distance_transform.hpp"
 #include "geometry/mesh_signed_distance.hpp"
 
 #include <Eigen/Geometry>
@@ -134,11 +135,14 @@ private:
 };
 
 /// How far a point is inside an organ's own material: the distance to the organ's surface or to
-/// the nearest organ nested in it, whichever is closer (mm; negative outside that material).
+/// the nearest organ nested in it, whichever is closer (mm); outside that material a value <= 0.
 /// Distances from the tessellations (within their tolerance of the surfaces), sides from OrganSide.
-/// Each query starts from the closest triangles of the point asked before with the same hints
-/// (a neighbour along a ray or the grid, or the compass search's last point): fewer boxes are
-/// opened, and the answers, ties included, are those of a search without hints.
+/// The sides come first: a point outside the material (outside the organ or inside a nested one)
+/// is told so without a distance search, the most of the work (the tessellations' search trees
+/// hold up to millions of triangles); every use of a clearance <= 0 is that the point is not a
+/// candidate. Each query starts from the closest triangles of the point asked before with the
+/// same hints (a neighbour along a ray or the grid, or the compass search's last point): fewer
+/// boxes are opened, and the answers, ties included, are those of a search without hints.
 class OwnMaterial {
 public:
   OwnMaterial(const Phantom& phantom, std::size_t o, OrganDistances& distances)
@@ -154,10 +158,14 @@ public:
   using Hints = std::vector<int>;
   Hints no_hints() const { return Hints(2 * (1 + m_nested.size()), -1); }
 
+  /// The clearance at x inside the material; outside it 0 (not the distance: no candidate).
   double clearance(const Eigen::Vector3d& x, Hints& hints) const {
-    double c = -m_own.signed_distance(x, &hints[0]);
+    if (!m_own.side.inside(x, hints[1])) return 0.0;
     for (std::size_t n = 0; n < m_nested.size(); ++n)
-      c = std::min(c, m_nested[n].signed_distance(x, &hints[2 * (n + 1)]));
+      if (m_nested[n].side.inside(x, hints[2 * (n + 1) + 1])) return 0.0;
+    double c = m_own.distance_to(x, hints[0]);
+    for (std::size_t n = 0; n < m_nested.size(); ++n)
+      c = std::min(c, m_nested[n].distance_to(x, hints[2 * (n + 1)]));
     return c;
   }
 
@@ -165,13 +173,11 @@ private:
   struct Surface {
     const MeshDistance* distance;
     OrganSide side;
-    /// Negative inside, mm. hint[0] and hint[1]: the closest triangles of the tessellation and
-    /// of the base mesh, updated to x's.
-    double signed_distance(const Eigen::Vector3d& x, int* hint) const {
-      const MeshClosestPoint closest = distance->closest(x, hint[0]);
-      hint[0] = closest.triangle;
-      const double d = std::sqrt(closest.distance_squared);
-      return side.inside(x, hint[1]) ? -d : d;
+    /// Unsigned distance to the tessellation, mm; hint: its closest triangle, updated to x's.
+    double distance_to(const Eigen::Vector3d& x, int& hint) const {
+      const MeshClosestPoint closest = distance->closest(x, hint);
+      hint = closest.triangle;
+      return std::sqrt(closest.distance_squared);
     }
   };
   Surface m_own;
@@ -329,16 +335,147 @@ std::optional<Eigen::Vector3d> deepest_point(const Phantom& phantom, std::size_t
   return deepest.x;
 }
 
+/// Where each label lies on the grid: the index box of its voxels and whether any lies on the
+/// grid's border (then the organ may reach beyond the grid).
+struct LabelExtents {
+  std::vector<Eigen::AlignedBox3i> box; ///< by label value; empty for a label with no voxel
+  std::vector<bool> on_border;
+
+  LabelExtents(const ImageGrid& grid, const std::vector<std::int32_t>& labels, std::size_t label_count)
+      : box(label_count + 1), on_border(label_count + 1, false) {
+    const Eigen::Vector3i& dims = grid.dims;
+    for (int k = 0; k < dims.z(); ++k)
+      for (int j = 0; j < dims.y(); ++j)
+        for (int i = 0; i < dims.x(); ++i) {
+          const std::int32_t l = labels[voxel_index(dims, i, j, k)];
+          if (l <= 0 || static_cast<std::size_t>(l) > label_count) continue;
+          box[static_cast<std::size_t>(l)].extend(Eigen::Vector3i(i, j, k));
+          if (i == 0 || j == 0 || k == 0 || i == dims.x() - 1 || j == dims.y() - 1 || k == dims.z() - 1)
+            on_border[static_cast<std::size_t>(l)] = true;
+        }
+  }
+};
+
+/// Whether the grid's axes are orthogonal with lengths its spacing (a distance transform in
+/// index space with that spacing is then the world one).
+bool orthogonal_axes(const ImageGrid& grid) {
+  const Eigen::Matrix3d axes = grid.world_from_voxel.topLeftCorner<3, 3>();
+  for (int a = 0; a < 3; ++a) {
+    if (!(std::abs(axes.col(a).norm() - grid.spacing_mm[a]) <= 1e-9 * grid.spacing_mm[a])) return false;
+    for (int b = a + 1; b < 3; ++b)
+      if (!(std::abs(axes.col(a).dot(axes.col(b))) <= 1e-9 * grid.spacing_mm[a] * grid.spacing_mm[b]))
+        return false;
+  }
+  return true;
+}
+
+/// Whether organ n lies inside organ o, directly or through organs nested in between.
+bool nested_in(const Phantom& phantom, std::size_t n, std::size_t o) {
+  for (std::size_t steps = 0; steps < phantom.organs.size() && !phantom.organs[n].inside.empty(); ++steps) {
+    const Organ* container = phantom.find(phantom.organs[n].inside);
+    if (!container) return false;
+    n = static_cast<std::size_t>(container - phantom.organs.data());
+    if (n == o) return true;
+  }
+  return false;
+}
+
+/// The deepest point of an organ's own material from the reference labels (organ_landmarks):
+/// the centre of the voxel of its label farthest from every other voxel (the exact distance
+/// transform of the label, over the label's box and one voxel around it, all of which lies
+/// outside the label: a voxel beyond that ring is never nearer than the ring's voxel it projects
+/// to) whose centre lies in the organ's own material by the patches; with a map, the deepest
+/// whose surroundings the map moves exactly with the organ (candidates from different
+/// neighbourhoods, as the tessellation path), else the deepest. None when the labels cannot tell
+/// (see organ_landmarks); then the tessellations do.
+std::optional<Eigen::Vector3d> deepest_labelled_point(const Phantom& phantom, std::size_t o,
+                                                      const ReferenceLabels& labels,
+                                                      const LabelExtents& extents, const DeformationMap* map,
+                                                      bool moved) {
+  const auto label = static_cast<std::size_t>(o) + 1;
+  if (extents.box[label].isEmpty()) return std::nullopt;
+  for (std::size_t n = 0; n < phantom.organs.size(); ++n)
+    if ((n == o || nested_in(phantom, n, o)) && extents.on_border[n + 1]) return std::nullopt;
+  const ImageGrid& grid = *labels.grid;
+  // The label's box and one voxel around it (inside the grid: no voxel of the label is on its border).
+  const Eigen::Vector3i first = extents.box[label].min().array() - 1,
+                        last = extents.box[label].max().array() + 1;
+  ImageGrid block = grid;
+  block.dims = last - first + Eigen::Vector3i::Ones();
+  std::vector<bool> outside(static_cast<std::size_t>(block.voxel_count()));
+  for (int k = 0; k < block.dims.z(); ++k)
+    for (int j = 0; j < block.dims.y(); ++j)
+      for (int i = 0; i < block.dims.x(); ++i)
+        outside[voxel_index(block.dims, i, j, k)] =
+            (*labels.labels)[voxel_index(grid.dims, first.x() + i, first.y() + j, first.z() + k)] !=
+            static_cast<std::int32_t>(label);
+  const std::vector<double> depth = distance_to(outside, block);
+  std::vector<std::size_t> order;
+  for (std::size_t v = 0; v < outside.size(); ++v)
+    if (!outside[v]) order.push_back(v);
+  // Deepest first; equal depths in voxel order (the same on any thread count).
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return depth[a] > depth[b]; });
+  std::vector<OrganSide> sides{OrganSide(*phantom.organs[o].surface)};
+  for (std::size_t n = 0; n < phantom.organs.size(); ++n)
+    if (phantom.organs[n].inside == phantom.organs[o].name && phantom.organs[n].surface)
+      sides.emplace_back(*phantom.organs[n].surface);
+  std::vector<int> hints(sides.size(), -1);
+  const auto centre = [&](std::size_t v) {
+    const auto b = static_cast<std::int64_t>(v);
+    const std::int64_t row = b / block.dims.x();
+    return grid.world_from_index(Eigen::Vector3d(static_cast<double>(first.x() + b % block.dims.x()),
+                                                 static_cast<double>(first.y() + row % block.dims.y()),
+                                                 static_cast<double>(first.z() + row / block.dims.y())));
+  };
+  const auto in_material = [&](const Eigen::Vector3d& x) {
+    if (!sides[0].inside(x, hints[0])) return false;
+    for (std::size_t s = 1; s < sides.size(); ++s)
+      if (sides[s].inside(x, hints[s])) return false;
+    return true;
+  };
+  const Eigen::MatrixX3d& rest = phantom.organs[o].surface->rest_positions();
+  const double step = (rest.colwise().maxCoeff() - rest.colwise().minCoeff()).maxCoeff() / 40.0;
+  std::optional<Eigen::Vector3d> deepest;
+  std::vector<Eigen::Vector3d> tried;
+  for (const std::size_t v : order) {
+    if (tried.size() >= 64) break;
+    const Eigen::Vector3d x = centre(v);
+    if (deepest) {
+      bool near = false;
+      for (const Eigen::Vector3d& t : tried)
+        near |= (t - x).norm() < step;
+      if (near) continue;
+    }
+    if (!in_material(x)) continue;
+    if (!deepest) {
+      deepest = x;
+      if (!map || exact_around(*map, x, moved)) return x;
+      continue;
+    }
+    // Try the next candidates, each from a different neighbourhood.
+    tried.push_back(x);
+    if (exact_around(*map, x, moved)) return x;
+  }
+  return deepest;
+}
+
 } // namespace
 
 std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDeformation* deformation,
                                       const DeformationMap* map, double depth_tolerance_mm,
                                       std::vector<std::string>* warnings,
-                                      const std::function<void()>& organ_done) {
+                                      const std::function<void()>& organ_done,
+                                      const ReferenceLabels& labels) {
   static const char* const k_directions[6] = {"left",     "right",    "posterior",
                                               "anterior", "inferior", "superior"};
   std::vector<Landmark> out;
   OrganDistances distances(reference, depth_tolerance_mm);
+  std::optional<LabelExtents> extents;
+  if (labels.grid && labels.labels &&
+      labels.labels->size() == static_cast<std::size_t>(labels.grid->voxel_count()) &&
+      orthogonal_axes(*labels.grid))
+    extents.emplace(*labels.grid, *labels.labels, reference.organs.size());
   for (std::size_t o = 0; o < reference.organs.size(); ++o) {
     const Organ& organ = reference.organs[o];
     if (!organ.surface) continue;
@@ -350,7 +487,9 @@ std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDef
     // solved tets); the others did not move.
     const bool moved_organ = deformation && (deformation->organs[o].moved_by == "solver" ||
                                              deformation->organs[o].moved_by.rfind("embedded", 0) == 0);
-    const std::optional<Eigen::Vector3d> deepest = deepest_point(reference, o, distances, map, moved_organ);
+    std::optional<Eigen::Vector3d> deepest;
+    if (extents) deepest = deepest_labelled_point(reference, o, labels, *extents, map, moved_organ);
+    if (!deepest) deepest = deepest_point(reference, o, distances, map, moved_organ);
     distances.done(o);
     if (deepest) {
       out.push_back({organ.name + "_deepest", organ.name, *deepest,

@@ -3,15 +3,24 @@
 #pragma once
 
 #include "anatomy/organ.hpp"
+#include "core/grid.hpp"
 #include "sim/phantom_deformation.hpp"
 #include "voxelize/motion_fields.hpp"
 #include "voxelize/voxelized_phantom.hpp"
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
 
 namespace phantasm {
+
+/// The reference state's voxel labels on their grid (voxelized_phantom.hpp: organ index + 1, 0
+/// for background), in which the deepest points are searched when given.
+struct ReferenceLabels {
+  const ImageGrid* grid = nullptr;
+  const std::vector<std::int32_t>* labels = nullptr;
+};
 
 /// Seven landmarks per closed organ, each a material point of that organ: the deepest point of
 /// its own material ("<organ>_deepest": inside it and outside the organs nested in it, farthest
@@ -20,20 +29,30 @@ namespace phantasm {
 /// (patch base vertices). Both states are exact: an extreme point's deformed position is its
 /// vertex's solved one; the deepest point of an organ the solver moved goes through the map
 /// (barycentric in the solved tets), that of an organ that did not move stays.
+/// The depth is measured one of two ways, and either way the point's side of every surface is
+/// exact (from the patches themselves), so the deepest point is a material point of its organ:
+/// - with `labels`, for an organ that lies within the grid (none of its or its nested organs'
+///   labels on the grid's border; axes orthogonal): the exact Euclidean distance transform of its
+///   own label, so the depth is that of the voxel centres, known to within a voxel; the point is
+///   the centre of the deepest voxel whose centre lies in the organ's own material;
+/// - otherwise (no labels, an organ the grid cuts or misses, or one whose labelled voxels have no
+///   centre in its material: thinner than a voxel): distances to its surfaces tessellated within
+///   `depth_tolerance_mm`, over a grid of candidates and rays inward from the base vertices,
+///   refined by a compass search. Tessellating the folded Colin white matter within 0.5 mm makes
+///   5 million triangles, within 1 mm 1.8 million: seconds per organ.
 /// An organ whose own material holds no point (the organs nested in it fill it) has no deepest
 /// point: that landmark is left out, with a warning.
 /// @param map the reference-to-deformed map (nullptr without a deformation)
-/// @param depth_tolerance_mm how closely the surfaces are tessellated for the depth search, mm:
-///        a depth is known to within it (the side of a surface exactly, from the patches), so the
-///        deepest point is a material point of its organ whatever the tolerance. Tessellating
-///        the folded Colin white matter within 0.5 mm makes 5 million triangles, within 1 mm 1.8
-///        million (voxelize_phantom passes the voxel edge, 0.5-2 mm).
+/// @param depth_tolerance_mm the tessellations' tolerance, mm (voxelize_phantom passes the voxel
+///        edge, 0.5-2 mm)
 /// @param warnings receives a line per landmark left out (nullptr: none kept)
 /// @param organ_done called after each organ with a surface (a progress step; empty: none)
+/// @param labels the reference labels (none: every depth from the tessellations)
 std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDeformation* deformation,
                                       const DeformationMap* map, double depth_tolerance_mm,
                                       std::vector<std::string>* warnings = nullptr,
-                                      const std::function<void()>& organ_done = {});
+                                      const std::function<void()>& organ_done = {},
+                                      const ReferenceLabels& labels = {});
 
 /// CSV text of one state: "name,organ,x_mm,y_mm,z_mm" (world RAS mm), one landmark per line.
 std::string landmarks_csv(const std::vector<Landmark>& landmarks, bool deformed);

@@ -187,7 +187,8 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
                        static_cast<std::size_t>(states) * (reference.organs.size() + 1) + (deformed ? 1 : 0) +
                            landmark_organs);
   const std::function<void()> landmark_done = [&progress] { progress.advance(); };
-  // The depth search tessellates the surfaces within a voxel edge (0.5-2 mm): a deepest point
+  // Where the labels cannot tell a depth, the search tessellates the surfaces within a voxel edge
+  // (0.5-2 mm): a deepest point
   // needs its depth to within a voxel, and its side of every surface is exact whatever the
   // tolerance (voxelize/landmarks.hpp).
   const double landmark_tolerance_mm = std::clamp(out.grid.spacing_mm.minCoeff(), 0.5, 2.0);
@@ -270,8 +271,8 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
     out.motion = compute_motion_fields(out.grid, map);
     progress.advance();
     progress.set_detail("landmarks");
-    out.landmarks =
-        organ_landmarks(reference, deformation, &map, landmark_tolerance_mm, &report.warnings, landmark_done);
+    out.landmarks = organ_landmarks(reference, deformation, &map, landmark_tolerance_mm, &report.warnings,
+                                    landmark_done, {&out.grid, &out.reference.labels});
     report.modelled.push_back(
         "displacement fields both ways: barycentric in the solved tets (exact), outside "
         "them a Shepard extension of the moved boundary fading out over " +
@@ -306,13 +307,13 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
     }
   }
   if (!deformation)
-    out.landmarks =
-        organ_landmarks(reference, nullptr, nullptr, landmark_tolerance_mm, &report.warnings, landmark_done);
+    out.landmarks = organ_landmarks(reference, nullptr, nullptr, landmark_tolerance_mm, &report.warnings,
+                                    landmark_done, {&out.grid, &out.reference.labels});
   report.modelled.push_back(
-      "landmarks: each organ's deepest point from distances to its surfaces tessellated "
-      "within " +
-      format_number(landmark_tolerance_mm) +
-      " mm (the voxel edge; which side of a surface, from the patches themselves)");
+      "landmarks: each organ's deepest point from the distance transform of its reference label (depth "
+      "within a voxel), or, for an organ the grid cuts or thinner than a voxel, from distances to its "
+      "surfaces tessellated within " +
+      format_number(landmark_tolerance_mm) + " mm; which side of a surface, from the patches themselves");
   report.status = "done";
   return out;
 }

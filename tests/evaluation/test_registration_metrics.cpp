@@ -3,6 +3,7 @@
 // (LPS components, x_moving = x + u) in warping and in carrying points.
 
 #include "evaluation/registration_metrics.hpp"
+#include "geometry/distance_transform.hpp"
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>

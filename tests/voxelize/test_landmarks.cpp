@@ -11,6 +11,7 @@
 #include "tests/support/patch_bumps.hpp"
 #include "voxelize/landmarks.hpp"
 #include "voxelize/motion_fields.hpp"
+#include "voxelize/voxelize_phantom.hpp"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
@@ -61,6 +62,25 @@ PatchSurface sphere(double radius_mm, double spike_mm = 0.0) {
         facing, {phantasm::testing::disc_in_triangle(base, facing, {1.0 / 3.0, 1.0 / 3.0}, 0.5, -spike_mm)});
   }
   return surface;
+}
+
+/// The small head test scene, built and deformed.
+struct SmallHead {
+  Scene scene;
+  Phantom phantom;
+  PhantomDeformation deformation;
+  Phantom moved;
+};
+
+SmallHead deformed_small_head() {
+  SmallHead head;
+  head.scene = load("tests/data/scenes/small-head.yaml");
+  Reporter quiet = Reporter::silent();
+  head.phantom = build_phantom(head.scene.anatomy, {}, quiet);
+  StageReport report;
+  head.deformation = deform_phantom(head.scene.deformation, head.scene.organs, head.phantom, report, quiet);
+  head.moved = deformed_phantom(head.phantom, head.deformation);
+  return head;
 }
 
 Organ organ(const std::string& name, const std::string& inside, PatchSurface surface) {
@@ -152,12 +172,9 @@ TEST(OrganLandmarks, AreTheSameOnOneAndTwoThreadsWhenSurfacesAreBuiltTogether) {
 }
 
 TEST(OrganLandmarks, DeepestPointsLieInTheirOrgansOwnMaterialInBothStates) {
-  const Scene scene = load("tests/data/scenes/small-head.yaml");
-  Reporter quiet = Reporter::silent();
-  const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
-  StageReport report;
-  const PhantomDeformation d = deform_phantom(scene.deformation, scene.organs, phantom, report, quiet);
-  const Phantom moved = deformed_phantom(phantom, d);
+  const SmallHead head = deformed_small_head();
+  const Phantom &phantom = head.phantom, &moved = head.moved;
+  const PhantomDeformation& d = head.deformation;
   const DeformationMap map(d.bodies, 4.0);
   const std::vector<Landmark> landmarks = organ_landmarks(phantom, &d, &map, 0.5);
   ASSERT_EQ(landmarks.size(), 7u * phantom.organs.size());
@@ -189,4 +206,132 @@ TEST(OrganLandmarks, DeepestPointsLieInTheirOrgansOwnMaterialInBothStates) {
     }
   }
   EXPECT_GT(moved_most, 0.0); // the grey matter's deepest point moves with the push
+}
+
+namespace {
+
+/// A 1 mm grid over x in [x_low, x_high], y and z in [-25, 25] (voxel centres on whole mm), its
+/// labels by radius: 2 (the core) within core_mm of the origin, 1 (the shell) out to shell_mm.
+struct LabelledSpheres {
+  ImageGrid grid;
+  std::vector<std::int32_t> labels;
+};
+
+LabelledSpheres labelled_spheres(int x_low, int x_high, double core_mm, double shell_mm) {
+  LabelledSpheres out;
+  out.grid.dims = Eigen::Vector3i(x_high - x_low + 1, 51, 51);
+  out.grid.world_from_voxel.topRightCorner<3, 1>() = Eigen::Vector3d(x_low, -25.0, -25.0);
+  out.labels.resize(static_cast<std::size_t>(out.grid.voxel_count()));
+  for (int k = 0; k < out.grid.dims.z(); ++k)
+    for (int j = 0; j < out.grid.dims.y(); ++j)
+      for (int i = 0; i < out.grid.dims.x(); ++i) {
+        const double r = out.grid.world_from_index(Eigen::Vector3d(i, j, k)).norm();
+        out.labels[voxel_index(out.grid.dims, i, j, k)] = r < core_mm ? 2 : r < shell_mm ? 1 : 0;
+      }
+  return out;
+}
+
+bool voxel_centre(const ImageGrid& grid, const Eigen::Vector3d& x) {
+  const Eigen::Vector3d ijk = grid.index_from_world(x);
+  return (ijk - ijk.array().round().matrix()).norm() < 1e-9;
+}
+
+} // namespace
+
+// With the reference labels, an organ inside the grid takes its deepest point from the distance
+// transform of its label (a voxel centre: the core's is the centre voxel); an organ the grid cuts
+// (the shell, beyond x = 12) takes it from the tessellations, the same bits as without labels.
+// On one and two threads alike.
+TEST(OrganLandmarks, AnOrganTheGridCutsTakesItsDepthFromTheSurfacesOneInsideFromItsLabel) {
+  Phantom phantom;
+  phantom.organs.push_back(organ("shell", "", sphere(20.0)));
+  phantom.organs.push_back(organ("core", "shell", sphere(8.0)));
+  const LabelledSpheres labelled = labelled_spheres(-25, 12, 6.5, 17.0);
+  const ReferenceLabels labels{&labelled.grid, &labelled.labels};
+  const std::vector<Landmark> surfaces = organ_landmarks(phantom, nullptr, nullptr, 0.5);
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const std::vector<Landmark> one = organ_landmarks(phantom, nullptr, nullptr, 0.5, nullptr, {}, labels);
+  omp_set_num_threads(2);
+  const std::vector<Landmark> two = organ_landmarks(phantom, nullptr, nullptr, 0.5, nullptr, {}, labels);
+  omp_set_num_threads(threads);
+  ASSERT_EQ(one.size(), 14u);
+  EXPECT_EQ(landmarks_csv(one, false), landmarks_csv(two, false));
+  ASSERT_EQ(one[0].name, "shell_deepest");
+  EXPECT_EQ(one[0].reference_mm, surfaces[0].reference_mm);
+  EXPECT_FALSE(voxel_centre(labelled.grid, one[0].reference_mm)) << one[0].reference_mm.transpose();
+  ASSERT_EQ(one[7].name, "core_deepest");
+  EXPECT_TRUE(voxel_centre(labelled.grid, one[7].reference_mm)) << one[7].reference_mm.transpose();
+  EXPECT_EQ(one[7].reference_mm, Eigen::Vector3d::Zero());
+
+  // The whole shell on the grid: now both from the labels. The shell's label voxels deepest in
+  // it lie 5.5 mm from the core's label and from the grid's outside, all in its material.
+  const LabelledSpheres whole = labelled_spheres(-25, 25, 6.5, 17.0);
+  const std::vector<Landmark> both =
+      organ_landmarks(phantom, nullptr, nullptr, 0.5, nullptr, {}, {&whole.grid, &whole.labels});
+  EXPECT_TRUE(voxel_centre(whole.grid, both[0].reference_mm)) << both[0].reference_mm.transpose();
+  EXPECT_GT(both[0].reference_mm.norm(), 8.0);
+  EXPECT_LT(both[0].reference_mm.norm(), 17.0);
+  EXPECT_EQ(both[7].reference_mm, Eigen::Vector3d::Zero());
+}
+
+// Labels whose voxels have no centre in their organ's own material (the core's drawn where only
+// the shell is, the shell's inside the core): the labels cannot tell, and the tessellations give
+// both deepest points.
+TEST(OrganLandmarks, ALabelOutsideItsOrgansMaterialFallsBackToTheSurfaces) {
+  Phantom phantom;
+  phantom.organs.push_back(organ("shell", "", sphere(20.0)));
+  phantom.organs.push_back(organ("core", "shell", sphere(8.0)));
+  LabelledSpheres labelled = labelled_spheres(-25, 25, 6.5, 17.0);
+  for (int k = 0; k < labelled.grid.dims.z(); ++k)
+    for (int j = 0; j < labelled.grid.dims.y(); ++j)
+      for (int i = 0; i < labelled.grid.dims.x(); ++i) {
+        const double r = labelled.grid.world_from_index(Eigen::Vector3d(i, j, k)).norm();
+        labelled.labels[voxel_index(labelled.grid.dims, i, j, k)] = r < 6.5 ? 1 : r > 9.0 && r < 17.0 ? 2 : 0;
+      }
+  const std::vector<Landmark> surfaces = organ_landmarks(phantom, nullptr, nullptr, 0.5);
+  const std::vector<Landmark> swapped =
+      organ_landmarks(phantom, nullptr, nullptr, 0.5, nullptr, {}, {&labelled.grid, &labelled.labels});
+  ASSERT_EQ(swapped.size(), surfaces.size());
+  EXPECT_EQ(landmarks_csv(swapped, false), landmarks_csv(surfaces, false));
+}
+
+// On the small head voxelized at 2 mm, the deepest points from the labels are material points
+// of their organs in both states, moved exactly by the map, and as deep as the tessellations'
+// (within 0.5 mm) to within a voxel's diagonal; each is a voxel centre (every organ lies within
+// the grid).
+TEST(OrganLandmarks, DeepestPointsFromTheLabelsAreAsDeepAsFromTheSurfacesToWithinAVoxel) {
+  const SmallHead head = deformed_small_head();
+  const Phantom &phantom = head.phantom, &moved = head.moved;
+  const PhantomDeformation& d = head.deformation;
+  const ImageGrid grid = head.scene.grid.grid();
+  StageReport report;
+  Reporter quiet = Reporter::silent();
+  const VoxelizedPhantom voxelized =
+      voxelize_phantom(head.scene.voxelization, head.scene.organs, grid, phantom, &moved, &d, report, quiet);
+  const DeformationMap map(d.bodies, 2.0 * grid.spacing_mm.maxCoeff());
+  const std::vector<Landmark> surfaces = organ_landmarks(phantom, &d, &map, 0.5);
+  ASSERT_EQ(voxelized.landmarks.size(), surfaces.size());
+  const double diagonal = grid.spacing_mm.norm();
+  for (std::size_t l = 0; l < surfaces.size(); ++l) {
+    const Landmark& from_labels = voxelized.landmarks[l];
+    if (from_labels.name != from_labels.organ + "_deepest") continue;
+    SCOPED_TRACE(from_labels.name);
+    ASSERT_EQ(from_labels.name, surfaces[l].name);
+    EXPECT_TRUE(voxel_centre(grid, from_labels.reference_mm)) << from_labels.reference_mm.transpose();
+    const double depth = clearance(phantom, from_labels.organ, from_labels.reference_mm);
+    EXPECT_GT(depth, 0.0);
+    EXPECT_GT(clearance(moved, from_labels.organ, from_labels.deformed_mm), 0.0);
+    EXPECT_GT(depth, clearance(phantom, from_labels.organ, surfaces[l].reference_mm) - diagonal);
+    const Organ& organ = *phantom.find(from_labels.organ);
+    const auto o = static_cast<std::size_t>(&organ - phantom.organs.data());
+    if (d.organs[o].moved_by == "fixed") {
+      EXPECT_EQ(from_labels.deformed_mm, from_labels.reference_mm);
+    }
+    if (d.organs[o].moved_by == "solver") {
+      bool exact = false;
+      EXPECT_EQ(from_labels.deformed_mm, map.forward(from_labels.reference_mm, &exact));
+      EXPECT_TRUE(exact);
+    }
+  }
 }
