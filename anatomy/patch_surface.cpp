@@ -197,6 +197,27 @@ void PatchSurface::set_bumps(Eigen::Index t, std::vector<PatchBump> bumps) {
   m_lattices[static_cast<std::size_t>(t)] = BumpLattice(bumps);
   m_bumps[static_cast<std::size_t>(t)] = std::move(bumps);
   m_perturbations[static_cast<std::size_t>(t)] = std::move(perturbations);
+  m_height_ranges.reset();
+}
+
+void PatchSurface::hold_height_ranges() {
+  m_height_ranges = patch_height_ranges(*this);
+}
+
+void PatchSurface::set_height_ranges(std::vector<HeightRange> ranges) {
+  if (ranges.size() != static_cast<std::size_t>(patch_count())) {
+    throw InputError(m_what + ": expected " + std::to_string(patch_count()) + " patch height bounds, found " +
+                     std::to_string(ranges.size()));
+  }
+  for (std::size_t t = 0; t < ranges.size(); ++t) {
+    if (!std::isfinite(ranges[t].lowest) || !std::isfinite(ranges[t].highest) ||
+        !(ranges[t].lowest <= ranges[t].highest)) {
+      throw InputError(m_what + ": triangle " + std::to_string(t) +
+                       ": expected finite height bounds, lowest <= highest, found " +
+                       std::to_string(ranges[t].lowest) + " and " + std::to_string(ranges[t].highest));
+    }
+  }
+  m_height_ranges = std::move(ranges);
 }
 
 void PatchSurface::set_positions(const Eigen::MatrixX3d& positions) {

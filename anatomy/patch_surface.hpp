@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -104,9 +105,23 @@ public:
   /// @throws InputError naming the defective element of an invalid base mesh
   PatchSurface(TriangleMesh base, const std::string& what);
 
-  /// Replaces the bumps of one patch.
+  /// Replaces the bumps of one patch (and forgets the height bounds held, height_ranges()).
   /// @throws InputError when a bump's ellipse leaves the triangle or its shape is not positive definite
   void set_bumps(Eigen::Index triangle, std::vector<PatchBump> bumps);
+
+  /// Every patch's height bounds (patch_height_ranges) when held: computed by
+  /// hold_height_ranges() or given by set_height_ranges() (an anatomy read back), null otherwise.
+  /// Heights over the base triangles: they hold while the base vertices move.
+  const std::vector<HeightRange>* height_ranges() const {
+    return m_height_ranges ? &*m_height_ranges : nullptr;
+  }
+  /// Computes and holds every patch's height bounds (patch_height_ranges; about 40 us per patch
+  /// with bumps: the level sets of a fitted organ need them, and a stored anatomy keeps them).
+  void hold_height_ranges();
+  /// Holds height bounds computed before for these bumps (patch_height_ranges of this surface).
+  /// @throws InputError when there is not one per patch, or one is not finite or has its lowest
+  ///         above its highest
+  void set_height_ranges(std::vector<HeightRange> ranges);
   const std::vector<PatchBump>& bumps(Eigen::Index triangle) const {
     return m_bumps[static_cast<std::size_t>(triangle)];
   }
@@ -182,6 +197,7 @@ private:
   std::vector<std::vector<PatchBump>> m_bumps;
   std::vector<std::vector<Perturbation>> m_perturbations;
   std::vector<BumpLattice> m_lattices;
+  std::optional<std::vector<HeightRange>> m_height_ranges;
   Eigen::MatrixX3i m_neighbours; ///< triangle across edge k (k = 0: x0x1, 1: x1x2, 2: x2x0)
 };
 

@@ -271,6 +271,9 @@ void build_organ_geometry(Organ& organ, const AnatomySettings& anatomy, std::siz
     organ.fit = measure_fit(*organ.surface, *organ.target, 5e-3 * organ.target->bounding_radius(), 4,
                             surface_sample_level_for_spacing(*organ.surface, k_fit_sample_spacing_mm));
   }
+  // The patches' height bounds, which every level set of the organ needs, once with the anatomy
+  // (and stored with it: encode_organ_geometry).
+  if (organ.surface) organ.surface->hold_height_ranges();
 }
 
 /// The log line of a built organ.
@@ -295,7 +298,7 @@ std::string organ_line(const Organ& organ) {
 
 // The geometry encoding (encode_organ_geometry): native-endian raw values, each array preceded by
 // its dimensions. Bumped whenever the layout or what an organ holds changes.
-constexpr std::uint32_t k_geometry_format = 2;
+constexpr std::uint32_t k_geometry_format = 3;
 
 } // namespace
 
@@ -353,6 +356,13 @@ std::string encode_organ_geometry(const Phantom& phantom) {
           out.value(bump.amplitude_mm);
         }
       }
+      // Each patch's height bounds, lowest and highest (computed here when not held).
+      const std::vector<HeightRange> computed =
+          surface.height_ranges() ? std::vector<HeightRange>() : patch_height_ranges(surface);
+      for (const HeightRange& range : surface.height_ranges() ? *surface.height_ranges() : computed) {
+        out.value(range.lowest);
+        out.value(range.highest);
+      }
     }
     out.value(static_cast<std::uint8_t>(organ.sheet.has_value()));
     if (organ.sheet) {
@@ -408,6 +418,16 @@ Phantom phantom_from_geometry(const AnatomySettings& anatomy, const std::map<std
           bump.amplitude_mm = in.value<double>();
         }
         if (!bumps.empty()) surface.set_bumps(t, std::move(bumps));
+      }
+      std::vector<HeightRange> ranges(static_cast<std::size_t>(surface.patch_count()));
+      for (HeightRange& range : ranges) {
+        range.lowest = in.value<double>();
+        range.highest = in.value<double>();
+      }
+      try {
+        surface.set_height_ranges(std::move(ranges));
+      } catch (const InputError& error) {
+        throw DamagedGeometry(std::string("organ geometry: ") + error.what());
       }
       organ.surface = std::move(surface);
     }

@@ -127,7 +127,9 @@ StateLevelSets level_sets_of(const VoxelizationSettings& settings, const OrganTa
       if (!built[i]) {
         const PatchSurface& surface = *phantom.organs[chosen[i]].surface;
         std::optional<std::vector<HeightRange>>& ranges = height_ranges[chosen[i]]; // this iteration's alone
-        if (!ranges) ranges = patch_height_ranges(surface);
+        // Held by a built or stored anatomy; computed here otherwise.
+        if (!ranges)
+          ranges = surface.height_ranges() ? *surface.height_ranges() : patch_height_ranges(surface);
         built[i] = std::make_shared<const LevelSet>(surface, voxel_size, 3.0, &*ranges);
       }
       progress.advance();

@@ -202,6 +202,48 @@ TEST(PatchSurface, BumpsThatLeaveTheirTriangleAreRejected) {
   EXPECT_THROW(surface.set_bumps(0, {endless}), InputError);
 }
 
+// The height bounds a surface holds are patch_height_ranges' bit for bit; changing a patch's
+// bumps forgets them (no stale bounds reach a level set); bounds given back are checked.
+TEST(PatchSurface, HeldHeightBoundsAreComputedOnesAndForgottenWhenBumpsChange) {
+  PatchSurface surface(sphere_mesh(1, 10.0), "sphere");
+  const TriangleMesh& base = surface.base_mesh();
+  const Eigen::Vector3d e1 = base.vertex(base.faces(0, 1)) - base.vertex(base.faces(0, 0));
+  Eigen::Matrix2d metric = Eigen::Matrix2d::Identity() * e1.squaredNorm();
+  metric(0, 1) = metric(1, 0) = 0.5 * e1.squaredNorm();
+  const auto bump = [&](double amplitude_mm) {
+    PatchBump b = PatchBump::disc({0.3, 0.35}, 0.2 * e1.norm(), metric);
+    b.amplitude_mm = amplitude_mm;
+    return b;
+  };
+  for (Eigen::Index t = 0; t < surface.patch_count(); t += 3)
+    surface.set_bumps(t, {bump(0.1 * static_cast<double>(t % 7) - 0.3)});
+  EXPECT_EQ(surface.height_ranges(), nullptr);
+  surface.hold_height_ranges();
+  ASSERT_NE(surface.height_ranges(), nullptr);
+  const std::vector<HeightRange> computed = patch_height_ranges(surface);
+  ASSERT_EQ(surface.height_ranges()->size(), computed.size());
+  for (std::size_t t = 0; t < computed.size(); ++t) {
+    EXPECT_EQ((*surface.height_ranges())[t].lowest, computed[t].lowest);
+    EXPECT_EQ((*surface.height_ranges())[t].highest, computed[t].highest);
+  }
+  PatchSurface moved = surface;
+  moved.set_positions(1.5 * base.vertices);
+  EXPECT_NE(moved.height_ranges(), nullptr); // heights over the base: they hold as it moves
+  surface.set_bumps(1, {bump(2.0)});
+  EXPECT_EQ(surface.height_ranges(), nullptr);
+
+  EXPECT_NO_THROW(surface.set_height_ranges(computed));
+  std::vector<HeightRange> bad = computed;
+  bad.pop_back();
+  EXPECT_THROW(surface.set_height_ranges(bad), InputError);
+  bad = computed;
+  bad[2].highest = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(surface.set_height_ranges(bad), InputError);
+  bad = computed;
+  bad[4] = {1.0, -1.0};
+  EXPECT_THROW(surface.set_height_ranges(bad), InputError);
+}
+
 namespace {
 std::string error_of(const TriangleMesh& mesh) {
   try {

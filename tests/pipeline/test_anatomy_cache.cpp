@@ -56,6 +56,16 @@ TEST(AnatomyCache, DecodedGeometryIsTheBuiltPhantomBitForBit) {
         EXPECT_EQ(a.surface->volume(), b.surface->volume()); // the bumps' perturbations too
         const Eigen::Vector3d probe = a.surface->base_mesh().vertex(0) * 0.9;
         EXPECT_EQ(a.surface->value(0, probe), b.surface->value(0, probe));
+        // The patches' height bounds: held by the built anatomy, stored and read back.
+        ASSERT_NE(a.surface->height_ranges(), nullptr);
+        ASSERT_NE(b.surface->height_ranges(), nullptr);
+        const std::vector<HeightRange> computed = patch_height_ranges(*a.surface);
+        ASSERT_EQ(b.surface->height_ranges()->size(), computed.size());
+        for (std::size_t t = 0; t < computed.size(); ++t) {
+          EXPECT_EQ((*a.surface->height_ranges())[t].lowest, computed[t].lowest);
+          EXPECT_EQ((*b.surface->height_ranges())[t].lowest, computed[t].lowest);
+          EXPECT_EQ((*b.surface->height_ranges())[t].highest, computed[t].highest);
+        }
       }
       ASSERT_EQ(a.solid.has_value(), b.solid.has_value());
       if (a.solid) {
