@@ -119,6 +119,7 @@ void SignedDistanceMesh::update(const Eigen::MatrixX3d& p) {
     }
   }
   m_nodes.clear();
+  m_tree_triangles.clear();
 }
 
 void SignedDistanceMesh::build_search_tree() {
@@ -172,6 +173,12 @@ void SignedDistanceMesh::build_search_tree() {
     pending.push_back({first + 1, middle, p.end});
     pending.push_back({first, p.begin, middle});
   }
+  // Each leaf's triangles side by side: a search reads them in this order.
+  m_tree_triangles.resize(m_order.size());
+  for (std::size_t i = 0; i < m_order.size(); ++i) {
+    const auto t = static_cast<std::size_t>(m_order[i]);
+    m_tree_triangles[i] = {m_corners[t], m_face_min[t], m_face_max[t], m_order[i]};
+  }
 }
 
 MeshClosestPoint SignedDistanceMesh::closest(const Eigen::Vector3d& x) const {
@@ -211,9 +218,10 @@ MeshClosestPoint SignedDistanceMesh::search_tree(const Eigen::Vector3d& x, MeshC
     if (box_distance_squared(x, node.lo, node.hi) > best.distance_squared) continue;
     if (node.first_child < 0) {
       for (int i = node.begin; i < node.end; ++i) {
-        const auto t = static_cast<std::size_t>(m_order[static_cast<std::size_t>(i)]);
-        if (box_distance_squared(x, m_face_min[t], m_face_max[t]) > best.distance_squared) continue;
-        const auto& v = m_corners[t];
+        const TreeTriangle& tt = m_tree_triangles[static_cast<std::size_t>(i)];
+        const auto t = static_cast<std::size_t>(tt.triangle);
+        if (box_distance_squared(x, tt.lo, tt.hi) > best.distance_squared) continue;
+        const auto& v = tt.corners;
         const TriangleClosestPoint c = closest_point_on_triangle(x, v[0], v[1], v[2]);
         const double d = (c.point - x).squaredNorm();
         // Equal distances (a shared edge or vertex) keep the lower triangle index: the answer

@@ -43,7 +43,8 @@ public:
   void update(const Eigen::MatrixX3d& positions);
 
   /// Builds a bounding-box hierarchy (median splits, leaves of at most 4 triangles) over the
-  /// current positions, used by closest() until the next update().
+  /// current positions, used by closest() until the next update(). It holds a copy of every
+  /// triangle's corners and box in the tree's order (128 bytes per triangle).
   void build_search_tree();
 
   /// The point of the mesh closest to x (x in mm). Its triangle is -1 for a mesh without triangles.
@@ -103,6 +104,14 @@ private:
   };
   std::vector<SearchNode> m_nodes;
   std::vector<int> m_order;
+  /// The triangles in m_order's order, each with its corners and box: a leaf's triangles lie
+  /// side by side in memory (a search read them through m_order from all over the arrays).
+  struct TreeTriangle {
+    std::array<Eigen::Vector3d, 3> corners;
+    Eigen::Vector3d lo, hi;
+    int triangle;
+  };
+  std::vector<TreeTriangle> m_tree_triangles;
 };
 
 } // namespace phantasm

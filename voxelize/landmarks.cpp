@@ -413,9 +413,20 @@ std::optional<Eigen::Vector3d> deepest_labelled_point(const Phantom& phantom, st
   std::vector<std::size_t> order;
   for (std::size_t v = 0; v < outside.size(); ++v)
     if (!outside[v]) order.push_back(v);
-  // Deepest first; equal depths in voxel order (the same on any thread count).
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t a, std::size_t b) { return depth[a] > depth[b]; });
+  // Deepest first; equal depths in voxel order (the same on any thread count). Sorted as far as
+  // the search reads, in growing pieces: it mostly stops within the first few voxels, and the
+  // label of a large organ holds a million.
+  const auto deeper = [&](std::size_t a, std::size_t b) {
+    return depth[a] > depth[b] || (depth[a] == depth[b] && a < b);
+  };
+  std::size_t sorted = 0;
+  const auto sort_through = [&](std::size_t n) {
+    if (n < sorted) return;
+    const std::size_t end = std::min(order.size(), std::max<std::size_t>(2 * sorted, n + 256));
+    std::partial_sort(order.begin() + static_cast<std::ptrdiff_t>(sorted),
+                      order.begin() + static_cast<std::ptrdiff_t>(end), order.end(), deeper);
+    sorted = end;
+  };
   std::vector<OrganSide> sides{OrganSide(*phantom.organs[o].surface)};
   for (std::size_t n = 0; n < phantom.organs.size(); ++n)
     if (phantom.organs[n].inside == phantom.organs[o].name && phantom.organs[n].surface)
@@ -438,9 +449,10 @@ std::optional<Eigen::Vector3d> deepest_labelled_point(const Phantom& phantom, st
   const double step = (rest.colwise().maxCoeff() - rest.colwise().minCoeff()).maxCoeff() / 40.0;
   std::optional<Eigen::Vector3d> deepest;
   std::vector<Eigen::Vector3d> tried;
-  for (const std::size_t v : order) {
+  for (std::size_t n = 0; n < order.size(); ++n) {
     if (tried.size() >= 64) break;
-    const Eigen::Vector3d x = centre(v);
+    sort_through(n);
+    const Eigen::Vector3d x = centre(order[n]);
     if (deepest) {
       bool near = false;
       for (const Eigen::Vector3d& t : tried)
