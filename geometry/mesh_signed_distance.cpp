@@ -177,7 +177,7 @@ void SignedDistanceMesh::build_search_tree() {
   m_tree_triangles.resize(m_order.size());
   for (std::size_t i = 0; i < m_order.size(); ++i) {
     const auto t = static_cast<std::size_t>(m_order[i]);
-    m_tree_triangles[i] = {m_corners[t], m_face_min[t], m_face_max[t], m_order[i]};
+    m_tree_triangles[i] = {m_corners[t], m_face_min[t], m_face_max[t], m_face_normals[t], m_order[i]};
   }
 }
 
@@ -221,6 +221,14 @@ MeshClosestPoint SignedDistanceMesh::search_tree(const Eigen::Vector3d& x, MeshC
         const TreeTriangle& tt = m_tree_triangles[static_cast<std::size_t>(i)];
         const auto t = static_cast<std::size_t>(tt.triangle);
         if (box_distance_squared(x, tt.lo, tt.hi) > best.distance_squared) continue;
+        // The plane's distance bounds the triangle's from below. A triangle is passed over only
+        // when its plane lies farther than the best by a margin far above the rounding of both
+        // (1e-9 of the coordinates' scale): ties and near ties, at any distance (a point on the
+        // surface has many), still go through the closest point's own arithmetic.
+        const Eigen::Vector3d from_corner = x - tt.corners[0];
+        const double margin = 1e-9 * (1.0 + from_corner.cwiseAbs().maxCoeff() + (tt.hi - tt.lo).maxCoeff());
+        const double plane = std::abs(tt.normal.dot(from_corner)) - margin;
+        if (plane > 0.0 && plane * plane > best.distance_squared) continue;
         const auto& v = tt.corners;
         const TriangleClosestPoint c = closest_point_on_triangle(x, v[0], v[1], v[2]);
         const double d = (c.point - x).squaredNorm();

@@ -109,6 +109,7 @@ private:
   struct TreeTriangle {
     std::array<Eigen::Vector3d, 3> corners;
     Eigen::Vector3d lo, hi;
+    Eigen::Vector3d normal; ///< unit (zero for a triangle without area)
     int triangle;
   };
   std::vector<TreeTriangle> m_tree_triangles;

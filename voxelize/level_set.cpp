@@ -73,10 +73,11 @@ struct PatchHeights {
   /// narrow bumps (on the head most points took all 8 steps; now most take 3 to 5); Newton from
   /// the first step may head for a farther local minimum across a bump (the tests' many-bumps
   /// surface: 0.18 mm off), the Gauss-Newton steps first find the near one.
-  double distance(const Eigen::Vector3d& x, Eigen::Vector2d uv) const {
-    Eigen::Vector2d d_uv;
-    Eigen::Matrix2d dd_uv;
-    double h = height(uv, &d_uv, &dd_uv);
+  /// @param h, d_uv the height and its derivatives at uv (height()): the caller has them
+  double distance(const Eigen::Vector3d& x, Eigen::Vector2d uv, double h, Eigen::Vector2d d_uv) const {
+    // The first two steps are Gauss-Newton, which needs no second derivatives: those at uv
+    // are never read (each accepted step brings its point's own).
+    Eigen::Matrix2d dd_uv = Eigen::Matrix2d::Zero();
     Eigen::Vector3d r = x - point(uv, h);
     double best = r.squaredNorm();
     for (int iteration = 0; iteration < 8; ++iteration) {
@@ -239,8 +240,10 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
         // closest point near the band's middle.
         const Eigen::Vector2d uv = closest.on_triangle.barycentric.tail<2>();
         Eigen::Vector2d d_uv;
-        const double along_normal = d - p.height(uv, &d_uv);
-        const double distance = std::abs(along_normal) < band ? p.distance(x, uv) : std::abs(along_normal);
+        const double h = p.height(uv, &d_uv);
+        const double along_normal = d - h;
+        const double distance =
+            std::abs(along_normal) < band ? p.distance(x, uv, h, d_uv) : std::abs(along_normal);
         d = along_normal < 0.0 ? -distance : distance;
       }
       values[i] = static_cast<float>(std::clamp(d, -band, band));
