@@ -210,6 +210,10 @@ MeshClosestPoint SignedDistanceMesh::search_tree(const Eigen::Vector3d& x, MeshC
   // Branch and bound, nearer child first: a box farther than the best so far cannot hold a
   // closer point (one exactly as far may hold a tie of lower index, which wins as in scan()).
   // The cost grows with log #F, not with the distance to the surface.
+  // 1e-9 of the scale of the coordinates (the query's and the mesh's): the rounding of a plane's
+  // or a closest point's distance is about 1e-16 of it.
+  const double margin = 1e-9 * (1.0 + x.cwiseAbs().maxCoeff() +
+                                std::max(m_min.cwiseAbs().maxCoeff(), m_max.cwiseAbs().maxCoeff()));
   std::array<int, 128> stack{};
   int size = 0;
   stack[static_cast<std::size_t>(size++)] = 0;
@@ -223,11 +227,9 @@ MeshClosestPoint SignedDistanceMesh::search_tree(const Eigen::Vector3d& x, MeshC
         if (box_distance_squared(x, tt.lo, tt.hi) > best.distance_squared) continue;
         // The plane's distance bounds the triangle's from below. A triangle is passed over only
         // when its plane lies farther than the best by a margin far above the rounding of both
-        // (1e-9 of the coordinates' scale): ties and near ties, at any distance (a point on the
-        // surface has many), still go through the closest point's own arithmetic.
-        const Eigen::Vector3d from_corner = x - tt.corners[0];
-        const double margin = 1e-9 * (1.0 + from_corner.cwiseAbs().maxCoeff() + (tt.hi - tt.lo).maxCoeff());
-        const double plane = std::abs(tt.normal.dot(from_corner)) - margin;
+        // (`margin`): ties and near ties, at any distance (a point on the surface has many),
+        // still go through the closest point's own arithmetic.
+        const double plane = std::abs(tt.normal.dot(x - tt.corners[0])) - margin;
         if (plane > 0.0 && plane * plane > best.distance_squared) continue;
         const auto& v = tt.corners;
         const TriangleClosestPoint c = closest_point_on_triangle(x, v[0], v[1], v[2]);
