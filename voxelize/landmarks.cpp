@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <limits>
 #include <memory>
 #include <numeric>
 #include <optional>
@@ -397,6 +398,13 @@ std::optional<Eigen::Vector3d> deepest_labelled_point(const Phantom& phantom, st
   for (std::size_t n = 0; n < phantom.organs.size(); ++n)
     if ((n == o || nested_in(phantom, n, o)) && extents.on_border[n + 1]) return std::nullopt;
   const ImageGrid& grid = *labels.grid;
+  std::size_t bumps = 0;
+  for (Eigen::Index t = 0; t < phantom.organs[o].surface->patch_count(); ++t)
+    bumps += phantom.organs[o].surface->bumps(t).size();
+  const Eigen::Vector3d box_voxels = (extents.box[label].sizes().array() + 3).cast<double>();
+  const bool cheaper = labels.voxels_per_bump == std::numeric_limits<double>::infinity() ||
+                       box_voxels.prod() < labels.voxels_per_bump * static_cast<double>(bumps);
+  if (!cheaper) return std::nullopt;
   // The label's box and one voxel around it (inside the grid: no voxel of the label is on its border).
   const Eigen::Vector3i first = extents.box[label].min().array() - 1,
                         last = extents.box[label].max().array() + 1;

@@ -18,6 +18,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <limits>
 #include <string>
 
 using namespace phantasm;
@@ -231,6 +232,9 @@ LabelledSpheres labelled_spheres(int x_low, int x_high, double core_mm, double s
   return out;
 }
 
+/// Every organ the labels can tell takes its depth from them (these spheres carry no bumps).
+constexpr double k_always = std::numeric_limits<double>::infinity();
+
 bool voxel_centre(const ImageGrid& grid, const Eigen::Vector3d& x) {
   const Eigen::Vector3d ijk = grid.index_from_world(x);
   return (ijk - ijk.array().round().matrix()).norm() < 1e-9;
@@ -247,7 +251,7 @@ TEST(OrganLandmarks, AnOrganTheGridCutsTakesItsDepthFromTheSurfacesOneInsideFrom
   phantom.organs.push_back(organ("shell", "", sphere(20.0)));
   phantom.organs.push_back(organ("core", "shell", sphere(8.0)));
   const LabelledSpheres labelled = labelled_spheres(-25, 12, 6.5, 17.0);
-  const ReferenceLabels labels{&labelled.grid, &labelled.labels};
+  const ReferenceLabels labels{&labelled.grid, &labelled.labels, k_always};
   const std::vector<Landmark> surfaces = organ_landmarks(phantom, nullptr, nullptr, 0.5);
   const int threads = omp_get_max_threads();
   omp_set_num_threads(1);
@@ -268,11 +272,17 @@ TEST(OrganLandmarks, AnOrganTheGridCutsTakesItsDepthFromTheSurfacesOneInsideFrom
   // it lie 5.5 mm from the core's label and from the grid's outside, all in its material.
   const LabelledSpheres whole = labelled_spheres(-25, 25, 6.5, 17.0);
   const std::vector<Landmark> both =
-      organ_landmarks(phantom, nullptr, nullptr, 0.5, nullptr, {}, {&whole.grid, &whole.labels});
+      organ_landmarks(phantom, nullptr, nullptr, 0.5, nullptr, {}, {&whole.grid, &whole.labels, k_always});
   EXPECT_TRUE(voxel_centre(whole.grid, both[0].reference_mm)) << both[0].reference_mm.transpose();
   EXPECT_GT(both[0].reference_mm.norm(), 8.0);
   EXPECT_LT(both[0].reference_mm.norm(), 17.0);
   EXPECT_EQ(both[7].reference_mm, Eigen::Vector3d::Zero());
+  // By default a surface without bumps in a box of 50 000 voxels searches its tessellation,
+  // the cheaper way: the same landmarks as without labels.
+  EXPECT_EQ(
+      landmarks_csv(
+          organ_landmarks(phantom, nullptr, nullptr, 0.5, nullptr, {}, {&whole.grid, &whole.labels}), false),
+      landmarks_csv(surfaces, false));
 }
 
 // Labels whose voxels have no centre in their organ's own material (the core's drawn where only
@@ -290,8 +300,8 @@ TEST(OrganLandmarks, ALabelOutsideItsOrgansMaterialFallsBackToTheSurfaces) {
         labelled.labels[voxel_index(labelled.grid.dims, i, j, k)] = r < 6.5 ? 1 : r > 9.0 && r < 17.0 ? 2 : 0;
       }
   const std::vector<Landmark> surfaces = organ_landmarks(phantom, nullptr, nullptr, 0.5);
-  const std::vector<Landmark> swapped =
-      organ_landmarks(phantom, nullptr, nullptr, 0.5, nullptr, {}, {&labelled.grid, &labelled.labels});
+  const std::vector<Landmark> swapped = organ_landmarks(phantom, nullptr, nullptr, 0.5, nullptr, {},
+                                                        {&labelled.grid, &labelled.labels, k_always});
   ASSERT_EQ(swapped.size(), surfaces.size());
   EXPECT_EQ(landmarks_csv(swapped, false), landmarks_csv(surfaces, false));
 }
