@@ -1,5 +1,5 @@
 // Fit error against base mesh size, as CSV (for scripts/accuracy_plots.py): the 60 x 45 x 30 mm
-// ellipsoid of the README's table on both base meshes (icosphere cast from the centre, the
+// ellipsoid of docs/performance.md's table on both base meshes (icosphere cast from the centre, the
 // default for star shapes, and the extracted surface), and shapes rays from a centre cannot
 // sample on the extracted surface: a torus (R 30, r 10 mm, genus 1), a folded spheroid (spiral
 // folds rays from its centre cross up to three times) and a horseshoe (a bent capsule).

@@ -3,7 +3,7 @@
 //   energy    e_k = (E(p_k) - E*) / (E(p_0) - E*)
 //   position  r_k = |p_k - p*| / |p_0 - p*|
 // p_0 = s (the inertial target with the prescribed ends), p* from Newton run to a gradient
-// below 1e-9 N. Prints a Markdown table (the README's); with a second argument, also writes
+// below 1e-9 N. Prints a Markdown table (docs/performance.md's); with a second argument, also writes
 // every iteration (solver, iteration, seconds, energy error, position error) as CSV there for
 // scripts/accuracy_plots.py. With "quick" as a third argument each iterative solver stops after a
 // tenth of its iterations (the plots' shape near the start, for the test of the plotting command).

@@ -1,8 +1,9 @@
 // The deformation's speed/accuracy knob, anatomy.tet_size_mm: the scene's deformation solved on
 // body meshes of several tet sizes, each compared with the finest. Prints a Markdown table (the
-// README's and docs/deformation.md's): tets, CSF tets, time of the stage (meshing included), and
-// the displacement error of every moved organ's surface vertices against the finest size (RMS
-// and largest, mm), with the finest run's largest displacement for scale.
+// ones of docs/performance.md and docs/deformation.md): tets, CSF tets, time of the stage
+// (meshing included), and the displacement error of every moved organ's surface vertices
+// against the finest size (RMS and largest, mm), with the finest run's largest displacement for
+// scale.
 // Usage: tet_size_accuracy [SCENE] [SIZE_MM ...]   (default: the head at 30 16 10 7 mm and the finest, 5)
 // PHANTASM_ANATOMY_CACHE=DIR: the anatomy cache folder (docs/batch.md), so that a heavy anatomy is built
 // once.

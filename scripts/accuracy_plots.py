@@ -7,7 +7,7 @@ the plots, and prints what it wrote.
 
 Usage: scripts/accuracy_plots.py -o OUT [--build build/release] [--threads 2] [--skip-voxel] [--quick]
 (--quick: a tenth of the solvers' iterations and the fit without its largest base mesh, for a
-test of the command; the README's plots are made without it)
+test of the command; the plots of docs/performance.md are made without it)
 """
 
 import argparse

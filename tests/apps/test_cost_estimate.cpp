@@ -83,7 +83,7 @@ void check_estimate(const std::string& param) {
   // Processor time is printed and recorded, not asserted: it grows with the machine's load
   // (shared caches, OpenMP threads waiting, other tests beside this one); the abdomen's measured
   // 8.3 s on a quiet machine and 43 s at a load of 4. Its agreement with the estimate is measured
-  // on a quiet machine (README, cost estimate row), as every timing is.
+  // on a quiet machine (docs/performance.md, Cost estimate), as every timing is.
   EXPECT_GT(time_ratio, 0.0);
   // provenance.json holds the same estimate.
   const auto provenance =
