@@ -1,6 +1,7 @@
 #include "mri/mri_plan.hpp"
 
 #include "core/format.hpp"
+#include "mri/sequence_type.hpp"
 #include "mri/tissue_parameters.hpp"
 
 #include <cmath>
@@ -27,19 +28,14 @@ StageReport plan_mri(const MriSettings& settings, const OrganTable& organs) {
   }
   for (const auto& s : settings.sequences) {
     std::ostringstream line;
-    line << s.name << ": " << to_string(s.kind) << ", TR " << s.TR_ms << " ms, TE " << s.TE_ms << " ms";
-    if (s.kind != SequenceKind::spin_echo) line << ", flip " << s.flip_deg << " deg";
-    if (s.kind == SequenceKind::inversion_recovery || s.kind == SequenceKind::mprage)
-      line << ", TI " << s.TI_ms << " ms";
-    line << "; reference and deformed";
+    line << s.name << ": " << to_string(s.kind) << ", TR " << s.TR_ms << " ms, TE " << s.TE_ms << " ms"
+         << sequence_type(s.kind).plan(s) << "; reference and deformed";
     report.modelled.push_back(line.str());
   }
   for (const auto& s : settings.sequences) {
     // A gradient-echo excitation of 0 or 180 degrees leaves no transverse magnetisation: the image
     // is zero, and noise relative to the reference tissue's signal is zero as well.
-    const bool gradient_echo = s.kind == SequenceKind::spoiled_gre || s.kind == SequenceKind::bssfp ||
-                               s.kind == SequenceKind::mprage;
-    if (gradient_echo && std::abs(std::sin(s.flip_deg * M_PI / 180.0)) < 1e-6) {
+    if (sequence_type(s.kind).gradient_echo && std::abs(std::sin(s.flip_deg * M_PI / 180.0)) < 1e-6) {
       report.warnings.push_back("sequence " + s.name + ": a flip angle of " + format_number(s.flip_deg) +
                                 " deg makes no signal (sin(flip) = 0): the image is zero");
     }

@@ -1,18 +1,11 @@
 // The closed-form steady-state signals of the scene's sequences (spin echo, spoiled gradient
-// echo, inversion recovery, bSSFP, MPRAGE) for one tissue's relaxation parameters, signed.
+// echo, inversion recovery, bSSFP, MPRAGE) for one tissue's relaxation parameters, signed; each
+// sequence's own in its member of the registry (mri/sequence_type.hpp, mri/sequences/).
 #pragma once
 
-#include "mri/mri_settings.hpp"
+#include "mri/sequence_type.hpp"
 
 namespace phantasm {
-
-/// Relaxation parameters of one tissue (times in ms, PD relative).
-struct Relaxation {
-  double PD = 1.0;
-  double T1_ms = 1000.0;
-  double T2_ms = 100.0;
-  double T2star_ms = 50.0;
-};
 
 /// The closed-form steady-state signal of a sequence for one tissue (docs/volumes-and-images.md, MR images),
 /// signed: inversion-recovery and MPRAGE signals keep the sign of the longitudinal

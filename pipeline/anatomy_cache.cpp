@@ -7,6 +7,7 @@
 #include "io/atomic_file.hpp"
 #include "io/output_path.hpp"
 #include "pipeline/cache_entry.hpp"
+#include "scene/settings_declarations.hpp"
 
 #include <sstream>
 
@@ -17,7 +18,7 @@ namespace {
 namespace fs = std::filesystem;
 
 // The file's first line; the key follows on the second, the geometry after it.
-constexpr const char* k_magic = "phantasm anatomy cache 1\n";
+constexpr const char* k_magic = "phantasm anatomy cache 2\n";
 
 template <typename Derived>
 std::string bytes_hash(const Eigen::PlainObjectBase<Derived>& m) {
@@ -26,30 +27,10 @@ std::string bytes_hash(const Eigen::PlainObjectBase<Derived>& m) {
                                      sizeof(typename Derived::Scalar) * static_cast<std::size_t>(m.size())));
 }
 
-/// Every field of the anatomy settings, one per line. A field added to AnatomySettings,
-/// OrganSettings or ShapeSettings must be added here (tests/pipeline/test_anatomy_cache.cpp
-/// changes each and expects another key).
+/// Every declared anatomy setting that shapes the anatomy (scene/settings_declarations.cpp),
+/// one per line.
 std::string settings_text(const AnatomySettings& a) {
-  std::ostringstream out;
-  out << "variation " << exact_text(a.variation) << "\nbase_mesh_triangles " << a.base_mesh_triangles
-      << "\ntet_size_mm " << exact_text(a.tet_size_mm) << "\ntet_facet_distance_mm "
-      << exact_text(a.tet_facet_distance_mm) << "\ntet_interfaces " << to_string(a.tet_interfaces)
-      << "\nseed " << a.seed << "\norgans " << a.organs.size() << "\n";
-  for (const OrganSettings& o : a.organs) {
-    const ShapeSettings& s = o.shape;
-    out << "organ " << o.name << "\n tissue " << o.tissue << "\n material " << o.material << "\n inside "
-        << o.inside << "\n solid " << o.solid << "\n base_mesh_triangles " << o.base_mesh_triangles
-        << "\n thickness_mm " << exact_text(o.thickness_mm) << "\n enclosed_volume_tolerance "
-        << (o.enclosed_volume_tolerance ? exact_text(*o.enclosed_volume_tolerance) : "none") << "\n shape "
-        << to_string(s.kind) << " center " << exact_text(s.center_mm) << " radii " << exact_text(s.radii_mm)
-        << " rotation " << exact_text(s.rotation_deg) << " exponents " << exact_text(s.exponent_1) << " "
-        << exact_text(s.exponent_2) << " size " << exact_text(s.size_mm) << " cells " << exact_text(s.cells)
-        << " file " << s.file.string() << " atlas " << s.atlas << " label " << s.label << " labels";
-    for (const std::string& l : s.labels)
-      out << " " << l;
-    out << " smoothing " << exact_text(s.smoothing_mm) << "\n";
-  }
-  return out.str();
+  return key_text(declared_settings<AnatomySettings>(), a, cached_anatomy);
 }
 
 /// The shape data by content (label volumes shared by organs are hashed once).

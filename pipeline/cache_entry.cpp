@@ -15,12 +15,6 @@
 
 namespace phantasm {
 
-std::string exact_text(double value) {
-  std::ostringstream out;
-  out << std::hexfloat << value;
-  return out.str();
-}
-
 CacheKeyLock::CacheKeyLock(const std::filesystem::path& path, const std::string& what) {
   m_fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
   if (m_fd < 0)

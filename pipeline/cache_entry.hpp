@@ -3,25 +3,14 @@
 // entry once, and reading an entry whole.
 #pragma once
 
+#include "core/settings_declaration.hpp"
+
 #include <Eigen/Core>
 
 #include <filesystem>
 #include <string>
 
 namespace phantasm {
-
-/// A double as a hex float: a key changes with any bit of a setting.
-std::string exact_text(double value);
-
-/// A matrix's values as hex floats, column by column: "[a b c]".
-template <typename Derived>
-std::string exact_text(const Eigen::MatrixBase<Derived>& m) {
-  std::string out = "[";
-  for (Eigen::Index c = 0; c < m.cols(); ++c)
-    for (Eigen::Index r = 0; r < m.rows(); ++r)
-      out += (r + c > 0 ? " " : "") + exact_text(static_cast<double>(m(r, c)));
-  return out + "]";
-}
 
 /// An exclusive flock on a key's lock file, held for the object's life: the first process that
 /// needs an entry builds it while the others wait, polling so that a cancelled run stops waiting.

@@ -14,6 +14,7 @@
 #include "io/output_path.hpp"
 #include "io/preview_png.hpp"
 #include "io/vdb_file.hpp"
+#include "mri/sequence_type.hpp"
 #include "pipeline/cost_estimate.hpp"
 #include "pipeline/reference_files_cache.hpp"
 #include "scene/scene_json.hpp"
@@ -386,10 +387,9 @@ nlohmann::json solves_json(const std::vector<SolveReport>& solves) {
 nlohmann::json image_sidecar(const Scene& scene, const MrImages& images, const MrImage& image) {
   const SequenceSettings& s = *image.sequence;
   nlohmann::json j = {{"MagneticFieldStrength", scene.mri.field_strength_T},
-                      {"PulseSequenceType", to_string(s.kind)},
+                      {"PulseSequenceType", sequence_type(s.kind).name},
                       {"RepetitionTime", s.TR_ms / 1000.0},
                       {"EchoTime", s.TE_ms / 1000.0},
-                      {"FlipAngle", s.kind == SequenceKind::spin_echo ? 90.0 : s.flip_deg},
                       {"NoiseSigma", image.noise_sigma},
                       {"NoisePercent", scene.mri.acquisition.noise_percent},
                       {"NoiseReferenceTissue", scene.mri.acquisition.noise_reference_tissue},
@@ -398,8 +398,9 @@ nlohmann::json image_sidecar(const Scene& scene, const MrImages& images, const M
                       {"CoilCombinationMethod", images.coils > 1 ? "sum of squares" : "single uniform coil"},
                       {"Units", "arbitrary (proton density 1 = 1)"},
                       {"GeneratedBy", "phantasm " + std::string(version)}};
-  if (s.kind == SequenceKind::inversion_recovery || s.kind == SequenceKind::mprage)
-    j["InversionTime"] = s.TI_ms / 1000.0;
+  // The sequence's own fields, from its member of the registry (mri/sequences/).
+  for (const auto& [key, value] : sequence_type(s.kind).sidecar(s))
+    j[key] = sequence_value_json(value);
   if (images.kspace) {
     const KspaceSampling& k = *images.kspace;
     j["AcquisitionMatrix"] = {k.acquired.x(), k.acquired.y(), k.acquired.z()};
@@ -408,17 +409,6 @@ nlohmann::json image_sidecar(const Scene& scene, const MrImages& images, const M
     if (k.slice_thickness_voxels > 0.0) j["SliceThickness"] = scene.mri.acquisition.slice_thickness_mm;
   } else {
     j["KspaceTruncation"] = "none (images sampled directly on the grid)";
-  }
-  if (s.kind == SequenceKind::inversion_recovery) j["InversionRecoveryReadout"] = to_string(s.readout);
-  if (s.kind == SequenceKind::mprage) {
-    // The timing the signal model assumes (docs/volumes-and-images.md, MPRAGE timing).
-    j["InversionRecoveryReadout"] = "gradient_echo";
-    j["EchoSpacing"] = s.echo_spacing_ms / 1000.0;
-    j["TurboFactor"] = s.turbo_factor;
-    j["RepetitionTimePreparation"] = s.TR_ms / 1000.0;
-    j["RepetitionTimeExcitation"] = s.echo_spacing_ms / 1000.0;
-    j["InversionTimeMeasuredTo"] =
-        "excitation of the centre echo of the train (echo TurboFactor/2, counted from 0)";
   }
   return j;
 }

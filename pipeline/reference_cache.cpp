@@ -8,6 +8,7 @@
 #include "io/output_path.hpp"
 #include "io/vdb_file.hpp"
 #include "pipeline/cache_entry.hpp"
+#include "scene/settings_declarations.hpp"
 #include "voxelize/voxelize_phantom.hpp"
 
 #include <optional>
@@ -20,25 +21,15 @@ namespace fs = std::filesystem;
 
 // The file's first line; the key follows on the second, the compressed state after it. The
 // format number is also part of the key.
-constexpr const char* k_reference_magic = "phantasm reference cache 1\n";
+constexpr const char* k_reference_magic = "phantasm reference cache 2\n";
 
-/// The grid, the settings the reference state depends on and the organ table, one per line. A
-/// field added to VoxelizationSettings, OrganEntry or ImageGrid that changes the reference state
-/// must be added here (tests/pipeline/test_reference_cache.cpp changes each and expects another
-/// key).
+/// The grid, the declared voxelization settings that shape the reference state
+/// (scene/settings_declarations.cpp) and the organ table, one per line.
 std::string inputs_text(const VoxelizationSettings& s, const OrganTable& organs, const ImageGrid& grid) {
   std::ostringstream out;
   out << "grid " << exact_text(grid.dims) << " spacing " << exact_text(grid.spacing_mm)
-      << " world_from_voxel " << exact_text(grid.world_from_voxel) << "\nsupersampling " << s.supersampling
-      << "\ntessellation_tolerance_mm " << exact_text(s.tessellation_tolerance_mm)
-      << "\nlevel_sets_from_tessellation " << s.level_sets_from_tessellation << "\norgan_bounds_mm "
-      << s.organ_bounds_mm.size() << "\n";
-  for (const std::optional<WorldBox>& bounds : s.organ_bounds_mm) {
-    if (bounds)
-      out << " " << exact_text(bounds->min_mm) << " " << exact_text(bounds->max_mm) << "\n";
-    else
-      out << " none\n";
-  }
+      << " world_from_voxel " << exact_text(grid.world_from_voxel) << "\n"
+      << key_text(declared_settings<VoxelizationSettings>(), s, cached_reference_state);
   out << "organs " << organs.size() << "\n";
   for (const OrganEntry& organ : organs)
     out << " " << organ.name << " tissue " << organ.tissue << " parent " << organ.parent << " depth "

@@ -7,12 +7,12 @@
 #include "io/byte_compression.hpp"
 #include "io/output_path.hpp"
 #include "pipeline/cache_entry.hpp"
+#include "scene/settings_declarations.hpp"
 
 #include <array>
 #include <cstdint>
 #include <cstring>
 #include <optional>
-#include <sstream>
 #include <utility>
 
 namespace phantasm {
@@ -22,43 +22,12 @@ namespace fs = std::filesystem;
 
 // The file's first line; the key follows on the second, the images after it. The format number
 // is also part of the key.
-constexpr const char* k_images_magic = "phantasm reference images cache 1\n";
+constexpr const char* k_images_magic = "phantasm reference images cache 2\n";
 
-/// A name as its length and its characters: no name can pass for another field.
-std::string name_text(const std::string& name) {
-  return std::to_string(name.size()) + ":" + name;
-}
-
-std::string optional_text(const std::optional<double>& value) {
-  return value ? exact_text(*value) : "none";
-}
-
-/// Every MRI setting the reference images and maps are made from, one per line. A field added
-/// to MriSettings, TissueOverride, SequenceSettings or AcquisitionSettings that changes the
-/// reference images must be added here (tests/pipeline/test_reference_images_cache.cpp changes
-/// each and expects another key).
+/// Every declared MRI setting that shapes the reference images and maps
+/// (scene/settings_declarations.cpp), one per line.
 std::string settings_text(const MriSettings& mri) {
-  std::ostringstream out;
-  out << "field_strength_T " << exact_text(mri.field_strength_T) << "\ntissues " << mri.tissues.size()
-      << "\n";
-  for (const TissueOverride& t : mri.tissues)
-    out << " " << name_text(t.tissue) << " T1_ms " << optional_text(t.T1_ms) << " T2_ms "
-        << optional_text(t.T2_ms) << " T2star_ms " << optional_text(t.T2star_ms) << " PD "
-        << optional_text(t.PD) << "\n";
-  out << "sequences " << mri.sequences.size() << "\n";
-  for (const SequenceSettings& s : mri.sequences)
-    out << " " << name_text(s.name) << " kind " << to_string(s.kind) << " TR_ms " << exact_text(s.TR_ms)
-        << " TE_ms " << exact_text(s.TE_ms) << " flip_deg " << exact_text(s.flip_deg) << " TI_ms "
-        << exact_text(s.TI_ms) << " readout " << to_string(s.readout) << " echo_spacing_ms "
-        << exact_text(s.echo_spacing_ms) << " turbo_factor " << s.turbo_factor << "\n";
-  const AcquisitionSettings& a = mri.acquisition;
-  out << "kspace " << a.kspace << "\nkspace_oversampling " << a.kspace_oversampling << "\nacquired_voxel_mm "
-      << (a.acquired_voxel_mm ? exact_text(*a.acquired_voxel_mm) : "none") << "\nslice_thickness_mm "
-      << exact_text(a.slice_thickness_mm) << "\nnoise_percent " << exact_text(a.noise_percent)
-      << "\nnoise_reference_tissue " << name_text(a.noise_reference_tissue) << "\nbias_percent "
-      << exact_text(a.bias_percent) << "\ncoils " << a.coils << "\nseed " << mri.seed << "\nparameter_maps "
-      << mri.parameter_maps << "\n";
-  return out.str();
+  return key_text(declared_settings<MriSettings>(), mri, cached_reference_images);
 }
 
 std::string_view bytes_of(const std::vector<float>& values) {

@@ -1,5 +1,6 @@
 #include "core/format.hpp"
 #include "core/tissue_table.hpp"
+#include "mri/sequence_type.hpp"
 #include "scene/parse_sections.hpp"
 
 #include <algorithm>
@@ -179,55 +180,15 @@ public:
     }
   }
 
+  /// The timing checks of the sequence's member of the registry (mri/sequences/).
   void check_sequence_timing(std::size_t i, const SequenceSettings& s) {
-    const std::string base = indexed("sequences", i, "");
-    if (s.kind == SequenceKind::bssfp) {
-      // A negative TE was not given: resolve_stage_settings() makes it TR / 2.
-      if (s.TE_ms >= 0.0 && std::abs(s.TE_ms - 0.5 * s.TR_ms) > 1e-9 * s.TR_ms) {
-        problem(base + ".TE_ms", "expected TE_ms = TR_ms / 2 = " + format_number(0.5 * s.TR_ms) +
-                                     " (on-resonance bSSFP), found " + format_number(s.TE_ms));
-      }
-      return;
-    }
-    if (s.kind == SequenceKind::mprage) {
-      // TI runs from the inversion to the centre of the gradient-echo train; the train must fit
-      // between the inversion and the next one.
-      const double half_train = 0.5 * s.turbo_factor * s.echo_spacing_ms;
-      if (s.TE_ms >= s.echo_spacing_ms) {
-        problem(base + ".TE_ms", "expected TE_ms shorter than echo_spacing_ms (" +
-                                     format_number(s.echo_spacing_ms) + "), found " + format_number(s.TE_ms));
-      }
-      if (s.TI_ms <= half_train) {
-        problem(base + ".TI_ms", "expected TI_ms greater than half the echo train (" +
-                                     format_number(half_train) + " ms), found " + format_number(s.TI_ms));
-      } else if (s.TI_ms + half_train >= s.TR_ms) {
-        problem(base + ".TR_ms", "expected TR_ms greater than TI_ms + half the echo train (" +
-                                     format_number(s.TI_ms + half_train) + " ms), found " +
-                                     format_number(s.TR_ms));
-      }
-      return;
-    }
-    if (s.TE_ms >= s.TR_ms) {
-      problem(base + ".TE_ms", "expected TE_ms less than TR_ms (" + format_number(s.TR_ms) + "), found " +
-                                   format_number(s.TE_ms));
-    }
-    if (s.kind == SequenceKind::inversion_recovery && s.TI_ms + s.TE_ms >= s.TR_ms) {
-      problem(base + ".TI_ms", "expected TI_ms + TE_ms less than TR_ms (" + format_number(s.TR_ms) +
-                                   "), found " + format_number(s.TI_ms + s.TE_ms));
-    }
+    for (const SequenceProblem& p : sequence_type(s.kind).check(s))
+      problem(indexed("sequences", i, p.key), p.message);
   }
 
   /// The quantities a sequence's signal equation reads (docs/volumes-and-images.md, MR images).
   static std::vector<std::string> needed_values(const SequenceSettings& s) {
-    switch (s.kind) {
-    case SequenceKind::spin_echo:
-    case SequenceKind::bssfp: return {"T1_ms", "T2_ms", "PD"};
-    case SequenceKind::inversion_recovery:
-      return {"T1_ms", s.readout == Readout::spin_echo ? "T2_ms" : "T2star_ms", "PD"};
-    case SequenceKind::spoiled_gre:
-    case SequenceKind::mprage: return {"T1_ms", "T2star_ms", "PD"};
-    }
-    return {};
+    return sequence_type(s.kind).tissue_values(s);
   }
 
   bool has_value(const std::string& tissue, const std::string& quantity) const {

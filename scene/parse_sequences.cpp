@@ -1,11 +1,12 @@
+#include "mri/sequence_type.hpp"
 #include "scene/parse_sections.hpp"
 
 namespace phantasm::scene_detail {
 namespace {
 
 const NumberRule k_time_rule{0.0, 1e5, true, false, "ms"};
-const NumberRule k_echo_time_rule{0.0, 1e5, false, false, "ms"};
 
+/// Reads a sequence: name, type and TR_ms, then the keys its member of the registry reads.
 void parse_sequence(CheckedMap& map, SequenceSettings& sequence) {
   if (map.string("name", sequence.name, true) && !is_bids_label(sequence.name)) {
     map.context().problem(map.get("name"), map.child_path("name"),
@@ -13,40 +14,30 @@ void parse_sequence(CheckedMap& map, SequenceSettings& sequence) {
                               "'");
   }
   std::string kind;
-  if (!map.choice("type", kind, {"spin_echo", "spoiled_gre", "inversion_recovery", "bssfp", "mprage"},
-                  true)) {
+  if (!map.choice("type", kind, sequence_type_names(), true)) {
     map.accept_remaining_keys();
     return;
   }
+  const SequenceType& type = *find_sequence_type(kind);
+  sequence.kind = type.kind;
   map.number("TR_ms", sequence.TR_ms, k_time_rule, true);
-  const NumberRule flip_rule = between(0.0, 180.0, "degrees");
-  if (kind == "spin_echo") {
-    sequence.kind = SequenceKind::spin_echo;
-    map.number("TE_ms", sequence.TE_ms, k_echo_time_rule, true);
-  } else if (kind == "spoiled_gre") {
-    sequence.kind = SequenceKind::spoiled_gre;
-    map.number("TE_ms", sequence.TE_ms, k_echo_time_rule, true);
-    map.number("flip_deg", sequence.flip_deg, flip_rule, true);
-  } else if (kind == "inversion_recovery") {
-    sequence.kind = SequenceKind::inversion_recovery;
-    map.number("TE_ms", sequence.TE_ms, k_echo_time_rule, true);
-    map.number("TI_ms", sequence.TI_ms, k_time_rule, true);
-    std::string readout;
-    if (map.choice("readout", readout, {"gradient_echo", "spin_echo"}, true)) {
-      sequence.readout = readout == "spin_echo" ? Readout::spin_echo : Readout::gradient_echo;
+  for (const SequenceParameter& p : type.parameters) {
+    switch (p.kind) {
+    case SequenceParameter::Kind::number:
+      if (!p.required) sequence.*p.number = p.absent;
+      map.number(p.key, sequence.*p.number,
+                 NumberRule{p.min, p.max, p.min_exclusive, p.max_exclusive, p.unit}, p.required);
+      break;
+    case SequenceParameter::Kind::integer:
+      map.integer(p.key, sequence.*p.integer, static_cast<int>(p.min), static_cast<int>(p.max), p.required);
+      break;
+    case SequenceParameter::Kind::readout: {
+      std::string readout;
+      if (map.choice(p.key, readout, {"gradient_echo", "spin_echo"}, p.required))
+        sequence.readout = readout == "spin_echo" ? Readout::spin_echo : Readout::gradient_echo;
+      break;
     }
-  } else if (kind == "bssfp") {
-    sequence.kind = SequenceKind::bssfp;
-    sequence.TE_ms = -1.0; // TR/2 unless given
-    map.number("TE_ms", sequence.TE_ms, k_echo_time_rule);
-    map.number("flip_deg", sequence.flip_deg, flip_rule, true);
-  } else {
-    sequence.kind = SequenceKind::mprage;
-    map.number("TE_ms", sequence.TE_ms, k_echo_time_rule, true);
-    map.number("TI_ms", sequence.TI_ms, k_time_rule, true);
-    map.number("flip_deg", sequence.flip_deg, flip_rule, true);
-    map.number("echo_spacing_ms", sequence.echo_spacing_ms, k_time_rule, true);
-    map.integer("turbo_factor", sequence.turbo_factor, 1, 1024, true);
+    }
   }
 }
 

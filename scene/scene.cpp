@@ -1,5 +1,7 @@
 #include "scene/scene.hpp"
 
+#include "mri/sequence_type.hpp"
+
 namespace phantasm {
 
 const OrganSettings* Scene::find_organ(const std::string& organ_name) const {
@@ -73,8 +75,9 @@ void resolve_stage_settings(Scene& scene) {
   mri.images = outputs.images;
   mri.parameter_maps = outputs.parameter_maps;
   for (SequenceSettings& sequence : mri.sequences) {
-    // On-resonance bSSFP echoes halfway through TR; a negative TE means it was not given.
-    if (sequence.kind == SequenceKind::bssfp && sequence.TE_ms < 0.0) sequence.TE_ms = 0.5 * sequence.TR_ms;
+    // Values that depend on others, by the sequence's member (bSSFP: TE = TR / 2 unless given).
+    const SequenceType& type = sequence_type(sequence.kind);
+    if (type.resolve) type.resolve(sequence);
   }
 }
 

@@ -1,5 +1,9 @@
 #include "scene/scene_json.hpp"
 
+#include "mri/sequence_type.hpp"
+
+#include <variant>
+
 namespace phantasm {
 namespace {
 
@@ -70,18 +74,18 @@ nlohmann::json load_json(const LoadSettings& load) {
 }
 
 nlohmann::json sequence_json(const SequenceSettings& s) {
-  nlohmann::json j = {{"name", s.name}, {"type", to_string(s.kind)}, {"TR_ms", s.TR_ms}, {"TE_ms", s.TE_ms}};
-  if (s.kind != SequenceKind::spin_echo) j["flip_deg"] = s.flip_deg;
-  if (s.kind == SequenceKind::inversion_recovery || s.kind == SequenceKind::mprage) j["TI_ms"] = s.TI_ms;
-  if (s.kind == SequenceKind::inversion_recovery) j["readout"] = to_string(s.readout);
-  if (s.kind == SequenceKind::mprage) {
-    j["echo_spacing_ms"] = s.echo_spacing_ms;
-    j["turbo_factor"] = s.turbo_factor;
-  }
+  const SequenceType& type = sequence_type(s.kind);
+  nlohmann::json j = {{"name", s.name}, {"type", type.name}, {"TR_ms", s.TR_ms}, {"TE_ms", s.TE_ms}};
+  for (const auto& [key, value] : type.provenance(s))
+    j[key] = sequence_value_json(value);
   return j;
 }
 
 } // namespace
+
+nlohmann::json sequence_value_json(const SequenceValue& value) {
+  return std::visit([](const auto& v) { return nlohmann::json(v); }, value);
+}
 
 nlohmann::json scene_settings_json(const Scene& scene) {
   nlohmann::json materials = nlohmann::json::object();

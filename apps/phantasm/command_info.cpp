@@ -3,6 +3,7 @@
 #include "pipeline/cost_estimate.hpp"
 #include "pipeline/run_pipeline.hpp"
 #include "scene/scene_json.hpp"
+#include "scene/settings_declarations.hpp"
 
 #include <iostream>
 #include <memory>
@@ -13,12 +14,16 @@ void add_info_command(CLI::App& app, std::function<int()>& action) {
   struct Options {
     std::string scene;
     bool json = false;
+    bool settings = false;
   };
   auto options = std::make_shared<Options>();
   CLI::App* command = app.add_subcommand(
       "info", "Show what a scene models: grid, organs, tissues, sequences and each stage's plan");
   command->add_option("scene", options->scene, "Scene file (YAML)")->required();
   command->add_flag("--json", options->json, "Print every setting, defaults filled in, as JSON");
+  command->add_flag("--settings", options->settings,
+                    "Print every declared setting of the stages: value, type, unit, bounds, default and "
+                    "the cached results it shapes");
   command->callback([options, &action] {
     action = [options] {
       const SceneLoadResult result = load_scene(options->scene);
@@ -29,6 +34,11 @@ void add_info_command(CLI::App& app, std::function<int()>& action) {
       const Scene& scene = *result.scene;
       if (options->json) {
         std::cout << json_text(scene_settings_json(scene)) << '\n';
+        return static_cast<int>(exit_ok);
+      }
+      if (options->settings) {
+        for (const std::string& row : settings_table(scene))
+          std::cout << row << '\n';
         return static_cast<int>(exit_ok);
       }
       const ImageGrid grid = scene.grid.grid();

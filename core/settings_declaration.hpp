@@ -1,0 +1,324 @@
+// Settings declared once: each field of a settings struct with its name, type, unit, bounds,
+// help and the cached results it shapes, and what every reader of settings (the caches' keys,
+// `phantasm info --settings`, the docs' table, the tests) takes from that declaration.
+// scene/settings_declarations.hpp declares the settings of every stage with it.
+#pragma once
+
+#include "core/format.hpp"
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+namespace phantasm {
+
+/// A double as a hex float: a key changes with any bit of a setting.
+std::string exact_text(double value);
+
+/// A matrix's values as hex floats, column by column: "[a b c]".
+template <typename Derived>
+std::string exact_text(const Eigen::MatrixBase<Derived>& m) {
+  std::string out = "[";
+  for (Eigen::Index c = 0; c < m.cols(); ++c)
+    for (Eigen::Index r = 0; r < m.rows(); ++r)
+      out += (r + c > 0 ? " " : "") + exact_text(static_cast<double>(m(r, c)));
+  return out + "]";
+}
+
+/// The cached results a run keeps across runs, as bits: a setting names those it shapes. Each is
+/// made from the one before (the reference state from the anatomy, the reference images from the
+/// state), so its key holds the key before it: a setting that shapes the anatomy changes all three.
+enum CacheKeys : unsigned {
+  no_cached_result = 0,
+  cached_anatomy = 1,          ///< organ geometry (pipeline/anatomy_cache.hpp)
+  cached_reference_state = 2,  ///< level sets, labels, fractions (pipeline/reference_cache.hpp)
+  cached_reference_images = 4, ///< reference MR images and maps (pipeline/reference_images_cache.hpp)
+};
+
+/// The keys that change with a setting that shapes `keys`: those and every one made after them.
+unsigned keys_changed_by(unsigned keys);
+
+/// How one type of value is written in a key (exactly, each value delimiting itself), shown to a
+/// reader, named, and changed to another value (the tests' change of each setting).
+template <typename T, typename Enable = void>
+struct SettingValue;
+
+template <>
+struct SettingValue<double> {
+  static std::string exact(double v) { return exact_text(v); }
+  static std::string shown(double v) { return format_number(v); }
+  static std::string type() { return "number"; }
+  static void change(double& v) { v = v * 1.5 + 1.0; }
+};
+
+template <typename T>
+struct SettingValue<T, std::enable_if_t<std::is_integral_v<T> && !std::is_same_v<T, bool>>> {
+  static std::string exact(T v) { return std::to_string(v); }
+  static std::string shown(T v) { return std::to_string(v); }
+  static std::string type() { return "integer"; }
+  static void change(T& v) { v = static_cast<T>(v + 1); }
+};
+
+template <>
+struct SettingValue<bool> {
+  static std::string exact(bool v) { return v ? "true" : "false"; }
+  static std::string shown(bool v) { return exact(v); }
+  static std::string type() { return "boolean"; }
+  static void change(bool& v) { v = !v; }
+};
+
+template <>
+struct SettingValue<std::string> {
+  /// The length and the characters: no text can pass for another field.
+  static std::string exact(const std::string& v) { return std::to_string(v.size()) + ":" + v; }
+  static std::string shown(const std::string& v) { return v.empty() ? "(none)" : v; }
+  static std::string type() { return "text"; }
+  static void change(std::string& v) { v += "x"; }
+};
+
+template <>
+struct SettingValue<std::filesystem::path> {
+  static std::string exact(const std::filesystem::path& v) {
+    return SettingValue<std::string>::exact(v.string());
+  }
+  static std::string shown(const std::filesystem::path& v) {
+    return SettingValue<std::string>::shown(v.string());
+  }
+  static std::string type() { return "path"; }
+  static void change(std::filesystem::path& v) { v += "x"; }
+};
+
+template <typename Scalar>
+struct SettingValue<Eigen::Matrix<Scalar, 3, 1>> {
+  using V = Eigen::Matrix<Scalar, 3, 1>;
+  static std::string exact(const V& v) { return exact_text(v); }
+  static std::string shown(const V& v) { return format_vector(v.template cast<double>()); }
+  static std::string type() { return std::is_integral_v<Scalar> ? "3 integers" : "3 numbers"; }
+  static void change(V& v) { SettingValue<Scalar>::change(v.x()); }
+  static V some() { return V::Ones(); }
+};
+
+template <typename T>
+struct SettingValue<std::optional<T>> {
+  static std::string exact(const std::optional<T>& v) { return v ? SettingValue<T>::exact(*v) : "none"; }
+  static std::string shown(const std::optional<T>& v) { return v ? SettingValue<T>::shown(*v) : "(unset)"; }
+  static std::string type() { return SettingValue<T>::type() + " or unset"; }
+  static void change(std::optional<T>& v) {
+    if (!v) {
+      if constexpr (std::is_arithmetic_v<T>)
+        v = T{};
+      else
+        v = SettingValue<T>::some();
+    }
+    SettingValue<T>::change(*v);
+  }
+};
+
+template <typename T>
+struct SettingValue<std::vector<T>> {
+  static std::string exact(const std::vector<T>& v) {
+    std::string out = "[" + std::to_string(v.size()) + ":";
+    for (const T& e : v)
+      out += " " + SettingValue<T>::exact(e);
+    return out + "]";
+  }
+  static std::string shown(const std::vector<T>& v) {
+    std::string out;
+    for (const T& e : v)
+      out += (out.empty() ? "" : ", ") + SettingValue<T>::shown(e);
+    return "[" + out + "]";
+  }
+  static std::string type() { return "list of " + SettingValue<T>::type(); }
+  static void change(std::vector<T>& v) { v.emplace_back(); }
+};
+
+/// One declared field of a settings struct S: a setting the scene file gives, or a value the
+/// scene fills from other settings (`derived`), as one line of every table of settings.
+template <typename S>
+struct SettingField {
+  std::string name;   ///< path inside S: "supersampling", "shape.radii_mm", "organs[].name"
+  std::string type;   ///< "number", "integer", "boolean", "text", "choice of a, b", ...
+  std::string unit;   ///< "mm", "ms", ... ; empty for none
+  std::string bounds; ///< the values the scene parser accepts, as text; empty when any
+  std::string help;
+  unsigned keys = no_cached_result; ///< the cached results it shapes (CacheKeys)
+  bool derived = false;             ///< filled by the scene from other settings, not read from the file
+  std::function<std::string(const S&)> exact; ///< the value as a key writes it
+  std::function<std::string(const S&)> shown; ///< the value as a reader reads it
+  std::function<void(S&)> change;             ///< sets another value (tests change each in turn)
+  /// The struct member this field is or lies in (its list or nested struct): every member of S
+  /// must be the member of some field (settings_members() lists them all).
+  std::function<const void*(const S&)> member;
+};
+
+/// The text of the fields of `s` that shape any of `keys`, one "name value" line each, in
+/// declaration order: what a cache key hashes.
+template <typename S>
+std::string key_text(const std::vector<SettingField<S>>& fields, const S& s, unsigned keys) {
+  std::string out;
+  for (const SettingField<S>& f : fields)
+    if (f.keys & keys) out += f.name + " " + f.exact(s) + "\n";
+  return out;
+}
+
+/// Builds the declaration of one settings struct S, field by field.
+template <typename S>
+class SettingsDeclaration {
+public:
+  /// What every field added next shapes (CacheKeys), until the next call.
+  SettingsDeclaration& shaping(unsigned keys) {
+    m_keys = keys;
+    return *this;
+  }
+
+  /// A setting held by member `m` of a type SettingValue knows.
+  template <typename T>
+  SettingsDeclaration& field(std::string name, T S::*m, std::string unit, std::string bounds,
+                             std::string help) {
+    SettingField<S> f = base(std::move(name), SettingValue<T>::type(), std::move(unit), std::move(bounds),
+                             std::move(help), m);
+    f.exact = [m](const S& s) { return SettingValue<T>::exact(s.*m); };
+    f.shown = [m](const S& s) { return SettingValue<T>::shown(s.*m); };
+    f.change = [m](S& s) { SettingValue<T>::change(s.*m); };
+    m_fields.push_back(std::move(f));
+    return *this;
+  }
+
+  /// A setting of an enum type, by the names of its values.
+  template <typename E>
+  SettingsDeclaration& choice(std::string name, E S::*m, std::vector<std::pair<std::string, E>> choices,
+                              std::string help) {
+    std::string names;
+    for (const auto& c : choices)
+      names += (names.empty() ? "" : ", ") + c.first;
+    SettingField<S> f = base(std::move(name), "choice of " + names, "", "", std::move(help), m);
+    f.exact = f.shown = [m, choices](const S& s) {
+      for (const auto& c : choices)
+        if (c.second == s.*m) return c.first;
+      return std::string("?");
+    };
+    f.change = [m, choices](S& s) {
+      for (std::size_t k = 0; k < choices.size(); ++k)
+        if (choices[k].second == s.*m) {
+          s.*m = choices[(k + 1) % choices.size()].second;
+          return;
+        }
+    };
+    m_fields.push_back(std::move(f));
+    return *this;
+  }
+
+  /// A setting written and changed by the given functions (a type SettingValue does not know).
+  template <typename T>
+  SettingsDeclaration& custom(std::string name, T S::*m, std::string type, std::string unit, std::string help,
+                              std::function<std::string(const T&)> exact,
+                              std::function<std::string(const T&)> shown, std::function<void(T&)> change) {
+    SettingField<S> f = base(std::move(name), std::move(type), std::move(unit), "", std::move(help), m);
+    f.exact = [m, exact](const S& s) { return exact(s.*m); };
+    f.shown = [m, shown](const S& s) { return shown(s.*m); };
+    f.change = [m, change](S& s) { change(s.*m); };
+    m_fields.push_back(std::move(f));
+    return *this;
+  }
+
+  /// Marks the last field added as derived: the scene fills it from `from`.
+  SettingsDeclaration& derived_from(const std::string& from) {
+    m_fields.back().derived = true;
+    m_fields.back().help += " (set by the scene from " + from + ")";
+    return *this;
+  }
+
+  /// Every field of the nested struct held by member `m`, named "prefix.field"; the keys they
+  /// shape are those of the nested declaration.
+  template <typename N>
+  SettingsDeclaration& nested(const std::string& prefix, N S::*m,
+                              const std::vector<SettingField<N>>& fields) {
+    for (const SettingField<N>& n : fields) {
+      SettingField<S> f = relabel(prefix + "." + n.name, n, m);
+      f.exact = [m, e = n.exact](const S& s) { return e(s.*m); };
+      f.shown = [m, v = n.shown](const S& s) { return v(s.*m); };
+      f.change = [m, c = n.change](S& s) { c(s.*m); };
+      m_fields.push_back(std::move(f));
+    }
+    return *this;
+  }
+
+  /// A list of nested structs held by member `m`: its length (shaping `keys`), then every field
+  /// of the nested struct over the list's elements, named "prefix[].field". A test's change of
+  /// such a field changes the first element (made when the list is empty).
+  template <typename N>
+  SettingsDeclaration& list(const std::string& prefix, std::vector<N> S::*m, const std::string& help,
+                            const std::vector<SettingField<N>>& fields) {
+    unsigned all_keys = no_cached_result;
+    for (const SettingField<N>& n : fields)
+      all_keys |= n.keys;
+    SettingField<S> count = base(prefix, "list", "", "", help, m);
+    count.keys = all_keys;
+    count.exact = count.shown = [m](const S& s) { return std::to_string((s.*m).size()); };
+    count.change = [m](S& s) {
+      if ((s.*m).empty())
+        (s.*m).emplace_back();
+      else
+        (s.*m).pop_back();
+    };
+    m_fields.push_back(std::move(count));
+    for (const SettingField<N>& n : fields) {
+      SettingField<S> f = relabel(prefix + "[]." + n.name, n, m);
+      f.exact = [m, e = n.exact](const S& s) {
+        std::string out = "[";
+        for (const N& element : s.*m)
+          out += (out.size() > 1 ? " " : "") + e(element);
+        return out + "]";
+      };
+      f.shown = [m, v = n.shown](const S& s) {
+        std::string out;
+        for (const N& element : s.*m)
+          out += (out.empty() ? "" : "; ") + v(element);
+        return "[" + out + "]";
+      };
+      f.change = [m, c = n.change](S& s) {
+        if ((s.*m).empty()) (s.*m).emplace_back();
+        c((s.*m).front());
+      };
+      m_fields.push_back(std::move(f));
+    }
+    return *this;
+  }
+
+  const std::vector<SettingField<S>>& fields() const { return m_fields; }
+
+private:
+  template <typename T>
+  SettingField<S> base(std::string name, std::string type, std::string unit, std::string bounds,
+                       std::string help, T S::*m) const {
+    SettingField<S> f;
+    f.name = std::move(name);
+    f.type = std::move(type);
+    f.unit = std::move(unit);
+    f.bounds = std::move(bounds);
+    f.help = std::move(help);
+    f.keys = m_keys;
+    f.member = [m](const S& s) -> const void* { return &(s.*m); };
+    return f;
+  }
+
+  template <typename N, typename T>
+  SettingField<S> relabel(std::string name, const SettingField<N>& n, T S::*m) const {
+    SettingField<S> f = base(std::move(name), n.type, n.unit, n.bounds, n.help, m);
+    f.keys = n.keys;
+    f.derived = n.derived;
+    return f;
+  }
+
+  unsigned m_keys = no_cached_result;
+  std::vector<SettingField<S>> m_fields;
+};
+
+} // namespace phantasm
