@@ -2,8 +2,8 @@
 // between two surfaces, with which patch fits are measured against their targets.
 #pragma once
 
-#include "anatomy/triangle_mesh.hpp"
 #include "geometry/mesh_signed_distance.hpp"
+#include "geometry/triangle_mesh.hpp"
 
 #include <Eigen/Core>
 

@@ -1,5 +1,5 @@
-// The anatomy's result: Organ (target shape, patch surface or sheet, tet mesh), ShapeData read
-// from files, and Phantom, the list of organs every later stage reads.
+// The anatomy's result: Organ (target shape, patch surface or sheet, tet mesh) and Phantom, the
+// list of organs every later stage reads.
 #pragma once
 
 #include "anatomy/anatomy_settings.hpp"
@@ -7,8 +7,9 @@
 #include "anatomy/patch_fit.hpp"
 #include "anatomy/patch_surface.hpp"
 #include "anatomy/tet_mesh.hpp"
-#include "anatomy/triangle_mesh.hpp"
 #include "core/grid.hpp"
+#include "geometry/shape_data.hpp"
+#include "geometry/triangle_mesh.hpp"
 
 #include <cstdint>
 #include <memory>
@@ -36,18 +37,6 @@ struct Organ {
   /// For each patch base vertex, the tet-mesh vertex it is (solid organs).
   Eigen::VectorXi tet_vertex_of_surface_vertex;
   PatchFitReport fit; ///< how well the surface matches the target
-};
-
-/// A dense triangle mesh or a label volume (read from a file or derived from an atlas), for
-/// organs whose shape is one. Organs of one volume share its labels.
-struct ShapeData {
-  std::optional<TriangleMesh> mesh;
-  std::optional<ImageGrid> label_grid;
-  std::shared_ptr<const std::vector<std::int32_t>> labels; ///< label_grid.voxel_count() values, i fastest
-  /// The labels whose union is the organ's solid: its own and those of the organs nested in it
-  /// (their surfaces lie inside its surface); empty: shape.label alone.
-  std::vector<std::int32_t> target_labels;
-  std::string source; ///< the file or the atlas, for messages
 };
 
 /// The anatomy of a scene.

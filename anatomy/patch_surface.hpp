@@ -3,7 +3,7 @@
 #pragma once
 
 #include "anatomy/bump_lattice.hpp"
-#include "anatomy/triangle_mesh.hpp"
+#include "geometry/triangle_mesh.hpp"
 
 #include <Eigen/Core>
 

@@ -3,7 +3,7 @@
 #pragma once
 
 #include "anatomy/implicit_shape.hpp"
-#include "anatomy/triangle_mesh.hpp"
+#include "geometry/triangle_mesh.hpp"
 
 #include <cstdint>
 

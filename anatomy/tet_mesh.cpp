@@ -1,5 +1,7 @@
 #include "anatomy/tet_mesh.hpp"
 
+#include "geometry/tet_quality.hpp"
+
 #include <Eigen/Geometry>
 
 #include <algorithm>
@@ -115,85 +117,6 @@ Eigen::MatrixX3i subdomain_interface_faces(const TetMesh& mesh) {
   for (std::size_t i = 0; i < faces.size(); ++i)
     result.row(static_cast<Eigen::Index>(i)) = faces[i].transpose();
   return result;
-}
-
-double tet_volume(const TetMesh& mesh, Eigen::Index t) {
-  const Eigen::Vector3d a = mesh.vertices.row(mesh.tets(t, 0)).transpose();
-  const Eigen::Vector3d b = mesh.vertices.row(mesh.tets(t, 1)).transpose();
-  const Eigen::Vector3d c = mesh.vertices.row(mesh.tets(t, 2)).transpose();
-  const Eigen::Vector3d d = mesh.vertices.row(mesh.tets(t, 3)).transpose();
-  return (b - a).dot((c - a).cross(d - a)) / 6.0;
-}
-
-namespace {
-
-/// The six dihedral angles of the tet with corners p, degrees.
-std::array<double, 6> dihedral_angles_deg(const std::array<Eigen::Vector3d, 4>& p) {
-  // Outward face normals; face k is opposite vertex k.
-  Eigen::Vector3d n[4];
-  for (int k = 0; k < 4; ++k) {
-    const Eigen::Vector3d a = p[static_cast<std::size_t>((k + 1) % 4)],
-                          b = p[static_cast<std::size_t>((k + 2) % 4)],
-                          c = p[static_cast<std::size_t>((k + 3) % 4)];
-    n[k] = (b - a).cross(c - a).normalized();
-    if (n[k].dot(p[static_cast<std::size_t>(k)] - a) > 0.0) n[k] = -n[k];
-  }
-  std::array<double, 6> angles;
-  int i = 0;
-  for (int a = 0; a < 4; ++a) {
-    for (int b = a + 1; b < 4; ++b) {
-      // The dihedral angle at the edge shared by faces a and b is pi minus the angle of their normals.
-      angles[static_cast<std::size_t>(i++)] =
-          180.0 - std::acos(std::clamp(n[a].dot(n[b]), -1.0, 1.0)) * 180.0 / M_PI;
-    }
-  }
-  return angles;
-}
-
-std::array<Eigen::Vector3d, 4> corners(const TetMesh& mesh, const Eigen::Vector4i& tet) {
-  std::array<Eigen::Vector3d, 4> p;
-  for (int k = 0; k < 4; ++k)
-    p[static_cast<std::size_t>(k)] = mesh.vertices.row(tet[k]).transpose();
-  return p;
-}
-
-} // namespace
-
-std::array<double, 6> tet_dihedral_angles_deg(const TetMesh& mesh, Eigen::Index t) {
-  return dihedral_angles_deg(corners(mesh, mesh.tets.row(t).transpose()));
-}
-
-double min_dihedral_angle_deg(const TetMesh& mesh) {
-  double smallest = std::numeric_limits<double>::infinity();
-  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
-    for (double angle : tet_dihedral_angles_deg(mesh, t))
-      smallest = std::min(smallest, angle);
-  }
-  return smallest;
-}
-
-Eigen::Index tets_with_dihedral_below(const TetMesh& mesh, double bound_deg) {
-  Eigen::Index count = 0;
-  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
-    const std::array<double, 6> angles = tet_dihedral_angles_deg(mesh, t);
-    count += *std::min_element(angles.begin(), angles.end()) < bound_deg;
-  }
-  return count;
-}
-
-double mean_edge_length(const TetMesh& mesh) {
-  std::vector<std::pair<int, int>> edges;
-  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
-    for (int a = 0; a < 4; ++a)
-      for (int b = a + 1; b < 4; ++b)
-        edges.emplace_back(std::minmax(mesh.tets(t, a), mesh.tets(t, b)));
-  }
-  std::sort(edges.begin(), edges.end());
-  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
-  double sum = 0.0;
-  for (const auto& [a, b] : edges)
-    sum += (mesh.vertices.row(a) - mesh.vertices.row(b)).norm();
-  return edges.empty() ? 0.0 : sum / static_cast<double>(edges.size());
 }
 
 std::vector<std::vector<int>> group_tets(const TetMesh& mesh, int target_size,
@@ -344,12 +267,6 @@ TriangleMesh boundary_surface(const TetMesh& mesh, Eigen::VectorXi* tet_vertex_o
 }
 
 namespace {
-
-/// Signed volume of the tet (a, b, c, d), mm^3.
-double signed_volume(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                     const Eigen::Vector3d& d) {
-  return (b - a).cross(c - a).dot(d - a) / 6.0;
-}
 
 /// True when tet t's centroid lies in its own subdomain.
 bool centroid_in_subdomain(const TetMesh& mesh, int t,
@@ -724,11 +641,11 @@ int flip_slivers(TetMesh& mesh, double bound_deg, int passes) {
   for (std::size_t t = 0; t < tets.size(); ++t)
     enter(static_cast<int>(t));
   const auto volume = [&](const Eigen::Vector4i& tet) {
-    const std::array<Eigen::Vector3d, 4> p = corners(mesh, tet);
+    const std::array<Eigen::Vector3d, 4> p = tet_corners(mesh, tet);
     return signed_volume(p[0], p[1], p[2], p[3]);
   };
   const auto quality = [&](const Eigen::Vector4i& tet) {
-    const std::array<double, 6> angles = dihedral_angles_deg(corners(mesh, tet));
+    const std::array<double, 6> angles = dihedral_angles_deg(tet_corners(mesh, tet));
     return *std::min_element(angles.begin(), angles.end());
   };
   const auto oriented = [&](Eigen::Vector4i tet) {
@@ -1122,11 +1039,11 @@ int collapse_short_sliver_edges(TetMesh& mesh) {
   std::vector<char> alive(static_cast<std::size_t>(mesh.tets.rows()), 1);
   std::vector<int> onto(static_cast<std::size_t>(vertex_count), -1); // a removed vertex's target
   const auto smallest = [&](const Eigen::Vector4i& tet) {
-    const std::array<double, 6> angles = dihedral_angles_deg(corners(mesh, tet));
+    const std::array<double, 6> angles = dihedral_angles_deg(tet_corners(mesh, tet));
     return *std::min_element(angles.begin(), angles.end());
   };
   const auto volume = [&](const Eigen::Vector4i& tet) {
-    const std::array<Eigen::Vector3d, 4> p = corners(mesh, tet);
+    const std::array<Eigen::Vector3d, 4> p = tet_corners(mesh, tet);
     return signed_volume(p[0], p[1], p[2], p[3]);
   };
   // Collapses p onto q when allowed and better; true when done.

@@ -1,9 +1,11 @@
-// TetMesh, the tetrahedral mesh of a solid organ, and its tetrahedralization from an implicit
+// The tetrahedralization of a solid organ (geometry/tet_mesh.hpp's TetMesh) from an implicit
 // shape with CGAL Mesh_3 (seeded, repeatable). The deformation stage's bodies are made of them.
 #pragma once
 
 #include "anatomy/implicit_shape.hpp"
-#include "anatomy/triangle_mesh.hpp"
+#include "geometry/tet_mesh.hpp"
+#include "geometry/tet_quality.hpp"
+#include "geometry/triangle_mesh.hpp"
 
 #include <Eigen/Core>
 
@@ -13,17 +15,6 @@
 #include <vector>
 
 namespace phantasm {
-
-/// A tetrahedral mesh of a solid organ.
-struct TetMesh {
-  Eigen::MatrixX3d vertices; ///< #V by 3 positions, RAS mm
-  Eigen::MatrixX4i tets;     ///< #T by 4 vertex indices, positively oriented
-  /// #B by 3 boundary triangles (indices into vertices), counter-clockwise seen from outside.
-  Eigen::MatrixX3i boundary_faces;
-  /// Meshes of nested shapes (mesh_nested_solid): #T, per tet the index of the innermost shape
-  /// holding it (into NestedShapes::shapes); empty for a mesh of one shape.
-  Eigen::VectorXi subdomains;
-};
 
 /// Shapes nested in one solid: shapes[0] the outermost, parent[k] (< k) the shape that holds
 /// shape k (parent[0] = -1). Siblings are disjoint; every shape lies inside its parent.
@@ -161,17 +152,6 @@ int split_slivers(TetMesh& mesh, const std::function<int(const Eigen::Vector3d&)
 /// vertices are renumbered). In tet order: the same mesh gives the same result.
 /// @return how many edges were collapsed
 int collapse_short_sliver_edges(TetMesh& mesh);
-
-/// Signed volume of tet t, mm^3 (positive for the orientation phantasm uses).
-double tet_volume(const TetMesh& mesh, Eigen::Index t);
-/// The six dihedral angles of tet t, degrees.
-std::array<double, 6> tet_dihedral_angles_deg(const TetMesh& mesh, Eigen::Index t);
-/// Smallest dihedral angle over all tets, degrees.
-double min_dihedral_angle_deg(const TetMesh& mesh);
-/// How many tets have a dihedral angle below bound_deg (slivers, for a bound of about 10 degrees).
-Eigen::Index tets_with_dihedral_below(const TetMesh& mesh, double bound_deg);
-/// Mean length of the tets' edges (each edge once), mm.
-double mean_edge_length(const TetMesh& mesh);
 
 /// A deterministic partition of the tets into small face-connected groups of about
 /// `target_size` tets (the groups whose volume-averaged deformation gradient carries one bulk

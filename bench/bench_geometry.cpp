@@ -3,8 +3,8 @@
 // of triangles on real anatomy), so its cost shows in every run's voxelization.
 // Usage: build/release/bench/bench_geometry [--benchmark_filter=...]
 
-#include "anatomy/triangle_mesh.hpp"
 #include "geometry/mesh_signed_distance.hpp"
+#include "geometry/triangle_mesh.hpp"
 
 #include <benchmark/benchmark.h>
 

@@ -3,8 +3,8 @@
 // triangle and coordinate checks), then the closed-manifold check and the enclosed volume the
 // anatomy stage starts with. The input's first byte chooses the format (byte % 4: stl, obj, ply,
 // vtp); the rest is the file. Only InputError may refuse a file.
-#include "anatomy/triangle_mesh.hpp"
 #include "fuzz/fuzz_support.hpp"
+#include "geometry/triangle_mesh.hpp"
 #include "io/shape_files.hpp"
 
 #include <cstdint>

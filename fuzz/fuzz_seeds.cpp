@@ -4,7 +4,7 @@
 // NIfTI-1 and NIfTI-2) and a closed 20-triangle mesh in every mesh format, each mesh file behind
 // the byte that makes fuzz_mesh read it as that format.
 // Usage: fuzz_seeds NIFTI_FOLDER MESH_FOLDER
-#include "anatomy/triangle_mesh.hpp"
+#include "geometry/triangle_mesh.hpp"
 #include "io/mesh_file.hpp"
 #include "io/nifti_file.hpp"
 

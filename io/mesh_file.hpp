@@ -2,8 +2,8 @@
 // (.vtp) and tet meshes (.vtu) with per-vertex arrays, atomically.
 #pragma once
 
-#include "anatomy/tet_mesh.hpp"
-#include "anatomy/triangle_mesh.hpp"
+#include "geometry/tet_mesh.hpp"
+#include "geometry/triangle_mesh.hpp"
 
 #include <Eigen/Core>
 

@@ -3,8 +3,8 @@
 #pragma once
 
 #include "anatomy/anatomy_settings.hpp"
-#include "anatomy/organ.hpp"
 #include "core/grid.hpp"
+#include "geometry/shape_data.hpp"
 
 #include <functional>
 #include <map>

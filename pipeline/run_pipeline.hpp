@@ -4,7 +4,7 @@
 
 #include "core/progress.hpp"
 #include "core/stage_report.hpp"
-#include "io/shape_files.hpp"
+#include "geometry/shape_data.hpp"
 #include "pipeline/dataset_writer.hpp"
 #include "pipeline/simulation.hpp"
 #include "scene/scene.hpp"

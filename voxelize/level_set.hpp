@@ -3,7 +3,7 @@
 #pragma once
 
 #include "anatomy/patch_surface.hpp"
-#include "anatomy/triangle_mesh.hpp"
+#include "geometry/triangle_mesh.hpp"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>

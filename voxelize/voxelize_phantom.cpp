@@ -1,8 +1,8 @@
 #include "voxelize/voxelize_phantom.hpp"
 
-#include "anatomy/triangle_mesh.hpp"
 #include "core/cancellation.hpp"
 #include "core/format.hpp"
+#include "geometry/triangle_mesh.hpp"
 #include "voxelize/gap_fill.hpp"
 #include "voxelize/landmarks.hpp"
 #include "voxelize/level_set.hpp"

@@ -3,7 +3,7 @@
 
 #include "anatomy/bump_lattice.hpp"
 #include "anatomy/patch_surface.hpp"
-#include "anatomy/triangle_mesh.hpp"
+#include "geometry/triangle_mesh.hpp"
 #include "tests/support/patch_bumps.hpp"
 
 #include <Eigen/Geometry>

@@ -1,7 +1,7 @@
 #include "anatomy/patch_surface.hpp"
-#include "anatomy/triangle_mesh.hpp"
 #include "core/cancellation.hpp"
 #include "core/error.hpp"
+#include "geometry/triangle_mesh.hpp"
 #include "tests/support/finite_difference.hpp"
 #include "tests/support/patch_bumps.hpp"
 

@@ -3,6 +3,7 @@
 // coarse run is tests/atlas/test_colin_head_scene.cpp.
 
 #include "core/sha256.hpp"
+#include "geometry/tet_quality.hpp"
 #include "io/dataset_layout.hpp"
 #include "io/mesh_file.hpp"
 #include "io/nifti_file.hpp"

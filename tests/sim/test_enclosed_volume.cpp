@@ -1,7 +1,7 @@
 // The patch volume constraint: the enclosed volume and its gradient, the projection onto a
 // volume range, and shells that keep their volume under load in every solver.
 
-#include "anatomy/triangle_mesh.hpp"
+#include "geometry/triangle_mesh.hpp"
 #include "sim/elastic_model.hpp"
 #include "sim/enclosed_volume.hpp"
 #include "sim/local_global.hpp"

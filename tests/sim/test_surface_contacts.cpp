@@ -2,8 +2,8 @@
 // and two bodies pressed together that do not pass through each other.
 
 #include "anatomy/structured_mesh.hpp"
-#include "anatomy/triangle_mesh.hpp"
 #include "geometry/tet_boundary.hpp"
+#include "geometry/triangle_mesh.hpp"
 #include "sim/elastic_model.hpp"
 #include "sim/local_global.hpp"
 #include "sim/newton.hpp"

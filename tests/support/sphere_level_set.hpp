@@ -3,7 +3,7 @@
 // The level set of a sphere for the voxelizer's tests: a level-4 icosphere (5120 triangles)
 // scaled and moved, through the level set's mesh constructor.
 
-#include "anatomy/triangle_mesh.hpp"
+#include "geometry/triangle_mesh.hpp"
 #include "voxelize/level_set.hpp"
 
 #include <Eigen/Core>

@@ -4,8 +4,8 @@
 
 #include "anatomy/mesh_distance.hpp"
 #include "anatomy/phantom.hpp"
-#include "anatomy/triangle_mesh.hpp"
 #include "core/format.hpp"
+#include "geometry/triangle_mesh.hpp"
 #include "scene/scene.hpp"
 #include "sim/deform_phantom.hpp"
 #include "tests/support/patch_bumps.hpp"

@@ -2,8 +2,8 @@
 // exact enclosed volume, its convergence under refinement, and the signed-distance property.
 
 #include "anatomy/patch_surface.hpp"
-#include "anatomy/triangle_mesh.hpp"
 #include "geometry/mesh_signed_distance.hpp"
+#include "geometry/triangle_mesh.hpp"
 #include "tests/support/finite_difference.hpp"
 #include "tests/support/patch_bumps.hpp"
 #include "tests/support/sphere_level_set.hpp"

@@ -1,4 +1,4 @@
-#include "anatomy/triangle_mesh.hpp"
+#include "geometry/triangle_mesh.hpp"
 
 #include "core/error.hpp"
 
