@@ -1,12 +1,12 @@
 // Time and peak memory of the voxelization stage on the head (labels and fractions of both
 // states, both displacement fields, Jacobian), at a given voxel size. One process per size, so
 // the peak resident memory it prints is that run's. PATH chooses the implementation: "new" (the
-// default: level sets from the patch surfaces, field extension by a distance transform), "old"
-// (level sets through tessellations and mesh-to-volume, the extension by a search over the moved
-// boundary faces per voxel), or "both" (old, then new, in one process: the times side by side;
-// the peak memory is then the larger of the two). SCENE (default data-synthetic/head.yaml) may be
-// any scene, the Colin head included: its anatomy is built, or read from the anatomy cache CACHE
-// when one is given, and deformed as a run would before the voxelization is timed.
+// default: level sets from the patch surfaces), "old" (level sets through tessellations and
+// mesh-to-volume), or "both" (old, then new, in one process: the times side by side; the peak
+// memory is then the larger of the two). The fields take the same path in both. SCENE (default
+// data-synthetic/head.yaml) may be any scene, the Colin head included: its anatomy is built, or
+// read from the anatomy cache CACHE when one is given, and deformed as a run would before the
+// voxelization is timed.
 // Usage: voxelize_head VOXEL_MM [PATH [SCENE [CACHE]]]
 
 #include "pipeline/run_pipeline.hpp"
@@ -50,7 +50,6 @@ int main(int argc, char** argv) {
     if ((old && path_choice == "new") || (!old && path_choice == "old")) continue;
     VoxelizationSettings settings = scene.voxelization;
     settings.level_sets_from_tessellation = old;
-    settings.field_extension_by_search = old;
     StageReport report;
     rusage before{};
     getrusage(RUSAGE_SELF, &before);

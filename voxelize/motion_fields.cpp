@@ -10,11 +10,12 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <string>
 
 namespace phantasm {
 
-DeformationMap::DeformationMap(std::vector<DeformedBody> bodies, double extension_mm, bool search_all_faces)
-    : m_bodies(std::move(bodies)), m_extension(extension_mm), m_search_all(search_all_faces) {
+DeformationMap::DeformationMap(std::vector<DeformedBody> bodies, double extension_mm)
+    : m_bodies(std::move(bodies)), m_extension(extension_mm) {
   for (const DeformedBody& body : m_bodies) {
     // Boundary faces with a moved vertex drive the extension.
     const Eigen::MatrixX3i faces = tet_boundary_faces(body.rest_mm, body.tets);
@@ -114,27 +115,20 @@ double DeformationMap::moved_boundary_distance(const Eigen::Vector3d& x, bool de
   // Only faces nearer than the extension matter to the callers: those are in x's cell (its list
   // holds every face whose box grown by the extension meets the cell), in face order, so the
   // strict comparison below picks the face the scan of all faces would.
-  const std::uint32_t* first = nullptr;
-  const std::uint32_t* last = nullptr;
-  if (!m_search_all) {
-    const FaceBuckets& b = m_buckets[deformed ? 1 : 0];
-    if (b.faces.empty()) return best;
-    int ijk[3];
-    for (int a = 0; a < 3; ++a) {
-      const double c = std::floor((x[a] - b.origin[a]) / b.cell_mm);
-      if (!(c >= 0.0 && c < b.cells[a])) return best;
-      ijk[a] = static_cast<int>(c);
-    }
-    const std::size_t cell = static_cast<std::size_t>(ijk[0]) +
-                             static_cast<std::size_t>(b.cells[0]) *
-                                 (static_cast<std::size_t>(ijk[1]) +
-                                  static_cast<std::size_t>(b.cells[1]) * static_cast<std::size_t>(ijk[2]));
-    first = b.faces.data() + b.offsets[cell];
-    last = b.faces.data() + b.offsets[cell + 1];
+  const FaceBuckets& b = m_buckets[deformed ? 1 : 0];
+  if (b.faces.empty()) return best;
+  int ijk[3];
+  for (int a = 0; a < 3; ++a) {
+    const double c = std::floor((x[a] - b.origin[a]) / b.cell_mm);
+    if (!(c >= 0.0 && c < b.cells[a])) return best;
+    ijk[a] = static_cast<int>(c);
   }
-  const std::size_t count = m_search_all ? m_moved_faces.size() : static_cast<std::size_t>(last - first);
-  for (std::size_t n = 0; n < count; ++n) {
-    const MovedFace& f = m_moved_faces[m_search_all ? n : first[n]];
+  const std::size_t cell = static_cast<std::size_t>(ijk[0]) +
+                           static_cast<std::size_t>(b.cells[0]) *
+                               (static_cast<std::size_t>(ijk[1]) +
+                                static_cast<std::size_t>(b.cells[1]) * static_cast<std::size_t>(ijk[2]));
+  for (std::uint32_t n = b.offsets[cell]; n < b.offsets[cell + 1]; ++n) {
+    const MovedFace& f = m_moved_faces[b.faces[n]];
     const auto& v = deformed ? f.deformed : f.rest;
     const Eigen::Vector3d w = closest_point_on_triangle(x, v[0], v[1], v[2]).barycentric;
     const double d = (x - (w[0] * v[0] + w[1] * v[1] + w[2] * v[2])).norm();
@@ -159,7 +153,6 @@ Eigen::Vector3d DeformationMap::extension(const Eigen::Vector3d& x) const {
 }
 
 bool DeformationMap::far_from_moved_boundary(const Eigen::Vector3d& x) const {
-  if (m_search_all) return m_moved_faces.empty();
   // moved_boundary_distance's look-up: no face in x's cell (or x beyond the cells) in either
   // state means infinity from both, so no extension and no doubt about exactness.
   for (const FaceBuckets& b : m_buckets) {
@@ -367,10 +360,12 @@ void check_compositions(const ImageGrid& grid, MotionFields& f) {
 namespace {
 
 /// det(I + grad u) of the field `u` (3 * voxel_count, component-major) at every voxel into
-/// `jacobian`: central differences in index space (one-sided at the border), mapped to world
-/// derivatives by the inverse of the grid's linear part. Returns the smallest.
-double jacobian_determinants(const ImageGrid& grid, const std::vector<float>& u,
-                             std::vector<float>& jacobian) {
+/// `jacobian`: central differences in index space (one-sided at the border and next to still
+/// tissue, none between two still voxels), mapped to world derivatives by the inverse of the
+/// grid's linear part; 1 at a voxel of still tissue (`still` in the field's state). Returns the
+/// smallest.
+double jacobian_determinants(const ImageGrid& grid, const std::vector<float>& u, const StillTissue& still,
+                             bool deformed, std::vector<float>& jacobian) {
   const auto count = static_cast<std::size_t>(grid.voxel_count());
   const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
   auto at = [&](int i, int j, int k) { return voxel_index(grid.dims, i, j, k); };
@@ -381,6 +376,10 @@ double jacobian_determinants(const ImageGrid& grid, const std::vector<float>& u,
     if (cancellation_requested()) continue; // no exception may leave an OpenMP region
     for (int j = 0; j < ny; ++j) {
       for (int i = 0; i < nx; ++i) {
+        if (still.at(at(i, j, k), deformed)) {
+          jacobian[at(i, j, k)] = 1.0f; // its motion: the identity
+          continue;
+        }
         const int index[3] = {i, j, k};
         const int size[3] = {nx, ny, nz};
         Eigen::Matrix3d d_index; // column a: du / d(index a)
@@ -388,6 +387,9 @@ double jacobian_determinants(const ImageGrid& grid, const std::vector<float>& u,
           int lo[3] = {i, j, k}, hi[3] = {i, j, k};
           lo[a] = std::max(0, index[a] - 1);
           hi[a] = std::min(size[a] - 1, index[a] + 1);
+          // Not across into still tissue: the motion jumps there.
+          if (still.at(at(lo[0], lo[1], lo[2]), deformed)) lo[a] = index[a];
+          if (still.at(at(hi[0], hi[1], hi[2]), deformed)) hi[a] = index[a];
           const double span = hi[a] - lo[a];
           for (int c = 0; c < 3; ++c) {
             const auto base = static_cast<std::size_t>(c) * count;
@@ -407,7 +409,18 @@ double jacobian_determinants(const ImageGrid& grid, const std::vector<float>& u,
 
 } // namespace
 
-MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& map) {
+std::vector<std::uint8_t> still_organ_labels(const PhantomDeformation& deformation) {
+  // Background, the organs, the gap.
+  std::vector<std::uint8_t> still(deformation.organs.size() + 2, 0);
+  for (std::size_t o = 0; o < deformation.organs.size(); ++o) {
+    const std::string& how = deformation.organs[o].moved_by;
+    still[o + 1] = how == "fixed" || how == "rigid" ? 1 : 0;
+  }
+  return still;
+}
+
+MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& map,
+                                   const StillTissue& still) {
   const auto count = static_cast<std::size_t>(grid.voxel_count());
   MotionFields f;
   f.ref_to_def.assign(3 * count, 0.0f);
@@ -437,19 +450,22 @@ MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& 
     for (int j = 0; j < ny; ++j) {
       for (int i = 0; i < nx; ++i) {
         const std::size_t v = at(i, j, k);
-        if (inside_ref[v] && inside_def[v]) continue;
+        // Still tissue keeps the zero displacement and the exact mark the fields start with.
+        const bool forward = !inside_ref[v] && !still.at(v, false);
+        const bool backward = !inside_def[v] && !still.at(v, true);
+        if (!forward && !backward) continue;
         const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
         // No moved face near: both maps are the identity there, exactly: the zero displacement
         // and the exact mark the fields start with.
         if (map.far_from_moved_boundary(x)) continue;
         bool exact = true;
-        if (!inside_ref[v]) {
+        if (forward) {
           const Eigen::Vector3d to_def = map.forward_outside(x, &exact) - x;
           f.ref_to_def_exact[v] = exact;
           for (int c = 0; c < 3; ++c)
             f.ref_to_def[static_cast<std::size_t>(c) * count + v] = static_cast<float>(to_def[c]);
         }
-        if (!inside_def[v]) {
+        if (backward) {
           const Eigen::Vector3d to_ref = map.inverse_outside(x, &exact) - x;
           f.def_to_ref_exact[v] = exact;
           for (int c = 0; c < 3; ++c)
@@ -462,8 +478,22 @@ MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& 
   // compositions.
   inside_ref = std::vector<std::uint8_t>();
   inside_def = std::vector<std::uint8_t>();
-  f.min_jacobian = jacobian_determinants(grid, f.ref_to_def, f.jacobian);
-  jacobian_determinants(grid, f.def_to_ref, f.def_to_ref_jacobian);
+  // Still tissue inside a body's tets (a voxel whose label is the container's, on the body's
+  // side of the faceted boundary): zero and exact too, in each state.
+  if (still.reference_labels || still.deformed_labels) {
+#pragma omp parallel for schedule(static)
+    for (std::size_t v = 0; v < count; ++v) {
+      for (const bool deformed : {false, true}) {
+        if (!still.at(v, deformed)) continue;
+        std::vector<float>& u = deformed ? f.def_to_ref : f.ref_to_def;
+        for (std::size_t c = 0; c < 3; ++c)
+          u[c * count + v] = 0.0f;
+        (deformed ? f.def_to_ref_exact : f.ref_to_def_exact)[v] = 1;
+      }
+    }
+  }
+  f.min_jacobian = jacobian_determinants(grid, f.ref_to_def, still, false, f.jacobian);
+  jacobian_determinants(grid, f.def_to_ref, still, true, f.def_to_ref_jacobian);
   double max_displacement = 0.0;
 #pragma omp parallel for schedule(static) reduction(max : max_displacement)
   for (std::size_t v = 0; v < count; ++v) {

@@ -24,9 +24,7 @@ class DeformationMap {
 public:
   /// @param bodies the solved bodies (rest and deformed tet meshes, mm)
   /// @param extension_mm width of the fading extension outside the bodies, mm
-  /// @param search_all_faces find the moved boundary near a point by scanning all moved faces
-  ///        rather than the buckets near it (the same result, slower; kept to compare)
-  DeformationMap(std::vector<DeformedBody> bodies, double extension_mm, bool search_all_faces = false);
+  DeformationMap(std::vector<DeformedBody> bodies, double extension_mm);
 
   /// Deformed position of a reference point (RAS mm); *exact tells whether it is the solved motion.
   Eigen::Vector3d forward(const Eigen::Vector3d& x_ref, bool* exact = nullptr) const;
@@ -53,6 +51,19 @@ public:
   const std::vector<DeformedBody>& bodies() const { return m_bodies; }
   double extension_mm() const { return m_extension; }
 
+  /// A boundary face of a body with a moved vertex, in both states.
+  struct MovedFace {
+    std::array<Eigen::Vector3d, 3> rest, deformed;
+  };
+  /// The moved boundary faces, which drive the extension, in the order the buckets list them.
+  const std::vector<MovedFace>& moved_faces() const { return m_moved_faces; }
+  /// Distance from x to the moved boundary faces in one state, and the displacement of the
+  /// closest point (the first such face in moved_faces() order), when it is below extension_mm
+  /// (else infinity or a distance >= extension_mm). Only the faces listed in x's bucket are
+  /// read: the same answer as a scan of every face, faster.
+  double moved_boundary_distance(const Eigen::Vector3d& x, bool deformed,
+                                 Eigen::Vector3d* displacement) const;
+
 private:
   /// The body tet holding x (rest or deformed positions): body, tet and barycentric weights.
   bool locate(const Eigen::Vector3d& x, bool deformed, std::size_t* body, Eigen::Index* tet,
@@ -64,14 +75,6 @@ private:
 
   std::vector<DeformedBody> m_bodies;
   double m_extension = 10.0;
-  /// Distance from x to the moved boundary faces in one state, and the displacement of the
-  /// closest point, when it is below extension_mm (else infinity or a distance >= extension_mm).
-  double moved_boundary_distance(const Eigen::Vector3d& x, bool deformed,
-                                 Eigen::Vector3d* displacement) const;
-
-  struct MovedFace {
-    std::array<Eigen::Vector3d, 3> rest, deformed;
-  };
   std::vector<MovedFace> m_moved_faces;
   /// Per state (rest [0], deformed [1]): the moved faces within extension_mm of each cell of a
   /// uniform grid of cells of about extension_mm, in face order (compressed rows), so a query
@@ -85,8 +88,6 @@ private:
     std::vector<std::uint32_t> faces;
   };
   FaceBuckets m_buckets[2];
-  /// true: moved_boundary_distance scans every moved face (the former path, kept to compare).
-  bool m_search_all = false;
   /// Bounding boxes of the moved faces, rest [0] and deformed [1].
   Eigen::Vector3d m_moved_low[2] = {Eigen::Vector3d::Constant(1e300), Eigen::Vector3d::Constant(1e300)};
   Eigen::Vector3d m_moved_high[2] = {Eigen::Vector3d::Constant(-1e300), Eigen::Vector3d::Constant(-1e300)};
@@ -94,8 +95,33 @@ private:
   std::vector<TetMeshLocator> m_rest, m_deformed;
 };
 
-/// The fields of `map` on every voxel of `grid`.
-MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& map);
+/// The voxels of tissue that does not move (organs fixed in place or rigid), by their labels on
+/// the grid in each state. Its motion is known exactly, zero: such a voxel carries zero
+/// displacement in the field of its state, inside or outside the bodies' tets, and is exact; the
+/// extension of a moved boundary stops at it; its Jacobian is 1, and a Jacobian next to it takes
+/// its differences on the moving side only (the motion is discontinuous there: tissue slides
+/// along, or leaves, tissue that stays).
+struct StillTissue {
+  const std::vector<std::int32_t>* reference_labels = nullptr; ///< the reference state's labels
+  const std::vector<std::int32_t>* deformed_labels = nullptr;  ///< the deformed state's labels
+  std::vector<std::uint8_t> still_labels; ///< per label value: 1 for an organ that does not move
+
+  /// Whether voxel v of the reference (deformed = false) or deformed state holds still tissue.
+  bool at(std::size_t v, bool deformed) const {
+    const std::vector<std::int32_t>* labels = deformed ? deformed_labels : reference_labels;
+    if (!labels) return false;
+    const auto label = static_cast<std::size_t>((*labels)[v]);
+    return label < still_labels.size() && still_labels[label] != 0;
+  }
+};
+
+/// Per label value (0 background, organ i's label i + 1, then the gap): 1 for the organs that
+/// `deformation` leaves where they are (OrganDeformation::moved_by "fixed" or "rigid").
+std::vector<std::uint8_t> still_organ_labels(const PhantomDeformation& deformation);
+
+/// The fields of `map` on every voxel of `grid`, with the voxels of `still` held at zero.
+MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& map,
+                                   const StillTissue& still = {});
 
 /// How far (in voxels, of the smallest spacing) the composition of the two fields may miss
 /// identity at a voxel marked exact.

@@ -269,14 +269,17 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
     // moved boundary, over two voxels [choice].
     const double extension = 2.0 * out.grid.spacing_mm.maxCoeff();
     progress.set_detail("displacement fields");
-    const DeformationMap map(deformation->bodies, extension, settings.field_extension_by_search);
+    const DeformationMap map(deformation->bodies, extension);
     // The landmarks first: their distance transforms (8 bytes per voxel of an organ's label box)
     // then do not add to the fields' memory (34 bytes per voxel of the grid), the peak.
     progress.set_detail("landmarks");
     out.landmarks = organ_landmarks(reference, deformation, &map, landmark_tolerance_mm, &report.warnings,
                                     landmark_done, {&out.grid, &out.reference.labels});
     progress.set_detail("displacement fields");
-    out.motion = compute_motion_fields(out.grid, map);
+    // Organs that stay where they are carry zero displacement in both fields (by their labels).
+    StillTissue still{&out.reference.labels, out.deformed ? &out.deformed->labels : nullptr,
+                      still_organ_labels(*deformation)};
+    out.motion = compute_motion_fields(out.grid, map, still);
     progress.advance();
     report.modelled.push_back(
         "displacement fields both ways: barycentric in the solved tets (exact), outside "

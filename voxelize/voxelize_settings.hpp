@@ -19,9 +19,6 @@ struct VoxelizationSettings {
   /// Level sets through tessellations within tessellation_tolerance_mm and OpenVDB's
   /// mesh-to-volume instead of from the patch surfaces directly (slower; kept to compare).
   bool level_sets_from_tessellation = false;
-  /// Displacement fields outside the bodies by a search over the moved boundary faces per voxel
-  /// instead of a distance transform of them (slower; kept to compare).
-  bool field_extension_by_search = false;
 
   // Set by the scene from other sections.
   bool deformed = false;           ///< deformation.mode is not none: a deformed state is made

@@ -172,7 +172,6 @@ TEST(ReferenceCache, EveryInputOfTheReferenceStateChangesTheKey) {
   const std::vector<Change> kept = {
       [](Inputs& in) { in.settings.gap_tissue = "csf"; },
       [](Inputs& in) { in.settings.gap_fill = "csf"; },
-      [](Inputs& in) { in.settings.field_extension_by_search = !in.settings.field_extension_by_search; },
       [](Inputs& in) { in.settings.deformed = !in.settings.deformed; },
       [](Inputs& in) { in.settings.keep_level_sets = !in.settings.keep_level_sets; },
       [](Inputs& in) { in.settings.labels = !in.settings.labels; },

@@ -5,11 +5,14 @@
 
 #include "voxelize/motion_fields.hpp"
 
+#include "geometry/closest_point_triangle.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/LU>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 using namespace phantasm;
@@ -176,48 +179,145 @@ TEST(DeformationMap, MotionFieldsHoldTheMotionAndItsJacobianInsideAndNothingFarA
   EXPECT_GT(far, 100);
 }
 
-// The buckets of moved faces find the same closest face as the scan of every face, so the
-// fields are the same to the bit (both ways, masks and Jacobian), on a grid that is not aligned
-// with the cube and reaches past the buckets.
-TEST(DeformationMap, FaceBucketsGiveTheFieldsOfTheFullScanBitForBit) {
-  const DeformationMap fast({affine_cube()}, k_extension_mm);
-  const DeformationMap scan({affine_cube()}, k_extension_mm, true);
+namespace reference {
+
+/// The moved boundary's distance from x by a scan of every moved face, in order (the way before
+/// the buckets; kept here only to compare): the nearest face, the first of equals.
+double scan_distance(const DeformationMap& map, const Eigen::Vector3d& x, bool deformed,
+                     Eigen::Vector3d* displacement) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const DeformationMap::MovedFace& f : map.moved_faces()) {
+    const auto& v = deformed ? f.deformed : f.rest;
+    const Eigen::Vector3d w = closest_point_on_triangle(x, v[0], v[1], v[2]).barycentric;
+    const double d = (x - (w[0] * v[0] + w[1] * v[1] + w[2] * v[2])).norm();
+    if (d < best) {
+      best = d;
+      *displacement = Eigen::Vector3d::Zero();
+      for (int k = 0; k < 3; ++k)
+        *displacement += w[k] * (f.deformed[k] - f.rest[k]);
+    }
+  }
+  return best;
+}
+
+} // namespace reference
+
+// The buckets of moved faces find the same closest face as the scan of every face wherever it is
+// nearer than the extension (the only distances the maps read), in both states, at the voxels of
+// a grid not aligned with the cube that reaches past the buckets and at random points; and where
+// the buckets call a point far from the moved boundary, the scan finds no face within the
+// extension in either state (so the identity there is exact).
+TEST(DeformationMap, FaceBucketsFindTheFaceTheScanOfEveryFaceFinds) {
+  const DeformationMap map({affine_cube()}, k_extension_mm);
+  ASSERT_EQ(map.moved_faces().size(), 12u); // every boundary face moves
+  std::vector<Eigen::Vector3d> points;
   ImageGrid grid;
   grid.dims = {31, 29, 27};
   grid.spacing_mm = Eigen::Vector3d(1.3, 1.4, 1.5);
   grid.world_from_voxel.topLeftCorner<3, 3>() = grid.spacing_mm.asDiagonal();
   grid.world_from_voxel.topRightCorner<3, 1>() = Eigen::Vector3d(-9.7, -10.1, -9.9);
-  const MotionFields a = compute_motion_fields(grid, fast);
-  const MotionFields b = compute_motion_fields(grid, scan);
-  EXPECT_EQ(a.ref_to_def, b.ref_to_def);
-  EXPECT_EQ(a.def_to_ref, b.def_to_ref);
-  EXPECT_EQ(a.ref_to_def_exact, b.ref_to_def_exact);
-  EXPECT_EQ(a.def_to_ref_exact, b.def_to_ref_exact);
-  EXPECT_EQ(a.jacobian, b.jacobian);
-  EXPECT_EQ(a.def_to_ref_jacobian, b.def_to_ref_jacobian);
-  // Off the grid too, both ways.
+  for (int k = 0; k < grid.dims.z(); ++k)
+    for (int j = 0; j < grid.dims.y(); ++j)
+      for (int i = 0; i < grid.dims.x(); ++i)
+        points.push_back(grid.world_from_index(Eigen::Vector3d(i, j, k)));
   std::mt19937 random(7);
   std::uniform_real_distribution<double> coordinate(-12.0, 35.0);
-  int far = 0;
-  for (int n = 0; n < 2000; ++n) {
-    const Eigen::Vector3d x(coordinate(random), coordinate(random), coordinate(random));
-    bool exact_a = false, exact_b = false;
-    EXPECT_EQ(fast.forward(x, &exact_a), scan.forward(x, &exact_b)) << x.transpose();
-    EXPECT_EQ(exact_a, exact_b);
-    EXPECT_EQ(fast.inverse(x, &exact_a), scan.inverse(x, &exact_b)) << x.transpose();
-    EXPECT_EQ(exact_a, exact_b);
-    // Far from the moved faces by the buckets: the full scan's maps are the identity there,
-    // exactly (what the fields skip).
-    if (fast.far_from_moved_boundary(x)) {
+  for (int n = 0; n < 2000; ++n)
+    points.emplace_back(coordinate(random), coordinate(random), coordinate(random));
+  int near = 0, far = 0;
+  for (const Eigen::Vector3d& x : points) {
+    for (const bool deformed : {false, true}) {
+      Eigen::Vector3d u_buckets = Eigen::Vector3d::Constant(-1.0), u_scan = u_buckets;
+      const double d_buckets = map.moved_boundary_distance(x, deformed, &u_buckets);
+      const double d_scan = reference::scan_distance(map, x, deformed, &u_scan);
+      if (d_scan < k_extension_mm) {
+        ++near;
+        EXPECT_EQ(d_buckets, d_scan) << x.transpose();
+        EXPECT_EQ(u_buckets, u_scan) << x.transpose();
+      } else {
+        EXPECT_FALSE(d_buckets < k_extension_mm) << x.transpose();
+      }
+    }
+    if (map.far_from_moved_boundary(x)) {
       ++far;
-      EXPECT_EQ(scan.forward_outside(x, &exact_b), x) << x.transpose();
-      EXPECT_TRUE(exact_b);
-      EXPECT_EQ(scan.inverse_outside(x, &exact_b), x) << x.transpose();
-      EXPECT_TRUE(exact_b);
+      Eigen::Vector3d u;
+      EXPECT_GE(reference::scan_distance(map, x, false, &u), k_extension_mm) << x.transpose();
+      EXPECT_GE(reference::scan_distance(map, x, true, &u), k_extension_mm) << x.transpose();
     }
   }
-  EXPECT_GT(far, 100); // the test reaches the fast path
-  EXPECT_LT(far, 1900);
+  // Both kinds of point were there to check.
+  EXPECT_GT(near, 1000);
+  EXPECT_GT(far, 1000);
+  EXPECT_LT(far, static_cast<int>(points.size()) - 1000);
+}
+
+// Tissue that does not move (by its label in each state) carries zero displacement in the field
+// of that state and is exact, inside the body's tets or in the extension; its Jacobian is 1, and
+// the Jacobian of a moving voxel next to it is differenced on the moving side only: under the
+// affine motion every moving voxel with a moving neighbour on each side along each axis, or on
+// one side, has the motion's determinant. The voxels of other labels keep the fields without
+// still tissue, bit for bit.
+TEST(MotionFields, StillTissueHasZeroDisplacementAndTheExtensionStopsAtIt) {
+  const DeformationMap map({affine_cube()}, k_extension_mm);
+  ImageGrid grid;
+  grid.dims = {24, 24, 24};
+  grid.spacing_mm = Eigen::Vector3d::Ones();
+  grid.world_from_voxel.topRightCorner<3, 1>() = Eigen::Vector3d::Constant(-2.0);
+  const auto count = static_cast<std::size_t>(grid.voxel_count());
+  // Label 1 (moving) inside x < 14 mm, label 2 (still) from there on: the still slab cuts
+  // through the cube (inside its tets) and through the extension beyond it.
+  std::vector<std::int32_t> labels(count, 1);
+  for (std::size_t v = 0; v < count; ++v)
+    if (grid.world_from_index(Eigen::Vector3d(static_cast<double>(v % 24), 0, 0)).x() >= 14.0) labels[v] = 2;
+  const StillTissue still{&labels, &labels, {0, 0, 1}};
+  const MotionFields free = compute_motion_fields(grid, map);
+  const MotionFields held = compute_motion_fields(grid, map, still);
+  const double det = motion_matrix().determinant();
+  long still_voxels = 0, moving_in_cube = 0, checked_jacobians = 0, had_extension = 0;
+  for (int k = 0; k < 24; ++k) {
+    for (int j = 0; j < 24; ++j) {
+      for (int i = 0; i < 24; ++i) {
+        const std::size_t v = voxel_index(grid.dims, i, j, k);
+        const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
+        if (labels[v] == 2) {
+          ++still_voxels;
+          for (std::size_t c = 0; c < 3; ++c) {
+            EXPECT_EQ(held.ref_to_def[c * count + v], 0.0f);
+            EXPECT_EQ(held.def_to_ref[c * count + v], 0.0f);
+          }
+          EXPECT_EQ(held.ref_to_def_exact[v], 1);
+          EXPECT_EQ(held.def_to_ref_exact[v], 1);
+          EXPECT_EQ(held.jacobian[v], 1.0f);
+          EXPECT_EQ(held.def_to_ref_jacobian[v], 1.0f);
+          if (free.ref_to_def[v] != 0.0f) ++had_extension;
+          continue;
+        }
+        for (std::size_t c = 0; c < 3; ++c) {
+          EXPECT_EQ(held.ref_to_def[c * count + v], free.ref_to_def[c * count + v]);
+          EXPECT_EQ(held.def_to_ref[c * count + v], free.def_to_ref[c * count + v]);
+        }
+        // Moving voxels inside the cube, off its faces, whose stencil stays inside it.
+        const bool interior = (x.array() >= 1.0).all() && (x.array() <= k_side_mm - 1.0).all();
+        if (!interior) continue;
+        ++moving_in_cube;
+        EXPECT_NEAR(held.jacobian[v], det, 1e-4) << x.transpose();
+        ++checked_jacobians;
+      }
+    }
+  }
+  EXPECT_GT(still_voxels, 1000);
+  EXPECT_GT(had_extension, 100); // without still tissue, the extension reached into the slab
+  EXPECT_GT(moving_in_cube, 1000);
+  EXPECT_GT(checked_jacobians, 1000);
+  EXPECT_EQ(held.folded_exact_voxels, 0);
+}
+
+TEST(MotionFields, StillOrganLabelsAreTheFixedAndRigidOrgans) {
+  PhantomDeformation deformation;
+  for (const char* how : {"fixed", "solver", "rigid", "embedded in a"})
+    deformation.organs.push_back(OrganDeformation{"organ", how, {}, {}});
+  // Background, four organs, the gap.
+  EXPECT_EQ(still_organ_labels(deformation), (std::vector<std::uint8_t>{0, 1, 0, 1, 0, 0}));
 }
 
 // The composition check: where neither field moves a voxel, both compositions are the identity
