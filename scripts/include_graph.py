@@ -8,15 +8,19 @@ phantasm_add_library calls (SOURCES, HEADERS, PUBLIC_LIBS, PRIVATE_LIBS). Prints
 
 * the folder graph: which folder includes which, with the number of #include lines;
 * the target graph, when a folder declares more than one target (a header belongs to the
-  target that lists it in SOURCES or HEADERS, or that compiles the .cpp of the same name, else
-  to the folder's main target);
+  target that lists it in SOURCES or HEADERS, or that compiles the .cpp of the same name, or
+  that alone compiles the .cpp files of its directory, else to the folder's main target);
 * each target's depth (the longest include path down to a target that includes no other), so a
   straight line shows as depths 0, 1, 2, ... one target each;
 * per target: links that no include needs, includes with no link (and whether another link
-  provides them publicly), and public headers whose include is only a PRIVATE link.
+  provides them publicly), and public headers whose include is only a PRIVATE link;
+* includes of a stage (anatomy, sim, voxelize, mri) by the file formats (io), which stand below
+  every stage: the types they read and write live in core and geometry.
 
-Usage: scripts/include_graph.py [--root DIR] [--dot FILE]
-Exit status 0; the report is for reading (no third-party modules needed).
+Each of these, and a cycle, is a finding; the last line counts them.
+
+Usage: scripts/include_graph.py [--root DIR] [--dot FILE] [--check]
+Exit status 0, or with --check 1 when there is a finding (no third-party modules needed).
 """
 
 import argparse
@@ -29,6 +33,9 @@ INCLUDE = re.compile(r'^\s*#\s*include\s+"([A-Za-z0-9_]+)/([^"]+)"')
 CALL = re.compile(r"phantasm_add_library\s*\(([^)]*)\)", re.S)
 KEYWORDS = ("SOURCES", "HEADERS", "PUBLIC_LIBS", "PRIVATE_LIBS")
 SOURCE_EXTENSIONS = (".hpp", ".cpp", ".h")
+# Targets that may include no stage, and the stages' targets.
+BELOW_THE_STAGES = ("io",)
+STAGES = ("anatomy", "sim", "voxelize", "mri")
 
 
 class Target:
@@ -93,9 +100,19 @@ def owner_function(targets):
             if extension == ".cpp":
                 listed.setdefault(stem + ".hpp", target.name)
 
+    # Per directory, the targets that compile its .cpp files: a header beside the sources of one
+    # target alone (e.g. mri/sequences/) belongs to it.
+    by_directory = defaultdict(set)
+    for target in targets.values():
+        for path in target.files:
+            if path.endswith(".cpp"):
+                by_directory[os.path.dirname(path)].add(target.name)
+
     def owner(path):
         if path in listed:
             return listed[path]
+        if len(by_directory.get(os.path.dirname(path), ())) == 1:
+            return next(iter(by_directory[os.path.dirname(path)]))
         folder = path.split("/", 1)[0]
         candidates = by_folder.get(folder, [])
         for target in candidates:
@@ -148,12 +165,13 @@ def print_graph(title, nodes, edges):
     level = depths(nodes, edges)
     if level is None:
         print("  not a DAG")
-        return
+        return False
     by_level = defaultdict(list)
     for node, d in level.items():
         by_level[d].append(node)
     print("  depth (longest include path down): " +
           "; ".join(f"{d}: {' '.join(sorted(by_level[d]))}" for d in sorted(by_level)))
+    return True
 
 
 def write_dot(path, nodes, edges):
@@ -171,6 +189,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--root", default=os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
     parser.add_argument("--dot", help="also write the target graph as Graphviz dot to this file")
+    parser.add_argument("--check", action="store_true", help="exit with status 1 when there is a finding")
     args = parser.parse_args()
     root = os.path.abspath(args.root)
 
@@ -199,10 +218,13 @@ def main():
             if path.endswith((".hpp", ".h")):
                 public_needs[source].add(destination)
 
-    print_graph("folder graph", folders, folder_edges)
+    problems = 0
+    if not print_graph("folder graph", folders, folder_edges):
+        problems += 1
     if len(targets) != len(folders):
         print()
-        print_graph("target graph", set(targets), target_edges)
+        if not print_graph("target graph", set(targets), target_edges):
+            problems += 1
     if args.dot:
         write_dot(args.dot, set(targets), target_edges)
         print(f"\nwrote {args.dot}")
@@ -217,7 +239,6 @@ def main():
         return seen
 
     print("\nlinks against includes (per target):")
-    problems = 0
     for name in sorted(targets):
         target = targets[name]
         links = set(target.public_links) | set(target.private_links)
@@ -235,8 +256,17 @@ def main():
         print(f"  {name}: " + ("ok" if not lines else ""))
         for line in lines:
             print(f"    {line}")
+
+    print("\nformats below the stages:")
+    for name in BELOW_THE_STAGES:
+        stages = sorted(set(target_edges.get(name, {})) & set(STAGES))
+        problems += len(stages)
+        print(f"  {name}: " + ("ok" if not stages else ""))
+        for stage in stages:
+            print(f"    includes the stage {stage} ({target_edges[name][stage]} #include lines)")
     print(f"{problems} findings")
+    return 1 if args.check and problems else 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())
