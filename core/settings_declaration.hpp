@@ -32,6 +32,13 @@ std::string exact_text(const Eigen::MatrixBase<Derived>& m) {
   return out + "]";
 }
 
+/// A string as a JSON string literal.
+std::string json_string(const std::string& text);
+
+/// A double as a JSON number that reads back as the same double and as a number with a fraction
+/// ("256.0", not "256": a JSON library keeps it a floating-point number).
+std::string json_number(double value);
+
 /// The cached results a run keeps across runs, as bits: a setting names those it shapes. Each is
 /// made from the one before (the reference state from the anatomy, the reference images from the
 /// state), so its key holds the key before it: a setting that shapes the anatomy changes all three.
@@ -55,6 +62,7 @@ struct SettingValue<double> {
   static std::string exact(double v) { return exact_text(v); }
   static std::string shown(double v) { return format_number(v); }
   static std::string type() { return "number"; }
+  static std::string json(double v) { return json_number(v); }
   static void change(double& v) { v = v * 1.5 + 1.0; }
 };
 
@@ -63,6 +71,7 @@ struct SettingValue<T, std::enable_if_t<std::is_integral_v<T> && !std::is_same_v
   static std::string exact(T v) { return std::to_string(v); }
   static std::string shown(T v) { return std::to_string(v); }
   static std::string type() { return "integer"; }
+  static std::string json(T v) { return std::to_string(v); }
   static void change(T& v) { v = static_cast<T>(v + 1); }
 };
 
@@ -71,6 +80,7 @@ struct SettingValue<bool> {
   static std::string exact(bool v) { return v ? "true" : "false"; }
   static std::string shown(bool v) { return exact(v); }
   static std::string type() { return "boolean"; }
+  static std::string json(bool v) { return exact(v); }
   static void change(bool& v) { v = !v; }
 };
 
@@ -80,6 +90,7 @@ struct SettingValue<std::string> {
   static std::string exact(const std::string& v) { return std::to_string(v.size()) + ":" + v; }
   static std::string shown(const std::string& v) { return v.empty() ? "(none)" : v; }
   static std::string type() { return "text"; }
+  static std::string json(const std::string& v) { return json_string(v); }
   static void change(std::string& v) { v += "x"; }
 };
 
@@ -92,6 +103,7 @@ struct SettingValue<std::filesystem::path> {
     return SettingValue<std::string>::shown(v.string());
   }
   static std::string type() { return "path"; }
+  static std::string json(const std::filesystem::path& v) { return json_string(v.string()); }
   static void change(std::filesystem::path& v) { v += "x"; }
 };
 
@@ -101,6 +113,10 @@ struct SettingValue<Eigen::Matrix<Scalar, 3, 1>> {
   static std::string exact(const V& v) { return exact_text(v); }
   static std::string shown(const V& v) { return format_vector(v.template cast<double>()); }
   static std::string type() { return std::is_integral_v<Scalar> ? "3 integers" : "3 numbers"; }
+  static std::string json(const V& v) {
+    return "[" + SettingValue<Scalar>::json(v.x()) + "," + SettingValue<Scalar>::json(v.y()) + "," +
+           SettingValue<Scalar>::json(v.z()) + "]";
+  }
   static void change(V& v) { SettingValue<Scalar>::change(v.x()); }
   static V some() { return V::Ones(); }
 };
@@ -110,6 +126,7 @@ struct SettingValue<std::optional<T>> {
   static std::string exact(const std::optional<T>& v) { return v ? SettingValue<T>::exact(*v) : "none"; }
   static std::string shown(const std::optional<T>& v) { return v ? SettingValue<T>::shown(*v) : "(unset)"; }
   static std::string type() { return SettingValue<T>::type() + " or unset"; }
+  static std::string json(const std::optional<T>& v) { return v ? SettingValue<T>::json(*v) : "null"; }
   static void change(std::optional<T>& v) {
     if (!v) {
       if constexpr (std::is_arithmetic_v<T>)
@@ -136,6 +153,12 @@ struct SettingValue<std::vector<T>> {
     return "[" + out + "]";
   }
   static std::string type() { return "list of " + SettingValue<T>::type(); }
+  static std::string json(const std::vector<T>& v) {
+    std::string out;
+    for (const T& e : v)
+      out += (out.empty() ? "" : ",") + SettingValue<T>::json(e);
+    return "[" + out + "]";
+  }
   static void change(std::vector<T>& v) { v.emplace_back(); }
 };
 
@@ -150,8 +173,12 @@ struct SettingField {
   std::string help;
   unsigned keys = no_cached_result; ///< the cached results it shapes (CacheKeys)
   bool derived = false;             ///< filled by the scene from other settings, not read from the file
+  /// Written in its own section of the scene file and provenance.json; false for a key of
+  /// another section (voxelization.gap_tissue is deformation.gap_tissue).
+  bool in_section = true;
   std::function<std::string(const S&)> exact; ///< the value as a key writes it
   std::function<std::string(const S&)> shown; ///< the value as a reader reads it
+  std::function<std::string(const S&)> json;  ///< the value as JSON (provenance.json)
   std::function<void(S&)> change;             ///< sets another value (tests change each in turn)
   /// The struct member this field is or lies in (its list or nested struct): every member of S
   /// must be the member of some field (settings_members() lists them all).
@@ -186,6 +213,7 @@ public:
                              std::move(help), m);
     f.exact = [m](const S& s) { return SettingValue<T>::exact(s.*m); };
     f.shown = [m](const S& s) { return SettingValue<T>::shown(s.*m); };
+    f.json = [m](const S& s) { return SettingValue<T>::json(s.*m); };
     f.change = [m](S& s) { SettingValue<T>::change(s.*m); };
     m_fields.push_back(std::move(f));
     return *this;
@@ -204,6 +232,7 @@ public:
         if (c.second == s.*m) return c.first;
       return std::string("?");
     };
+    f.json = [shown = f.shown](const S& s) { return json_string(shown(s)); };
     f.change = [m, choices](S& s) {
       for (std::size_t k = 0; k < choices.size(); ++k)
         if (choices[k].second == s.*m) {
@@ -223,6 +252,7 @@ public:
     SettingField<S> f = base(std::move(name), std::move(type), std::move(unit), "", std::move(help), m);
     f.exact = [m, exact](const S& s) { return exact(s.*m); };
     f.shown = [m, shown](const S& s) { return shown(s.*m); };
+    f.json = [m](const S& s) { return SettingValue<T>::json(s.*m); };
     f.change = [m, change](S& s) { change(s.*m); };
     m_fields.push_back(std::move(f));
     return *this;
@@ -235,6 +265,19 @@ public:
     return *this;
   }
 
+  /// Marks the last field added as a key of another section of the scene file, `key`.
+  SettingsDeclaration& key_elsewhere(const std::string& key) {
+    m_fields.back().in_section = false;
+    m_fields.back().help += " (scene key " + key + ")";
+    return *this;
+  }
+
+  /// Marks the last field added as no key of the scene file (a benchmark's switch).
+  SettingsDeclaration& not_in_scene_file() {
+    m_fields.back().in_section = false;
+    return *this;
+  }
+
   /// Every field of the nested struct held by member `m`, named "prefix.field"; the keys they
   /// shape are those of the nested declaration.
   template <typename N>
@@ -244,6 +287,7 @@ public:
       SettingField<S> f = relabel(prefix + "." + n.name, n, m);
       f.exact = [m, e = n.exact](const S& s) { return e(s.*m); };
       f.shown = [m, v = n.shown](const S& s) { return v(s.*m); };
+      f.json = [m, j = n.json](const S& s) { return j(s.*m); };
       f.change = [m, c = n.change](S& s) { c(s.*m); };
       m_fields.push_back(std::move(f));
     }
@@ -261,7 +305,7 @@ public:
       all_keys |= n.keys;
     SettingField<S> count = base(prefix, "list", "", "", help, m);
     count.keys = all_keys;
-    count.exact = count.shown = [m](const S& s) { return std::to_string((s.*m).size()); };
+    count.exact = count.shown = count.json = [m](const S& s) { return std::to_string((s.*m).size()); };
     count.change = [m](S& s) {
       if ((s.*m).empty())
         (s.*m).emplace_back();
@@ -281,6 +325,12 @@ public:
         std::string out;
         for (const N& element : s.*m)
           out += (out.empty() ? "" : "; ") + v(element);
+        return "[" + out + "]";
+      };
+      f.json = [m, j = n.json](const S& s) {
+        std::string out;
+        for (const N& element : s.*m)
+          out += (out.empty() ? "" : ",") + j(element);
         return "[" + out + "]";
       };
       f.change = [m, c = n.change](S& s) {
@@ -314,6 +364,7 @@ private:
     SettingField<S> f = base(std::move(name), n.type, n.unit, n.bounds, n.help, m);
     f.keys = n.keys;
     f.derived = n.derived;
+    f.in_section = n.in_section;
     return f;
   }
 

@@ -1,13 +1,19 @@
 #include "mri/sequence_type.hpp"
 
-#include "mri/sequences/sequences.hpp"
-
 #include <stdexcept>
 
 namespace phantasm {
 
+// The members, one per file of mri/sequences/.
+const SequenceType& spin_echo_sequence();
+const SequenceType& spoiled_gre_sequence();
+const SequenceType& inversion_recovery_sequence();
+const SequenceType& bssfp_sequence();
+const SequenceType& mprage_sequence();
+
 const std::vector<const SequenceType*>& sequence_types() {
-  // The registrations: a new sequence adds its line here (docs/architecture.md, Adding a variant).
+  // The registrations: a new sequence adds its line here and its declaration above
+  // (docs/architecture.md, Adding a variant).
   static const std::vector<const SequenceType*> types{&spin_echo_sequence(), &spoiled_gre_sequence(),
                                                       &inversion_recovery_sequence(), &bssfp_sequence(),
                                                       &mprage_sequence()};

@@ -1,11 +1,23 @@
 #include "scene/scene_json.hpp"
 
 #include "mri/sequence_type.hpp"
+#include "scene/settings_declarations.hpp"
 
 #include <variant>
 
 namespace phantasm {
 namespace {
+
+/// The settings of a section that its struct's declarations write (scene/settings_declarations.cpp):
+/// every field of the section's own keys, but not its lists, nested structs or derived values.
+template <typename S>
+nlohmann::json declared_json(const S& settings) {
+  nlohmann::json j = nlohmann::json::object();
+  for (const SettingField<S>& f : declared_settings<S>())
+    if (!f.derived && f.in_section && f.type != "list" && f.name.find_first_of(".[") == std::string::npos)
+      j[f.name] = nlohmann::json::parse(f.json(settings));
+  return j;
+}
 
 nlohmann::json vec3(const Eigen::Vector3d& v) {
   return nlohmann::json::array({v.x(), v.y(), v.z()});
@@ -131,25 +143,16 @@ nlohmann::json scene_settings_json(const Scene& scene) {
 
   const DeformationSettings& d = scene.deformation;
   const AcquisitionSettings& a = scene.mri.acquisition;
-  const OutputSettings& o = scene.outputs;
+  nlohmann::json anatomy = declared_json(scene.anatomy);
+  anatomy["organs"] = organs;
   return {
       {"name", scene.name},
       {"seed", scene.seed},
       {"field_strength_T", scene.mri.field_strength_T},
-      {"grid",
-       {{"field_of_view_mm", vec3(scene.grid.field_of_view_mm)},
-        {"voxel_size_mm", vec3(scene.grid.voxel_size_mm)},
-        {"center_mm", vec3(scene.grid.center_mm)},
-        {"orientation", scene.grid.orientation}}},
+      {"grid", declared_json(scene.grid)},
       {"materials", materials},
       {"tissues", tissues},
-      {"anatomy",
-       {{"variation", scene.anatomy.variation},
-        {"base_mesh_triangles", scene.anatomy.base_mesh_triangles},
-        {"tet_size_mm", scene.anatomy.tet_size_mm},
-        {"tet_facet_distance_mm", scene.anatomy.tet_facet_distance_mm},
-        {"tet_interfaces", to_string(scene.anatomy.tet_interfaces)},
-        {"organs", organs}}},
+      {"anatomy", anatomy},
       {"deformation",
        {{"mode", to_string(d.mode)},
         {"solver",
@@ -168,9 +171,7 @@ nlohmann::json scene_settings_json(const Scene& scene) {
         {"obstacles", obstacles},
         {"collisions", collisions},
         {"gap_tissue", scene.voxelization.gap_fill}}},
-      {"voxelization",
-       {{"supersampling", scene.voxelization.supersampling},
-        {"tessellation_tolerance_mm", scene.voxelization.tessellation_tolerance_mm}}},
+      {"voxelization", declared_json(scene.voxelization)},
       {"sequences", sequences},
       {"acquisition",
        {{"kspace", a.kspace},
@@ -181,18 +182,7 @@ nlohmann::json scene_settings_json(const Scene& scene) {
         {"noise_reference_tissue", a.noise_reference_tissue},
         {"bias_percent", a.bias_percent},
         {"coils", a.coils}}},
-      {"outputs",
-       {{"subject", o.subject},
-        {"images", o.images},
-        {"labels", o.labels},
-        {"fractions", o.fractions},
-        {"displacement_fields", o.displacement_fields},
-        {"jacobian", o.jacobian},
-        {"landmarks", o.landmarks},
-        {"meshes", o.meshes},
-        {"vdb", o.vdb},
-        {"previews", o.previews},
-        {"parameter_maps", o.parameter_maps}}},
+      {"outputs", declared_json(scene.outputs)},
   };
 }
 

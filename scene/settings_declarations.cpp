@@ -12,6 +12,10 @@ struct SettingValue<WorldBox> {
     return format_vector(b.min_mm) + " to " + format_vector(b.max_mm);
   }
   static std::string type() { return "box"; }
+  static std::string json(const WorldBox& b) {
+    return "[" + SettingValue<Eigen::Vector3d>::json(b.min_mm) + "," +
+           SettingValue<Eigen::Vector3d>::json(b.max_mm) + "]";
+  }
   static void change(WorldBox& b) { b.max_mm.x() += 1.0; }
   static WorldBox some() { return WorldBox{Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()}; }
 };
@@ -150,13 +154,13 @@ const std::vector<SettingField<VoxelizationSettings>>& declared_settings<Voxeliz
                "patch surface tessellation deviation")
         .shaping(no_cached_result)
         .field("gap_tissue", &V::gap_tissue, "", "air or an organ's tissue",
-               "what fills the space a moved organ leaves (deformation.gap_tissue; empty: the default)")
+               "what fills the space a moved organ leaves (empty: the default)")
+        .key_elsewhere("deformation.gap_tissue")
         .shaping(cached_reference_state)
         .field("level_sets_from_tessellation", &V::level_sets_from_tessellation, "", "",
                "level sets through tessellations (benchmarks only; not a scene key)")
+        .not_in_scene_file()
         .shaping(no_cached_result)
-        .field("field_extension_by_search", &V::field_extension_by_search, "", "",
-               "fields outside the bodies by a search (benchmarks only; not a scene key)")
         .field("deformed", &V::deformed, "", "", "a deformed state is made")
         .derived_from("deformation.mode")
         .field("keep_level_sets", &V::keep_level_sets, "", "", "level sets kept for .vdb files")
@@ -321,11 +325,10 @@ std::vector<const void*> settings_members(const AnatomySettings& s) {
 }
 
 std::vector<const void*> settings_members(const VoxelizationSettings& s) {
-  const auto& [supersampling, tolerance, gap_tissue, from_tessellation, by_search, deformed, keep_level_sets,
-               labels, fractions, fields, jacobian, landmarks, gap_fill, bounds] = s;
-  return {
-      &supersampling, &tolerance, &gap_tissue, &from_tessellation, &by_search, &deformed, &keep_level_sets,
-      &labels,        &fractions, &fields,     &jacobian,          &landmarks, &gap_fill, &bounds};
+  const auto& [supersampling, tolerance, gap_tissue, from_tessellation, deformed, keep_level_sets, labels,
+               fractions, fields, jacobian, landmarks, gap_fill, bounds] = s;
+  return {&supersampling, &tolerance, &gap_tissue, &from_tessellation, &deformed, &keep_level_sets, &labels,
+          &fractions,     &fields,    &jacobian,   &landmarks,         &gap_fill, &bounds};
 }
 
 std::vector<const void*> settings_members(const TissueOverride& s) {

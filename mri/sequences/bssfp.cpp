@@ -1,6 +1,5 @@
 // Balanced SSFP on resonance with alternating RF phase; TE = TR / 2 unless the scene gives it.
 #include "mri/sequences/sequence_math.hpp"
-#include "mri/sequences/sequences.hpp"
 
 namespace phantasm {
 namespace bssfp_member {

@@ -1,7 +1,6 @@
 // Inversion recovery: an inversion, TI later a 90-degree excitation read by a gradient echo or
 // a spin echo; the signal keeps the sign of the longitudinal magnetization (e.g. FLAIR).
 #include "mri/sequences/sequence_math.hpp"
-#include "mri/sequences/sequences.hpp"
 
 namespace phantasm {
 namespace inversion_recovery_member {

@@ -1,7 +1,6 @@
 // MPRAGE: an inversion, then turbo_factor spoiled gradient echoes spaced echo_spacing_ms and
 // centred at TI, repeated every TR; the signal is the centre echo's.
 #include "mri/sequences/sequence_math.hpp"
-#include "mri/sequences/sequences.hpp"
 
 #include <algorithm>
 

@@ -1,6 +1,5 @@
 // Spin echo: an ideal 90-180 pair, spoiled before each excitation.
 #include "mri/sequences/sequence_math.hpp"
-#include "mri/sequences/sequences.hpp"
 
 namespace phantasm {
 namespace spin_echo_member {

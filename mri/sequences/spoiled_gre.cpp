@@ -1,6 +1,5 @@
 // Spoiled gradient echo (FLASH): the Ernst steady state with T2* decay to the echo.
 #include "mri/sequences/sequence_math.hpp"
-#include "mri/sequences/sequences.hpp"
 
 namespace phantasm {
 namespace spoiled_gre_member {

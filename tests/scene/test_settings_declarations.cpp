@@ -2,6 +2,7 @@
 // struct belongs to a declared field, each declared once, with a help text; and the table
 // `phantasm info --settings` prints names every one.
 
+#include "scene/scene_json.hpp"
 #include "scene/settings_declarations.hpp"
 
 #include <gtest/gtest.h>
@@ -97,4 +98,21 @@ TEST(SettingsDeclarations, TheTableNamesEverySettingWithItsDefaultAndCaches) {
             declared_settings<GridSettings>().size() + declared_settings<AnatomySettings>().size() +
                 declared_settings<VoxelizationSettings>().size() + declared_settings<MriSettings>().size() +
                 declared_settings<OutputSettings>().size());
+}
+
+// provenance.json's sections written from the declarations: numbers keep their fraction, text is
+// escaped, and only a section's own keys are written (gap_tissue is the deformation's key).
+TEST(SettingsDeclarations, ProvenanceSectionsAreWrittenFromTheDeclarations) {
+  Scene scene;
+  scene.grid.orientation = "L\"PS\n";
+  scene.voxelization.gap_tissue = "csf";
+  const nlohmann::json settings = scene_settings_json(scene);
+  EXPECT_EQ(settings.at("grid").dump(),
+            R"({"center_mm":[0.0,0.0,0.0],"field_of_view_mm":[256.0,256.0,256.0],"orientation":"L\"PS\n",)"
+            R"("voxel_size_mm":[1.0,1.0,1.0]})");
+  EXPECT_EQ(settings.at("voxelization").dump(), R"({"supersampling":4,"tessellation_tolerance_mm":0.2})");
+  EXPECT_EQ(settings.at("anatomy").size(), 6u); // five settings and the organs
+  EXPECT_EQ(settings.at("outputs").size(), declared_settings<OutputSettings>().size());
+  EXPECT_EQ(json_number(0.1), "0.10000000000000001");
+  EXPECT_EQ(nlohmann::json::parse(json_number(0.1)).get<double>(), 0.1);
 }
