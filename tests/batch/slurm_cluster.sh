@@ -9,7 +9,8 @@
 #      resubmitted task 2, and tasks 1 and 3 make nothing again.
 #   3. scripts/Snakefile in Snakemake's cluster mode (a job per subject, submitted with sbatch)
 #      makes that same dataset.
-# Every daemon and job is stopped at the end, whatever happens (trap).
+# Every daemon and job is stopped at the end, whatever happens (trap). Before all that: the recipe
+# docs/batch.md shows is the shipped one.
 # Usage: slurm_cluster.sh PHANTASM SOURCE_DIR  (as root, like slurmd on a cluster)
 set -euo pipefail
 
@@ -28,6 +29,13 @@ for program in /usr/sbin/slurmctld /usr/sbin/slurmd /usr/sbin/munged /usr/bin/sb
   [ -x "$program" ] || fail "$program not found: run scripts/install-deps.sh (Debian's slurm-wlm, munge and snakemake)"
 done
 [ "$(id -u)" -eq 0 ] || fail "slurmd starts jobs as their user and runs as root: run this test as root"
+
+# docs/batch.md shows the recipe as it is (its lines but the comments at the top).
+documented=$(awk '/^### Slurm job array/ { section = 1 } section && /^```/ { if (code) exit; code = 1; next }
+  code { print }' "$source_dir/docs/batch.md")
+shipped=$(grep -v -e '^# ' -e '^#$' "$recipe")
+[ "$documented" = "$shipped" ] || fail "docs/batch.md (Slurm job array) does not show $recipe as it is:
+$(diff <(echo "$documented") <(echo "$shipped"))"
 
 # Short path: munge's socket path must fit a sockaddr_un (108 bytes).
 tmp=$(mktemp -d /tmp/phantasm-slurm.XXXXXX)
