@@ -23,6 +23,21 @@ constexpr std::size_t k_slow_chunk_bytes = 4096; // with a test delay: small chu
 std::atomic<int> g_write_delay_ms{0};
 std::atomic<unsigned> g_temporary_counter{0};
 
+/// This machine's name as it appears in temporary file names: on a file system that several
+/// machines share (a cluster's), a process id says nothing about another machine's processes.
+const std::string& host_name() {
+  static const std::string name = [] {
+    char buffer[256] = {};
+    if (::gethostname(buffer, sizeof buffer - 1) != 0 || buffer[0] == '\0') return std::string("localhost");
+    std::string text(buffer);
+    for (char& c : text) {
+      if (c == '/' || c == '-' || static_cast<unsigned char>(c) < 0x21) c = '_';
+    }
+    return text;
+  }();
+  return name;
+}
+
 std::runtime_error io_error(const std::string& what, const std::filesystem::path& path) {
   return std::runtime_error(what + " '" + path.string() + "': " + std::strerror(errno));
 }
@@ -43,7 +58,8 @@ AtomicFileWriter::AtomicFileWriter(std::filesystem::path final_path) : m_final_p
   const std::filesystem::path folder = m_final_path.parent_path();
   if (!folder.empty()) std::filesystem::create_directories(folder);
   const std::string name = "." + m_final_path.filename().string() + k_temporary_marker +
-                           std::to_string(::getpid()) + "-" + std::to_string(g_temporary_counter++);
+                           std::to_string(::getpid()) + "-" + std::to_string(g_temporary_counter++) + "-" +
+                           host_name();
   m_temporary_path = folder / name;
   m_registration.emplace(m_temporary_path);
   m_fd = ::open(m_temporary_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
@@ -107,8 +123,11 @@ bool is_temporary_file_name(const std::filesystem::path& path) {
 
 namespace {
 
-/// True when the process that made a temporary file (the pid in its name) still runs: another
-/// run writing into the same dataset, e.g. a parallel batch job. Unknown owners count as gone.
+/// True when the process that made a temporary file (the pid and host in its name) may still run:
+/// another run writing into the same dataset, e.g. a parallel batch job, on this machine or, on
+/// a shared file system, on another (whose processes this one cannot see: they count as alive).
+/// Names without a host (written before hosts were named) count as this machine's. Unknown
+/// owners count as gone.
 bool owner_is_alive(const std::filesystem::path& temporary) {
   const std::string name = temporary.filename().string();
   const std::size_t at = name.find(k_temporary_marker);
@@ -116,6 +135,8 @@ bool owner_is_alive(const std::filesystem::path& temporary) {
   const std::string rest = name.substr(at + std::string(k_temporary_marker).size());
   const std::size_t dash = rest.find('-');
   if (dash == 0 || dash == std::string::npos) return false;
+  const std::size_t host_dash = rest.find('-', dash + 1);
+  if (host_dash != std::string::npos && rest.substr(host_dash + 1) != host_name()) return true;
   long pid = 0;
   try {
     pid = std::stol(rest.substr(0, dash));

@@ -12,7 +12,7 @@
 namespace phantasm {
 
 /// Writes one file so that its final name only ever holds a complete file. Bytes go to a hidden
-/// temporary file in the same folder (".<name>.phantasm-tmp-<pid>-<n>"); commit() flushes it to
+/// temporary file in the same folder (".<name>.phantasm-tmp-<pid>-<n>-<host>"); commit() flushes it to
 /// disk and renames it over the final name. A writer destroyed without commit() (an exception,
 /// a cancelled run) removes its temporary file. A killed process can leave a temporary file,
 /// but never a partial file under the final name; remove_stale_temporaries() clears those. A
@@ -50,7 +50,8 @@ void write_file_atomically(const std::filesystem::path& path, std::string_view b
 bool is_temporary_file_name(const std::filesystem::path& path);
 
 /// Removes the temporary files a killed run left under a folder; returns how many. Temporary
-/// files of processes still running (named by their pid) are theirs and stay.
+/// files of processes still running (named by their pid) are theirs and stay, and so are those
+/// of other machines (named by their host): on a shared file system their processes are unseen.
 std::size_t remove_stale_temporaries(const std::filesystem::path& root);
 
 /// Slows every chunk written by AtomicFileWriter (4 KiB while a delay is set) by this many

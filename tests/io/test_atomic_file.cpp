@@ -179,7 +179,20 @@ TEST(AtomicFile, StaleTemporariesOfAKilledRunAreFoundAndRemoved) {
   std::ofstream(folder / "sub" / live) << "being written";
   std::ofstream(folder / "sub" / "keep.json") << "{}";
   std::ofstream(folder / ".hidden") << "not ours";
-  EXPECT_EQ(remove_stale_temporaries(folder), 1u);
+  // The same ended pid on this machine by name, and on another machine sharing the folder (a
+  // cluster's file system): this machine cannot see the other's processes, so that file stays.
+  char host[256] = {};
+  ASSERT_EQ(::gethostname(host, sizeof host - 1), 0);
+  std::string this_host(host);
+  for (char& c : this_host) {
+    if (c == '/' || c == '-' || static_cast<unsigned char>(c) < 0x21) c = '_';
+  }
+  std::ofstream(folder / "sub" / (".z.nii.gz.phantasm-tmp-" + std::to_string(ended) + "-3-" + this_host))
+      << "x";
+  const std::string other = ".w.nii.gz.phantasm-tmp-" + std::to_string(ended) + "-4-node-b." + this_host;
+  std::ofstream(folder / "sub" / other) << "being written elsewhere";
+  EXPECT_EQ(remove_stale_temporaries(folder), 2u);
+  EXPECT_TRUE(fs::exists(folder / "sub" / other));
   EXPECT_TRUE(fs::exists(folder / "sub" / live));
   EXPECT_TRUE(fs::exists(folder / "sub" / "keep.json"));
   EXPECT_TRUE(fs::exists(folder / ".hidden"));
