@@ -193,6 +193,28 @@ void write_nifti(const std::filesystem::path& path, const ImageGrid& grid, const
   write_volume(path, grid, values.data(), values.size(), DT_FLOAT32, options);
 }
 
+void write_nifti_whole_numbers(const std::filesystem::path& path, const ImageGrid& grid,
+                               const std::vector<float>& values, bool is_signed,
+                               const NiftiWriteOptions& options) {
+  const auto narrow = [&values](auto type) {
+    using T = decltype(type);
+    const double low = std::numeric_limits<T>::min(), high = std::numeric_limits<T>::max();
+    std::vector<T> out(values.size());
+    for (std::size_t v = 0; v < values.size(); ++v) {
+      const double value = std::isfinite(values[v]) ? std::round(double{values[v]}) : 0.0;
+      out[v] = static_cast<T>(std::clamp(value, low, high));
+    }
+    return out;
+  };
+  if (is_signed) {
+    const std::vector<std::int16_t> out = narrow(std::int16_t{});
+    write_volume(path, grid, out.data(), out.size(), DT_INT16, options);
+  } else {
+    const std::vector<std::uint16_t> out = narrow(std::uint16_t{});
+    write_volume(path, grid, out.data(), out.size(), DT_UINT16, options);
+  }
+}
+
 void write_nifti_labels(const std::filesystem::path& path, const ImageGrid& grid,
                         const std::vector<std::int32_t>& labels, const NiftiWriteOptions& options) {
   NiftiWriteOptions o = options;

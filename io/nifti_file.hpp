@@ -33,6 +33,13 @@ struct NiftiWriteOptions {
 void write_nifti(const std::filesystem::path& path, const ImageGrid& grid, const std::vector<float>& values,
                  const NiftiWriteOptions& options = {});
 
+/// Writes a scalar image as NIfTI-1 of whole numbers, int16 or uint16, as scanners write them:
+/// each value rounded to the nearest and clamped to the type's range (NaN as 0).
+/// @throws std::invalid_argument when the value count does not match the grid
+void write_nifti_whole_numbers(const std::filesystem::path& path, const ImageGrid& grid,
+                               const std::vector<float>& values, bool is_signed,
+                               const NiftiWriteOptions& options = {});
+
 /// Writes a label map as NIfTI-1, datatype uint8 when every label fits, else int16 or int32
 /// (intent label unless the options say otherwise).
 void write_nifti_labels(const std::filesystem::path& path, const ImageGrid& grid,

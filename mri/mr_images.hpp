@@ -23,8 +23,9 @@ struct ParameterMaps {
 /// One magnitude image of one sequence in one state.
 struct MrImage {
   const SequenceSettings* sequence = nullptr;
-  std::vector<float> magnitude; ///< grid voxel count
-  double noise_sigma = 0.0;     ///< std of each of the real and imaginary noise parts
+  std::vector<float> magnitude; ///< grid voxel count, in scanner units (PD units x receiver_gain)
+  double noise_sigma = 0.0;     ///< std of each of the real and imaginary noise parts (scanner units)
+  double receiver_gain = 1.0;   ///< scanner units per proton-density unit
 };
 
 struct MrImages {

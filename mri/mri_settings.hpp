@@ -19,6 +19,12 @@ struct TissueOverride {
 
 enum class SequenceKind { spin_echo, spoiled_gre, inversion_recovery, bssfp, mprage };
 enum class Readout { gradient_echo, spin_echo };
+/// How the images' voxels are stored: as a scanner writes them (whole numbers) or as floats.
+enum class ImageDatatype { float32, int16, uint16 };
+
+/// The level at which the automatic receiver gain puts the reference tissue's signal
+/// (automatic_receiver_gain()): a T1w head's white matter at 1000, as scanners write it.
+inline constexpr double k_receiver_reference_level = 1000.0;
 
 /// One MR image to make, named by its BIDS suffix.
 struct SequenceSettings {
@@ -43,6 +49,10 @@ struct AcquisitionSettings {
   std::string noise_reference_tissue = "white_matter";
   double bias_percent = 0.0; ///< peak-to-peak multiplicative bias field, percent
   int coils = 1;             ///< receive coils combined by sum of squares
+  /// Scanner units per proton-density unit, the same for every image; empty: each sequence's
+  /// automatic gain (automatic_receiver_gain()).
+  std::optional<double> receiver_gain;
+  ImageDatatype image_datatype = ImageDatatype::float32; ///< how the image files store voxels
 };
 
 struct MriSettings {
@@ -59,5 +69,14 @@ struct MriSettings {
 
 const char* to_string(SequenceKind kind);
 const char* to_string(Readout readout);
+const char* to_string(ImageDatatype datatype);
+
+/// The receiver gain of one sequence when the scene gives none: the reference tissue's signal
+/// (noise_reference_tissue, in proton-density units) lands at k_receiver_reference_level, unless
+/// that would put the brightest tissue beyond 20 times the level (a reference tissue nulled or
+/// nearly so); then the brightest lands at 20 times the level. 1 when no tissue gives signal.
+/// @param reference_signal the reference tissue's signal; 0 when it is not in the phantom
+/// @param brightest_signal the largest signal magnitude of the phantom's tissues
+double automatic_receiver_gain(double reference_signal, double brightest_signal);
 
 } // namespace phantasm

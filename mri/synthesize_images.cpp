@@ -1,6 +1,7 @@
 #include "mri/synthesize_images.hpp"
 
 #include "core/cancellation.hpp"
+#include "core/error.hpp"
 #include "core/format.hpp"
 #include "mri/kspace.hpp"
 #include "mri/parameter_maps.hpp"
@@ -120,6 +121,7 @@ struct Acquisition {
   std::optional<KspaceSampling> kspace;
   double bias_percent;
   KspacePipeline* pipeline; ///< k-space through the pipeline; nullptr: per coil (or no k-space)
+  CoilAcquisition per_coil; ///< k-space per coil (without the pipeline)
 };
 
 /// Voxel buffers that every image of a run reuses: fresh ones of hundreds of megabytes per
@@ -218,7 +220,7 @@ MrImage image_of(const Acquisition& acquisition, Workspace& workspace, const Seq
     }
     const std::uint64_t coil_seed = mix_seed(seed, static_cast<std::uint64_t>(c) + 1);
     if (acquisition.kspace) {
-      acquire_in_kspace(coil_image, *acquisition.kspace, noise_sigma, coil_seed);
+      acquisition.per_coil(coil_image, *acquisition.kspace, noise_sigma, coil_seed);
     } else if (noise_sigma > 0.0) {
       add_image_noise(coil_image, grid.dims, noise_sigma, coil_seed);
     }
@@ -287,9 +289,9 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
   std::unique_ptr<KspacePipeline> pipeline;
   // Two coils at a time: one sweep over the sum of squares for both, for the memory of one
   // double-precision coil image.
-  if (sampling && options.method == KspaceMethod::pipeline && (!given || deformed))
+  if (sampling && !options.per_coil && (!given || deformed))
     pipeline = std::make_unique<KspacePipeline>(*sampling, std::min(coils.count(), 2));
-  const Acquisition acquisition{grid, coils, sampling, settings.bias_percent, pipeline.get()};
+  const Acquisition acquisition{grid, coils, sampling, settings.bias_percent, pipeline.get(), options.per_coil};
   Workspace workspace;
   images.kspace = acquisition.kspace;
   images.coils = coils.count();
@@ -322,7 +324,21 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
     std::vector<double> tissue_signal;
     std::string line = sequence.name + " tissue signals (x PD units):";
     for (const std::string& tissue : volumes.tissues) {
-      tissue_signal.push_back(sequence_signal(sequence, relaxation_of(tissue)));
+      const Relaxation r = relaxation_of(tissue);
+      tissue_signal.push_back(sequence_signal(sequence, r));
+      // Relaxation times beyond any tissue's with an excitation of 0 make the signal equations
+      // 0/0: an image of NaN must not be written (the run stops before any file is).
+      if (!std::isfinite(tissue_signal.back())) {
+        throw SettingError(
+            "sequences[" + std::to_string(q) + "].type",
+            "sequence " + sequence.name + ", tissue " + tissue + ": expected a finite signal, found " +
+                (std::isnan(tissue_signal.back()) ? std::string("NaN")
+                                                  : format_number(tissue_signal.back())) +
+                " (T1 " + format_number(r.T1_ms) + " ms, T2 " + format_number(r.T2_ms) + " ms, T2* " +
+                format_number(r.T2star_ms) + " ms, PD " + format_number(r.PD) + "; TR " +
+                format_number(sequence.TR_ms) + " ms, TE " + format_number(sequence.TE_ms) + " ms, flip " +
+                format_number(sequence.flip_deg) + " deg)");
+      }
       line += " " + tissue + " " + format_number(tissue_signal.back());
     }
     report.modelled.push_back(line);
@@ -334,21 +350,41 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
       report.skipped.push_back("noise of " + sequence.name + ": the reference tissue " + reference_tissue +
                                " is not in the phantom");
     }
-    const double sigma = settings.noise_percent / 100.0 * std::abs(reference_signal);
+    // The receiver gain: the scene's, or the one that puts the reference tissue at the scanner's
+    // level; signals and noise alike are in scanner units from here on.
+    double brightest = 0.0;
+    for (double signal : tissue_signal)
+      brightest = std::max(brightest, std::abs(signal));
+    const double gain = settings.receiver_gain ? *settings.receiver_gain
+                                               : automatic_receiver_gain(reference_signal, brightest);
+    for (double& signal : tissue_signal)
+      signal *= gain;
+    std::string rule = " (the scene's)";
+    if (!settings.receiver_gain)
+      rule =
+          std::abs(std::abs(reference_signal) * gain - k_receiver_reference_level) <
+                  1e-6 * k_receiver_reference_level
+              ? " (automatic: " + reference_tissue + " at " + format_number(k_receiver_reference_level) + ")"
+              : " (automatic: the brightest tissue at " + format_number(brightest * gain) + ")";
+    report.modelled.push_back(sequence.name + " receiver gain " + format_number(gain) + rule);
+    const double sigma = settings.noise_percent / 100.0 * std::abs(reference_signal) * gain;
     // One seed per image (sequence and state): images differ, and every run repeats them.
     if (given) {
       images.reference.push_back(std::move(given->images[q]));
       images.reference.back().sequence = &sequence;
+      images.reference.back().receiver_gain = gain;
     } else {
       progress.set_detail(sequence.name + ", reference");
       images.reference.push_back(image_of(acquisition, workspace, sequence, mix_seed(mri.seed, 2 * q),
                                           volumes.reference, tissue_signal, sigma));
+      images.reference.back().receiver_gain = gain;
       progress.advance();
     }
     if (deformed) {
       progress.set_detail(sequence.name + ", deformed");
       images.deformed.push_back(image_of(acquisition, workspace, sequence, mix_seed(mri.seed, 2 * q + 1),
                                          *deformed, tissue_signal, sigma));
+      images.deformed.back().receiver_gain = gain;
       progress.advance();
     }
   }

@@ -382,6 +382,14 @@ nlohmann::json solves_json(const std::vector<SolveReport>& solves) {
   return list;
 }
 
+/// How the image's receiver gain was chosen (docs/volumes-and-images.md, Receiver gain).
+std::string receiver_gain_rule(const AcquisitionSettings& a) {
+  return a.receiver_gain
+             ? "the scene's acquisition.receiver_gain"
+             : "automatic: " + a.noise_reference_tissue +
+                   " at 1000, the brightest tissue at most 20000 (docs/volumes-and-images.md, Receiver gain)";
+}
+
 /// BIDS sidecar of one image: timing in seconds, flip angle in degrees, field strength, and how
 /// noise and bias were modelled.
 nlohmann::json image_sidecar(const Scene& scene, const MrImages& images, const MrImage& image) {
@@ -396,7 +404,10 @@ nlohmann::json image_sidecar(const Scene& scene, const MrImages& images, const M
                       {"BiasPercent", scene.mri.acquisition.bias_percent},
                       {"ReceiveCoils", images.coils},
                       {"CoilCombinationMethod", images.coils > 1 ? "sum of squares" : "single uniform coil"},
-                      {"Units", "arbitrary (proton density 1 = 1)"},
+                      {"Units", "scanner units: proton density (CSF = 1) times ReceiverGain"},
+                      {"ReceiverGain", image.receiver_gain},
+                      {"ReceiverGainRule", receiver_gain_rule(scene.mri.acquisition)},
+                      {"ImageDatatype", to_string(scene.mri.acquisition.image_datatype)},
                       {"GeneratedBy", "phantasm " + std::string(version)}};
   // The sequence's own fields, from its member of the registry (mri/sequences/).
   for (const auto& [key, value] : sequence_type(s.kind).sidecar(s))
@@ -462,8 +473,12 @@ void plan_images(const ImageGrid& grid, const Scene& scene, const MrImages& imag
       const std::filesystem::path path = layout.anat_image(state, image.sequence->name);
       plan.file(
           path,
-          [&grid, &image](const std::filesystem::path& p) {
-            write_nifti(p, grid, image.magnitude, {NiftiIntent::none, 1, "phantasm " + image.sequence->name});
+          [&grid, &image, datatype = scene.mri.acquisition.image_datatype](const std::filesystem::path& p) {
+            const NiftiWriteOptions options{NiftiIntent::none, 1, "phantasm " + image.sequence->name};
+            if (datatype == ImageDatatype::float32)
+              write_nifti(p, grid, image.magnitude, options);
+            else
+              write_nifti_whole_numbers(p, grid, image.magnitude, datatype == ImageDatatype::int16, options);
           },
           source_in(state, FileSource::reference_images));
       plan.json(sidecar_path(path),

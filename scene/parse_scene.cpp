@@ -91,6 +91,14 @@ void parse_acquisition(CheckedMap& map, AcquisitionSettings& acquisition) {
   map.string("noise_reference_tissue", acquisition.noise_reference_tissue);
   map.number("bias_percent", acquisition.bias_percent, between(0.0, 100.0, "percent"));
   map.integer("coils", acquisition.coils, 1, 64);
+  double gain = 0.0;
+  if (map.number("receiver_gain", gain, positive("scanner units per proton-density unit")))
+    acquisition.receiver_gain = gain;
+  std::string datatype;
+  if (map.choice("image_datatype", datatype, {"float32", "int16", "uint16"}))
+    acquisition.image_datatype = datatype == "int16"    ? ImageDatatype::int16
+                                 : datatype == "uint16" ? ImageDatatype::uint16
+                                                        : ImageDatatype::float32;
 }
 
 void parse_outputs(CheckedMap& map, OutputSettings& outputs) {

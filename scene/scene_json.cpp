@@ -69,6 +69,8 @@ nlohmann::json organ_json(const OrganSettings& organ) {
 }
 
 nlohmann::json load_json(const LoadSettings& load) {
+  if (load.kind == LoadKind::growth)
+    return {{"type", "growth"}, {"organ", load.organ}, {"volume_change", load.volume_change}};
   nlohmann::json j = {
       {"type", to_string(load.kind)}, {"motion", to_string(load.motion)}, {"period_s", load.period_s}};
   if (load.kind == LoadKind::gravity) {
@@ -181,7 +183,9 @@ nlohmann::json scene_settings_json(const Scene& scene) {
         {"noise_percent", a.noise_percent},
         {"noise_reference_tissue", a.noise_reference_tissue},
         {"bias_percent", a.bias_percent},
-        {"coils", a.coils}}},
+        {"coils", a.coils},
+        {"receiver_gain", a.receiver_gain ? nlohmann::json(*a.receiver_gain) : nlohmann::json("automatic")},
+        {"image_datatype", to_string(a.image_datatype)}}},
       {"outputs", declared_json(scene.outputs)},
   };
 }

@@ -245,7 +245,15 @@ const std::vector<SettingField<AcquisitionSettings>>& declared_settings<Acquisit
                "the noise's reference tissue")
         .field("bias_percent", &A::bias_percent, "percent", "0 to 100",
                "peak-to-peak multiplicative bias field")
-        .field("coils", &A::coils, "", "1 to 64", "receive coils combined by sum of squares");
+        .field("coils", &A::coils, "", "1 to 64", "receive coils combined by sum of squares")
+        .field("receiver_gain", &A::receiver_gain, "scanner units per proton-density unit", k_positive,
+               "the same gain for every image (unset: each sequence's automatic gain)")
+        .shaping(no_cached_result)
+        .choice("image_datatype", &A::image_datatype,
+                {{"float32", ImageDatatype::float32},
+                 {"int16", ImageDatatype::int16},
+                 {"uint16", ImageDatatype::uint16}},
+                "how the image files store voxels");
     return d.fields();
   }();
   return fields;
@@ -342,8 +350,10 @@ std::vector<const void*> settings_members(const SequenceSettings& s) {
 }
 
 std::vector<const void*> settings_members(const AcquisitionSettings& s) {
-  const auto& [kspace, oversampling, acquired_voxel, slice, noise, noise_tissue, bias, coils] = s;
-  return {&kspace, &oversampling, &acquired_voxel, &slice, &noise, &noise_tissue, &bias, &coils};
+  const auto& [kspace, oversampling, acquired_voxel, slice, noise, noise_tissue, bias, coils, gain,
+               datatype] = s;
+  return {&kspace,       &oversampling, &acquired_voxel, &slice, &noise,
+          &noise_tissue, &bias,         &coils,          &gain,  &datatype};
 }
 
 std::vector<const void*> settings_members(const MriSettings& s) {

@@ -12,7 +12,7 @@ The scaled loads do not change the anatomy, so every magnitude's `phantasm run` 
 cache (--cache, default OUT/anatomy-cache): the organs are fitted and meshed once per study.
 
 Usage: scripts/registration_study.py -o OUT [--magnitudes 2 4 6 8] [--scene FILE] [--cache DIR]
-                                      [--phantasm BIN] [--iterations N] [--threads N]
+                                      [--phantasm BIN] [--iterations N] [--threads N] [--voxel-size MM]
 """
 
 import argparse
@@ -79,6 +79,18 @@ def scaled_scene(scene, magnitude):
     return scene
 
 
+def with_voxel_size(scene, voxel_mm):
+    """The scene on a grid of `voxel_mm` voxels: same centre, the field of view rounded up to a
+    whole number of voxels (a coarse, quicker version of a scene)."""
+    grid = scene.setdefault("grid", {})
+    grid["voxel_size_mm"] = voxel_mm
+    fov = grid.get("field_of_view_mm")
+    if fov is not None:
+        fov = fov if isinstance(fov, list) else [fov] * 3
+        grid["field_of_view_mm"] = [math.ceil(f / voxel_mm - 1e-9) * voxel_mm for f in fov]
+    return scene
+
+
 def with_iterations(source, target, iterations):
     """Copies an elastix parameter file, replacing MaximumNumberOfIterations when asked."""
     with open(source) as f:
@@ -97,7 +109,10 @@ def study_pair(args, base_scene, magnitude, folder):
     open(log, "w").close()
     scene_path = os.path.join(folder, "scene.yaml")
     with open(scene_path, "w") as f:
-        yaml.safe_dump(scaled_scene(json.loads(json.dumps(base_scene)), magnitude), f, sort_keys=False)
+        scene = scaled_scene(json.loads(json.dumps(base_scene)), magnitude)
+        if args.voxel_size is not None:
+            scene = with_voxel_size(scene, args.voxel_size)
+        yaml.safe_dump(scene, f, sort_keys=False)
     dataset = os.path.join(folder, "dataset")
     seconds = {}
     run([args.phantasm, "run", scene_path, "-o", dataset, "--force", "-q", "--cache", args.cache], log, seconds,
@@ -200,7 +215,11 @@ def main():
     parser.add_argument("--iterations", type=int, default=None,
                         help="override MaximumNumberOfIterations of both stages (quick runs)")
     parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--voxel-size", type=float, default=None,
+                        help="run the scene on voxels of this size in mm (a coarse, quicker version)")
     args = parser.parse_args()
+    if args.voxel_size is not None and not args.voxel_size > 0:
+        sys.exit("registration_study: --voxel-size: expected a size > 0 mm")
     if any(m <= 0 for m in args.magnitudes):
         sys.exit("registration_study: --magnitudes: expected lengths > 0 mm")
     with open(args.scene) as f:

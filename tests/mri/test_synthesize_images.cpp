@@ -2,6 +2,7 @@
 // field's span, partial-volume mixing, and seeded repeatability.
 
 #include "mri/kspace.hpp"
+#include "mri/kspace_reference.hpp"
 #include "mri/parameter_maps.hpp"
 #include "mri/receive_coils.hpp"
 #include "mri/signal_equations.hpp"
@@ -41,6 +42,7 @@ MriSettings noisy_scene(double noise_percent, double bias_percent) {
   scene.acquisition.noise_percent = noise_percent;
   scene.acquisition.noise_reference_tissue = "white_matter";
   scene.acquisition.bias_percent = bias_percent;
+  scene.acquisition.receiver_gain = 1.0; // signals in PD units; the gain has a test of its own
   return scene;
 }
 
@@ -107,6 +109,44 @@ TEST(SynthesizeImages, TissueSignalBiasSpanAndSeededRepeatability) {
   scene.seed = 6;
   EXPECT_NE(synthesize_images(scene, block(), volumes(32), report, quiet).reference[0].magnitude,
             a.reference[0].magnitude);
+}
+
+// The automatic receiver gain puts the reference tissue at the scanner's level (1000) and scales
+// the noise with the signal; a gain the scene gives scales the PD-unit image and its noise by
+// exactly that factor; a nulled reference tissue gives way to the brightest tissue at 20 000.
+TEST(SynthesizeImages, ReceiverGainPutsTheReferenceTissueAtTheScannersLevel) {
+  StageReport report;
+  Reporter quiet = Reporter::silent();
+  MriSettings automatic = noisy_scene(0.0, 0.0);
+  automatic.acquisition.receiver_gain.reset();
+  const MrImages scanner = synthesize_images(automatic, block(), volumes(64), report, quiet);
+  const double white = sequence_signal(automatic.sequences[0], {0.7, 810, 80, 53.2});
+  EXPECT_NEAR(scanner.reference[0].receiver_gain, k_receiver_reference_level / white, 1e-9 / white);
+  for (float x : scanner.reference[0].magnitude)
+    ASSERT_NEAR(x, k_receiver_reference_level, 1e-3);
+  EXPECT_NE(std::find_if(report.modelled.begin(), report.modelled.end(),
+                         [](const std::string& line) {
+                           return line.find("T1w receiver gain") != std::string::npos &&
+                                  line.find("automatic: white_matter at 1000") != std::string::npos;
+                         }),
+            report.modelled.end());
+
+  const MrImages plain = synthesize_images(noisy_scene(3.0, 20.0), block(), volumes(32), report, quiet);
+  MriSettings gained = noisy_scene(3.0, 20.0);
+  gained.acquisition.receiver_gain = 3e4;
+  const MrImages loud = synthesize_images(gained, block(), volumes(32), report, quiet);
+  EXPECT_EQ(loud.reference[0].receiver_gain, 3e4);
+  EXPECT_NEAR(loud.reference[0].noise_sigma, 3e4 * plain.reference[0].noise_sigma,
+              1e-9 * loud.reference[0].noise_sigma);
+  for (std::size_t v = 0; v < plain.reference[0].magnitude.size(); ++v)
+    ASSERT_NEAR(loud.reference[0].magnitude[v], 3e4 * plain.reference[0].magnitude[v],
+                1e-5 * 3e4 * (plain.reference[0].magnitude[v] + white));
+
+  EXPECT_DOUBLE_EQ(automatic_receiver_gain(0.5, 1.0), 2000.0);
+  EXPECT_DOUBLE_EQ(automatic_receiver_gain(-0.5, 1.0), 2000.0); // a signed (inverted) signal
+  EXPECT_DOUBLE_EQ(automatic_receiver_gain(0.0, 2.0) * 2.0, 20.0 * k_receiver_reference_level);
+  EXPECT_DOUBLE_EQ(automatic_receiver_gain(1e-9, 2.0) * 2.0, 20.0 * k_receiver_reference_level);
+  EXPECT_EQ(automatic_receiver_gain(0.0, 0.0), 1.0); // no signal at all: nothing to scale
 }
 
 // Sum of squares over a ring of coils: without noise the image is the one-coil image times the
@@ -230,8 +270,8 @@ TEST(SynthesizeImages, KspacePipelineMatchesThePerCoilAcquisition) {
   scene.acquisition.slice_thickness_mm = 2.0;
   scene.acquisition.coils = 8;
   const VoxelizedPhantom object = volumes(20);
-  const MrImages pipeline = synthesize_images(scene, block(), object, report, quiet, KspaceMethod::pipeline);
-  const MrImages per_coil = synthesize_images(scene, block(), object, report, quiet, KspaceMethod::per_coil);
+  const MrImages pipeline = synthesize_images(scene, block(), object, report, quiet, nullptr);
+  const MrImages per_coil = synthesize_images(scene, block(), object, report, quiet, &reference::acquire_in_kspace);
   double worst = 0.0, brightest = 0.0;
   for (std::size_t v = 0; v < per_coil.reference[0].magnitude.size(); ++v) {
     worst = std::max(
@@ -244,7 +284,7 @@ TEST(SynthesizeImages, KspacePipelineMatchesThePerCoilAcquisition) {
   scene.acquisition.noise_percent = 5.0;
   scene.acquisition.bias_percent = 0.0;
   const int n = 8;
-  for (KspaceMethod method : {KspaceMethod::pipeline, KspaceMethod::per_coil}) {
+  for (CoilAcquisition method : {CoilAcquisition(nullptr), &reference::acquire_in_kspace}) {
     const MrImages background = synthesize_images(scene, block(), volumes(0), report, quiet, method);
     const std::vector<float>& m = background.reference[0].magnitude;
     double mean = 0.0;

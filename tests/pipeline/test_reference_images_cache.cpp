@@ -214,6 +214,7 @@ TEST(ReferenceImagesCache, EveryMriSettingOfTheReferenceImagesChangesTheKey) {
       [](Inputs& in) { in.mri.acquisition.noise_reference_tissue = "gray_matter"; },
       [](Inputs& in) { in.mri.acquisition.bias_percent += 1.0; },
       [](Inputs& in) { in.mri.acquisition.coils += 1; },
+      [](Inputs& in) { in.mri.acquisition.receiver_gain = 3e4; },
       [](Inputs& in) { in.mri.seed += 1; },
       [](Inputs& in) { in.mri.parameter_maps = !in.mri.parameter_maps; },
   };
