@@ -7,8 +7,10 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 namespace phantasm {
 namespace {
@@ -312,8 +314,154 @@ PatchFitReport measure_fit(const PatchSurface& surface, const ImplicitShape& tar
   const SurfaceDistance d = symmetric_distance(tessellation, samples, to_target);
   report.hausdorff_mm = d.hausdorff_mm;
   report.mean_distance_mm = d.mean_mm;
+  // The same surface points against the target itself.
+  const TargetBoundary boundary(target);
+  std::vector<double> to_source(to_target.size());
+#pragma omp parallel for schedule(dynamic, 16)
+  for (Eigen::Index t = 0; t < patches; ++t) {
+    if (cancellation_requested()) continue;
+    const std::vector<Eigen::Vector3d> points =
+        surface.patch_grid_points(t, std::clamp(surface_sample_level, 0, 8));
+    for (std::size_t k = 0; k < per_patch; ++k)
+      to_source[static_cast<std::size_t>(t) * per_patch + k] = boundary.distance(points[k]);
+  }
+  throw_if_cancelled();
+  if (!to_source.empty()) {
+    double sum = 0.0;
+    for (double v : to_source)
+      sum += v;
+    report.source_mean_mm = sum / static_cast<double>(to_source.size());
+    const auto p95 = to_source.begin() + static_cast<std::ptrdiff_t>(0.95 * double(to_source.size() - 1));
+    std::nth_element(to_source.begin(), p95, to_source.end());
+    report.source_p95_mm = *p95;
+    report.source_max_mm = *std::max_element(p95, to_source.end());
+  }
   report.volume_error = (surface.volume() - target.volume()) / target.volume();
   return report;
+}
+
+TargetBoundary::TargetBoundary(const ImplicitShape& target, double spacing_mm) {
+  const double radius = target.bounding_radius();
+  m_spacing = spacing_mm > 0.0 ? spacing_mm : std::max(std::min(1.0, radius / 32.0), radius / 200.0);
+  const double half = 1.05 * radius + m_spacing;
+  const int n = static_cast<int>(std::ceil(2.0 * half / m_spacing)) + 1;
+  const Eigen::Vector3d low = target.center() - Eigen::Vector3d::Constant(half);
+  const auto at = [&](int i, int j, int k) -> Eigen::Vector3d {
+    return low + m_spacing * Eigen::Vector3d(i, j, k);
+  };
+  // The crossing on the edge a-b (values fa, fb of opposite signs): false position with the
+  // Illinois step, to 1e-4 of the spacing.
+  const auto crossing = [&](Eigen::Vector3d a, Eigen::Vector3d b, double fa, double fb) {
+    Eigen::Vector3d x = a;
+    int side = 0;
+    for (int iteration = 0; iteration < 40; ++iteration) {
+      const double t = fa / (fa - fb);
+      x = a + t * (b - a);
+      const double fx = target.value(x);
+      if (fx == 0.0 || (b - a).norm() < 1e-4 * m_spacing) break;
+      if ((fx > 0.0) == (fa > 0.0)) {
+        a = x;
+        fa = fx;
+        if (side == -1) fb *= 0.5;
+        side = -1;
+      } else {
+        b = x;
+        fb = fx;
+        if (side == 1) fa *= 0.5;
+        side = 1;
+      }
+      if (std::abs(fx) < 1e-12) break;
+    }
+    return x;
+  };
+  // Layer by layer (two in memory), each layer's values in parallel over its rows.
+  std::vector<double> below(static_cast<std::size_t>(n) * n), layer(below.size());
+  const auto fill = [&](std::vector<double>& values, int k) {
+#pragma omp parallel for schedule(static)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i)
+        values[static_cast<std::size_t>(j) * n + i] = target.value(at(i, j, k));
+  };
+  const auto inside = [](double f) { return f > 0.0; };
+  for (int k = 0; k < n; ++k) {
+    throw_if_cancelled();
+    fill(layer, k);
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const double f = layer[static_cast<std::size_t>(j) * n + i];
+        if (i + 1 < n && inside(f) != inside(layer[static_cast<std::size_t>(j) * n + i + 1]))
+          m_points.push_back(
+              crossing(at(i, j, k), at(i + 1, j, k), f, layer[static_cast<std::size_t>(j) * n + i + 1]));
+        if (j + 1 < n && inside(f) != inside(layer[static_cast<std::size_t>(j + 1) * n + i]))
+          m_points.push_back(
+              crossing(at(i, j, k), at(i, j + 1, k), f, layer[static_cast<std::size_t>(j + 1) * n + i]));
+        if (k > 0 && inside(f) != inside(below[static_cast<std::size_t>(j) * n + i]))
+          m_points.push_back(
+              crossing(at(i, j, k), at(i, j, k - 1), f, below[static_cast<std::size_t>(j) * n + i]));
+      }
+    std::swap(below, layer);
+  }
+  m_normals.resize(m_points.size());
+#pragma omp parallel for schedule(static)
+  for (std::int64_t p = 0; p < static_cast<std::int64_t>(m_points.size()); ++p) {
+    const Eigen::Vector3d g = target.gradient(m_points[static_cast<std::size_t>(p)]);
+    m_normals[static_cast<std::size_t>(p)] =
+        g.norm() > 0.0 ? Eigen::Vector3d(-g.normalized()) : Eigen::Vector3d::Zero();
+  }
+  // A hash grid of cells of two spacings over the lattice's box.
+  m_cell = 2.0 * m_spacing;
+  m_origin = low;
+  m_cells = Eigen::Vector3i::Constant(static_cast<int>(std::ceil(2.0 * half / m_cell)) + 1);
+  const auto cell_of = [&](const Eigen::Vector3d& x) -> Eigen::Vector3i {
+    const Eigen::Vector3i c = ((x - m_origin) / m_cell).array().floor().cast<int>().matrix();
+    return c.cwiseMax(Eigen::Vector3i::Zero()).cwiseMin(m_cells - Eigen::Vector3i::Ones());
+  };
+  const auto flat = [&](const Eigen::Vector3i& c) {
+    return static_cast<std::size_t>((std::int64_t{c.z()} * m_cells.y() + c.y()) * m_cells.x() + c.x());
+  };
+  m_first.assign(static_cast<std::size_t>(m_cells.cast<std::int64_t>().prod()) + 1, 0);
+  for (const Eigen::Vector3d& x : m_points)
+    ++m_first[flat(cell_of(x)) + 1];
+  for (std::size_t c = 1; c < m_first.size(); ++c)
+    m_first[c] += m_first[c - 1];
+  m_order.resize(m_points.size());
+  std::vector<std::uint32_t> next(m_first.begin(), m_first.end() - 1);
+  for (std::size_t p = 0; p < m_points.size(); ++p)
+    m_order[next[flat(cell_of(m_points[p]))]++] = static_cast<std::uint32_t>(p);
+}
+
+double TargetBoundary::distance(const Eigen::Vector3d& x) const {
+  if (m_points.empty()) return std::numeric_limits<double>::infinity();
+  const Eigen::Vector3i c = ((x - m_origin) / m_cell).array().floor().cast<int>().matrix();
+  // Rings of cells around x's cell until the ring's distance exceeds the best so far.
+  double best = std::numeric_limits<double>::infinity();
+  std::size_t nearest = 0;
+  const int largest = m_cells.maxCoeff();
+  for (int ring = 0; ring <= largest + std::abs(c.x()) + std::abs(c.y()) + std::abs(c.z()); ++ring) {
+    if ((ring - 1) * m_cell > best) break;
+    for (int dz = -ring; dz <= ring; ++dz)
+      for (int dy = -ring; dy <= ring; ++dy)
+        for (int dx = -ring; dx <= ring; ++dx) {
+          if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != ring) continue;
+          const Eigen::Vector3i at = c + Eigen::Vector3i(dx, dy, dz);
+          if ((at.array() < 0).any() || (at.array() >= m_cells.array()).any()) continue;
+          const std::size_t cell =
+              static_cast<std::size_t>((std::int64_t{at.z()} * m_cells.y() + at.y()) * m_cells.x() + at.x());
+          for (std::uint32_t k = m_first[cell]; k < m_first[cell + 1]; ++k) {
+            const double d = (m_points[m_order[k]] - x).norm();
+            if (d < best || (d == best && m_order[k] < nearest)) {
+              best = d;
+              nearest = m_order[k];
+            }
+          }
+        }
+  }
+  // Near the boundary, the distance to the tangent plane at the nearest crossing (the boundary
+  // curves between crossings a spacing apart); farther out, the distance to that point.
+  const Eigen::Vector3d offset = x - m_points[nearest];
+  const double along = std::abs(offset.dot(m_normals[nearest]));
+  const double across2 = std::max(0.0, offset.squaredNorm() - along * along);
+  return across2 <= 2.25 * m_spacing * m_spacing && m_normals[nearest].squaredNorm() > 0.0 ? along : best;
 }
 
 int surface_sample_level_for_spacing(const PatchSurface& surface, double spacing_mm) {

@@ -289,16 +289,17 @@ std::string organ_line(const Organ& organ) {
       line << ", " << organ.solid->vertices.rows() << " vertices / " << organ.solid->tets.rows()
            << " tets (min dihedral " << format_number(min_dihedral_angle_deg(*organ.solid)) << " deg)";
     }
-    line << ", volume " << format_number(organ.surface->volume() / 1000.0) << " ml, fit Hausdorff "
-         << format_number(organ.fit.hausdorff_mm) << " mm, volume error "
-         << format_number(100.0 * organ.fit.volume_error) << " %";
+    line << ", volume " << format_number(organ.surface->volume() / 1000.0)
+         << " ml, fit to the source boundary: mean " << format_number(organ.fit.source_mean_mm) << ", p95 "
+         << format_number(organ.fit.source_p95_mm) << ", max " << format_number(organ.fit.source_max_mm)
+         << " mm, volume error " << format_number(100.0 * organ.fit.volume_error) << " %";
   }
   return line.str();
 }
 
 // The geometry encoding (encode_organ_geometry): native-endian raw values, each array preceded by
 // its dimensions. Bumped whenever the layout or what an organ holds changes.
-constexpr std::uint32_t k_geometry_format = 3;
+constexpr std::uint32_t k_geometry_format = 4;
 
 } // namespace
 
@@ -383,6 +384,9 @@ std::string encode_organ_geometry(const Phantom& phantom) {
     out.value(organ.fit.hausdorff_mm);
     out.value(organ.fit.mean_distance_mm);
     out.value(organ.fit.volume_error);
+    out.value(organ.fit.source_mean_mm);
+    out.value(organ.fit.source_p95_mm);
+    out.value(organ.fit.source_max_mm);
   }
   return out.take();
 }
@@ -449,6 +453,9 @@ Phantom phantom_from_geometry(const AnatomySettings& anatomy, const std::map<std
     organ.fit.hausdorff_mm = in.value<double>();
     organ.fit.mean_distance_mm = in.value<double>();
     organ.fit.volume_error = in.value<double>();
+    organ.fit.source_mean_mm = in.value<double>();
+    organ.fit.source_p95_mm = in.value<double>();
+    organ.fit.source_max_mm = in.value<double>();
   }
   if (!in.done()) throw DamagedGeometry("organ geometry: bytes after the last organ");
 

@@ -80,6 +80,9 @@ Phantom build_anatomy(const Scene& scene, const std::filesystem::path& cache, St
   Phantom phantom = build_phantom_cached(scene.anatomy, files, cache, report, reporter);
   for (const Organ& organ : phantom.organs) {
     if (!organ.surface) continue;
+    report.accuracy[organ.name + " fit to source mean mm"] = organ.fit.source_mean_mm;
+    report.accuracy[organ.name + " fit to source p95 mm"] = organ.fit.source_p95_mm;
+    report.accuracy[organ.name + " fit to source max mm"] = organ.fit.source_max_mm;
     report.accuracy[organ.name + " fit Hausdorff mm"] = organ.fit.hausdorff_mm;
     report.accuracy[organ.name + " fit mean distance mm"] = organ.fit.mean_distance_mm;
     report.accuracy[organ.name + " fit relative volume error"] = organ.fit.volume_error;
