@@ -1,9 +1,9 @@
 // Time of the MR image stage for three contrasts (MPRAGE T1w, spin-echo T2w, FLAIR) on a 256^3
 // grid of nested ellipsoids (CSF, grey and white matter, with partial-volume fractions), with
 // and without the k-space acquisition and with a ring of coils. OMP_NUM_THREADS sets the threads.
-// The k-space cases run through the pipeline (KspaceMethod::pipeline) and through the former
-// per-coil acquisition (KspaceMethod::per_coil) alternately, ROUNDS times, in one process, and
-// report each round's time, the median, the median processor time (user and system, all
+// The k-space cases run through the pipeline and through the former per-coil acquisition
+// (reference::acquire_in_kspace, mri/kspace_reference.hpp) alternately, ROUNDS times, in one
+// process, and report each round's time, the median, the median processor time (user and system, all
 // threads), a hash of the images' bytes (the last round's; the same hash from two builds means
 // the same images), and the largest difference between the two methods' noise-free images
 // (relative to the brightest voxel).
@@ -13,6 +13,7 @@
 // coil) and c (k-space, 8 coils), all by default; METHODS pipeline, per_coil or both, both by
 // default, e.g. `mri_images 256 3 0 c pipeline` times the 8-coil pipeline alone)
 
+#include "mri/kspace_reference.hpp"
 #include "mri/synthesize_images.hpp"
 
 #include <omp.h>
@@ -166,7 +167,7 @@ int main(int argc, char** argv) {
   std::printf("%d^3 grid, three contrasts, noise 3 %%, bias 20 %%, %d threads, %d rounds\n", size,
               omp_get_max_threads(), rounds);
   Reporter quiet = Reporter::silent();
-  auto run = [&](const MriSettings& scene, KspaceMethod method, double& seconds, double& cpu) {
+  auto run = [&](const MriSettings& scene, CoilAcquisition method, double& seconds, double& cpu) {
     StageReport report;
     const auto start = std::chrono::steady_clock::now();
     const double cpu_start = process_cpu_seconds();
@@ -194,7 +195,7 @@ int main(int argc, char** argv) {
         if (!wanted(which)) continue;
         double seconds = 0.0, cpu = 0.0;
         const MrImages images =
-            run(scene, which == 0 ? KspaceMethod::pipeline : KspaceMethod::per_coil, seconds, cpu);
+            run(scene, which == 0 ? nullptr : &reference::acquire_in_kspace, seconds, cpu);
         times[which].push_back(seconds);
         cpu_times[which].push_back(cpu);
         hashes[which] = bytes_hash(images);
@@ -213,8 +214,8 @@ int main(int argc, char** argv) {
       // The methods differ in their noise deviates; without noise they must agree to rounding.
       const MriSettings clean = scene_of(c, size, 0.0);
       double unused = 0.0, unused_cpu = 0.0;
-      const MrImages a = run(clean, KspaceMethod::pipeline, unused, unused_cpu);
-      const MrImages b = run(clean, KspaceMethod::per_coil, unused, unused_cpu);
+      const MrImages a = run(clean, nullptr, unused, unused_cpu);
+      const MrImages b = run(clean, &reference::acquire_in_kspace, unused, unused_cpu);
       double worst = 0.0, brightest = 0.0;
       for (std::size_t q = 0; q < a.reference.size(); ++q)
         for (std::size_t v = 0; v < a.reference[q].magnitude.size(); ++v) {

@@ -6,6 +6,7 @@
 
 #include <complex>
 #include <cstdint>
+#include <mutex>
 #include <vector>
 
 namespace phantasm {
@@ -30,15 +31,8 @@ int signed_frequency(int index, int n);
 /// as scanners do.
 bool is_kept_frequency(int index, int n, int kept);
 
-/// Acquires `image` (the complex object on the grid, x fastest) in place: forward DFT, keeps the
-/// central samples of `sampling` weighted by the slice profile, adds complex Gaussian noise to
-/// every kept sample such that each of the real and imaginary parts of a reconstructed voxel has
-/// standard deviation `noise_sigma`, and reconstructs on the object grid by inverse DFT of the
-/// zero-filled k-space (unit gain: a constant object is reproduced). Noise is drawn per k-space
-/// line from streams seeded by `noise_seed`, and the lines are transformed in parallel with one
-/// FFTW plan per axis, so the result does not depend on the number of threads.
-void acquire_in_kspace(std::vector<std::complex<double>>& image, const KspaceSampling& sampling,
-                       double noise_sigma, std::uint64_t noise_seed);
+/// FFTW's planner is not thread-safe: every plan is made and destroyed under this lock.
+std::mutex& fftw_planner_lock();
 
 /// One receive coil of a k-space acquisition: its in-plane sensitivities and its noise.
 struct KspaceCoil {
@@ -49,7 +43,8 @@ struct KspaceCoil {
 
 /// The k-space acquisition of many images of one grid: sensitivity (in-plane, the same on every
 /// slice) x a real object, with the same sampling, plans and buffers for every coil, sequence
-/// and state. Equal to acquire_in_kspace() of sensitivity x object up to single-precision
+/// and state. Equal to reference::acquire_in_kspace() (mri/kspace_reference.hpp, the former
+/// method, for tests and benchmarks) of sensitivity x object up to single-precision
 /// rounding (tested to 1e-6 of the largest value), noise apart (another generator, the same
 /// statistics):
 /// * the object is real, so its transform along the third axis is real-to-complex, and the

@@ -9,21 +9,23 @@
 #include "mri/mri_settings.hpp"
 #include "voxelize/voxelized_phantom.hpp"
 
+#include <complex>
+#include <cstdint>
 #include <optional>
 #include <utility>
 #include <vector>
 
 namespace phantasm {
 
-/// How synthesize_images() acquires in k-space. Both give the same images up to rounding, noise
-/// apart (the same statistics, other deviates).
-enum class KspaceMethod {
-  /// KspacePipeline: the object's transform along the coils' axis once per image, plans and
-  /// buffers shared by every coil, sequence and state, in-plane work one plane at a time.
-  pipeline,
-  /// acquire_in_kspace() on each coil's complex image: the former method, kept for comparison.
-  per_coil,
-};
+struct KspaceSampling;
+
+/// A k-space acquisition of one coil's complex image (x fastest) in place, with noise of
+/// noise_sigma per part of a reconstructed voxel seeded by noise_seed: the former method,
+/// reference::acquire_in_kspace (mri/kspace_reference.hpp), which tests and benchmarks compare
+/// with KspacePipeline. Both give the same images up to rounding, noise apart (the same
+/// statistics, other deviates).
+using CoilAcquisition = void (*)(std::vector<std::complex<double>>& image, const KspaceSampling& sampling,
+                                 double noise_sigma, std::uint64_t noise_seed);
 
 /// The reference state's part of synthesize_images()'s result: one image per sequence and, with
 /// settings.parameter_maps, the state's parameter maps. They are made from the settings, the
@@ -38,7 +40,10 @@ struct ReferenceImages {
 
 /// What synthesize_images() makes besides the settings.
 struct SynthesisOptions {
-  KspaceMethod method = KspaceMethod::pipeline;
+  /// How k-space is acquired: nullptr, through KspacePipeline (the object's transform along the
+  /// coils' axis once per image, plans and buffers shared by every coil, sequence and state,
+  /// in-plane work one plane at a time); otherwise each coil's complex image by this function.
+  CoilAcquisition per_coil = nullptr;
   /// The reference state alone: a deformed state the volumes hold is passed over (its images,
   /// its maps). The report gets the same lines as when both are made.
   bool reference_only = false;
@@ -69,12 +74,12 @@ MrImages synthesize_images(const MriSettings& settings, const OrganTable& organs
                            SynthesisOptions options);
 
 /// synthesize_images() of every state the volumes hold.
-/// @param method how k-space is acquired (benchmarks compare the two)
+/// @param per_coil how k-space is acquired (SynthesisOptions::per_coil; benchmarks compare the two)
 inline MrImages synthesize_images(const MriSettings& settings, const OrganTable& organs,
                                   const VoxelizedPhantom& volumes, StageReport& report, Reporter& reporter,
-                                  KspaceMethod method = KspaceMethod::pipeline) {
+                                  CoilAcquisition per_coil = nullptr) {
   SynthesisOptions options;
-  options.method = method;
+  options.per_coil = per_coil;
   return synthesize_images(settings, organs, volumes, report, reporter, std::move(options));
 }
 

@@ -4,6 +4,7 @@
 
 #include "mri/gaussian_noise.hpp"
 #include "mri/kspace.hpp"
+#include "mri/kspace_reference.hpp"
 
 #include <fftw3.h>
 #include <gtest/gtest.h>
@@ -15,6 +16,7 @@
 #include <random>
 
 using namespace phantasm;
+using phantasm::reference::acquire_in_kspace;
 
 namespace {
 
