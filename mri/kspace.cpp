@@ -329,7 +329,7 @@ void KspacePipeline::acquire_coils(const KspaceCoil* coils, int count, const Del
         const std::complex<float>* sensitivity =
             coils[p].sensitivity ? sensitivities.data() + static_cast<std::size_t>(p) * slice : nullptr;
         // Per part noise of each kept sample for sigma per part in the reconstructed voxel (the
-        // inverse transform is scaled by 1 / total), as in acquire_in_kspace().
+        // inverse transform is scaled by 1 / total), as in reference::acquire_in_kspace().
         const double sample_sigma = coils[p].noise_sigma * total / std::sqrt(kept_count);
         std::complex<float>* plane =
             m_coil + static_cast<std::size_t>(p) * coil_planes + static_cast<std::size_t>(q) * m_plane;
