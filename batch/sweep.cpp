@@ -13,6 +13,7 @@
 #include <regex>
 #include <set>
 #include <sstream>
+#include <string_view>
 
 namespace phantasm {
 namespace {
@@ -31,6 +32,10 @@ struct Variation {
   std::string random_kind;        ///< or a range: uniform, log_uniform, random_integer
   double low = 0.0, high = 0.0;
 };
+
+/// The start of the message for a key of vary that names no scene setting.
+const std::string k_key_path_expected = "expected a scene key path such as acquisition.noise_percent or "
+                                        "deformation.loads[1].displacement_mm, found ";
 
 class SweepReader {
 public:
@@ -75,11 +80,7 @@ public:
     while (std::getline(parts, part, '.')) {
       std::smatch match;
       if (!std::regex_match(part, match, segment)) {
-        fail(v.mark, "vary." + v.key,
-             "expected a scene key path such as acquisition.noise_percent or "
-             "deformation.loads[1].displacement_mm, "
-             "found '" +
-                 part + "' in it");
+        fail(v.mark, "vary." + v.key, k_key_path_expected + ("'" + part + "' in it"));
       }
       Segment s{match[1].str(), {}};
       static const std::regex index(R"(\[([0-9]{1,6})\])");
@@ -95,6 +96,12 @@ public:
     Variation v;
     v.key = key;
     v.mark = value.Mark();
+    // An empty key path (or one with an empty part) names no setting: it would vary nothing.
+    if (key.empty() || key.front() == '.' || key.back() == '.' || key.find("..") != std::string::npos) {
+      fail(v.mark, "vary." + key,
+           k_key_path_expected +
+               (key.empty() ? std::string("an empty key") : "an empty part in '" + key + "'"));
+    }
     if (value.IsSequence()) {
       if (value.size() == 0) fail(v.mark, "vary." + key, "expected a non-empty list of values, found []");
       for (const auto& item : value)
@@ -540,7 +547,9 @@ private:
 } // namespace
 
 bool is_sweep_text(const std::string& text) {
-  std::istringstream in(text);
+  // A UTF-8 byte-order mark (some editors write one) comes before the first key, not in it.
+  const std::string_view bom = "\xef\xbb\xbf";
+  std::istringstream in(text.compare(0, bom.size(), bom) == 0 ? text.substr(bom.size()) : text);
   std::string line;
   while (std::getline(in, line))
     if (line.rfind("phantasm_sweep:", 0) == 0) return true;

@@ -4,8 +4,10 @@
 #include "core/error.hpp"
 #include "core/format.hpp"
 #include "core/path_kind.hpp"
+#include "core/sha256.hpp"
 #include "evaluation/registration_metrics.hpp"
 #include "io/dataset_layout.hpp"
+#include "io/json_file.hpp"
 #include "io/nifti_file.hpp"
 
 #include <algorithm>
@@ -122,6 +124,33 @@ void require_same_grid(const ImageGrid& expected, const ImageGrid& found, const 
             << found.dims.x() << " x " << found.dims.y() << " x " << found.dims.z()
             << " voxels with an affine differing by up to " << mismatch << " mm";
     throw InputError(message.str());
+  }
+}
+
+/// Refuses an exact mask whose values are not those the dataset wrote: the writer records
+/// their SHA-256 (one byte per voxel, 1 inside the mask, i fastest) in the mask's sidecar as
+/// ValuesSha256. A mask changed after the run would score a registration where the truth is not
+/// exact. A dataset written before the record has none: its mask is read as it is.
+void require_written_mask(const NiftiVolume& mask, const std::filesystem::path& path) {
+  const std::filesystem::path sidecar = sidecar_path(path);
+  std::ifstream in(sidecar, std::ios::binary);
+  if (!in || path_kind(sidecar) != "a regular file") return;
+  std::ostringstream text;
+  text << in.rdbuf();
+  const nlohmann::json record = parse_json_text(text.str(), sidecar, "the JSON sidecar phantasm writes");
+  if (!record.is_object() || !record.contains("ValuesSha256")) return;
+  if (!record["ValuesSha256"].is_string())
+    throw InputError(sidecar.string() + ": ValuesSha256: expected 64 hex digits, found " +
+                     record["ValuesSha256"].dump());
+  std::string inside(mask.values.size(), '\0');
+  for (std::size_t v = 0; v < mask.values.size(); ++v)
+    inside[v] = mask.values[v] > 0.5 ? 1 : 0;
+  const std::string found = sha256_hex(inside);
+  const std::string expected = record["ValuesSha256"].get<std::string>();
+  if (found != expected) {
+    throw InputError(path.string() + ": expected the exact mask the dataset wrote (SHA-256 of its values " +
+                     expected + ", " + sidecar.filename().string() + " ValuesSha256), found other values (" +
+                     found + "): the mask was changed after the run");
   }
 }
 
@@ -277,6 +306,7 @@ nlohmann::json evaluate_registration(const EvaluationRequest& request) {
                        std::to_string(truth.lps_mm.size()) + " voxels (one component), found " +
                        std::to_string(mask.values.size()));
     }
+    require_written_mask(mask, layout.transform_mask(moving, fixed));
     std::vector<double> error;
     for (std::size_t v = 0; v < truth.lps_mm.size(); ++v)
       if (mask.values[v] > 0.5) error.push_back((field->lps_mm[v] - truth.lps_mm[v]).norm());

@@ -4,6 +4,7 @@
 #include "core/error.hpp"
 #include "core/format.hpp"
 #include "core/parallel_tasks.hpp"
+#include "core/sha256.hpp"
 #include "core/version.hpp"
 #include "geometry/ras_lps.hpp"
 #include "io/atomic_file.hpp"
@@ -16,6 +17,7 @@
 #include "io/vdb_file.hpp"
 #include "mri/sequence_type.hpp"
 #include "pipeline/cost_estimate.hpp"
+#include "pipeline/finite_outputs.hpp"
 #include "pipeline/reference_files_cache.hpp"
 #include "scene/scene_json.hpp"
 #include "voxelize/landmarks.hpp"
@@ -614,11 +616,19 @@ void plan_volumes(const Scene& scene, const VoxelizedPhantom& v, const DatasetLa
                  jacobian = scene.outputs.jacobian
                                 ? layout.jacobian(from, to).filename().string()
                                 : std::string()] { return field_sidecar(from, to, name, jacobian); });
-      plan.json(sidecar_path(mask), [field = field.filename().string()] {
+      plan.json(sidecar_path(mask), [&v, ref_grid, field = field.filename().string()] {
+        // The values' hash lets phantasm eval refuse a mask changed after the run.
+        const auto& exact = ref_grid ? v.motion->ref_to_def_exact : v.motion->def_to_ref_exact;
+        std::string inside(exact.size(), '\0');
+        for (std::size_t i = 0; i < exact.size(); ++i)
+          inside[i] = exact[i] != 0 ? 1 : 0;
         return nlohmann::json{{"Description", "1 where the field " + field +
                                                   " is the solved motion, 0 where it is the smooth "
                                                   "extension outside the simulated bodies"},
-                              {"Units", "n/a (0 or 1)"}};
+                              {"Units", "n/a (0 or 1)"},
+                              {"ValuesSha256", sha256_hex(inside)},
+                              {"ValuesSha256Description",
+                               "SHA-256 of the mask's values, one byte per voxel (1 inside), i fastest"}};
       });
     }
   }
@@ -772,6 +782,7 @@ void write_in_parallel(const std::vector<const PlannedFile*>& files, ProgressBar
 RunSummary write_dataset(const Scene& scene, const Simulation& simulation,
                          const std::filesystem::path& output, Reporter& reporter) {
   check_dataset_names(scene);
+  require_finite_outputs(simulation, scene.file); // a NaN is refused before the first file
   RunSummary summary;
   summary.stages = simulation.stages;
   const DatasetLayout layout(output, scene.outputs.subject);

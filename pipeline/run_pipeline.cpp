@@ -9,6 +9,7 @@
 #include "io/shape_files.hpp"
 #include "mri/mri_plan.hpp"
 #include "pipeline/anatomy_cache.hpp"
+#include "pipeline/anatomy_checks.hpp"
 #include "pipeline/cost_estimate.hpp"
 #include "pipeline/reference_cache.hpp"
 #include "pipeline/reference_images_cache.hpp"
@@ -120,6 +121,7 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
   }
   std::string anatomy_key;
   result.phantom = build_anatomy(scene, cache, result.stages[0], reporter, anatomy_key);
+  check_built_anatomy(scene, result.phantom); // organs read from files, obstacles at rest
   if (until == SimulationStage::anatomy) return;
 
   StageReport& sim = result.stages[1];

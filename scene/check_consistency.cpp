@@ -113,6 +113,34 @@ public:
         current = m_scene.find_organ(current->inside);
       }
     }
+    check_nested_sizes();
+  }
+
+  /// An organ cannot fit in a container smaller than itself along an axis. Analytic shapes are
+  /// checked here by their bounds; those read from files once built (pipeline/anatomy_checks.hpp).
+  void check_nested_sizes() {
+    const auto& organs = m_scene.anatomy.organs;
+    for (std::size_t i = 0; i < organs.size(); ++i) {
+      if (organs[i].inside.empty()) continue;
+      const OrganSettings* container = m_scene.find_organ(organs[i].inside);
+      if (container == nullptr) continue;
+      // The bounds of an ellipsoid or a box are its extent; those of a superquadric may be larger.
+      const ShapeKind kind = organs[i].shape.kind;
+      if (kind != ShapeKind::ellipsoid && kind != ShapeKind::box) continue;
+      const std::optional<WorldBox> own = analytic_shape_bounds(organs[i].shape);
+      const std::optional<WorldBox> outer = analytic_shape_bounds(container->shape);
+      if (!own || !outer) continue;
+      const Eigen::Vector3d size = own->max_mm - own->min_mm, room = outer->max_mm - outer->min_mm;
+      for (int a = 0; a < 3; ++a) {
+        if (size[a] > room[a] * (1.0 + 1e-9)) {
+          problem(indexed("anatomy.organs", i, "inside"),
+                  "expected a container at least as large as the organ it holds, found '" + container->name +
+                      "' " + format_number(room[a]) + " mm across along " + "xyz"[a] + " and '" +
+                      organs[i].name + "' " + format_number(size[a]) + " mm");
+          break;
+        }
+      }
+    }
   }
 
   void check_organ_reference(const std::string& key_path, const std::string& organ) {
@@ -132,7 +160,18 @@ public:
         check_organ_reference(indexed("deformation.loads", i, "organs") + "[" + std::to_string(j) + "]",
                               load.organs[j]);
       }
-      if (load.kind == LoadKind::displacement) {
+      for (std::size_t j = 0; load.kind == LoadKind::growth && j < i; ++j) {
+        if (d.loads[j].kind == LoadKind::growth && d.loads[j].organ == load.organ)
+          problem(indexed("deformation.loads", i, "organ"),
+                  "expected one growth per organ, found a second for '" + load.organ + "' (the first is "
+                  "deformation.loads[" + std::to_string(j) + "])");
+      }
+      const OrganSettings* grown = load.kind == LoadKind::growth ? m_scene.find_organ(load.organ) : nullptr;
+      if (grown != nullptr && !grown->solid)
+        problem(indexed("deformation.loads", i, "organ"),
+                "expected a solid organ (growth changes the volume of its tets), found '" + load.organ +
+                    "', a surface organ (solid: false)");
+      if (load.kind != LoadKind::gravity) {
         check_organ_reference(indexed("deformation.loads", i, "organ"), load.organ);
         for (const auto& fixed : d.fixed) {
           if (fixed == load.organ) {
@@ -170,6 +209,7 @@ public:
     if (d.mode == DeformationMode::none && !d.obstacles.empty()) {
       problem("deformation.mode", "expected quasi_static or dynamic when obstacles are given, found 'none'");
     }
+    check_stiffness_under_gravity();
     const bool position_based =
         d.solver.method == SolverMethod::gauss_seidel_pbd || d.solver.method == SolverMethod::xpbd;
     if (position_based && d.mode == DeformationMode::quasi_static) {
@@ -177,6 +217,32 @@ public:
               std::string("expected local_global, jacobi_chebyshev or newton for a quasi_static scene (") +
                   to_string(d.solver.method) + " steps in time: it needs mode dynamic), found " +
                   to_string(d.solver.method));
+    }
+  }
+
+  /// Gravity strains a body of size L by about density g L / E: a material so soft that this is
+  /// beyond 10^6 (E = 1e-300 Pa) makes a solve of no physical meaning and numbers past any
+  /// float. (A 1 Pa brain under 1 g, strained about 10^3, runs and warns of inverted tets.)
+  void check_stiffness_under_gravity() {
+    const DeformationSettings& d = m_scene.deformation;
+    if (d.mode == DeformationMode::none) return;
+    double gravity = 0.0;
+    for (const LoadSettings& load : d.loads)
+      if (load.kind == LoadKind::gravity) gravity = std::max(gravity, load.acceleration_m_s2.norm());
+    if (!(gravity > 0.0)) return;
+    const double size_m = m_scene.grid.field_of_view_mm.maxCoeff() / 1000.0;
+    constexpr double k_largest_strain = 1e6;
+    for (const MaterialSettings& material : d.materials) {
+      const double strain = material.density_kg_m3 * gravity * size_m / material.youngs_modulus_Pa;
+      if (strain > k_largest_strain) {
+        problem("materials." + material.name + ".youngs_modulus_Pa",
+                "expected a modulus gravity strains by at most 10^6 (density x gravity x field of view / E "
+                "<= 10^6, E >= " +
+                    format_number(material.density_kg_m3 * gravity * size_m / k_largest_strain) +
+                    " Pa under " + format_number(gravity) + " m/s^2), found " +
+                    format_number(material.youngs_modulus_Pa) + " Pa: a strain of about " +
+                    format_number(strain));
+      }
     }
   }
 

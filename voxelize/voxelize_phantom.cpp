@@ -3,6 +3,7 @@
 #include "core/cancellation.hpp"
 #include "core/format.hpp"
 #include "geometry/triangle_mesh.hpp"
+#include "voxelize/fold_warning.hpp"
 #include "voxelize/gap_fill.hpp"
 #include "voxelize/landmarks.hpp"
 #include "voxelize/level_set.hpp"
@@ -293,26 +294,20 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
                               " voxels left out of the exact masks: composing the two fields there misses "
                               "identity by more than " +
                               format_number(composition_tolerance_voxels) + " voxel");
-    if (out.motion->folded_exact_voxels > 0) {
-      // Name the organs (reference labels) the folds fall in, so the warning says what to fix.
-      std::map<std::int32_t, long> folded_by_label;
-      for (std::size_t v = 0; v < out.motion->jacobian.size(); ++v)
-        if (out.motion->ref_to_def_exact[v] && !(out.motion->jacobian[v] > 0.0f))
-          ++folded_by_label[out.reference.labels[v]];
-      std::string where;
-      for (const auto& [label, count] : folded_by_label) {
-        const auto o = static_cast<std::size_t>(label - 1);
-        where += (where.empty() ? "" : ", ") +
-                 (label > 0 && o < reference.organs.size() ? reference.organs[o].name
-                                                           : std::string("background")) +
-                 " (" + std::to_string(count) + ")";
-      }
-      report.warnings.push_back(std::to_string(out.motion->folded_exact_voxels) +
-                                " voxels of the exact ref_to_def mask have a Jacobian determinant <= 0 "
-                                "(smallest " +
-                                format_number(out.motion->min_exact_jacobian) + ") in " + where +
-                                ": the deformation folds tissue there (see the sim stage's loads)");
-    }
+    // Both fields checked alike: each in its own exact mask, its folds named by the labels of
+    // its own grid (the deformed grid's gap label included).
+    std::vector<std::string> label_names;
+    for (const Organ& organ : reference.organs)
+      label_names.push_back(organ.name);
+    label_names.push_back(k_gap_label_name);
+    const MotionFields& m = *out.motion;
+    if (auto warning = fold_warning("from-def_to-ref (the reference grid)", m.jacobian, m.ref_to_def_exact,
+                                    out.reference.labels, label_names))
+      report.warnings.push_back(*warning);
+    if (auto warning = fold_warning("from-ref_to-def (the deformed grid)", m.def_to_ref_jacobian,
+                                    m.def_to_ref_exact,
+                                    out.deformed ? out.deformed->labels : out.reference.labels, label_names))
+      report.warnings.push_back(*warning);
   }
   if (!deformation)
     out.landmarks = organ_landmarks(reference, nullptr, nullptr, landmark_tolerance_mm, &report.warnings,

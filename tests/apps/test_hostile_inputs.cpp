@@ -15,6 +15,7 @@
 #include <csignal>
 #include <limits>
 #include <thread>
+#include <tuple>
 
 using namespace phantasm::testing;
 namespace fs = std::filesystem;
@@ -28,6 +29,18 @@ std::string ball_scene(const std::string& organ, const std::string& tissue, doub
          std::to_string(voxel_mm) + "\nanatomy:\n  organs:\n    - name: " + organ +
          "\n      tissue: " + tissue +
          "\n      shape: {type: ellipsoid, center_mm: [0, 0, 0], radii_mm: 20}\n";
+}
+
+/// A ball of 4 mm voxels, its bottom cap held and its top cap pushed `push_mm` along z.
+std::string pushed_ball_scene(double push_mm) {
+  return ball_scene("ball", "gray_matter", 4.0) + "      material: soft\n" +
+         "materials:\n  soft: {youngs_modulus_Pa: 3000, poisson_ratio: 0.45}\n"
+         "deformation:\n  mode: quasi_static\n  loads:\n"
+         "    - {type: displacement, organ: ball, displacement_mm: [0, 0, " +
+         std::to_string(push_mm) +
+         "], region: {center_mm: [0, 0, 20], radius_mm: 8}}\n"
+         "    - {type: displacement, organ: ball, displacement_mm: [0, 0, 0], "
+         "region: {center_mm: [0, 0, -20], radius_mm: 8}}\n";
 }
 
 /// Every path under a folder whose name holds `text`.
@@ -317,20 +330,68 @@ TEST(HostileInputs, SettingsThatMakeNoSignalWarnAndProvenanceRecordsIt) {
   write_text_file(root / "scene.yaml",
                   ball_scene("ball", "gray_matter") +
                       "tissues:\n  gray_matter: {T1_ms: 1.0e300}\nsequences:\n"
-                      "  - {name: T1w, type: spoiled_gre, TR_ms: 20, TE_ms: 5, flip_deg: 0}\n");
+                      "  - {name: T1w, type: spoiled_gre, TR_ms: 20, TE_ms: 5, flip_deg: 30}\n"
+                      "  - {name: T2w, type: spin_echo, TR_ms: 4000, TE_ms: 90}\n"
+                      "outputs:\n  parameter_maps: false\n"); // a T1 map of 1e300 is refused (below)
   const fs::path out = root / "out";
   const CommandResult result =
       run_command({k_phantasm, "run", (root / "scene.yaml").string(), "-o", out.string(), "-q"});
   ASSERT_EQ(result.exit_code, 0) << result.err;
-  EXPECT_NE(result.err.find("[mri] warning: sequence T1w: a flip angle of 0 deg makes no signal"),
-            std::string::npos)
-      << result.err;
   EXPECT_NE(result.err.find("[mri] warning: tissue gray_matter: T1 of 1e+300 ms is beyond any tissue's"),
             std::string::npos)
       << result.err;
-  const std::string provenance = read_file(out / "derivatives" / "phantasm" / "sub-01" / "provenance.json");
-  EXPECT_NE(provenance.find("a flip angle of 0 deg makes no signal"), std::string::npos);
+  std::string provenance = read_file(out / "derivatives" / "phantasm" / "sub-01" / "provenance.json");
   EXPECT_NE(provenance.find("T1 of 1e+300 ms"), std::string::npos);
+
+  // A flip angle of 0 with a tissue's own T1: an image of zeros, with a warning.
+  write_text_file(root / "flip.yaml",
+                  ball_scene("ball", "gray_matter") +
+                      "sequences:\n  - {name: T1w, type: spoiled_gre, TR_ms: 20, TE_ms: 5, flip_deg: 0}\n");
+  const CommandResult flip =
+      run_command({k_phantasm, "run", (root / "flip.yaml").string(), "-o", (root / "flip").string(), "-q"});
+  ASSERT_EQ(flip.exit_code, 0) << flip.err;
+  EXPECT_NE(flip.err.find("[mri] warning: sequence T1w: a flip angle of 0 deg makes no signal"),
+            std::string::npos)
+      << flip.err;
+  provenance = read_file(root / "flip" / "derivatives" / "phantasm" / "sub-01" / "provenance.json");
+  EXPECT_NE(provenance.find("a flip angle of 0 deg makes no signal"), std::string::npos);
+}
+
+// T1 of 1e300 ms with a flip angle of 0: the spoiled gradient echo's signal is 0/0. The run wrote
+// images of NaN and exited 0 (#44 item 5); it now stops before any file, naming the file, the
+// sequence and the tissue.
+TEST(HostileInputs, ASignalThatIsNotANumberIsRefusedBeforeAnythingIsWritten) {
+  const fs::path root = fresh_folder("hostile-nan-signal");
+  const fs::path scene = root / "scene.yaml";
+  write_text_file(scene, ball_scene("ball", "gray_matter") +
+                             "tissues:\n  gray_matter: {T1_ms: 1.0e300}\nsequences:\n"
+                             "  - {name: T2w, type: spin_echo, TR_ms: 4000, TE_ms: 90}\n"
+                             "  - {name: T1w, type: spoiled_gre, TR_ms: 20, TE_ms: 5, flip_deg: 0}\n");
+  const fs::path out = root / "out";
+  const CommandResult result = run_command({k_phantasm, "run", scene.string(), "-o", out.string(), "-q"});
+  EXPECT_EQ(result.exit_code, 2) << result.err;
+  EXPECT_NE(result.err.find(scene.string() +
+                            ":17:23: sequences[1].type: sequence T1w, tissue gray_matter: expected "
+                            "a finite signal, found NaN (T1 1e+300 ms"),
+            std::string::npos)
+      << result.err;
+  EXPECT_EQ(raw_library_marker(result.err), "") << result.err;
+  EXPECT_FALSE(fs::exists(out)) << "a refused run left files behind";
+
+  // With a flip angle that excites, the signal is finite (0), but the T1 map would hold 1e300 ms,
+  // beyond a float: infinity. Refused before the first file, naming the map and the tissue.
+  const fs::path maps = root / "maps.yaml";
+  write_text_file(maps, ball_scene("ball", "gray_matter") +
+                            "tissues:\n  gray_matter: {T1_ms: 1.0e300}\nsequences:\n"
+                            "  - {name: T1w, type: spoiled_gre, TR_ms: 20, TE_ms: 5, flip_deg: 30}\n");
+  const CommandResult map = run_command({k_phantasm, "run", maps.string(), "-o", out.string(), "-q"});
+  EXPECT_EQ(map.exit_code, 2) << map.err;
+  EXPECT_NE(map.err.find(maps.string() + ": T1 map of the reference state: expected finite values before "
+                                         "anything is written, found inf at voxel ("),
+            std::string::npos)
+      << map.err;
+  EXPECT_NE(map.err.find("), tissue gray_matter\n"), std::string::npos) << map.err;
+  EXPECT_FALSE(fs::exists(out)) << "a refused run left files behind";
 }
 
 // Two sweeps never mix in one dataset: while a batch of one sweep holds its mark in a folder, a
@@ -569,4 +630,167 @@ TEST(HostileInputs, TextThatIsNotUtf8IsNamedAndPathsThatAreNotAreRecorded) {
   EXPECT_EQ(raw_library_marker(run.err), "") << run.err;
   const std::string provenance = read_file(out / "derivatives" / "phantasm" / "sub-01" / "provenance.json");
   EXPECT_NE(provenance.find("b\xef\xbf\xbd.yaml"), std::string::npos); // U+FFFD
+}
+
+// Input that was accepted without a word (#44 item 5): a key of vary that names no setting,
+// obstacles that hold every organ at rest. Each is now refused with the file, the place, what
+// was expected and what was found; a refused run leaves nothing behind.
+TEST(HostileInputs, SilentNonsenseIsRefused) {
+  expect_clear_refusals({
+      {{"validate", hostile("sweep-empty-vary-key.yaml")},
+       hostile("sweep-empty-vary-key.yaml") + ":5:7: vary.: ",
+       "expected a scene key path such as acquisition.noise_percent or deformation.loads[1].displacement_mm, "
+       "found an empty key"},
+      {{"batch", "--list", hostile("sweep-empty-vary-key.yaml")},
+       hostile("sweep-empty-vary-key.yaml") + ":5:7: vary.: ",
+       "found an empty key"},
+  });
+  const fs::path root = fresh_folder("hostile-obstacles");
+  const std::string scene = hostile("obstacle-encloses-every-organ.yaml");
+  const CommandResult run = run_command({k_phantasm, "run", scene, "-o", (root / "out").string(), "-q"});
+  EXPECT_EQ(run.exit_code, 2) << run.err;
+  EXPECT_NE(run.err.find(scene +
+                         ":19:5: deformation.obstacles[0]: expected obstacles beside the tissue at rest "
+                         "(no simulated vertex may enter one), found organ 'ball' wholly inside the "
+                         "obstacle\n"),
+            std::string::npos)
+      << run.err;
+  EXPECT_EQ(raw_library_marker(run.err), "") << run.err;
+  EXPECT_FALSE(fs::exists(root / "out"));
+}
+
+// A sweep saved with a UTF-8 byte-order mark before 'phantasm_sweep: 1' was taken for a scene
+// ("expected a scene ..., found a sweep" from validate): it is a sweep.
+TEST(HostileSweeps, ASweepWithAByteOrderMarkIsASweep) {
+  const std::string sweep = hostile("sweep-with-byte-order-mark.yaml");
+  ASSERT_EQ(read_file(sweep).rfind("\xef\xbb\xbfphantasm_sweep: 1\n", 0), 0u);
+  const CommandResult validate = run_command({k_phantasm, "validate", sweep});
+  EXPECT_EQ(validate.exit_code, 0) << validate.err;
+  EXPECT_EQ(validate.out.rfind(sweep + ": valid sweep of 3 subjects", 0), 0u) << validate.out << validate.err;
+  const CommandResult list = run_command({k_phantasm, "batch", "--list", sweep});
+  EXPECT_EQ(list.exit_code, 0) << list.err;
+  EXPECT_EQ(std::count(list.out.begin(), list.out.end(), '\n'), 3) << list.out;
+}
+
+// An exact mask changed after the run (#44 item 5): eval scored the registration where the truth
+// is not exact. The dataset records the mask's values (ValuesSha256 in its sidecar); eval refuses
+// another mask, naming the file, and scores the mask the run wrote.
+TEST(DatasetIntegrity, EvalRefusesAnExactMaskChangedAfterTheRun) {
+  const fs::path root = fresh_folder("hostile-tampered-mask");
+  const fs::path scene = root / "push.yaml";
+  write_text_file(scene, pushed_ball_scene(3.0));
+  const fs::path out = root / "out";
+  ASSERT_EQ(run_command({k_phantasm, "run", scene.string(), "-o", out.string(), "-q"}).exit_code, 0);
+  const CommandResult untouched = run_command({k_phantasm, "eval", out.string(), "--identity"});
+  ASSERT_EQ(untouched.exit_code, 0) << untouched.err;
+
+  const fs::path mask =
+      out / "derivatives" / "phantasm" / "sub-01" / "xfm" / "sub-01_from-def_to-ref_desc-exact_mask.nii.gz";
+  ASSERT_TRUE(fs::exists(mask));
+  EXPECT_NE(
+      read_file(fs::path(mask).replace_extension("").replace_extension(".json")).find("\"ValuesSha256\""),
+      std::string::npos);
+  const phantasm::NiftiVolume original = phantasm::read_nifti(mask);
+  std::vector<std::int32_t> tampered(original.values.begin(), original.values.end());
+  long outside = 0;
+  for (auto& value : tampered) {
+    outside += value == 0;
+    value = 1; // every voxel called exact, the smooth extension too
+  }
+  ASSERT_GT(outside, 0) << "the run left no voxel out of the mask: the test would prove nothing";
+  phantasm::write_nifti_labels(mask, original.grid, tampered);
+  const CommandResult eval = run_command({k_phantasm, "eval", out.string(), "--identity"});
+  EXPECT_EQ(eval.exit_code, 2) << eval.err;
+  EXPECT_EQ(eval.err.rfind(
+                mask.string() + ": expected the exact mask the dataset wrote (SHA-256 of its values ", 0),
+            0u)
+      << eval.err;
+  EXPECT_NE(eval.err.find("found other values ("), std::string::npos) << eval.err;
+  EXPECT_NE(eval.err.find("the mask was changed after the run"), std::string::npos) << eval.err;
+  EXPECT_EQ(std::count(eval.err.begin(), eval.err.end(), '\n'), 1) << eval.err;
+
+  // The mask the run wrote, written back: accepted again.
+  std::vector<std::int32_t> restored(original.values.begin(), original.values.end());
+  phantasm::write_nifti_labels(mask, original.grid, restored);
+  EXPECT_EQ(run_command({k_phantasm, "eval", out.string(), "--identity"}).exit_code, 0);
+}
+
+// Both fields checked alike (#44 item 4): a ball pushed 16 mm into itself folds on the deformed
+// grid's field (from-ref_to-def) inside its exact mask, where the reference grid's does not. The
+// run warned of the reference grid's folds only; it now names the deformed grid's too, with the
+// count the written Jacobian and mask give and the organ of the deformed labels.
+TEST(DatasetIntegrity, AFoldInsideEitherExactMaskIsAWarningWithItsCount) {
+  const fs::path root = fresh_folder("hostile-folds");
+  const fs::path scene = root / "push.yaml";
+  write_text_file(scene, pushed_ball_scene(-16.0));
+  const fs::path out = root / "out";
+  const CommandResult run = run_command({k_phantasm, "run", scene.string(), "-o", out.string(), "-q"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const fs::path xfm = out / "derivatives" / "phantasm" / "sub-01" / "xfm";
+  const fs::path anat = out / "derivatives" / "phantasm" / "sub-01";
+  for (const auto& [from, to, grid] :
+       {std::tuple{"def", "ref", "the reference grid"}, std::tuple{"ref", "def", "the deformed grid"}}) {
+    const std::string field = std::string("from-") + from + "_to-" + to;
+    SCOPED_TRACE(field);
+    const auto jacobian = phantasm::read_nifti(xfm / ("sub-01_" + field + "_jacobian.nii.gz")).values;
+    const auto mask = phantasm::read_nifti(xfm / ("sub-01_" + field + "_desc-exact_mask.nii.gz")).values;
+    const auto labels = phantasm::read_nifti(anat / (std::string("ses-") + to) / "anat" /
+                                             ("sub-01_ses-" + std::string(to) + "_dseg.nii.gz"))
+                            .values;
+    ASSERT_EQ(jacobian.size(), mask.size());
+    long folded = 0, in_ball = 0;
+    for (std::size_t v = 0; v < mask.size(); ++v) {
+      if (mask[v] > 0.5 && !(jacobian[v] > 0.0)) {
+        ++folded;
+        in_ball += labels[v] == 1.0;
+      }
+    }
+    const std::string warning = "[voxelize] warning: " + std::to_string(folded) +
+                                " voxels of the exact mask of " + field + " (" + grid +
+                                ") have a Jacobian determinant <= 0";
+    if (folded == 0) {
+      EXPECT_EQ(run.err.find(field + " (" + grid + ")"), std::string::npos) << run.err;
+      continue;
+    }
+    EXPECT_NE(run.err.find(warning), std::string::npos) << "expected " << warning << "\nfound " << run.err;
+    if (in_ball > 0)
+      EXPECT_NE(run.err.find(std::to_string(in_ball) + " in ball (" + std::to_string(in_ball) + ")"),
+                std::string::npos)
+          << run.err;
+  }
+  // The deformed grid's field folds here: without its warning the test would prove nothing.
+  EXPECT_NE(run.err.find("of the exact mask of from-ref_to-def (the deformed grid)"), std::string::npos)
+      << run.err;
+}
+
+// An organ read from a file nested in a container smaller than itself (#44 item 5): validate
+// cannot size a mesh, so the run refuses it once the anatomy is built, before any other stage,
+// naming the organ's `inside` at its line; nothing is written.
+TEST(HostileInputs, AMeshOrganLargerThanItsContainerIsRefused) {
+  const fs::path root = fresh_folder("hostile-mesh-nesting");
+  std::string cube;
+  for (const char* vertex : {"-30 -30 -30", "30 -30 -30", "30 30 -30", "-30 30 -30", "-30 -30 30",
+                             "30 -30 30", "30 30 30", "-30 30 30"})
+    cube += std::string("v ") + vertex + "\n";
+  cube +=
+      "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\n"
+      "f 4 5 8\n";
+  write_text_file(root / "cube.obj", cube);
+  const fs::path scene = root / "nest.yaml";
+  write_text_file(scene, ball_scene("shell", "gray_matter", 4.0) +
+                             "    - name: cube\n      tissue: white_matter\n      inside: shell\n"
+                             "      shape: {type: mesh, file: cube.obj}\n");
+  const CommandResult validate = run_command({k_phantasm, "validate", scene.string()});
+  EXPECT_EQ(validate.exit_code, 0) << validate.err; // a mesh's size is known once it is read
+  const CommandResult run =
+      run_command({k_phantasm, "run", scene.string(), "-o", (root / "out").string(), "-q"});
+  EXPECT_EQ(run.exit_code, 2) << run.err;
+  EXPECT_EQ(run.err.rfind(scene.string() +
+                              ":15:15: anatomy.organs[1].inside: expected a container at least as "
+                              "large as the organ it holds, found 'shell' ",
+                          0),
+            0u)
+      << run.err;
+  EXPECT_NE(run.err.find(" and 'cube' 6"), std::string::npos) << run.err; // about 60 mm across
+  EXPECT_FALSE(fs::exists(root / "out"));
 }
