@@ -400,9 +400,53 @@ Mask brainstem_mask(const ImageGrid& grid, const Volume& vol, const Mask& brain,
   return largest_component(stem_candidate, grid);
 }
 
-/// Labels the voxels outside the brain: outer CSF, skull and scalp (see the comments inside).
+/// Divides the tissue outside the skull (labelled scalp) into skin, subcutaneous fat and muscle,
+/// and the skull into cortical bone and marrow (see the comments inside).
+void label_extracranial_tissues(const ImageGrid& grid, const std::vector<int>& intensity,
+                                const std::vector<float>& from_outside, double white_matter_mean,
+                                double bone_level, const Colin27Options& options,
+                                std::vector<std::int32_t>& labels) {
+  const Volume vol(grid);
+  const std::size_t count = labels.size();
+  // Skin: the head's outer layer. Under it, fat is what is brighter than the brain's white matter
+  // (fat's short T1 makes it the brightest tissue of a T1w head), muscle the rest; one majority
+  // pass as inside the brain drops single voxels of either.
+  const double fat_level = options.fat_intensity_fraction * white_matter_mean;
+  Mask soft(count);
+  std::vector<std::int8_t> cls(count, 0);
+  for (std::size_t n = 0; n < count; ++n) {
+    if (labels[n] != colin27_scalp || from_outside[n] <= options.skin_thickness_mm) continue;
+    soft[n] = 1;
+    cls[n] = intensity[n] >= fat_level ? 2 : 1;
+  }
+  for (int pass = 0; pass < options.majority_filter_passes; ++pass)
+    cls = majority_filter(cls, soft, grid);
+  for (std::size_t n = 0; n < count; ++n)
+    if (soft[n]) labels[n] = cls[n] == 2 ? colin27_subcutaneous_fat : colin27_muscle;
+  // Marrow (diploe): skull voxels brighter than marrow_intensity_fraction times white matter
+  // whose six neighbours are all skull, so that the cortical tables stay bone on both sides.
+  const double marrow_level = std::max(bone_level, options.marrow_intensity_fraction * white_matter_mean);
+  std::vector<std::int64_t> marrow;
+  for (int k = 1; k < vol.nz - 1; ++k)
+    for (int j = 1; j < vol.ny - 1; ++j)
+      for (int i = 1; i < vol.nx - 1; ++i) {
+        const std::int64_t n = vol.at(i, j, k);
+        if (labels[n] != colin27_skull || intensity[n] < marrow_level) continue;
+        bool enclosed = true;
+        for (const std::int64_t m : {n - 1, n + 1, n - vol.nx, n + vol.nx, n - std::int64_t(vol.nx) * vol.ny,
+                                     n + std::int64_t(vol.nx) * vol.ny})
+          enclosed = enclosed && labels[m] == colin27_skull;
+        if (enclosed) marrow.push_back(n);
+      }
+  for (const std::int64_t n : marrow)
+    labels[n] = colin27_bone_marrow;
+}
+
+/// Labels the voxels outside the brain: outer CSF, skull and scalp, then the tissues inside
+/// scalp and skull (see the comments inside).
 void label_outside_brain(const ImageGrid& grid, const Mask& brain, const std::vector<int>& intensity,
-                         const Colin27Options& options, std::vector<std::int32_t>& labels) {
+                         double white_matter_mean, const Colin27Options& options,
+                         std::vector<std::int32_t>& labels) {
   const std::size_t count = labels.size();
   // Outside the brain. Head: T1 above Otsu's threshold of the whole volume, its largest
   // piece, holes filled (dark bone and sinuses are inside the head).
@@ -441,6 +485,7 @@ void label_outside_brain(const ImageGrid& grid, const Mask& brain, const std::ve
     else
       labels[n] = colin27_scalp;
   }
+  label_extracranial_tissues(grid, intensity, from_outside, white_matter_mean, bone_level, options, labels);
 }
 
 } // namespace
@@ -539,10 +584,20 @@ HeadLabels derive_colin27_head(const std::filesystem::path& templates_dir, const
       labels[n] = cls[n] == 3 ? colin27_white_matter : colin27_cortical_gm;
   }
 
-  label_outside_brain(grid, brain, intensity, options, labels);
+  // The brain's white-matter class: the reference level of the tissues outside it.
+  double white_matter_sum = 0.0;
+  std::int64_t white_matter_voxels = 0;
+  for (std::size_t n = 0; n < count; ++n)
+    if (cls[n] == 3) {
+      white_matter_sum += intensity[n];
+      ++white_matter_voxels;
+    }
+  const double white_matter_mean =
+      white_matter_voxels > 0 ? white_matter_sum / double(white_matter_voxels) : 255.0;
+  label_outside_brain(grid, brain, intensity, white_matter_mean, options, labels);
 
   head.table = {{colin27_background, "background", ""},
-                {colin27_scalp, "scalp", "skin"},
+                {colin27_scalp, "scalp", "skin"}, // the skin alone (the tissues under it below)
                 {colin27_skull, "skull", "bone_cortical"},
                 {colin27_csf, "csf", "csf"},
                 {colin27_cortical_gm, "cortical_grey_matter", "gray_matter"},
@@ -553,7 +608,10 @@ HeadLabels derive_colin27_head(const std::filesystem::path& templates_dir, const
                 {colin27_pallidum, "pallidum", "gray_matter"},
                 {colin27_thalamus, "thalamus", "gray_matter"},
                 {colin27_cerebellum, "cerebellum", "gray_matter"},
-                {colin27_brainstem, "brainstem", "white_matter"}};
+                {colin27_brainstem, "brainstem", "white_matter"},
+                {colin27_subcutaneous_fat, "subcutaneous_fat", "fat_subcutaneous"},
+                {colin27_muscle, "muscle", "muscle_skeletal"},
+                {colin27_bone_marrow, "bone_marrow", "bone_marrow"}};
   return head;
 }
 

@@ -12,7 +12,7 @@ namespace phantasm {
 /// Labels of the Colin 27 head volume (docs/anatomy-colin27.md).
 enum Colin27Label : std::int32_t {
   colin27_background = 0,
-  colin27_scalp = 1,        ///< soft tissue outside the skull: skin, fat, muscle
+  colin27_scalp = 1,        ///< the skin: the head's outer layer (skin_thickness_mm)
   colin27_skull = 2,        ///< bone between the outer CSF and the scalp
   colin27_csf = 3,          ///< outer (subarachnoid) and sulcal CSF
   colin27_cortical_gm = 4,  ///< cerebral grey matter outside the deep nuclei
@@ -24,6 +24,9 @@ enum Colin27Label : std::int32_t {
   colin27_thalamus = 10,
   colin27_cerebellum = 11,
   colin27_brainstem = 12,
+  colin27_subcutaneous_fat = 13, ///< soft tissue under the skin brighter than white matter (fat)
+  colin27_muscle = 14,           ///< the other soft tissue under the skin (muscle, connective tissue)
+  colin27_bone_marrow = 15,      ///< skull voxels brighter than bone, enclosed by skull (diploe)
 };
 
 /// One row of the label table.
@@ -51,6 +54,13 @@ struct Colin27Options {
   double ventricle_min_volume_ml = 1.0; ///< smaller deep CSF components are sulcal CSF
   double ventricle_midline_gap_mm = 2.0; ///< deep CSF this close to the midline (x) is not ventricle
   double brainstem_half_width_mm = 20.0; ///< brainstem candidates lie this close to the midline (x)
+  double skin_thickness_mm = 1.5;        ///< skin = head voxels this close to the head's surface
+  /// Under the skin, T1 at least this times the mean of the brain's white-matter class is fat
+  /// (the brightest tissue of a T1w head); darker soft tissue is muscle.
+  double fat_intensity_fraction = 1.15;
+  /// Skull voxels enclosed by skull with T1 at least this times the white-matter mean are marrow
+  /// (diploe); darker ones stay cortical bone.
+  double marrow_intensity_fraction = 0.5;
 };
 
 /// Derives the labelled Colin 27 head from the templates of Debian's mricron-data package

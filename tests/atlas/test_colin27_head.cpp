@@ -49,7 +49,7 @@ TEST(Colin27Head, EveryLabelIsPresentWithPlausibleVolumes) {
   const HeadLabels& head = derived();
   EXPECT_EQ(head.grid.dims, Eigen::Vector3i(181, 217, 181));
   const std::vector<double> ml = label_volumes_ml(head);
-  ASSERT_EQ(ml.size(), 13U);
+  ASSERT_EQ(ml.size(), 16U);
   for (const HeadLabelInfo& info : head.table) {
     std::cout << info.label << ' ' << info.name << ' ' << ml[info.label] << " ml\n";
     EXPECT_GT(ml[info.label], 0.0) << info.name;
@@ -68,6 +68,56 @@ TEST(Colin27Head, EveryLabelIsPresentWithPlausibleVolumes) {
   std::cout << "grey matter " << gm << " ml, intracranial " << intracranial << " ml\n";
   EXPECT_GE(intracranial, 1200.0);
   EXPECT_LE(intracranial, 1900.0);
+}
+
+// Outside the brain the scan's intensities order the derived tissues as a T1w head shows them:
+// fat (the brightest) above white matter, muscle below it, marrow brighter than cortical bone;
+// the skin is the head's outer layer (every voxel of it touches the background within 2 voxels),
+// marrow lies inside the skull (no marrow voxel touches anything but skull and marrow), and the
+// soft tissues under the skin hold plausible adult volumes.
+TEST(Colin27Head, TissuesOutsideTheBrainFollowTheScan) {
+  SKIP_WITHOUT_TEMPLATES();
+  const HeadLabels& head = derived();
+  const NiftiVolume t1 = read_nifti(templates / "ch2.nii.gz");
+  std::vector<double> sum(16, 0.0), count(16, 0.0);
+  for (std::size_t n = 0; n < head.labels.size(); ++n) {
+    sum[static_cast<std::size_t>(head.labels[n])] += t1.values[n];
+    count[static_cast<std::size_t>(head.labels[n])] += 1.0;
+  }
+  const auto mean = [&](int label) {
+    return sum[static_cast<std::size_t>(label)] / count[static_cast<std::size_t>(label)];
+  };
+  std::cout << "mean T1: fat " << mean(colin27_subcutaneous_fat) << ", white matter "
+            << mean(colin27_white_matter) << ", muscle " << mean(colin27_muscle) << ", marrow "
+            << mean(colin27_bone_marrow) << ", bone " << mean(colin27_skull) << ", skin "
+            << mean(colin27_scalp) << "\n";
+  EXPECT_GT(mean(colin27_subcutaneous_fat), 1.15 * mean(colin27_white_matter));
+  EXPECT_LT(mean(colin27_muscle), mean(colin27_white_matter));
+  EXPECT_GT(mean(colin27_bone_marrow), 1.5 * mean(colin27_skull));
+  const std::vector<double> ml = label_volumes_ml(head);
+  EXPECT_GE(ml[colin27_subcutaneous_fat], 50.0);
+  EXPECT_GE(ml[colin27_muscle], 200.0);
+  EXPECT_GE(ml[colin27_bone_marrow], 2.0);
+  EXPECT_LE(ml[colin27_bone_marrow], 0.5 * ml[colin27_skull]);
+  const Eigen::Vector3i d = head.grid.dims;
+  auto at = [&](int i, int j, int k) { return i + std::int64_t(d.x()) * (j + std::int64_t(d.y()) * k); };
+  std::int64_t marrow_touching_other = 0, fat_touching_background = 0;
+  for (int k = 1; k < d.z() - 1; ++k)
+    for (int j = 1; j < d.y() - 1; ++j)
+      for (int i = 1; i < d.x() - 1; ++i) {
+        const std::int64_t n = at(i, j, k);
+        const std::int32_t l = head.labels[n];
+        if (l != colin27_bone_marrow && l != colin27_subcutaneous_fat && l != colin27_muscle) continue;
+        for (const std::int64_t m : {at(i + 1, j, k), at(i - 1, j, k), at(i, j + 1, k), at(i, j - 1, k),
+                                     at(i, j, k + 1), at(i, j, k - 1)}) {
+          if (l == colin27_bone_marrow)
+            marrow_touching_other += head.labels[m] != colin27_skull && head.labels[m] != colin27_bone_marrow;
+          else
+            fat_touching_background += head.labels[m] == colin27_background; // the skin covers them
+        }
+      }
+  EXPECT_EQ(marrow_touching_other, 0);
+  EXPECT_EQ(fat_touching_background, 0);
 }
 
 TEST(Colin27Head, NestingIsSane) {

@@ -5,10 +5,10 @@
 
 using namespace phantasm;
 
-TEST(TissueTable, BuiltinTableHoldsEighteenTissuesAtTwoFieldStrengths) {
+TEST(TissueTable, BuiltinTableHoldsNineteenTissuesAtTwoFieldStrengths) {
   const TissueTable& table = TissueTable::builtin();
-  EXPECT_EQ(table.tissue_names().size(), 18u);
-  EXPECT_EQ(table.records().size(), 36u);
+  EXPECT_EQ(table.tissue_names().size(), 19u);
+  EXPECT_EQ(table.records().size(), 38u);
   for (const auto& name : table.tissue_names()) {
     EXPECT_EQ(table.field_strengths(name), (std::vector<double>{1.5, 3.0})) << name;
   }
@@ -27,6 +27,17 @@ TEST(TissueTable, BuiltinValuesKeepTheirSources) {
   const TissueRecord* liver = TissueTable::builtin().find("liver", 1.5);
   ASSERT_NE(liver, nullptr);
   EXPECT_EQ(liver->T1_source, "de Bazelaire et al. 2004 Radiology 230:652 (in vivo, 1.5/3 T)");
+}
+
+// Every value of the shipped table names where it comes from.
+TEST(TissueTable, EveryBuiltinValueNamesItsSource) {
+  for (const TissueRecord& r : TissueTable::builtin().records()) {
+    const std::string what = r.tissue + " at " + std::to_string(r.field_T) + " T";
+    EXPECT_TRUE(!r.T1_ms || !r.T1_source.empty()) << what << ": T1";
+    EXPECT_TRUE(!r.T2_ms || !r.T2_source.empty()) << what << ": T2";
+    EXPECT_TRUE(!r.T2star_ms || !r.T2star_source.empty()) << what << ": T2*";
+    EXPECT_TRUE(!r.PD || !r.PD_source.empty()) << what << ": PD";
+  }
 }
 
 TEST(TissueTable, MissingValuesStayEmpty) {
