@@ -5,6 +5,7 @@
 #include "core/cancellation.hpp"
 #include "core/progress.hpp"
 #include "sim/local_global_impl.hpp"
+#include "sim/newton.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -112,7 +113,7 @@ SolveReport LocalGlobalSolver::solve_jacobi_chebyshev(Eigen::MatrixX3d& p, const
   report.final_energy_J = energy;
   m->finish_report(x, target, report);
   if (!test) test.emplace(stop, report.residual_N);
-  judge_convergence(*test, report);
+  finish_solve(m->model, StepInertia{m->alpha, target}, p, stop, *test, true, report);
   return report;
 }
 

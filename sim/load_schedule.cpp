@@ -48,6 +48,10 @@ FrameSolver make_frame_solver(const DeformationSettings& deformation, const Elas
   s.stop.relative_energy_decrease = solver.relative_energy_tolerance;
   s.stop.position_change_m = k_mm * solver.position_tolerance_mm;
   s.stop.relative_residual = solver.relative_residual_tolerance;
+  // The distance test with the same tolerance: the Newton step at the result within this
+  // fraction of the largest displacement (a small residual is not a small distance where stiff
+  // springs twist or push a slender body).
+  s.stop.relative_distance = solver.relative_residual_tolerance;
   s.h = deformation.time_step_s;
   // Quasi-static solves apply the loads in load_steps equal increments, each starting from the
   // last; dynamic mode makes one solve per frame.
@@ -114,21 +118,39 @@ void report_solves(const FrameSolver& s, const ElasticModel& model, const Eigen:
   report.accuracy["solver residual N"] = last.residual_N;
   report.accuracy["solver relative residual"] = last.relative_residual;
   report.accuracy["solver iterations"] = last.iterations;
-  // A solve that stopped short of equilibrium gives a ground truth nobody can vouch for: say so.
+  // A solve that stopped short of equilibrium gives a ground truth nobody can vouch for: say so,
+  // and by how much (the residual over the force scale, the Newton step over the displacement).
   int unconverged = 0;
   const SolveReport* worst = nullptr;
+  double farthest = 0.0;
   for (const SolveReport& solve : result.solves) {
+    farthest = std::max(farthest, solve.relative_distance());
     if (solve.converged) continue;
     ++unconverged;
     if (!worst || solve.relative_residual > worst->relative_residual) worst = &solve;
   }
+  report.accuracy["solver relative distance"] = farthest;
+  // Where a solve stopped at an unstable equilibrium (a saddle: a pushed body held straight
+  // where it buckles), the solver left it for a stable one: say where it was.
+  for (std::size_t i = 0; i < result.solves.size(); ++i) {
+    const SolveReport& solve = result.solves[i];
+    if (solve.saddle_energies_J.empty()) continue;
+    report.modelled.push_back("solve " + std::to_string(i + 1) + " reached an unstable equilibrium (energy " +
+                              format_number(solve.saddle_energies_J.front()) +
+                              " J; a direction lowers it: the body buckles) and left it for a stable one (" +
+                              format_number(solve.final_energy_J) + " J)");
+  }
   if (worst) {
-    report.warnings.push_back(std::to_string(unconverged) + " of " + std::to_string(result.solves.size()) +
-                              " " + last.solver + " solves did not converge: relative residual up to " +
-                              format_number(worst->relative_residual) + " (tolerance " +
-                              format_number(s.stop.relative_residual) + ") after " +
-                              std::to_string(worst->iterations) + " iterations, stopped by " +
-                              worst->stopped_by + "; raise deformation.solver.max_iterations");
+    double distance = 0.0;
+    for (const SolveReport& solve : result.solves)
+      if (!solve.converged) distance = std::max(distance, solve.relative_distance());
+    report.warnings.push_back(
+        std::to_string(unconverged) + " of " + std::to_string(result.solves.size()) + " " + last.solver +
+        " solves did not converge: relative residual up to " + format_number(worst->relative_residual) +
+        " (tolerance " + format_number(s.stop.relative_residual) + "), a Newton step from the result up to " +
+        format_number(100.0 * distance) + " % of the largest displacement (tolerance " +
+        format_number(100.0 * s.stop.relative_distance) + " %) after " + std::to_string(worst->iterations) +
+        " iterations, stopped by " + worst->stopped_by + "; raise deformation.solver.max_iterations");
   }
   for (const PointConstraint& c : model.points) {
     Eigen::Vector3d x = Eigen::Vector3d::Zero();
@@ -185,6 +207,7 @@ void solve_frames(const DeformationSettings& deformation, ElasticModel& model, L
   if (!model.obstacles.empty())
     for (const ObstacleSettings& o : deformation.obstacles)
       moved_m = std::max(moved_m, k_mm * o.displacement_mm.norm());
+  moved_m = std::max(moved_m, loads.growth_moved_m);
   s.stop.force_scale_N = std::max(s.stop.force_scale_N, nominal_stiffness(model) * moved_m / s.frames);
   Eigen::MatrixX3d velocity = Eigen::MatrixX3d::Zero(p.rows(), 3);
   ProgressBar progress(reporter, "deform", static_cast<std::size_t>(s.frames));

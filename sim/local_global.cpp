@@ -7,6 +7,7 @@
 #include "core/progress.hpp"
 #include "sim/anderson_acceleration.hpp"
 #include "sim/local_global_impl.hpp"
+#include "sim/newton.hpp"
 #include "sim/quasi_newton_history.hpp"
 #include "sim/tet_projection_batch.hpp"
 
@@ -340,7 +341,7 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
   }
   report.final_energy_J = energy;
   m->finish_report(m->free_positions(p), target, report);
-  judge_convergence(*test, report);
+  finish_solve(m->model, StepInertia{m->alpha, target}, p, stop, *test, true, report);
   return report;
 }
 

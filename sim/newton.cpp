@@ -11,6 +11,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
+#include <random>
 #include <stdexcept>
 
 namespace phantasm {
@@ -173,6 +175,119 @@ Eigen::SparseMatrix<double> assemble_hessian(const ElasticModel& model, const St
   return H;
 }
 
+/// The free rows: per vertex its row (-1 for fixed vertices), and per row its vertex.
+struct FreeRows {
+  std::vector<int> index, vertex;
+  explicit FreeRows(const ElasticModel& model) : index(static_cast<std::size_t>(model.vertex_count()), -1) {
+    for (Eigen::Index v = 0; v < model.vertex_count(); ++v) {
+      if (model.fixed.empty() || !model.fixed[static_cast<std::size_t>(v)]) {
+        index[static_cast<std::size_t>(v)] = static_cast<int>(vertex.size());
+        vertex.push_back(static_cast<int>(v));
+      }
+    }
+  }
+  Eigen::Index count() const { return static_cast<Eigen::Index>(vertex.size()); }
+  /// The free rows of a per-vertex gradient, flattened.
+  Eigen::VectorXd gather(const Eigen::MatrixX3d& gradient) const {
+    Eigen::VectorXd g(3 * count());
+    for (Eigen::Index f = 0; f < count(); ++f)
+      g.segment<3>(3 * f) = gradient.row(vertex[static_cast<std::size_t>(f)]).transpose();
+    return g;
+  }
+};
+
+using HessianFactor = Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower>;
+
+/// The largest row of a flattened direction (m).
+double largest_step(const Eigen::VectorXd& direction) {
+  double largest = 0.0;
+  for (Eigen::Index f = 0; 3 * f < direction.size(); ++f)
+    largest = std::max(largest, direction.segment<3>(3 * f).norm());
+  return largest;
+}
+
+/// The Newton direction -H^-1 g at p (H the PSD-projected Hessian, into `H`, shifted until it
+/// factors where it is singular).
+/// @throws std::runtime_error when no shift makes it factor
+Eigen::VectorXd newton_direction(const ElasticModel& model, const StepInertia& inertia,
+                                 const Eigen::MatrixX3d& p, const FreeRows& free, const Eigen::VectorXd& g,
+                                 HessianFactor& factor, std::vector<Eigen::Triplet<double>>& entries,
+                                 Eigen::SparseMatrix<double>& H) {
+  H = assemble_hessian(model, inertia, p, free.index, free.count(), entries);
+  // A PSD Hessian can be singular (a quasi-static model held only in part): shift until it factors.
+  double shift = 0.0;
+  for (int attempt = 0; attempt < 30; ++attempt) {
+    factor.setShift(shift);
+    factor.compute(H);
+    if (factor.info() == Eigen::Success) {
+      Eigen::VectorXd direction = -factor.solve(g);
+      if (direction.allFinite()) return direction;
+    }
+    shift = shift == 0.0 ? 1e-8 * H.diagonal().cwiseAbs().maxCoeff() : 10.0 * shift;
+  }
+  throw std::runtime_error("newton: the Hessian could not be factored");
+}
+
+/// p with its free rows moved by t x the flattened d.
+Eigen::MatrixX3d moved(const Eigen::MatrixX3d& p, const FreeRows& free, const Eigen::VectorXd& d, double t) {
+  Eigen::MatrixX3d q = p;
+  for (Eigen::Index f = 0; f < free.count(); ++f)
+    q.row(free.vertex[static_cast<std::size_t>(f)]) += t * d.segment<3>(3 * f).transpose();
+  return q;
+}
+
+/// Power iterations that look for a direction of negative curvature at an equilibrium.
+constexpr int k_stability_iterations = 30;
+
+/// Whether the equilibrium p is unstable (a saddle of E: a buckled bar held straight), and if
+/// so a direction that lowers E (flattened, free rows). The projected Hessian H (factored in
+/// `factor`) is the true one plus what the projection clamped (PSD), so the pencil's Rayleigh
+/// quotient v.H_true v / v.H v is at most 1 and the power iteration on I - H^-1 H_true finds
+/// its smallest value; H_true v by central differences of the gradient.
+std::optional<Eigen::VectorXd> descent_direction(const ElasticModel& model, const StepInertia& inertia,
+                                                 const Eigen::MatrixX3d& p, const FreeRows& free,
+                                                 const Eigen::SparseMatrix<double>& H, HessianFactor& factor,
+                                                 double length_m) {
+  if (free.count() == 0 || !(length_m > 0.0)) return std::nullopt;
+  std::mt19937 random(44);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  Eigen::VectorXd v(3 * free.count());
+  for (Eigen::Index i = 0; i < v.size(); ++i)
+    v[i] = uniform(random);
+  double previous = 2.0;
+  for (int iteration = 0; iteration < k_stability_iterations; ++iteration) {
+    v *= length_m / largest_step(v);
+    const Eigen::VectorXd Hv = H.selfadjointView<Eigen::Lower>() * v;
+    const double eps = 1e-3; // a thousandth of the probe's length
+    const Eigen::VectorXd true_Hv = (free.gather(model_gradient(model, inertia, moved(p, free, v, eps))) -
+                                     free.gather(model_gradient(model, inertia, moved(p, free, v, -eps)))) /
+                                    (2.0 * eps);
+    const double curvature = v.dot(true_Hv), bound = v.dot(Hv);
+    if (!(bound > 0.0) || !std::isfinite(curvature)) return std::nullopt;
+    if (curvature < -1e-3 * bound) return v;
+    const double quotient = curvature / bound; // settled well above 0: stable
+    if (quotient > 1e-2 && std::abs(quotient - previous) < 1e-3 * quotient) return std::nullopt;
+    previous = quotient;
+    v -= factor.solve(true_Hv);
+    if (!v.allFinite() || v.isZero()) return std::nullopt;
+  }
+  return std::nullopt;
+}
+
+/// Equilibria a solve leaves along a direction of negative curvature before it stops at one.
+constexpr int k_saddle_escapes = 3;
+
+/// The largest free vertex's displacement from rest (m).
+double largest_displacement(const ElasticModel& model, const FreeRows& free, const Eigen::MatrixX3d& p) {
+  double largest = 0.0;
+  for (int v : free.vertex)
+    largest = std::max(largest, (p.row(v) - model.rest_positions_m.row(v)).norm());
+  return largest;
+}
+
+/// Newton iterations that finish a local/global solve whose distance test fails.
+constexpr int k_finishing_newton_iterations = 200;
+
 } // namespace
 
 SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, Eigen::MatrixX3d& p,
@@ -185,15 +300,7 @@ SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, 
   };
   SolveReport report;
   report.solver = "newton";
-  std::vector<int> free_index(static_cast<std::size_t>(model.vertex_count()), -1);
-  std::vector<int> free_vertex;
-  for (Eigen::Index v = 0; v < model.vertex_count(); ++v) {
-    if (model.fixed.empty() || !model.fixed[static_cast<std::size_t>(v)]) {
-      free_index[static_cast<std::size_t>(v)] = static_cast<int>(free_vertex.size());
-      free_vertex.push_back(static_cast<int>(v));
-    }
-  }
-  const auto nf = static_cast<Eigen::Index>(free_vertex.size());
+  const FreeRows free(model);
   double energy = model_energy(model, inertia, p);
   report.initial_energy_J = energy;
   if (record_energies) {
@@ -206,13 +313,16 @@ SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, 
     observer_seconds += std::chrono::duration<double>(Clock::now() - before).count();
   }
   report.stopped_by = "max_iterations";
-  Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> factor;
+  HessianFactor factor;
   // Simplicial: the supernodal factor's many small BLAS calls cost more than they save at the
   // sizes Newton is the reference for (the bar: 35 vs 57 ms per iteration, bench_sim).
   factor.setMode(Eigen::CholmodSimplicialLLt);
   std::vector<Eigen::Triplet<double>> entries;
+  Eigen::SparseMatrix<double> H;
   Eigen::MatrixX3d gradient = model_gradient(model, inertia, p);
   const ResidualTest test(stop, free_gradient_norm(model, gradient));
+  const bool distance_test = stop.relative_distance > 0.0 && stop.gradient_norm_N <= 0.0;
+  bool distance_known = false; // report.equilibrium_distance_m is the step at p
   for (int iteration = 1; iteration <= stop.max_iterations; ++iteration) {
     throw_if_cancelled(); // an iteration takes milliseconds to a second: SIGINT stops here
     const double residual = free_gradient_norm(model, gradient);
@@ -221,41 +331,67 @@ SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, 
       report.stopped_by = "gradient";
       break;
     }
-    if (stop.gradient_norm_N <= 0.0 && test.passes(residual)) {
+    const bool residual_passes = stop.gradient_norm_N <= 0.0 && test.passes(residual);
+    if (residual_passes && !distance_test) {
       report.stopped_by = "residual";
       break;
     }
-    Eigen::VectorXd g(3 * nf);
-    for (Eigen::Index f = 0; f < nf; ++f)
-      g.segment<3>(3 * f) = gradient.row(free_vertex[static_cast<std::size_t>(f)]).transpose();
-    Eigen::SparseMatrix<double> H = assemble_hessian(model, inertia, p, free_index, nf, entries);
-    // A PSD Hessian can be singular (a quasi-static model held only in part): shift until it factors.
-    double shift = 0.0;
-    Eigen::VectorXd direction;
-    for (int attempt = 0; attempt < 30; ++attempt) {
-      factor.setShift(shift);
-      factor.compute(H);
-      if (factor.info() == Eigen::Success) {
-        direction = -factor.solve(g);
-        if (direction.allFinite()) break;
+    const Eigen::VectorXd g = free.gather(gradient);
+    const Eigen::VectorXd direction = newton_direction(model, inertia, p, free, g, factor, entries, H);
+    // The distance test: the step itself measures how far the equilibrium is.
+    report.equilibrium_distance_m = largest_step(direction);
+    report.largest_displacement_m = largest_displacement(model, free, p);
+    distance_known = true;
+    if (residual_passes &&
+        distance_passes(stop, report.equilibrium_distance_m, report.largest_displacement_m)) {
+      // An equilibrium, but a stable one? A saddle (a pushed bar held straight) has a small
+      // residual and step too: leave it along the direction that lowers the energy.
+      const std::optional<Eigen::VectorXd> down =
+          report.saddles_left < k_saddle_escapes
+              ? descent_direction(model, inertia, p, free, H, factor, 0.1 * report.largest_displacement_m)
+              : std::nullopt;
+      Eigen::MatrixX3d lower;
+      double lower_energy = energy;
+      for (double t = 1.0; down && t > 1e-3 && !(lower_energy < energy); t *= 0.5) {
+        for (double sign : {1.0, -1.0}) {
+          const Eigen::MatrixX3d q = moved(p, free, *down, sign * t);
+          const double e = model_energy(model, inertia, q);
+          if (e < energy && e < lower_energy) {
+            lower = q;
+            lower_energy = e;
+          }
+        }
       }
-      shift = shift == 0.0 ? 1e-8 * H.diagonal().cwiseAbs().maxCoeff() : 10.0 * shift;
+      if (!(lower_energy < energy)) {
+        report.stopped_by = "residual";
+        break;
+      }
+      report.saddle_energies_J.push_back(energy);
+      ++report.saddles_left;
+      p = lower;
+      energy = lower_energy;
+      gradient = model_gradient(model, inertia, p);
+      distance_known = false;
+      report.iterations = iteration;
+      continue;
     }
-    if (direction.size() != g.size()) throw std::runtime_error("newton: the Hessian could not be factored");
     const double slope = g.dot(direction);
     double step = 1.0;
     Eigen::MatrixX3d trial = p;
     double trial_energy = energy;
     bool accepted = false;
     Eigen::MatrixX3d trial_gradient;
+    auto place = [&](double t) {
+      for (Eigen::Index f = 0; f < free.count(); ++f)
+        trial.row(free.vertex[static_cast<std::size_t>(f)]) =
+            p.row(free.vertex[static_cast<std::size_t>(f)]) + t * direction.segment<3>(3 * f).transpose();
+    };
     // Near the minimizer the decrease a step promises falls below the round-off of E itself and
     // Armijo's test becomes a coin toss: there, the full Newton step is taken when it lowers the
     // gradient norm instead (the merit function of Newton's method for the equation grad E = 0).
     const bool below_roundoff = -slope <= 1e-13 * std::abs(energy);
     if (below_roundoff) {
-      for (Eigen::Index f = 0; f < nf; ++f)
-        trial.row(free_vertex[static_cast<std::size_t>(f)]) =
-            p.row(free_vertex[static_cast<std::size_t>(f)]) + direction.segment<3>(3 * f).transpose();
+      place(1.0);
       trial_gradient = model_gradient(model, inertia, trial);
       if (free_gradient_norm(model, trial_gradient) < free_gradient_norm(model, gradient)) {
         trial_energy = model_energy(model, inertia, trial);
@@ -265,9 +401,7 @@ SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, 
       }
     }
     for (int backtrack = 0; backtrack < 60 && !accepted; ++backtrack) {
-      for (Eigen::Index f = 0; f < nf; ++f)
-        trial.row(free_vertex[static_cast<std::size_t>(f)]) =
-            p.row(free_vertex[static_cast<std::size_t>(f)]) + step * direction.segment<3>(3 * f).transpose();
+      place(step);
       trial_energy = model_energy(model, inertia, trial);
       if (trial_energy <= energy + 1e-4 * step * slope) {
         accepted = true;
@@ -283,6 +417,7 @@ SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, 
     const double previous = energy;
     p = trial;
     energy = trial_energy;
+    distance_known = false;
     gradient = trial_gradient.rows() == p.rows() ? trial_gradient : model_gradient(model, inertia, p);
     if (record_energies) {
       report.energies_J.push_back(energy);
@@ -293,8 +428,9 @@ SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, 
       observer(iteration, p, energy);
       observer_seconds += std::chrono::duration<double>(Clock::now() - before).count();
     }
-    // The energy criterion stops only a solve whose residual test passes too.
-    if (stop.gradient_norm_N <= 0.0 &&
+    // The energy criterion stops only a solve whose residual test passes too (and, with the
+    // distance test, never: the next iteration's step decides).
+    if (stop.gradient_norm_N <= 0.0 && !distance_test &&
         previous - energy <= stop.relative_energy_decrease * std::abs(energy) &&
         test.passes(free_gradient_norm(model, gradient))) {
       report.stopped_by = "energy";
@@ -303,8 +439,63 @@ SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, 
   }
   report.final_energy_J = energy;
   report.residual_N = free_gradient_norm(model, gradient);
-  judge_convergence(test, report);
+  if (distance_test && !distance_known) { // stopped by the limit: how far it still is
+    report.equilibrium_distance_m =
+        largest_step(newton_direction(model, inertia, p, free, free.gather(gradient), factor, entries, H));
+    report.largest_displacement_m = largest_displacement(model, free, p);
+  }
+  judge_convergence(test, report, distance_test ? stop : StopCriteria{});
   return report;
+}
+
+double newton_step_length(const ElasticModel& model, const StepInertia& inertia, const Eigen::MatrixX3d& p) {
+  const FreeRows free(model);
+  HessianFactor factor;
+  factor.setMode(Eigen::CholmodSimplicialLLt);
+  std::vector<Eigen::Triplet<double>> entries;
+  Eigen::SparseMatrix<double> H;
+  const Eigen::VectorXd g = free.gather(model_gradient(model, inertia, p));
+  return free.count() > 0 ? largest_step(newton_direction(model, inertia, p, free, g, factor, entries, H))
+                          : 0.0;
+}
+
+void finish_solve(const ElasticModel& model, const StepInertia& inertia, Eigen::MatrixX3d& p,
+                  const StopCriteria& stop, const ResidualTest& test, bool newton_steps,
+                  SolveReport& report) {
+  judge_convergence(test, report);
+  if (stop.relative_distance <= 0.0) return;
+  if (newton_steps && report.converged) {
+    StopCriteria finish = stop;
+    finish.force_scale_N = test.scale_N;
+    finish.max_iterations = std::min(stop.max_iterations, k_finishing_newton_iterations);
+    const SolveReport newton = newton_solve(model, inertia, p, finish);
+    report.newton_iterations = newton.iterations;
+    report.iterations += newton.iterations;
+    report.saddles_left = newton.saddles_left;
+    report.saddle_energies_J = newton.saddle_energies_J;
+    if (newton.iterations > 0) {
+      report.stopped_by = "newton " + newton.stopped_by;
+      report.final_energy_J = newton.final_energy_J;
+      report.residual_N = newton.residual_N;
+      // the contacts where Newton left the vertices
+      report.contacts = static_cast<int>(surface_contacts(model, p).size());
+      for (Eigen::Index v = 0; v < p.rows() && !model.obstacles.empty(); ++v) {
+        if (!model.fixed.empty() && model.fixed[static_cast<std::size_t>(v)]) continue;
+        for (const Obstacle& o : model.obstacles) {
+          if (o.signed_distance(p.row(v).transpose()) < 0.0) {
+            ++report.contacts;
+            break;
+          }
+        }
+      }
+    }
+    report.equilibrium_distance_m = newton.equilibrium_distance_m;
+    report.largest_displacement_m = newton.largest_displacement_m;
+  } else {
+    report.equilibrium_distance_m = newton_step_length(model, inertia, p);
+    report.largest_displacement_m = largest_displacement(model, FreeRows(model), p);
+  }
+  judge_convergence(test, report, stop);
 }
 
 } // namespace phantasm

@@ -2,6 +2,7 @@
 
 #include "core/cancellation.hpp"
 #include "core/progress.hpp"
+#include "sim/newton.hpp"
 #include "sim/signed_svd.hpp"
 
 #include <array>
@@ -301,7 +302,7 @@ SolveReport position_based_solve(PositionBasedVariant variant, const ElasticMode
   report.final_energy_J = energy;
   report.local_seconds = solver_seconds;
   report.residual_N = residual;
-  judge_convergence(test, report);
+  finish_solve(model, inertia, p, stop, test, false, report);
   return report;
 }
 

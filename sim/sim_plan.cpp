@@ -66,6 +66,8 @@ StageReport plan_sim(const DeformationSettings& d, const OrganTable& organs) {
     std::ostringstream line;
     if (load.kind == LoadKind::gravity) {
       line << "gravity " << format_vector(load.acceleration_m_s2) << " m/s^2";
+    } else if (load.kind == LoadKind::growth) {
+      line << "growth of " << load.organ << " by " << 100.0 * load.volume_change << " % of its rest volume";
     } else {
       line << "displacement " << format_vector(load.displacement_mm) << " mm";
       if (load.rotation_deg != 0.0)
@@ -97,7 +99,9 @@ StageReport plan_sim(const DeformationSettings& d, const OrganTable& organs) {
   std::ostringstream solver;
   solver << to_string(d.solver.method) << " solver, " << to_string(d.mode) << ", at most "
          << d.solver.max_iterations << " iterations, converged at a residual of "
-         << d.solver.relative_residual_tolerance << " of the loads' force per vertex";
+         << d.solver.relative_residual_tolerance
+         << " of the loads' force per vertex and a Newton step within that fraction of the largest "
+            "displacement";
   if (d.mode == DeformationMode::dynamic)
     solver << ", " << d.frames << " frames of " << d.time_step_s << " s";
   else if (d.load_steps > 1)

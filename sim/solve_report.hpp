@@ -18,6 +18,12 @@ namespace phantasm {
 /// is larger), or when that is 0 the largest free gradient row at the start of the solve. The residual test
 /// stops a solve by itself; the step criteria (position change, energy decrease) measure a step,
 /// not the distance to equilibrium, and stop a solve only when its residual test passes too.
+/// A small residual is not a small distance when the loads are stiff springs and the structure
+/// is slender (a twisted or pushed bar: its soft modes amplify the residual thousandfold), so a
+/// residual that passes is checked by the distance test: the Newton step from the result (the
+/// PSD-projected Hessian, sim/newton.hpp) must move no free vertex further than
+/// relative_distance times the largest displacement of a free vertex from rest. Local/global
+/// finishes with Newton steps where it does not; Newton takes the step anyway.
 struct StopCriteria {
   int max_iterations = 100;
   double relative_energy_decrease = 1e-6; ///< (E_k-1 - E_k) / |E_k| below this, with the residual test
@@ -25,6 +31,9 @@ struct StopCriteria {
   double gradient_norm_N = 0.0;    ///< stop when the largest free gradient row is below this (0 = off)
   double relative_residual = 1e-3; ///< converged: residual <= this x force scale (0 = never)
   double force_scale_N = 0.0;      ///< the loads' force scale, N (0 = the initial gradient)
+  /// converged also needs the Newton step at the result <= this x the largest displacement from
+  /// rest (0 = off: the residual test alone)
+  double relative_distance = 0.0;
 };
 
 /// The residual test: the force scale of a solve from its initial residual (N) and the floor in
@@ -67,14 +76,40 @@ struct SolveReport {
   int contacts = 0;               ///< free vertices inside an obstacle at the result
   long contact_changes = 0;       ///< vertices whose contacts came or went during the solve
   long rank_updates = 0;          ///< rank-one updates/downdates of the factor so far
+  /// The distance test (StopCriteria::relative_distance), when on: the largest free vertex's
+  /// Newton step at the result (m; -1: not computed), the largest free displacement from rest
+  /// (m), and Newton iterations that finished a local/global solve (counted in `iterations`).
+  double equilibrium_distance_m = -1.0;
+  double largest_displacement_m = 0.0;
+  int newton_iterations = 0;
+  /// Unstable equilibria (saddles of the energy: a direction lowers it, as a bar pushed along
+  /// its axis buckles) the solve reached and left before it stopped, and their energies (J).
+  int saddles_left = 0;
+  std::vector<double> saddle_energies_J;
+  /// The distance over the largest displacement (0 when nothing moved or not computed).
+  double relative_distance() const {
+    return equilibrium_distance_m > 0.0 && largest_displacement_m > 0.0
+               ? equilibrium_distance_m / largest_displacement_m
+               : 0.0;
+  }
 };
 
+/// Whether a Newton step of `distance_m` passes the distance test of `stop` at a result whose
+/// largest free displacement from rest is `largest_displacement_m` (round-off: 1e-12 m passes).
+inline bool distance_passes(const StopCriteria& stop, double distance_m, double largest_displacement_m) {
+  return stop.relative_distance <= 0.0 ||
+         (distance_m >= 0.0 &&
+          distance_m <= std::max(stop.relative_distance * largest_displacement_m, 1e-12));
+}
+
 /// The residual test's outcome at the result into `report` (converged, relative_residual,
-/// force_scale_N), from report.residual_N.
-inline void judge_convergence(const ResidualTest& test, SolveReport& report) {
+/// force_scale_N), from report.residual_N, and the distance test's when `stop` asks for it
+/// (from report.equilibrium_distance_m and largest_displacement_m).
+inline void judge_convergence(const ResidualTest& test, SolveReport& report, const StopCriteria& stop = {}) {
   report.force_scale_N = test.scale_N;
   report.relative_residual = test.relative(report.residual_N);
-  report.converged = test.passes(report.residual_N);
+  report.converged = test.passes(report.residual_N) &&
+                     distance_passes(stop, report.equilibrium_distance_m, report.largest_displacement_m);
 }
 
 /// Called after every iteration with its number, the positions and E(p); its own time is not
