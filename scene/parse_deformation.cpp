@@ -82,7 +82,7 @@ void parse_list(CheckedMap& map, const std::string& key, const char* what, std::
 
 void parse_load(CheckedMap& map, LoadSettings& load) {
   std::string kind;
-  if (!map.choice("type", kind, {"gravity", "displacement"}, true)) {
+  if (!map.choice("type", kind, {"gravity", "displacement", "growth"}, true)) {
     map.accept_remaining_keys();
     return;
   }
@@ -91,6 +91,12 @@ void parse_load(CheckedMap& map, LoadSettings& load) {
     load.kind = LoadKind::gravity;
     map.vec3("acceleration_m_s2", load.acceleration_m_s2, NumberRule{-1e4, 1e4, false, false, "m/s^2"}, true);
     map.string_list("organs", load.organs);
+  } else if (kind == "growth") {
+    // The rest volume of the organ's tets changes by volume_change; -1 would leave no tissue.
+    load.kind = LoadKind::growth;
+    map.string("organ", load.organ, true);
+    map.number("volume_change", load.volume_change, NumberRule{-1.0, 10.0, true, false, ""}, true);
+    return;
   } else {
     load.kind = LoadKind::displacement;
     map.string("organ", load.organ, true);

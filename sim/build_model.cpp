@@ -6,6 +6,7 @@
 #include "core/format.hpp"
 #include "core/progress.hpp"
 #include "geometry/tet_boundary.hpp"
+#include "sim/growth.hpp"
 #include "sim/vertex_star_volumes.hpp"
 
 #include <algorithm>
@@ -196,6 +197,7 @@ Body add_solid_body(const DeformationSettings& deformation, const OrganTable& or
   const std::size_t first_tet = model.tets.size();
   body.first_vertex = add_body(model, k_mm * mesh.vertices, mesh.tets, materials);
   std::vector<int> organ_labels(organ_of_tet.begin(), organ_of_tet.end());
+  apply_growth(deformation, organs, organ_of_tet, first_tet, model, built.grown_tets);
   const int bulk_terms = apply_volume_formulation(model, deformation.volume, mesh, first_tet, organ_labels);
   body.tet_organ = std::move(organ_labels);
   body.vertex_count = mesh.vertices.rows();
@@ -241,6 +243,7 @@ BodyModel build_body_model(const DeformationSettings& deformation, const OrganTa
       built.bodies.push_back(add_solid_body(deformation, organs, phantom, assignment, b, built, report));
     }
   }
+  report_growth(deformation, built.grown_tets, report);
   return built;
 }
 

@@ -12,8 +12,9 @@ namespace phantasm::sim_detail {
 /// The model of the bodies, before loads.
 struct BodyModel {
   ElasticModel model;
-  std::vector<Body> bodies; ///< in scene order of their organs
-  std::vector<int> held;    ///< boundary vertices of bodies inside an organ that does not move
+  std::vector<Body> bodies;            ///< in scene order of their organs
+  std::vector<int> held;               ///< boundary vertices of bodies inside an organ that does not move
+  std::vector<std::size_t> grown_tets; ///< per load of the scene, the tets a growth load grew
 };
 
 /// The model of every body of `assignment` [choices documented in docs/deformation.md]: a solid

@@ -21,6 +21,8 @@ std::string load_names(const DeformationSettings& deformation) {
     if (!names.empty()) names += ", ";
     names += load.kind == LoadKind::gravity
                  ? "gravity (" + format_number(load.acceleration_m_s2.norm()) + " m/s^2)"
+             : load.kind == LoadKind::growth
+                 ? "the growth of " + load.organ + " by " + format_number(100.0 * load.volume_change) + " %"
                  : "the displacement of " + load.organ + " by " + format_number(load.displacement_mm.norm()) +
                        " mm";
     if (load.kind == LoadKind::displacement && load.rotation_deg != 0.0)

@@ -4,6 +4,7 @@
 
 #include "core/error.hpp"
 #include "core/format.hpp"
+#include "sim/growth.hpp"
 
 #include <Eigen/Geometry>
 
@@ -52,6 +53,14 @@ Loads add_loads(const std::vector<LoadSettings>& load_settings, const OrganTable
                          "expected an organ of the phantom, found '" + load.organ + "'");
     }
     const std::size_t i = static_cast<std::size_t>(organ);
+    if (load.kind == LoadKind::growth) {
+      const Organ& grown = phantom.organs[i];
+      loads.growth_moved_m = std::max(
+          loads.growth_moved_m, growth_displacement_m(load, grown.surface ? grown.surface->rest_positions()
+                                                            : grown.solid ? grown.solid->vertices
+                                                                          : Eigen::MatrixX3d()));
+      continue;
+    }
     if (body_of[i] < 0 || (!phantom.organs[i].surface && !phantom.organs[i].sheet)) {
       report.skipped.push_back("displacement of " + load.organ +
                                ": the organ is not part of a simulated body");

@@ -26,12 +26,14 @@ Eigen::Vector3d loaded_position_m(const LoadSettings& load, const Eigen::Vector3
 struct Loads {
   Eigen::MatrixX3d acceleration;    ///< per model vertex, m/s^2 (gravity)
   std::vector<PushedPoints> pushes; ///< one per displacement load that reaches a body
+  double growth_moved_m = 0.0;      ///< the largest rest-surface motion of a growth load (sim/growth.hpp)
 };
 
 /// Gravity on the bodies it acts on, and every displacement load as springs of 10^4 x
 /// `nominal_stiffness` from the organ's surface points in its region (embedded in their body) to
 /// their displaced places, added to `built.model.points` at full displacement. Loads that reach
-/// no body go into `report` as skipped.
+/// no body go into `report` as skipped. Growth loads act on the bodies' tets (build_body_model);
+/// here only their scale of motion is kept.
 Loads add_loads(const std::vector<LoadSettings>& load_settings, const OrganTable& organs,
                 const Phantom& phantom, const BodyAssignment& assignment, BodyModel& built,
                 double nominal_stiffness, StageReport& report);

@@ -21,10 +21,22 @@ std::vector<OrganMotion> classify_organ_motion(const DeformationSettings& d, con
       continue;
     }
     for (const auto& load : d.loads) {
-      const bool acts = load.kind == LoadKind::displacement
-                            ? load.organ == name
-                            : load.organs.empty() || contains(load.organs, name);
+      const bool acts = load.kind != LoadKind::gravity ? load.organ == name
+                                                       : load.organs.empty() || contains(load.organs, name);
       if (acts) motion[i] = OrganMotion::simulated;
+    }
+  }
+  // A growing organ pushes on (or pulls) the tissue around it: the solid organs holding it are
+  // simulated with it, up to a fixed one or a surface organ.
+  for (const auto& load : d.loads) {
+    if (load.kind != LoadKind::growth) continue;
+    const int grown = organs.index_of(load.organ);
+    if (grown < 0) continue;
+    for (int j = organs[static_cast<std::size_t>(grown)].parent; j >= 0;
+         j = organs[static_cast<std::size_t>(j)].parent) {
+      const auto k = static_cast<std::size_t>(j);
+      if (motion[k] == OrganMotion::fixed || (k < d.organs.size() && !d.organs[k].solid)) break;
+      motion[k] = OrganMotion::simulated;
     }
   }
   return motion;
@@ -67,7 +79,7 @@ const char* to_string(VolumeFormulation volume) {
 }
 
 const char* to_string(LoadKind kind) {
-  return kind == LoadKind::gravity ? "gravity" : "displacement";
+  return kind == LoadKind::gravity ? "gravity" : kind == LoadKind::growth ? "growth" : "displacement";
 }
 
 const char* to_string(ObstacleShape shape) {

@@ -42,19 +42,20 @@ enum class VolumeFormulation {
   tet_group    ///< per group of about 5 tets: one constraint on the group's volume-averaged F
 };
 
-enum class LoadKind { gravity, displacement };
+enum class LoadKind { gravity, displacement, growth };
 enum class MotionProfile { constant, ramp, sine };
 
 /// An external load: gravity on organs, or a prescribed displacement of the part of an organ's
 /// surface inside a sphere (a retractor, a probe, a compression paddle, a clamp that holds or
 /// twists the end of a bar): each point x of the region goes to
 /// c + R (x - c) + displacement_mm, R the turn by rotation_deg about rotation_axis through c =
-/// rotation_center_mm (right-handed; 0 degrees: a pure translation).
+/// rotation_center_mm (right-handed; 0 degrees: a pure translation). Or the growth (atrophy when
+/// negative) of an organ's tets: a change of their rest volume by the fraction volume_change.
 struct LoadSettings {
   LoadKind kind = LoadKind::gravity;
   std::vector<std::string> organs; ///< gravity: organs it acts on (empty = all moving)
   Eigen::Vector3d acceleration_m_s2{0, 0, -9.81};
-  std::string organ; ///< displacement: the organ pushed
+  std::string organ; ///< displacement: the organ pushed; growth: the organ that grows
   Eigen::Vector3d displacement_mm{0, 0, 0};
   Eigen::Vector3d region_center_mm{0, 0, 0};
   double region_radius_mm = 10.0;
@@ -63,6 +64,7 @@ struct LoadSettings {
   Eigen::Vector3d rotation_center_mm{0, 0, 0};    ///< a point of the axis
   MotionProfile motion = MotionProfile::constant; ///< how the load evolves in dynamic mode
   double period_s = 1.0;                          ///< ramp duration or sine period
+  double volume_change = 0.0; ///< growth: the rest volume's relative change, > -1 (-0.05: 5 % atrophy)
 };
 
 enum class ObstacleShape { half_space, sphere };
