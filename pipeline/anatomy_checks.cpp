@@ -3,6 +3,7 @@
 #include "core/error.hpp"
 #include "core/format.hpp"
 
+#include <algorithm>
 #include <string>
 
 namespace phantasm {
@@ -20,17 +21,26 @@ bool inside_obstacle(const ObstacleSettings& o, const Eigen::Vector3d& x) {
   return (x - o.point_mm).dot(o.normal) < 0.0; // the normal points out of it, towards the tissue
 }
 
-void check_nesting(const Phantom& phantom) {
+/// An organ read from a mesh file larger than its container. Only mesh files are checked here:
+/// analytic shapes are checked by the scene's validation, and an organ from a label volume nests by
+/// construction (its surface bounds its labels united with those inside it), where a fitted
+/// surface's base mesh may reach a few millimetres beyond its container's without any error of
+/// the scene's.
+void check_nesting(const Scene& scene, const Phantom& phantom) {
   for (std::size_t i = 0; i < phantom.organs.size(); ++i) {
     const Organ& organ = phantom.organs[i];
     if (organ.inside.empty()) continue;
+    const std::vector<OrganSettings>& declared = scene.anatomy.organs;
+    const auto settings = std::find_if(declared.begin(), declared.end(),
+                                       [&](const OrganSettings& o) { return o.name == organ.name; });
+    if (settings == declared.end() || settings->shape.kind != ShapeKind::mesh) continue;
     const Organ* container = phantom.find(organ.inside);
     if (container == nullptr) continue;
     const std::optional<Eigen::Vector3d> size = extent(organ), room = extent(*container);
     if (!size || !room) continue;
     for (int a = 0; a < 3; ++a) {
       if ((*size)[a] > 1.05 * (*room)[a]) {
-        const std::string key = "anatomy.organs[" + std::to_string(i) + "].inside";
+        const std::string key = "anatomy.organs[" + std::to_string(settings - declared.begin()) + "].inside";
         throw SettingError(key, std::string("expected a container at least as large as the organ it holds, "
                                             "found '") +
                                     container->name + "' " + format_number((*room)[a]) + " mm across along " +
@@ -74,7 +84,7 @@ void check_obstacles(const Scene& scene, const Phantom& phantom) {
 } // namespace
 
 void check_built_anatomy(const Scene& scene, const Phantom& phantom) {
-  check_nesting(phantom);
+  check_nesting(scene, phantom);
   check_obstacles(scene, phantom);
 }
 

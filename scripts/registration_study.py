@@ -88,6 +88,13 @@ def with_voxel_size(scene, voxel_mm):
     if fov is not None:
         fov = fov if isinstance(fov, list) else [fov] * 3
         grid["field_of_view_mm"] = [math.ceil(f / voxel_mm - 1e-9) * voxel_mm for f in fov]
+    # An acquired voxel smaller than the coarser grid's cannot be sampled on it: acquire at
+    # the grid's voxel along such axes (the scene's k-space otherwise stays as it is).
+    acquisition = scene.get("acquisition")
+    if isinstance(acquisition, dict) and "acquired_voxel_mm" in acquisition:
+        acquired = acquisition["acquired_voxel_mm"]
+        acquired = acquired if isinstance(acquired, list) else [acquired] * 3
+        acquisition["acquired_voxel_mm"] = [max(float(a), voxel_mm) for a in acquired]
     return scene
 
 
