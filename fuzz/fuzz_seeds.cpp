@@ -121,7 +121,9 @@ void write_mesh_seeds(const fs::path& folder) {
   data->SetPoints(points);
   data->SetPolys(triangles);
   // Each writer writes a scratch file of its own extension (vtkPLYWriter adds ".ply" otherwise).
-  const auto scratch = [&folder](const char* extension) { return folder / (std::string("scratch") + extension); };
+  const auto scratch = [&folder](const char* extension) {
+    return folder / (std::string("scratch") + extension);
+  };
   for (const bool binary : {false, true}) {
     vtkNew<vtkSTLWriter> stl;
     stl->SetInputData(data);

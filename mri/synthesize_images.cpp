@@ -291,7 +291,8 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
   // double-precision coil image.
   if (sampling && !options.per_coil && (!given || deformed))
     pipeline = std::make_unique<KspacePipeline>(*sampling, std::min(coils.count(), 2));
-  const Acquisition acquisition{grid, coils, sampling, settings.bias_percent, pipeline.get(), options.per_coil};
+  const Acquisition acquisition{grid,           coils,           sampling, settings.bias_percent,
+                                pipeline.get(), options.per_coil};
   Workspace workspace;
   images.kspace = acquisition.kspace;
   images.coils = coils.count();

@@ -163,8 +163,10 @@ public:
       for (std::size_t j = 0; load.kind == LoadKind::growth && j < i; ++j) {
         if (d.loads[j].kind == LoadKind::growth && d.loads[j].organ == load.organ)
           problem(indexed("deformation.loads", i, "organ"),
-                  "expected one growth per organ, found a second for '" + load.organ + "' (the first is "
-                  "deformation.loads[" + std::to_string(j) + "])");
+                  "expected one growth per organ, found a second for '" + load.organ +
+                      "' (the first is "
+                      "deformation.loads[" +
+                      std::to_string(j) + "])");
       }
       const OrganSettings* grown = load.kind == LoadKind::growth ? m_scene.find_organ(load.organ) : nullptr;
       if (grown != nullptr && !grown->solid)

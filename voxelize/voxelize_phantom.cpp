@@ -304,9 +304,9 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
     if (auto warning = fold_warning("from-def_to-ref (the reference grid)", m.jacobian, m.ref_to_def_exact,
                                     out.reference.labels, label_names))
       report.warnings.push_back(*warning);
-    if (auto warning = fold_warning("from-ref_to-def (the deformed grid)", m.def_to_ref_jacobian,
-                                    m.def_to_ref_exact,
-                                    out.deformed ? out.deformed->labels : out.reference.labels, label_names))
+    if (auto warning =
+            fold_warning("from-ref_to-def (the deformed grid)", m.def_to_ref_jacobian, m.def_to_ref_exact,
+                         out.deformed ? out.deformed->labels : out.reference.labels, label_names))
       report.warnings.push_back(*warning);
   }
   if (!deformation)

@@ -271,7 +271,8 @@ TEST(SynthesizeImages, KspacePipelineMatchesThePerCoilAcquisition) {
   scene.acquisition.coils = 8;
   const VoxelizedPhantom object = volumes(20);
   const MrImages pipeline = synthesize_images(scene, block(), object, report, quiet, nullptr);
-  const MrImages per_coil = synthesize_images(scene, block(), object, report, quiet, &reference::acquire_in_kspace);
+  const MrImages per_coil =
+      synthesize_images(scene, block(), object, report, quiet, &reference::acquire_in_kspace);
   double worst = 0.0, brightest = 0.0;
   for (std::size_t v = 0; v < per_coil.reference[0].magnitude.size(); ++v) {
     worst = std::max(
