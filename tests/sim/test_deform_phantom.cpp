@@ -8,6 +8,7 @@
 #include "sim/enclosed_volume.hpp"
 #include "sim/newton.hpp"
 #include "sim/surface_contacts.hpp"
+#include "tests/support/deformed_bodies.hpp"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
@@ -20,26 +21,13 @@ using namespace phantasm;
 
 namespace {
 
-Scene load(const std::string& path) {
-  SceneLoadResult result = load_scene(std::string(PHANTASM_SOURCE_DIR) + "/" + path);
-  EXPECT_TRUE(result.scene) << format_diagnostics(result.problems);
-  return *result.scene;
-}
-
-double signed_tet_volume(const Eigen::MatrixX3d& x, const Eigen::MatrixX4i& tets, Eigen::Index t) {
-  Eigen::Matrix3d D;
-  for (int k = 0; k < 3; ++k)
-    D.col(k) = (x.row(tets(t, k + 1)) - x.row(tets(t, 0))).transpose();
-  return D.determinant() / 6.0;
-}
-
 /// No tet of the body inverted, and its volume within `tolerance` (relative) of the rest volume.
 void expect_no_inversion_and_volume_kept(const DeformedBody& body, double tolerance) {
   double rest_volume = 0.0, volume = 0.0;
   for (Eigen::Index t = 0; t < body.tets.rows(); ++t) {
-    ASSERT_GT(signed_tet_volume(body.deformed_mm, body.tets, t), 0.0) << "tet " << t;
-    rest_volume += signed_tet_volume(body.rest_mm, body.tets, t);
-    volume += signed_tet_volume(body.deformed_mm, body.tets, t);
+    ASSERT_GT(phantasm::testing::body_tet_volume(body.deformed_mm, body.tets, t), 0.0) << "tet " << t;
+    rest_volume += phantasm::testing::body_tet_volume(body.rest_mm, body.tets, t);
+    volume += phantasm::testing::body_tet_volume(body.deformed_mm, body.tets, t);
   }
   EXPECT_NEAR(volume / rest_volume, 1.0, tolerance);
 }
@@ -49,7 +37,7 @@ void expect_no_inversion_and_volume_kept(const DeformedBody& body, double tolera
 // The small head: grey matter is the body (inside the fixed scalp, so its boundary is held
 // except where the load pushes it), white matter is embedded in it.
 TEST(DeformPhantom, PushedSurfaceReachesItsTargetAndEmbeddedOrgansFollow) {
-  const Scene scene = load("tests/data/scenes/small-head.yaml");
+  const Scene scene = phantasm::testing::load_repository_scene("tests/data/scenes/small-head.yaml");
   Reporter quiet = Reporter::silent();
   const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
   StageReport report;
@@ -82,7 +70,7 @@ TEST(DeformPhantom, PushedSurfaceReachesItsTargetAndEmbeddedOrgansFollow) {
 
 /// The bar scene under gravity alone, its clamps taken off: nothing holds it.
 Scene free_bar() {
-  Scene scene = load("data-synthetic/bar.yaml");
+  Scene scene = phantasm::testing::load_repository_scene("data-synthetic/bar.yaml");
   auto& loads = scene.deformation.loads;
   loads.erase(std::remove_if(loads.begin(), loads.end(),
                              [](const LoadSettings& l) { return l.kind != LoadKind::gravity; }),
@@ -95,7 +83,7 @@ Scene free_bar() {
 // load with a rotation), under gravity. The clamped ends are where the loads put them, the
 // middle twists part of the way and sags a little, and the bar stays in the field of view.
 TEST(DeformPhantom, TheBarSceneHoldsOneEndAndTwistsTheOther) {
-  const Scene scene = load("data-synthetic/bar.yaml");
+  const Scene scene = phantasm::testing::load_repository_scene("data-synthetic/bar.yaml");
   Reporter quiet = Reporter::silent();
   const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
   StageReport report;
@@ -171,7 +159,7 @@ TEST(DeformPhantom, AQuasiStaticBodyThatNothingHoldsIsAClearError) {
 // code that ask for it stop the stage with the setting's key path, which the pipeline turns into
 // the scene's line.
 TEST(DeformPhantom, APositionBasedSolverInAQuasiStaticSceneStopsAtItsSetting) {
-  Scene scene = load("tests/data/scenes/small-head.yaml");
+  Scene scene = phantasm::testing::load_repository_scene("tests/data/scenes/small-head.yaml");
   scene.deformation.solver.method = SolverMethod::xpbd;
   Reporter quiet = Reporter::silent();
   const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
@@ -189,7 +177,7 @@ TEST(DeformPhantom, APositionBasedSolverInAQuasiStaticSceneStopsAtItsSetting) {
 // deformation.volume: tet_groups puts the body's bulk term on groups of tets (the log says how
 // many); the small head's push is met as with the per-tet term, and the solve converges.
 TEST(DeformPhantom, BulkTermOnGroupsOfTetsFromTheScene) {
-  Scene scene = load("tests/data/scenes/small-head.yaml");
+  Scene scene = phantasm::testing::load_repository_scene("tests/data/scenes/small-head.yaml");
   scene.deformation.volume = VolumeFormulation::tet_group;
   Reporter quiet = Reporter::silent();
   const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
@@ -220,7 +208,7 @@ TEST(DeformPhantom, TetInterfacesFollowOrgansOrOnlyMaterialChanges) {
   for (const Case& c :
        {Case{TetInterfaces::organs, "brain", true}, Case{TetInterfaces::materials, "brain", false},
         Case{TetInterfaces::materials, "scalp", true}}) {
-    Scene scene = load("tests/data/scenes/small-head.yaml");
+    Scene scene = phantasm::testing::load_repository_scene("tests/data/scenes/small-head.yaml");
     scene.anatomy.tet_size_mm = 8.0;
     scene.anatomy.tet_interfaces = c.interfaces;
     scene.deformation.organs[2].material = c.white_material;
@@ -257,7 +245,7 @@ TEST(DeformPhantom, TetInterfacesFollowOrgansOrOnlyMaterialChanges) {
 // wall held. Nothing passes a paddle beyond the penalty's give, the paddles carry the load
 // (contacts at the end), no tet inverts and the volume is kept (nu 0.49).
 TEST(DeformPhantom, PaddlesCompressTheBreastWithoutPassingThroughIt) {
-  const Scene scene = load("data-synthetic/breast.yaml");
+  const Scene scene = phantasm::testing::load_repository_scene("data-synthetic/breast.yaml");
   ASSERT_EQ(scene.deformation.obstacles.size(), 2u);
   Reporter quiet = Reporter::silent();
   const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
@@ -296,7 +284,7 @@ TEST(DeformPhantom, PaddlesCompressTheBreastWithoutPassingThroughIt) {
 // the sheet swings down (a physical pendulum of 1 m is near the bottom of its swing at 0.4 s), and the
 // membrane barely stretches (E 1 MPa, 0.5 mm thick) except next to the six held points that carry it.
 TEST(DeformPhantom, ClothHangsFromItsCornersAsAShell) {
-  Scene scene = load("data-synthetic/cloth.yaml");
+  Scene scene = phantasm::testing::load_repository_scene("data-synthetic/cloth.yaml");
   scene.deformation.frames = 24;
   scene.anatomy.organs[0].shape.cells = Eigen::Vector3i(20, 20, 1);
   Reporter quiet = Reporter::silent();
@@ -337,7 +325,7 @@ TEST(DeformPhantom, ClothHangsFromItsCornersAsAShell) {
 // organ): the paddles flatten it without losing volume. The constraint's volume is the patch
 // surface's own (base polyhedron plus bumps), at rest and deformed.
 TEST(DeformPhantom, AClosedShellKeepsTheVolumeItEnclosesUnderThePaddles) {
-  Scene scene = load("data-synthetic/breast.yaml");
+  Scene scene = phantasm::testing::load_repository_scene("data-synthetic/breast.yaml");
   scene.anatomy.organs.resize(1);
   scene.anatomy.organs[0].solid = false;
   scene.anatomy.organs[0].thickness_mm = 2.0;
@@ -398,7 +386,7 @@ TEST(DeformPhantom, AClosedShellKeepsTheVolumeItEnclosesUnderThePaddles) {
 }
 
 TEST(DeformPhantom, AnEnclosedVolumeOnAnOpenSheetIsAClearError) {
-  Scene scene = load("data-synthetic/cloth.yaml");
+  Scene scene = phantasm::testing::load_repository_scene("data-synthetic/cloth.yaml");
   scene.anatomy.organs[0].shape.cells = Eigen::Vector3i(4, 4, 1);
   scene.anatomy.organs[0].enclosed_volume_tolerance = 0.01;
   resolve_stage_settings(scene);
@@ -418,7 +406,7 @@ TEST(DeformPhantom, AnEnclosedVolumeOnAnOpenSheetIsAClearError) {
 // Two balls pressed together (tests/data/scenes/two-balls.yaml): with the collision listed
 // neither enters the other and the right one is pushed; without it the left one passes in.
 TEST(DeformPhantom, CollidingOrgansPressOnEachOtherInsteadOfPassingThrough) {
-  Scene scene = load("tests/data/scenes/two-balls.yaml");
+  Scene scene = phantasm::testing::load_repository_scene("tests/data/scenes/two-balls.yaml");
   ASSERT_EQ(scene.deformation.collisions.size(), 1u);
   Reporter quiet = Reporter::silent();
   const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);

@@ -4,6 +4,7 @@
 #include "core/error.hpp"
 #include "scene/scene.hpp"
 #include "sim/deform_phantom.hpp"
+#include "tests/support/deformed_bodies.hpp"
 
 #include <gtest/gtest.h>
 
@@ -13,19 +14,6 @@ using namespace phantasm;
 
 namespace {
 
-Scene growth_scene(const std::string& path) {
-  SceneLoadResult result = load_scene(std::string(PHANTASM_SOURCE_DIR) + "/" + path);
-  EXPECT_TRUE(result.scene) << format_diagnostics(result.problems);
-  return *result.scene;
-}
-
-double grown_tet_volume(const Eigen::MatrixX3d& x, const Eigen::MatrixX4i& tets, Eigen::Index t) {
-  Eigen::Matrix3d D;
-  for (int k = 0; k < 3; ++k)
-    D.col(k) = (x.row(tets(t, k + 1)) - x.row(tets(t, 0))).transpose();
-  return D.determinant() / 6.0;
-}
-
 /// Per organ name, the deformed volume of its tets over their rest volume, minus 1.
 std::map<std::string, double> volume_changes(const PhantomDeformation& d, const OrganTable& organs) {
   std::map<std::string, double> rest, deformed, change;
@@ -33,8 +21,8 @@ std::map<std::string, double> volume_changes(const PhantomDeformation& d, const 
     for (Eigen::Index t = 0; t < body.tets.rows(); ++t) {
       const std::string& name =
           organs[static_cast<std::size_t>(body.tet_organ[static_cast<std::size_t>(t)])].name;
-      rest[name] += grown_tet_volume(body.rest_mm, body.tets, t);
-      deformed[name] += grown_tet_volume(body.deformed_mm, body.tets, t);
+      rest[name] += phantasm::testing::body_tet_volume(body.rest_mm, body.tets, t);
+      deformed[name] += phantasm::testing::body_tet_volume(body.deformed_mm, body.tets, t);
     }
   for (const auto& [name, volume] : rest)
     change[name] = deformed[name] / volume - 1.0;
@@ -46,7 +34,7 @@ std::map<std::string, double> volume_changes(const PhantomDeformation& d, const 
 // One ball shrinks by 10 %, the other grows by 5 %: each ends within 1 % (absolute) of its
 // prescription, the compliant layer around them takes up the difference, nothing inverts.
 TEST(Growth, EachOrgansVolumeChangesAsPrescribedAndTheLayerAroundAnswers) {
-  const Scene scene = growth_scene("tests/data/scenes/growth-balls.yaml");
+  const Scene scene = phantasm::testing::load_repository_scene("tests/data/scenes/growth-balls.yaml");
   Reporter quiet = Reporter::silent();
   const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
   StageReport report;
@@ -62,8 +50,8 @@ TEST(Growth, EachOrgansVolumeChangesAsPrescribedAndTheLayerAroundAnswers) {
   // The layer's boundary is held by the box: the volume it gives the balls is its own.
   double rest_total = 0.0, deformed_total = 0.0;
   for (Eigen::Index t = 0; t < d.bodies[0].tets.rows(); ++t) {
-    rest_total += grown_tet_volume(d.bodies[0].rest_mm, d.bodies[0].tets, t);
-    deformed_total += grown_tet_volume(d.bodies[0].deformed_mm, d.bodies[0].tets, t);
+    rest_total += phantasm::testing::body_tet_volume(d.bodies[0].rest_mm, d.bodies[0].tets, t);
+    deformed_total += phantasm::testing::body_tet_volume(d.bodies[0].deformed_mm, d.bodies[0].tets, t);
   }
   EXPECT_NEAR(deformed_total / rest_total, 1.0, 1e-6);
   EXPECT_GT(change.at("layer"), 0.0)
@@ -72,7 +60,7 @@ TEST(Growth, EachOrgansVolumeChangesAsPrescribedAndTheLayerAroundAnswers) {
 
 // Growth with the bulk term on vertex stars (which span organs) is a clear error at the key.
 TEST(Growth, WithVertexStarsIsAClearError) {
-  Scene scene = growth_scene("tests/data/scenes/growth-balls.yaml");
+  Scene scene = phantasm::testing::load_repository_scene("tests/data/scenes/growth-balls.yaml");
   scene.deformation.volume = VolumeFormulation::vertex_star;
   Reporter quiet = Reporter::silent();
   const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
