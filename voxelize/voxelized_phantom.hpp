@@ -174,14 +174,24 @@ struct Landmark {
   Eigen::Vector3d deformed_mm = Eigen::Vector3d::Zero();
 };
 
+/// Spatial variation of T1 and PD within the textured tissues of one state: per voxel, factors
+/// of the tissues' T1 and PD (1 where nothing varies), the reference's made in reference space and
+/// the deformed state's carried to it by the exact map (voxelize/material_maps.hpp).
+struct TextureMaps {
+  std::vector<float> T1_factor, PD_factor; ///< voxel_count() each
+  std::vector<bool> textured;              ///< per tissue (the phantom's tissue list): the factors apply
+  std::string description;                 ///< the source and parameters, for sidecars and provenance
+};
+
 /// The volumes of one run: labels and fractions of both states, and the motion between them.
 struct VoxelizedPhantom {
   ImageGrid grid;
   std::vector<std::string> tissues; ///< tissue names, in order of first use by an organ
   TissueVolumes reference;
-  std::optional<TissueVolumes> deformed; ///< when the scene deforms
-  std::optional<MotionFields> motion;    ///< when the scene deforms
-  std::vector<Landmark> landmarks;       ///< both states (equal when nothing deforms)
+  std::optional<TissueVolumes> deformed;                          ///< when the scene deforms
+  std::optional<MotionFields> motion;                             ///< when the scene deforms
+  std::optional<TextureMaps> reference_texture, deformed_texture; ///< when the scene asks for texture
+  std::vector<Landmark> landmarks; ///< both states (equal when nothing deforms)
   /// The organs' level sets by organ name, kept when the scene asks for .vdb output. Shared and
   /// opaque, so that holding them needs no OpenVDB (LevelSet::grid() gives the grid to write).
   std::vector<std::pair<std::string, std::shared_ptr<const LevelSet>>> reference_level_sets,
