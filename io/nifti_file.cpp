@@ -50,12 +50,13 @@ nifti_1_header make_header(const ImageGrid& grid, int components, int datatype, 
                                   " outside [1, 32767]");
     }
   }
-  h.dim[0] = static_cast<short>(components > 1 ? 5 : 3);
+  const bool fourth = components > 1 && options.components_in_fourth_dimension;
+  h.dim[0] = static_cast<short>(components > 1 ? (fourth ? 4 : 5) : 3);
   h.dim[1] = static_cast<short>(grid.dims.x());
   h.dim[2] = static_cast<short>(grid.dims.y());
   h.dim[3] = static_cast<short>(grid.dims.z());
-  h.dim[4] = 1;
-  h.dim[5] = static_cast<short>(components);
+  h.dim[4] = static_cast<short>(fourth ? components : 1);
+  h.dim[5] = static_cast<short>(fourth ? 1 : components);
   h.dim[6] = h.dim[7] = 1;
   h.intent_code = static_cast<short>(options.intent);
   h.datatype = static_cast<short>(datatype);
@@ -396,7 +397,7 @@ std::vector<unsigned char> read_voxel_data(const std::filesystem::path& path, co
 
 /// Reads a NIfTI file holding `components` values per voxel: a 3-D volume for 1, a 5-D
 /// (X, Y, Z, 1, components) image in the ITK vector convention otherwise.
-NiftiVolume read_volume(const std::filesystem::path& path, int components) {
+NiftiVolume read_volume(const std::filesystem::path& path, int components, bool fourth_dimension = false) {
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error))
     throw_file_error(path, "expected a NIfTI file, found " + path_kind(path));
@@ -415,6 +416,14 @@ NiftiVolume read_volume(const std::filesystem::path& path, int components) {
         throw_file_error(path, "expected a 3-D volume, found dimension " + std::to_string(d) + " of size " +
                                    std::to_string(image->dim[d]));
       }
+    }
+  } else if (fourth_dimension) {
+    if (image->dim[0] != 4 || image->dim[4] != components) {
+      std::string found = "dimensions (";
+      for (int d = 1; d <= image->dim[0]; ++d)
+        found += (d > 1 ? ", " : "") + std::to_string(image->dim[d]);
+      throw_file_error(path, "expected a 4-D vector image (X, Y, Z, " + std::to_string(components) +
+                                 "), found " + found + ")");
     }
   } else {
     const std::string expected =
@@ -504,6 +513,10 @@ NiftiVolume read_nifti(const std::filesystem::path& path) {
 
 NiftiVolume read_nifti_vectors(const std::filesystem::path& path, int components) {
   return read_volume(path, components);
+}
+
+NiftiVolume read_nifti_vectors_4d(const std::filesystem::path& path, int components) {
+  return read_volume(path, components, true);
 }
 
 std::vector<std::int32_t> read_nifti_labels(const std::filesystem::path& path, ImageGrid* grid) {

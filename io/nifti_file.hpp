@@ -23,6 +23,9 @@ struct NiftiWriteOptions {
   NiftiIntent intent = NiftiIntent::none;
   int components = 1;      ///< 1 for scalar images; 3 for vector fields (dim [5, X, Y, Z, 1, 3])
   std::string description; ///< the header's descrip field (at most 79 characters kept)
+  /// Vector components along the fourth dimension (dim [4, X, Y, Z, 3]), as nibabel saves an
+  /// (X, Y, Z, 3) array: the layout of Learn2Reg, MRtrix3, voxelmorph and dipy fields.
+  bool components_in_fourth_dimension = false;
 };
 
 /// Writes a NIfTI-1 image (float32), gzip-compressed when the path ends in ".gz", atomically
@@ -65,6 +68,11 @@ NiftiVolume read_nifti(const std::filesystem::path& path);
 /// @throws InputError naming the file as read_nifti, and for any other layout (a 4-D
 /// (X, Y, Z, 3) file is named as such: ITK would read it as a time series)
 NiftiVolume read_nifti_vectors(const std::filesystem::path& path, int components = 3);
+
+/// Reads a vector image with its components along the fourth dimension, 4-D (X, Y, Z,
+/// components), as nibabel saves an (X, Y, Z, 3) array; values ordered as read_nifti_vectors.
+/// @throws InputError naming the file as read_nifti, and for any other layout
+NiftiVolume read_nifti_vectors_4d(const std::filesystem::path& path, int components = 3);
 
 /// Reads a label volume: a NIfTI file of integer labels (an integer datatype, or floats that
 /// are all whole numbers).

@@ -19,6 +19,7 @@ packages=(
   pybind11-dev python3-dev python3-numpy python3-scipy python3-yaml python3-nibabel python3-h5py
   python3-matplotlib python3-openvdb python3-vtk9
   elastix snakemake
+  mrtrix3 python3-dipy
   slurm-wlm munge
   zlib1g-dev libdeflate-dev libpng-dev
   mricron-data

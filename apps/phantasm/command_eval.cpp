@@ -2,6 +2,9 @@
 #include "core/error.hpp"
 #include "core/safe_name.hpp"
 #include "evaluation/evaluate_registration.hpp"
+#include "evaluation/learn2reg_task.hpp"
+#include "evaluation/score_task.hpp"
+#include "io/atomic_file.hpp"
 #include "io/json_file.hpp"
 #include "io/nifti_file.hpp"
 #include "io/output_path.hpp"
@@ -14,6 +17,7 @@ namespace phantasm::cli {
 void add_eval_command(CLI::App& app, std::function<int()>& action) {
   struct Options {
     std::string dataset, field, labels, json, subject, fixed = "ref";
+    std::string results, truth, csv, convention = "learn2reg";
     bool identity = false, quiet = false;
     int read_delay_ms = 0;
   };
@@ -34,6 +38,16 @@ void add_eval_command(CLI::App& app, std::function<int()>& action) {
   command->add_option("--subject", options->subject, "Subject label when the dataset holds several");
   command->add_option("--fixed", options->fixed, "Session of the fixed image: ref (default) or def")
       ->check(CLI::IsMember({"ref", "def"}));
+  auto* results = command->add_option("--results", options->results,
+                                      "Score a task (the positional folder, made by phantasm task): one "
+                                      "disp_<fixed>_<moving>.nii.gz per pair");
+  results->excludes(field)->excludes(labels)->excludes(identity);
+  command->add_option("--truth", options->truth,
+                      "The task's ground-truth folder (default: TASK-truth beside it)");
+  command->add_option("--convention", options->convention,
+                      "Convention of the result fields: learn2reg (default), itk, mrtrix-deformation, "
+                      "mrtrix-displacement");
+  command->add_option("--csv", options->csv, "Write a task's scores per pair as CSV to this file");
   command->add_flag("-q,--quiet", options->quiet, "Do not print the table");
   // For tests that interrupt an evaluation while it reads; hidden from --help.
   command->add_option("--read-delay-ms", options->read_delay_ms)->group("")->check(CLI::NonNegativeNumber);
@@ -46,6 +60,22 @@ void add_eval_command(CLI::App& app, std::function<int()>& action) {
                          " (the label after sub-), found " + quote_name(options->subject));
       }
       if (!options->json.empty()) require_replaceable_file(options->json, "--json");
+      if (!options->results.empty()) {
+        if (!options->csv.empty()) require_replaceable_file(options->csv, "--csv");
+        TaskScoreRequest task;
+        task.task = options->dataset;
+        task.results = options->results;
+        task.truth = options->truth.empty() ? default_truth_folder(options->dataset)
+                                            : std::filesystem::path(options->truth);
+        task.convention = field_convention_from_string(options->convention, "--convention");
+        const nlohmann::json scores = score_task(task);
+        if (!options->json.empty()) write_json_file(options->json, scores);
+        if (!options->csv.empty()) write_file_atomically(options->csv, task_scores_csv(scores));
+        if (!options->quiet) std::cout << task_scores_table(scores);
+        for (const auto& warning : scores["warnings"])
+          std::cerr << "phantasm: warning: " << warning.get<std::string>() << '\n';
+        return static_cast<int>(exit_ok);
+      }
       EvaluationRequest request;
       request.dataset = options->dataset;
       request.subject = options->subject;

@@ -34,5 +34,6 @@ void add_eval_command(CLI::App& app, std::function<int()>& action);
 void add_batch_command(CLI::App& app, std::function<int()>& action);
 void add_hdf5_command(CLI::App& app, std::function<int()>& action);
 void add_atlas_command(CLI::App& app, std::function<int()>& action);
+void add_task_command(CLI::App& app, std::function<int()>& action);
 
 } // namespace phantasm::cli
