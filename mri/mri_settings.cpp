@@ -18,6 +18,15 @@ const char* to_string(ImageDatatype datatype) {
   return "?";
 }
 
+const char* to_string(TextureSource source) {
+  switch (source) {
+  case TextureSource::none: return "none";
+  case TextureSource::scan: return "scan";
+  case TextureSource::random: return "random";
+  }
+  return "?";
+}
+
 double automatic_receiver_gain(double reference_signal, double brightest_signal) {
   constexpr double k_brightest_at_most = 20.0; // times the level: int16 holds it with room to spare
   const double reference =

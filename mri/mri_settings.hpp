@@ -55,11 +55,41 @@ struct AcquisitionSettings {
   ImageDatatype image_datatype = ImageDatatype::float32; ///< how the image files store voxels
 };
 
+/// A tissue region (docs/volumes-and-images.md, "Tissue regions and texture"): the voxels of an
+/// organ that the organ's atlas gives `label` take `tissue` and a dseg label of their own, named
+/// after the atlas label. Made in the reference state and carried to the deformed one by the
+/// exact map, so that a region moves with the tissue.
+struct TissueRegionSettings {
+  std::string organ;  ///< an organ whose shape is a label volume of an atlas
+  std::string label;  ///< a label name of that atlas
+  std::string tissue; ///< a tissue of the built-in table or of the scene's tissues section
+};
+
+/// Where a texture's deviations come from.
+enum class TextureSource { none, scan, random };
+
+/// Spatial variation of T1 and PD within tissues (docs/volumes-and-images.md, "Tissue regions and
+/// texture"): off by default.
+struct TextureSettings {
+  TextureSource source = TextureSource::none;
+  std::vector<std::string> tissues; ///< the textured tissues; empty: every tissue
+  std::string scan;                 ///< source scan: a NIfTI file; empty: the atlas's T1 scan (ch2.nii.gz)
+  double T1_gain = 1.0;             ///< T1 x exp(-T1_gain d) for a relative deviation d
+  double PD_gain = 0.25;            ///< PD x exp(PD_gain d)
+  double max_deviation = 0.3;       ///< d clamped to +-max_deviation
+  double random_sd = 0.05;          ///< random: standard deviation of d
+  double correlation_mm = 2.0;      ///< random: the smoothing Gaussian's standard deviation
+};
+
+const char* to_string(TextureSource source);
+
 struct MriSettings {
   double field_strength_T = 3.0;
   std::vector<TissueOverride> tissues;
   std::vector<SequenceSettings> sequences;
   AcquisitionSettings acquisition;
+  std::vector<TissueRegionSettings> regions; ///< tissue regions within organs (scene key tissue_regions)
+  TextureSettings texture;                   ///< scene key texture
 
   // Set by the scene from other sections.
   std::uint64_t seed = 0;     ///< the scene's seed (noise, bias field)

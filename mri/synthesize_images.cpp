@@ -7,6 +7,7 @@
 #include "mri/parameter_maps.hpp"
 #include "mri/receive_coils.hpp"
 #include "mri/signal_equations.hpp"
+#include "mri/texture_signal.hpp"
 #include "mri/tissue_parameters.hpp"
 
 #include <algorithm>
@@ -133,9 +134,11 @@ struct Workspace {
 
 /// Writes the object of every voxel of layer k, the fraction-weighted signed signals (partial
 /// volume may cancel at a null) times the bias field, converted to Value.
+/// With a texture, a textured tissue's signal is the one at the voxel's T1 and PD factors.
 template <class Value>
 void object_layer(const TissueVolumes& volumes, const std::vector<double>& tissue_signal,
-                  const BiasField& bias, const Eigen::Vector3i& dims, int k, Value* object) {
+                  const BiasField& bias, const Eigen::Vector3i& dims, int k, Value* object,
+                  const TexturedSignal* texture) {
   // The field one row at a time (a loop the compiler vectorizes), 1 where it does not vary.
   std::vector<double> field(static_cast<std::size_t>(dims.x()), 1.0);
   int field_row = -1;
@@ -145,15 +148,22 @@ void object_layer(const TissueVolumes& volumes, const std::vector<double>& tissu
       field_row = j;
     }
     double sum = 0.0;
-    for (std::size_t t = 0; t < tissue_signal.size(); ++t)
-      sum += fractions[t] * tissue_signal[t];
+    if (texture) {
+      const float t1 = texture->maps().T1_factor[v], pd = texture->maps().PD_factor[v];
+      for (std::size_t t = 0; t < tissue_signal.size(); ++t)
+        if (fractions[t] != 0.0f)
+          sum += fractions[t] * (texture->textured(t) ? texture->signal(t, t1, pd) : tissue_signal[t]);
+    } else {
+      for (std::size_t t = 0; t < tissue_signal.size(); ++t)
+        sum += fractions[t] * tissue_signal[t];
+    }
     object[v] = static_cast<Value>(sum * field[static_cast<std::size_t>(i)]);
   });
 }
 
 MrImage image_of(const Acquisition& acquisition, Workspace& workspace, const SequenceSettings& sequence,
                  std::uint64_t seed, const TissueVolumes& volumes, const std::vector<double>& tissue_signal,
-                 double noise_sigma) {
+                 double noise_sigma, const TexturedSignal* texture) {
   const ImageGrid& grid = acquisition.grid;
   MrImage image;
   image.sequence = &sequence;
@@ -171,7 +181,7 @@ MrImage image_of(const Acquisition& acquisition, Workspace& workspace, const Seq
     object.resize(count);
 #pragma omp parallel for schedule(dynamic, 1)
     for (int k = 0; k < layers; ++k)
-      object_layer(volumes, tissue_signal, bias, grid.dims, k, object.data());
+      object_layer(volumes, tissue_signal, bias, grid.dims, k, object.data(), texture);
     KspacePipeline& pipeline = *acquisition.pipeline;
     pipeline.set_object(object.data());
     // The sum of squares (one coil: the squared magnitude) over the coils, a group of coils at a
@@ -201,7 +211,7 @@ MrImage image_of(const Acquisition& acquisition, Workspace& workspace, const Seq
   object.resize(count);
 #pragma omp parallel for schedule(static)
   for (int k = 0; k < layers; ++k)
-    object_layer(volumes, tissue_signal, bias, grid.dims, k, object.data());
+    object_layer(volumes, tissue_signal, bias, grid.dims, k, object.data(), texture);
   const int nx = grid.dims.x(), ny = grid.dims.y();
   const std::int64_t rows = std::int64_t{ny} * grid.dims.z();
   std::vector<double> sum_of_squares(coils > 1 ? count : 0, 0.0);
@@ -360,6 +370,15 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
                                                : automatic_receiver_gain(reference_signal, brightest);
     for (double& signal : tissue_signal)
       signal *= gain;
+    // Texture: the textured tissues' signals at each voxel's factors (the same gain).
+    std::vector<Relaxation> relaxation;
+    for (const std::string& tissue : volumes.tissues)
+      relaxation.push_back(relaxation_of(tissue));
+    std::optional<TexturedSignal> reference_texture, deformed_texture;
+    if (volumes.reference_texture)
+      reference_texture.emplace(sequence, volumes.tissues, relaxation, gain, *volumes.reference_texture);
+    if (volumes.deformed_texture)
+      deformed_texture.emplace(sequence, volumes.tissues, relaxation, gain, *volumes.deformed_texture);
     std::string rule = " (the scene's)";
     if (!settings.receiver_gain)
       rule =
@@ -377,14 +396,16 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
     } else {
       progress.set_detail(sequence.name + ", reference");
       images.reference.push_back(image_of(acquisition, workspace, sequence, mix_seed(mri.seed, 2 * q),
-                                          volumes.reference, tissue_signal, sigma));
+                                          volumes.reference, tissue_signal, sigma,
+                                          reference_texture ? &*reference_texture : nullptr));
       images.reference.back().receiver_gain = gain;
       progress.advance();
     }
     if (deformed) {
       progress.set_detail(sequence.name + ", deformed");
       images.deformed.push_back(image_of(acquisition, workspace, sequence, mix_seed(mri.seed, 2 * q + 1),
-                                         *deformed, tissue_signal, sigma));
+                                         *deformed, tissue_signal, sigma,
+                                         deformed_texture ? &*deformed_texture : nullptr));
       images.deformed.back().receiver_gain = gain;
       progress.advance();
     }
@@ -397,6 +418,14 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
     images.reference_maps =
         given ? std::move(given->maps) : parameter_maps(volumes.reference, volumes.tissues, parameters);
     if (deformed) images.deformed_maps = parameter_maps(*deformed, volumes.tissues, parameters);
+    if (volumes.reference_texture && !given)
+      apply_texture(*images.reference_maps, volumes.reference, volumes.tissues, parameters,
+                    *volumes.reference_texture);
+    if (deformed && volumes.deformed_texture)
+      apply_texture(*images.deformed_maps, *deformed, volumes.tissues, parameters, *volumes.deformed_texture);
+    if (volumes.reference_texture)
+      report.modelled.push_back("texture in the parameter maps and images: " +
+                                volumes.reference_texture->description);
     report.modelled.push_back(
         "parameter maps PD, T1, T2, T2* (fraction-weighted; PD summed, times averaged)");
   }

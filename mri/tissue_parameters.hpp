@@ -18,7 +18,8 @@ struct TissueParameters {
   std::string T1_source, T2_source, T2star_source, PD_source; ///< "scene" or the table's source
 };
 
-/// The parameters of every tissue the organs use, at the settings' field strength: the scene's
+/// The parameters of every tissue the organs and the tissue regions use, at the settings' field
+/// strength: the scene's
 /// tissue values first, then the built-in table. Values neither provides stay empty (the scene's
 /// validation has already made sure that its sequences need none of those).
 /// @param settings field strength and the scene's tissue values

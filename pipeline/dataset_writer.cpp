@@ -18,6 +18,7 @@
 #include "mri/sequence_type.hpp"
 #include "pipeline/cost_estimate.hpp"
 #include "pipeline/finite_outputs.hpp"
+#include "pipeline/material_maps_stage.hpp"
 #include "pipeline/reference_files_cache.hpp"
 #include "scene/scene_json.hpp"
 #include "voxelize/landmarks.hpp"
@@ -135,6 +136,10 @@ std::string dseg_table(const Scene& scene) {
     row(index++, organ.name, organ.tissue);
   // The space a moved organ leaves in a container that stays (deformed state only).
   if (scene.voxelization.deformed) row(index, k_gap_label_name, scene.voxelization.gap_fill);
+  // Tissue regions within organs (tissue_regions), after the gap's index.
+  index = first_region_label(scene);
+  for (const TissueRegionSettings& region : scene.mri.regions)
+    row(index++, region.label, region.tissue);
   return text.str();
 }
 
@@ -427,8 +432,9 @@ nlohmann::json image_sidecar(const Scene& scene, const MrImages& images, const M
 }
 
 /// The four ground-truth parameter maps of one state, each with its sidecar.
+/// @param texture the state's texture (null: none), recorded in the T1 and PD maps' sidecars
 void plan_parameter_maps(const ImageGrid& grid, const ParameterMaps& maps, PhantomState state,
-                         const DatasetLayout& layout, DatasetPlan& plan) {
+                         const DatasetLayout& layout, DatasetPlan& plan, const TextureMaps* texture) {
   struct Map {
     const char* suffix;
     const std::vector<float>* values;
@@ -455,21 +461,26 @@ void plan_parameter_maps(const ImageGrid& grid, const ParameterMaps& maps, Phant
           write_nifti(p, grid, values, {NiftiIntent::none, 1, std::string("phantasm ") + map.suffix});
         },
         source_in(state, FileSource::reference_images));
-    plan.json(sidecar_path(path), [map] {
-      return nlohmann::json{{"Units", map.units},
-                            {"Description", map.description},
-                            {"GeneratedBy", "phantasm " + std::string(version)}};
+    const bool textured = texture && (map.values == &maps.T1_ms || map.values == &maps.PD);
+    plan.json(sidecar_path(path), [map, textured, texture] {
+      nlohmann::json j{{"Units", map.units},
+                       {"Description", map.description},
+                       {"GeneratedBy", "phantasm " + std::string(version)}};
+      j["Texture"] = textured ? texture->description : "none";
+      return j;
     });
   }
 }
 
 /// Parameter maps, then every image with its sidecar (and preview when asked for).
-void plan_images(const ImageGrid& grid, const Scene& scene, const MrImages& images,
+void plan_images(const ImageGrid& grid, const Scene& scene, const MrImages& images, const VoxelizedPhantom& v,
                  const DatasetLayout& layout, DatasetPlan& plan) {
   if (images.reference_maps)
-    plan_parameter_maps(grid, *images.reference_maps, PhantomState::reference, layout, plan);
+    plan_parameter_maps(grid, *images.reference_maps, PhantomState::reference, layout, plan,
+                        v.reference_texture ? &*v.reference_texture : nullptr);
   if (images.deformed_maps)
-    plan_parameter_maps(grid, *images.deformed_maps, PhantomState::deformed, layout, plan);
+    plan_parameter_maps(grid, *images.deformed_maps, PhantomState::deformed, layout, plan,
+                        v.deformed_texture ? &*v.deformed_texture : nullptr);
   for (PhantomState state : {PhantomState::reference, PhantomState::deformed}) {
     for (const MrImage& image : state == PhantomState::reference ? images.reference : images.deformed) {
       const std::filesystem::path path = layout.anat_image(state, image.sequence->name);
@@ -695,7 +706,7 @@ DatasetPlan plan_dataset(const Scene& scene, const Simulation& simulation, const
     reporter.skipped("anatomy", "organ meshes (outputs.meshes is false)");
   }
   plan_volumes(scene, simulation.volumes, layout, plan);
-  plan_images(simulation.volumes.grid, scene, simulation.images, layout, plan);
+  plan_images(simulation.volumes.grid, scene, simulation.images, simulation.volumes, layout, plan);
 
   plan.text(layout.log(), [&reporter] {
     std::string log;

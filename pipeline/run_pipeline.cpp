@@ -5,12 +5,14 @@
 #include "atlas/atlas_labels.hpp"
 #include "core/abandonable_work.hpp"
 #include "core/error.hpp"
+#include "core/sha256.hpp"
 #include "io/dataset_layout.hpp"
 #include "io/shape_files.hpp"
 #include "mri/mri_plan.hpp"
 #include "pipeline/anatomy_cache.hpp"
 #include "pipeline/anatomy_checks.hpp"
 #include "pipeline/cost_estimate.hpp"
+#include "pipeline/material_maps_stage.hpp"
 #include "pipeline/reference_cache.hpp"
 #include "pipeline/reference_images_cache.hpp"
 #include "sim/deform_phantom.hpp"
@@ -45,8 +47,10 @@ private:
 
 /// Derives the label volumes organs name by atlas (once per run) and records what was derived,
 /// from which inputs, and the sources to cite, in the log and the provenance.
-AtlasLoader atlas_loader(StageReport& report, Reporter& reporter) {
-  return [&report, &reporter](const std::string& atlas) {
+/// @param derived_volumes receives each derived volume by atlas name (null: kept nowhere)
+AtlasLoader atlas_loader(StageReport& report, Reporter& reporter,
+                         std::map<std::string, AtlasLabelVolume>* derived_volumes = nullptr) {
+  return [&report, &reporter, derived_volumes](const std::string& atlas) {
     AtlasLabels derived = derive_atlas_labels(atlas);
     for (const std::string& line : derived.provenance) {
       report.modelled.push_back(line);
@@ -58,6 +62,7 @@ AtlasLoader atlas_loader(StageReport& report, Reporter& reporter) {
     for (const HeadLabelInfo& info : derived.head.table)
       if (info.label != 0) volume.names[info.name] = info.label;
     volume.labels = std::make_shared<const std::vector<std::int32_t>>(std::move(derived.head.labels));
+    if (derived_volumes) (*derived_volumes)[atlas] = volume;
     return volume;
   };
 }
@@ -74,9 +79,12 @@ namespace {
 /// The anatomy stage: reads the scene's shape files and builds every organ; records fit errors.
 /// @param anatomy_key receives the anatomy's cache key when there is a cache (the reference
 ///        cache's key starts from it)
+/// @param atlases receives the atlas volumes the organs were made from (the tissue regions' labels)
 Phantom build_anatomy(const Scene& scene, const std::filesystem::path& cache, StageReport& report,
-                      Reporter& reporter, std::string& anatomy_key) {
-  const std::map<std::string, ShapeData> files = read_scene_shape_files(scene, report, reporter);
+                      Reporter& reporter, std::string& anatomy_key,
+                      std::map<std::string, AtlasLabelVolume>& atlases) {
+  const std::map<std::string, ShapeData> files =
+      read_shape_files(scene.anatomy, atlas_loader(report, reporter, &atlases), scene.grid.grid());
   if (!cache.empty()) anatomy_key = anatomy_cache_key(scene.anatomy, files);
   Phantom phantom = build_phantom_cached(scene.anatomy, files, cache, report, reporter);
   for (const Organ& organ : phantom.organs) {
@@ -120,7 +128,8 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
       reporter.skipped(stage.stage, line);
   }
   std::string anatomy_key;
-  result.phantom = build_anatomy(scene, cache, result.stages[0], reporter, anatomy_key);
+  std::map<std::string, AtlasLabelVolume> atlases;
+  result.phantom = build_anatomy(scene, cache, result.stages[0], reporter, anatomy_key, atlases);
   check_built_anatomy(scene, result.phantom); // organs read from files, obstacles at rest
   if (until == SimulationStage::anatomy) return;
 
@@ -146,6 +155,12 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
       voxelize_phantom_cached(anatomy_key, scene.voxelization, scene.organs, scene.grid.grid(),
                               result.phantom, result.deformed ? &*result.deformed : nullptr,
                               result.deformation ? &*result.deformation : nullptr, cache, voxelize, reporter);
+  // Tissue regions and texture, after the cached reference state (which holds neither): the
+  // reference state's files then have a key of their own.
+  attach_material_maps(scene, atlases, result.volumes, voxelize);
+  if (const std::string text = material_maps_key_text(scene);
+      !text.empty() && !result.reference_entries.state_key.empty())
+    result.reference_entries.state_key = sha256_hex(result.reference_entries.state_key + "\n" + text);
   voxelize_lines.print_new(voxelize, reporter);
   if (until == SimulationStage::voxelization) return;
 

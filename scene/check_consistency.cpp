@@ -285,6 +285,12 @@ public:
         tissues.push_back(organ.tissue);
       }
     }
+    for (const TissueRegionSettings& region : m_scene.mri.regions) {
+      if (tissue_known(region.tissue) &&
+          std::find(tissues.begin(), tissues.end(), region.tissue) == tissues.end()) {
+        tissues.push_back(region.tissue);
+      }
+    }
     for (std::size_t i = 0; i < m_scene.mri.sequences.size(); ++i) {
       const SequenceSettings& s = m_scene.mri.sequences[i];
       if (!names.insert(s.name).second) {
@@ -324,6 +330,56 @@ public:
     }
   }
 
+  /// Tissue regions name an organ of an atlas's labels, a tissue and a dseg name of their own;
+  /// textured tissues are the phantom's.
+  void check_material_maps() {
+    std::set<std::string> names;
+    for (const auto& organ : m_scene.anatomy.organs)
+      names.insert(organ.name);
+    names.insert("background");
+    names.insert("gap"); // the deformed state's gap label (voxelize/voxelized_phantom.hpp)
+    std::vector<std::string> phantom_tissues;
+    for (const auto& organ : m_scene.anatomy.organs)
+      phantom_tissues.push_back(organ.tissue);
+    const auto& regions = m_scene.mri.regions;
+    for (std::size_t i = 0; i < regions.size(); ++i) {
+      const TissueRegionSettings& region = regions[i];
+      const OrganSettings* organ = m_scene.find_organ(region.organ);
+      if (!organ) {
+        problem(indexed("tissue_regions", i, "organ"),
+                "expected the name of an organ in this scene, found '" + region.organ + "'");
+      } else if (organ->shape.kind != ShapeKind::label_volume || organ->shape.atlas.empty()) {
+        problem(indexed("tissue_regions", i, "organ"),
+                "expected an organ whose shape is a label volume of an atlas (the region's labels are "
+                "the atlas's), found '" +
+                    region.organ + "'");
+      }
+      if (!tissue_known(region.tissue)) {
+        problem(indexed("tissue_regions", i, "tissue"),
+                "expected a tissue of the built-in table or of the scene's tissues section, found '" +
+                    region.tissue + "'");
+      }
+      if (!names.insert(region.label).second) {
+        problem(indexed("tissue_regions", i, "label"),
+                "expected a label that names no organ and no other region (it names the region's dseg "
+                "label), found '" +
+                    region.label + "' again");
+      }
+      phantom_tissues.push_back(region.tissue);
+    }
+    const TextureSettings& texture = m_scene.mri.texture;
+    for (std::size_t i = 0; i < texture.tissues.size(); ++i) {
+      if (std::find(phantom_tissues.begin(), phantom_tissues.end(), texture.tissues[i]) ==
+          phantom_tissues.end())
+        problem("texture.tissues[" + std::to_string(i) + "]",
+                "expected a tissue of an organ or tissue region in this scene, found '" + texture.tissues[i] +
+                    "'");
+    }
+    if (texture.source != TextureSource::scan && !texture.scan.empty())
+      problem("texture.scan", "expected a scan only with source: scan, found one with source: " +
+                                  std::string(to_string(texture.source)));
+  }
+
 private:
   YamlContext& m_context;
   const Scene& m_scene;
@@ -337,6 +393,7 @@ void check_consistency(YamlContext& context, const Scene& scene) {
   checker.check_organs();
   checker.check_deformation();
   checker.check_sequences();
+  checker.check_material_maps();
 }
 
 } // namespace phantasm::scene_detail

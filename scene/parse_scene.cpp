@@ -206,6 +206,12 @@ SceneLoadResult parse_scene(const std::string& text, const std::filesystem::path
       CheckedMap acquisition(context, top.get("acquisition"), "acquisition");
       if (acquisition.valid()) parse_acquisition(acquisition, scene.mri.acquisition);
     }
+    if (top.has("tissue_regions"))
+      parse_tissue_regions(context, top.get("tissue_regions"), scene.mri.regions);
+    if (top.has("texture")) {
+      CheckedMap texture(context, top.get("texture"), "texture");
+      if (texture.valid()) parse_texture(texture, scene.mri.texture);
+    }
     if (top.has("outputs")) {
       CheckedMap outputs(context, top.get("outputs"), "outputs");
       if (outputs.valid()) parse_outputs(outputs, scene.outputs);

@@ -142,6 +142,9 @@ nlohmann::json scene_settings_json(const Scene& scene) {
   nlohmann::json sequences = nlohmann::json::array();
   for (const auto& s : scene.mri.sequences)
     sequences.push_back(sequence_json(s));
+  nlohmann::json regions = nlohmann::json::array();
+  for (const auto& r : scene.mri.regions)
+    regions.push_back({{"organ", r.organ}, {"label", r.label}, {"tissue", r.tissue}});
 
   const DeformationSettings& d = scene.deformation;
   const AcquisitionSettings& a = scene.mri.acquisition;
@@ -175,6 +178,8 @@ nlohmann::json scene_settings_json(const Scene& scene) {
         {"gap_tissue", scene.voxelization.gap_fill}}},
       {"voxelization", declared_json(scene.voxelization)},
       {"sequences", sequences},
+      {"tissue_regions", regions},
+      {"texture", declared_json(scene.mri.texture)},
       {"acquisition",
        {{"kspace", a.kspace},
         {"kspace_oversampling", a.kspace_oversampling},

@@ -260,6 +260,45 @@ const std::vector<SettingField<AcquisitionSettings>>& declared_settings<Acquisit
 }
 
 template <>
+const std::vector<SettingField<TissueRegionSettings>>& declared_settings<TissueRegionSettings>() {
+  static const auto fields = [] {
+    SettingsDeclaration<TissueRegionSettings> d;
+    d.shaping(cached_reference_images)
+        .field("organ", &TissueRegionSettings::organ, "", "an organ of an atlas's labels",
+               "the organ the region lies in")
+        .field("label", &TissueRegionSettings::label, "", "a label of that atlas",
+               "the atlas label that selects the region's voxels (and names its dseg label)")
+        .field("tissue", &TissueRegionSettings::tissue, "", "a tissue", "the region's tissue");
+    return d.fields();
+  }();
+  return fields;
+}
+
+template <>
+const std::vector<SettingField<TextureSettings>>& declared_settings<TextureSettings>() {
+  static const auto fields = [] {
+    using T = TextureSettings;
+    SettingsDeclaration<T> d;
+    d.shaping(cached_reference_images)
+        .choice(
+            "source", &T::source,
+            {{"none", TextureSource::none}, {"scan", TextureSource::scan}, {"random", TextureSource::random}},
+            "where the deviations come from (none: no texture)")
+        .field("tissues", &T::tissues, "", "tissues of the phantom", "the textured tissues (empty: all)")
+        .field("scan", &T::scan, "", "a NIfTI file covering the anatomy",
+               "source: scan, the scan (empty: the atlas's T1 scan)")
+        .field("T1_gain", &T::T1_gain, "", "0 to 5", "T1 x exp(-T1_gain d)")
+        .field("PD_gain", &T::PD_gain, "", "0 to 5", "PD x exp(PD_gain d)")
+        .field("max_deviation", &T::max_deviation, "", "above 0 to 0.9", "d clamped to +-max_deviation")
+        .field("random_sd", &T::random_sd, "", "0 to 0.5", "source: random, standard deviation of d")
+        .field("correlation_mm", &T::correlation_mm, "mm", "0 to 50",
+               "source: random, standard deviation of the smoothing Gaussian");
+    return d.fields();
+  }();
+  return fields;
+}
+
+template <>
 const std::vector<SettingField<MriSettings>>& declared_settings<MriSettings>() {
   static const auto fields = [] {
     SettingsDeclaration<MriSettings> d;
@@ -271,6 +310,9 @@ const std::vector<SettingField<MriSettings>>& declared_settings<MriSettings>() {
         .list("sequences", &MriSettings::sequences, "the images to make",
               declared_settings<SequenceSettings>())
         .nested("acquisition", &MriSettings::acquisition, declared_settings<AcquisitionSettings>())
+        .list("regions", &MriSettings::regions, "tissue regions within organs (scene key tissue_regions)",
+              declared_settings<TissueRegionSettings>())
+        .nested("texture", &MriSettings::texture, declared_settings<TextureSettings>())
         .field("seed", &MriSettings::seed, "", "", "seed of the noise and bias field")
         .derived_from("seed")
         .shaping(no_cached_result)
@@ -356,9 +398,21 @@ std::vector<const void*> settings_members(const AcquisitionSettings& s) {
           &noise_tissue, &bias,         &coils,          &gain,  &datatype};
 }
 
+std::vector<const void*> settings_members(const TissueRegionSettings& s) {
+  const auto& [organ, label, tissue] = s;
+  return {&organ, &label, &tissue};
+}
+
+std::vector<const void*> settings_members(const TextureSettings& s) {
+  const auto& [source, tissues, scan, T1_gain, PD_gain, max_deviation, random_sd, correlation] = s;
+  return {&source, &tissues, &scan, &T1_gain, &PD_gain, &max_deviation, &random_sd, &correlation};
+}
+
 std::vector<const void*> settings_members(const MriSettings& s) {
-  const auto& [field_strength, tissues, sequences, acquisition, seed, images, parameter_maps] = s;
-  return {&field_strength, &tissues, &sequences, &acquisition, &seed, &images, &parameter_maps};
+  const auto& [field_strength, tissues, sequences, acquisition, regions, texture, seed, images,
+               parameter_maps] = s;
+  return {&field_strength, &tissues, &sequences, &acquisition,   &regions,
+          &texture,        &seed,    &images,    &parameter_maps};
 }
 
 std::vector<const void*> settings_members(const OutputSettings& s) {

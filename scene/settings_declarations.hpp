@@ -13,7 +13,8 @@ namespace phantasm {
 
 /// The declared fields of a settings struct, in the order of its keys' texts. Declared for
 /// GridSettings, ShapeSettings, OrganSettings, AnatomySettings, VoxelizationSettings,
-/// TissueOverride, SequenceSettings, AcquisitionSettings, MriSettings and OutputSettings.
+/// TissueOverride, SequenceSettings, AcquisitionSettings, TissueRegionSettings, TextureSettings,
+/// MriSettings and OutputSettings.
 template <typename S>
 const std::vector<SettingField<S>>& declared_settings();
 
@@ -28,6 +29,8 @@ std::vector<const void*> settings_members(const VoxelizationSettings& s);
 std::vector<const void*> settings_members(const TissueOverride& s);
 std::vector<const void*> settings_members(const SequenceSettings& s);
 std::vector<const void*> settings_members(const AcquisitionSettings& s);
+std::vector<const void*> settings_members(const TissueRegionSettings& s);
+std::vector<const void*> settings_members(const TextureSettings& s);
 std::vector<const void*> settings_members(const MriSettings& s);
 std::vector<const void*> settings_members(const OutputSettings& s);
 

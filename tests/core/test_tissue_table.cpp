@@ -5,10 +5,10 @@
 
 using namespace phantasm;
 
-TEST(TissueTable, BuiltinTableHoldsNineteenTissuesAtTwoFieldStrengths) {
+TEST(TissueTable, BuiltinTableHoldsTwentyTissuesAtTwoFieldStrengths) {
   const TissueTable& table = TissueTable::builtin();
-  EXPECT_EQ(table.tissue_names().size(), 19u);
-  EXPECT_EQ(table.records().size(), 38u);
+  EXPECT_EQ(table.tissue_names().size(), 20u);
+  EXPECT_EQ(table.records().size(), 40u);
   for (const auto& name : table.tissue_names()) {
     EXPECT_EQ(table.field_strengths(name), (std::vector<double>{1.5, 3.0})) << name;
   }

@@ -1,0 +1,173 @@
+#include "pipeline/material_maps_stage.hpp"
+
+#include "atlas/colin27_head.hpp"
+#include "core/error.hpp"
+#include "core/format.hpp"
+#include "core/settings_declaration.hpp"
+#include "io/nifti_file.hpp"
+#include "voxelize/material_maps.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+namespace phantasm {
+namespace {
+
+int tissue_index(std::vector<std::string>& tissues, const std::string& tissue) {
+  auto found = std::find(tissues.begin(), tissues.end(), tissue);
+  if (found == tissues.end()) {
+    tissues.push_back(tissue);
+    return static_cast<int>(tissues.size()) - 1;
+  }
+  return static_cast<int>(found - tissues.begin());
+}
+
+void attach_regions(const Scene& scene, const std::map<std::string, AtlasLabelVolume>& atlases,
+                    VoxelizedPhantom& v, StageReport& report) {
+  const auto& regions = scene.mri.regions;
+  // Regions per atlas: one region volume each (the atlas's labels on the image grid).
+  std::map<std::string, std::vector<TissueRegion>> by_atlas;
+  for (std::size_t i = 0; i < regions.size(); ++i) {
+    const TissueRegionSettings& r = regions[i];
+    const OrganSettings& organ = *scene.find_organ(r.organ); // the scene's checks made sure
+    const std::string& atlas = organ.shape.atlas;
+    const auto volume = atlases.find(atlas);
+    if (volume == atlases.end())
+      throw SettingError("tissue_regions[" + std::to_string(i) + "].organ",
+                         "expected an organ whose atlas the anatomy read, found '" + r.organ +
+                             "' of atlas '" + atlas + "', which was not read");
+    const auto label = volume->second.names.find(r.label);
+    if (label == volume->second.names.end()) {
+      std::string known;
+      for (const auto& [name, value] : volume->second.names)
+        known += (known.empty() ? "" : ", ") + name;
+      throw SettingError("tissue_regions[" + std::to_string(i) + "].label",
+                         "expected a label of " + volume->second.source + " (" + known + "), found '" +
+                             r.label + "'");
+    }
+    TissueRegion region;
+    region.name = r.label;
+    region.organ_label = scene.organs.index_of(r.organ) + 1;
+    region.region_value = label->second;
+    region.label = first_region_label(scene) + static_cast<std::int32_t>(i);
+    region.tissue = tissue_index(v.tissues, r.tissue);
+    by_atlas[atlas].push_back(region);
+  }
+  const int tissue_count = static_cast<int>(v.tissues.size());
+  widen_tissues(v.reference, tissue_count);
+  if (v.deformed) widen_tissues(*v.deformed, tissue_count);
+  for (const auto& [atlas, list] : by_atlas) {
+    const AtlasLabelVolume& volume = atlases.at(atlas);
+    const std::vector<std::int32_t> reference = resample_labels(v.grid, volume.grid, *volume.labels);
+    const std::vector<std::size_t> counts = apply_tissue_regions(v.reference, reference, list);
+    std::vector<std::size_t> deformed_counts;
+    if (v.deformed && v.motion)
+      deformed_counts =
+          apply_tissue_regions(*v.deformed, carry_labels(v.grid, reference, v.motion->def_to_ref), list);
+    for (std::size_t k = 0; k < list.size(); ++k) {
+      std::string line = "tissue region " + list[k].name + " (dseg " + std::to_string(list[k].label) + ", " +
+                         v.tissues[static_cast<std::size_t>(list[k].tissue)] +
+                         "): " + std::to_string(counts[k]) + " reference voxels of organ " +
+                         scene.organs[static_cast<std::size_t>(list[k].organ_label - 1)].name + " that " +
+                         volume.source + " labels " + list[k].name;
+      if (!deformed_counts.empty())
+        line += ", " + std::to_string(deformed_counts[k]) +
+                " deformed voxels whose reference position (the exact map, from-ref_to-def) it labels so";
+      report.modelled.push_back(line);
+      report.accuracy["tissue region " + list[k].name + " reference voxels"] = static_cast<double>(counts[k]);
+    }
+  }
+}
+
+std::vector<bool> textured_tissues(const TextureSettings& texture, const std::vector<std::string>& tissues) {
+  std::vector<bool> textured(tissues.size(), texture.tissues.empty());
+  for (std::size_t t = 0; t < tissues.size(); ++t)
+    if (std::find(texture.tissues.begin(), texture.tissues.end(), tissues[t]) != texture.tissues.end())
+      textured[t] = true;
+  return textured;
+}
+
+/// The scan's intensity on the image grid; the scan must cover every voxel of a textured tissue.
+std::vector<float> scan_on_grid(const std::filesystem::path& path, const VoxelizedPhantom& v,
+                                const std::vector<bool>& textured) {
+  const NiftiVolume scan = read_nifti(path);
+  std::vector<float> values(scan.values.begin(), scan.values.end());
+  const std::vector<float> on_grid = resample_values(v.grid, scan.grid, values, std::nanf(""));
+  const TissueVolumes& ref = v.reference;
+  for (std::size_t voxel = 0; voxel < ref.labels.size(); ++voxel) {
+    const int tissue = ref.label_tissues[static_cast<std::size_t>(ref.labels[voxel])];
+    if (tissue < 0 || !textured[static_cast<std::size_t>(tissue)] || std::isfinite(on_grid[voxel])) continue;
+    const Eigen::Vector3i ijk(static_cast<int>(voxel % static_cast<std::size_t>(v.grid.dims.x())),
+                              static_cast<int>(voxel / static_cast<std::size_t>(v.grid.dims.x()) %
+                                               static_cast<std::size_t>(v.grid.dims.y())),
+                              static_cast<int>(voxel / (static_cast<std::size_t>(v.grid.dims.x()) *
+                                                        static_cast<std::size_t>(v.grid.dims.y()))));
+    throw InputError(path.string() + ": expected a texture scan whose grid covers the anatomy, found voxel " +
+                     format_vector(ijk.cast<double>()) + " of tissue " +
+                     v.tissues[static_cast<std::size_t>(tissue)] + " (world " +
+                     format_vector(v.grid.world_from_index(ijk.cast<double>())) +
+                     " mm) outside it (texture.scan)");
+  }
+  return on_grid;
+}
+
+void attach_texture(const Scene& scene, VoxelizedPhantom& v, StageReport& report) {
+  const TextureSettings& t = scene.mri.texture;
+  const std::vector<bool> textured = textured_tissues(t, v.tissues);
+  const TextureGains gains{t.T1_gain, t.PD_gain, t.max_deviation};
+  std::string names;
+  for (std::size_t k = 0; k < textured.size(); ++k)
+    if (textured[k]) names += (names.empty() ? "" : ", ") + v.tissues[k];
+  std::string description;
+  if (t.source == TextureSource::scan) {
+    const std::filesystem::path path =
+        t.scan.empty() ? default_colin27_templates_dir() / "ch2.nii.gz" : std::filesystem::path(t.scan);
+    v.reference_texture =
+        texture_from_intensity(v.reference, textured, scan_on_grid(path, v, textured), gains);
+    description = "from the scan " + path.string() + ": d = intensity / its mean over the tissue - 1";
+  } else {
+    const std::uint64_t seed = scene.seed * 0x9E3779B97F4A7C15ull + 0x7E57u;
+    v.reference_texture =
+        texture_from_random_field(v.grid, v.reference, textured, seed, t.correlation_mm, t.random_sd, gains);
+    description = "from a seeded random field (seed " + std::to_string(scene.seed) +
+                  "): d Gaussian, standard deviation " + format_number(t.random_sd) +
+                  ", smoothed by a Gaussian of " + format_number(t.correlation_mm) + " mm";
+  }
+  description += "; T1 x exp(-" + format_number(t.T1_gain) + " d), PD x exp(" + format_number(t.PD_gain) +
+                 " d), d within +-" + format_number(t.max_deviation) + "; tissues " + names +
+                 "; the deformed state's factors are the reference's at each voxel's reference position "
+                 "(the exact map, from-ref_to-def), trilinear";
+  v.reference_texture->description = description;
+  if (v.deformed && v.motion)
+    v.deformed_texture = carry_texture(v.grid, *v.reference_texture, v.motion->def_to_ref);
+  report.modelled.push_back("texture " + description);
+}
+
+} // namespace
+
+std::int32_t first_region_label(const Scene& scene) {
+  return static_cast<std::int32_t>(scene.anatomy.organs.size()) + 2; // after the organs and the gap
+}
+
+void attach_material_maps(const Scene& scene, const std::map<std::string, AtlasLabelVolume>& atlases,
+                          VoxelizedPhantom& volumes, StageReport& report) {
+  if (!scene.mri.regions.empty()) attach_regions(scene, atlases, volumes, report);
+  if (scene.mri.texture.source != TextureSource::none) attach_texture(scene, volumes, report);
+}
+
+std::string material_maps_key_text(const Scene& scene) {
+  if (scene.mri.regions.empty() && scene.mri.texture.source == TextureSource::none) return {};
+  std::string text = "material maps\n";
+  for (const TissueRegionSettings& r : scene.mri.regions)
+    text += "region " + r.organ + " " + r.label + " " + r.tissue + "\n";
+  const TextureSettings& t = scene.mri.texture;
+  text += std::string("texture ") + to_string(t.source) + " " + t.scan + " " + exact_text(t.T1_gain) + " " +
+          exact_text(t.PD_gain) + " " + exact_text(t.max_deviation) + " " + exact_text(t.random_sd) + " " +
+          exact_text(t.correlation_mm) + " seed " + std::to_string(scene.seed);
+  for (const std::string& tissue : t.tissues)
+    text += " " + tissue;
+  return text + "\n";
+}
+
+} // namespace phantasm
