@@ -13,6 +13,7 @@
 #include "pipeline/anatomy_checks.hpp"
 #include "pipeline/cost_estimate.hpp"
 #include "pipeline/material_maps_stage.hpp"
+#include "pipeline/growth_atlas.hpp"
 #include "pipeline/reference_cache.hpp"
 #include "pipeline/reference_images_cache.hpp"
 #include "sim/deform_phantom.hpp"
@@ -127,6 +128,8 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
     for (const auto& line : stage.skipped)
       reporter.skipped(stage.stage, line);
   }
+  // Growth regions are resolved before the anatomy is built: a misnamed one stops the run at once.
+  const DeformationSettings deformation = with_growth_atlas(scene.deformation, result.stages[1], reporter);
   std::string anatomy_key;
   std::map<std::string, AtlasLabelVolume> atlases;
   result.phantom = build_anatomy(scene, cache, result.stages[0], reporter, anatomy_key, atlases);
@@ -136,7 +139,7 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
   StageReport& sim = result.stages[1];
   if (scene.deformation.mode != DeformationMode::none) {
     const StageLines lines(sim);
-    result.deformation = deform_phantom(scene.deformation, scene.organs, result.phantom, sim, reporter);
+    result.deformation = deform_phantom(deformation, scene.organs, result.phantom, sim, reporter);
     lines.print_new(sim, reporter);
     result.deformed = deformed_phantom(result.phantom, *result.deformation);
   }

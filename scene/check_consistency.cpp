@@ -160,7 +160,7 @@ public:
         check_organ_reference(indexed("deformation.loads", i, "organs") + "[" + std::to_string(j) + "]",
                               load.organs[j]);
       }
-      for (std::size_t j = 0; load.kind == LoadKind::growth && j < i; ++j) {
+      for (std::size_t j = 0; load.kind == LoadKind::growth && !load.organ.empty() && j < i; ++j) {
         if (d.loads[j].kind == LoadKind::growth && d.loads[j].organ == load.organ)
           problem(indexed("deformation.loads", i, "organ"),
                   "expected one growth per organ, found a second for '" + load.organ +
@@ -168,12 +168,23 @@ public:
                       "deformation.loads[" +
                       std::to_string(j) + "])");
       }
+      // A region named twice (groups are resolved when the atlas is read, before the anatomy).
+      for (std::size_t j = 0; load.kind == LoadKind::growth && j <= i; ++j) {
+        const std::vector<std::string>& earlier = d.loads[j].regions;
+        for (std::size_t r = 0; r < load.regions.size(); ++r) {
+          const auto end = j == i ? earlier.begin() + static_cast<std::ptrdiff_t>(r) : earlier.end();
+          if (d.loads[j].kind == LoadKind::growth && std::find(earlier.begin(), end, load.regions[r]) != end)
+            problem(indexed("deformation.loads", i, "region"),
+                    "expected one growth per region, found a second for '" + load.regions[r] +
+                        "' (the first is deformation.loads[" + std::to_string(j) + "])");
+        }
+      }
       const OrganSettings* grown = load.kind == LoadKind::growth ? m_scene.find_organ(load.organ) : nullptr;
       if (grown != nullptr && !grown->solid)
         problem(indexed("deformation.loads", i, "organ"),
                 "expected a solid organ (growth changes the volume of its tets), found '" + load.organ +
                     "', a surface organ (solid: false)");
-      if (load.kind != LoadKind::gravity) {
+      if (load.kind != LoadKind::gravity && !(load.kind == LoadKind::growth && !load.regions.empty())) {
         check_organ_reference(indexed("deformation.loads", i, "organ"), load.organ);
         for (const auto& fixed : d.fixed) {
           if (fixed == load.organ) {

@@ -80,6 +80,22 @@ void parse_list(CheckedMap& map, const std::string& key, const char* what, std::
   }
 }
 
+/// A growth load's regions: `region` (a name or a list of names of regions or groups) and the
+/// `atlas` they are of; the names are resolved when the atlas is read.
+void parse_growth_regions(CheckedMap& map, LoadSettings& load) {
+  map.choice("atlas", load.atlas, {"aal"}, true);
+  const YAML::Node region = map.get("region");
+  if (!region.IsDefined()) {
+    map.missing("region", "a region of the atlas or a list of them (Hippocampus_L, [Hippocampus, cortex])");
+  } else if (region.IsSequence()) {
+    if (map.string_list("region", load.regions) && load.regions.empty())
+      map.context().problem(region, map.child_path("region"), "expected at least one region, found []");
+  } else {
+    std::string name;
+    if (map.string("region", name)) load.regions = {name};
+  }
+}
+
 void parse_load(CheckedMap& map, LoadSettings& load) {
   std::string kind;
   if (!map.choice("type", kind, {"gravity", "displacement", "growth"}, true)) {
@@ -92,9 +108,17 @@ void parse_load(CheckedMap& map, LoadSettings& load) {
     map.vec3("acceleration_m_s2", load.acceleration_m_s2, NumberRule{-1e4, 1e4, false, false, "m/s^2"}, true);
     map.string_list("organs", load.organs);
   } else if (kind == "growth") {
-    // The rest volume of the organ's tets changes by volume_change; -1 would leave no tissue.
+    // The rest volume of the organ's tets, or of the tets in atlas regions, changes by
+    // volume_change; -1 would leave no tissue.
     load.kind = LoadKind::growth;
-    map.string("organ", load.organ, true);
+    if (map.has("region") || map.has("atlas")) {
+      parse_growth_regions(map, load);
+      if (map.has("organ"))
+        map.context().problem(map.get("organ"), map.child_path("organ"),
+                              "expected organ or region, not both, found both");
+    } else {
+      map.string("organ", load.organ, true);
+    }
     map.number("volume_change", load.volume_change, NumberRule{-1.0, 10.0, true, false, ""}, true);
     return;
   } else {

@@ -69,6 +69,11 @@ nlohmann::json organ_json(const OrganSettings& organ) {
 }
 
 nlohmann::json load_json(const LoadSettings& load) {
+  if (load.kind == LoadKind::growth && !load.regions.empty())
+    return {{"type", "growth"},
+            {"region", load.regions},
+            {"atlas", load.atlas},
+            {"volume_change", load.volume_change}};
   if (load.kind == LoadKind::growth)
     return {{"type", "growth"}, {"organ", load.organ}, {"volume_change", load.volume_change}};
   nlohmann::json j = {

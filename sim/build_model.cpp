@@ -197,7 +197,7 @@ Body add_solid_body(const DeformationSettings& deformation, const OrganTable& or
   const std::size_t first_tet = model.tets.size();
   body.first_vertex = add_body(model, k_mm * mesh.vertices, mesh.tets, materials);
   std::vector<int> organ_labels(organ_of_tet.begin(), organ_of_tet.end());
-  apply_growth(deformation, organs, organ_of_tet, first_tet, model, built.grown_tets);
+  apply_growth(deformation, organs, organ_of_tet, mesh, first_tet, built);
   const int bulk_terms = apply_volume_formulation(model, deformation.volume, mesh, first_tet, organ_labels);
   body.tet_organ = std::move(organ_labels);
   body.vertex_count = mesh.vertices.rows();

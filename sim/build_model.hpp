@@ -12,9 +12,12 @@ namespace phantasm::sim_detail {
 /// The model of the bodies, before loads.
 struct BodyModel {
   ElasticModel model;
-  std::vector<Body> bodies;            ///< in scene order of their organs
-  std::vector<int> held;               ///< boundary vertices of bodies inside an organ that does not move
-  std::vector<std::size_t> grown_tets; ///< per load of the scene, the tets a growth load grew
+  std::vector<Body> bodies;              ///< in scene order of their organs
+  std::vector<int> held;                 ///< boundary vertices of bodies inside an organ that does not move
+  std::vector<std::size_t> grown_tets;   ///< per load of the scene, the tets a growth load grew
+  double region_growth_moved_m = 0.0;    ///< the largest rest-surface motion of a grown atlas region
+  std::vector<int> growth_load_of_tet;   ///< per tet of the model, the growth load growing it (-1: none)
+  std::vector<double> growth_rest_ratio; ///< per load, the rest-volume ratio applied to its tets (1: none)
 };
 
 /// The model of every body of `assignment` [choices documented in docs/deformation.md]: a solid

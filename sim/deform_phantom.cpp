@@ -2,6 +2,7 @@
 
 #include "sim/body_embedding.hpp"
 #include "sim/build_model.hpp"
+#include "sim/growth.hpp"
 #include "sim/load_schedule.hpp"
 #include "sim/loads.hpp"
 
@@ -21,10 +22,10 @@ std::string load_names(const DeformationSettings& deformation) {
     if (!names.empty()) names += ", ";
     names += load.kind == LoadKind::gravity
                  ? "gravity (" + format_number(load.acceleration_m_s2.norm()) + " m/s^2)"
-             : load.kind == LoadKind::growth
-                 ? "the growth of " + load.organ + " by " + format_number(100.0 * load.volume_change) + " %"
-                 : "the displacement of " + load.organ + " by " + format_number(load.displacement_mm.norm()) +
-                       " mm";
+             : load.kind == LoadKind::growth ? "the growth of " + growth_target(load) + " by " +
+                                                   format_number(100.0 * load.volume_change) + " %"
+                                             : "the displacement of " + load.organ + " by " +
+                                                   format_number(load.displacement_mm.norm()) + " mm";
     if (load.kind == LoadKind::displacement && load.rotation_deg != 0.0)
       names += " and a turn of " + format_number(load.rotation_deg) + " degrees";
   }
@@ -94,6 +95,12 @@ PhantomDeformation deform_phantom(const DeformationSettings& deformation, const 
 
   Eigen::MatrixX3d p = model.rest_positions_m;
   if (!built.bodies.empty()) solve_frames(deformation, model, loads, p, result, report, reporter);
+  // Growth prescribes the grown tets' volume in the result: their rest volume is rescaled until
+  // the solve meets it (sim/growth.hpp).
+  for (int round = 0; deformation.mode == DeformationMode::quasi_static && !built.bodies.empty() &&
+                      recalibrate_growth(deformation, built, p, round, report);
+       ++round)
+    solve_frames(deformation, model, loads, p, result, report, reporter);
   collect_deformations(organs, phantom, assignment, built.bodies, p / k_mm, result);
   check_inversions(deformation, result, report);
   return result;

@@ -4,23 +4,31 @@
 #include "core/error.hpp"
 #include "core/format.hpp"
 #include "sim/body_embedding.hpp"
+#include "sim/growth_regions.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 
 namespace phantasm::sim_detail {
 namespace {
 
-std::string organ_key(std::size_t k) {
-  return "deformation.loads[" + std::to_string(k) + "].organ";
+std::string growth_load_key(std::size_t k, const LoadSettings& load) {
+  return "deformation.loads[" + std::to_string(k) + "]." + (load.regions.empty() ? "organ" : "region");
 }
 
 } // namespace
 
 void apply_growth(const DeformationSettings& deformation, const OrganTable& organs,
-                  const std::vector<std::size_t>& organ_of_tet, std::size_t first_tet, ElasticModel& model,
-                  std::vector<std::size_t>& grown_tets) {
-  grown_tets.resize(deformation.loads.size(), 0);
+                  const std::vector<std::size_t>& organ_of_tet, const TetMesh& mesh, std::size_t first_tet,
+                  BodyModel& built) {
+  built.grown_tets.resize(deformation.loads.size(), 0);
+  built.growth_rest_ratio.resize(deformation.loads.size(), 1.0);
+  built.growth_load_of_tet.resize(first_tet + organ_of_tet.size(), -1);
+  const std::vector<std::vector<std::int32_t>> region_labels = growth_region_labels(deformation);
+  // The load growing each tet: an organ's, then a region's (which takes precedence).
+  std::vector<std::optional<std::size_t>> load_of_tet(organ_of_tet.size());
   for (std::size_t k = 0; k < deformation.loads.size(); ++k) {
     const LoadSettings& load = deformation.loads[k];
     if (load.kind != LoadKind::growth) continue;
@@ -29,22 +37,137 @@ void apply_growth(const DeformationSettings& deformation, const OrganTable& orga
                          "expected per_tet or tet_groups with a growth load (a vertex star's bulk term "
                          "spans organs), found 'vertex_stars'");
     }
-    const int organ = organs.index_of(load.organ);
-    if (organ < 0) continue; // no tet carries it: report_growth says so
+    const int organ = load.regions.empty() ? organs.index_of(load.organ) : -1;
+    if (organ < 0) continue; // regions below; an organ no tet carries: report_growth says so
+    for (std::size_t t = 0; t < organ_of_tet.size(); ++t)
+      if (organ_of_tet[t] == static_cast<std::size_t>(organ)) load_of_tet[t] = k;
+  }
+  if (deformation.region_atlas) {
+    const RegionAtlas& atlas = *deformation.region_atlas;
+    for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+      Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+      for (int c = 0; c < 4; ++c)
+        centroid += 0.25 * mesh.vertices.row(mesh.tets(t, c)).transpose();
+      const std::int32_t label = atlas.label_at(centroid);
+      if (label == 0) continue;
+      for (std::size_t k = 0; k < region_labels.size(); ++k)
+        if (std::find(region_labels[k].begin(), region_labels[k].end(), label) != region_labels[k].end())
+          load_of_tet[static_cast<std::size_t>(t)] = k;
+    }
+  }
+  // Per region load, the tets it grows: their extent gives the residual's scale.
+  std::vector<std::vector<Eigen::Index>> region_tets(deformation.loads.size());
+  for (std::size_t t = 0; t < load_of_tet.size(); ++t) {
+    if (!load_of_tet[t]) continue;
+    const std::size_t k = *load_of_tet[t];
+    const LoadSettings& load = deformation.loads[k];
     // Fe = F Fg^-1 = X Q / s: the tet's elastic terms read Q / s, and they weigh the grown
     // rest volume V s^3 = V (1 + g) (energy per unit of grown volume).
     const double volume_ratio = 1.0 + load.volume_change;
-    const double s = std::cbrt(volume_ratio);
-    for (std::size_t t = 0; t < organ_of_tet.size(); ++t) {
-      if (organ_of_tet[t] != static_cast<std::size_t>(organ)) continue;
-      TetElement& e = model.tets[first_tet + t];
-      e.Q /= s;
-      e.rest_volume_m3 *= volume_ratio;
-      e.strain_weight *= volume_ratio;
-      e.volume_weight *= volume_ratio;
-      ++grown_tets[k];
+    TetElement& e = built.model.tets[first_tet + t];
+    e.Q /= std::cbrt(volume_ratio);
+    e.rest_volume_m3 *= volume_ratio;
+    e.strain_weight *= volume_ratio;
+    e.volume_weight *= volume_ratio;
+    ++built.grown_tets[k];
+    built.growth_load_of_tet[first_tet + t] = static_cast<int>(k);
+    built.growth_rest_ratio[k] = volume_ratio;
+    if (!load.regions.empty()) region_tets[k].push_back(static_cast<Eigen::Index>(t));
+  }
+  for (std::size_t k = 0; k < region_tets.size(); ++k) {
+    Eigen::MatrixX3d vertices(4 * static_cast<Eigen::Index>(region_tets[k].size()), 3);
+    for (std::size_t n = 0; n < region_tets[k].size(); ++n)
+      for (int c = 0; c < 4; ++c)
+        vertices.row(4 * static_cast<Eigen::Index>(n) + c) =
+            mesh.vertices.row(mesh.tets(region_tets[k][n], c));
+    built.region_growth_moved_m =
+        std::max(built.region_growth_moved_m, growth_displacement_m(deformation.loads[k], vertices));
+  }
+}
+
+bool recalibrate_growth(const DeformationSettings& deformation, BodyModel& built, const Eigen::MatrixX3d& p_m,
+                        int round, StageReport& report) {
+  ElasticModel& model = built.model;
+  const std::size_t loads = built.growth_rest_ratio.size();
+  std::vector<double> rest(loads, 0.0), deformed(loads, 0.0);
+  for (std::size_t t = 0; t < built.growth_load_of_tet.size(); ++t) {
+    const int k = built.growth_load_of_tet[t];
+    if (k < 0) continue;
+    const TetElement& e = model.tets[t];
+    const auto& v = e.vertices;
+    const Eigen::Vector3d a = p_m.row(v[1]) - p_m.row(v[0]), b = p_m.row(v[2]) - p_m.row(v[0]),
+                          c = p_m.row(v[3]) - p_m.row(v[0]);
+    deformed[static_cast<std::size_t>(k)] += a.cross(b).dot(c) / 6.0;
+    rest[static_cast<std::size_t>(k)] +=
+        e.rest_volume_m3 / built.growth_rest_ratio[static_cast<std::size_t>(k)];
+  }
+  // Per load, the factor its tets' rest volume is rescaled by (1: it meets its prescription).
+  std::vector<double> rescale(loads, 1.0);
+  bool rescaled = false;
+  for (std::size_t k = 0; k < loads; ++k) {
+    if (!(rest[k] > 0.0)) continue;
+    const LoadSettings& load = deformation.loads[k];
+    const double reached = deformed[k] / rest[k], wanted = 1.0 + load.volume_change;
+    if (std::abs(reached - wanted) <= k_growth_tolerance) continue;
+    if (round >= k_growth_rounds || !(reached > 0.0)) {
+      throw SettingError(growth_load_key(k, load),
+                         "expected a volume change the tissue around can take up, found " +
+                             format_number(100.0 * load.volume_change) + " % for " + growth_target(load) +
+                             ", which reaches " + format_number(100.0 * (reached - 1.0)) + " % after " +
+                             std::to_string(round + 1) +
+                             " solves (no room to give way: a softer or more compressible tissue around it, "
+                             "or a smaller change)");
+    }
+    rescale[k] = wanted / reached;
+    built.growth_rest_ratio[k] *= rescale[k];
+    rescaled = true;
+  }
+  if (!rescaled) {
+    for (std::size_t k = 0; k < loads; ++k)
+      if (rest[k] > 0.0)
+        report.modelled.push_back("growth of " + growth_target(deformation.loads[k]) +
+                                  ": its tets' volume changed by " +
+                                  format_number(100.0 * (deformed[k] / rest[k] - 1.0)) +
+                                  " % as prescribed, from a rest-volume change of " +
+                                  format_number(100.0 * (built.growth_rest_ratio[k] - 1.0)) + " % (" +
+                                  std::to_string(round + 1) + " solves)");
+    return false;
+  }
+  // Fg of each rescaled tet: Q / s, weights times s^3 = the rescale of its volume; a group of
+  // tets (deformation.volume: tet_groups) holding one is made again from its tets' Q and
+  // volumes (F_g = sum_t V_t F_t / V_g) with its bulk weight in proportion to its volume.
+  std::vector<char> changed(model.tets.size(), 0);
+  for (std::size_t t = 0; t < built.growth_load_of_tet.size(); ++t) {
+    const int k = built.growth_load_of_tet[t];
+    if (k < 0 || rescale[static_cast<std::size_t>(k)] == 1.0) continue;
+    const double f = rescale[static_cast<std::size_t>(k)];
+    TetElement& e = model.tets[t];
+    e.Q /= std::cbrt(f);
+    e.rest_volume_m3 *= f;
+    e.strain_weight *= f;
+    e.volume_weight *= f;
+    changed[t] = 1;
+  }
+  for (TetGroup& g : model.tet_groups) {
+    if (std::none_of(g.tets.begin(), g.tets.end(),
+                     [&](int t) { return changed[static_cast<std::size_t>(t)] != 0; }))
+      continue;
+    double volume = 0.0;
+    for (int t : g.tets)
+      volume += model.tets[static_cast<std::size_t>(t)].rest_volume_m3;
+    g.weight *= volume / g.rest_volume_m3;
+    g.rest_volume_m3 = volume;
+    g.G.setZero();
+    for (int t : g.tets) {
+      const TetElement& e = model.tets[static_cast<std::size_t>(t)];
+      for (int c = 0; c < 4; ++c) {
+        const auto at =
+            std::find(g.vertices.begin(), g.vertices.end(), e.vertices[static_cast<std::size_t>(c)]);
+        g.G.row(at - g.vertices.begin()) += (e.rest_volume_m3 / volume) * e.Q.row(c);
+      }
     }
   }
+  return true;
 }
 
 void report_growth(const DeformationSettings& deformation, const std::vector<std::size_t>& grown_tets,
@@ -53,11 +176,15 @@ void report_growth(const DeformationSettings& deformation, const std::vector<std
     const LoadSettings& load = deformation.loads[k];
     if (load.kind != LoadKind::growth) continue;
     if (k >= grown_tets.size() || grown_tets[k] == 0) {
-      throw SettingError(organ_key(k),
-                         "expected an organ with tets of its own in a simulated solid body, found '" +
-                             load.organ + "' (a surface organ, or one meshed with the organ holding it)");
+      throw SettingError(growth_load_key(k, load),
+                         load.regions.empty()
+                             ? "expected an organ with tets of its own in a simulated solid body, found '" +
+                                   load.organ + "' (a surface organ, or one meshed with the organ holding it)"
+                             : "expected regions holding the centroid of some tet of a simulated solid body, "
+                               "found " +
+                                   growth_target(load) + " holding none (a region smaller than the tets?)");
     }
-    report.modelled.push_back("growth of " + load.organ + ": rest volume of its " +
+    report.modelled.push_back("growth of " + growth_target(load) + ": rest volume of its " +
                               std::to_string(grown_tets[k]) + " tets changed by " +
                               format_number(100.0 * load.volume_change) +
                               " % (F = Fe Fg, Fg = (1 + g)^(1/3) I; the tissue around answers elastically)");

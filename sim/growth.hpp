@@ -3,6 +3,8 @@
 #pragma once
 
 #include "core/stage_report.hpp"
+#include "geometry/tet_mesh.hpp"
+#include "sim/build_model.hpp"
 #include "sim/elastic_model.hpp"
 #include "sim/sim_settings.hpp"
 
@@ -11,19 +13,37 @@
 
 namespace phantasm::sim_detail {
 
-/// Applies every growth load of `loads` to the tets of one body, appended to `model` from
-/// `first_tet` with `organ_of_tet` (organ table indices) for each: a tet of a grown organ gets
+/// Applies every growth load of `deformation` to the tets of one body (`mesh`), appended to
+/// `built.model` from `first_tet` with `organ_of_tet` (organ table indices) for each: a tet of a
+/// grown organ, or whose centroid (rest state) lies in a grown atlas region, gets
 /// Fg = (1 + g)^(1/3) I, so its elastic energy reads Fe = F Fg^-1 (Q / (1 + g)^(1/3)) and its
-/// weights are those of its grown rest volume V (1 + g). Counts the tets grown per load into
-/// `grown_tets` (one entry per load).
+/// weights are those of its grown rest volume V (1 + g). A region's change takes precedence
+/// over its organ's. Counts the tets grown per load into `built.grown_tets` (one entry per load)
+/// and raises `built.region_growth_moved_m` to the rest-surface motion of each region grown.
 /// @throws SettingError (deformation.volume) for growth with vertex_stars, whose bulk term is
-///   not per tet
+///   not per tet; (deformation.loads[k].region) as growth_region_labels
 void apply_growth(const DeformationSettings& deformation, const OrganTable& organs,
-                  const std::vector<std::size_t>& organ_of_tet, std::size_t first_tet, ElasticModel& model,
-                  std::vector<std::size_t>& grown_tets);
+                  const std::vector<std::size_t>& organ_of_tet, const TetMesh& mesh, std::size_t first_tet,
+                  BodyModel& built);
+
+/// The largest miss (absolute) of a growth load's volume change in the result, and the most
+/// solves that may meet it (recalibrate_growth).
+inline constexpr double k_growth_tolerance = 1e-3;
+inline constexpr int k_growth_rounds = 8;
+
+/// A growth load prescribes its tets' volume change in the result: after the solve of `round`
+/// (0 first), the volume each load's tets reach in `p_m` (m) against their rest volume before
+/// growth. Where one misses 1 + g by more than k_growth_tolerance, its tets' rest-volume ratio is
+/// rescaled by (1 + g) / reached (the tissue around takes up less than the rest-volume change)
+/// and true says to solve again; else each load's figures go into `report` and false says done.
+/// @throws SettingError (deformation.loads[k].organ or .region) when a load still misses after
+///   k_growth_rounds solves or inverts its tets: no room to give way
+bool recalibrate_growth(const DeformationSettings& deformation, BodyModel& built, const Eigen::MatrixX3d& p_m,
+                        int round, StageReport& report);
 
 /// Checks that every growth load grew some tets and reports each one as modelled.
-/// @throws SettingError (deformation.loads[k].organ) for an organ no simulated tet lies in
+/// @throws SettingError (deformation.loads[k].organ, or .region) for an organ or regions no
+///   simulated tet lies in
 void report_growth(const DeformationSettings& deformation, const std::vector<std::size_t>& grown_tets,
                    StageReport& report);
 

@@ -47,6 +47,10 @@ Loads add_loads(const std::vector<LoadSettings>& load_settings, const OrganTable
                                 " m/s^2 on the bodies' lumped masses");
       continue;
     }
+    if (load.kind == LoadKind::growth && !load.regions.empty()) {
+      loads.growth_moved_m = std::max(loads.growth_moved_m, built.region_growth_moved_m);
+      continue;
+    }
     const int organ = organs.index_of(load.organ);
     if (organ < 0) {
       throw SettingError("deformation.loads[" + std::to_string(k) + "].organ",

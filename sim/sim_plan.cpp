@@ -67,7 +67,8 @@ StageReport plan_sim(const DeformationSettings& d, const OrganTable& organs) {
     if (load.kind == LoadKind::gravity) {
       line << "gravity " << format_vector(load.acceleration_m_s2) << " m/s^2";
     } else if (load.kind == LoadKind::growth) {
-      line << "growth of " << load.organ << " by " << 100.0 * load.volume_change << " % of its rest volume";
+      line << "growth of " << growth_target(load) << " by " << 100.0 * load.volume_change
+           << " % of its rest volume";
     } else {
       line << "displacement " << format_vector(load.displacement_mm) << " mm";
       if (load.rotation_deg != 0.0)

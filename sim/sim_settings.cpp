@@ -30,6 +30,9 @@ std::vector<OrganMotion> classify_organ_motion(const DeformationSettings& d, con
   // simulated with it, up to a fixed one or a surface organ.
   for (const auto& load : d.loads) {
     if (load.kind != LoadKind::growth) continue;
+    // Atlas regions may lie in any solid organ: those that are not fixed are simulated.
+    for (std::size_t i = 0; !load.regions.empty() && i < organs.size() && i < d.organs.size(); ++i)
+      if (d.organs[i].solid && motion[i] != OrganMotion::fixed) motion[i] = OrganMotion::simulated;
     const int grown = organs.index_of(load.organ);
     if (grown < 0) continue;
     for (int j = organs[static_cast<std::size_t>(grown)].parent; j >= 0;
@@ -40,6 +43,14 @@ std::vector<OrganMotion> classify_organ_motion(const DeformationSettings& d, con
     }
   }
   return motion;
+}
+
+std::string growth_target(const LoadSettings& load) {
+  if (load.regions.empty()) return load.organ;
+  std::string names;
+  for (const std::string& region : load.regions)
+    names += (names.empty() ? "" : ", ") + region;
+  return names + " (atlas " + load.atlas + ")";
 }
 
 const MaterialSettings* DeformationSettings::find_material(const std::string& material_name) const {

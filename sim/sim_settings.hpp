@@ -3,10 +3,15 @@
 // the standard library only, so the scene needs no solver.
 #pragma once
 
+#include "core/grid.hpp"
 #include "core/organ_table.hpp"
 
 #include <Eigen/Core>
 
+#include <cmath>
+#include <cstdint>
+#include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -50,7 +55,8 @@ enum class MotionProfile { constant, ramp, sine };
 /// twists the end of a bar): each point x of the region goes to
 /// c + R (x - c) + displacement_mm, R the turn by rotation_deg about rotation_axis through c =
 /// rotation_center_mm (right-handed; 0 degrees: a pure translation). Or the growth (atrophy when
-/// negative) of an organ's tets: a change of their rest volume by the fraction volume_change.
+/// negative) of an organ's tets, or of the tets whose centroid lies in atlas regions: a change of
+/// their rest volume by the fraction volume_change.
 struct LoadSettings {
   LoadKind kind = LoadKind::gravity;
   std::vector<std::string> organs; ///< gravity: organs it acts on (empty = all moving)
@@ -64,7 +70,33 @@ struct LoadSettings {
   Eigen::Vector3d rotation_center_mm{0, 0, 0};    ///< a point of the axis
   MotionProfile motion = MotionProfile::constant; ///< how the load evolves in dynamic mode
   double period_s = 1.0;                          ///< ramp duration or sine period
-  double volume_change = 0.0; ///< growth: the rest volume's relative change, > -1 (-0.05: 5 % atrophy)
+  double volume_change = 0.0;       ///< growth: the rest volume's relative change, > -1 (-0.05: 5 % atrophy)
+  std::vector<std::string> regions; ///< growth: atlas regions or groups of them (instead of an organ)
+  std::string atlas;                ///< growth: the atlas the regions are of ("aal")
+};
+
+/// The regions of a label atlas that growth loads name, on its voxel grid (in world space, so a
+/// tet's centroid finds its region without registration). Not a scene key: the pipeline reads
+/// the atlas a growth load names and sets DeformationSettings::region_atlas.
+struct RegionAtlas {
+  std::string name;   ///< as scenes name it ("aal")
+  std::string source; ///< the files it was read from, for messages
+  ImageGrid grid;
+  std::vector<std::int32_t> labels;                       ///< grid.voxel_count() labels, i fastest
+  std::map<std::string, std::int32_t> regions;            ///< label by region name
+  std::map<std::string, std::vector<std::string>> groups; ///< named sets of regions ("Hippocampus": both)
+
+  /// The label of the voxel nearest to `world_mm`; 0 (background) outside the grid.
+  std::int32_t label_at(const Eigen::Vector3d& world_mm) const {
+    const Eigen::Vector3d index = grid.index_from_world(world_mm);
+    Eigen::Vector3i v;
+    for (int a = 0; a < 3; ++a) {
+      const double r = std::round(index[a]);
+      if (!(r >= 0.0 && r < grid.dims[a])) return 0;
+      v[a] = static_cast<int>(r);
+    }
+    return labels[static_cast<std::size_t>(voxel_index(grid.dims, v.x(), v.y(), v.z()))];
+  }
 };
 
 enum class ObstacleShape { half_space, sphere };
@@ -111,6 +143,8 @@ struct DeformationSettings {
   std::vector<MaterialSettings> materials; ///< the scene's materials section
   /// Per organ in scene order, set by the scene from anatomy.organs.
   std::vector<OrganMechanics> organs;
+  /// The atlas whose regions growth loads name, set by the pipeline (null: none named).
+  std::shared_ptr<const RegionAtlas> region_atlas;
 
   const MaterialSettings* find_material(const std::string& name) const;
 };
@@ -127,6 +161,10 @@ enum class OrganMotion {
 /// it (the gap tissue) without the solver.
 std::vector<OrganMotion> classify_organ_motion(const DeformationSettings& deformation,
                                                const OrganTable& organs);
+
+/// What a growth load grows, for messages: its organ, or its regions and their atlas
+/// ("Hippocampus_L, Hippocampus_R (atlas aal)").
+std::string growth_target(const LoadSettings& load);
 
 const char* to_string(DeformationMode mode);
 const char* to_string(SolverMethod method);
