@@ -5,6 +5,9 @@
 // silent wrong answer (converged, nothing inverted, and off the oracle).
 // Usage: solver_extremes [first_case [last_case [solver]]] (cases 0-based, inclusive; default
 // all; solver: one of local_global, jacobi_chebyshev, newton, xpbd, gauss_seidel_pbd)
+//        solver_extremes locking [CELLS...]: the volume-locking rows, Newton's tip (relative
+//        residual 1e-7) on the bar with CELLS cells across (default 4 8) at nu 0.45, 0.49, 0.499,
+//        per tet and with the default bulk term (deformation.volume)
 
 #include "bench/solver_extremes.hpp"
 
@@ -33,12 +36,44 @@ std::string describe(const ExtremeCase& c) {
   return s;
 }
 
+/// The volume-locking rows: Newton's tip per bulk term and Poisson ratio on bars of `cells`.
+int locking_rows(std::FILE* table, const std::vector<int>& cells) {
+  std::fprintf(table, "| bulk term | cells | nu 0.45 | nu 0.49 | nu 0.499 | 0.499 vs 0.45 | time |\n"
+                      "|---|---|---|---|---|---|---|\n");
+  for (int n : cells)
+    for (VolumeFormulation v : {VolumeFormulation::tet, DeformationSettings{}.volume}) {
+      const auto start = std::chrono::steady_clock::now();
+      std::vector<double> tips;
+      for (double nu : {0.45, 0.49, 0.499}) {
+        ExtremeCase c{1e5, nu, 0.0, 0.0};
+        c.volume = v;
+        c.cells_across = n;
+        const ExtremeCantilever k = extreme_cantilever(c);
+        const ExtremeOracle oracle = extreme_oracle(k);
+        if (!oracle_converged(oracle))
+          std::fprintf(stderr, "%d cells, nu %g: Newton did not converge\n", n, nu);
+        tips.push_back(tip_deflection_mm(k, oracle.p));
+      }
+      std::fprintf(table, "| %s | %d x %d x %d | %.2f mm | %.2f mm | %.2f mm | %+.1f %% | %.0f s |\n",
+                   to_string(v), n, n, 5 * n, tips[0], tips[1], tips[2], 100.0 * (tips[2] / tips[0] - 1.0),
+                   std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      std::fflush(table);
+    }
+  return 0;
+}
+
 } // namespace
 
 int main(int argc, char** argv) {
   // The table goes to stdout; CHOLMOD's warnings (a singular Hessian, which Newton shifts) to stderr.
   std::FILE* table = fdopen(dup(1), "w");
   dup2(2, 1);
+  if (argc > 1 && std::string(argv[1]) == "locking") {
+    std::vector<int> cells;
+    for (int a = 2; a < argc; ++a)
+      cells.push_back(std::atoi(argv[a]));
+    return locking_rows(table, cells.empty() ? std::vector<int>{4, 8} : cells);
+  }
   std::vector<ExtremeCase> cases;
   for (double E : {1.0, 1e3, 1e5, 1e7, 1e9})
     cases.push_back({E, 0.3, 0.0, 0.0});

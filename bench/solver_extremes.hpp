@@ -14,6 +14,7 @@
 #include "sim/newton.hpp"
 #include "sim/position_based.hpp"
 #include "sim/sim_settings.hpp"
+#include "sim/vertex_star_volumes.hpp"
 
 #include <Eigen/Geometry>
 
@@ -22,6 +23,7 @@
 #include <cmath>
 #include <cstdio>
 #include <exception>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -57,6 +59,8 @@ struct ExtremeCase {
   /// != 0: the free end's vertices are tied the same way to their rest places turned by this
   /// angle about the bar's axis (through the free face's centre; with push_mm, then pushed)
   double twist_deg = 0.0;
+  std::optional<VolumeFormulation> volume; ///< unset: the scene default (deformation.volume)
+  int cells_across = 4;                    ///< the bar's cells across (5 times as many along it)
 };
 
 /// The cantilever of a case as the deformation stage would build it.
@@ -68,11 +72,14 @@ struct ExtremeCantilever {
 };
 
 inline ExtremeCantilever extreme_cantilever(const ExtremeCase& c) {
-  const TetMesh mesh = structured_box(Eigen::Vector3d(100, 20, 20), Eigen::Vector3i(20, 4, 4),
+  const int n = c.cells_across;
+  const TetMesh mesh = structured_box(Eigen::Vector3d(100, 20, 20), Eigen::Vector3i(5 * n, n, n),
                                       Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
   ExtremeCantilever k;
   add_body(k.model, 1e-3 * mesh.vertices, mesh.tets, lame_parameters(c.youngs_modulus_Pa, c.poisson_ratio),
            1000.0);
+  // The bulk term where a scene puts it by default (deformation.volume), as the stage does.
+  apply_volume_formulation(k.model, c.volume ? *c.volume : DeformationSettings{}.volume, mesh, 0);
   const Eigen::MatrixX3d& rest = k.model.rest_positions_m;
   const Eigen::RowVector3d g(0, 0, -9.81);
   const SolverSettings defaults;

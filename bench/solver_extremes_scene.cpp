@@ -5,7 +5,13 @@
 // displacement, with what the first solve reported (converged, relative residual, the Newton
 // step at its result). Exit status 1 when a solve reported converged lies more than 1 % off.
 // Usage: solver_extremes_scene SCENE.yaml
+//        solver_extremes_scene SCENE.yaml volumes NU: every material of Poisson ratio 0.45 or more
+//        set to NU, solved by Newton (to 1e-7) with the bulk term per tet and with the default
+//        formulation; prints each organ's volume change (its patch surface's base mesh, moved with
+//        the tets; and the sum of the tets of its material region), as docs/deformation.md's
+//        volume table.
 
+#include "geometry/tet_quality.hpp"
 #include "pipeline/run_pipeline.hpp"
 #include "scene/scene.hpp"
 #include "sim/deform_phantom.hpp"
@@ -13,21 +19,88 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
+#include <string>
+
+namespace {
+
+using namespace phantasm;
+
+/// The volume a closed triangle mesh encloses (vertices as rows), mm^3.
+double enclosed_volume_mm3(const Eigen::MatrixX3d& x, const Eigen::MatrixX3i& faces) {
+  double v = 0.0;
+  for (Eigen::Index t = 0; t < faces.rows(); ++t)
+    v += signed_volume(Eigen::Vector3d::Zero(), x.row(faces(t, 0)).transpose(),
+                       x.row(faces(t, 1)).transpose(), x.row(faces(t, 2)).transpose());
+  return v;
+}
+
+/// Signed volume of tet t of `tets` over the vertices x (rows), mm^3.
+double body_tet_volume_mm3(const Eigen::MatrixX3d& x, const Eigen::MatrixX4i& tets, Eigen::Index t) {
+  return signed_volume(x.row(tets(t, 0)).transpose(), x.row(tets(t, 1)).transpose(),
+                       x.row(tets(t, 2)).transpose(), x.row(tets(t, 3)).transpose());
+}
+
+/// Each organ's volume change at Poisson ratio nu, per tet and with the default bulk term.
+int organ_volumes(const Scene& scene, const Phantom& phantom, double nu, Reporter& quiet) {
+  std::printf("| bulk term | organ | volume change (surface) | volume change (its tets) | solve |\n"
+              "|---|---|---|---|---|\n");
+  for (VolumeFormulation v : {VolumeFormulation::tet, DeformationSettings{}.volume}) {
+    DeformationSettings d = scene.deformation;
+    d.volume = v;
+    d.solver.method = SolverMethod::newton;
+    d.solver.relative_residual_tolerance = 1e-7;
+    d.solver.max_iterations = 200;
+    for (MaterialSettings& m : d.materials)
+      if (m.poisson_ratio >= 0.45) m.poisson_ratio = nu;
+    StageReport report;
+    const auto start = std::chrono::steady_clock::now();
+    const PhantomDeformation result = deform_phantom(d, scene.organs, phantom, report, quiet);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::string solve;
+    for (const SolveReport& r : result.solves)
+      solve += std::to_string(r.iterations) + " it., " + (r.converged ? "converged" : "not converged");
+    char time[32];
+    std::snprintf(time, sizeof time, ", %.0f s", seconds);
+    // The tets of each organ's material region, over every body.
+    std::vector<double> rest(result.organs.size(), 0.0), moved(result.organs.size(), 0.0);
+    for (const DeformedBody& body : result.bodies)
+      for (Eigen::Index t = 0; t < body.tets.rows(); ++t) {
+        const auto organ = static_cast<std::size_t>(body.tet_organ[static_cast<std::size_t>(t)]);
+        rest[organ] += body_tet_volume_mm3(body.rest_mm, body.tets, t);
+        moved[organ] += body_tet_volume_mm3(body.deformed_mm, body.tets, t);
+      }
+    for (std::size_t o = 0; o < result.organs.size(); ++o) {
+      if (!phantom.organs[o].surface || result.organs[o].moved_by == "fixed") continue;
+      const TriangleMesh& base = phantom.organs[o].surface->base_mesh();
+      const double before = enclosed_volume_mm3(base.vertices, base.faces);
+      const double after = enclosed_volume_mm3(result.organs[o].surface_mm, base.faces);
+      char tets[32] = "";
+      if (rest[o] > 0.0) std::snprintf(tets, sizeof tets, "%+.2f %%", 100.0 * (moved[o] / rest[o] - 1.0));
+      std::printf("| %s | %s | %+.2f %% | %s | %s%s |\n", to_string(v), result.organs[o].organ.c_str(),
+                  100.0 * (after / before - 1.0), tets, solve.c_str(), time);
+    }
+    std::fflush(stdout);
+  }
+  return 0;
+}
+
+} // namespace
 
 int main(int argc, char** argv) {
-  using namespace phantasm;
   SceneLoadResult loaded;
-  if (argc == 2) loaded = load_scene(argv[1]);
-  if (argc != 2 || !loaded.scene) {
-    std::cerr << (argc == 2 ? format_diagnostics(loaded.problems)
-                            : "usage: solver_extremes_scene SCENE.yaml\n");
+  if (argc == 2 || argc == 4) loaded = load_scene(argv[1]);
+  if ((argc != 2 && argc != 4) || !loaded.scene) {
+    std::cerr << (argc == 2 || argc == 4 ? format_diagnostics(loaded.problems)
+                                         : "usage: solver_extremes_scene SCENE.yaml [volumes NU]\n");
     return 2;
   }
   const Scene& scene = *loaded.scene;
   Reporter quiet = Reporter::silent();
   try {
     const Phantom phantom = simulate(scene, quiet, SimulationStage::anatomy).phantom;
+    if (argc == 4) return organ_volumes(scene, phantom, std::atof(argv[3]), quiet);
     auto solve = [&](const DeformationSettings& settings, StageReport& report) {
       const auto start = std::chrono::steady_clock::now();
       PhantomDeformation d = deform_phantom(settings, scene.organs, phantom, report, quiet);

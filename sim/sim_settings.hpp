@@ -138,8 +138,9 @@ struct DeformationSettings {
   std::vector<ObstacleSettings> obstacles;
   std::vector<CollisionSettings> collisions;
   int load_steps = 1; ///< quasi-static: loads and obstacles applied in this many equal increments
-  /// where the solid bodies' bulk term lives (per_tet, tet_groups, vertex_stars)
-  VolumeFormulation volume = VolumeFormulation::tet;
+  /// where the solid bodies' bulk term lives (per_tet, tet_groups, vertex_stars); groups by
+  /// default: the per-tet term locks as nu -> 1/2 (docs/deformation.md, Volume locking)
+  VolumeFormulation volume = VolumeFormulation::tet_group;
   std::vector<MaterialSettings> materials; ///< the scene's materials section
   /// Per organ in scene order, set by the scene from anatomy.organs.
   std::vector<OrganMechanics> organs;
