@@ -16,18 +16,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
-/// A transformix parameter file that applies a displacement field on a grid, the way
-/// docs/use-with-your-tools.md tells users to.
-std::string transform_parameters(const fs::path& field, const phantasm::ImageGrid& grid) {
-  return "(Transform \"DeformationFieldTransform\")\n(DeformationFieldFileName \"" + field.string() +
-         "\")\n(DeformationFieldInterpolationOrder 1)\n(NumberOfParameters 0)\n" +
-         transformix_grid_lines(grid);
-}
-
 fs::path run_transformix(const fs::path& moving, const fs::path& field, const phantasm::ImageGrid& grid,
                          const fs::path& folder) {
   fs::create_directories(folder);
-  write_text_file(folder / "parameters.txt", transform_parameters(field, grid));
+  write_text_file(folder / "parameters.txt", deformation_field_parameters(field, grid));
   const CommandResult result = run_command({"/usr/bin/transformix", "-in", moving.string(), "-out",
                                             folder.string(), "-tp", (folder / "parameters.txt").string()});
   EXPECT_EQ(result.exit_code, 0) << result.out << result.err;

@@ -6,6 +6,7 @@
 
 #include "core/grid.hpp"
 
+#include <filesystem>
 #include <sstream>
 #include <string>
 
@@ -34,6 +35,14 @@ inline std::string transformix_grid_lines(const ImageGrid& grid) {
     << "(Resampler \"DefaultResampler\")\n(DefaultPixelValue 0)\n"
     << "(ResultImageFormat \"nii.gz\")\n(ResultImagePixelType \"short\")\n(CompressResultImage \"true\")\n";
   return p.str();
+}
+
+/// A transformix parameter file that applies a displacement field on a grid, the way
+/// docs/use-with-your-tools.md tells users to.
+inline std::string deformation_field_parameters(const std::filesystem::path& field, const ImageGrid& grid) {
+  return "(Transform \"DeformationFieldTransform\")\n(DeformationFieldFileName \"" + field.string() +
+         "\")\n(DeformationFieldInterpolationOrder 1)\n(NumberOfParameters 0)\n" +
+         transformix_grid_lines(grid);
 }
 
 } // namespace phantasm::testing
