@@ -34,12 +34,14 @@ namespace {
 /// The shipped scenes' file stems, sorted; sweep files (a `phantasm_sweep` key) are sweeps, not
 /// scenes. colin-head.yaml has its own coarse run with the same checks and coarse base meshes
 /// (tests/atlas/test_colin_head_scene.cpp): its 2000-triangle label surfaces would take minutes
-/// here. The source folder comes from the macro (not k_source_dir): the test list is built
-/// during static initialization.
+/// here; colin-atrophy.yaml has the same anatomy, and its growth loads are checked on a smaller
+/// scene of an atlas region (tests/sim/test_growth_regions.cpp). The source folder comes from the macro (not
+/// k_source_dir): the test list is built during static initialization.
 std::vector<std::string> shipped_scenes() {
   std::vector<std::string> scenes;
   for (const auto& entry : fs::directory_iterator(fs::path(PHANTASM_SOURCE_DIR) / "data-synthetic")) {
-    if (entry.path().extension() != ".yaml" || entry.path().stem() == "colin-head") continue;
+    const std::string stem = entry.path().stem().string();
+    if (entry.path().extension() != ".yaml" || stem == "colin-head" || stem == "colin-atrophy") continue;
     if (YAML::LoadFile(entry.path().string())["phantasm_sweep"]) continue;
     scenes.push_back(entry.path().stem().string());
   }
