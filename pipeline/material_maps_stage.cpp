@@ -88,26 +88,36 @@ std::vector<bool> textured_tissues(const TextureSettings& texture, const std::ve
   return textured;
 }
 
-/// The scan's intensity on the image grid; the scan must cover every voxel of a textured tissue.
+/// The scan's intensity on the image grid; the scan must cover every voxel of a textured tissue,
+/// to within k_scan_margin of its voxels beyond its outermost voxel centres (there the nearest
+/// edge's values): an atlas organ's surface may reach as far past the template's grid as the
+/// atlas's padding (atlas/atlas_labels.hpp).
+constexpr double k_scan_margin = 2.0;
+
 std::vector<float> scan_on_grid(const std::filesystem::path& path, const VoxelizedPhantom& v,
                                 const std::vector<bool>& textured) {
   const NiftiVolume scan = read_nifti(path);
   std::vector<float> values(scan.values.begin(), scan.values.end());
-  const std::vector<float> on_grid = resample_values(v.grid, scan.grid, values, std::nanf(""));
+  std::vector<float> on_grid = resample_values(v.grid, scan.grid, values, std::nanf(""));
   const TissueVolumes& ref = v.reference;
+  const auto nx = static_cast<std::size_t>(v.grid.dims.x()), ny = static_cast<std::size_t>(v.grid.dims.y());
   for (std::size_t voxel = 0; voxel < ref.labels.size(); ++voxel) {
     const int tissue = ref.label_tissues[static_cast<std::size_t>(ref.labels[voxel])];
     if (tissue < 0 || !textured[static_cast<std::size_t>(tissue)] || std::isfinite(on_grid[voxel])) continue;
-    const Eigen::Vector3i ijk(static_cast<int>(voxel % static_cast<std::size_t>(v.grid.dims.x())),
-                              static_cast<int>(voxel / static_cast<std::size_t>(v.grid.dims.x()) %
-                                               static_cast<std::size_t>(v.grid.dims.y())),
-                              static_cast<int>(voxel / (static_cast<std::size_t>(v.grid.dims.x()) *
-                                                        static_cast<std::size_t>(v.grid.dims.y()))));
-    throw InputError(path.string() + ": expected a texture scan whose grid covers the anatomy, found voxel " +
-                     format_vector(ijk.cast<double>()) + " of tissue " +
-                     v.tissues[static_cast<std::size_t>(tissue)] + " (world " +
-                     format_vector(v.grid.world_from_index(ijk.cast<double>())) +
-                     " mm) outside it (texture.scan)");
+    const Eigen::Vector3d ijk(static_cast<double>(voxel % nx), static_cast<double>(voxel / nx % ny),
+                              static_cast<double>(voxel / (nx * ny)));
+    const Eigen::Vector3d world = v.grid.world_from_index(ijk);
+    const Eigen::Vector3d at = scan.grid.index_from_world(world);
+    const Eigen::Vector3d last = (scan.grid.dims.array() - 1).cast<double>();
+    if ((at.array() >= -k_scan_margin).all() && (at.array() <= last.array() + k_scan_margin).all()) {
+      const Eigen::Vector3d clamped = at.cwiseMax(Eigen::Vector3d::Zero()).cwiseMin(last);
+      on_grid[voxel] = value_at(scan.grid, values, scan.grid.world_from_index(clamped), std::nanf(""));
+      continue;
+    }
+    throw InputError(path.string() + ": expected a texture scan whose grid covers the anatomy (to within " +
+                     format_number(k_scan_margin) + " of its voxels), found voxel " + format_vector(ijk) +
+                     " of tissue " + v.tissues[static_cast<std::size_t>(tissue)] + " (world " +
+                     format_vector(world) + " mm) outside it (texture.scan)");
   }
   return on_grid;
 }
