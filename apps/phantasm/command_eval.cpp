@@ -25,7 +25,10 @@ void add_eval_command(CLI::App& app, std::function<int()>& action) {
   CLI::App* command = app.add_subcommand(
       "eval", "Evaluate a registration result against a dataset's ground truth (TRE, Dice, HD95, endpoint "
               "error, Jacobian)");
-  command->add_option("dataset", options->dataset, "Dataset folder written by phantasm run")->required();
+  command
+      ->add_option("dataset", options->dataset,
+                   "Dataset folder written by phantasm run (with --results: a task folder of phantasm task)")
+      ->required();
   auto* field = command->add_option(
       "--field", options->field, "Displacement field on the fixed grid (ITK/elastix convention, 5-D NIfTI)");
   auto* labels =
