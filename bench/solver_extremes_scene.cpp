@@ -5,11 +5,11 @@
 // displacement, with what the first solve reported (converged, relative residual, the Newton
 // step at its result). Exit status 1 when a solve reported converged lies more than 1 % off.
 // Usage: solver_extremes_scene SCENE.yaml
-//        solver_extremes_scene SCENE.yaml volumes NU: every material of Poisson ratio 0.45 or more
-//        set to NU, solved by Newton (to 1e-7) with the bulk term per tet and with the default
-//        formulation; prints each organ's volume change (its patch surface's base mesh, moved with
-//        the tets; and the sum of the tets of its material region), as docs/deformation.md's
-//        volume table.
+//        solver_extremes_scene SCENE.yaml volumes NU [ANATOMY_CACHE [scene]]: every material of
+//        Poisson ratio 0.45 or more set to NU, solved by Newton (to 1e-7; `scene`: the scene's own
+//        solver, to 1e-6) with the bulk term per tet and with the default formulation; prints each organ's
+//        volume change (its patch surface's base mesh, moved with the tets; and the sum of the tets of its
+//        material region), as docs/deformation.md's volume table.
 
 #include "geometry/tet_quality.hpp"
 #include "pipeline/run_pipeline.hpp"
@@ -43,15 +43,19 @@ double body_tet_volume_mm3(const Eigen::MatrixX3d& x, const Eigen::MatrixX4i& te
 }
 
 /// Each organ's volume change at Poisson ratio nu, per tet and with the default bulk term.
-int organ_volumes(const Scene& scene, const Phantom& phantom, double nu, Reporter& quiet) {
+int organ_volumes(const Scene& scene, const Phantom& phantom, double nu, bool scene_solver, Reporter& quiet) {
   std::printf("| bulk term | organ | volume change (surface) | volume change (its tets) | solve |\n"
               "|---|---|---|---|---|\n");
   for (VolumeFormulation v : {VolumeFormulation::tet, DeformationSettings{}.volume}) {
     DeformationSettings d = scene.deformation;
     d.volume = v;
-    d.solver.method = SolverMethod::newton;
-    d.solver.relative_residual_tolerance = 1e-7;
-    d.solver.max_iterations = 200;
+    if (scene_solver) {
+      d.solver.relative_residual_tolerance = 1e-6;
+    } else {
+      d.solver.method = SolverMethod::newton;
+      d.solver.relative_residual_tolerance = 1e-7;
+      d.solver.max_iterations = 200;
+    }
     for (MaterialSettings& m : d.materials)
       if (m.poisson_ratio >= 0.45) m.poisson_ratio = nu;
     StageReport report;
@@ -90,17 +94,19 @@ int organ_volumes(const Scene& scene, const Phantom& phantom, double nu, Reporte
 
 int main(int argc, char** argv) {
   SceneLoadResult loaded;
-  if (argc == 2 || argc == 4) loaded = load_scene(argv[1]);
-  if ((argc != 2 && argc != 4) || !loaded.scene) {
-    std::cerr << (argc == 2 || argc == 4 ? format_diagnostics(loaded.problems)
-                                         : "usage: solver_extremes_scene SCENE.yaml [volumes NU]\n");
+  const bool usage = argc == 2 || (argc >= 4 && argc <= 6 && std::string(argv[2]) == "volumes");
+  if (usage) loaded = load_scene(argv[1]);
+  if (!usage || !loaded.scene) {
+    std::cerr << (usage ? format_diagnostics(loaded.problems)
+                        : "usage: solver_extremes_scene SCENE.yaml [volumes NU [ANATOMY_CACHE [scene]]]\n");
     return 2;
   }
   const Scene& scene = *loaded.scene;
   Reporter quiet = Reporter::silent();
   try {
-    const Phantom phantom = simulate(scene, quiet, SimulationStage::anatomy).phantom;
-    if (argc == 4) return organ_volumes(scene, phantom, std::atof(argv[3]), quiet);
+    const Phantom phantom =
+        simulate(scene, quiet, SimulationStage::anatomy, argc >= 5 ? argv[4] : std::string()).phantom;
+    if (argc >= 4) return organ_volumes(scene, phantom, std::atof(argv[3]), argc == 6, quiet);
     auto solve = [&](const DeformationSettings& settings, StageReport& report) {
       const auto start = std::chrono::steady_clock::now();
       PhantomDeformation d = deform_phantom(settings, scene.organs, phantom, report, quiet);
