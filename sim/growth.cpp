@@ -25,6 +25,9 @@ void apply_growth(const DeformationSettings& deformation, const OrganTable& orga
                   BodyModel& built) {
   built.grown_tets.resize(deformation.loads.size(), 0);
   built.growth_rest_ratio.resize(deformation.loads.size(), 1.0);
+  // No growth reaches no change: the secant's first point (recalibrate_growth).
+  built.growth_previous_ratio.resize(deformation.loads.size(), 1.0);
+  built.growth_previous_reached.resize(deformation.loads.size(), 1.0);
   built.growth_load_of_tet.resize(first_tet + organ_of_tet.size(), -1);
   const std::vector<std::vector<std::int32_t>> region_labels = growth_region_labels(deformation);
   // The load growing each tet: an organ's, then a region's (which takes precedence).
@@ -103,11 +106,13 @@ bool recalibrate_growth(const DeformationSettings& deformation, BodyModel& built
   }
   // Per load, the factor its tets' rest volume is rescaled by (1: it meets its prescription).
   std::vector<double> rescale(loads, 1.0);
+  std::vector<double> previous_ratio = built.growth_rest_ratio, previous_reached(loads, 1.0);
   bool rescaled = false;
   for (std::size_t k = 0; k < loads; ++k) {
     if (!(rest[k] > 0.0)) continue;
     const LoadSettings& load = deformation.loads[k];
     const double reached = deformed[k] / rest[k], wanted = 1.0 + load.volume_change;
+    previous_reached[k] = reached;
     if (std::abs(reached - wanted) <= k_growth_tolerance) continue;
     if (round >= k_growth_rounds || !(reached > 0.0)) {
       throw SettingError(growth_load_key(k, load),
@@ -118,10 +123,23 @@ bool recalibrate_growth(const DeformationSettings& deformation, BodyModel& built
                              " solves (no room to give way: a softer or more compressible tissue around it, "
                              "or a smaller change)");
     }
-    rescale[k] = wanted / reached;
-    built.growth_rest_ratio[k] *= rescale[k];
+    // The reached ratio is about linear in the rest ratio: the secant through the last two
+    // solves (the first through no growth, which reaches no change); where the two coincide,
+    // a step that assumes the rest ratio reached in full.
+    const double ratio = built.growth_rest_ratio[k];
+    double next = ratio * wanted / reached;
+    if (!built.growth_previous_ratio.empty()) {
+      const double slope =
+          (reached - built.growth_previous_reached[k]) / (ratio - built.growth_previous_ratio[k]);
+      if (std::isfinite(slope) && slope > 0.0)
+        next = std::clamp(ratio + (wanted - reached) / slope, 0.5 * ratio, 2.0 * ratio);
+    }
+    rescale[k] = next / ratio;
+    built.growth_rest_ratio[k] = next;
     rescaled = true;
   }
+  built.growth_previous_ratio = previous_ratio;
+  built.growth_previous_reached = previous_reached;
   if (!rescaled) {
     for (std::size_t k = 0; k < loads; ++k)
       if (rest[k] > 0.0)

@@ -34,8 +34,9 @@ inline constexpr int k_growth_rounds = 8;
 /// A growth load prescribes its tets' volume change in the result: after the solve of `round`
 /// (0 first), the volume each load's tets reach in `p_m` (m) against their rest volume before
 /// growth. Where one misses 1 + g by more than k_growth_tolerance, its tets' rest-volume ratio is
-/// rescaled by (1 + g) / reached (the tissue around takes up less than the rest-volume change)
-/// and true says to solve again; else each load's figures go into `report` and false says done.
+/// moved along the secant of the reached ratio through the last two solves (the tissue around
+/// takes up less than the rest-volume change) and true says to solve again; else each load's figures go into
+/// `report` and false says done.
 /// @throws SettingError (deformation.loads[k].organ or .region) when a load still misses after
 ///   k_growth_rounds solves or inverts its tets: no room to give way
 bool recalibrate_growth(const DeformationSettings& deformation, BodyModel& built, const Eigen::MatrixX3d& p_m,
