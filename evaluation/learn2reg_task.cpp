@@ -128,6 +128,34 @@ PairInputs read_pair(const std::filesystem::path& dataset, const std::string& su
   return in;
 }
 
+/// A sweep's varied values per subject, from the participants.tsv a batch writes (participant_id
+/// and a column per variation); none for a dataset without it.
+std::map<std::string, nlohmann::json> sweep_factors(const std::filesystem::path& path) {
+  std::map<std::string, nlohmann::json> factors;
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) return factors;
+  std::istringstream in(whole_file(path, "the sweep's participants table"));
+  auto cells = [](const std::string& line) {
+    std::vector<std::string> fields;
+    std::istringstream text(line);
+    for (std::string cell; std::getline(text, cell, '\t');)
+      fields.push_back(cell.empty() || cell.back() != '\r' ? cell : cell.substr(0, cell.size() - 1));
+    return fields;
+  };
+  std::string line;
+  if (!std::getline(in, line)) return factors;
+  const std::vector<std::string> header = cells(line);
+  while (std::getline(in, line)) {
+    const std::vector<std::string> row = cells(line);
+    if (row.empty() || row.front().rfind("sub-", 0) != 0) continue;
+    nlohmann::json values = nlohmann::json::object();
+    for (std::size_t c = 1; c < row.size() && c < header.size(); ++c)
+      values[header[c]] = row[c];
+    factors[row.front().substr(4)] = values;
+  }
+  return factors;
+}
+
 void require_new_or_empty(const std::filesystem::path& folder, const std::string& option) {
   std::error_code error;
   if (!std::filesystem::exists(folder, error)) return;
@@ -198,6 +226,8 @@ nlohmann::json make_learn2reg_task(const TaskRequest& request) {
           p.layout.dseg(PhantomState::reference).string() +
           ": expected the grid size of every other subject (a Learn2Reg task has one tensor shape)");
 
+  const std::map<std::string, nlohmann::json> factors = sweep_factors(request.dataset / "participants.tsv");
+
   // Everything read: write.
   for (const char* folder : {"imagesTr", "labelsTr", "masksTr", "keypointsTr"})
     std::filesystem::create_directories(task / folder);
@@ -242,16 +272,18 @@ nlohmann::json make_learn2reg_task(const TaskRequest& request) {
       csv += p.point_names[r] + "," + keypoint_row(p.fixed_points[r]) + "," +
              keypoint_row(p.moving_points[r]) + "\n";
     write_file_atomically(truth / ("keypoints_" + stem + ".csv"), csv);
-    truth_pairs.push_back({{"case", p.pair.case_index},
-                           {"subject", p.pair.subject},
-                           {"fixed", file("imagesTr", p.pair.fixed_id, ".nii.gz")},
-                           {"moving", file("imagesTr", p.pair.moving_id, ".nii.gz")},
-                           {"fixed_id", p.pair.fixed_id},
-                           {"moving_id", p.pair.moving_id},
-                           {"result", learn2reg_result_name(p.pair)},
-                           {"displacement", learn2reg_result_name(p.pair)},
-                           {"mask", "mask_" + stem + ".nii.gz"},
-                           {"keypoints", "keypoints_" + stem + ".csv"}});
+    truth_pairs.push_back(
+        {{"case", p.pair.case_index},
+         {"subject", p.pair.subject},
+         {"fixed", file("imagesTr", p.pair.fixed_id, ".nii.gz")},
+         {"moving", file("imagesTr", p.pair.moving_id, ".nii.gz")},
+         {"fixed_id", p.pair.fixed_id},
+         {"moving_id", p.pair.moving_id},
+         {"result", learn2reg_result_name(p.pair)},
+         {"displacement", learn2reg_result_name(p.pair)},
+         {"mask", "mask_" + stem + ".nii.gz"},
+         {"keypoints", "keypoints_" + stem + ".csv"},
+         {"factors", factors.count(p.pair.subject) ? factors.at(p.pair.subject) : nlohmann::json::object()}});
   }
 
   nlohmann::json labels = nlohmann::json::object();

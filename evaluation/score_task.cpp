@@ -92,6 +92,40 @@ double percentile(std::vector<double> values, double fraction) {
   return values[below] + (position - static_cast<double>(below)) * (values[above] - values[below]);
 }
 
+/// The pairs' scores grouped by each varied factor of a sweep (participants.tsv): per factor and
+/// value, the pairs and their mean Dice, TRE, endpoint error and NDV.
+nlohmann::json by_factor(const nlohmann::json& pairs) {
+  std::map<std::string, std::map<std::string, std::vector<const nlohmann::json*>>> groups;
+  for (const auto& pair : pairs)
+    for (const auto& [factor, value] : pair["factors"].items())
+      groups[factor][value.is_string() ? value.get<std::string>() : value.dump()].push_back(&pair);
+  nlohmann::json result = nlohmann::json::object();
+  for (const auto& [factor, values] : groups) {
+    for (const auto& [value, members] : values) {
+      auto mean = [&](const std::function<nlohmann::json(const nlohmann::json&)>& pick) {
+        double sum = 0.0;
+        int count = 0;
+        for (const nlohmann::json* p : members) {
+          const nlohmann::json x = pick(*p);
+          if (x.is_number()) {
+            sum += x.get<double>();
+            ++count;
+          }
+        }
+        return count ? nlohmann::json(sum / count) : nlohmann::json();
+      };
+      result[factor][value] = {
+          {"pairs", members.size()},
+          {"mean_dice", mean([](const nlohmann::json& p) { return p["mean_dice"]; })},
+          {"mean_tre_mm", mean([](const nlohmann::json& p) { return p["tre_mm"]["mean"]; })},
+          {"mean_endpoint_error_mm",
+           mean([](const nlohmann::json& p) { return p["endpoint_error_mm"]["mean"]; })},
+          {"mean_ndv_percent", mean([](const nlohmann::json& p) { return p["ndv"]["percent"]; })}};
+    }
+  }
+  return result;
+}
+
 /// One pair's inputs, read and checked before anything is scored.
 struct PairFiles {
   nlohmann::json entry;
@@ -368,6 +402,7 @@ nlohmann::json score_task(const TaskScoreRequest& request) {
       warnings.push_back(text.str());
     }
     out["warnings"] = pair_warnings;
+    out["factors"] = in.entry.value("factors", nlohmann::json::object());
     scored.push_back(out);
     dice_per_pair.push_back(mean_dice);
     hd95_per_pair.push_back(mean_hd95);
@@ -403,6 +438,7 @@ nlohmann::json score_task(const TaskScoreRequest& request) {
         {"mean_endpoint_error_mm", mean_of(epe_per_pair)},
         {"mean_ndv_percent", mean_of(ndv_per_pair)},
         {"mean_log_jacobian_sd", mean_of(sdlogj_per_pair)}}},
+      {"by_factor", by_factor(scored)},
       {"warnings", warnings},
       {"conventions",
        {{"dice_p30", "30th percentile of the pairs' mean Dice (robustness, as LUMIR reports it)"},

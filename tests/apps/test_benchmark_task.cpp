@@ -330,7 +330,7 @@ TEST(TaskCommand, ASweepGivesOnePairPerSubjectAndEachTruthScoresZero) {
   EXPECT_EQ(subjects.size(), 3u);
   const CommandResult eval =
       run_command({k_phantasm, "eval", (root / "task").string(), "--results", (root / "results").string(),
-                   "--csv", (root / "scores.csv").string(), "-q"});
+                   "--csv", (root / "scores.csv").string(), "--json", (root / "scores.json").string(), "-q"});
   ASSERT_EQ(eval.exit_code, 0) << eval.err;
   std::istringstream csv(read_file(root / "scores.csv"));
   std::string line;
@@ -347,4 +347,13 @@ TEST(TaskCommand, ASweepGivesOnePairPerSubjectAndEachTruthScoresZero) {
     EXPECT_EQ(cells[11], "0") << line; // warnings
   }
   EXPECT_EQ(rows, 3);
+  // Results per varied factor of the sweep (participants.tsv: the seed, 11, 12 and 13).
+  const nlohmann::json scores = nlohmann::json::parse(read_file(root / "scores.json"));
+  const nlohmann::json& seeds = scores["by_factor"]["seed"];
+  ASSERT_EQ(seeds.size(), 3u) << scores["by_factor"];
+  for (const char* seed : {"11", "12", "13"}) {
+    ASSERT_TRUE(seeds.contains(seed)) << seeds;
+    EXPECT_EQ(seeds[seed]["pairs"], 1);
+    EXPECT_EQ(seeds[seed]["mean_endpoint_error_mm"].get<double>(), 0.0);
+  }
 }
