@@ -346,26 +346,21 @@ void check_compositions(const ImageGrid& grid, MotionFields& f) {
   }
   f.inconsistent_voxels = inconsistent;
   f.max_composition_error_mm = worst;
-  long folded = 0;
-  double smallest = 1.0;
-  for (std::size_t v = 0; v < count; ++v) {
-    if (!f.ref_to_def_exact[v]) continue;
-    smallest = std::min(smallest, static_cast<double>(f.jacobian[v]));
-    if (!(f.jacobian[v] > 0.0f)) ++folded;
-  }
-  f.folded_exact_voxels = folded;
-  f.min_exact_jacobian = smallest;
 }
 
 namespace {
 
 /// det(I + grad u) of the field `u` (3 * voxel_count, component-major) at every voxel into
-/// `jacobian`: central differences in index space (one-sided at the border and next to still
-/// tissue, none between two still voxels), mapped to world derivatives by the inverse of the
-/// grid's linear part; 1 at a voxel of still tissue (`still` in the field's state). Returns the
-/// smallest.
+/// `jacobian`: central differences in index space (one-sided at the border, next to still
+/// tissue, and at a voxel of the `exact` mask next to one outside it; none between two still
+/// voxels), mapped to world derivatives by the inverse of the grid's linear part; 1 at a voxel
+/// of still tissue (`still` in the field's state). Inside the exact mask the determinant thus
+/// reads exact values only: a neighbour outside holds the extension or a composition that missed,
+/// and a central difference across it made the head's deformed grid report thousands of folds
+/// that no tet had. Returns the smallest.
 double jacobian_determinants(const ImageGrid& grid, const std::vector<float>& u, const StillTissue& still,
-                             bool deformed, std::vector<float>& jacobian) {
+                             bool deformed, const std::vector<std::uint8_t>& exact,
+                             std::vector<float>& jacobian) {
   const auto count = static_cast<std::size_t>(grid.voxel_count());
   const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
   auto at = [&](int i, int j, int k) { return voxel_index(grid.dims, i, j, k); };
@@ -387,9 +382,14 @@ double jacobian_determinants(const ImageGrid& grid, const std::vector<float>& u,
           int lo[3] = {i, j, k}, hi[3] = {i, j, k};
           lo[a] = std::max(0, index[a] - 1);
           hi[a] = std::min(size[a] - 1, index[a] + 1);
-          // Not across into still tissue: the motion jumps there.
-          if (still.at(at(lo[0], lo[1], lo[2]), deformed)) lo[a] = index[a];
-          if (still.at(at(hi[0], hi[1], hi[2]), deformed)) hi[a] = index[a];
+          // Not across into still tissue (the motion jumps there), nor out of the exact mask.
+          const bool in_mask = exact[at(i, j, k)] != 0;
+          auto leave_out = [&](const int(&n)[3]) {
+            const std::size_t w = at(n[0], n[1], n[2]);
+            return still.at(w, deformed) || (in_mask && !exact[w]);
+          };
+          if (leave_out(lo)) lo[a] = index[a];
+          if (leave_out(hi)) hi[a] = index[a];
           const double span = hi[a] - lo[a];
           for (int c = 0; c < 3; ++c) {
             const auto base = static_cast<std::size_t>(c) * count;
@@ -492,8 +492,6 @@ MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& 
       }
     }
   }
-  f.min_jacobian = jacobian_determinants(grid, f.ref_to_def, still, false, f.jacobian);
-  jacobian_determinants(grid, f.def_to_ref, still, true, f.def_to_ref_jacobian);
   double max_displacement = 0.0;
 #pragma omp parallel for schedule(static) reduction(max : max_displacement)
   for (std::size_t v = 0; v < count; ++v) {
@@ -504,7 +502,23 @@ MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& 
   throw_if_cancelled();
   check_compositions(grid, f);
   throw_if_cancelled();
+  exact_jacobians(grid, still, f);
+  throw_if_cancelled();
   return f;
+}
+
+void exact_jacobians(const ImageGrid& grid, const StillTissue& still, MotionFields& f) {
+  f.min_jacobian = jacobian_determinants(grid, f.ref_to_def, still, false, f.ref_to_def_exact, f.jacobian);
+  jacobian_determinants(grid, f.def_to_ref, still, true, f.def_to_ref_exact, f.def_to_ref_jacobian);
+  long folded = 0;
+  double smallest = std::numeric_limits<double>::infinity();
+  for (std::size_t v = 0; v < f.ref_to_def_exact.size(); ++v) {
+    if (!f.ref_to_def_exact[v]) continue;
+    smallest = std::min(smallest, static_cast<double>(f.jacobian[v]));
+    if (!(f.jacobian[v] > 0.0f)) ++folded;
+  }
+  f.folded_exact_voxels = folded;
+  f.min_exact_jacobian = std::isfinite(smallest) ? smallest : 1.0; // an empty mask: the identity's
 }
 
 } // namespace phantasm

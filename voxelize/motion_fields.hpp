@@ -129,9 +129,14 @@ constexpr double composition_tolerance_voxels = 0.1;
 
 /// The masks of `f` narrowed to the voxels whose two-way composition is identity within
 /// composition_tolerance_voxels: ref_to_def exact at x only when def_to_ref (trilinear) at
-/// x + u_ref_to_def(x) returns to x, and the same the other way. Then the Jacobian inside the
-/// ref_to_def mask (min_exact_jacobian, folded_exact_voxels): the Jacobian map is exact only
-/// where that mask is. Called by compute_motion_fields.
+/// x + u_ref_to_def(x) returns to x, and the same the other way. Called by
+/// compute_motion_fields.
 void check_compositions(const ImageGrid& grid, MotionFields& f);
+
+/// Both fields' Jacobian determinants (jacobian, def_to_ref_jacobian), read inside each exact
+/// mask from exact values only (one-sided differences where a neighbour lies outside the mask or
+/// in still tissue), with min_jacobian, and inside the ref_to_def mask min_exact_jacobian and
+/// folded_exact_voxels. Called by compute_motion_fields after check_compositions.
+void exact_jacobians(const ImageGrid& grid, const StillTissue& still, MotionFields& f);
 
 } // namespace phantasm

@@ -320,6 +320,22 @@ TEST(MotionFields, StillOrganLabelsAreTheFixedAndRigidOrgans) {
   EXPECT_EQ(still_organ_labels(deformation), (std::vector<std::uint8_t>{0, 1, 0, 1, 0, 0}));
 }
 
+namespace {
+
+/// Fields of `count` voxels that move nothing, every voxel exact, Jacobians 1.
+MotionFields still_fields(std::size_t count) {
+  MotionFields f;
+  f.ref_to_def.assign(3 * count, 0.0f);
+  f.def_to_ref.assign(3 * count, 0.0f);
+  f.ref_to_def_exact.assign(count, 1);
+  f.def_to_ref_exact.assign(count, 1);
+  f.jacobian.assign(count, 1.0f);
+  f.def_to_ref_jacobian.assign(count, 1.0f);
+  return f;
+}
+
+} // namespace
+
 // The composition check: where neither field moves a voxel, both compositions are the identity
 // and the voxel stays in both masks; a voxel one field moves and the other does not is left out
 // of both (each composition misses identity by the displacement), and only it.
@@ -328,13 +344,7 @@ TEST(MotionFields, CompositionsLeaveOutTheVoxelOneFieldMovesAndKeepTheStillOnes)
   grid.dims = {8, 8, 8};
   grid.spacing_mm = Eigen::Vector3d::Ones();
   const auto count = static_cast<std::size_t>(grid.voxel_count());
-  MotionFields f;
-  f.ref_to_def.assign(3 * count, 0.0f);
-  f.def_to_ref.assign(3 * count, 0.0f);
-  f.ref_to_def_exact.assign(count, 1);
-  f.def_to_ref_exact.assign(count, 1);
-  f.jacobian.assign(count, 1.0f);
-  f.def_to_ref_jacobian.assign(count, 1.0f);
+  MotionFields f = still_fields(count);
   const std::size_t v = voxel_index(grid.dims, 3, 4, 5);
   f.def_to_ref[v] = 2.0f; // x component: def_to_ref moves v by 2 mm, ref_to_def leaves it
   check_compositions(grid, f);
@@ -347,4 +357,36 @@ TEST(MotionFields, CompositionsLeaveOutTheVoxelOneFieldMovesAndKeepTheStillOnes)
   EXPECT_EQ(kept, 2 * count - 2);
   EXPECT_EQ(f.max_composition_error_mm, 0.0);
   EXPECT_EQ(f.folded_exact_voxels, 0);
+}
+
+// Inside an exact mask the Jacobian reads exact values only: a linear field u = (3 x, 0, 0)
+// (det 4 everywhere) with a plane of voxels left out of the mask holding something else (zero,
+// as the extension or a missed composition can). A central difference across that plane gives
+// its neighbours det -3.5, a fold no tissue has; the one-sided differences give 4.
+TEST(MotionFields, JacobiansInsideTheExactMaskReadNoValueOutsideIt) {
+  ImageGrid grid;
+  grid.dims = {10, 6, 6};
+  grid.spacing_mm = Eigen::Vector3d::Ones();
+  const auto count = static_cast<std::size_t>(grid.voxel_count());
+  MotionFields f = still_fields(count);
+  for (int k = 0; k < 6; ++k)
+    for (int j = 0; j < 6; ++j)
+      for (int i = 0; i < 10; ++i) {
+        const std::size_t v = voxel_index(grid.dims, i, j, k);
+        const bool outside = i == 5;
+        f.ref_to_def[v] = outside ? 0.0f : 3.0f * static_cast<float>(i);
+        f.def_to_ref[v] = outside ? 0.0f : 3.0f * static_cast<float>(i);
+        f.ref_to_def_exact[v] = outside ? 0 : 1;
+        f.def_to_ref_exact[v] = outside ? 0 : 1;
+      }
+  exact_jacobians(grid, StillTissue{}, f);
+  for (std::size_t v = 0; v < count; ++v) {
+    if (!f.ref_to_def_exact[v]) continue;
+    EXPECT_NEAR(f.jacobian[v], 4.0f, 1e-5f) << v;
+    EXPECT_NEAR(f.def_to_ref_jacobian[v], 4.0f, 1e-5f) << v;
+  }
+  EXPECT_EQ(f.folded_exact_voxels, 0);
+  EXPECT_NEAR(f.min_exact_jacobian, 4.0, 1e-5);
+  // Outside the mask nothing is promised: the plane's own determinant reads across it.
+  EXPECT_LT(f.min_jacobian, 4.0);
 }
