@@ -240,11 +240,11 @@ void write_landmarks(hid_t file, const std::string& path, const std::filesystem:
     names.push_back(fields[0]);
     organs.push_back(fields[1]);
     for (int c = 2; c < 5; ++c) {
-      const std::string& field = fields[static_cast<std::size_t>(c)];
+      const std::string& number_text = fields[static_cast<std::size_t>(c)];
       char* end = nullptr;
       errno = 0;
-      const double value = std::strtod(field.c_str(), &end);
-      if (field.empty() || *end != '\0' || errno != 0 || !std::isfinite(value)) {
+      const double value = std::strtod(number_text.c_str(), &end);
+      if (number_text.empty() || *end != '\0' || errno != 0 || !std::isfinite(value)) {
         throw InputError(csv.string() + ":" + std::to_string(number) +
                          ": expected three finite numbers (mm) after the name and organ, found '" + line +
                          "'");

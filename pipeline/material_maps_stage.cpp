@@ -5,6 +5,7 @@
 #include "core/format.hpp"
 #include "core/settings_declaration.hpp"
 #include "io/nifti_file.hpp"
+#include "io/shape_files.hpp"
 #include "voxelize/material_maps.hpp"
 
 #include <algorithm>

@@ -4,7 +4,6 @@
 #pragma once
 
 #include "core/stage_report.hpp"
-#include "io/shape_files.hpp"
 #include "scene/scene.hpp"
 #include "voxelize/voxelized_phantom.hpp"
 
@@ -13,6 +12,8 @@
 #include <vector>
 
 namespace phantasm {
+
+struct AtlasLabelVolume; // io/shape_files.hpp: the stage's callers hold the atlases, io stays private
 
 /// The dseg labels of the scene's tissue regions, in scene order: after the organs and the gap.
 std::int32_t first_region_label(const Scene& scene);
