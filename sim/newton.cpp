@@ -15,6 +15,10 @@
 #include <random>
 #include <stdexcept>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 namespace phantasm {
 namespace {
 
@@ -196,7 +200,72 @@ struct FreeRows {
   }
 };
 
-using HessianFactor = Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower>;
+/// Free coordinates from which the supernodal factor is used.
+constexpr Eigen::Index k_supernodal_rows = 20000;
+
+/// OpenMP's thread count of the calling thread set to one while it lives: CHOLMOD's supernodal
+/// factor calls BLAS, whose OpenMP build takes the thread count from there. On one thread the
+/// factor is the same bits on any machine, and a busy second core (a test or a second subject
+/// beside the solve) cannot stall it: the Colin head's 27 000-row Hessian factored in 2-3 s on
+/// one thread and in 17 s on two with the other core loaded.
+class SingleThreadedBlas {
+public:
+#ifdef _OPENMP
+  SingleThreadedBlas() : threads_(omp_get_max_threads()) {
+    omp_set_num_threads(1);
+  }
+  ~SingleThreadedBlas() {
+    omp_set_num_threads(threads_);
+  }
+
+private:
+  int threads_;
+#endif
+public:
+  SingleThreadedBlas(const SingleThreadedBlas&) = delete;
+  SingleThreadedBlas& operator=(const SingleThreadedBlas&) = delete;
+};
+
+/// CHOLMOD's LL^T factor of the projected Hessian. Simplicial below k_supernodal_rows: the
+/// supernodal factor's many small BLAS calls cost more than they save at the sizes Newton is the
+/// reference for (the bar: 35 vs 57 ms per iteration, bench_sim); above, its dense blocks win by
+/// far (the Colin head's body, 27 000 rows, 1.1e7 entries in the factor: 9.4 s of processor time
+/// simplicial, 1.5 s supernodal on one thread). The symbolic analysis (fill-reducing ordering,
+/// elimination tree) is kept while the Hessian's pattern stays the same, as it does between
+/// iterations unless contacts come or go.
+class HessianFactor {
+public:
+  explicit HessianFactor(const FreeRows& free) {
+    cholmod_.setMode(3 * free.count() >= k_supernodal_rows ? Eigen::CholmodSupernodalLLt
+                                                           : Eigen::CholmodSimplicialLLt);
+  }
+  /// Factors H + shift I; false when it is not positive definite.
+  bool factorize(const Eigen::SparseMatrix<double>& H, double shift) {
+    const SingleThreadedBlas one_thread;
+    if (!same_pattern(H)) {
+      cholmod_.analyzePattern(H);
+      outer_.assign(H.outerIndexPtr(), H.outerIndexPtr() + H.outerSize() + 1);
+      inner_.assign(H.innerIndexPtr(), H.innerIndexPtr() + H.nonZeros());
+    }
+    cholmod_.setShift(shift);
+    cholmod_.factorize(H);
+    return cholmod_.info() == Eigen::Success;
+  }
+  Eigen::VectorXd solve(const Eigen::VectorXd& b) const {
+    const SingleThreadedBlas one_thread;
+    return cholmod_.solve(b);
+  }
+
+private:
+  bool same_pattern(const Eigen::SparseMatrix<double>& H) const {
+    return H.isCompressed() && outer_.size() == static_cast<std::size_t>(H.outerSize() + 1) &&
+           inner_.size() == static_cast<std::size_t>(H.nonZeros()) &&
+           std::equal(outer_.begin(), outer_.end(), H.outerIndexPtr()) &&
+           std::equal(inner_.begin(), inner_.end(), H.innerIndexPtr());
+  }
+  Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> cholmod_;
+  std::vector<int> outer_, inner_; // the analysed pattern
+};
 
 /// The largest row of a flattened direction (m).
 double largest_step(const Eigen::VectorXd& direction) {
@@ -217,9 +286,7 @@ Eigen::VectorXd newton_direction(const ElasticModel& model, const StepInertia& i
   // A PSD Hessian can be singular (a quasi-static model held only in part): shift until it factors.
   double shift = 0.0;
   for (int attempt = 0; attempt < 30; ++attempt) {
-    factor.setShift(shift);
-    factor.compute(H);
-    if (factor.info() == Eigen::Success) {
+    if (factor.factorize(H, shift)) {
       Eigen::VectorXd direction = -factor.solve(g);
       if (direction.allFinite()) return direction;
     }
@@ -313,10 +380,7 @@ SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, 
     observer_seconds += std::chrono::duration<double>(Clock::now() - before).count();
   }
   report.stopped_by = "max_iterations";
-  HessianFactor factor;
-  // Simplicial: the supernodal factor's many small BLAS calls cost more than they save at the
-  // sizes Newton is the reference for (the bar: 35 vs 57 ms per iteration, bench_sim).
-  factor.setMode(Eigen::CholmodSimplicialLLt);
+  HessianFactor factor(free);
   std::vector<Eigen::Triplet<double>> entries;
   Eigen::SparseMatrix<double> H;
   Eigen::MatrixX3d gradient = model_gradient(model, inertia, p);
@@ -450,8 +514,7 @@ SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, 
 
 double newton_step_length(const ElasticModel& model, const StepInertia& inertia, const Eigen::MatrixX3d& p) {
   const FreeRows free(model);
-  HessianFactor factor;
-  factor.setMode(Eigen::CholmodSimplicialLLt);
+  HessianFactor factor(free);
   std::vector<Eigen::Triplet<double>> entries;
   Eigen::SparseMatrix<double> H;
   const Eigen::VectorXd g = free.gather(model_gradient(model, inertia, p));
