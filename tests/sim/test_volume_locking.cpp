@@ -1,9 +1,10 @@
-// Volume locking of the default bulk term (#44): the extremes table's cantilever
+// Volume locking of the bulk term (#44): the extremes table's cantilever
 // (bench/solver_extremes.hpp: 20 x 20 x 100 mm, E = 100 kPa, under its weight, its x-min end held)
 // solved by Newton to a relative residual of 1e-7 as nu goes from 0.45 to 0.499, on its 4 x 4 x 20
-// cells and on 6 x 6 x 30. The scene default (deformation.volume) must keep the tip within 5 %
-// and must not make the coarse bar softer than the refined one; the per-tet term, still
-// reachable as `volume: per_tet`, loses more than 10 % (docs/deformation.md, Volume locking).
+// cells and on 6 x 6 x 30. The bulk term on groups of tets (`volume: tet_groups`) must keep the tip
+// within 5 % and must not make the coarse bar softer than the refined one; the per-tet term, the
+// default (groups let single tets invert on a coarse head), loses more than 10 %
+// (docs/deformation.md, Volume locking).
 
 #include "bench/solver_extremes.hpp"
 
@@ -30,14 +31,15 @@ double tip_mm(int cells, double nu, std::optional<VolumeFormulation> volume = st
 
 } // namespace
 
-TEST(VolumeLocking, TheDefaultBulkTermIsOnGroupsOfTetsAndPerTetStaysReachable) {
-  EXPECT_EQ(DeformationSettings{}.volume, VolumeFormulation::tet_group);
-  EXPECT_STREQ(to_string(VolumeFormulation::tet), "per_tet");
+TEST(VolumeLocking, TheDefaultBulkTermIsPerTetAndGroupsAreReachable) {
+  EXPECT_EQ(DeformationSettings{}.volume, VolumeFormulation::tet);
+  EXPECT_STREQ(to_string(VolumeFormulation::tet_group), "tet_groups");
 }
 
-TEST(VolumeLocking, TheDefaultKeepsTheCantileversTipAsPoissonRatioNearsOneHalf) {
-  const double coarse = tip_mm(4, 0.45), coarse_incompressible = tip_mm(4, 0.499);
-  const double refined = tip_mm(6, 0.45), refined_incompressible = tip_mm(6, 0.499);
+TEST(VolumeLocking, TetGroupsKeepTheCantileversTipAsPoissonRatioNearsOneHalf) {
+  constexpr VolumeFormulation groups = VolumeFormulation::tet_group;
+  const double coarse = tip_mm(4, 0.45, groups), coarse_incompressible = tip_mm(4, 0.499, groups);
+  const double refined = tip_mm(6, 0.45, groups), refined_incompressible = tip_mm(6, 0.499, groups);
   SCOPED_TRACE("tips at nu 0.45 / 0.499: coarse " + std::to_string(coarse) + " / " +
                std::to_string(coarse_incompressible) + " mm, refined " + std::to_string(refined) + " / " +
                std::to_string(refined_incompressible) + " mm");
@@ -48,7 +50,7 @@ TEST(VolumeLocking, TheDefaultKeepsTheCantileversTipAsPoissonRatioNearsOneHalf) 
   // Linear tets converge from the stiff side: the coarse bar may not bend more than the refined.
   EXPECT_LE(coarse, refined);
   EXPECT_LE(coarse_incompressible, refined_incompressible);
-  // What the default avoids: per tet the same coarse bar locks.
+  // What groups avoid: per tet the same coarse bar locks.
   const double per_tet = tip_mm(4, 0.45, VolumeFormulation::tet);
   const double per_tet_incompressible = tip_mm(4, 0.499, VolumeFormulation::tet);
   EXPECT_LT(per_tet_incompressible, 0.9 * per_tet);
