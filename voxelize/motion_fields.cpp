@@ -419,16 +419,21 @@ std::vector<std::uint8_t> still_organ_labels(const PhantomDeformation& deformati
   return still;
 }
 
+MotionFields identity_motion_fields(std::size_t voxel_count) {
+  MotionFields f;
+  f.ref_to_def.assign(3 * voxel_count, 0.0f);
+  f.def_to_ref.assign(3 * voxel_count, 0.0f);
+  f.ref_to_def_exact.assign(voxel_count, 1);
+  f.def_to_ref_exact.assign(voxel_count, 1);
+  f.jacobian.assign(voxel_count, 1.0f);
+  f.def_to_ref_jacobian.assign(voxel_count, 1.0f);
+  return f;
+}
+
 MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& map,
                                    const StillTissue& still) {
   const auto count = static_cast<std::size_t>(grid.voxel_count());
-  MotionFields f;
-  f.ref_to_def.assign(3 * count, 0.0f);
-  f.def_to_ref.assign(3 * count, 0.0f);
-  f.ref_to_def_exact.assign(count, 1);
-  f.def_to_ref_exact.assign(count, 1);
-  f.jacobian.assign(count, 1.0f);
-  f.def_to_ref_jacobian.assign(count, 1.0f);
+  MotionFields f = identity_motion_fields(count);
   const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
   auto at = [&](int i, int j, int k) { return voxel_index(grid.dims, i, j, k); };
   if (map.bodies().empty()) return f;

@@ -119,6 +119,10 @@ struct StillTissue {
 /// `deformation` leaves where they are (OrganDeformation::moved_by "fixed" or "rigid").
 std::vector<std::uint8_t> still_organ_labels(const PhantomDeformation& deformation);
 
+/// Fields of `voxel_count` voxels that move nothing: zero displacements, every voxel exact,
+/// Jacobians 1.
+MotionFields identity_motion_fields(std::size_t voxel_count);
+
 /// The fields of `map` on every voxel of `grid`, with the voxels of `still` held at zero.
 MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& map,
                                    const StillTissue& still = {});

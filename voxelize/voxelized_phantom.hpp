@@ -152,8 +152,10 @@ struct MotionFields {
   std::vector<float> ref_to_def; ///< 3 * voxel_count: component-major (all x, then all y, then all z)
   std::vector<float> def_to_ref;
   std::vector<std::uint8_t> ref_to_def_exact, def_to_ref_exact;
-  std::vector<float> jacobian;            ///< det(I + grad u) of ref_to_def, central differences
-  std::vector<float> def_to_ref_jacobian; ///< det(I + grad u) of def_to_ref, central differences
+  /// det(I + grad u) of ref_to_def, central differences (one-sided inside the exact mask next to
+  /// a voxel outside it, and next to still tissue)
+  std::vector<float> jacobian;
+  std::vector<float> def_to_ref_jacobian; ///< det(I + grad u) of def_to_ref, likewise
   double max_displacement_mm = 0.0;
   double min_jacobian = 1.0;
   /// voxels the maps mark exact whose two-way composition misses identity by more than

@@ -320,22 +320,6 @@ TEST(MotionFields, StillOrganLabelsAreTheFixedAndRigidOrgans) {
   EXPECT_EQ(still_organ_labels(deformation), (std::vector<std::uint8_t>{0, 1, 0, 1, 0, 0}));
 }
 
-namespace {
-
-/// Fields of `count` voxels that move nothing, every voxel exact, Jacobians 1.
-MotionFields still_fields(std::size_t count) {
-  MotionFields f;
-  f.ref_to_def.assign(3 * count, 0.0f);
-  f.def_to_ref.assign(3 * count, 0.0f);
-  f.ref_to_def_exact.assign(count, 1);
-  f.def_to_ref_exact.assign(count, 1);
-  f.jacobian.assign(count, 1.0f);
-  f.def_to_ref_jacobian.assign(count, 1.0f);
-  return f;
-}
-
-} // namespace
-
 // The composition check: where neither field moves a voxel, both compositions are the identity
 // and the voxel stays in both masks; a voxel one field moves and the other does not is left out
 // of both (each composition misses identity by the displacement), and only it.
@@ -344,7 +328,7 @@ TEST(MotionFields, CompositionsLeaveOutTheVoxelOneFieldMovesAndKeepTheStillOnes)
   grid.dims = {8, 8, 8};
   grid.spacing_mm = Eigen::Vector3d::Ones();
   const auto count = static_cast<std::size_t>(grid.voxel_count());
-  MotionFields f = still_fields(count);
+  MotionFields f = identity_motion_fields(count);
   const std::size_t v = voxel_index(grid.dims, 3, 4, 5);
   f.def_to_ref[v] = 2.0f; // x component: def_to_ref moves v by 2 mm, ref_to_def leaves it
   check_compositions(grid, f);
@@ -368,7 +352,7 @@ TEST(MotionFields, JacobiansInsideTheExactMaskReadNoValueOutsideIt) {
   grid.dims = {10, 6, 6};
   grid.spacing_mm = Eigen::Vector3d::Ones();
   const auto count = static_cast<std::size_t>(grid.voxel_count());
-  MotionFields f = still_fields(count);
+  MotionFields f = identity_motion_fields(count);
   for (int k = 0; k < 6; ++k)
     for (int j = 0; j < 6; ++j)
       for (int i = 0; i < 10; ++i) {
