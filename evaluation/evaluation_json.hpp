@@ -17,6 +17,10 @@
 namespace phantasm {
 
 inline nlohmann::json summary_json(const Summary& s) {
+  // An empty set has no statistics: null, not the zeros of an empty Summary (a task pair without
+  // keypoints would otherwise score a TRE of 0).
+  if (s.count == 0)
+    return {{"count", 0}, {"mean", nullptr}, {"sd", nullptr}, {"p95", nullptr}, {"max", nullptr}};
   return {{"count", s.count}, {"mean", s.mean}, {"sd", s.sd}, {"p95", s.p95}, {"max", s.max}};
 }
 

@@ -101,6 +101,14 @@ DisplacementField read_field(const std::filesystem::path& path, FieldConvention 
     throw InputError(path.string() + ": expected a field on the fixed grid (" + dims_text(fixed.dims) +
                      " voxels, 3 components), found " + dims_text(volume.grid.dims) + " voxels");
   }
+  // The world-coordinate conventions (ITK, MRtrix3) read their vectors in the file's space: one on
+  // another grid of the same size is another field. A Learn2Reg file's vectors are voxels of the
+  // fixed grid whatever its header says (the challenge's files carry an identity or none).
+  if (convention != FieldConvention::learn2reg &&
+      (volume.grid.world_from_voxel - fixed.world_from_voxel).cwiseAbs().maxCoeff() > 1e-3) {
+    throw InputError(path.string() + ": expected a field on the fixed grid's voxel-to-world matrix (" +
+                     to_string(convention) + " vectors are in world mm), found another one");
+  }
   if (is_integer_datatype(volume.datatype)) {
     throw InputError(path.string() + ": expected float32 or float64 displacements, found NIfTI datatype " +
                      std::to_string(volume.datatype) +

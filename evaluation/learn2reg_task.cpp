@@ -11,6 +11,8 @@
 #include "io/json_file.hpp"
 #include "io/nifti_file.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cstdio>
 #include <fstream>
 #include <map>
@@ -196,8 +198,18 @@ nlohmann::json make_learn2reg_task(const TaskRequest& request) {
                      std::to_string(subjects.size()));
   const std::filesystem::path task = std::filesystem::absolute(request.task).lexically_normal();
   const std::filesystem::path truth = std::filesystem::absolute(request.truth).lexically_normal();
-  const std::string task_text = task.string() + "/", truth_text = truth.string() + "/";
-  if (truth_text.rfind(task_text, 0) == 0 || task_text.rfind(truth_text, 0) == 0) {
+  // Compared by path components ("out/" and "out" are one folder; "out2" is not inside "out").
+  auto components = [](const std::filesystem::path& p) {
+    std::vector<std::filesystem::path> parts;
+    for (const std::filesystem::path& part : std::filesystem::absolute(p).lexically_normal())
+      if (!part.empty()) parts.push_back(part);
+    return parts;
+  };
+  const std::vector<std::filesystem::path> task_parts = components(request.task),
+                                           truth_parts = components(request.truth);
+  const std::size_t common = std::min(task_parts.size(), truth_parts.size());
+  if (std::equal(task_parts.begin(), task_parts.begin() + static_cast<std::ptrdiff_t>(common),
+                 truth_parts.begin())) {
     throw InputError(
         "--truth: expected a folder apart from the task (a method must not see the truth), found " +
         request.truth.string() + " and " + request.task.string());

@@ -407,7 +407,7 @@ nlohmann::json score_task(const TaskScoreRequest& request) {
     dice_per_pair.push_back(mean_dice);
     hd95_per_pair.push_back(mean_hd95);
     tre_per_pair.push_back(tre.empty() ? std::nan("") : summarize(tre).mean);
-    epe_per_pair.push_back(epe_summary.mean);
+    epe_per_pair.push_back(epe.empty() ? std::nan("") : epe_summary.mean);
     ndv_per_pair.push_back(ndv.ndv_percent);
     sdlogj_per_pair.push_back(j.log_jacobian_sd);
   }

@@ -38,19 +38,28 @@ void add_eval_command(CLI::App& app, std::function<int()>& action) {
   field->excludes(labels)->excludes(identity);
   labels->excludes(identity);
   command->add_option("--json", options->json, "Write the evaluation as JSON to this file");
-  command->add_option("--subject", options->subject, "Subject label when the dataset holds several");
-  command->add_option("--fixed", options->fixed, "Session of the fixed image: ref (default) or def")
-      ->check(CLI::IsMember({"ref", "def"}));
+  auto* subject =
+      command->add_option("--subject", options->subject, "Subject label when the dataset holds several");
+  auto* fixed =
+      command->add_option("--fixed", options->fixed, "Session of the fixed image: ref (default) or def")
+          ->check(CLI::IsMember({"ref", "def"}));
   auto* results = command->add_option("--results", options->results,
                                       "Score a task (the positional folder, made by phantasm task): one "
                                       "disp_<fixed>_<moving>.nii.gz per pair");
-  results->excludes(field)->excludes(labels)->excludes(identity);
-  command->add_option("--truth", options->truth,
-                      "The task's ground-truth folder (default: TASK-truth beside it)");
-  command->add_option("--convention", options->convention,
-                      "Convention of the result fields: learn2reg (default), itk, mrtrix-deformation, "
-                      "mrtrix-displacement");
-  command->add_option("--csv", options->csv, "Write a task's scores per pair as CSV to this file");
+  results->excludes(field)->excludes(labels)->excludes(identity)->excludes(subject)->excludes(fixed);
+  auto* truth = command->add_option("--truth", options->truth,
+                                    "The task's ground-truth folder (default: TASK-truth beside it)");
+  auto* convention =
+      command->add_option("--convention", options->convention,
+                          "Convention of the result fields: learn2reg (default), itk, mrtrix-deformation, "
+                          "mrtrix-displacement");
+  auto* csv =
+      command->add_option("--csv", options->csv, "Write a task's scores per pair as CSV to this file");
+  // A task's options mean nothing without --results (and a subject's nothing with it): refused,
+  // not ignored.
+  truth->needs(results);
+  convention->needs(results);
+  csv->needs(results);
   command->add_flag("-q,--quiet", options->quiet, "Do not print the table");
   // For tests that interrupt an evaluation while it reads; hidden from --help.
   command->add_option("--read-delay-ms", options->read_delay_ms)->group("")->check(CLI::NonNegativeNumber);

@@ -106,10 +106,10 @@ TEST(TaskCommand, ExportsALearn2RegTaskThatALoaderWrittenFromTheFormatReads) {
   EXPECT_GE(pair["keypoints"].get<int>(), 10);
   // Read as Learn2Reg reads a result, the truth carries the keypoints onto their moving
   // positions (within 0.05 voxel, trilinear interpolation) though they moved, and warps the
-  // moving labels at least as close to the fixed ones as they were.
+  // moving labels closer to the fixed ones than they were.
   EXPECT_LT(pair["tre_truth_voxels_max"].get<double>(), 0.05);
   EXPECT_GT(pair["tre_identity_voxels_max"].get<double>(), 0.1);
-  EXPECT_GE(pair["dice_truth"].get<double>(), pair["dice_identity"].get<double>());
+  EXPECT_GT(pair["dice_truth"].get<double>(), pair["dice_identity"].get<double>());
 
   // A task into a folder that holds files, or of a contrast the dataset lacks: exit 2, nothing made.
   const fs::path other = fresh_folder("benchmark-task-bad");
@@ -125,6 +125,20 @@ TEST(TaskCommand, ExportsALearn2RegTaskThatALoaderWrittenFromTheFormatReads) {
       << contrast.err;
   EXPECT_FALSE(fs::exists(other / "t"));
   EXPECT_FALSE(fs::exists(other / "t-truth"));
+  // The truth inside the task, named with a trailing slash: refused all the same.
+  const CommandResult inside =
+      run_command({k_phantasm, "task", m.dataset.string(), "-o", (other / "s").string() + "/", "--truth",
+                   (other / "s" / "truth").string()});
+  EXPECT_EQ(inside.exit_code, 2);
+  EXPECT_NE(inside.err.find("--truth: expected a folder apart from the task"), std::string::npos)
+      << inside.err;
+  EXPECT_FALSE(fs::exists(other / "s"));
+  // A task's option without --results is refused, not ignored.
+  const CommandResult alone = run_command(
+      {k_phantasm, "eval", m.dataset.string(), "--identity", "--csv", (other / "scores.csv").string()});
+  EXPECT_EQ(alone.exit_code, 2) << alone.err;
+  EXPECT_NE(alone.err.find("--csv requires --results"), std::string::npos) << alone.err;
+  EXPECT_FALSE(fs::exists(other / "scores.csv"));
 }
 
 TEST(TaskCommand, PairsCanCrossContrasts) {
@@ -218,6 +232,27 @@ TEST(EvalTask, BadResultsAreRefusedNamingTheFileWithNothingWritten) {
     EXPECT_EQ(raw_library_marker(run.err), "") << run.err;
     EXPECT_FALSE(fs::exists(json)) << folder;
     EXPECT_FALSE(fs::exists(csv)) << folder;
+  }
+  // An ITK field of the right size on another voxel-to-world matrix (shifted 10 mm): its vectors
+  // are world mm of another space, refused naming the file and nothing written.
+  {
+    phantasm::ImageGrid shifted = fixed_grid();
+    shifted.world_from_voxel(0, 3) += 10.0;
+    const phantasm::DisplacementField truth =
+        phantasm::read_field(m.truth / k_result, phantasm::FieldConvention::learn2reg, fixed_grid());
+    fs::create_directories(root / "affine");
+    phantasm::write_field(root / "affine" / k_result,
+                          phantasm::field_from_ras(shifted, phantasm::ras_displacements(truth)),
+                          phantasm::FieldConvention::itk);
+    const fs::path json = root / "affine.json";
+    const CommandResult run =
+        run_command({k_phantasm, "eval", m.task.string(), "--results", (root / "affine").string(),
+                     "--convention", "itk", "--json", json.string()});
+    EXPECT_EQ(run.exit_code, 2) << run.err;
+    EXPECT_NE(run.err.find(k_result + ": expected a field on the fixed grid's voxel-to-world matrix"),
+              std::string::npos)
+        << run.err;
+    EXPECT_FALSE(fs::exists(json));
   }
   // A ground truth of another task: refused.
   const fs::path cross = root / "cross";
