@@ -9,10 +9,12 @@
 namespace phantasm {
 namespace {
 
-// The table covers T1 factors exp(-k_log_range) to exp(k_log_range): beyond any clamp of the
-// deviation times a gain of 5 (voxelize/material_maps.hpp, TextureGains).
-constexpr double k_log_range = 1.5;
-constexpr int k_table_steps = 600;
+// The table covers T1 factors exp(-k_log_range) to exp(k_log_range): the largest gain (5) times
+// the largest clamp of the deviation (0.9) the scene allows (scene/parse_material_maps.cpp), so
+// the images never read a clamped factor where the T1 map holds the exact one; steps of 0.005 in
+// log T1.
+constexpr double k_log_range = 5.0 * 0.9;
+constexpr int k_table_steps = 1800;
 
 } // namespace
 

@@ -7,6 +7,7 @@
 #include "mri/receive_coils.hpp"
 #include "mri/signal_equations.hpp"
 #include "mri/synthesize_images.hpp"
+#include "mri/texture_signal.hpp"
 #include "mri/tissue_parameters.hpp"
 
 #include <gtest/gtest.h>
@@ -499,5 +500,28 @@ TEST(SynthesizeImages, ParameterMapsAreThePlainMixtureByteForByte) {
       ASSERT_EQ(map->size(), expected.size());
       EXPECT_EQ(0, std::memcmp(map->data(), expected.data(), expected.size() * sizeof(float)));
     }
+  }
+}
+
+// A textured tissue's signal is the signal equation at its voxel's T1 and PD factors, over the
+// whole range a scene allows (gain 5 times a deviation of 0.9: T1 factors exp(+-4.5)), not a
+// factor clamped to a narrower table while the T1 map holds the exact one.
+TEST(TexturedSignal, FollowsTheSignalEquationOverEveryFactorASceneAllows) {
+  SequenceSettings spin_echo;
+  spin_echo.kind = SequenceKind::spin_echo;
+  spin_echo.TR_ms = 500.0;
+  spin_echo.TE_ms = 15.0;
+  const Relaxation tissue{0.8, 900.0, 80.0, 50.0};
+  TextureMaps maps;
+  maps.textured = {true};
+  const double gain = 1000.0;
+  const TexturedSignal textured(spin_echo, {"grey_matter"}, {tissue}, gain, maps);
+  ASSERT_TRUE(textured.textured(0));
+  for (const double log_factor : {-4.5, -3.0, -1.0, 0.0, 0.7, 2.0, 4.4}) {
+    Relaxation r = tissue;
+    r.T1_ms *= std::exp(log_factor);
+    const double expected = 1.1 * sequence_signal(spin_echo, r) * gain;
+    const double got = textured.signal(0, static_cast<float>(std::exp(log_factor)), 1.1f);
+    EXPECT_NEAR(got, expected, 2e-3 * std::abs(expected) + 1e-9) << "log T1 factor " << log_factor;
   }
 }
