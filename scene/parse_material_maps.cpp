@@ -2,6 +2,8 @@
 // (docs/scene-format.md; docs/volumes-and-images.md, "Tissue regions and texture").
 #include "scene/parse_sections.hpp"
 
+#include <filesystem>
+
 namespace phantasm::scene_detail {
 
 void parse_tissue_regions(YamlContext& context, const YAML::Node& node,
@@ -23,14 +25,18 @@ void parse_tissue_regions(YamlContext& context, const YAML::Node& node,
   }
 }
 
-void parse_texture(CheckedMap& map, TextureSettings& texture) {
+void parse_texture(CheckedMap& map, const std::filesystem::path& scene_folder, TextureSettings& texture) {
   std::string source;
   if (map.choice("source", source, {"none", "scan", "random"}))
     texture.source = source == "scan"     ? TextureSource::scan
                      : source == "random" ? TextureSource::random
                                           : TextureSource::none;
   map.string_list("tissues", texture.tissues);
-  map.string("scan", texture.scan);
+  // A relative scan is the scene folder's, as organs' files are (anatomy.organs[].shape.file);
+  // whether it exists and covers the anatomy is checked when it is read.
+  if (map.string("scan", texture.scan) && !texture.scan.empty() &&
+      std::filesystem::path(texture.scan).is_relative())
+    texture.scan = (scene_folder / texture.scan).string();
   map.number("T1_gain", texture.T1_gain, between(0.0, 5.0, ""));
   map.number("PD_gain", texture.PD_gain, between(0.0, 5.0, ""));
   map.number("max_deviation", texture.max_deviation, NumberRule{0.0, 0.9, true, false, ""});

@@ -210,7 +210,7 @@ SceneLoadResult parse_scene(const std::string& text, const std::filesystem::path
       parse_tissue_regions(context, top.get("tissue_regions"), scene.mri.regions);
     if (top.has("texture")) {
       CheckedMap texture(context, top.get("texture"), "texture");
-      if (texture.valid()) parse_texture(texture, scene.mri.texture);
+      if (texture.valid()) parse_texture(texture, file.parent_path(), scene.mri.texture);
     }
     if (top.has("outputs")) {
       CheckedMap outputs(context, top.get("outputs"), "outputs");

@@ -21,7 +21,7 @@ void parse_acquisition(CheckedMap& map, AcquisitionSettings& acquisition);
 void parse_outputs(CheckedMap& map, OutputSettings& outputs);
 void parse_tissue_regions(YamlContext& context, const YAML::Node& node,
                           std::vector<TissueRegionSettings>& regions);
-void parse_texture(CheckedMap& map, TextureSettings& texture);
+void parse_texture(CheckedMap& map, const std::filesystem::path& scene_folder, TextureSettings& texture);
 
 /// Checks that need more than one section: references between sections, tissue values the
 /// sequences need, consistent timings. Runs only on a scene whose sections parsed cleanly.

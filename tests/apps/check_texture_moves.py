@@ -1,5 +1,5 @@
 """Checks that texture moves with the tissue in a phantasm dataset (called by
-tests/atlas/test_material_maps_run.cpp; usable by hand on any dataset made with a texture).
+tests/apps/test_material_maps_run.cpp; usable by hand on any dataset made with a texture).
 Argument: the dataset folder. On the deformed grid, every voxel inside the exact mask of the
 from-ref_to-def field (a deformed point x lies at x + u(x) in the reference state) whose reference
 position lies inside one tissue (its 3x3x3 reference neighbourhood has one label, as has its own

@@ -61,8 +61,9 @@ TEST(MaterialMapsRun, TextureMovesWithTheTissue) {
   const fs::path root = fresh_folder("texture-moves");
   for (const std::string& texture :
        {std::string("texture: {source: random, correlation_mm: 4, random_sd: 0.08}"),
+        // the scan named relative to the scene's folder, as organs' files are
         "texture: {source: scan, tissues: [gray_matter, white_matter], scan: " +
-            smooth_scan(root / "scan.nii.gz", 70.0).string() + "}"}) {
+            smooth_scan(root / "scan.nii.gz", 70.0).filename().string() + "}"}) {
     SCOPED_TRACE(texture);
     const fs::path out = root / "out";
     const CommandResult run = run_command(
