@@ -1,5 +1,6 @@
 #include "batch/sweep.hpp"
 
+#include "batch/random_draw.hpp"
 #include "core/error.hpp"
 #include "core/safe_name.hpp"
 #include "scene/scene.hpp"
@@ -29,8 +30,7 @@ struct Variation {
   std::string key;
   YAML::Mark mark;
   std::vector<YAML::Node> values; ///< a list: the grid
-  std::string random_kind;        ///< or a range: uniform, log_uniform, random_integer
-  double low = 0.0, high = 0.0;
+  RandomDistribution random;      ///< or a distribution drawn per subject (kind empty for a list)
 };
 
 /// The start of the message for a key of vary that names no scene setting.
@@ -92,6 +92,83 @@ public:
     return path;
   }
 
+  /// Two finite numbers [a, b] of a distribution's key.
+  std::pair<double, double> number_pair(const Variation& v, const std::string& key,
+                                        const YAML::Node& node) const {
+    double a = 0.0, b = 0.0;
+    try {
+      if (!node.IsSequence() || node.size() != 2) throw YAML::Exception(node.Mark(), "range");
+      a = node[0].as<double>();
+      b = node[1].as<double>();
+    } catch (const YAML::Exception&) {
+      fail(v.mark, "vary." + v.key + "." + key, "expected [low, high] (two numbers), found " + flow(node));
+    }
+    // Whole numbers beyond 2^53 are not exact in a double; no scene setting is that large.
+    constexpr double k_largest = 9007199254740992.0;
+    if (!std::isfinite(a) || !std::isfinite(b) || std::abs(a) > k_largest || std::abs(b) > k_largest) {
+      fail(v.mark, "vary." + v.key + "." + key,
+           "expected two finite numbers within +-2^53, found " + flow(node));
+    }
+    return {a, b};
+  }
+
+  /// A declared distribution (docs/batch.md, Random draws): its kind with its two parameters,
+  /// and for normal and log_normal the optional `add` and `within`.
+  void read_distribution(Variation& v, const YAML::Node& value) const {
+    RandomDistribution& d = v.random;
+    d.kind = value.begin()->first.Scalar();
+    static const char* k_kinds = "{uniform: [a, b]}, {log_uniform: [a, b]}, {random_integer: [a, b]}, "
+                                 "{normal: [mean, sd]}, {log_normal: [mu, sigma]}";
+    if (d.kind != "uniform" && d.kind != "log_uniform" && d.kind != "random_integer" &&
+        !takes_shape_options(d.kind))
+      fail(v.mark, "vary." + v.key,
+           std::string("expected a list of values or one of ") + k_kinds + ", found '" + d.kind + "'");
+    const std::string at = "vary." + v.key + "." + d.kind;
+    std::tie(d.a, d.b) = number_pair(v, d.kind, value.begin()->second);
+    for (auto entry = std::next(value.begin()); entry != value.end(); ++entry) {
+      const std::string option = entry->first.IsScalar() ? entry->first.Scalar() : flow(entry->first);
+      if (!takes_shape_options(d.kind) || (option != "add" && option != "within")) {
+        fail(v.mark, "vary." + v.key,
+             takes_shape_options(d.kind)
+                 ? "expected add or within beside " + d.kind + ", found '" + option + "'"
+                 : "expected only " + d.kind +
+                       ": [a, b] (add and within go with normal and log_normal), found '" + option + "'");
+      }
+      if (option == "within") {
+        d.truncated = true;
+        std::tie(d.low, d.high) = number_pair(v, "within", entry->second);
+        if (!(d.low < d.high))
+          fail(v.mark, "vary." + v.key + ".within", "expected low < high, found " + flow(entry->second));
+      } else {
+        try {
+          d.add = entry->second.as<double>();
+        } catch (const YAML::Exception&) {
+          fail(v.mark, "vary." + v.key + ".add", "expected a number, found " + flow(entry->second));
+        }
+        if (!std::isfinite(d.add))
+          fail(v.mark, "vary." + v.key + ".add", "expected a finite number, found " + flow(entry->second));
+      }
+    }
+    if (takes_shape_options(d.kind)) {
+      if (!(d.b >= 0.0))
+        fail(v.mark, at, "expected a spread >= 0 as the second number, found " + flow(value.begin()->second));
+      // A range the distribution hardly reaches would take endless redraws, and is a mistake.
+      if (probability_within(d) < 1e-3) {
+        fail(v.mark, "vary." + v.key + ".within",
+             "expected a range holding at least 1/1000 of the draws, found one holding " +
+                 std::to_string(probability_within(d)));
+      }
+      return;
+    }
+    if (!(d.a <= d.b) || (d.kind == "log_uniform" && d.a <= 0.0) ||
+        (d.kind == "random_integer" && (d.a != std::floor(d.a) || d.b != std::floor(d.b)))) {
+      fail(v.mark, at,
+           "expected low <= high" + std::string(d.kind == "log_uniform" ? ", both > 0" : "") +
+               std::string(d.kind == "random_integer" ? ", whole numbers" : "") + ", found " +
+               flow(value.begin()->second));
+    }
+  }
+
   Variation read_variation(const std::string& key, const YAML::Node& value) const {
     Variation v;
     v.key = key;
@@ -108,39 +185,8 @@ public:
         v.values.push_back(item);
       return v;
     }
-    if (value.IsMap() && value.size() == 1 && value.begin()->first.IsScalar()) {
-      v.random_kind = value.begin()->first.Scalar();
-      const YAML::Node range = value.begin()->second;
-      if (v.random_kind != "uniform" && v.random_kind != "log_uniform" && v.random_kind != "random_integer") {
-        fail(v.mark, "vary." + key,
-             "expected a list of values or one of {uniform: [a, b]}, {log_uniform: [a, b]}, {random_integer: "
-             "[a, "
-             "b]}, found '" +
-                 v.random_kind + "'");
-      }
-      try {
-        if (!range.IsSequence() || range.size() != 2) throw YAML::Exception(range.Mark(), "range");
-        v.low = range[0].as<double>();
-        v.high = range[1].as<double>();
-      } catch (const YAML::Exception&) {
-        fail(v.mark, "vary." + key + "." + v.random_kind,
-             "expected [low, high] (two numbers), found " + flow(range));
-      }
-      // Whole numbers beyond 2^53 are not exact in a double; no scene setting is that large.
-      constexpr double k_largest = 9007199254740992.0;
-      if (!std::isfinite(v.low) || !std::isfinite(v.high) || std::abs(v.low) > k_largest ||
-          std::abs(v.high) > k_largest) {
-        fail(v.mark, "vary." + key + "." + v.random_kind,
-             "expected two finite numbers within +-2^53, found " + flow(range));
-      }
-      if (!(v.low <= v.high) || (v.random_kind == "log_uniform" && v.low <= 0.0) ||
-          (v.random_kind == "random_integer" &&
-           (v.low != std::floor(v.low) || v.high != std::floor(v.high)))) {
-        fail(v.mark, "vary." + key + "." + v.random_kind,
-             "expected low <= high" + std::string(v.random_kind == "log_uniform" ? ", both > 0" : "") +
-                 std::string(v.random_kind == "random_integer" ? ", whole numbers" : "") + ", found " +
-                 flow(range));
-      }
+    if (value.IsMap() && value.size() >= 1 && value.begin()->first.IsScalar()) {
+      read_distribution(v, value);
       return v;
     }
     fail(v.mark, "vary." + key,
@@ -434,20 +480,13 @@ public:
       if (!v.values.empty()) {
         value = v.values[choice[k]];
       } else {
-        std::seed_seq mix{static_cast<std::uint32_t>(m_seed), static_cast<std::uint32_t>(m_seed >> 32),
-                          static_cast<std::uint32_t>(s), static_cast<std::uint32_t>(k)};
-        std::mt19937_64 random(mix);
         std::ostringstream text;
         text.precision(6);
-        if (v.random_kind == "random_integer") {
-          std::uniform_int_distribution<long long> draw(static_cast<long long>(v.low),
-                                                        static_cast<long long>(v.high));
-          text << draw(random);
-        } else if (v.random_kind == "uniform") {
-          text << std::uniform_real_distribution<double>(v.low, v.high)(random);
-        } else {
-          text << std::exp(std::uniform_real_distribution<double>(std::log(v.low), std::log(v.high))(random));
-        }
+        const double drawn = draw_value(v.random, m_seed, s, k);
+        if (v.random.kind == "random_integer")
+          text << static_cast<long long>(drawn);
+        else
+          text << drawn;
         value = YAML::Load(text.str());
       }
       assign(scene, v, value);
