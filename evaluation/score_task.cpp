@@ -7,6 +7,7 @@
 #include "core/sha256.hpp"
 #include "evaluation/digital_jacobian.hpp"
 #include "evaluation/evaluation_json.hpp"
+#include "evaluation/inverse_consistency.hpp"
 #include "geometry/ras_lps.hpp"
 #include "io/json_file.hpp"
 #include "io/nifti_file.hpp"
@@ -18,6 +19,7 @@
 #include <fstream>
 #include <functional>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -126,12 +128,21 @@ nlohmann::json by_factor(const nlohmann::json& pairs) {
   return result;
 }
 
+/// The result name of a pair's reverse direction (the moving image fixed): disp_<moving>_<fixed>.
+std::string reverse_result_name(const nlohmann::json& pair, const std::filesystem::path& truth_path) {
+  return "disp_" + string_member(pair, "moving_id", truth_path) + "_" +
+         string_member(pair, "fixed_id", truth_path) + ".nii.gz";
+}
+
 /// One pair's inputs, read and checked before anything is scored.
 struct PairFiles {
   nlohmann::json entry;
   ImageGrid grid;
   std::vector<std::int32_t> fixed_labels, moving_labels;
   DisplacementField result, truth;
+  /// The method's field of the reverse direction (moving image fixed), on the moving grid, when
+  /// the results hold one: disp_<moving>_<fixed>.nii.gz.
+  std::optional<DisplacementField> backward;
   std::vector<bool> mask;
   std::vector<Keypoint> keypoints;
 };
@@ -272,9 +283,11 @@ nlohmann::json score_task(const TaskScoreRequest& request) {
   if (path_kind(request.results) != "a folder")
     throw InputError(request.results.string() + ": expected the folder of results (--results), found " +
                      path_kind(request.results));
-  std::set<std::string> expected, found;
-  for (const auto& pair : pairs)
+  std::set<std::string> expected, found, reverses;
+  for (const auto& pair : pairs) {
     expected.insert(string_member(pair, "result", truth_path));
+    reverses.insert(reverse_result_name(pair, truth_path));
+  }
   for (const auto& entry : std::filesystem::directory_iterator(request.results)) {
     const std::string name = entry.path().filename().string();
     if (name.rfind("disp_", 0) == 0) found.insert(name);
@@ -283,7 +296,7 @@ nlohmann::json score_task(const TaskScoreRequest& request) {
   for (const auto& name : expected)
     if (!found.count(name)) missing += (missing.empty() ? "" : ", ") + name;
   for (const auto& name : found)
-    if (!expected.count(name)) extra += (extra.empty() ? "" : ", ") + name;
+    if (!expected.count(name) && !reverses.count(name)) extra += (extra.empty() ? "" : ", ") + name;
   if (!missing.empty() || !extra.empty()) {
     std::string message = request.results.string() + ": expected one result per pair of the task (" +
                           std::to_string(expected.size()) + ")";
@@ -312,6 +325,9 @@ nlohmann::json score_task(const TaskScoreRequest& request) {
                           FieldConvention::learn2reg, in.grid);
     in.result =
         read_field(request.results / string_member(pair, "result", truth_path), request.convention, in.grid);
+    const std::filesystem::path reverse = request.results / reverse_result_name(pair, truth_path);
+    if (found.count(reverse.filename().string()))
+      in.backward = read_field(reverse, request.convention, moving_grid);
     const std::filesystem::path mask_path = request.truth / string_member(pair, "mask", truth_path);
     const NiftiVolume mask = read_nifti(mask_path);
     if (mask.grid.dims != in.grid.dims)
@@ -330,6 +346,7 @@ nlohmann::json score_task(const TaskScoreRequest& request) {
 
   nlohmann::json scored = nlohmann::json::array(), warnings = nlohmann::json::array();
   std::vector<double> dice_per_pair, hd95_per_pair, tre_per_pair, epe_per_pair, ndv_per_pair, sdlogj_per_pair;
+  std::vector<double> consistency_per_pair; // pairs with both directions only
   for (PairFiles& in : inputs) {
     throw_if_cancelled();
     const ImageGrid& grid = in.grid;
@@ -377,6 +394,12 @@ nlohmann::json score_task(const TaskScoreRequest& request) {
       if (in.mask[v]) epe.push_back((in.result.lps_mm[v] - in.truth.lps_mm[v]).norm());
     const Summary epe_summary = summarize(epe);
     out["endpoint_error_mm"] = summary_json(epe_summary);
+    out["inverse_consistency_mm"] = nullptr;
+    if (in.backward) {
+      const Summary consistency = summarize(inverse_consistency_errors(in.result, *in.backward, in.mask));
+      out["inverse_consistency_mm"] = summary_json(consistency);
+      consistency_per_pair.push_back(consistency.mean);
+    }
 
     std::vector<bool> foreground(in.fixed_labels.size());
     for (std::size_t v = 0; v < foreground.size(); ++v)
@@ -437,7 +460,9 @@ nlohmann::json score_task(const TaskScoreRequest& request) {
         {"mean_tre_mm", mean_of(tre_per_pair)},
         {"mean_endpoint_error_mm", mean_of(epe_per_pair)},
         {"mean_ndv_percent", mean_of(ndv_per_pair)},
-        {"mean_log_jacobian_sd", mean_of(sdlogj_per_pair)}}},
+        {"mean_log_jacobian_sd", mean_of(sdlogj_per_pair)},
+        {"inverse_consistency_pairs", consistency_per_pair.size()},
+        {"mean_inverse_consistency_mm", mean_of(consistency_per_pair)}}},
       {"by_factor", by_factor(scored)},
       {"warnings", warnings},
       {"conventions",
@@ -447,7 +472,10 @@ nlohmann::json score_task(const TaskScoreRequest& request) {
         {"ndv", "non-diffeomorphic volume: negative tetrahedra of each voxel cube of the fixed foreground, "
                 "percent of the cubes"},
         {"log_jacobian_sd",
-         "standard deviation of log det(I + grad u), central differences, fixed foreground"}}}};
+         "standard deviation of log det(I + grad u), central differences, fixed foreground"},
+        {"inverse_consistency",
+         "|phi_ba(phi_ab(x)) - x| in mm inside the exact mask, where the results also hold the reverse "
+         "direction disp_<moving>_<fixed> (on the moving grid); null otherwise"}}}};
 }
 
 std::string task_scores_csv(const nlohmann::json& scores) {
@@ -489,6 +517,9 @@ std::string task_scores_table(const nlohmann::json& scores) {
   out << "  mean Dice " << number(s["mean_dice"]) << " (30th percentile " << number(s["dice_p30"])
       << "), TRE " << number(s["mean_tre_mm"]) << " mm, endpoint error "
       << number(s["mean_endpoint_error_mm"]) << " mm, NDV " << number(s["mean_ndv_percent"]) << " %\n";
+  if (s["inverse_consistency_pairs"].get<std::size_t>() > 0)
+    out << "  inverse consistency " << number(s["mean_inverse_consistency_mm"]) << " mm (mean over "
+        << s["inverse_consistency_pairs"].get<std::size_t>() << " pairs with both directions)\n";
   for (const auto& w : scores["warnings"])
     out << "  warning: " << w.get<std::string>() << "\n";
   return out.str();
