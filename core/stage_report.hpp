@@ -21,4 +21,12 @@ struct StageReport {
   std::vector<std::string> warnings;
 };
 
+/// How long one stage of a run took ("anatomy", "deformation", "voxelization", "mri", "writing":
+/// the cost estimate's names), set against the estimate in the subject's report.
+struct StageTiming {
+  std::string stage;
+  double wall_seconds = 0.0;
+  double cpu_seconds = 0.0; ///< the process's processor time, every thread summed
+};
+
 } // namespace phantasm

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace phantasm {
 
@@ -42,11 +43,20 @@ void write_preview_png(const std::filesystem::path& path, const ImageGrid& grid,
     for (int j = 0; j < ny; ++j)
       put(2 * nx + j, k, at(nx / 2, j, k));
   // VTK's image origin is the lower left; rows above are higher indices, as wanted.
+  write_file_atomically(path, encode_png(width, height, 1, pixels));
+}
+
+std::string encode_png(int width, int height, int components, const std::vector<unsigned char>& pixels) {
+  if (width <= 0 || height <= 0 || components < 1 || components > 4 ||
+      pixels.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height) *
+                           static_cast<std::size_t>(components))
+    throw std::invalid_argument("PNG of " + std::to_string(width) + " x " + std::to_string(height) + " x " +
+                                std::to_string(components) + " bytes given " + std::to_string(pixels.size()));
   vtkNew<vtkImageData> image;
   image->SetDimensions(width, height, 1);
   vtkNew<vtkUnsignedCharArray> scalars;
-  scalars->SetNumberOfComponents(1);
-  scalars->SetNumberOfTuples(static_cast<vtkIdType>(pixels.size()));
+  scalars->SetNumberOfComponents(components);
+  scalars->SetNumberOfTuples(static_cast<vtkIdType>(width) * height);
   std::copy(pixels.begin(), pixels.end(), scalars->GetPointer(0));
   image->GetPointData()->SetScalars(scalars);
   vtkNew<vtkPNGWriter> writer;
@@ -54,9 +64,9 @@ void write_preview_png(const std::filesystem::path& path, const ImageGrid& grid,
   writer->WriteToMemoryOn();
   writer->Write();
   vtkUnsignedCharArray* bytes = writer->GetResult();
-  if (!bytes) throw std::runtime_error(path.string() + ": VTK could not encode the PNG");
-  write_file_atomically(path, std::string_view(reinterpret_cast<const char*>(bytes->GetPointer(0)),
-                                               static_cast<std::size_t>(bytes->GetNumberOfTuples())));
+  if (!bytes) throw std::runtime_error("VTK could not encode a PNG");
+  return std::string(reinterpret_cast<const char*>(bytes->GetPointer(0)),
+                     static_cast<std::size_t>(bytes->GetNumberOfTuples()));
 }
 
 } // namespace phantasm

@@ -5,6 +5,7 @@
 #include "core/grid.hpp"
 
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace phantasm {
@@ -14,5 +15,12 @@ namespace phantasm {
 /// volume, one pixel per voxel (voxel spacing is not resampled). Atomic, like every output.
 void write_preview_png(const std::filesystem::path& path, const ImageGrid& grid,
                        const std::vector<float>& values);
+
+/// PNG bytes of an 8-bit image held in memory (the HTML report embeds them).
+/// @param width, height in pixels
+/// @param components 1 (grey), 3 (RGB) or 4 (RGBA)
+/// @param pixels width * height * components bytes, row 0 the bottom row, components interleaved
+/// @throws std::invalid_argument when the sizes disagree
+std::string encode_png(int width, int height, int components, const std::vector<unsigned char>& pixels);
 
 } // namespace phantasm

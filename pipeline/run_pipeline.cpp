@@ -16,10 +16,13 @@
 #include "pipeline/material_maps_stage.hpp"
 #include "pipeline/reference_cache.hpp"
 #include "pipeline/reference_images_cache.hpp"
+#include "report/subject_report.hpp"
 #include "sim/deform_phantom.hpp"
 #include "sim/sim_plan.hpp"
 #include "voxelize/voxelize_plan.hpp"
 
+#include <chrono>
+#include <ctime>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -44,6 +47,25 @@ public:
 
 private:
   std::size_t m_modelled, m_skipped, m_warnings;
+};
+
+/// Times the stages one after another: lap() records the wall and processor time since the last.
+class StageClock {
+public:
+  explicit StageClock(std::vector<StageTiming>& timings) : m_timings(timings) {}
+  void lap(const char* stage) {
+    const auto wall = std::chrono::steady_clock::now();
+    const std::clock_t cpu = std::clock(); // the process's, every thread summed
+    m_timings.push_back({stage, std::chrono::duration<double>(wall - m_wall).count(),
+                         static_cast<double>(cpu - m_cpu) / CLOCKS_PER_SEC});
+    m_wall = wall;
+    m_cpu = cpu;
+  }
+
+private:
+  std::vector<StageTiming>& m_timings;
+  std::chrono::steady_clock::time_point m_wall = std::chrono::steady_clock::now();
+  std::clock_t m_cpu = std::clock();
 };
 
 /// Derives the label volumes organs name by atlas (once per run) and records what was derived,
@@ -113,6 +135,7 @@ namespace {
 /// Runs the stages; what they reject is named by its key path (SettingError).
 void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
                 const std::filesystem::path& cache, Simulation& result) {
+  StageClock clock(result.timings);
   result.stages = plan_stages(scene);
   // The cost before the work heads the log: each organ's effective settings and what the run
   // will build and need (deterministic for the scene, so the log stays the same run to run).
@@ -134,6 +157,7 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
   std::map<std::string, AtlasLabelVolume> atlases;
   result.phantom = build_anatomy(scene, cache, result.stages[0], reporter, anatomy_key, atlases);
   check_built_anatomy(scene, result.phantom); // organs read from files, obstacles at rest
+  clock.lap("anatomy");
   if (until == SimulationStage::anatomy) return;
 
   StageReport& sim = result.stages[1];
@@ -143,6 +167,7 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
     lines.print_new(sim, reporter);
     result.deformed = deformed_phantom(result.phantom, *result.deformation);
   }
+  clock.lap("deformation");
   if (until == SimulationStage::deformation) return;
 
   if (!cache.empty()) {
@@ -165,6 +190,7 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
       !text.empty() && !result.reference_entries.state_key.empty())
     result.reference_entries.state_key = sha256_hex(result.reference_entries.state_key + "\n" + text);
   voxelize_lines.print_new(voxelize, reporter);
+  clock.lap("voxelization");
   if (until == SimulationStage::voxelization) return;
 
   StageReport& mri = result.stages[3];
@@ -177,6 +203,7 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
     result.reference_entries.images_key = reference_images_key(result.reference_entries.state_key, scene.mri);
     mri_lines.print_new(mri, reporter);
   }
+  clock.lap("mri");
 }
 
 } // namespace
@@ -201,6 +228,8 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& re
   std::error_code error;
   const bool existed = !options.output_created && std::filesystem::exists(options.output, error);
   prepare_output_folder(options.output, options.force);
+  RunSummary summary;
+  std::vector<StageTiming> timings;
   try {
     check_dataset_names(scene); // before the stages run, not after
     const Simulation simulation = simulate(scene, reporter, SimulationStage::mri, options.anatomy_cache);
@@ -213,14 +242,30 @@ RunSummary run_scene(const Scene& scene, const RunOptions& options, Reporter& re
         throw StrictError(message);
       }
     }
-    return write_dataset(scene, simulation, options.output, reporter);
+    timings = simulation.timings;
+    StageClock clock(timings);
+    summary = write_dataset(scene, simulation, options.output, reporter);
+    clock.lap("writing");
   } catch (const InputError&) {
     // Bad input found by a stage (a label missing from its volume, ...): leave nothing behind,
     // as when the scene itself is rejected.
     if (!existed && std::filesystem::is_empty(options.output, error))
       std::filesystem::remove(options.output, error);
     throw;
+  } catch (const Cancelled&) {
+    throw;
+  } catch (const std::exception& failure) {
+    // The subject's report says why it failed (the files it would show are not all there).
+    try {
+      write_failed_subject_report(options.output, scene.outputs.subject, failure.what(),
+                                  reporter.log_lines());
+    } catch (const std::exception&) { // the failure itself is what the user must see
+    }
+    throw;
   }
+  // Read back from the files, with the simulation's memory already returned.
+  write_subject_report(options.output, scene.outputs.subject, timings);
+  return summary;
 }
 
 } // namespace phantasm

@@ -33,6 +33,7 @@ struct Simulation {
   VoxelizedPhantom volumes;
   MrImages images; ///< refers to the scene's sequences: keep the scene alive
   ReferenceEntries reference_entries;
+  std::vector<StageTiming> timings; ///< each stage that ran, in order (the report's stage times)
 };
 
 } // namespace phantasm

@@ -23,6 +23,7 @@ packages=(
   slurm-wlm munge
   zlib1g-dev libdeflate-dev libpng-dev
   mricron-data
+  chromium
 )
 
 missing=()

@@ -35,5 +35,6 @@ void add_batch_command(CLI::App& app, std::function<int()>& action);
 void add_hdf5_command(CLI::App& app, std::function<int()>& action);
 void add_atlas_command(CLI::App& app, std::function<int()>& action);
 void add_task_command(CLI::App& app, std::function<int()>& action);
+void add_report_command(CLI::App& app, std::function<int()>& action);
 
 } // namespace phantasm::cli

@@ -39,11 +39,20 @@ inline std::string raw_library_marker(const std::string& message) {
   return {};
 }
 
-/// Every regular file under a folder, by path relative to it, with its bytes.
+/// Whether a dataset file holds a run's measured times, which differ from run to run: a subject's
+/// timing.json and its report (derivatives/phantasm/sub-<id>.html, docs/report.md).
+inline bool holds_run_times(const std::filesystem::path& relative) {
+  const std::string name = relative.filename().string();
+  return name == "timing.json" || (relative.parent_path().filename() == "phantasm" &&
+                                   name.rfind("sub-", 0) == 0 && relative.extension() == ".html");
+}
+
+/// Every regular file under a folder, by path relative to it, with its bytes; files that hold a
+/// run's measured times (holds_run_times) are left out.
 inline std::map<std::string, std::string> folder_contents(const std::filesystem::path& folder) {
   std::map<std::string, std::string> contents;
   for (const auto& entry : std::filesystem::recursive_directory_iterator(folder)) {
-    if (entry.is_regular_file()) {
+    if (entry.is_regular_file() && !holds_run_times(std::filesystem::relative(entry.path(), folder))) {
       contents[std::filesystem::relative(entry.path(), folder).generic_string()] = read_file(entry.path());
     }
   }

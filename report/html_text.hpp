@@ -1,0 +1,23 @@
+// Text for the HTML report: escaping of every text that comes from a scene or a result file,
+// base64 for the embedded pictures, and numbers as people read them.
+#pragma once
+
+#include <string>
+#include <string_view>
+
+namespace phantasm {
+
+/// `text` with &, <, >, " and ' replaced by their HTML entities, so that a scene's name, a path
+/// or a log line shows as text wherever it lands (element content or attribute value).
+std::string html_escape(std::string_view text);
+
+/// RFC 4648 base64 of `bytes` (with padding), as data: URLs want it.
+std::string base64_encode(std::string_view bytes);
+
+/// A data: URL of PNG bytes, for an <img> embedded in the page.
+std::string png_data_url(std::string_view png_bytes);
+
+/// A number with `digits` significant digits ("%.*g"): 0.000123, 12.3, 1.23e+06.
+std::string significant(double value, int digits = 3);
+
+} // namespace phantasm

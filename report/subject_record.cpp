@@ -1,0 +1,287 @@
+#include "report/subject_record.hpp"
+
+#include "core/error.hpp"
+#include "io/dataset_layout.hpp"
+#include "io/json_file.hpp"
+#include "io/nifti_file.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace phantasm {
+namespace {
+
+std::string read_text(const std::filesystem::path& path, const char* what) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string() + ": expected " + what + ", found no readable file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);)
+    if (!line.empty()) lines.push_back(line);
+  return lines;
+}
+
+std::vector<std::string> fields_of(const std::string& line, char separator) {
+  std::vector<std::string> fields;
+  std::istringstream in(line);
+  for (std::string field; std::getline(in, field, separator);)
+    fields.push_back(field);
+  return fields;
+}
+
+double number_field(const std::string& text, const std::filesystem::path& file, std::size_t line,
+                    const char* column) {
+  char* end = nullptr;
+  const double value = std::strtod(text.c_str(), &end);
+  if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(value))
+    throw InputError(file.string() + ":" + std::to_string(line) + ": " + column +
+                     ": expected a number, found '" + text + "'");
+  return value;
+}
+
+/// The landmarks CSV (name,organ,x_mm,y_mm,z_mm), by name, in file order.
+std::vector<std::pair<std::string, std::array<std::string, 4>>>
+read_landmarks(const std::filesystem::path& file) {
+  const std::vector<std::string> lines = lines_of(read_text(file, "the landmarks CSV phantasm writes"));
+  if (lines.empty() || lines.front() != "name,organ,x_mm,y_mm,z_mm")
+    throw InputError(file.string() + ":1: expected the header 'name,organ,x_mm,y_mm,z_mm', found '" +
+                     (lines.empty() ? std::string() : lines.front()) + "'");
+  std::vector<std::pair<std::string, std::array<std::string, 4>>> rows;
+  for (std::size_t n = 1; n < lines.size(); ++n) {
+    const std::vector<std::string> f = fields_of(lines[n], ',');
+    if (f.size() != 5)
+      throw InputError(file.string() + ":" + std::to_string(n + 1) + ": expected 5 fields, found " +
+                       std::to_string(f.size()));
+    rows.push_back({f[0], {f[1], f[2], f[3], f[4]}});
+  }
+  return rows;
+}
+
+Eigen::Vector3d point_of(const std::array<std::string, 4>& row, const std::filesystem::path& file,
+                         std::size_t line) {
+  return {number_field(row[1], file, line, "x_mm"), number_field(row[2], file, line, "y_mm"),
+          number_field(row[3], file, line, "z_mm")};
+}
+
+/// Every volume of a subject lies on the scene's one grid.
+void require_grid(SubjectRecord& record, const ImageGrid& grid, const std::filesystem::path& file) {
+  if (record.dims == Eigen::Vector3i::Zero()) {
+    record.dims = grid.dims;
+    record.spacing_mm = grid.spacing_mm;
+    return;
+  }
+  if (grid.dims != record.dims) {
+    throw InputError(file.string() + ": expected a volume of " + std::to_string(record.dims.x()) + " x " +
+                     std::to_string(record.dims.y()) + " x " + std::to_string(record.dims.z()) +
+                     " voxels like the subject's other volumes, found " + std::to_string(grid.dims.x()) +
+                     " x " + std::to_string(grid.dims.y()) + " x " + std::to_string(grid.dims.z()));
+  }
+}
+
+std::vector<double> read_volume(SubjectRecord& record, const std::filesystem::path& file) {
+  NiftiVolume volume = read_nifti(file);
+  require_grid(record, volume.grid, file);
+  return std::move(volume.values);
+}
+
+std::vector<std::int32_t> read_labels(SubjectRecord& record, const std::filesystem::path& file) {
+  ImageGrid grid;
+  std::vector<std::int32_t> labels = read_nifti_labels(file, &grid);
+  require_grid(record, grid, file);
+  return labels;
+}
+
+void read_label_table(SubjectRecord& record, const std::filesystem::path& file) {
+  const std::vector<std::string> lines = lines_of(read_text(file, "the label table dseg.tsv"));
+  if (lines.empty() || fields_of(lines.front(), '\t').size() < 3 ||
+      fields_of(lines.front(), '\t')[0] != "index")
+    throw InputError(file.string() + ":1: expected the header 'index<TAB>name<TAB>tissue...', found '" +
+                     (lines.empty() ? std::string() : lines.front()) + "'");
+  for (std::size_t n = 1; n < lines.size(); ++n) {
+    const std::vector<std::string> f = fields_of(lines[n], '\t');
+    if (f.size() < 3)
+      throw InputError(file.string() + ":" + std::to_string(n + 1) + ": expected at least 3 fields, found " +
+                       std::to_string(f.size()));
+    const double index = number_field(f[0], file, n + 1, "index");
+    if (index > 0) record.labels[static_cast<std::int32_t>(index)] = {f[1], f[2], {0, 0}};
+  }
+}
+
+void read_pictures(SubjectRecord& record, const DatasetLayout& layout, const std::set<std::string>& listed) {
+  const auto is_listed = [&](const std::filesystem::path& file) {
+    return listed.count(std::filesystem::relative(file, layout.root()).generic_string()) > 0;
+  };
+  // The images: every ses-ref anatomical image the run listed, with its ses-def twin.
+  const std::string prefix = "sub-" + layout.subject() + "_ses-ref_";
+  std::vector<std::string> suffixes;
+  for (const std::string& file : listed) {
+    const std::filesystem::path path(file);
+    const std::string name = path.filename().string();
+    if (path.parent_path() == std::filesystem::path("sub-" + layout.subject()) / "ses-ref" / "anat" &&
+        name.rfind(prefix, 0) == 0 && name.size() > prefix.size() + 7 &&
+        name.compare(name.size() - 7, 7, ".nii.gz") == 0)
+      suffixes.push_back(name.substr(prefix.size(), name.size() - prefix.size() - 7));
+  }
+  std::optional<SliceMontage> montage;
+  const auto montage_for = [&]() -> const SliceMontage& {
+    if (!montage) montage.emplace(record.dims);
+    return *montage;
+  };
+  for (const std::string& suffix : suffixes) {
+    const std::vector<double> reference =
+        read_volume(record, layout.anat_image(PhantomState::reference, suffix));
+    const std::vector<double> deformed =
+        read_volume(record, layout.anat_image(PhantomState::deformed, suffix));
+    record.images.push_back(
+        {suffix, grey_slices_png(montage_for(), reference), grey_slices_png(montage_for(), deformed)});
+  }
+  // Labels: contours over the images, the organs' volumes; the pictures themselves when there
+  // are no images.
+  std::array<std::vector<std::int32_t>, 2> labels;
+  for (const PhantomState state : {PhantomState::reference, PhantomState::deformed}) {
+    const std::filesystem::path file = layout.dseg(state);
+    if (!is_listed(file)) continue;
+    std::vector<std::int32_t>& l = labels[state == PhantomState::reference ? 0 : 1];
+    l = read_labels(record, file);
+    for (const std::int32_t label : l)
+      if (const auto found = record.labels.find(label); found != record.labels.end())
+        ++found->second.voxels[state == PhantomState::reference ? 0 : 1];
+    (state == PhantomState::reference ? record.reference_contours_png : record.deformed_contours_png) =
+        contour_slices_png(montage_for(), l);
+  }
+  if (suffixes.empty() && !labels[0].empty() && !labels[1].empty()) {
+    const auto as_values = [](const std::vector<std::int32_t>& l) {
+      return std::vector<double>(l.begin(), l.end());
+    };
+    record.images.push_back({"dseg", grey_slices_png(montage_for(), as_values(labels[0])),
+                             grey_slices_png(montage_for(), as_values(labels[1]))});
+  }
+  // The motion of each reference point: |u| of from-def_to-ref and its Jacobian determinant.
+  if (const std::filesystem::path file = layout.transform(PhantomState::deformed, PhantomState::reference);
+      is_listed(file)) {
+    const NiftiVolume field = read_nifti_vectors(file, 3);
+    require_grid(record, field.grid, file);
+    const std::size_t n = static_cast<std::size_t>(field.grid.voxel_count());
+    std::vector<double> magnitude(n);
+    for (std::size_t v = 0; v < n; ++v) {
+      magnitude[v] = std::sqrt(field.values[v] * field.values[v] + field.values[n + v] * field.values[n + v] +
+                               field.values[2 * n + v] * field.values[2 * n + v]);
+      if (std::isfinite(magnitude[v]))
+        record.largest_displacement_mm = std::max(record.largest_displacement_mm, magnitude[v]);
+    }
+    ColourScale scale{ColourScale::Kind::magnitude, 0.0, std::max(record.largest_displacement_mm, 1e-3)};
+    record.displacement = Overlay{colour_slices_png(montage_for(), magnitude, scale), scale};
+  }
+  if (const std::filesystem::path file = layout.jacobian(PhantomState::deformed, PhantomState::reference);
+      is_listed(file)) {
+    const std::vector<double> jacobian = read_volume(record, file);
+    record.smallest_jacobian = jacobian.empty() ? 1.0 : jacobian.front();
+    for (const double j : jacobian) {
+      if (!std::isfinite(j)) continue;
+      record.smallest_jacobian = std::min(record.smallest_jacobian, j);
+      if (j <= 0.0) ++record.nonpositive_jacobian_voxels;
+    }
+    ColourScale scale{ColourScale::Kind::jacobian, 0.5, 2.0};
+    record.jacobian = Overlay{colour_slices_png(montage_for(), jacobian, scale), scale};
+  }
+}
+
+void read_landmark_moves(SubjectRecord& record, const DatasetLayout& layout,
+                         const std::set<std::string>& listed) {
+  const std::filesystem::path ref_file = layout.landmarks(PhantomState::reference);
+  const std::filesystem::path def_file = layout.landmarks(PhantomState::deformed);
+  if (!listed.count(std::filesystem::relative(ref_file, layout.root()).generic_string())) return;
+  const auto reference = read_landmarks(ref_file);
+  const auto deformed = read_landmarks(def_file);
+  std::map<std::string, std::size_t> deformed_row;
+  for (std::size_t r = 0; r < deformed.size(); ++r)
+    deformed_row[deformed[r].first] = r;
+  for (std::size_t r = 0; r < reference.size(); ++r) {
+    const auto found = deformed_row.find(reference[r].first);
+    if (found == deformed_row.end())
+      throw InputError(def_file.string() + ": expected the landmark '" + reference[r].first + "' of " +
+                       ref_file.filename().string() + ", found no row of that name");
+    record.landmarks.push_back({reference[r].first, reference[r].second[0],
+                                point_of(reference[r].second, ref_file, r + 2),
+                                point_of(deformed[found->second].second, def_file, found->second + 2)});
+  }
+}
+
+std::vector<StageTiming> read_timings(const std::filesystem::path& file) {
+  std::vector<StageTiming> timings;
+  std::error_code error;
+  if (!std::filesystem::exists(file, error)) return timings;
+  const nlohmann::json json =
+      parse_json_text(read_text(file, "the run's stage times"), file, "the run's stage times");
+  try {
+    for (const nlohmann::json& stage : json.at("stages"))
+      timings.push_back({stage.at("stage").get<std::string>(), stage.at("wall_seconds").get<double>(),
+                         stage.at("cpu_seconds").get<double>()});
+  } catch (const nlohmann::json::exception&) {
+    throw InputError(file.string() +
+                     ": expected 'stages', a list of {stage, wall_seconds, cpu_seconds}, found " +
+                     json_text(json, -1).substr(0, 80));
+  }
+  return timings;
+}
+
+} // namespace
+
+std::filesystem::path timing_path(const std::filesystem::path& dataset, const std::string& subject) {
+  return DatasetLayout(dataset, subject).provenance().parent_path() / "timing.json";
+}
+
+void write_timings(const std::filesystem::path& dataset, const std::string& subject,
+                   const std::vector<StageTiming>& timings) {
+  nlohmann::json stages = nlohmann::json::array();
+  for (const StageTiming& t : timings)
+    stages.push_back({{"stage", t.stage}, {"wall_seconds", t.wall_seconds}, {"cpu_seconds", t.cpu_seconds}});
+  write_json_file(timing_path(dataset, subject), {{"stages", stages}});
+}
+
+SubjectRecord read_subject_record(const std::filesystem::path& dataset, const std::string& subject) {
+  const DatasetLayout layout(dataset, subject);
+  SubjectRecord record;
+  record.subject = subject;
+  record.provenance = parse_json_text(read_text(layout.provenance(), "the provenance.json phantasm writes"),
+                                      layout.provenance(), "the provenance.json phantasm writes");
+  std::set<std::string> listed;
+  try {
+    for (const nlohmann::json& file : record.provenance.at("files"))
+      listed.insert(file.get<std::string>());
+    record.provenance.at("settings").at("anatomy").at("organs");
+    record.provenance.at("stages").at(0);
+  } catch (const nlohmann::json::exception&) {
+    throw InputError(layout.provenance().string() + ": expected the provenance phantasm writes ('files', "
+                                                    "'settings', 'stages'), found a file without them");
+  }
+  // Every file the run listed must be there: a report of a damaged dataset would mislead.
+  for (const std::string& file : listed) {
+    std::error_code error;
+    if (!std::filesystem::exists(layout.root() / file, error))
+      throw InputError((layout.root() / file).string() + ": expected the file " +
+                       layout.provenance().string() + " lists, found none");
+  }
+  if (listed.count(std::filesystem::relative(layout.log(), layout.root()).generic_string()))
+    record.log_lines = lines_of(read_text(layout.log(), "the run's log"));
+  if (listed.count(std::filesystem::relative(layout.scene_copy(), layout.root()).generic_string()))
+    record.scene_text = read_text(layout.scene_copy(), "the scene file as run");
+  if (listed.count(std::filesystem::relative(layout.dseg_table(), layout.root()).generic_string()))
+    read_label_table(record, layout.dseg_table());
+  read_pictures(record, layout, listed);
+  read_landmark_moves(record, layout, listed);
+  record.timings = read_timings(timing_path(dataset, subject));
+  return record;
+}
+
+} // namespace phantasm
