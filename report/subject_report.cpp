@@ -21,7 +21,7 @@ namespace {
 const char* const k_style = R"(
 body{font-family:sans-serif;max-width:1200px;margin:1em auto;padding:0 1em;color:#222}
 h1{font-size:1.5em}h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:1.6em}
-table{border-collapse:collapse;margin:.5em 0}td,th{border:1px solid #ccc;padding:.2em .5em;text-align:left;vertical-align:top}
+table{border-collapse:collapse;margin:.5em 0;display:block;max-width:100%;overflow-x:auto}td,th{border:1px solid #ccc;padding:.2em .5em;text-align:left;vertical-align:top}
 td.n{text-align:right;font-variant-numeric:tabular-nums}
 .ok{background:#e6f4e6;border:1px solid #7b7;padding:.5em}.bad{background:#fde8e8;border:1px solid #d66;padding:.5em}
 .warn{background:#fff4d6;border:1px solid #db4;padding:.5em}

@@ -133,6 +133,19 @@ TEST(ReportInBrowser, TheReportOfARunThatWarnedShowsItFirstWithEveryImageAndNoSc
   EXPECT_LT(html.find("id=\"warnings\""), html.find("id=\"modelled\""));
 }
 
+TEST(ReportCommand, AStrictRunThatWarnedWritesNoSubjectButAReportSayingWhy) {
+  const fs::path root = fresh_folder("report-strict");
+  fs::copy_file(warned_run().parent_path() / "scene.yaml", root / "scene.yaml");
+  const CommandResult run = run_command(
+      {k_phantasm, "run", (root / "scene.yaml").string(), "-o", (root / "out").string(), "-q", "--strict"});
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_FALSE(fs::exists(root / "out" / "derivatives" / "phantasm" / "sub-01"));
+  const std::string html = read_file(report_of(root / "out"));
+  EXPECT_NE(html.find("--strict: the run warned, no subject written"), std::string::npos);
+  EXPECT_NE(html.find("did not converge"), std::string::npos);
+  EXPECT_EQ(html.find(k_injected), std::string::npos);
+}
+
 TEST(ReportCommand, ReportingADatasetAgainGivesTheRunsOwnReport) {
   const fs::path copy = copy_of_warned_run("report-again");
   const std::string original = read_file(report_of(copy));
