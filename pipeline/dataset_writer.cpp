@@ -379,6 +379,7 @@ nlohmann::json solves_json(const std::vector<SolveReport>& solves) {
                             {"residual_N", s.residual_N},
                             {"initial_energy_J", s.initial_energy_J},
                             {"final_energy_J", s.final_energy_J}};
+    if (!s.residuals_N.empty()) solve["residuals_N"] = s.residuals_N; // the report's convergence plot
     if (s.rank_updates > 0 || s.contacts > 0) {
       solve["vertices_in_contact"] = s.contacts;
       solve["contact_changes"] = s.contact_changes;

@@ -268,38 +268,78 @@ std::string volumes_section(const SubjectRecord& r) {
   return html + "</table>\n";
 }
 
-/// log10 of each solve's relative residual against the solve's number, with the tolerance.
-std::string residual_plot(const nlohmann::json& solves, double tolerance) {
-  std::vector<double> values;
-  for (const nlohmann::json& s : solves)
-    values.push_back(std::log10(std::max(s.value("relative_residual", 0.0), 1e-16)));
-  const double tol = std::log10(std::max(tolerance, 1e-16));
-  const double lo = std::floor(std::min(*std::min_element(values.begin(), values.end()), tol) - 0.5);
-  const double hi = std::ceil(std::max(*std::max_element(values.begin(), values.end()), tol) + 0.5);
+/// Lines of relative residuals (each a series, drawn against its index) on a log scale, with
+/// the tolerance dashed; a point per value when `points` (red where `failed`).
+std::string residual_plot(const std::vector<std::vector<double>>& series, double tolerance,
+                          const std::string& x_label, int first, bool points,
+                          const std::vector<bool>& failed = {}) {
+  const auto log_of = [](double v) { return std::log10(std::max(v, 1e-16)); };
+  double lo = log_of(tolerance), hi = lo;
+  std::size_t longest = 1;
+  for (const std::vector<double>& line : series) {
+    longest = std::max(longest, line.size());
+    for (const double v : line) {
+      lo = std::min(lo, log_of(v));
+      hi = std::max(hi, log_of(v));
+    }
+  }
+  lo = std::floor(lo - 0.5);
+  hi = std::ceil(hi + 0.5);
   const double w = 640, h = 220, left = 60, bottom = 30;
   const auto x_of = [&](std::size_t k) {
-    return left + (values.size() > 1 ? (w - left - 10) * static_cast<double>(k) / (values.size() - 1)
-                                     : (w - left) / 2);
+    return left + (longest > 1 ? (w - left - 10) * static_cast<double>(k) / static_cast<double>(longest - 1)
+                               : (w - left) / 2);
   };
-  const auto y_of = [&](double v) { return 10 + (h - bottom - 10) * (hi - v) / (hi - lo); };
+  const auto y_of = [&](double log_value) { return 10 + (h - bottom - 10) * (hi - log_value) / (hi - lo); };
   std::ostringstream svg;
-  svg << "<svg role=\"img\" aria-label=\"relative residual per solve\" width=\"" << w << "\" height=\"" << h
-      << "\" style=\"background:#fff;border:1px solid #ccc\">";
-  for (double v = lo; v <= hi; v += 1.0)
-    svg << "<line x1=\"" << left << "\" x2=\"" << w - 10 << "\" y1=\"" << y_of(v) << "\" y2=\"" << y_of(v)
-        << "\" stroke=\"#eee\"/><text x=\"4\" y=\"" << y_of(v) + 4 << "\" font-size=\"11\">1e" << v
-        << "</text>";
-  svg << "<line x1=\"" << left << "\" x2=\"" << w - 10 << "\" y1=\"" << y_of(tol) << "\" y2=\"" << y_of(tol)
-      << "\" stroke=\"#c33\" stroke-dasharray=\"4 3\"/><polyline fill=\"none\" stroke=\"#236\" points=\"";
-  for (std::size_t k = 0; k < values.size(); ++k)
-    svg << x_of(k) << "," << y_of(values[k]) << " ";
-  svg << "\"/>";
-  for (std::size_t k = 0; k < values.size(); ++k)
-    svg << "<circle cx=\"" << x_of(k) << "\" cy=\"" << y_of(values[k]) << "\" r=\"3\" fill=\""
-        << (solves[k].value("converged", false) ? "#236" : "#c33") << "\"/>";
-  svg << "<text x=\"" << left << "\" y=\"" << h - 8 << "\" font-size=\"11\">solve 1 .. " << values.size()
-      << " (frames and load steps); dashed: the tolerance</text></svg>";
+  svg << "<svg role=\"img\" aria-label=\"relative residual against " << x_label << "\" width=\"" << w
+      << "\" height=\"" << h << "\" style=\"background:#fff;border:1px solid #ccc\">";
+  for (double decade = lo; decade <= hi; decade += 1.0)
+    svg << "<line x1=\"" << left << "\" x2=\"" << w - 10 << "\" y1=\"" << y_of(decade) << "\" y2=\""
+        << y_of(decade) << "\" stroke=\"#eee\"/><text x=\"4\" y=\"" << y_of(decade) + 4
+        << "\" font-size=\"11\">1e" << decade << "</text>";
+  svg << "<line x1=\"" << left << "\" x2=\"" << w - 10 << "\" y1=\"" << y_of(log_of(tolerance)) << "\" y2=\""
+      << y_of(log_of(tolerance)) << "\" stroke=\"#c33\" stroke-dasharray=\"4 3\"/>";
+  for (const std::vector<double>& line : series) {
+    svg << "<polyline fill=\"none\" stroke=\"#236\" stroke-opacity=\"0.7\" points=\"";
+    for (std::size_t k = 0; k < line.size(); ++k)
+      svg << x_of(k) << "," << y_of(log_of(line[k])) << " ";
+    svg << "\"/>";
+    for (std::size_t k = 0; points && k < line.size(); ++k)
+      svg << "<circle cx=\"" << x_of(k) << "\" cy=\"" << y_of(log_of(line[k])) << "\" r=\"3\" fill=\""
+          << (k < failed.size() && failed[k] ? "#c33" : "#236") << "\"/>";
+  }
+  svg << "<text x=\"" << left << "\" y=\"" << h - 8 << "\" font-size=\"11\">" << x_label << " " << first
+      << " .. " << longest - 1 + first << "; dashed: the tolerance</text></svg>";
   return svg.str();
+}
+
+/// Each solve's relative residual per iteration (local/global records it), and at the end of
+/// each solve when there are several (or no iterations were recorded).
+std::string residual_plots(const nlohmann::json& solves, double tolerance) {
+  std::vector<std::vector<double>> iterations;
+  std::vector<double> ends;
+  std::vector<bool> failed;
+  for (const nlohmann::json& s : solves) {
+    const double scale = s.value("force_scale_N", 0.0);
+    if (s.contains("residuals_N") && scale > 0.0) {
+      std::vector<double> line;
+      for (const nlohmann::json& r : s.at("residuals_N"))
+        line.push_back(r.get<double>() / scale);
+      iterations.push_back(std::move(line));
+    }
+    ends.push_back(s.value("relative_residual", 0.0));
+    failed.push_back(!s.value("converged", false));
+  }
+  std::string html;
+  if (!iterations.empty())
+    html += "<p>Relative residual against iteration, a line per solve (its local/global iterations; a "
+            "Newton step that finishes a solve shows in its end value):</p>" +
+            residual_plot(iterations, tolerance, "iteration", 0, false);
+  if (solves.size() > 1 || iterations.empty())
+    html += "<p>Relative residual at the end of each solve (red: not converged):</p>" +
+            residual_plot({ends}, tolerance, "solve", 1, true, failed);
+  return html;
 }
 
 std::string convergence_section(const SubjectRecord& r) {
@@ -322,8 +362,8 @@ std::string convergence_section(const SubjectRecord& r) {
       " solves converged (relative residual " + "at most " + significant(tolerance) + "), " +
       std::to_string(iterations) +
       " iterations in all. The relative residual is the largest force on a free vertex over the loads' force "
-      "per vertex; each solve records it at its end (not per iteration).</p>";
-  html += residual_plot(solves, tolerance);
+      "per vertex.</p>";
+  html += residual_plots(solves, tolerance);
   html += "<table><tr><th>solve</th><th>solver</th><th>iterations</th><th>stopped by</th><th>relative "
           "residual</th>"
           "<th>residual (N)</th><th>converged</th></tr>";

@@ -255,6 +255,7 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
     else
       gradient.resize(0, 3);
     const double residual = nf > 0 ? gradient.rowwise().norm().maxCoeff() : 0.0;
+    report.residuals_N.push_back(residual);
     const bool quasi_newton = !contacts_possible && m->history > 0 && iteration > k_anderson_iterations;
     if (quasi_newton) history.add(x, gradient);
     report.local_seconds += seconds_since(start);

@@ -86,6 +86,10 @@ struct SolveReport {
   /// its axis buckles) the solve reached and left before it stopped, and their energies (J).
   int saddles_left = 0;
   std::vector<double> saddle_energies_J;
+  /// The residual (largest free gradient row, N) at each local/global iterate, as the stop test saw
+  /// it (Newton steps that finish the solve not included): the report's convergence plot (empty for
+  /// the other solvers).
+  std::vector<double> residuals_N;
   /// The distance over the largest displacement (0 when nothing moved or not computed).
   double relative_distance() const {
     return equilibrium_distance_m > 0.0 && largest_displacement_m > 0.0

@@ -131,6 +131,7 @@ TEST(ReportInBrowser, TheReportOfARunThatWarnedShowsItFirstWithEveryImageAndNoSc
   EXPECT_NE(html.find("&lt;script&gt;window.phantasmInjected"), std::string::npos);
   EXPECT_EQ(html.find(k_injected), std::string::npos);
   EXPECT_LT(html.find("id=\"warnings\""), html.find("id=\"modelled\""));
+  EXPECT_NE(html.find("aria-label=\"relative residual against iteration\""), std::string::npos);
 }
 
 TEST(ReportCommand, AStrictRunThatWarnedWritesNoSubjectButAReportSayingWhy) {
