@@ -2,8 +2,8 @@
 // command template a user's method uses: on a coarse copy of the main job's pair (the Colin head
 // of data-synthetic/colin-head.yaml, 4 mm) elastix and dipy's SyN bring the landmarks closer than
 // no registration does; a method's field in each convention reaches eval as written; the truth's
-// two directions are inverse consistent and a mismatched pair is not; bad templates and failing
-// methods are refused with nothing written.
+// two directions are inverse consistent and a mismatched pair is not; bad templates, failing
+// methods and a reverse field of another size are refused with nothing written.
 
 #include "evaluation/field_conventions.hpp"
 #include "io/nifti_file.hpp"
@@ -258,4 +258,25 @@ TEST(TaskBaselines, BadTemplatesAndFailingMethodsAreRefusedWithNothingWritten) {
   const CommandResult occupied = register_task(m, root / "occupied", {"--baseline", "none"});
   EXPECT_EQ(occupied.exit_code, 2);
   EXPECT_NE(occupied.err.find("expected a new or empty folder"), std::string::npos) << occupied.err;
+}
+
+TEST(TaskBaselines, ABadReverseFieldIsRefusedNamingItWithNothingWritten) {
+  // The reverse direction is read and checked as the result is: a field of another size is refused,
+  // naming the file, exit 2, no scores written.
+  const Made& m = small_task();
+  const fs::path results = fresh_folder("baselines-bad-reverse");
+  fs::copy_file(m.truth / k_result, results / k_result);
+  phantasm::ImageGrid smaller;
+  phantasm::read_nifti_labels(m.task / "labelsTr" / "PHANTASM_0001_0001.nii.gz", &smaller);
+  smaller.dims -= Eigen::Vector3i(1, 0, 0);
+  phantasm::write_field(results / k_reverse, phantasm::zero_field(smaller),
+                        phantasm::FieldConvention::learn2reg);
+  const fs::path json = results.parent_path() / "bad-reverse.json";
+  const CommandResult eval = run_command(
+      {k_phantasm, "eval", m.task.string(), "--results", results.string(), "--json", json.string(), "-q"});
+  EXPECT_EQ(eval.exit_code, 2) << eval.err;
+  EXPECT_NE(eval.err.find(k_reverse + ": expected a field on the fixed grid (48 x 56 x 52 voxels"),
+            std::string::npos)
+      << eval.err;
+  EXPECT_FALSE(fs::exists(json));
 }
