@@ -35,6 +35,7 @@ void add_batch_command(CLI::App& app, std::function<int()>& action);
 void add_hdf5_command(CLI::App& app, std::function<int()>& action);
 void add_atlas_command(CLI::App& app, std::function<int()>& action);
 void add_task_command(CLI::App& app, std::function<int()>& action);
+void add_pair_command(CLI::App& app, std::function<int()>& action);
 void add_report_command(CLI::App& app, std::function<int()>& action);
 
 } // namespace phantasm::cli

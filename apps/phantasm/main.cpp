@@ -74,6 +74,7 @@ int main(int argc, char** argv) {
   add_info_command(app, action);
   add_eval_command(app, action);
   add_task_command(app, action);
+  add_pair_command(app, action);
   add_report_command(app, action);
 
   if (const std::string unknown = unknown_top_level_word(app, argc, argv); !unknown.empty()) {

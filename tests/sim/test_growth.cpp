@@ -12,24 +12,7 @@
 
 using namespace phantasm;
 
-namespace {
-
-/// Per organ name, the deformed volume of its tets over their rest volume, minus 1.
-std::map<std::string, double> volume_changes(const PhantomDeformation& d, const OrganTable& organs) {
-  std::map<std::string, double> rest, deformed, change;
-  for (const DeformedBody& body : d.bodies)
-    for (Eigen::Index t = 0; t < body.tets.rows(); ++t) {
-      const std::string& name =
-          organs[static_cast<std::size_t>(body.tet_organ[static_cast<std::size_t>(t)])].name;
-      rest[name] += phantasm::testing::body_tet_volume(body.rest_mm, body.tets, t);
-      deformed[name] += phantasm::testing::body_tet_volume(body.deformed_mm, body.tets, t);
-    }
-  for (const auto& [name, volume] : rest)
-    change[name] = deformed[name] / volume - 1.0;
-  return change;
-}
-
-} // namespace
+using phantasm::testing::organ_volume_changes;
 
 // One ball shrinks by 10 %, the other grows by 5 %: each ends within 1 % (absolute) of its
 // prescription, the compliant layer around them takes up the difference, nothing inverts.
@@ -42,7 +25,7 @@ TEST(Growth, EachOrgansVolumeChangesAsPrescribedAndTheLayerAroundAnswers) {
   EXPECT_EQ(report.status, "done");
   ASSERT_EQ(d.bodies.size(), 1u); // the layer, carrying both balls
   EXPECT_EQ(d.bodies[0].inverted_tets, 0);
-  const std::map<std::string, double> change = volume_changes(d, scene.organs);
+  const std::map<std::string, double> change = organ_volume_changes(d, scene.organs);
   ASSERT_EQ(change.count("left"), 1u);
   ASSERT_EQ(change.count("right"), 1u);
   EXPECT_NEAR(change.at("left"), -0.10, 0.01);

@@ -1,0 +1,270 @@
+#include "evaluation/subject_pairs.hpp"
+
+#include "core/error.hpp"
+#include "core/path_kind.hpp"
+#include "evaluation/dataset_tables.hpp"
+#include "evaluation/field_conventions.hpp"
+#include "geometry/ras_lps.hpp"
+#include "io/atomic_file.hpp"
+#include "io/dataset_layout.hpp"
+#include "io/nifti_file.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <random>
+#include <regex>
+#include <set>
+#include <sstream>
+
+namespace phantasm {
+namespace {
+
+/// True when X (voxel coordinates) lies on the grid and every voxel of its trilinear cell is
+/// exact.
+bool exact_cell(const ImageGrid& grid, const std::vector<std::uint8_t>& exact, const Eigen::Vector3d& index) {
+  int low[3];
+  for (int a = 0; a < 3; ++a) {
+    if (!(index[a] >= 0.0 && index[a] <= grid.dims[a] - 1)) return false;
+    low[a] = std::min(static_cast<int>(std::floor(index[a])), std::max(grid.dims[a] - 2, 0));
+  }
+  for (int corner = 0; corner < 8; ++corner) {
+    int c[3];
+    for (int a = 0; a < 3; ++a)
+      c[a] = std::min(low[a] + ((corner >> a) & 1), grid.dims[a] - 1);
+    if (!exact[voxel_index(grid.dims, c[0], c[1], c[2])]) return false;
+  }
+  return true;
+}
+
+std::vector<std::uint8_t> read_mask(const std::filesystem::path& path, ImageGrid* grid) {
+  const std::vector<std::int32_t> labels = read_nifti_labels(path, grid);
+  std::vector<std::uint8_t> mask(labels.size());
+  for (std::size_t v = 0; v < labels.size(); ++v)
+    mask[v] = labels[v] != 0 ? 1 : 0;
+  return mask;
+}
+
+bool same_grid(const ImageGrid& a, const ImageGrid& b) {
+  return a.dims == b.dims && (a.world_from_voxel - b.world_from_voxel).cwiseAbs().maxCoeff() <= 1e-6;
+}
+
+std::string coordinates(const Eigen::Vector3d& ras) {
+  char text[96];
+  std::snprintf(text, sizeof text, "%.6f,%.6f,%.6f", ras.x(), ras.y(), ras.z());
+  return text;
+}
+
+/// The files a subject's pairs read.
+struct SubjectFiles {
+  std::filesystem::path from_template, from_template_mask; ///< from-def_to-ref: template grid -> def
+  std::filesystem::path to_template, to_template_mask;     ///< from-ref_to-def: def grid -> template
+  std::filesystem::path landmarks, reference_labels;
+};
+
+SubjectFiles subject_files(const std::filesystem::path& dataset, const std::string& subject) {
+  const DatasetLayout layout(dataset, subject);
+  SubjectFiles files{layout.transform(PhantomState::deformed, PhantomState::reference),
+                     layout.transform_mask(PhantomState::deformed, PhantomState::reference),
+                     layout.transform(PhantomState::reference, PhantomState::deformed),
+                     layout.transform_mask(PhantomState::reference, PhantomState::deformed),
+                     layout.landmarks(PhantomState::deformed),
+                     layout.dseg(PhantomState::reference)};
+  for (const auto* path : {&files.from_template, &files.from_template_mask, &files.to_template,
+                           &files.to_template_mask, &files.landmarks, &files.reference_labels}) {
+    if (path_kind(*path) != "a regular file")
+      throw InputError(path->string() + ": expected sub-" + subject +
+                       "'s file (a dataset of phantasm batch), found " + path_kind(*path));
+  }
+  return files;
+}
+
+/// The pair's landmarks: each name both subjects have, with its place in i and in j.
+std::string landmark_table(const std::filesystem::path& moving, const std::filesystem::path& fixed) {
+  std::map<std::string, Eigen::Vector3d> in_fixed;
+  for (const LandmarkRow& row : read_landmarks(fixed))
+    in_fixed[row.name] = row.ras_mm;
+  std::string text = "name,organ,moving_x_mm,moving_y_mm,moving_z_mm,fixed_x_mm,fixed_y_mm,fixed_z_mm\n";
+  for (const LandmarkRow& row : read_landmarks(moving)) {
+    const auto found = in_fixed.find(row.name);
+    if (found != in_fixed.end())
+      text += row.name + "," + row.organ + "," + coordinates(row.ras_mm) + "," + coordinates(found->second) +
+              "\n";
+  }
+  return text;
+}
+
+std::string pair_name(const SubjectPair& pair) {
+  return "from-" + pair.first + "_to-" + pair.second;
+}
+
+} // namespace
+
+ComposedField compose_through_template(const DisplacementField& moving_from_template,
+                                       const std::vector<std::uint8_t>& moving_exact,
+                                       const DisplacementField& template_from_fixed,
+                                       const std::vector<std::uint8_t>& fixed_exact) {
+  if (moving_exact.size() != moving_from_template.lps_mm.size() ||
+      fixed_exact.size() != template_from_fixed.lps_mm.size())
+    throw InputError("compose_through_template: expected a mask of each field's voxel count, found another");
+  const ImageGrid& grid = template_from_fixed.grid;
+  ComposedField out{DisplacementField{grid, std::vector<Eigen::Vector3d>(fixed_exact.size())},
+                    std::vector<std::uint8_t>(fixed_exact.size(), 0)};
+#pragma omp parallel for schedule(static)
+  for (int k = 0; k < grid.dims.z(); ++k)
+    for (int j = 0; j < grid.dims.y(); ++j)
+      for (int i = 0; i < grid.dims.x(); ++i) {
+        const std::size_t v = voxel_index(grid.dims, i, j, k);
+        const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
+        const Eigen::Vector3d in_template = x + ras_from_lps(template_from_fixed.lps_mm[v]);
+        const Eigen::Vector3d in_moving = moving_from_template.moved(in_template);
+        out.field.lps_mm[v] = lps_from_ras(in_moving - x);
+        out.exact[v] = fixed_exact[v] && exact_cell(moving_from_template.grid, moving_exact,
+                                                    moving_from_template.grid.index_from_world(in_template));
+      }
+  return out;
+}
+
+std::vector<SubjectPair> parse_pair_list(const std::string& text) {
+  static const std::regex pair_pattern(R"(([A-Za-z0-9]+):([A-Za-z0-9]+))");
+  std::vector<SubjectPair> pairs;
+  std::stringstream parts(text);
+  std::string part;
+  while (std::getline(parts, part, ',')) {
+    std::smatch match;
+    if (!std::regex_match(part, match, pair_pattern))
+      throw InputError("--pairs: expected all or pairs of subject labels such as 01:02,03:05, found '" +
+                       part + "' in '" + text + "'");
+    pairs.emplace_back(match[1].str(), match[2].str());
+  }
+  if (pairs.empty()) throw InputError("--pairs: expected all or pairs such as 01:02, found '" + text + "'");
+  return pairs;
+}
+
+std::vector<SubjectPair> choose_pairs(const std::vector<std::string>& subjects, const PairRequest& request) {
+  std::string known;
+  for (const std::string& s : subjects)
+    known += (known.empty() ? "" : ", ") + s;
+  std::set<SubjectPair> chosen;
+  if (!request.listed.empty()) {
+    for (const SubjectPair& pair : request.listed) {
+      for (const std::string& s : {pair.first, pair.second})
+        if (std::find(subjects.begin(), subjects.end(), s) == subjects.end())
+          throw InputError("--pairs: expected subjects of " + request.dataset.string() + " (" + known +
+                           "), found '" + s + "', which it does not hold");
+      if (pair.first == pair.second)
+        throw InputError("--pairs: expected two different subjects, found " + pair.first + ":" + pair.second);
+      chosen.insert(std::minmax(pair.first, pair.second));
+    }
+    return {chosen.begin(), chosen.end()};
+  }
+  std::vector<SubjectPair> all;
+  for (std::size_t a = 0; a < subjects.size(); ++a)
+    for (std::size_t b = a + 1; b < subjects.size(); ++b)
+      all.emplace_back(subjects[a], subjects[b]);
+  if (request.random_count == 0) return all;
+  if (request.random_count > all.size())
+    throw InputError("--random: expected at most " + std::to_string(all.size()) + " pairs (the " +
+                     std::to_string(subjects.size()) + " subjects of " + request.dataset.string() +
+                     " make no more), found " + std::to_string(request.random_count));
+  // A partial Fisher-Yates shuffle on 53-bit uniforms: the same pairs for the same seed with any
+  // standard library.
+  std::seed_seq mix{static_cast<std::uint32_t>(request.seed), static_cast<std::uint32_t>(request.seed >> 32)};
+  std::mt19937_64 random(mix);
+  for (std::size_t n = 0; n < request.random_count; ++n) {
+    const double u = static_cast<double>(random() >> 11) * 0x1.0p-53;
+    const std::size_t pick = n + std::min(all.size() - n - 1, static_cast<std::size_t>(u * (all.size() - n)));
+    std::swap(all[n], all[pick]);
+  }
+  all.resize(request.random_count);
+  std::sort(all.begin(), all.end());
+  return all;
+}
+
+nlohmann::json write_subject_pairs(const PairRequest& request) {
+  const std::vector<std::string> subjects = complete_subjects(request.dataset);
+  if (subjects.size() < 2)
+    throw InputError(request.dataset.string() +
+                     ": expected a dataset of phantasm batch with at least two complete subjects "
+                     "(derivatives/phantasm/sub-<id>/provenance.json), found " +
+                     std::to_string(subjects.size()));
+  const std::vector<SubjectPair> pairs = choose_pairs(subjects, request);
+  std::error_code error;
+  if (std::filesystem::exists(request.out, error) &&
+      (!std::filesystem::is_directory(request.out, error) || !std::filesystem::is_empty(request.out, error)))
+    throw InputError("-o: expected a new or empty folder, found " + path_kind(request.out) + " at " +
+                     request.out.string() + " (remove it, or choose another)");
+
+  // Every subject's files and its template checked before anything is written: one grid, and the
+  // same reference labels (the template every field goes through).
+  std::set<std::string> used;
+  for (const SubjectPair& pair : pairs)
+    used.insert({pair.first, pair.second});
+  std::map<std::string, SubjectFiles> files;
+  ImageGrid grid;
+  std::vector<std::int32_t> template_labels;
+  std::string first;
+  for (const std::string& subject : used) {
+    files[subject] = subject_files(request.dataset, subject);
+    ImageGrid labels_grid;
+    std::vector<std::int32_t> labels = read_nifti_labels(files[subject].reference_labels, &labels_grid);
+    if (first.empty()) {
+      first = subject;
+      grid = labels_grid;
+      template_labels = std::move(labels);
+    } else if (!same_grid(grid, labels_grid)) {
+      throw InputError(files[subject].reference_labels.string() + ": expected the grid of sub-" + first +
+                       " (pairs share one grid), found another size or affine");
+    } else if (labels != template_labels) {
+      throw InputError(files[subject].reference_labels.string() + ": expected the reference labels of sub-" +
+                       first +
+                       " (subjects of one template: the same anatomy, seed and grid), found others: sub-" +
+                       subject + " and sub-" + first + " cannot be paired through one template");
+    }
+    for (const auto* mask : {&files[subject].from_template_mask, &files[subject].to_template_mask}) {
+      ImageGrid mask_grid;
+      read_nifti_labels(*mask, &mask_grid);
+      if (!same_grid(grid, mask_grid))
+        throw InputError(mask->string() + ": expected the grid of sub-" + first +
+                         ", found another size or affine");
+    }
+  }
+
+  std::filesystem::create_directories(request.out);
+  nlohmann::json written = nlohmann::json::array();
+  std::string table = "moving\tfixed\tfield\tmask\tlandmarks\texact_fraction\n";
+  for (const SubjectPair& unordered : pairs) {
+    for (const SubjectPair& pair : {unordered, SubjectPair{unordered.second, unordered.first}}) {
+      const SubjectFiles& moving = files.at(pair.first);
+      const SubjectFiles& fixed = files.at(pair.second);
+      ImageGrid ignored;
+      const ComposedField composed =
+          compose_through_template(read_field(moving.from_template, FieldConvention::itk, grid),
+                                   read_mask(moving.from_template_mask, &ignored),
+                                   read_field(fixed.to_template, FieldConvention::itk, grid),
+                                   read_mask(fixed.to_template_mask, &ignored));
+      const std::string name = pair_name(pair);
+      const std::filesystem::path folder = request.out / name;
+      std::filesystem::create_directories(folder);
+      write_field(folder / (name + "_mode-image_xfm.nii.gz"), composed.field, FieldConvention::itk);
+      write_nifti_labels(folder / (name + "_desc-exact_mask.nii.gz"), grid,
+                         std::vector<std::int32_t>(composed.exact.begin(), composed.exact.end()));
+      write_file_atomically(folder / "landmarks.csv", landmark_table(moving.landmarks, fixed.landmarks));
+      std::size_t exact = 0;
+      for (const std::uint8_t e : composed.exact)
+        exact += e;
+      const double fraction = static_cast<double>(exact) / static_cast<double>(composed.exact.size());
+      char cell[32];
+      std::snprintf(cell, sizeof cell, "%.6f", fraction);
+      table += pair.first + "\t" + pair.second + "\t" + name + "/" + name + "_mode-image_xfm.nii.gz\t" +
+               name + "/" + name + "_desc-exact_mask.nii.gz\t" + name + "/landmarks.csv\t" + cell + "\n";
+      written.push_back(
+          {{"moving", pair.first}, {"fixed", pair.second}, {"folder", name}, {"exact_fraction", fraction}});
+    }
+  }
+  write_file_atomically(request.out / "pairs.tsv", table);
+  return {{"dataset", request.dataset.string()}, {"pairs", written}};
+}
+
+} // namespace phantasm

@@ -1,0 +1,341 @@
+// Fields between two subjects of one template (phantasm pair, evaluation/subject_pairs.cpp): the
+// composition through the template on analytic fields, the pairs chosen, and on a population of
+// three solved subjects: the composed field against the direct composition of the two solved
+// meshes, i -> j after j -> i against the identity, the landmarks, transformix carrying i's labels
+// onto j's, and bad input refused with nothing written.
+
+#include "anatomy/phantom.hpp"
+#include "batch/sweep.hpp"
+#include "core/error.hpp"
+#include "evaluation/subject_pairs.hpp"
+#include "geometry/ras_lps.hpp"
+#include "geometry/tet_location.hpp"
+#include "io/dataset_layout.hpp"
+#include "io/nifti_file.hpp"
+#include "scene/scene.hpp"
+#include "sim/deform_phantom.hpp"
+#include "tests/apps/cli_fixtures.hpp"
+#include "tests/apps/transformix_parameters.hpp"
+#include "tests/support/error_message.hpp"
+#include "tests/support/subprocess.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+using namespace phantasm;
+using namespace phantasm::testing;
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path k_population = k_source_dir / "tests" / "data" / "sweeps" / "population-balls.yaml";
+
+ImageGrid small_grid() {
+  ImageGrid grid;
+  grid.dims = Eigen::Vector3i(16, 14, 12);
+  grid.spacing_mm = Eigen::Vector3d::Constant(2.0);
+  grid.world_from_voxel.topLeftCorner<3, 3>() = 2.0 * Eigen::Matrix3d::Identity();
+  grid.world_from_voxel.topRightCorner<3, 1>() = Eigen::Vector3d(-15, -13, -11);
+  return grid;
+}
+
+/// The field of the affine point map x -> a x + b on `grid` (trilinear interpolation is exact on it).
+DisplacementField affine_field(const ImageGrid& grid, const Eigen::Matrix3d& a, const Eigen::Vector3d& b) {
+  DisplacementField field{grid, std::vector<Eigen::Vector3d>(static_cast<std::size_t>(grid.voxel_count()))};
+  for (int k = 0; k < grid.dims.z(); ++k)
+    for (int j = 0; j < grid.dims.y(); ++j)
+      for (int i = 0; i < grid.dims.x(); ++i) {
+        const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
+        field.lps_mm[voxel_index(grid.dims, i, j, k)] = lps_from_ras(a * x + b - x);
+      }
+  return field;
+}
+
+/// A batch of the three-subject population and its pairs (all), in a fresh folder.
+struct Population {
+  fs::path root, dataset, pairs;
+};
+
+Population make_population(const std::string& name) {
+  Population p;
+  p.root = fresh_folder(name);
+  p.dataset = p.root / "dataset";
+  p.pairs = p.root / "pairs";
+  const CommandResult batch = run_command(
+      {k_phantasm, "batch", k_population.string(), "-o", p.dataset.string(), "--jobs", "2", "--quiet"});
+  EXPECT_EQ(batch.exit_code, 0) << batch.err;
+  const CommandResult pair =
+      run_command({k_phantasm, "pair", p.dataset.string(), "-o", p.pairs.string(), "-q"});
+  EXPECT_EQ(pair.exit_code, 0) << pair.err;
+  return p;
+}
+
+fs::path pair_file(const Population& p, const std::string& i, const std::string& j,
+                   const std::string& suffix) {
+  const std::string name = "from-" + i + "_to-" + j;
+  return p.pairs / name / (name + suffix);
+}
+
+std::vector<std::int32_t> labels_of(const fs::path& path, ImageGrid* grid = nullptr) {
+  ImageGrid ignored;
+  return read_nifti_labels(path, grid ? grid : &ignored);
+}
+
+/// Voxels whose 26 neighbours all carry their label: away from every boundary.
+std::vector<bool> interior(const std::vector<std::int32_t>& labels, const ImageGrid& grid) {
+  std::vector<bool> inside(labels.size(), false);
+  for (int k = 1; k + 1 < grid.dims.z(); ++k)
+    for (int j = 1; j + 1 < grid.dims.y(); ++j)
+      for (int i = 1; i + 1 < grid.dims.x(); ++i) {
+        const std::int32_t own = labels[voxel_index(grid.dims, i, j, k)];
+        bool same = true;
+        for (int dk = -1; dk <= 1 && same; ++dk)
+          for (int dj = -1; dj <= 1 && same; ++dj)
+            for (int di = -1; di <= 1 && same; ++di)
+              same = labels[voxel_index(grid.dims, i + di, j + dj, k + dk)] == own;
+        inside[voxel_index(grid.dims, i, j, k)] = same;
+      }
+  return inside;
+}
+
+/// The smallest Dice over the labels of `fixed` (but 0) within `region`.
+double smallest_dice(const std::vector<std::int32_t>& fixed, const std::vector<std::int32_t>& warped,
+                     const std::vector<bool>& region) {
+  std::map<std::int32_t, std::array<double, 3>> counts; // both, fixed, warped
+  for (std::size_t v = 0; v < fixed.size(); ++v) {
+    if (!region[v]) continue;
+    counts[fixed[v]][1] += 1;
+    counts[warped[v]][2] += 1;
+    if (fixed[v] == warped[v]) counts[fixed[v]][0] += 1;
+  }
+  double smallest = 1.0;
+  for (const auto& [label, c] : counts)
+    if (label != 0 && c[1] > 0) smallest = std::min(smallest, 2.0 * c[0] / (c[1] + c[2]));
+  return smallest;
+}
+
+} // namespace
+
+// Two affine maps composed through a template: trilinear interpolation is exact on affine fields,
+// so the composed field is the composed map wherever the template point lies on the grid; a
+// voxel not exact in the fixed subject's mask, or a template cell touching one not exact in the
+// moving subject's, is not exact in the result.
+TEST(SubjectPairs, CompositionThroughTheTemplateIsTheComposedMapAndItsMaskTheIntersection) {
+  const ImageGrid grid = small_grid();
+  Eigen::Matrix3d a_moving, a_fixed;
+  a_moving << 1.05, 0.02, 0.0, -0.01, 0.97, 0.03, 0.0, 0.01, 1.02;
+  a_fixed << 0.96, 0.0, 0.02, 0.01, 1.03, 0.0, -0.02, 0.0, 0.99;
+  const Eigen::Vector3d b_moving(0.4, -0.3, 0.2), b_fixed(-0.2, 0.1, 0.3);
+  const DisplacementField moving = affine_field(grid, a_moving, b_moving);
+  const DisplacementField fixed = affine_field(grid, a_fixed, b_fixed);
+  const std::size_t n = static_cast<std::size_t>(grid.voxel_count());
+  std::vector<std::uint8_t> moving_exact(n, 1), fixed_exact(n, 1);
+  fixed_exact[voxel_index(grid.dims, 8, 7, 6)] = 0;
+  moving_exact[voxel_index(grid.dims, 4, 4, 4)] = 0;
+  const ComposedField composed = compose_through_template(moving, moving_exact, fixed, fixed_exact);
+  std::size_t checked = 0;
+  for (int k = 0; k < grid.dims.z(); ++k)
+    for (int j = 0; j < grid.dims.y(); ++j)
+      for (int i = 0; i < grid.dims.x(); ++i) {
+        const std::size_t v = voxel_index(grid.dims, i, j, k);
+        const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
+        const Eigen::Vector3d in_template = a_fixed * x + b_fixed;
+        const Eigen::Vector3d index = grid.index_from_world(in_template);
+        const bool on_grid =
+            (index.array() >= 0.0).all() && (index.array() <= (grid.dims.cast<double>().array() - 1.0)).all();
+        if (!on_grid) {
+          EXPECT_EQ(composed.exact[v], 0) << "a template point off the grid is no exact composition";
+          continue;
+        }
+        const Eigen::Vector3d expected = a_moving * in_template + b_moving - x;
+        EXPECT_LT((ras_from_lps(composed.field.lps_mm[v]) - expected).norm(), 1e-9)
+            << i << " " << j << " " << k;
+        const bool touches = (index - Eigen::Vector3d(4, 4, 4)).cwiseAbs().maxCoeff() < 1.0;
+        EXPECT_EQ(composed.exact[v], (i == 8 && j == 7 && k == 6) || touches ? 0 : 1)
+            << i << " " << j << " " << k;
+        ++checked;
+      }
+  EXPECT_GT(checked, n / 2);
+}
+
+// All pairs are every unordered pair; random pairs are distinct, the same for the same seed;
+// listed pairs name subjects of the dataset, or the message names the one that is not.
+TEST(SubjectPairs, PairsAreAllListedOrDrawnWithTheSeed) {
+  const std::vector<std::string> subjects = {"01", "02", "03", "04", "05", "06"};
+  PairRequest request;
+  request.dataset = "data";
+  EXPECT_EQ(choose_pairs(subjects, request).size(), 15u);
+  request.random_count = 5;
+  request.seed = 3;
+  const std::vector<SubjectPair> drawn = choose_pairs(subjects, request);
+  EXPECT_EQ(drawn.size(), 5u);
+  EXPECT_EQ(std::set<SubjectPair>(drawn.begin(), drawn.end()).size(), 5u);
+  EXPECT_EQ(choose_pairs(subjects, request), drawn);
+  bool another = false;
+  for (std::uint64_t seed = 4; seed < 8; ++seed) {
+    request.seed = seed;
+    another = another || choose_pairs(subjects, request) != drawn;
+  }
+  EXPECT_TRUE(another) << "the seed chooses the pairs";
+  request.random_count = 16;
+  EXPECT_NE(input_error_message([&] {
+              choose_pairs(subjects, request);
+            }).find("--random: expected at most 15 pairs"),
+            std::string::npos);
+  request.random_count = 0;
+  request.listed = parse_pair_list("03:01,02:05");
+  EXPECT_EQ(choose_pairs(subjects, request), (std::vector<SubjectPair>{{"01", "03"}, {"02", "05"}}));
+  request.listed = parse_pair_list("01:09");
+  EXPECT_NE(input_error_message([&] {
+              choose_pairs(subjects, request);
+            }).find("--pairs: expected subjects of data (01, 02, 03, 04, 05, 06), found '09'"),
+            std::string::npos);
+  EXPECT_NE(input_error_message([&] { parse_pair_list("01-02"); }).find("found '01-02'"), std::string::npos);
+}
+
+// Three subjects solved from one template, paired: in the exact mask, each composed field is
+// within 0.1 voxel of the direct composition (the point of j located in j's solved mesh, carried
+// by the same barycentric weights to i's) and i -> j composed with j -> i is the identity within
+// 0.1 voxel, both but in at most 0.1 % of the voxels (cells across a tissue interface, within
+// 0.25 voxel), and i's landmarks are where the field takes j's (within 0.2 voxel, as a single
+// subject's fields carry its landmarks: docs/volumes-and-images.md). Then bad input: a subject the dataset
+// does not hold, and a subject of another template, each exit 2 with nothing written.
+TEST(SubjectPairs, PopulationPairsMatchTheDirectCompositionAndInvertEachOther) {
+  const Population p = make_population("pairs");
+  const Sweep sweep = load_sweep(k_population);
+  Reporter quiet = Reporter::silent();
+  const SceneLoadResult first = parse_scene(sweep.subjects[0].scene_text, sweep.base_scene);
+  ASSERT_TRUE(first.scene);
+  const Phantom phantom = build_phantom(first.scene->anatomy, {}, quiet);
+  std::map<std::string, DeformedBody> bodies;
+  for (const SweepSubject& subject : sweep.subjects) {
+    const SceneLoadResult loaded = parse_scene(subject.scene_text, sweep.base_scene);
+    ASSERT_TRUE(loaded.scene);
+    StageReport report;
+    bodies[subject.id] =
+        deform_phantom(loaded.scene->deformation, loaded.scene->organs, phantom, report, quiet).bodies.at(0);
+  }
+  const ImageGrid grid = first.scene->grid.grid();
+  const double voxel = grid.spacing_mm.minCoeff();
+  double largest_move = 0.0;
+  for (const auto& [i, j] : std::vector<SubjectPair>{{"01", "02"}, {"02", "03"}, {"03", "01"}}) {
+    const DisplacementField forward = read_displacement_field(pair_file(p, i, j, "_mode-image_xfm.nii.gz"));
+    const DisplacementField backward = read_displacement_field(pair_file(p, j, i, "_mode-image_xfm.nii.gz"));
+    const std::vector<std::int32_t> exact = labels_of(pair_file(p, i, j, "_desc-exact_mask.nii.gz"));
+    const DeformedBody& moving = bodies.at(i);
+    const DeformedBody& fixed = bodies.at(j);
+    const TetMeshLocator locator(fixed.deformed_mm, fixed.tets);
+    std::vector<double> direct_errors, identity_errors;
+    for (int k = 0; k < grid.dims.z(); ++k)
+      for (int jj = 0; jj < grid.dims.y(); ++jj)
+        for (int ii = 0; ii < grid.dims.x(); ++ii) {
+          const std::size_t v = voxel_index(grid.dims, ii, jj, k);
+          if (!exact[v]) continue;
+          const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(ii, jj, k));
+          const Eigen::Vector3d in_moving = forward.moved(x);
+          largest_move = std::max(largest_move, (in_moving - x).norm());
+          identity_errors.push_back((backward.moved(in_moving) - x).norm());
+          const std::optional<TetLocation> at = locator.find(x, 1e-9, 1e-6);
+          if (!at) continue; // outside the solved body: the still box, where both stay
+          Eigen::Vector3d direct = Eigen::Vector3d::Zero();
+          for (int c = 0; c < 4; ++c)
+            direct += at->weights[c] * moving.deformed_mm.row(fixed.tets(at->tet, c)).transpose();
+          direct_errors.push_back((in_moving - direct).norm());
+        }
+    const Summary direct = summarize(direct_errors), identity = summarize(identity_errors);
+    const auto over = [&](const std::vector<double>& errors) {
+      return 100.0 *
+             static_cast<double>(
+                 std::count_if(errors.begin(), errors.end(), [&](double e) { return e > 0.1 * voxel; })) /
+             static_cast<double>(errors.size());
+    };
+    EXPECT_GT(direct.count, 1000u);
+    // Within 0.1 voxel but where the template point's cell straddles a tissue interface (the
+    // fields' gradients jump there, and trilinear interpolation rounds the kink): at most 0.1 % of
+    // the voxels, each within 0.25 voxel.
+    EXPECT_LE(over(direct_errors), 0.1) << i << " -> " << j;
+    EXPECT_LT(direct.max, 0.25 * voxel) << i << " -> " << j;
+    EXPECT_LE(over(identity_errors), 0.1) << i << " -> " << j << " -> " << i;
+    EXPECT_LT(identity.max, 0.2 * voxel) << i << " -> " << j << " -> " << i;
+    std::printf(
+        "[pairs] %s -> %s: against the direct composition mean %.4f, p95 %.4f, max %.4f mm, %.4f %% over "
+        "0.1 voxel (%zu voxels); round trip mean %.4f, p95 %.4f, max %.4f mm, %.4f %% over 0.1 voxel\n",
+        i.c_str(), j.c_str(), direct.mean, direct.p95, direct.max, over(direct_errors), direct.count,
+        identity.mean, identity.p95, identity.max, over(identity_errors));
+
+    // Landmarks: the field takes j's landmark to i's.
+    std::ifstream table(p.pairs / ("from-" + i + "_to-" + j) / "landmarks.csv");
+    std::string line;
+    std::getline(table, line);
+    int rows = 0;
+    while (std::getline(table, line)) {
+      std::stringstream cells(line);
+      std::string cell;
+      std::vector<double> numbers;
+      for (int c = 0; std::getline(cells, cell, ','); ++c)
+        if (c >= 2) numbers.push_back(std::stod(cell));
+      ASSERT_EQ(numbers.size(), 6u) << line;
+      const Eigen::Vector3d in_i(numbers[0], numbers[1], numbers[2]),
+          in_j(numbers[3], numbers[4], numbers[5]);
+      EXPECT_LT((forward.moved(in_j) - in_i).norm(), 0.2 * voxel) << line;
+      ++rows;
+    }
+    EXPECT_GT(rows, 3);
+  }
+  EXPECT_GT(largest_move, voxel) << "subjects must differ by more than a voxel for the test to tell";
+
+  // Bad input: exit 2, the message names the subject, nothing written.
+  const CommandResult unknown = run_command(
+      {k_phantasm, "pair", p.dataset.string(), "-o", (p.root / "bad1").string(), "--pairs", "01:07"});
+  EXPECT_EQ(unknown.exit_code, 2);
+  EXPECT_NE(unknown.err.find("found '07', which it does not hold"), std::string::npos) << unknown.err;
+  EXPECT_FALSE(fs::exists(p.root / "bad1"));
+  // A subject of another template: its reference labels differ (one voxel changed).
+  const fs::path mixed = p.root / "mixed";
+  fs::copy(p.dataset, mixed, fs::copy_options::recursive);
+  const DatasetLayout third(mixed, "03");
+  ImageGrid labels_grid;
+  std::vector<std::int32_t> labels = labels_of(third.dseg(PhantomState::reference), &labels_grid);
+  labels[labels.size() / 2] += 1;
+  write_nifti_labels(third.dseg(PhantomState::reference), labels_grid, labels);
+  const CommandResult other =
+      run_command({k_phantasm, "pair", mixed.string(), "-o", (p.root / "bad2").string()});
+  EXPECT_EQ(other.exit_code, 2);
+  EXPECT_NE(other.err.find("sub-03 and sub-01 cannot be paired through one template"), std::string::npos)
+      << other.err;
+  EXPECT_FALSE(fs::exists(p.root / "bad2"));
+}
+
+// transformix, given the pair field from-i_to-j as docs/subject-pairs.md says, carries i's labels
+// (ses-def) onto j's grid: Dice >= 0.98 for every label away from j's boundaries, where i's labels
+// unwarped score lower (the subjects differ there).
+TEST(SubjectPairs, TransformixCarriesOneSubjectsLabelsOntoTheOthers) {
+  const Population p = make_population("pairs-transformix");
+  for (const auto& [i, j] : std::vector<SubjectPair>{{"01", "02"}, {"03", "01"}}) {
+    ImageGrid grid;
+    const std::vector<std::int32_t> target =
+        labels_of(DatasetLayout(p.dataset, j).dseg(PhantomState::deformed), &grid);
+    const fs::path moving = DatasetLayout(p.dataset, i).dseg(PhantomState::deformed);
+    const fs::path folder = p.root / ("transformix-" + i + "-" + j);
+    fs::create_directories(folder);
+    write_text_file(folder / "parameters.txt",
+                    deformation_field_parameters(pair_file(p, i, j, "_mode-image_xfm.nii.gz"), grid));
+    const CommandResult result = run_command({"/usr/bin/transformix", "-in", moving.string(), "-out",
+                                              folder.string(), "-tp", (folder / "parameters.txt").string()});
+    ASSERT_EQ(result.exit_code, 0) << result.out << result.err;
+    const std::vector<std::int32_t> warped = labels_of(folder / "result.nii.gz");
+    const std::vector<bool> away = interior(target, grid);
+    const double dice = smallest_dice(target, warped, away);
+    const double unwarped = smallest_dice(target, labels_of(moving), away);
+    std::printf("[pairs] transformix %s -> %s: smallest Dice away from boundaries %.4f (unwarped %.4f)\n",
+                i.c_str(), j.c_str(), dice, unwarped);
+    EXPECT_GE(dice, 0.98);
+    EXPECT_LT(unwarped, dice);
+  }
+}
