@@ -7,7 +7,7 @@
 // all; solver: one of local_global, jacobi_chebyshev, newton, xpbd, gauss_seidel_pbd)
 //        solver_extremes locking [CELLS...]: the volume-locking rows, Newton's tip (relative
 //        residual 1e-7) on the bar with CELLS cells across (default 4 8) at nu 0.45, 0.49, 0.499,
-//        per tet and with the default bulk term (deformation.volume)
+//        per tet, on tet groups and on tet groups and tets
 
 #include "bench/solver_extremes.hpp"
 
@@ -41,7 +41,8 @@ int locking_rows(std::FILE* table, const std::vector<int>& cells) {
   std::fprintf(table, "| bulk term | cells | nu 0.45 | nu 0.49 | nu 0.499 | 0.499 vs 0.45 | time |\n"
                       "|---|---|---|---|---|---|---|\n");
   for (int n : cells)
-    for (VolumeFormulation v : {VolumeFormulation::tet, DeformationSettings{}.volume}) {
+    for (VolumeFormulation v :
+         {VolumeFormulation::tet, VolumeFormulation::tet_group, VolumeFormulation::tet_group_and_tet}) {
       const auto start = std::chrono::steady_clock::now();
       std::vector<double> tips;
       for (double nu : {0.45, 0.49, 0.499}) {

@@ -6,10 +6,11 @@
 // step at its result). Exit status 1 when a solve reported converged lies more than 1 % off.
 // Usage: solver_extremes_scene SCENE.yaml
 //        solver_extremes_scene SCENE.yaml volumes NU [ANATOMY_CACHE [scene]]: every material of
-//        Poisson ratio 0.45 or more set to NU, solved by Newton (to 1e-7; `scene`: the scene's own
-//        solver, to 1e-6) with the bulk term per tet and with the default formulation; prints each organ's
-//        volume change (its patch surface's base mesh, moved with the tets; and the sum of the tets of its
-//        material region), as docs/deformation.md's volume table.
+//        Poisson ratio 0.45 or more set to NU (0: as the scene has them), solved by Newton (to 1e-7; `scene`:
+//        the scene's own solver, to 1e-6) with the bulk term per tet, on tet groups and on tet groups and
+//        tets; prints each body's inverted tets and smallest det F and each organ's volume change (its patch
+//        surface's base mesh, moved with the tets; and the sum of the tets of its material region), as
+//        docs/deformation.md's volume table.
 
 #include "geometry/tet_quality.hpp"
 #include "pipeline/run_pipeline.hpp"
@@ -46,7 +47,8 @@ double body_tet_volume_mm3(const Eigen::MatrixX3d& x, const Eigen::MatrixX4i& te
 int organ_volumes(const Scene& scene, const Phantom& phantom, double nu, bool scene_solver, Reporter& quiet) {
   std::printf("| bulk term | organ | volume change (surface) | volume change (its tets) | solve |\n"
               "|---|---|---|---|---|\n");
-  for (VolumeFormulation v : {VolumeFormulation::tet, DeformationSettings{}.volume}) {
+  for (VolumeFormulation v :
+       {VolumeFormulation::tet, VolumeFormulation::tet_group, VolumeFormulation::tet_group_and_tet}) {
     DeformationSettings d = scene.deformation;
     d.volume = v;
     if (scene_solver) {
@@ -57,7 +59,7 @@ int organ_volumes(const Scene& scene, const Phantom& phantom, double nu, bool sc
       d.solver.max_iterations = 200;
     }
     for (MaterialSettings& m : d.materials)
-      if (m.poisson_ratio >= 0.45) m.poisson_ratio = nu;
+      if (m.poisson_ratio >= 0.45 && nu > 0.0) m.poisson_ratio = nu;
     StageReport report;
     const auto start = std::chrono::steady_clock::now();
     const PhantomDeformation result = deform_phantom(d, scene.organs, phantom, report, quiet);
@@ -67,6 +69,9 @@ int organ_volumes(const Scene& scene, const Phantom& phantom, double nu, bool sc
       solve += std::to_string(r.iterations) + " it., " + (r.converged ? "converged" : "not converged");
     char time[32];
     std::snprintf(time, sizeof time, ", %.0f s", seconds);
+    for (const DeformedBody& body : result.bodies)
+      std::printf("| %s | %s (body): %ld inverted tets, smallest det F %.3f | | | |\n", to_string(v),
+                  body.organ.c_str(), body.inverted_tets, body.smallest_det_F);
     // The tets of each organ's material region, over every body.
     std::vector<double> rest(result.organs.size(), 0.0), moved(result.organs.size(), 0.0);
     for (const DeformedBody& body : result.bodies)

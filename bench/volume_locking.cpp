@@ -49,6 +49,8 @@ const char* name_of(VolumeFormulation v, bool structured) {
   case VolumeFormulation::tet: return "per tet";
   case VolumeFormulation::vertex_star: return "vertex stars";
   case VolumeFormulation::tet_group: return structured ? "hexahedral cells" : "groups";
+  case VolumeFormulation::tet_group_and_tet:
+    return structured ? "hexahedral cells and tets" : "groups and tets";
   }
   return "?";
 }

@@ -174,10 +174,11 @@ void parse_deformation(CheckedMap& map, DeformationSettings& deformation,
   map.string_list("fixed", deformation.fixed);
   map.integer("load_steps", deformation.load_steps, 1, 10000);
   std::string volume;
-  if (map.choice("volume", volume, {"per_tet", "tet_groups", "vertex_stars"})) {
-    deformation.volume = volume == "tet_groups"     ? VolumeFormulation::tet_group
-                         : volume == "vertex_stars" ? VolumeFormulation::vertex_star
-                                                    : VolumeFormulation::tet;
+  if (map.choice("volume", volume, {"per_tet", "tet_groups", "tet_groups_and_tets", "vertex_stars"})) {
+    deformation.volume = volume == "tet_groups"            ? VolumeFormulation::tet_group
+                         : volume == "tet_groups_and_tets" ? VolumeFormulation::tet_group_and_tet
+                         : volume == "vertex_stars"        ? VolumeFormulation::vertex_star
+                                                           : VolumeFormulation::tet;
   }
   map.string("gap_tissue", voxelization.gap_tissue);
   parse_list(map, "loads", "loads", deformation.loads, parse_load);

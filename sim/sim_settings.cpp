@@ -85,6 +85,7 @@ const char* to_string(VolumeFormulation volume) {
   case VolumeFormulation::tet: return "per_tet";
   case VolumeFormulation::vertex_star: return "vertex_stars";
   case VolumeFormulation::tet_group: return "tet_groups";
+  case VolumeFormulation::tet_group_and_tet: return "tet_groups_and_tets";
   }
   return "?";
 }

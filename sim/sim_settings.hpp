@@ -44,7 +44,9 @@ struct SolverSettings {
 enum class VolumeFormulation {
   tet,         ///< per tet: wv/2 |F - P_volume(F)|^2 with wv = 3 lambda V (locks as nu -> 1/2)
   vertex_star, ///< per vertex: the volume of the union of its tets, an EnclosedVolume with K = lambda / 4
-  tet_group    ///< per group of about 5 tets: one constraint on the group's volume-averaged F
+  tet_group,   ///< per group of about 5 tets: one constraint on the group's volume-averaged F
+  /// per group as tet_group, with a small share of the bulk weight left on each tet (tet_bulk_share)
+  tet_group_and_tet
 };
 
 enum class LoadKind { gravity, displacement, growth };
@@ -171,7 +173,8 @@ std::string growth_target(const LoadSettings& load);
 const char* to_string(DeformationMode mode);
 const char* to_string(SolverMethod method);
 const char* to_string(LoadKind kind);
-const char* to_string(VolumeFormulation volume); ///< the scene's words: per_tet, vertex_stars, tet_groups
+/// the scene's words: per_tet, vertex_stars, tet_groups, tet_groups_and_tets
+const char* to_string(VolumeFormulation volume);
 const char* to_string(MotionProfile motion);
 const char* to_string(ObstacleShape shape);
 

@@ -1,6 +1,7 @@
 #include "sim/vertex_star_volumes.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -80,7 +81,15 @@ int move_bulk_to_vertex_stars(ElasticModel& model) {
   return added;
 }
 
-int move_bulk_to_tet_groups(ElasticModel& model, const std::vector<std::vector<int>>& groups) {
+int move_bulk_to_tet_groups(ElasticModel& model, const std::vector<std::vector<int>>& groups,
+                            double kept_per_tet) {
+  if (!(kept_per_tet >= 0.0 && std::isfinite(kept_per_tet)))
+    throw std::invalid_argument(
+        "move_bulk_to_tet_groups: the bulk weight kept per tet over its strain weight "
+        "must be finite and >= 0, found " +
+        std::to_string(kept_per_tet));
+  // What a tet keeps of its bulk weight: at most kept_per_tet times its strain weight.
+  auto kept = [&](const TetElement& e) { return std::min(e.volume_weight, kept_per_tet * e.strain_weight); };
   std::vector<char> grouped(model.tets.size(), 0);
   for (const std::vector<int>& group : groups) {
     for (int t : group) {
@@ -99,9 +108,9 @@ int move_bulk_to_tet_groups(ElasticModel& model, const std::vector<std::vector<i
       if (!(e.volume_weight > 0.0)) continue;
       bulk.push_back(t);
       g.rest_volume_m3 += e.rest_volume_m3;
-      g.weight += e.volume_weight;
+      g.weight += e.volume_weight - kept(e);
     }
-    if (bulk.empty()) continue;
+    if (!(g.weight > 0.0)) continue; // no tet of the group gives any of its bulk weight
     // The group's vertices in order of first use, and G = sum_t V_t S_t Q_t / V_g.
     std::map<int, int> local;
     for (int t : bulk)
@@ -117,7 +126,7 @@ int move_bulk_to_tet_groups(ElasticModel& model, const std::vector<std::vector<i
     g.tets = bulk;
     model.tet_groups.push_back(std::move(g));
     for (int t : bulk)
-      model.tets[static_cast<std::size_t>(t)].volume_weight = 0.0;
+      model.tets[static_cast<std::size_t>(t)].volume_weight = kept(model.tets[static_cast<std::size_t>(t)]);
     ++added;
   }
   return added;
@@ -145,12 +154,14 @@ int apply_volume_formulation(ElasticModel& model, VolumeFormulation formulation,
   switch (formulation) {
   case VolumeFormulation::tet: return 0;
   case VolumeFormulation::vertex_star: return move_bulk_to_vertex_stars(model);
-  case VolumeFormulation::tet_group: {
+  case VolumeFormulation::tet_group:
+  case VolumeFormulation::tet_group_and_tet: {
     std::vector<std::vector<int>> groups = group_tets(mesh, tets_per_group, labels);
     for (std::vector<int>& group : groups)
       for (int& t : group)
         t += static_cast<int>(first_tet);
-    return move_bulk_to_tet_groups(model, groups);
+    return move_bulk_to_tet_groups(
+        model, groups, formulation == VolumeFormulation::tet_group_and_tet ? tet_bulk_ratio : 0.0);
   }
   }
   return 0;

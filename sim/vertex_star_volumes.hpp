@@ -32,11 +32,17 @@ int move_bulk_to_vertex_stars(ElasticModel& model);
 /// from group_tets) no longer locks where the per-tet term and vertex stars do
 /// (docs/deformation.md). F_g is linear in the positions, so local/global takes the group like a
 /// tet (w G G^T in its constant matrix) and Newton its projected Hessian. The groups' tets'
-/// volume weights become 0; tets in no group keep theirs. Appended to model.tet_groups.
+/// volume weights become 0 (or at most `kept_per_tet` times their strain weights); tets in no
+/// group keep theirs.
+/// Appended to model.tet_groups.
 /// @param groups tet indices into model.tets, each tet in at most one group
+/// @param kept_per_tet the bulk weight each grouped tet keeps, over its strain weight (the group
+///        takes the rest of its bulk weight): a uniform strain still costs what the per-tet term costs
 /// @return the number of groups added (groups without a bulk term add none)
-/// @throws std::invalid_argument for a tet index out of range or in two groups
-int move_bulk_to_tet_groups(ElasticModel& model, const std::vector<std::vector<int>>& groups);
+/// @throws std::invalid_argument for a tet index out of range or in two groups, or a negative or
+///         infinite kept_per_tet
+int move_bulk_to_tet_groups(ElasticModel& model, const std::vector<std::vector<int>>& groups,
+                            double kept_per_tet = 0.0);
 
 /// The Hessian of a tet group's energy w/2 |F_g - P_volume(F_g)|^2 with respect to its vertices
 /// (3n x 3n, rows 3k .. 3k + 2 the coordinates of g.vertices[k]): (G (x) I3) H_F (G^T (x) I3)
@@ -50,9 +56,18 @@ Eigen::MatrixXd tet_group_hessian(const ElasticModel& model, const TetGroup& g, 
 /// (docs/deformation.md, bench/volume_locking).
 inline constexpr int tets_per_group = 8;
 
+/// The bulk weight `tet_groups_and_tets` leaves on each tet, over the tet's strain weight 2 mu V
+/// (at most its whole bulk weight 3 lambda V; the group takes the rest): the tets' own term is a
+/// bulk modulus of at most 2/3 ratio mu whatever lambda, so it does not grow as nu -> 1/2. 20:
+/// the smallest of 1, 10, 20 that left no tet of the coarse Colin head inverted (1 and 10 left 2
+/// and 1), and the cantilever's tip from nu 0.45 to 0.499 within 5 % (-3.2 %; 40: -5.6 %)
+/// (docs/deformation.md, Volume locking).
+inline constexpr double tet_bulk_ratio = 20.0;
+
 /// Applies `formulation` to the tets model.tets[first_tet ..] of one body meshed by `mesh`
-/// (tet_group: group_tets(mesh, tets_per_group, labels); vertex_star: the stars of the whole
-/// tets whose bulk term is still theirs, see move_bulk_to_vertex_stars; tet: nothing).
+/// (tet_group: group_tets(mesh, tets_per_group, labels); tet_group_and_tet: the same groups
+/// with at most tet_bulk_ratio times the strain weight of bulk weight left per tet; vertex_star: the stars of
+/// the whole tets whose bulk term is still theirs, see move_bulk_to_vertex_stars; tet: nothing).
 /// @param labels per tet of the mesh (e.g. its organ), or empty: tets of different labels are
 ///        not grouped together
 /// @return the groups or stars added
