@@ -190,6 +190,8 @@ std::string derivatives_bidsignore() {
          "/sub-*/provenance.json\n"
          "/sub-*/log.txt\n"
          "/sub-*/scene.yaml\n"
+         "/sub-*/timing.json\n"
+         "/sub-*.html\n"
          "/cache/\n";
 }
 
