@@ -1,5 +1,6 @@
 #include "core/path_kind.hpp"
 #include "scene/parse_sections.hpp"
+#include "scene/parse_segmentation.hpp"
 
 namespace phantasm::scene_detail {
 namespace {
@@ -143,9 +144,9 @@ void parse_shape(CheckedMap& map, const std::filesystem::path& scene_folder, Sha
   }
 }
 
-} // namespace
-
-void parse_anatomy(CheckedMap& map, const std::filesystem::path& scene_folder, AnatomySettings& anatomy) {
+/// The anatomy's settings and its list of organs.
+void parse_settings_and_organs(CheckedMap& map, const std::filesystem::path& scene_folder,
+                               AnatomySettings& anatomy) {
   map.number("variation", anatomy.variation, between(0.0, 0.3, "relative size"));
   map.integer("base_mesh_triangles", anatomy.base_mesh_triangles, 20, 200000);
   map.number("tet_size_mm", anatomy.tet_size_mm, between(0.5, 500.0, "mm"));
@@ -163,6 +164,7 @@ void parse_anatomy(CheckedMap& map, const std::filesystem::path& scene_folder, A
   }
   const YAML::Node organs = map.get("organs");
   const std::string path = map.child_path("organs");
+  if (!organs.IsDefined() && map.has("segmentation")) return; // the segmentation's organs alone
   if (!organs.IsDefined()) {
     map.missing("organs", "a list of organs");
     return;
@@ -196,6 +198,17 @@ void parse_anatomy(CheckedMap& map, const std::filesystem::path& scene_folder, A
       entry.missing("shape", "a mapping with a type (ellipsoid, superquadric, mesh, label_volume)");
     }
     anatomy.organs.push_back(organ);
+  }
+}
+
+} // namespace
+
+void parse_anatomy(CheckedMap& map, const std::filesystem::path& scene_folder, AnatomySettings& anatomy) {
+  parse_settings_and_organs(map, scene_folder, anatomy);
+  if (map.has("segmentation")) {
+    // Its organs follow those of the list, which keep their indices (and key paths).
+    CheckedMap segmentation(map.context(), map.get("segmentation"), map.child_path("segmentation"));
+    if (segmentation.valid()) parse_segmentation(segmentation, scene_folder, anatomy);
   }
 }
 

@@ -1,0 +1,301 @@
+#include "scene/parse_segmentation.hpp"
+
+#include "core/error.hpp"
+#include "core/path_kind.hpp"
+#include "io/nifti_file.hpp"
+
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace phantasm::scene_detail {
+namespace {
+
+/// An organ of a mapping: the table names whose labels it takes.
+struct MappedOrgan {
+  std::string name;
+  std::string tissue;
+  std::string inside; ///< the mapping's organ that contains it; empty for the outermost
+  bool solid = false;
+  std::vector<std::string> names;
+};
+
+/// FreeSurfer's structures (the aseg names of FreeSurferColorLUT.txt, which SynthSeg shares) as
+/// organs nested like the Colin head's (docs/scene-format.md, `anatomy.segmentation`): the
+/// intracranial CSF holds the brain and is the one solid organ; the cortex holds the cerebral
+/// white matter, which holds the lateral ventricles and the deep grey nuclei.
+std::vector<MappedOrgan> freesurfer_mapping() {
+  std::vector<MappedOrgan> organs = {
+      {"csf", "csf", "", true, {"CSF", "3rd-Ventricle", "4th-Ventricle", "5th-Ventricle", "Optic-Chiasm"}},
+      {"grey_matter", "gray_matter", "csf", false, {"Left-Cerebral-Cortex", "Right-Cerebral-Cortex"}},
+      {"white_matter",
+       "white_matter",
+       "grey_matter",
+       false,
+       {"Left-Cerebral-White-Matter", "Right-Cerebral-White-Matter", "WM-hypointensities",
+        "Left-WM-hypointensities", "Right-WM-hypointensities", "non-WM-hypointensities", "Left-vessel",
+        "Right-vessel", "CC_Posterior", "CC_Mid_Posterior", "CC_Central", "CC_Mid_Anterior", "CC_Anterior"}},
+      {"brainstem", "white_matter", "csf", false, {"Brain-Stem"}},
+  };
+  // name, tissue, container, the table's names after "Left-" or "Right-"
+  const std::vector<MappedOrgan> sided = {
+      {"lateral_ventricle",
+       "csf",
+       "white_matter",
+       false,
+       {"Lateral-Ventricle", "Inf-Lat-Vent", "choroid-plexus"}},
+      {"thalamus", "gray_matter", "white_matter", false, {"Thalamus", "Thalamus-Proper"}},
+      {"caudate", "gray_matter", "white_matter", false, {"Caudate"}},
+      {"putamen", "gray_matter", "white_matter", false, {"Putamen"}},
+      {"pallidum", "gray_matter", "white_matter", false, {"Pallidum"}},
+      {"accumbens", "gray_matter", "white_matter", false, {"Accumbens-area"}},
+      {"ventral_dc", "gray_matter", "white_matter", false, {"VentralDC"}},
+      {"hippocampus", "gray_matter", "grey_matter", false, {"Hippocampus"}},
+      {"amygdala", "gray_matter", "grey_matter", false, {"Amygdala"}},
+      {"cerebellum", "gray_matter", "csf", false, {"Cerebellum-Cortex"}},
+      {"cerebellum_white_matter", "white_matter", "", false, {"Cerebellum-White-Matter"}},
+  };
+  for (const char* side : {"left", "right"}) {
+    const std::string prefix = side[0] == 'l' ? "Left-" : "Right-";
+    for (MappedOrgan organ : sided) {
+      organ.inside = organ.inside.empty() ? std::string(side) + "_cerebellum" : organ.inside;
+      organ.name = std::string(side) + "_" + organ.name;
+      for (std::string& name : organ.names)
+        name = prefix + name;
+      organs.push_back(organ);
+    }
+  }
+  return organs;
+}
+
+std::string trimmed(const std::string& text) {
+  const std::size_t first = text.find_first_not_of(" \t\r");
+  if (first == std::string::npos) return "";
+  return text.substr(first, text.find_last_not_of(" \t\r") - first + 1);
+}
+
+std::vector<std::string> split_tabs(const std::string& line) {
+  std::vector<std::string> fields;
+  std::stringstream stream(line);
+  for (std::string field; std::getline(stream, field, '\t');)
+    fields.push_back(trimmed(field));
+  return fields;
+}
+
+/// A label value in [1, 65535] (0 is the background), or -1.
+long long label_value(const std::string& text) {
+  if (text.empty() || text.size() > 6 || text.find_first_not_of("0123456789") != std::string::npos) return -1;
+  const long long value = std::stoll(text);
+  return value <= 65535 ? value : -1;
+}
+
+/// The mapping's organs: the built-in `freesurfer`, or a list of {organ, tissue, inside, solid, labels}.
+std::vector<MappedOrgan> parse_mapping(CheckedMap& map) {
+  const YAML::Node node = map.get("mapping");
+  const std::string path = map.child_path("mapping");
+  if (!node.IsDefined()) {
+    map.missing("mapping", "freesurfer or a list of organs with the table's names of their labels");
+    return {};
+  }
+  if (node.IsScalar()) {
+    if (node.Scalar() == "freesurfer") {
+      map.context().remember(node, path);
+      return freesurfer_mapping();
+    }
+    map.context().problem(node, path,
+                          "expected freesurfer or a list of organs with the table's names of their labels, "
+                          "found '" +
+                              node.Scalar() + "'");
+    return {};
+  }
+  if (!node.IsSequence() || node.size() == 0) {
+    map.context().problem(node, path,
+                          "expected freesurfer or a non-empty list of organs, found " + describe(node));
+    return {};
+  }
+  std::vector<MappedOrgan> organs;
+  for (std::size_t i = 0; i < node.size(); ++i) {
+    CheckedMap entry(map.context(), node[i], path + "[" + std::to_string(i) + "]");
+    if (!entry.valid()) continue;
+    MappedOrgan organ;
+    if (entry.string("organ", organ.name, true))
+      check_name(map.context(), entry.get("organ"), entry.child_path("organ"), organ.name);
+    if (entry.string("tissue", organ.tissue, true))
+      check_name(map.context(), entry.get("tissue"), entry.child_path("tissue"), organ.tissue);
+    entry.string("inside", organ.inside);
+    entry.boolean("solid", organ.solid);
+    entry.string_list("labels", organ.names, true);
+    organs.push_back(organ);
+  }
+  return organs;
+}
+
+} // namespace
+
+std::map<std::int32_t, std::string> read_label_table(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file.string() + ": cannot be read");
+  const bool tsv = file.extension() == ".tsv";
+  std::map<std::int32_t, std::string> table;
+  std::size_t index_column = 0, name_column = 0;
+  bool header = tsv;
+  int number = 0;
+  for (std::string line; std::getline(in, line);) {
+    ++number;
+    const std::string where = file.string() + ":" + std::to_string(number) + ": ";
+    std::string index, name;
+    if (tsv) {
+      if (trimmed(line).empty()) continue;
+      const std::vector<std::string> fields = split_tabs(line);
+      if (header) {
+        const auto find = [&](const char* column) {
+          for (std::size_t c = 0; c < fields.size(); ++c)
+            if (fields[c] == column) return c;
+          throw InputError(where +
+                           "expected a header with the tab-separated columns index and name "
+                           "(BIDS dseg.tsv), found '" +
+                           trimmed(line) + "'");
+        };
+        index_column = find("index");
+        name_column = find("name");
+        header = false;
+        continue;
+      }
+      if (fields.size() > std::max(index_column, name_column)) {
+        index = fields[index_column];
+        name = fields[name_column];
+      }
+      if (label_value(index) < 0 || name.empty()) {
+        throw InputError(where + "expected a label in [0, 65535] under index and a name under name, found '" +
+                         trimmed(line) + "'");
+      }
+    } else {
+      const std::string content = trimmed(line.substr(0, line.find('#')));
+      if (content.empty()) continue;
+      std::istringstream fields(content);
+      std::vector<std::string> words;
+      for (std::string word; fields >> word;)
+        words.push_back(word);
+      bool colour = words.size() == 6;
+      for (std::size_t w = 2; colour && w < 6; ++w)
+        colour = label_value(words[w]) >= 0 && label_value(words[w]) <= 255;
+      if (!colour || label_value(words[0]) < 0) {
+        throw InputError(where + "expected 'index name R G B A' (a FreeSurfer lookup table line), found '" +
+                         content + "'");
+      }
+      index = words[0];
+      name = words[1];
+    }
+    const auto value = static_cast<std::int32_t>(label_value(index));
+    if (!table.emplace(value, name).second) {
+      throw InputError(where + "expected each label once, found label " + index + " again ('" + name +
+                       "'; earlier '" + table.at(value) + "')");
+    }
+  }
+  if (header) {
+    throw InputError(file.string() +
+                     ": expected a header with the columns index and name, found an empty file");
+  }
+  return table;
+}
+
+void parse_segmentation(CheckedMap& map, const std::filesystem::path& scene_folder,
+                        AnatomySettings& anatomy) {
+  std::filesystem::path files[2];
+  bool found = true;
+  const char* keys[2] = {"file", "table"};
+  for (int f = 0; f < 2; ++f) {
+    std::string text;
+    if (!map.string(keys[f], text, true)) {
+      found = false;
+      continue;
+    }
+    files[f] = std::filesystem::path(text).is_absolute() ? std::filesystem::path(text) : scene_folder / text;
+    if (const std::string kind = path_kind(files[f]); kind != "a regular file") {
+      map.context().problem(map.get(keys[f]), map.child_path(keys[f]),
+                            "expected an existing file, found " +
+                                (kind == "no such file" ? std::string("no file") : kind) + " at '" +
+                                files[f].string() + "'");
+      found = false;
+    }
+  }
+  double smoothing_mm = 1.0;
+  map.number("smoothing_mm", smoothing_mm, NumberRule{0.0, 10.0, false, false, "mm"});
+  const std::vector<MappedOrgan> organs = parse_mapping(map);
+  if (!found || organs.empty()) return;
+
+  std::map<std::int32_t, std::string> table;
+  std::set<std::int32_t> present;
+  try {
+    table = read_label_table(files[1]);
+  } catch (const InputError& error) {
+    map.context().problem(map.get("table"), map.child_path("table"), error.what());
+    return;
+  }
+  try {
+    ImageGrid grid;
+    for (const std::int32_t label : read_nifti_labels(files[0], &grid))
+      if (label != 0) present.insert(label);
+  } catch (const InputError& error) {
+    map.context().problem(map.get("file"), map.child_path("file"), error.what());
+    return;
+  }
+
+  std::map<std::string, std::size_t> organ_of_name;
+  for (std::size_t o = 0; o < organs.size(); ++o)
+    for (const std::string& name : organs[o].names)
+      organ_of_name.emplace(name, o);
+  std::vector<std::vector<std::string>> labels(organs.size());
+  for (const std::int32_t label : present) {
+    const auto named = table.find(label);
+    if (named == table.end()) {
+      map.context().problem(map.get("table"), map.child_path("table"),
+                            files[0].string() + ": label " + std::to_string(label) +
+                                " has voxels but no line in " + files[1].string() +
+                                ": expected every label of the volume in its table");
+      return;
+    }
+    const auto organ = organ_of_name.find(named->second);
+    if (organ == organ_of_name.end()) {
+      map.context().problem(map.get("mapping"), map.child_path("mapping"),
+                            files[0].string() + ": label " + std::to_string(label) + " ('" + named->second +
+                                "') has voxels but no organ in the mapping: expected an organ listing '" +
+                                named->second + "' among its labels");
+      return;
+    }
+    labels[organ->second].push_back(std::to_string(label));
+  }
+
+  // Organs with voxels, each inside its nearest container with voxels.
+  std::map<std::string, std::size_t> index_of;
+  for (std::size_t o = 0; o < organs.size(); ++o)
+    index_of.emplace(organs[o].name, o);
+  for (std::size_t o = 0; o < organs.size(); ++o) {
+    if (labels[o].empty()) continue;
+    OrganSettings organ;
+    organ.name = organs[o].name;
+    organ.tissue = organs[o].tissue;
+    organ.solid = organs[o].solid;
+    std::string inside = organs[o].inside;
+    for (std::size_t depth = 0; depth <= organs.size() && !inside.empty(); ++depth) {
+      const auto container = index_of.find(inside);
+      if (container == index_of.end()) {
+        organ.inside = inside; // an organ of the scene's organs list; the consistency check names it
+        break;
+      }
+      if (!labels[container->second].empty()) {
+        organ.inside = inside;
+        break;
+      }
+      inside = organs[container->second].inside;
+    }
+    organ.shape.kind = ShapeKind::label_volume;
+    organ.shape.file = files[0];
+    organ.shape.labels = labels[o];
+    organ.shape.label = std::stoi(labels[o].front());
+    organ.shape.smoothing_mm = smoothing_mm;
+    anatomy.organs.push_back(organ);
+  }
+}
+
+} // namespace phantasm::scene_detail

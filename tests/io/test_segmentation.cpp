@@ -1,0 +1,273 @@
+// A head from a whole segmentation: `anatomy.segmentation` with a FreeSurfer lookup table or a
+// BIDS dseg.tsv, expanded at scene load into nested label_volume organs by the mapping.
+
+#include "core/error.hpp"
+#include "io/nifti_file.hpp"
+#include "io/shape_files.hpp"
+#include "scene/scene.hpp"
+#include "tests/support/files.hpp"
+
+#include <gtest/gtest.h>
+
+using namespace phantasm;
+using phantasm::testing::fresh_folder;
+using phantasm::testing::write_text_file;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// A small brain in FreeSurfer's aseg numbering on a 2 mm grid of 48^3 voxels centred on the
+/// origin: CSF (24) fills a ball of radius 42 mm; the cerebrum, a ball of radius 30 mm at
+/// z = 8 mm, is cortex (3 left, 42 right) over white matter (2, 41) within 24 mm, which holds the
+/// lateral ventricles (4, 43) and thalami (10, 49); the hippocampi (17, 53) lie in the cortex and
+/// the brainstem (16) below the cerebrum. With `extra`, one voxel of label `extra` at the centre.
+void write_aseg(const fs::path& path, std::int32_t extra = 0) {
+  ImageGrid grid;
+  grid.dims = {48, 48, 48};
+  grid.world_from_voxel.topLeftCorner<3, 3>() *= 2.0;
+  grid.world_from_voxel.topRightCorner<3, 1>() = Eigen::Vector3d::Constant(-47.0);
+  std::vector<std::int32_t> labels(static_cast<std::size_t>(grid.voxel_count()), 0);
+  std::size_t n = 0;
+  for (int k = 0; k < grid.dims.z(); ++k)
+    for (int j = 0; j < grid.dims.y(); ++j)
+      for (int i = 0; i < grid.dims.x(); ++i, ++n) {
+        const Eigen::Vector3d p = grid.world_from_index(Eigen::Vector3d(i, j, k));
+        const Eigen::Vector3d c = p - Eigen::Vector3d(0, 0, 8); // in the cerebrum's frame
+        const bool left = p.x() < 0.0;
+        const auto side = [&](std::int32_t l, std::int32_t r) { return left ? l : r; };
+        const Eigen::Vector3d mirrored(std::abs(c.x()), c.y(), c.z());
+        std::int32_t label = 0;
+        if (p.norm() < 42.0) label = 24;
+        if ((p - Eigen::Vector3d(0, 0, -30)).norm() < 7.0) label = 16;
+        if (c.norm() < 30.0) label = side(3, 42);
+        if (c.norm() < 24.0) label = side(2, 41);
+        if ((mirrored - Eigen::Vector3d(9, 4, 4)).norm() < 5.0) label = side(4, 43);
+        if ((mirrored - Eigen::Vector3d(9, -8, -4)).norm() < 4.5) label = side(10, 49);
+        if ((mirrored - Eigen::Vector3d(26, -4, -8)).norm() < 3.5) label = side(17, 53);
+        labels[n] = label;
+      }
+  if (extra != 0) labels[voxel_index(grid.dims, 24, 24, 24)] = extra;
+  write_nifti_labels(path, grid, labels);
+}
+
+/// The lines of FreeSurferColorLUT.txt for these labels and a few the volume does not have.
+const char* const k_lut = R"(#$Id: FreeSurferColorLUT.txt (excerpt)
+#No. Label Name:                            R   G   B   A
+
+0   Unknown                                 0   0   0   0
+2   Left-Cerebral-White-Matter              245 245 245 0
+3   Left-Cerebral-Cortex                    205 62  78  0
+4   Left-Lateral-Ventricle                  120 18  134 0
+10  Left-Thalamus                           0   118 14  0
+11  Left-Caudate                            122 186 220 0
+16  Brain-Stem                              119 159 176 0
+17  Left-Hippocampus                        220 216 20  0
+24  CSF                                     60  60  60  0
+41  Right-Cerebral-White-Matter             245 245 245 0
+42  Right-Cerebral-Cortex                   205 62  78  0
+43  Right-Lateral-Ventricle                 120 18  134 0
+49  Right-Thalamus                          0   118 14  0
+53  Right-Hippocampus                       220 216 20  0
+)";
+
+/// The same names as a BIDS dseg.tsv (columns index, name and an abbreviation).
+std::string dseg_tsv() {
+  std::string text = "index\tname\tabbreviation\n";
+  std::istringstream lut(k_lut);
+  for (std::string line; std::getline(lut, line);) {
+    std::istringstream words(line);
+    std::string index, name;
+    if (line.empty() || line[0] == '#' || !(words >> index >> name)) continue;
+    text += index + "\t" + name + "\t" + name.substr(0, 3) + "\n";
+  }
+  return text;
+}
+
+fs::path fixture(const std::string& name, std::int32_t extra = 0) {
+  const fs::path folder = fresh_folder(name);
+  write_aseg(folder / "aseg.nii.gz", extra);
+  write_text_file(folder / "FreeSurferColorLUT.txt", k_lut);
+  write_text_file(folder / "aseg_dseg.tsv", dseg_tsv());
+  return folder;
+}
+
+std::string scene_text(const std::string& segmentation, const std::string& organs = "") {
+  return "phantasm: 1\nname: segmentation\nseed: 1\nfield_strength_T: 3.0\n"
+         "grid: {field_of_view_mm: 96, voxel_size_mm: 2}\n"
+         "anatomy:\n  base_mesh_triangles: 80\n  segmentation: " +
+         segmentation + "\n" + organs;
+}
+
+SceneLoadResult load(const fs::path& folder, const std::string& text) {
+  write_text_file(folder / "scene.yaml", text);
+  return load_scene(folder / "scene.yaml");
+}
+
+/// Each organ as "name < container: tissue [labels]".
+std::vector<std::string> organ_lines(const Scene& scene) {
+  std::vector<std::string> lines;
+  for (const OrganSettings& organ : scene.anatomy.organs) {
+    std::string line =
+        organ.name + " < " + organ.inside + ": " + organ.tissue + (organ.solid ? " solid" : "") + " [";
+    for (const std::string& label : organ.shape.labels)
+      line += (line.back() == '[' ? "" : " ") + label;
+    lines.push_back(line + "]");
+  }
+  return lines;
+}
+
+const std::vector<std::string> k_expected_organs = {
+    "csf < : csf solid [24]",
+    "grey_matter < csf: gray_matter [3 42]",
+    "white_matter < grey_matter: white_matter [2 41]",
+    "brainstem < csf: white_matter [16]",
+    "left_lateral_ventricle < white_matter: csf [4]",
+    "left_thalamus < white_matter: gray_matter [10]",
+    "left_hippocampus < grey_matter: gray_matter [17]",
+    "right_lateral_ventricle < white_matter: csf [43]",
+    "right_thalamus < white_matter: gray_matter [49]",
+    "right_hippocampus < grey_matter: gray_matter [53]",
+};
+
+/// The diagnostics of a scene that must not load.
+std::string refusal(const fs::path& folder, const std::string& text) {
+  const SceneLoadResult result = load(folder, text);
+  EXPECT_FALSE(result.scene) << "the scene loaded";
+  return format_diagnostics(result.problems);
+}
+
+} // namespace
+
+TEST(Segmentation, AnAsegWithItsLookupTableBecomesTheNestedOrgansOfTheFreeSurferMapping) {
+  const fs::path folder = fixture("segmentation-lut");
+  const SceneLoadResult result =
+      load(folder, scene_text("{file: aseg.nii.gz, table: FreeSurferColorLUT.txt, mapping: freesurfer}"));
+  ASSERT_TRUE(result.scene) << format_diagnostics(result.problems);
+  EXPECT_EQ(organ_lines(*result.scene), k_expected_organs);
+  for (const OrganSettings& organ : result.scene->anatomy.organs) {
+    EXPECT_EQ(organ.shape.kind, ShapeKind::label_volume);
+    EXPECT_EQ(organ.shape.file, folder / "aseg.nii.gz");
+    EXPECT_EQ(organ.shape.smoothing_mm, 1.0);
+  }
+  // Read as label_volume organs: each container's surface bounds its labels and those nested in
+  // it, so the CSF holds every label of the volume and the cortex the whole cerebrum.
+  const std::map<std::string, ShapeData> files = read_shape_files(result.scene->anatomy);
+  EXPECT_EQ(files.at("csf").target_labels,
+            (std::vector<std::int32_t>{2, 3, 4, 10, 16, 17, 24, 41, 42, 43, 49, 53}));
+  EXPECT_EQ(files.at("grey_matter").target_labels,
+            (std::vector<std::int32_t>{2, 3, 4, 10, 17, 41, 42, 43, 49, 53}));
+  EXPECT_EQ(files.at("white_matter").target_labels, (std::vector<std::int32_t>{2, 4, 10, 41, 43, 49}));
+  EXPECT_EQ(files.at("left_thalamus").target_labels, (std::vector<std::int32_t>{10}));
+}
+
+TEST(Segmentation, ADsegTsvGivesTheSameOrgansAndScenesMayAddOrgansOfTheirOwn) {
+  const fs::path folder = fixture("segmentation-tsv");
+  const SceneLoadResult result = load(
+      folder, scene_text("{file: aseg.nii.gz, table: aseg_dseg.tsv, mapping: freesurfer, smoothing_mm: 2}",
+                         "  organs:\n    - {name: lesion, tissue: csf, inside: left_thalamus, solid: false, "
+                         "shape: {type: ellipsoid, center_mm: [-9, -8, 4], radii_mm: 1}}\n"));
+  ASSERT_TRUE(result.scene) << format_diagnostics(result.problems);
+  std::vector<std::string> lines = organ_lines(*result.scene);
+  ASSERT_EQ(lines.size(), k_expected_organs.size() + 1);
+  EXPECT_EQ(lines.front(), "lesion < left_thalamus: csf []"); // the scene's own organ keeps index 0
+  lines.erase(lines.begin());
+  EXPECT_EQ(lines, k_expected_organs);
+  EXPECT_EQ(result.scene->anatomy.organs.back().shape.smoothing_mm, 2.0);
+  EXPECT_EQ(result.scene->organs.size(), k_expected_organs.size() + 1);
+}
+
+TEST(Segmentation, AMappingOfItsOwnNamesItsOrgansTissuesAndNesting) {
+  const fs::path folder = fixture("segmentation-custom");
+  const SceneLoadResult result = load(folder, scene_text(R"(
+    file: aseg.nii.gz
+    table: aseg_dseg.tsv
+    mapping:
+      - {organ: head, tissue: csf, solid: true, labels: [CSF, Brain-Stem]}
+      - {organ: brain, tissue: gray_matter, inside: head, labels: [Left-Cerebral-Cortex, Right-Cerebral-Cortex, Left-Hippocampus, Right-Hippocampus]}
+      - {organ: deep, tissue: white_matter, inside: brain, labels: [Left-Cerebral-White-Matter, Right-Cerebral-White-Matter, Left-Thalamus, Right-Thalamus]}
+      - {organ: unused, tissue: csf, inside: deep, labels: [Left-Caudate]}
+      - {organ: ventricles, tissue: csf, inside: unused, labels: [Left-Lateral-Ventricle, Right-Lateral-Ventricle]})"));
+  ASSERT_TRUE(result.scene) << format_diagnostics(result.problems);
+  // "unused" has no voxels: it is left out and the ventricles nest in its container.
+  EXPECT_EQ(organ_lines(*result.scene), (std::vector<std::string>{
+                                            "head < : csf solid [16 24]",
+                                            "brain < head: gray_matter [3 17 42 53]",
+                                            "deep < brain: white_matter [2 10 41 49]",
+                                            "ventricles < deep: csf [4 43]",
+                                        }));
+}
+
+TEST(Segmentation, AVolumeLabelMissingFromItsTableIsNamedWithBothFiles) {
+  const fs::path folder = fixture("segmentation-missing", 77); // WM-hypointensities: not in the excerpt
+  for (const char* table : {"FreeSurferColorLUT.txt", "aseg_dseg.tsv"}) {
+    const std::string problems = refusal(
+        folder, scene_text(std::string("{file: aseg.nii.gz, table: ") + table + ", mapping: freesurfer}"));
+    EXPECT_NE(problems.find("scene.yaml:8:"), std::string::npos) << problems;
+    EXPECT_NE(problems.find("anatomy.segmentation.table: " + (folder / "aseg.nii.gz").string() +
+                            ": label 77 has voxels but no line in " + (folder / table).string()),
+              std::string::npos)
+        << problems;
+  }
+}
+
+TEST(Segmentation, ALabelTheMappingDoesNotListIsNamedWithItsTableName) {
+  const fs::path folder = fixture("segmentation-unmapped");
+  const std::string problems =
+      refusal(folder, scene_text(R"({file: aseg.nii.gz, table: aseg_dseg.tsv, mapping: [
+      {organ: brain, tissue: gray_matter, labels: [CSF, Brain-Stem, Left-Cerebral-Cortex, Right-Cerebral-Cortex]}]})"));
+  EXPECT_NE(problems.find("anatomy.segmentation.mapping: " + (folder / "aseg.nii.gz").string() +
+                          ": label 2 ('Left-Cerebral-White-Matter') has voxels but no organ in the mapping"),
+            std::string::npos)
+      << problems;
+}
+
+TEST(Segmentation, TableLinesThatDoNotParseAreNamedByFileAndLine) {
+  const fs::path folder = fixture("segmentation-bad-table");
+  std::string lut = k_lut;
+  lut.replace(lut.find("17  Left-Hippocampus"), 19, "17  Left Hippocampus");
+  write_text_file(folder / "bad-lut.txt", lut);
+  std::string problems =
+      refusal(folder, scene_text("{file: aseg.nii.gz, table: bad-lut.txt, mapping: freesurfer}"));
+  EXPECT_NE(problems.find((folder / "bad-lut.txt").string() +
+                          ":11: expected 'index name R G B A' (a FreeSurfer lookup table line), found '17  "
+                          "Left Hippocampus"),
+            std::string::npos)
+      << problems;
+
+  write_text_file(folder / "bad_dseg.tsv", "index\tname\n3\tLeft-Cerebral-Cortex\nx3\tcortex\n");
+  problems = refusal(folder, scene_text("{file: aseg.nii.gz, table: bad_dseg.tsv, mapping: freesurfer}"));
+  EXPECT_NE(problems.find((folder / "bad_dseg.tsv").string() +
+                          ":3: expected a label in [0, 65535] under index and a name under name, found "
+                          "'x3\tcortex'"),
+            std::string::npos)
+      << problems;
+
+  write_text_file(folder / "no_header.tsv", "3\tLeft-Cerebral-Cortex\n");
+  problems = refusal(folder, scene_text("{file: aseg.nii.gz, table: no_header.tsv, mapping: freesurfer}"));
+  EXPECT_NE(problems.find((folder / "no_header.tsv").string() + ":1: expected a header"), std::string::npos)
+      << problems;
+
+  write_text_file(folder / "twice_dseg.tsv", "index\tname\n3\tLeft-Cerebral-Cortex\n3\tcortex\n");
+  problems = refusal(folder, scene_text("{file: aseg.nii.gz, table: twice_dseg.tsv, mapping: freesurfer}"));
+  EXPECT_NE(problems.find(":3: expected each label once, found label 3 again"), std::string::npos)
+      << problems;
+}
+
+TEST(Segmentation, AnUnknownMappingOrMissingFilesAreSceneErrorsAtTheirKeys) {
+  const fs::path folder = fixture("segmentation-keys");
+  std::string problems =
+      refusal(folder, scene_text("{file: aseg.nii.gz, table: FreeSurferColorLUT.txt, mapping: synthseg}"));
+  EXPECT_NE(problems.find("scene.yaml:8:"), std::string::npos) << problems;
+  EXPECT_NE(problems.find("anatomy.segmentation.mapping: expected freesurfer or a list of organs with the "
+                          "table's names of their labels, found 'synthseg'"),
+            std::string::npos)
+      << problems;
+  problems =
+      refusal(folder, scene_text("{file: gone.nii.gz, table: FreeSurferColorLUT.txt, mapping: freesurfer}"));
+  EXPECT_NE(problems.find("anatomy.segmentation.file: expected an existing file, found no file"),
+            std::string::npos)
+      << problems;
+  problems = refusal(folder, scene_text("{file: aseg.nii.gz, mapping: freesurfer, labels: 3}"));
+  EXPECT_NE(problems.find("anatomy.segmentation.table: expected"), std::string::npos) << problems;
+  EXPECT_NE(problems.find("labels"), std::string::npos) << problems; // the unknown key
+}
