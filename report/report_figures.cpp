@@ -87,6 +87,9 @@ std::string viewer(const SubjectRecord& r, const ImagePictures& image, int width
 std::string images_section(const SubjectRecord& r) {
   std::string html = "<h2 id=\"images\">Images of both states</h2>\n";
   if (r.images.empty()) return html + "<p>The run wrote neither images nor labels.</p>\n";
+  if (r.reference_only)
+    html +=
+        "<p>Nothing deforms in this scene: the run wrote the reference state only, shown on both sides.</p>";
   if (r.images.front().name == "dseg") html += "<p>The run made no MR images: the label maps are shown.</p>";
   html += colour_bars(r);
   const int montage_width = r.dims.x() * 2 + r.dims.y();

@@ -137,13 +137,15 @@ void read_pictures(SubjectRecord& record, const DatasetLayout& layout, const std
     if (!montage) montage.emplace(record.dims);
     return *montage;
   };
+  // A run in which nothing deforms writes the reference state only.
+  record.reference_only = !is_listed(layout.dseg(PhantomState::deformed));
   for (const std::string& suffix : suffixes) {
-    const std::vector<double> reference =
-        read_volume(record, layout.anat_image(PhantomState::reference, suffix));
-    const std::vector<double> deformed =
-        read_volume(record, layout.anat_image(PhantomState::deformed, suffix));
+    const std::string reference = grey_slices_png(
+        montage_for(), read_volume(record, layout.anat_image(PhantomState::reference, suffix)));
+    const std::filesystem::path deformed = layout.anat_image(PhantomState::deformed, suffix);
     record.images.push_back(
-        {suffix, grey_slices_png(montage_for(), reference), grey_slices_png(montage_for(), deformed)});
+        {suffix, reference,
+         is_listed(deformed) ? grey_slices_png(montage_for(), read_volume(record, deformed)) : reference});
   }
   // Labels: contours over the images, the organs' volumes; the pictures themselves when there
   // are no images.
@@ -159,13 +161,16 @@ void read_pictures(SubjectRecord& record, const DatasetLayout& layout, const std
     (state == PhantomState::reference ? record.reference_contours_png : record.deformed_contours_png) =
         contour_slices_png(montage_for(), l);
   }
-  if (suffixes.empty() && !labels[0].empty() && !labels[1].empty()) {
+  if (suffixes.empty() && !labels[0].empty()) {
     const auto as_values = [](const std::vector<std::int32_t>& l) {
       return std::vector<double>(l.begin(), l.end());
     };
-    record.images.push_back({"dseg", grey_slices_png(montage_for(), as_values(labels[0])),
-                             grey_slices_png(montage_for(), as_values(labels[1]))});
+    const std::string reference = grey_slices_png(montage_for(), as_values(labels[0]));
+    record.images.push_back(
+        {"dseg", reference,
+         labels[1].empty() ? reference : grey_slices_png(montage_for(), as_values(labels[1]))});
   }
+  if (record.deformed_contours_png.empty()) record.deformed_contours_png = record.reference_contours_png;
   // The motion of each reference point: |u| of from-def_to-ref and its Jacobian determinant.
   if (const std::filesystem::path file = layout.transform(PhantomState::deformed, PhantomState::reference);
       is_listed(file)) {
@@ -200,7 +205,9 @@ void read_landmark_moves(SubjectRecord& record, const DatasetLayout& layout,
                          const std::set<std::string>& listed) {
   const std::filesystem::path ref_file = layout.landmarks(PhantomState::reference);
   const std::filesystem::path def_file = layout.landmarks(PhantomState::deformed);
-  if (!listed.count(std::filesystem::relative(ref_file, layout.root()).generic_string())) return;
+  if (!listed.count(std::filesystem::relative(ref_file, layout.root()).generic_string()) ||
+      !listed.count(std::filesystem::relative(def_file, layout.root()).generic_string()))
+    return;
   const auto reference = read_landmarks(ref_file);
   const auto deformed = read_landmarks(def_file);
   std::map<std::string, std::size_t> deformed_row;

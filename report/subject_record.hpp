@@ -51,6 +51,9 @@ struct SubjectRecord {
   Eigen::Vector3i dims = Eigen::Vector3i::Zero();
   Eigen::Vector3d spacing_mm = Eigen::Vector3d::Zero();
   std::vector<ImagePictures> images;
+  /// the run wrote the reference state only (nothing deforms): each picture's deformed side is the
+  /// reference's, and there are no landmark moves
+  bool reference_only = false;
   std::string reference_contours_png, deformed_contours_png; ///< empty without labels
   std::optional<Overlay> displacement;                       ///< |u| of from-def_to-ref, mm
   std::optional<Overlay> jacobian;                           ///< det(I + grad u) of from-def_to-ref

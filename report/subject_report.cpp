@@ -148,6 +148,7 @@ std::string modelled_section(const SubjectRecord& r) {
 
 std::string landmarks_section(const SubjectRecord& r) {
   std::string html = "<h2 id=\"landmarks\">Landmarks</h2>\n";
+  if (r.reference_only) return html + "<p>Nothing deforms: the landmarks stay where they are.</p>\n";
   if (r.landmarks.empty()) return html + "<p>The run wrote no landmarks.</p>\n";
   html += "<p>Named material points, the same points in both states (world RAS mm), largest move first.</p>"
           "<table><tr><th>landmark</th><th>organ</th><th>reference (mm)</th><th>deformed (mm)</th>"

@@ -217,3 +217,22 @@ TEST(ReportCommand, ASubjectWhoseRunDidNotFinishGetsAReportSayingSo) {
   EXPECT_NE(html.find("provenance.json is missing"), std::string::npos);
   EXPECT_LT(html.find("id=\"warnings\""), html.find("The run's log"));
 }
+
+// A scene in which nothing deforms: the run writes the reference state only (no ses-def images,
+// labels or landmarks), and its report shows that state on both sides and says why.
+TEST(ReportCommand, ARunInWhichNothingDeformsGetsAReportOfItsOneState) {
+  const fs::path root = fresh_folder("report-reference-only");
+  write_text_file(root / "scene.yaml", "phantasm: 1\nname: ball\nseed: 1\nfield_strength_T: 3.0\n"
+                                       "grid: {field_of_view_mm: 48, voxel_size_mm: 3}\n"
+                                       "anatomy:\n  organs:\n    - {name: ball, tissue: gray_matter, shape: "
+                                       "{type: ellipsoid, center_mm: [0, 0, 0], radii_mm: 15}}\n"
+                                       "sequences:\n  - {name: T1w, type: spoiled_gre, TR_ms: 20, TE_ms: 5, "
+                                       "flip_deg: 30}\n");
+  const CommandResult run =
+      run_command({k_phantasm, "run", (root / "scene.yaml").string(), "-o", (root / "out").string(), "-q"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_FALSE(fs::exists(root / "out" / "sub-01" / "ses-def" / "anat" / "sub-01_ses-def_T1w.nii.gz"));
+  const std::string html = read_file(report_of(root / "out"));
+  EXPECT_NE(html.find("Nothing deforms in this scene"), std::string::npos);
+  EXPECT_NE(html.find("the landmarks stay where they are"), std::string::npos);
+}
