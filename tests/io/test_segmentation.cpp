@@ -5,91 +5,18 @@
 #include "io/nifti_file.hpp"
 #include "io/shape_files.hpp"
 #include "scene/scene.hpp"
+#include "tests/support/aseg_fixture.hpp"
 #include "tests/support/files.hpp"
 
 #include <gtest/gtest.h>
 
 using namespace phantasm;
-using phantasm::testing::fresh_folder;
+using phantasm::testing::k_lut;
+using phantasm::testing::write_aseg_fixture;
 using phantasm::testing::write_text_file;
 namespace fs = std::filesystem;
 
 namespace {
-
-/// A small brain in FreeSurfer's aseg numbering on a 2 mm grid of 48^3 voxels centred on the
-/// origin: CSF (24) fills a ball of radius 42 mm; the cerebrum, a ball of radius 30 mm at
-/// z = 8 mm, is cortex (3 left, 42 right) over white matter (2, 41) within 24 mm, which holds the
-/// lateral ventricles (4, 43) and thalami (10, 49); the hippocampi (17, 53) lie in the cortex and
-/// the brainstem (16) below the cerebrum. With `extra`, one voxel of label `extra` at the centre.
-void write_aseg(const fs::path& path, std::int32_t extra = 0) {
-  ImageGrid grid;
-  grid.dims = {48, 48, 48};
-  grid.world_from_voxel.topLeftCorner<3, 3>() *= 2.0;
-  grid.world_from_voxel.topRightCorner<3, 1>() = Eigen::Vector3d::Constant(-47.0);
-  std::vector<std::int32_t> labels(static_cast<std::size_t>(grid.voxel_count()), 0);
-  std::size_t n = 0;
-  for (int k = 0; k < grid.dims.z(); ++k)
-    for (int j = 0; j < grid.dims.y(); ++j)
-      for (int i = 0; i < grid.dims.x(); ++i, ++n) {
-        const Eigen::Vector3d p = grid.world_from_index(Eigen::Vector3d(i, j, k));
-        const Eigen::Vector3d c = p - Eigen::Vector3d(0, 0, 8); // in the cerebrum's frame
-        const bool left = p.x() < 0.0;
-        const auto side = [&](std::int32_t l, std::int32_t r) { return left ? l : r; };
-        const Eigen::Vector3d mirrored(std::abs(c.x()), c.y(), c.z());
-        std::int32_t label = 0;
-        if (p.norm() < 42.0) label = 24;
-        if ((p - Eigen::Vector3d(0, 0, -30)).norm() < 7.0) label = 16;
-        if (c.norm() < 30.0) label = side(3, 42);
-        if (c.norm() < 24.0) label = side(2, 41);
-        if ((mirrored - Eigen::Vector3d(9, 4, 4)).norm() < 5.0) label = side(4, 43);
-        if ((mirrored - Eigen::Vector3d(9, -8, -4)).norm() < 4.5) label = side(10, 49);
-        if ((mirrored - Eigen::Vector3d(26, -4, -8)).norm() < 3.5) label = side(17, 53);
-        labels[n] = label;
-      }
-  if (extra != 0) labels[voxel_index(grid.dims, 24, 24, 24)] = extra;
-  write_nifti_labels(path, grid, labels);
-}
-
-/// The lines of FreeSurferColorLUT.txt for these labels and a few the volume does not have.
-const char* const k_lut = R"(#$Id: FreeSurferColorLUT.txt (excerpt)
-#No. Label Name:                            R   G   B   A
-
-0   Unknown                                 0   0   0   0
-2   Left-Cerebral-White-Matter              245 245 245 0
-3   Left-Cerebral-Cortex                    205 62  78  0
-4   Left-Lateral-Ventricle                  120 18  134 0
-10  Left-Thalamus                           0   118 14  0
-11  Left-Caudate                            122 186 220 0
-16  Brain-Stem                              119 159 176 0
-17  Left-Hippocampus                        220 216 20  0
-24  CSF                                     60  60  60  0
-41  Right-Cerebral-White-Matter             245 245 245 0
-42  Right-Cerebral-Cortex                   205 62  78  0
-43  Right-Lateral-Ventricle                 120 18  134 0
-49  Right-Thalamus                          0   118 14  0
-53  Right-Hippocampus                       220 216 20  0
-)";
-
-/// The same names as a BIDS dseg.tsv (columns index, name and an abbreviation).
-std::string dseg_tsv() {
-  std::string text = "index\tname\tabbreviation\n";
-  std::istringstream lut(k_lut);
-  for (std::string line; std::getline(lut, line);) {
-    std::istringstream words(line);
-    std::string index, name;
-    if (line.empty() || line[0] == '#' || !(words >> index >> name)) continue;
-    text += index + "\t" + name + "\t" + name.substr(0, 3) + "\n";
-  }
-  return text;
-}
-
-fs::path fixture(const std::string& name, std::int32_t extra = 0) {
-  const fs::path folder = fresh_folder(name);
-  write_aseg(folder / "aseg.nii.gz", extra);
-  write_text_file(folder / "FreeSurferColorLUT.txt", k_lut);
-  write_text_file(folder / "aseg_dseg.tsv", dseg_tsv());
-  return folder;
-}
 
 std::string scene_text(const std::string& segmentation, const std::string& organs = "") {
   return "phantasm: 1\nname: segmentation\nseed: 1\nfield_strength_T: 3.0\n"
@@ -139,7 +66,7 @@ std::string refusal(const fs::path& folder, const std::string& text) {
 } // namespace
 
 TEST(Segmentation, AnAsegWithItsLookupTableBecomesTheNestedOrgansOfTheFreeSurferMapping) {
-  const fs::path folder = fixture("segmentation-lut");
+  const fs::path folder = write_aseg_fixture("segmentation-lut");
   const SceneLoadResult result =
       load(folder, scene_text("{file: aseg.nii.gz, table: FreeSurferColorLUT.txt, mapping: freesurfer}"));
   ASSERT_TRUE(result.scene) << format_diagnostics(result.problems);
@@ -161,7 +88,7 @@ TEST(Segmentation, AnAsegWithItsLookupTableBecomesTheNestedOrgansOfTheFreeSurfer
 }
 
 TEST(Segmentation, ADsegTsvGivesTheSameOrgansAndScenesMayAddOrgansOfTheirOwn) {
-  const fs::path folder = fixture("segmentation-tsv");
+  const fs::path folder = write_aseg_fixture("segmentation-tsv");
   const SceneLoadResult result = load(
       folder, scene_text("{file: aseg.nii.gz, table: aseg_dseg.tsv, mapping: freesurfer, smoothing_mm: 2}",
                          "  organs:\n    - {name: lesion, tissue: csf, inside: left_thalamus, solid: false, "
@@ -177,7 +104,7 @@ TEST(Segmentation, ADsegTsvGivesTheSameOrgansAndScenesMayAddOrgansOfTheirOwn) {
 }
 
 TEST(Segmentation, AMappingOfItsOwnNamesItsOrgansTissuesAndNesting) {
-  const fs::path folder = fixture("segmentation-custom");
+  const fs::path folder = write_aseg_fixture("segmentation-custom");
   const SceneLoadResult result = load(folder, scene_text(R"(
     file: aseg.nii.gz
     table: aseg_dseg.tsv
@@ -198,7 +125,8 @@ TEST(Segmentation, AMappingOfItsOwnNamesItsOrgansTissuesAndNesting) {
 }
 
 TEST(Segmentation, AVolumeLabelMissingFromItsTableIsNamedWithBothFiles) {
-  const fs::path folder = fixture("segmentation-missing", 77); // WM-hypointensities: not in the excerpt
+  const fs::path folder =
+      write_aseg_fixture("segmentation-missing", 77); // WM-hypointensities: not in the excerpt
   for (const char* table : {"FreeSurferColorLUT.txt", "aseg_dseg.tsv"}) {
     const std::string problems = refusal(
         folder, scene_text(std::string("{file: aseg.nii.gz, table: ") + table + ", mapping: freesurfer}"));
@@ -211,7 +139,7 @@ TEST(Segmentation, AVolumeLabelMissingFromItsTableIsNamedWithBothFiles) {
 }
 
 TEST(Segmentation, ALabelTheMappingDoesNotListIsNamedWithItsTableName) {
-  const fs::path folder = fixture("segmentation-unmapped");
+  const fs::path folder = write_aseg_fixture("segmentation-unmapped");
   const std::string problems =
       refusal(folder, scene_text(R"({file: aseg.nii.gz, table: aseg_dseg.tsv, mapping: [
       {organ: brain, tissue: gray_matter, labels: [CSF, Brain-Stem, Left-Cerebral-Cortex, Right-Cerebral-Cortex]}]})"));
@@ -222,7 +150,7 @@ TEST(Segmentation, ALabelTheMappingDoesNotListIsNamedWithItsTableName) {
 }
 
 TEST(Segmentation, TableLinesThatDoNotParseAreNamedByFileAndLine) {
-  const fs::path folder = fixture("segmentation-bad-table");
+  const fs::path folder = write_aseg_fixture("segmentation-bad-table");
   std::string lut = k_lut;
   lut.replace(lut.find("17  Left-Hippocampus"), 19, "17  Left Hippocampus");
   write_text_file(folder / "bad-lut.txt", lut);
@@ -254,7 +182,7 @@ TEST(Segmentation, TableLinesThatDoNotParseAreNamedByFileAndLine) {
 }
 
 TEST(Segmentation, AnUnknownMappingOrMissingFilesAreSceneErrorsAtTheirKeys) {
-  const fs::path folder = fixture("segmentation-keys");
+  const fs::path folder = write_aseg_fixture("segmentation-keys");
   std::string problems =
       refusal(folder, scene_text("{file: aseg.nii.gz, table: FreeSurferColorLUT.txt, mapping: synthseg}"));
   EXPECT_NE(problems.find("scene.yaml:8:"), std::string::npos) << problems;
