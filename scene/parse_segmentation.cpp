@@ -18,6 +18,7 @@ struct MappedOrgan {
   std::string inside; ///< the mapping's organ that contains it; empty for the outermost
   bool solid = false;
   std::vector<std::string> names;
+  YAML::Node at; ///< its entry in the scene (a list mapping), else undefined
 };
 
 /// FreeSurfer's structures (the aseg names of FreeSurferColorLUT.txt, which SynthSeg shares) as
@@ -125,6 +126,7 @@ std::vector<MappedOrgan> parse_mapping(CheckedMap& map) {
     entry.string("inside", organ.inside);
     entry.boolean("solid", organ.solid);
     entry.string_list("labels", organ.names, true);
+    organ.at = node[i];
     organs.push_back(organ);
   }
   return organs;
@@ -223,6 +225,18 @@ void parse_segmentation(CheckedMap& map, const std::filesystem::path& scene_fold
   map.number("smoothing_mm", smoothing_mm, NumberRule{0.0, 10.0, false, false, "mm"});
   const std::vector<MappedOrgan> organs = parse_mapping(map);
   if (!found || organs.empty()) return;
+  std::map<std::string, std::size_t> organ_of_name;
+  for (std::size_t o = 0; o < organs.size(); ++o) {
+    for (const std::string& name : organs[o].names) {
+      const auto [first, added] = organ_of_name.emplace(name, o);
+      if (!added) {
+        map.context().problem(organs[o].at, map.child_path("mapping") + "[" + std::to_string(o) + "].labels",
+                              "expected each name in one organ, found '" + name + "' in organ " +
+                                  organs[o].name + " and in organ " + organs[first->second].name);
+        return;
+      }
+    }
+  }
 
   std::map<std::int32_t, std::string> table;
   std::set<std::int32_t> present;
@@ -241,10 +255,11 @@ void parse_segmentation(CheckedMap& map, const std::filesystem::path& scene_fold
     return;
   }
 
-  std::map<std::string, std::size_t> organ_of_name;
-  for (std::size_t o = 0; o < organs.size(); ++o)
-    for (const std::string& name : organs[o].names)
-      organ_of_name.emplace(name, o);
+  if (present.empty()) {
+    map.context().problem(map.get("file"), map.child_path("file"),
+                          files[0].string() + ": expected labels (voxels other than 0), found none");
+    return;
+  }
   std::vector<std::vector<std::string>> labels(organs.size());
   for (const std::int32_t label : present) {
     const auto named = table.find(label);
@@ -294,6 +309,9 @@ void parse_segmentation(CheckedMap& map, const std::filesystem::path& scene_fold
     organ.shape.labels = labels[o];
     organ.shape.label = std::stoi(labels[o].front());
     organ.shape.smoothing_mm = smoothing_mm;
+    // Messages about the organ (its shape read later, say) point at the entry that made it.
+    map.context().remember(organs[o].at.IsDefined() ? organs[o].at : map.node(),
+                           "anatomy.organs[" + std::to_string(anatomy.organs.size()) + "]");
     anatomy.organs.push_back(organ);
   }
 }

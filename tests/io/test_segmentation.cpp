@@ -122,6 +122,9 @@ TEST(Segmentation, AMappingOfItsOwnNamesItsOrgansTissuesAndNesting) {
                                             "deep < brain: white_matter [2 10 41 49]",
                                             "ventricles < deep: csf [4 43]",
                                         }));
+  // Later messages about an organ (its shape, its tissue) point at the mapping entry that made it.
+  EXPECT_EQ(result.scene->location_of("anatomy.organs[3].shape.label").line, 16);
+  EXPECT_EQ(result.scene->location_of("anatomy.organs[0].tissue").line, 12);
 }
 
 TEST(Segmentation, AVolumeLabelMissingFromItsTableIsNamedWithBothFiles) {
@@ -198,4 +201,24 @@ TEST(Segmentation, AnUnknownMappingOrMissingFilesAreSceneErrorsAtTheirKeys) {
   problems = refusal(folder, scene_text("{file: aseg.nii.gz, mapping: freesurfer, labels: 3}"));
   EXPECT_NE(problems.find("anatomy.segmentation.table: expected"), std::string::npos) << problems;
   EXPECT_NE(problems.find("labels"), std::string::npos) << problems; // the unknown key
+}
+
+TEST(Segmentation, ANameInTwoOrgansOrAVolumeWithoutLabelsIsRefused) {
+  const fs::path folder = write_aseg_fixture("segmentation-twice");
+  std::string problems = refusal(folder, scene_text(R"({file: aseg.nii.gz, table: aseg_dseg.tsv, mapping: [
+      {organ: a, tissue: csf, labels: [CSF, Brain-Stem]},
+      {organ: b, tissue: csf, labels: [Left-Thalamus, Brain-Stem]}]})"));
+  EXPECT_NE(problems.find("anatomy.segmentation.mapping[1].labels: expected each name in one organ, found "
+                          "'Brain-Stem' in organ b and in organ a"),
+            std::string::npos)
+      << problems;
+
+  ImageGrid grid;
+  grid.dims = {8, 8, 8};
+  write_nifti_labels(folder / "empty.nii.gz", grid, std::vector<std::int32_t>(512, 0));
+  problems = refusal(folder, scene_text("{file: empty.nii.gz, table: aseg_dseg.tsv, mapping: freesurfer}"));
+  EXPECT_NE(problems.find("anatomy.segmentation.file: " + (folder / "empty.nii.gz").string() +
+                          ": expected labels (voxels other than 0), found none"),
+            std::string::npos)
+      << problems;
 }
