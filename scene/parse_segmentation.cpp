@@ -34,8 +34,9 @@ std::vector<MappedOrgan> freesurfer_mapping() {
        "grey_matter",
        false,
        {"Left-Cerebral-White-Matter", "Right-Cerebral-White-Matter", "WM-hypointensities",
-        "Left-WM-hypointensities", "Right-WM-hypointensities", "non-WM-hypointensities", "Left-vessel",
-        "Right-vessel", "CC_Posterior", "CC_Mid_Posterior", "CC_Central", "CC_Mid_Anterior", "CC_Anterior"}},
+        "Left-WM-hypointensities", "Right-WM-hypointensities", "non-WM-hypointensities",
+        "Left-non-WM-hypointensities", "Right-non-WM-hypointensities", "Left-vessel", "Right-vessel",
+        "CC_Posterior", "CC_Mid_Posterior", "CC_Central", "CC_Mid_Anterior", "CC_Anterior"}},
       {"brainstem", "white_matter", "csf", false, {"Brain-Stem"}},
   };
   // name, tissue, container, the table's names after "Left-" or "Right-"

@@ -10,6 +10,8 @@
 
 #include <gtest/gtest.h>
 
+#include <set>
+
 using namespace phantasm;
 using phantasm::testing::k_lut;
 using phantasm::testing::write_aseg_fixture;
@@ -221,4 +223,82 @@ TEST(Segmentation, ANameInTwoOrgansOrAVolumeWithoutLabelsIsRefused) {
                           ": expected labels (voxels other than 0), found none"),
             std::string::npos)
       << problems;
+}
+
+TEST(Segmentation, EveryLabelOfAReconAllAsegGetsAnOrganOfTheFreeSurferMapping) {
+  // The labels recon-all writes to aseg.mgz (and SynthSeg a subset of), one voxel each.
+  const std::vector<std::pair<int, std::string>> aseg = {{2, "Left-Cerebral-White-Matter"},
+                                                         {3, "Left-Cerebral-Cortex"},
+                                                         {4, "Left-Lateral-Ventricle"},
+                                                         {5, "Left-Inf-Lat-Vent"},
+                                                         {7, "Left-Cerebellum-White-Matter"},
+                                                         {8, "Left-Cerebellum-Cortex"},
+                                                         {10, "Left-Thalamus"},
+                                                         {11, "Left-Caudate"},
+                                                         {12, "Left-Putamen"},
+                                                         {13, "Left-Pallidum"},
+                                                         {14, "3rd-Ventricle"},
+                                                         {15, "4th-Ventricle"},
+                                                         {16, "Brain-Stem"},
+                                                         {17, "Left-Hippocampus"},
+                                                         {18, "Left-Amygdala"},
+                                                         {24, "CSF"},
+                                                         {26, "Left-Accumbens-area"},
+                                                         {28, "Left-VentralDC"},
+                                                         {30, "Left-vessel"},
+                                                         {31, "Left-choroid-plexus"},
+                                                         {41, "Right-Cerebral-White-Matter"},
+                                                         {42, "Right-Cerebral-Cortex"},
+                                                         {43, "Right-Lateral-Ventricle"},
+                                                         {44, "Right-Inf-Lat-Vent"},
+                                                         {46, "Right-Cerebellum-White-Matter"},
+                                                         {47, "Right-Cerebellum-Cortex"},
+                                                         {49, "Right-Thalamus"},
+                                                         {50, "Right-Caudate"},
+                                                         {51, "Right-Putamen"},
+                                                         {52, "Right-Pallidum"},
+                                                         {53, "Right-Hippocampus"},
+                                                         {54, "Right-Amygdala"},
+                                                         {58, "Right-Accumbens-area"},
+                                                         {60, "Right-VentralDC"},
+                                                         {62, "Right-vessel"},
+                                                         {63, "Right-choroid-plexus"},
+                                                         {72, "5th-Ventricle"},
+                                                         {77, "WM-hypointensities"},
+                                                         {78, "Left-WM-hypointensities"},
+                                                         {79, "Right-WM-hypointensities"},
+                                                         {80, "non-WM-hypointensities"},
+                                                         {81, "Left-non-WM-hypointensities"},
+                                                         {82, "Right-non-WM-hypointensities"},
+                                                         {85, "Optic-Chiasm"},
+                                                         {251, "CC_Posterior"},
+                                                         {252, "CC_Mid_Posterior"},
+                                                         {253, "CC_Central"},
+                                                         {254, "CC_Mid_Anterior"},
+                                                         {255, "CC_Anterior"}};
+  const fs::path folder = write_aseg_fixture("segmentation-recon-all");
+  ImageGrid grid;
+  grid.dims = {12, 12, 12};
+  std::vector<std::int32_t> labels(static_cast<std::size_t>(grid.voxel_count()), 0);
+  std::string lut = "0 Unknown 0 0 0 0\n";
+  for (std::size_t n = 0; n < aseg.size(); ++n) {
+    labels[voxel_index(grid.dims, 2 + static_cast<int>(n % 8), 2 + static_cast<int>(n / 8), 5)] =
+        aseg[n].first;
+    lut += std::to_string(aseg[n].first) + " " + aseg[n].second + " 1 2 3 0\n";
+  }
+  write_nifti_labels(folder / "recon-all.nii.gz", grid, labels);
+  write_text_file(folder / "recon-all-lut.txt", lut);
+  const SceneLoadResult result =
+      load(folder, scene_text("{file: recon-all.nii.gz, table: recon-all-lut.txt, mapping: freesurfer}"));
+  ASSERT_TRUE(result.scene) << format_diagnostics(result.problems);
+  std::multiset<std::string> mapped;
+  for (const OrganSettings& organ : result.scene->anatomy.organs)
+    mapped.insert(organ.shape.labels.begin(), organ.shape.labels.end());
+  std::multiset<std::string> expected;
+  for (const auto& [value, name] : aseg)
+    expected.insert(std::to_string(value));
+  EXPECT_EQ(mapped, expected); // each label in exactly one organ
+  EXPECT_EQ(result.scene->anatomy.organs.size(), 26u);
+  EXPECT_EQ(result.scene->find_organ("right_cerebellum_white_matter")->inside, "right_cerebellum");
+  EXPECT_EQ(result.scene->find_organ("left_cerebellum")->inside, "csf");
 }
