@@ -43,8 +43,8 @@ TEST(RegistrationStudy, TheMainJobsT1wPairRegistersInScannerUnits) {
   write_text_file(scene, coarse_colin_head_text());
   const CommandResult study = run_command(
       {PHANTASM_PYTHON, (k_source_dir / "scripts" / "registration_study.py").string(), "-o", folder.string(),
-       "--scene", scene.string(), "--voxel-size", "2",
-       "--magnitudes", "7.21110255", "--iterations", "150", "--phantasm", k_phantasm});
+       "--scene", scene.string(), "--voxel-size", "2", "--magnitudes", "7.21110255", "--iterations", "150",
+       "--phantasm", k_phantasm, "--cache", shared_coarse_colin_cache().string()});
   ASSERT_EQ(study.exit_code, 0) << study.out << study.err;
   const nlohmann::json result = nlohmann::json::parse(read_file(folder / "study.json"));
   ASSERT_EQ(result["rows"].size(), 1u);

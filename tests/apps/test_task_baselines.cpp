@@ -32,10 +32,13 @@ struct Made {
   fs::path dataset, task, truth;
 };
 
-/// A dataset of `scene` and its task, made once per scene for the tests of this file.
-Made made_task(const fs::path& scene, const fs::path& root) {
+/// A dataset of `scene` and its task, made once per scene for the tests of this file; `cache`, when
+/// given, is the run's anatomy cache.
+Made made_task(const fs::path& scene, const fs::path& root, const fs::path& cache = {}) {
   Made m{root / "out", root / "task", root / "task-truth"};
-  const CommandResult run = run_command({k_phantasm, "run", scene.string(), "-o", m.dataset.string(), "-q"});
+  std::vector<std::string> argv = {k_phantasm, "run", scene.string(), "-o", m.dataset.string(), "-q"};
+  if (!cache.empty()) argv.insert(argv.end(), {"--cache", cache.string()});
+  const CommandResult run = run_command(argv);
   EXPECT_EQ(run.exit_code, 0) << run.err;
   const CommandResult task =
       run_command({k_phantasm, "task", m.dataset.string(), "-o", m.task.string(), "-q"});
@@ -57,7 +60,7 @@ const Made& colin_task() {
     const std::string text = std::regex_replace(coarse_colin_head_text(), std::regex("outputs:\n"), outputs);
     EXPECT_NE(text.find(outputs), std::string::npos);
     write_text_file(root / "colin-coarse.yaml", text);
-    return made_task(root / "colin-coarse.yaml", root);
+    return made_task(root / "colin-coarse.yaml", root, shared_coarse_colin_cache());
   }();
   return made;
 }
