@@ -23,8 +23,9 @@ with h5py.File(path, "r") as f:
         if key not in f.attrs:
             problems.append(f"/ lacks attribute {key}")
     subjects = sorted(k for k in f.keys() if k.startswith("sub-"))
-    expected = sorted(d for d in os.listdir(os.path.join(dataset, "derivatives", "phantasm"))
-                      if d.startswith("sub-"))
+    derivatives = os.path.join(dataset, "derivatives", "phantasm")
+    expected = sorted(d for d in os.listdir(derivatives)
+                      if d.startswith("sub-") and os.path.isdir(os.path.join(derivatives, d)))
     if subjects != expected:
         problems.append(f"subjects {subjects} != {expected}")
     arrays = {}
