@@ -5,10 +5,10 @@
 #include "core/format.hpp"
 #include "core/path_kind.hpp"
 #include "core/sha256.hpp"
-#include "evaluation/dataset_tables.hpp"
 #include "evaluation/evaluation_json.hpp"
 #include "evaluation/registration_metrics.hpp"
 #include "io/dataset_layout.hpp"
+#include "io/dataset_tables.hpp"
 #include "io/json_file.hpp"
 #include "io/nifti_file.hpp"
 

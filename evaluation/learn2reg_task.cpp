@@ -3,11 +3,11 @@
 #include "core/error.hpp"
 #include "core/path_kind.hpp"
 #include "core/sha256.hpp"
-#include "evaluation/dataset_tables.hpp"
 #include "evaluation/evaluation_json.hpp"
 #include "evaluation/field_conventions.hpp"
 #include "io/atomic_file.hpp"
 #include "io/dataset_layout.hpp"
+#include "io/dataset_tables.hpp"
 #include "io/json_file.hpp"
 #include "io/nifti_file.hpp"
 

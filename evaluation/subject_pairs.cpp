@@ -2,11 +2,11 @@
 
 #include "core/error.hpp"
 #include "core/path_kind.hpp"
-#include "evaluation/dataset_tables.hpp"
 #include "evaluation/field_conventions.hpp"
 #include "geometry/ras_lps.hpp"
 #include "io/atomic_file.hpp"
 #include "io/dataset_layout.hpp"
+#include "io/dataset_tables.hpp"
 #include "io/nifti_file.hpp"
 
 #include <algorithm>

@@ -2,6 +2,7 @@
 
 #include "core/error.hpp"
 #include "io/dataset_layout.hpp"
+#include "io/dataset_tables.hpp"
 #include "io/json_file.hpp"
 #include "io/nifti_file.hpp"
 
@@ -47,30 +48,6 @@ double number_field(const std::string& text, const std::filesystem::path& file, 
     throw InputError(file.string() + ":" + std::to_string(line) + ": " + column +
                      ": expected a number, found '" + text + "'");
   return value;
-}
-
-/// The landmarks CSV (name,organ,x_mm,y_mm,z_mm), by name, in file order.
-std::vector<std::pair<std::string, std::array<std::string, 4>>>
-read_landmarks(const std::filesystem::path& file) {
-  const std::vector<std::string> lines = lines_of(read_text(file, "the landmarks CSV phantasm writes"));
-  if (lines.empty() || lines.front() != "name,organ,x_mm,y_mm,z_mm")
-    throw InputError(file.string() + ":1: expected the header 'name,organ,x_mm,y_mm,z_mm', found '" +
-                     (lines.empty() ? std::string() : lines.front()) + "'");
-  std::vector<std::pair<std::string, std::array<std::string, 4>>> rows;
-  for (std::size_t n = 1; n < lines.size(); ++n) {
-    const std::vector<std::string> f = fields_of(lines[n], ',');
-    if (f.size() != 5)
-      throw InputError(file.string() + ":" + std::to_string(n + 1) + ": expected 5 fields, found " +
-                       std::to_string(f.size()));
-    rows.push_back({f[0], {f[1], f[2], f[3], f[4]}});
-  }
-  return rows;
-}
-
-Eigen::Vector3d point_of(const std::array<std::string, 4>& row, const std::filesystem::path& file,
-                         std::size_t line) {
-  return {number_field(row[1], file, line, "x_mm"), number_field(row[2], file, line, "y_mm"),
-          number_field(row[3], file, line, "z_mm")};
 }
 
 /// Every volume of a subject lies on the scene's one grid.
@@ -208,19 +185,17 @@ void read_landmark_moves(SubjectRecord& record, const DatasetLayout& layout,
   if (!listed.count(std::filesystem::relative(ref_file, layout.root()).generic_string()) ||
       !listed.count(std::filesystem::relative(def_file, layout.root()).generic_string()))
     return;
-  const auto reference = read_landmarks(ref_file);
-  const auto deformed = read_landmarks(def_file);
-  std::map<std::string, std::size_t> deformed_row;
-  for (std::size_t r = 0; r < deformed.size(); ++r)
-    deformed_row[deformed[r].first] = r;
-  for (std::size_t r = 0; r < reference.size(); ++r) {
-    const auto found = deformed_row.find(reference[r].first);
-    if (found == deformed_row.end())
-      throw InputError(def_file.string() + ": expected the landmark '" + reference[r].first + "' of " +
+  const std::vector<LandmarkRow> reference = read_landmarks(ref_file);
+  const std::vector<LandmarkRow> deformed = read_landmarks(def_file);
+  std::map<std::string, const LandmarkRow*> deformed_by_name;
+  for (const LandmarkRow& row : deformed)
+    deformed_by_name[row.name] = &row;
+  for (const LandmarkRow& row : reference) {
+    const auto found = deformed_by_name.find(row.name);
+    if (found == deformed_by_name.end())
+      throw InputError(def_file.string() + ": expected the landmark '" + row.name + "' of " +
                        ref_file.filename().string() + ", found no row of that name");
-    record.landmarks.push_back({reference[r].first, reference[r].second[0],
-                                point_of(reference[r].second, ref_file, r + 2),
-                                point_of(deformed[found->second].second, def_file, found->second + 2)});
+    record.landmarks.push_back({row.name, row.organ, row.ras_mm, found->second->ras_mm});
   }
 }
 

@@ -1,6 +1,6 @@
-// Tables of a phantasm dataset read by the evaluation: the landmarks (ses-*/landmarks/*_landmarks.csv:
-// name,organ,x_mm,y_mm,z_mm in RAS mm) and the label table (dseg.tsv), each with a message naming
-// the file and line of anything else.
+// Tables of a phantasm dataset read back by its clients (evaluation, the report): the landmarks
+// (ses-*/landmarks/*_landmarks.csv: name,organ,x_mm,y_mm,z_mm in RAS mm) and the label table
+// (dseg.tsv), each with a message naming the file and line of anything else.
 #pragma once
 
 #include <Eigen/Core>

@@ -1,4 +1,4 @@
-#include "evaluation/dataset_tables.hpp"
+#include "io/dataset_tables.hpp"
 
 #include "core/error.hpp"
 #include "core/path_kind.hpp"
