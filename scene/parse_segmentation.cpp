@@ -18,7 +18,7 @@ struct MappedOrgan {
   std::string inside; ///< the mapping's organ that contains it; empty for the outermost
   bool solid = false;
   std::vector<std::string> names;
-  YAML::Node at; ///< its entry in the scene (a list mapping), else undefined
+  YAML::Node at = YAML::Node(); ///< its entry in the scene (a list mapping), else undefined
 };
 
 /// FreeSurfer's structures (the aseg names of FreeSurferColorLUT.txt, which SynthSeg shares) as
