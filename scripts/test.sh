@@ -10,15 +10,19 @@ cd "$(dirname "$0")/.."
 
 bash scripts/install-deps.sh
 jobs=$(nproc)
+# Each phase ends with its wall time and the processor time of everything it ran: docs/performance.md
+# gives the test command's time by phase, and wall x cores against processor time shows how busy
+# the cores were.
+TIMEFORMAT="   (%0R s wall, %0U s user + %0S s system processor time)"
 
 echo "== Release build and tests"
-bash scripts/build.sh release
-ctest --test-dir build/release --output-on-failure --parallel "$jobs" "$@"
+time bash scripts/build.sh release
+time ctest --test-dir build/release --output-on-failure --parallel "$jobs" "$@"
 
 echo "== Fuzzing: scene and sweep parsers, NIfTI and mesh readers (clang, libFuzzer, ASan + UBSan)"
-bash scripts/fuzz.sh 20
+time bash scripts/fuzz.sh 20
 
 echo "== ASan + UBSan build and tests"
-bash scripts/build.sh asan
-ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+time bash scripts/build.sh asan
+time env ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build/asan --output-on-failure --parallel "$jobs" -L fast "$@"
