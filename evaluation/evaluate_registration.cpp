@@ -107,6 +107,135 @@ void require_finite_field(const DisplacementField& field, const std::filesystem:
   }
 }
 
+/// The registration result to evaluate: its field (none for a warped label map), and the moving
+/// labels it carries onto the fixed grid into `warped`; records its kind in `result`.
+std::optional<DisplacementField> read_result(const EvaluationRequest& request, const ImageGrid& grid,
+                                             const ImageGrid& moving_grid,
+                                             const std::vector<std::int32_t>& moving_labels,
+                                             nlohmann::json* result, std::vector<std::int32_t>* warped) {
+  std::optional<DisplacementField> field;
+  if (request.field) {
+    field = read_displacement_field(*request.field);
+    require_same_grid(grid, field->grid, *request.field);
+    require_finite_field(*field, *request.field);
+    (*result)["result"] = {{"kind", "field"}, {"path", request.field->string()}};
+  } else if (request.identity) {
+    field = zero_field(grid);
+    (*result)["result"] = {{"kind", "identity"}};
+  } else {
+    ImageGrid warped_grid;
+    *warped = read_nifti_labels(*request.warped_labels, &warped_grid);
+    require_same_grid(grid, warped_grid, *request.warped_labels);
+    (*result)["result"] = {{"kind", "labels"}, {"path", request.warped_labels->string()}};
+  }
+  if (field) *warped = warp_labels(moving_labels, moving_grid, *field);
+  return field;
+}
+
+/// Landmarks: the fixed ones carried by the result against the moving ones (same names), into
+/// `result` ("landmarks", "landmark_displacement_mm", "tre_mm").
+void score_landmarks(const DatasetLayout& layout, PhantomState fixed, PhantomState moving,
+                     const std::optional<DisplacementField>& field, nlohmann::json* result,
+                     nlohmann::json* not_available) {
+  const std::vector<LandmarkRow> fixed_points = read_landmarks(layout.landmarks(fixed));
+  const std::vector<LandmarkRow> moving_points = read_landmarks(layout.landmarks(moving));
+  std::map<std::string, Eigen::Vector3d> moving_by_name;
+  for (const auto& row : moving_points)
+    moving_by_name[row.name] = row.ras_mm;
+  std::vector<double> displacement;
+  std::vector<double> tre;
+  nlohmann::json landmarks = nlohmann::json::array();
+  for (const auto& row : fixed_points) {
+    const auto found = moving_by_name.find(row.name);
+    if (found == moving_by_name.end()) {
+      throw InputError(layout.landmarks(moving).string() + ": expected landmark '" + row.name + "' of " +
+                       layout.landmarks(fixed).filename().string() + ", found none");
+    }
+    displacement.push_back((found->second - row.ras_mm).norm());
+    nlohmann::json entry = {
+        {"name", row.name}, {"organ", row.organ}, {"true_displacement_mm", displacement.back()}};
+    if (field) {
+      tre.push_back((field->moved(row.ras_mm) - found->second).norm());
+      entry["tre_mm"] = tre.back();
+    }
+    landmarks.push_back(entry);
+  }
+  (*result)["landmarks"] = landmarks;
+  (*result)["landmark_displacement_mm"] = summary_json(summarize(displacement));
+  if (field) {
+    (*result)["tre_mm"] = summary_json(summarize(tre));
+  } else {
+    (*result)["tre_mm"] = nullptr;
+    not_available->push_back("target registration error: a warped label map does not carry points");
+  }
+}
+
+/// Label overlap, per label of either map, into `result` ("labels", "mean_dice").
+void score_overlaps(const std::vector<std::int32_t>& fixed_labels, const std::vector<std::int32_t>& warped,
+                    const ImageGrid& grid, const std::map<std::int32_t, std::string>& names,
+                    nlohmann::json* result) {
+  nlohmann::json labels = nlohmann::json::array();
+  double dice_sum = 0.0;
+  std::set<std::int32_t> present(fixed_labels.begin(), fixed_labels.end());
+  present.insert(warped.begin(), warped.end());
+  for (std::int32_t label : present) {
+    throw_if_cancelled();
+    if (label == 0) continue;
+    // The gap (the space a moved organ left, deformed state only, the last row of dseg.tsv:
+    // docs/volumes-and-images.md) has no counterpart in the reference: no overlap to measure.
+    const auto gap = names.find(label);
+    if (gap != names.end() && gap->second == "gap" && label == names.rbegin()->first) continue;
+    const LabelOverlap overlap = label_overlap(fixed_labels, warped, grid, label);
+    const auto name = names.find(label);
+    labels.push_back({{"label", label},
+                      {"name", name != names.end() ? name->second : std::to_string(label)},
+                      {"dice", overlap.dice},
+                      {"hd95_mm", number_or_null(overlap.hd95_mm)},
+                      {"fixed_voxels", overlap.fixed_voxels},
+                      {"warped_voxels", overlap.warped_voxels}});
+    dice_sum += overlap.dice;
+  }
+  (*result)["labels"] = labels;
+  (*result)["mean_dice"] =
+      labels.empty() ? nlohmann::json() : nlohmann::json(dice_sum / static_cast<double>(labels.size()));
+}
+
+/// The dense endpoint error where the ground truth is exact, and the result's Jacobian over the
+/// fixed foreground, into `result` ("endpoint_error_mm", "jacobian").
+void score_field(const DatasetLayout& layout, PhantomState fixed, PhantomState moving, const ImageGrid& grid,
+                 const std::vector<std::int32_t>& fixed_labels, const DisplacementField& field,
+                 nlohmann::json* result) {
+  // The truth on the fixed grid is the field that brings the moving image there (BIDS
+  // from-<moving>_to-<fixed>).
+  const DisplacementField truth = read_displacement_field(layout.transform(moving, fixed));
+  require_same_grid(grid, truth.grid, layout.transform(moving, fixed));
+  require_finite_field(truth, layout.transform(moving, fixed));
+  const NiftiVolume mask = read_nifti(layout.transform_mask(moving, fixed));
+  // Read voxel by voxel with the field's indices: a mask of another grid would be read out of bounds.
+  require_same_grid(grid, mask.grid, layout.transform_mask(moving, fixed));
+  if (mask.values.size() != truth.lps_mm.size()) {
+    throw InputError(layout.transform_mask(moving, fixed).string() + ": expected " +
+                     std::to_string(truth.lps_mm.size()) + " voxels (one component), found " +
+                     std::to_string(mask.values.size()));
+  }
+  require_written_mask(mask, layout.transform_mask(moving, fixed));
+  std::vector<double> error;
+  for (std::size_t v = 0; v < truth.lps_mm.size(); ++v)
+    if (mask.values[v] > 0.5) error.push_back((field.lps_mm[v] - truth.lps_mm[v]).norm());
+  (*result)["endpoint_error_mm"] = summary_json(summarize(std::move(error)));
+  std::vector<bool> foreground(fixed_labels.size());
+  for (std::size_t v = 0; v < foreground.size(); ++v)
+    foreground[v] = fixed_labels[v] > 0;
+  const JacobianStatistics j = jacobian_statistics(field, foreground);
+  (*result)["jacobian"] = {{"region", "fixed foreground (label > 0)"},
+                           {"voxels", j.voxels},
+                           {"folding_voxels", j.folding_voxels},
+                           {"folding_fraction", j.folding_fraction},
+                           {"log_jacobian_sd", j.log_jacobian_sd},
+                           {"min_determinant", number_or_null(j.min_determinant)},
+                           {"max_determinant", number_or_null(j.max_determinant)}};
+}
+
 } // namespace
 
 nlohmann::json evaluate_registration(const EvaluationRequest& request) {
@@ -138,114 +267,13 @@ nlohmann::json evaluate_registration(const EvaluationRequest& request) {
       {"voxel_size_mm", {grid.spacing_mm.x(), grid.spacing_mm.y(), grid.spacing_mm.z()}}};
   nlohmann::json not_available = nlohmann::json::array();
 
-  std::optional<DisplacementField> field;
   std::vector<std::int32_t> warped;
-  if (request.field) {
-    field = read_displacement_field(*request.field);
-    require_same_grid(grid, field->grid, *request.field);
-    require_finite_field(*field, *request.field);
-    result["result"] = {{"kind", "field"}, {"path", request.field->string()}};
-  } else if (request.identity) {
-    field = zero_field(grid);
-    result["result"] = {{"kind", "identity"}};
-  } else {
-    ImageGrid warped_grid;
-    warped = read_nifti_labels(*request.warped_labels, &warped_grid);
-    require_same_grid(grid, warped_grid, *request.warped_labels);
-    result["result"] = {{"kind", "labels"}, {"path", request.warped_labels->string()}};
-  }
-  if (field) warped = warp_labels(moving_labels, moving_grid, *field);
-
-  // Landmarks: the fixed ones carried by the result against the moving ones (same names).
-  const std::vector<LandmarkRow> fixed_points = read_landmarks(layout.landmarks(fixed));
-  const std::vector<LandmarkRow> moving_points = read_landmarks(layout.landmarks(moving));
-  std::map<std::string, Eigen::Vector3d> moving_by_name;
-  for (const auto& row : moving_points)
-    moving_by_name[row.name] = row.ras_mm;
-  std::vector<double> displacement;
-  std::vector<double> tre;
-  nlohmann::json landmarks = nlohmann::json::array();
-  for (const auto& row : fixed_points) {
-    const auto found = moving_by_name.find(row.name);
-    if (found == moving_by_name.end()) {
-      throw InputError(layout.landmarks(moving).string() + ": expected landmark '" + row.name + "' of " +
-                       layout.landmarks(fixed).filename().string() + ", found none");
-    }
-    displacement.push_back((found->second - row.ras_mm).norm());
-    nlohmann::json entry = {
-        {"name", row.name}, {"organ", row.organ}, {"true_displacement_mm", displacement.back()}};
-    if (field) {
-      tre.push_back((field->moved(row.ras_mm) - found->second).norm());
-      entry["tre_mm"] = tre.back();
-    }
-    landmarks.push_back(entry);
-  }
-  result["landmarks"] = landmarks;
-  result["landmark_displacement_mm"] = summary_json(summarize(displacement));
+  const std::optional<DisplacementField> field =
+      read_result(request, grid, moving_grid, moving_labels, &result, &warped);
+  score_landmarks(layout, fixed, moving, field, &result, &not_available);
+  score_overlaps(fixed_labels, warped, grid, names, &result);
   if (field) {
-    result["tre_mm"] = summary_json(summarize(tre));
-  } else {
-    result["tre_mm"] = nullptr;
-    not_available.push_back("target registration error: a warped label map does not carry points");
-  }
-
-  // Label overlap, per label of either map.
-  nlohmann::json labels = nlohmann::json::array();
-  double dice_sum = 0.0;
-  std::set<std::int32_t> present(fixed_labels.begin(), fixed_labels.end());
-  present.insert(warped.begin(), warped.end());
-  for (std::int32_t label : present) {
-    throw_if_cancelled();
-    if (label == 0) continue;
-    // The gap (the space a moved organ left, deformed state only, the last row of dseg.tsv:
-    // docs/volumes-and-images.md) has no counterpart in the reference: no overlap to measure.
-    const auto gap = names.find(label);
-    if (gap != names.end() && gap->second == "gap" && label == names.rbegin()->first) continue;
-    const LabelOverlap overlap = label_overlap(fixed_labels, warped, grid, label);
-    const auto name = names.find(label);
-    labels.push_back({{"label", label},
-                      {"name", name != names.end() ? name->second : std::to_string(label)},
-                      {"dice", overlap.dice},
-                      {"hd95_mm", number_or_null(overlap.hd95_mm)},
-                      {"fixed_voxels", overlap.fixed_voxels},
-                      {"warped_voxels", overlap.warped_voxels}});
-    dice_sum += overlap.dice;
-  }
-  result["labels"] = labels;
-  result["mean_dice"] =
-      labels.empty() ? nlohmann::json() : nlohmann::json(dice_sum / static_cast<double>(labels.size()));
-
-  if (field) {
-    // Dense endpoint error where the ground truth is exact.
-    // The truth on the fixed grid is the field that brings the moving image there (BIDS
-    // from-<moving>_to-<fixed>).
-    const DisplacementField truth = read_displacement_field(layout.transform(moving, fixed));
-    require_same_grid(grid, truth.grid, layout.transform(moving, fixed));
-    require_finite_field(truth, layout.transform(moving, fixed));
-    const NiftiVolume mask = read_nifti(layout.transform_mask(moving, fixed));
-    // Read voxel by voxel with the field's indices: a mask of another grid would be read out of bounds.
-    require_same_grid(grid, mask.grid, layout.transform_mask(moving, fixed));
-    if (mask.values.size() != truth.lps_mm.size()) {
-      throw InputError(layout.transform_mask(moving, fixed).string() + ": expected " +
-                       std::to_string(truth.lps_mm.size()) + " voxels (one component), found " +
-                       std::to_string(mask.values.size()));
-    }
-    require_written_mask(mask, layout.transform_mask(moving, fixed));
-    std::vector<double> error;
-    for (std::size_t v = 0; v < truth.lps_mm.size(); ++v)
-      if (mask.values[v] > 0.5) error.push_back((field->lps_mm[v] - truth.lps_mm[v]).norm());
-    result["endpoint_error_mm"] = summary_json(summarize(std::move(error)));
-    std::vector<bool> foreground(fixed_labels.size());
-    for (std::size_t v = 0; v < foreground.size(); ++v)
-      foreground[v] = fixed_labels[v] > 0;
-    const JacobianStatistics j = jacobian_statistics(*field, foreground);
-    result["jacobian"] = {{"region", "fixed foreground (label > 0)"},
-                          {"voxels", j.voxels},
-                          {"folding_voxels", j.folding_voxels},
-                          {"folding_fraction", j.folding_fraction},
-                          {"log_jacobian_sd", j.log_jacobian_sd},
-                          {"min_determinant", number_or_null(j.min_determinant)},
-                          {"max_determinant", number_or_null(j.max_determinant)}};
+    score_field(layout, fixed, moving, grid, fixed_labels, *field, &result);
   } else {
     result["endpoint_error_mm"] = nullptr;
     result["jacobian"] = nullptr;

@@ -169,14 +169,7 @@ void require_new_or_empty(const std::filesystem::path& folder, const std::string
                      " holding files (remove it, or choose another)");
 }
 
-} // namespace
-
-std::string learn2reg_result_name(const TaskPair& pair) {
-  return "disp_" + pair.fixed_id + "_" + pair.moving_id + ".nii.gz";
-}
-
-nlohmann::json make_learn2reg_task(const TaskRequest& request) {
-  const std::string& name = request.name;
+void require_task_name(const std::string& name) {
   if (name.empty() || name.size() > 32 || std::any_of(name.begin(), name.end(), [](char c) {
         return !std::isalnum(static_cast<unsigned char>(c));
       })) {
@@ -185,19 +178,26 @@ nlohmann::json make_learn2reg_task(const TaskRequest& request) {
         "found '" +
         name + "'");
   }
-  const std::vector<std::string> subjects = complete_subjects(request.dataset);
+}
+
+/// The dataset's complete subjects, one case each (four-digit case numbers).
+std::vector<std::string> task_subjects(const std::filesystem::path& dataset) {
+  const std::vector<std::string> subjects = complete_subjects(dataset);
   if (subjects.empty()) {
-    throw InputError(request.dataset.string() +
-                     ": expected a phantasm dataset with a complete subject "
-                     "(derivatives/phantasm/sub-<id>/provenance.json), found none");
+    throw InputError(dataset.string() + ": expected a phantasm dataset with a complete subject "
+                                        "(derivatives/phantasm/sub-<id>/provenance.json), found none");
   }
   if (subjects.size() > 9999)
-    throw InputError(request.dataset.string() +
+    throw InputError(dataset.string() +
                      ": expected at most 9999 subjects (four-digit case numbers), "
                      "found " +
                      std::to_string(subjects.size()));
-  const std::filesystem::path task = std::filesystem::absolute(request.task).lexically_normal();
-  const std::filesystem::path truth = std::filesystem::absolute(request.truth).lexically_normal();
+  return subjects;
+}
+
+/// Refuses a truth folder inside the task folder or the other way round (a method must not see
+/// the truth).
+void require_truth_apart(const TaskRequest& request) {
   // Compared by path components ("out/" and "out" are one folder; "out2" is not inside "out").
   auto components = [](const std::filesystem::path& p) {
     std::vector<std::filesystem::path> parts;
@@ -214,6 +214,115 @@ nlohmann::json make_learn2reg_task(const TaskRequest& request) {
         "--truth: expected a folder apart from the task (a method must not see the truth), found " +
         request.truth.string() + " and " + request.task.string());
   }
+}
+
+/// A file of the task, relative to its folder: ./<folder>/<name>_<id><extension>.
+std::string task_file(const char* folder, const std::string& name, const std::string& id,
+                      const char* extension) {
+  return std::string("./") + folder + "/" + name + "_" + id + extension;
+}
+
+/// Writes a pair's image, labels, mask and keypoints of both states into the task, adding them to
+/// `training` and the pair to `paired`.
+void write_task_pair(const std::filesystem::path& task, const std::string& name, const PairInputs& p,
+                     nlohmann::json* training, nlohmann::json* paired) {
+  const std::pair<std::string, PhantomState> states[2] = {{p.pair.fixed_id, PhantomState::reference},
+                                                          {p.pair.moving_id, PhantomState::deformed}};
+  for (const auto& [id, state] : states) {
+    const bool fixed = state == PhantomState::reference;
+    write_file_atomically(task / task_file("imagesTr", name, id, ".nii.gz"),
+                          whole_file(fixed ? p.fixed_image : p.moving_image, "a file of the dataset"));
+    write_file_atomically(task / task_file("labelsTr", name, id, ".nii.gz"),
+                          whole_file(p.layout.dseg(state), "a file of the dataset"));
+    const std::vector<std::int32_t>& labels = fixed ? p.fixed_labels : p.moving_labels;
+    std::vector<std::int32_t> mask(labels.size());
+    for (std::size_t v = 0; v < labels.size(); ++v)
+      mask[v] = labels[v] > 0 ? 1 : 0;
+    write_nifti_labels(task / task_file("masksTr", name, id, ".nii.gz"), p.grid, mask);
+    std::string csv;
+    for (const auto& point : fixed ? p.fixed_points : p.moving_points)
+      csv += keypoint_row(point) + "\n";
+    write_file_atomically(task / task_file("keypointsTr", name, id, ".csv"), csv);
+    training->push_back({{"image", task_file("imagesTr", name, id, ".nii.gz")},
+                         {"label", task_file("labelsTr", name, id, ".nii.gz")},
+                         {"mask", task_file("masksTr", name, id, ".nii.gz")},
+                         {"keypoints", task_file("keypointsTr", name, id, ".csv")}});
+  }
+  paired->push_back({{"fixed", task_file("imagesTr", name, p.pair.fixed_id, ".nii.gz")},
+                     {"moving", task_file("imagesTr", name, p.pair.moving_id, ".nii.gz")}});
+}
+
+/// Writes a pair's true field, mask and keypoints into the truth folder; returns its entry of truth.json.
+nlohmann::json write_truth_pair(const std::filesystem::path& truth, const std::string& name,
+                                const PairInputs& p, const std::map<std::string, nlohmann::json>& factors) {
+  const std::string stem = p.pair.fixed_id + "_" + p.pair.moving_id;
+  write_field(truth / learn2reg_result_name(p.pair), p.truth, FieldConvention::learn2reg);
+  write_file_atomically(truth / ("mask_" + stem + ".nii.gz"),
+                        whole_file(p.truth_mask, "a file of the dataset"));
+  std::string csv = "name,fixed_i,fixed_j,fixed_k,moving_i,moving_j,moving_k\n";
+  for (std::size_t r = 0; r < p.point_names.size(); ++r)
+    csv += p.point_names[r] + "," + keypoint_row(p.fixed_points[r]) + "," + keypoint_row(p.moving_points[r]) +
+           "\n";
+  write_file_atomically(truth / ("keypoints_" + stem + ".csv"), csv);
+  return {{"case", p.pair.case_index},
+          {"subject", p.pair.subject},
+          {"fixed", task_file("imagesTr", name, p.pair.fixed_id, ".nii.gz")},
+          {"moving", task_file("imagesTr", name, p.pair.moving_id, ".nii.gz")},
+          {"fixed_id", p.pair.fixed_id},
+          {"moving_id", p.pair.moving_id},
+          {"result", learn2reg_result_name(p.pair)},
+          {"displacement", learn2reg_result_name(p.pair)},
+          {"mask", "mask_" + stem + ".nii.gz"},
+          {"keypoints", "keypoints_" + stem + ".csv"},
+          {"factors", factors.count(p.pair.subject) ? factors.at(p.pair.subject) : nlohmann::json::object()}};
+}
+
+/// The task's <name>_dataset.json (Learn2Reg's description of a task).
+nlohmann::json task_dataset_json(const std::string& name, const std::string& fixed_contrast,
+                                 const std::string& moving_contrast, const nlohmann::json& labels,
+                                 const std::vector<int>& dims, const nlohmann::json& training,
+                                 const nlohmann::json& paired) {
+  return {
+      {"name", name},
+      {"release", "1.0"},
+      {"description", "Registration pairs of a phantasm dataset: each subject's reference state (fixed, " +
+                          fixed_contrast + ") and deformed state (moving, " + moving_contrast + ")"},
+      {"licence", "as the source dataset"},
+      {"reference", "phantasm"},
+      {"pairings", "paired"},
+      {"provided_data",
+       {{"0", {"image", "label", "mask", "keypoints"}}, {"1", {"image", "label", "mask", "keypoints"}}}},
+      {"registration_direction", {{"fixed", 0}, {"moving", 1}}},
+      {"modality", {{"0", "MR " + fixed_contrast}, {"1", "MR " + moving_contrast}}},
+      {"img_shift", {{"fixed", "0000"}, {"moving", "0001"}}},
+      {"labels", {{"0", labels}, {"1", labels}}},
+      {"tensorImageSize", {{"0", "3D"}, {"1", "3D"}}},
+      {"tensorImageShape", {{"0", dims}, {"1", dims}}},
+      {"numTraining", training.size()},
+      {"numTest", 0},
+      {"training", training},
+      {"test", nlohmann::json::array()},
+      {"numPairedTraining", paired.size()},
+      {"training_paired_images", paired},
+      {"numRegistration_val", paired.size()},
+      {"registration_val", paired},
+      {"numRegistration_test", 0},
+      {"registration_test", nlohmann::json::array()}};
+}
+
+} // namespace
+
+std::string learn2reg_result_name(const TaskPair& pair) {
+  return "disp_" + pair.fixed_id + "_" + pair.moving_id + ".nii.gz";
+}
+
+nlohmann::json make_learn2reg_task(const TaskRequest& request) {
+  const std::string& name = request.name;
+  require_task_name(name);
+  const std::vector<std::string> subjects = task_subjects(request.dataset);
+  const std::filesystem::path task = std::filesystem::absolute(request.task).lexically_normal();
+  const std::filesystem::path truth = std::filesystem::absolute(request.truth).lexically_normal();
+  require_truth_apart(request);
   require_new_or_empty(request.task, "-o");
   require_new_or_empty(request.truth, "--truth");
 
@@ -244,58 +353,11 @@ nlohmann::json make_learn2reg_task(const TaskRequest& request) {
   for (const char* folder : {"imagesTr", "labelsTr", "masksTr", "keypointsTr"})
     std::filesystem::create_directories(task / folder);
   std::filesystem::create_directories(truth);
-  auto file = [&](const char* folder, const std::string& id, const char* extension) {
-    return std::string("./") + folder + "/" + name + "_" + id + extension;
-  };
   nlohmann::json training = nlohmann::json::array(), paired = nlohmann::json::array();
   nlohmann::json truth_pairs = nlohmann::json::array();
   for (const PairInputs& p : pairs) {
-    const std::pair<std::string, PhantomState> states[2] = {{p.pair.fixed_id, PhantomState::reference},
-                                                            {p.pair.moving_id, PhantomState::deformed}};
-    for (const auto& [id, state] : states) {
-      const bool fixed = state == PhantomState::reference;
-      write_file_atomically(task / file("imagesTr", id, ".nii.gz"),
-                            whole_file(fixed ? p.fixed_image : p.moving_image, "a file of the dataset"));
-      write_file_atomically(task / file("labelsTr", id, ".nii.gz"),
-                            whole_file(p.layout.dseg(state), "a file of the dataset"));
-      const std::vector<std::int32_t>& labels = fixed ? p.fixed_labels : p.moving_labels;
-      std::vector<std::int32_t> mask(labels.size());
-      for (std::size_t v = 0; v < labels.size(); ++v)
-        mask[v] = labels[v] > 0 ? 1 : 0;
-      write_nifti_labels(task / file("masksTr", id, ".nii.gz"), p.grid, mask);
-      std::string csv;
-      for (const auto& point : fixed ? p.fixed_points : p.moving_points)
-        csv += keypoint_row(point) + "\n";
-      write_file_atomically(task / file("keypointsTr", id, ".csv"), csv);
-      training.push_back({{"image", file("imagesTr", id, ".nii.gz")},
-                          {"label", file("labelsTr", id, ".nii.gz")},
-                          {"mask", file("masksTr", id, ".nii.gz")},
-                          {"keypoints", file("keypointsTr", id, ".csv")}});
-    }
-    paired.push_back({{"fixed", file("imagesTr", p.pair.fixed_id, ".nii.gz")},
-                      {"moving", file("imagesTr", p.pair.moving_id, ".nii.gz")}});
-
-    const std::string stem = p.pair.fixed_id + "_" + p.pair.moving_id;
-    write_field(truth / learn2reg_result_name(p.pair), p.truth, FieldConvention::learn2reg);
-    write_file_atomically(truth / ("mask_" + stem + ".nii.gz"),
-                          whole_file(p.truth_mask, "a file of the dataset"));
-    std::string csv = "name,fixed_i,fixed_j,fixed_k,moving_i,moving_j,moving_k\n";
-    for (std::size_t r = 0; r < p.point_names.size(); ++r)
-      csv += p.point_names[r] + "," + keypoint_row(p.fixed_points[r]) + "," +
-             keypoint_row(p.moving_points[r]) + "\n";
-    write_file_atomically(truth / ("keypoints_" + stem + ".csv"), csv);
-    truth_pairs.push_back(
-        {{"case", p.pair.case_index},
-         {"subject", p.pair.subject},
-         {"fixed", file("imagesTr", p.pair.fixed_id, ".nii.gz")},
-         {"moving", file("imagesTr", p.pair.moving_id, ".nii.gz")},
-         {"fixed_id", p.pair.fixed_id},
-         {"moving_id", p.pair.moving_id},
-         {"result", learn2reg_result_name(p.pair)},
-         {"displacement", learn2reg_result_name(p.pair)},
-         {"mask", "mask_" + stem + ".nii.gz"},
-         {"keypoints", "keypoints_" + stem + ".csv"},
-         {"factors", factors.count(p.pair.subject) ? factors.at(p.pair.subject) : nlohmann::json::object()}});
+    write_task_pair(task, name, p, &training, &paired);
+    truth_pairs.push_back(write_truth_pair(truth, name, p, factors));
   }
 
   nlohmann::json labels = nlohmann::json::object();
@@ -303,34 +365,9 @@ nlohmann::json make_learn2reg_task(const TaskRequest& request) {
   for (const auto& [index, label_name] : label_names)
     labels[std::to_string(index)] = label_name;
   const std::vector<int> dims = {shape.x(), shape.y(), shape.z()};
-  const nlohmann::json dataset_json = {
-      {"name", name},
-      {"release", "1.0"},
-      {"description", "Registration pairs of a phantasm dataset: each subject's reference state (fixed, " +
-                          fixed_contrast + ") and deformed state (moving, " + moving_contrast + ")"},
-      {"licence", "as the source dataset"},
-      {"reference", "phantasm"},
-      {"pairings", "paired"},
-      {"provided_data",
-       {{"0", {"image", "label", "mask", "keypoints"}}, {"1", {"image", "label", "mask", "keypoints"}}}},
-      {"registration_direction", {{"fixed", 0}, {"moving", 1}}},
-      {"modality", {{"0", "MR " + fixed_contrast}, {"1", "MR " + moving_contrast}}},
-      {"img_shift", {{"fixed", "0000"}, {"moving", "0001"}}},
-      {"labels", {{"0", labels}, {"1", labels}}},
-      {"tensorImageSize", {{"0", "3D"}, {"1", "3D"}}},
-      {"tensorImageShape", {{"0", dims}, {"1", dims}}},
-      {"numTraining", training.size()},
-      {"numTest", 0},
-      {"training", training},
-      {"test", nlohmann::json::array()},
-      {"numPairedTraining", paired.size()},
-      {"training_paired_images", paired},
-      {"numRegistration_val", paired.size()},
-      {"registration_val", paired},
-      {"numRegistration_test", 0},
-      {"registration_test", nlohmann::json::array()}};
   const std::filesystem::path dataset_json_path = task / (name + "_dataset.json");
-  write_json_file(dataset_json_path, dataset_json);
+  write_json_file(dataset_json_path,
+                  task_dataset_json(name, fixed_contrast, moving_contrast, labels, dims, training, paired));
 
   const nlohmann::json truth_json = {
       {"task", name},

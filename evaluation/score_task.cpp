@@ -262,8 +262,10 @@ std::vector<Misreading> likely_misreadings(const DisplacementField& result, cons
   return {best};
 }
 
-nlohmann::json score_task(const TaskScoreRequest& request) {
-  const std::filesystem::path truth_path = request.truth / "truth.json";
+namespace {
+
+/// The task's ground truth (truth.json), checked against the task's dataset JSON it was made with.
+nlohmann::json read_truth(const TaskScoreRequest& request, const std::filesystem::path& truth_path) {
   const nlohmann::json truth =
       parse_json_text(whole_file(truth_path, "the ground truth phantasm task writes (truth.json)"),
                       truth_path, "the ground truth phantasm task writes");
@@ -278,8 +280,13 @@ nlohmann::json score_task(const TaskScoreRequest& request) {
   if (!pairs.is_array() || pairs.empty())
     throw InputError(truth_path.string() + ": pairs: expected a list of the task's pairs, found " +
                      pairs.dump());
+  return truth;
+}
 
-  // The results folder holds one field per pair, no more, no less.
+/// The result files of the results folder (disp_*), checked to hold one field per pair, no more,
+/// no less (a pair's reverse direction is allowed beside it).
+std::set<std::string> result_files(const TaskScoreRequest& request, const nlohmann::json& pairs,
+                                   const std::filesystem::path& truth_path) {
   if (path_kind(request.results) != "a folder")
     throw InputError(request.results.string() + ": expected the folder of results (--results), found " +
                      path_kind(request.results));
@@ -304,178 +311,243 @@ nlohmann::json score_task(const TaskScoreRequest& request) {
     if (!extra.empty()) message += "; not pairs of the task: " + extra;
     throw InputError(message);
   }
+  return found;
+}
 
-  // Read and check everything before scoring.
-  std::vector<PairFiles> inputs;
-  for (const auto& pair : pairs) {
-    PairFiles in;
-    in.entry = pair;
-    const std::string fixed_id = string_member(pair, "fixed_id", truth_path);
-    const std::string moving_id = string_member(pair, "moving_id", truth_path);
-    const std::string task_name = string_member(truth, "task", truth_path);
-    in.fixed_labels =
-        read_nifti_labels(request.task / "labelsTr" / (task_name + "_" + fixed_id + ".nii.gz"), &in.grid);
-    ImageGrid moving_grid;
-    in.moving_labels = read_nifti_labels(
-        request.task / "labelsTr" / (task_name + "_" + moving_id + ".nii.gz"), &moving_grid);
-    if (moving_grid.dims != in.grid.dims)
-      throw InputError((request.task / "labelsTr" / (task_name + "_" + moving_id + ".nii.gz")).string() +
-                       ": expected the fixed image's grid size, found another");
-    in.truth = read_field(request.truth / string_member(pair, "displacement", truth_path),
-                          FieldConvention::learn2reg, in.grid);
-    in.result =
-        read_field(request.results / string_member(pair, "result", truth_path), request.convention, in.grid);
-    const std::filesystem::path reverse = request.results / reverse_result_name(pair, truth_path);
-    if (found.count(reverse.filename().string()))
-      in.backward = read_field(reverse, request.convention, moving_grid);
-    const std::filesystem::path mask_path = request.truth / string_member(pair, "mask", truth_path);
-    const NiftiVolume mask = read_nifti(mask_path);
-    if (mask.grid.dims != in.grid.dims)
-      throw InputError(mask_path.string() + ": expected the fixed image's grid size, found another");
-    in.mask.resize(mask.values.size());
-    for (std::size_t v = 0; v < mask.values.size(); ++v)
-      in.mask[v] = mask.values[v] > 0.5;
-    in.keypoints = read_keypoints(request.truth / string_member(pair, "keypoints", truth_path));
-    inputs.push_back(std::move(in));
-  }
+/// One pair's labels, fields, mask and keypoints, read and checked.
+PairFiles read_pair(const TaskScoreRequest& request, const nlohmann::json& truth, const nlohmann::json& pair,
+                    const std::filesystem::path& truth_path, const std::set<std::string>& found) {
+  PairFiles in;
+  in.entry = pair;
+  const std::string fixed_id = string_member(pair, "fixed_id", truth_path);
+  const std::string moving_id = string_member(pair, "moving_id", truth_path);
+  const std::string task_name = string_member(truth, "task", truth_path);
+  in.fixed_labels =
+      read_nifti_labels(request.task / "labelsTr" / (task_name + "_" + fixed_id + ".nii.gz"), &in.grid);
+  ImageGrid moving_grid;
+  in.moving_labels =
+      read_nifti_labels(request.task / "labelsTr" / (task_name + "_" + moving_id + ".nii.gz"), &moving_grid);
+  if (moving_grid.dims != in.grid.dims)
+    throw InputError((request.task / "labelsTr" / (task_name + "_" + moving_id + ".nii.gz")).string() +
+                     ": expected the fixed image's grid size, found another");
+  in.truth = read_field(request.truth / string_member(pair, "displacement", truth_path),
+                        FieldConvention::learn2reg, in.grid);
+  in.result =
+      read_field(request.results / string_member(pair, "result", truth_path), request.convention, in.grid);
+  const std::filesystem::path reverse = request.results / reverse_result_name(pair, truth_path);
+  if (found.count(reverse.filename().string()))
+    in.backward = read_field(reverse, request.convention, moving_grid);
+  const std::filesystem::path mask_path = request.truth / string_member(pair, "mask", truth_path);
+  const NiftiVolume mask = read_nifti(mask_path);
+  if (mask.grid.dims != in.grid.dims)
+    throw InputError(mask_path.string() + ": expected the fixed image's grid size, found another");
+  in.mask.resize(mask.values.size());
+  for (std::size_t v = 0; v < mask.values.size(); ++v)
+    in.mask[v] = mask.values[v] > 0.5;
+  in.keypoints = read_keypoints(request.truth / string_member(pair, "keypoints", truth_path));
+  return in;
+}
 
+/// The label names of the task's truth ("labels": index to name), where it has them.
+std::map<std::int32_t, std::string> label_names(const nlohmann::json& truth) {
   std::map<std::int32_t, std::string> names;
   if (truth.contains("labels") && truth["labels"].is_object())
     for (const auto& [index, name] : truth["labels"].items())
       if (name.is_string()) names[std::atoi(index.c_str())] = name.get<std::string>();
+  return names;
+}
 
-  nlohmann::json scored = nlohmann::json::array(), warnings = nlohmann::json::array();
+/// A pair's scores: its JSON entry and the per-pair values the summary averages.
+struct PairScore {
+  nlohmann::json out;
+  double mean_dice = 0.0, mean_hd95 = 0.0, tre = 0.0, epe = 0.0, ndv = 0.0, sdlogj = 0.0;
+  std::optional<double> consistency; // pairs with both directions only
+};
+
+/// Dice and HD95 per label of the fixed labels against the moving labels carried by the result,
+/// into `out` ("labels", "mean_dice", "mean_hd95_mm") and `score`.
+void score_overlaps(const PairFiles& in, const std::map<std::int32_t, std::string>& names, PairScore* score) {
+  const ImageGrid& grid = in.grid;
+  const std::vector<std::int32_t> warped = warp_labels(in.moving_labels, grid, in.result);
+  std::set<std::int32_t> present(in.fixed_labels.begin(), in.fixed_labels.end());
+  present.insert(warped.begin(), warped.end());
+  nlohmann::json labels = nlohmann::json::array();
+  double dice_sum = 0.0, hd95_sum = 0.0;
+  int hd95_count = 0;
+  for (std::int32_t label : present) {
+    const auto name = names.find(label);
+    // Background, and the gap a moved organ left (deformed state only): nothing to overlap.
+    if (label == 0 || (name != names.end() && name->second == "gap")) continue;
+    const LabelOverlap overlap = label_overlap(in.fixed_labels, warped, grid, label);
+    labels.push_back({{"label", label},
+                      {"name", name != names.end() ? name->second : std::to_string(label)},
+                      {"dice", overlap.dice},
+                      {"hd95_mm", number_or_null(overlap.hd95_mm)}});
+    dice_sum += overlap.dice;
+    if (std::isfinite(overlap.hd95_mm)) {
+      hd95_sum += overlap.hd95_mm;
+      ++hd95_count;
+    }
+  }
+  score->out["labels"] = labels;
+  score->mean_dice = labels.empty() ? std::nan("") : dice_sum / static_cast<double>(labels.size());
+  score->mean_hd95 = hd95_count ? hd95_sum / hd95_count : std::nan("");
+  score->out["mean_dice"] = number_or_null(score->mean_dice);
+  score->out["mean_hd95_mm"] = number_or_null(score->mean_hd95);
+}
+
+/// The warnings of a pair whose result looks like the true field read the wrong way.
+nlohmann::json misreading_warnings(const PairFiles& in, const TaskScoreRequest& request,
+                                   const std::string& result) {
+  nlohmann::json pair_warnings = nlohmann::json::array();
+  for (const Misreading& m : likely_misreadings(in.result, in.truth, in.mask)) {
+    std::ostringstream text;
+    text << (request.results / result).string()
+         << ": the result looks like the true field read the wrong way: " << m.mistake << " (endpoint error "
+         << format_number(m.error_as_read_voxels) << " voxels as read, "
+         << format_number(m.error_if_so_voxels)
+         << " if so; convention read: " << to_string(request.convention) << ")";
+    pair_warnings.push_back(text.str());
+  }
+  return pair_warnings;
+}
+
+/// One pair scored: overlaps, TRE, endpoint error, inverse consistency, folding and warnings.
+PairScore score_pair(const PairFiles& in, const std::map<std::int32_t, std::string>& names,
+                     const TaskScoreRequest& request) {
+  const ImageGrid& grid = in.grid;
+  PairScore score;
+  nlohmann::json& out = score.out;
+  out = {{"case", in.entry.value("case", 0)},
+         {"subject", in.entry.value("subject", "")},
+         {"fixed", in.entry.value("fixed", "")},
+         {"moving", in.entry.value("moving", "")},
+         {"result", in.entry.value("result", "")}};
+  score_overlaps(in, names, &score);
+
+  std::vector<double> tre;
+  for (const Keypoint& p : in.keypoints) {
+    const Eigen::Vector3d fixed = grid.world_from_index(p.fixed);
+    tre.push_back((in.result.moved(fixed) - grid.world_from_index(p.moving)).norm());
+  }
+  out["tre_mm"] = summary_json(summarize(tre));
+
+  std::vector<double> epe;
+  for (std::size_t v = 0; v < in.mask.size(); ++v)
+    if (in.mask[v]) epe.push_back((in.result.lps_mm[v] - in.truth.lps_mm[v]).norm());
+  const Summary epe_summary = summarize(epe);
+  out["endpoint_error_mm"] = summary_json(epe_summary);
+  out["inverse_consistency_mm"] = nullptr;
+  if (in.backward) {
+    const Summary consistency = summarize(inverse_consistency_errors(in.result, *in.backward, in.mask));
+    out["inverse_consistency_mm"] = summary_json(consistency);
+    score.consistency = consistency.mean;
+  }
+
+  std::vector<bool> foreground(in.fixed_labels.size());
+  for (std::size_t v = 0; v < foreground.size(); ++v)
+    foreground[v] = in.fixed_labels[v] > 0;
+  const FoldingVolume ndv = non_diffeomorphic_volume(in.result, foreground);
+  const JacobianStatistics j = jacobian_statistics(in.result, foreground);
+  out["ndv"] = {{"percent", ndv.ndv_percent},
+                {"voxels", ndv.ndv_voxels},
+                {"folded_cubes", ndv.folded_cubes},
+                {"cubes", ndv.cubes}};
+  out["jacobian_central_differences"] = {{"folding_fraction", j.folding_fraction},
+                                         {"log_jacobian_sd", j.log_jacobian_sd}};
+  out["warnings"] = misreading_warnings(in, request, out["result"].get<std::string>());
+  out["factors"] = in.entry.value("factors", nlohmann::json::object());
+  score.tre = tre.empty() ? std::nan("") : summarize(tre).mean;
+  score.epe = epe.empty() ? std::nan("") : epe_summary.mean;
+  score.ndv = ndv.ndv_percent;
+  score.sdlogj = j.log_jacobian_sd;
+  return score;
+}
+
+/// The mean of the finite values, null when there are none.
+nlohmann::json finite_mean(const std::vector<double>& values) {
+  double sum = 0.0;
+  int count = 0;
+  for (double v : values)
+    if (std::isfinite(v)) {
+      sum += v;
+      ++count;
+    }
+  return count ? nlohmann::json(sum / count) : nlohmann::json();
+}
+
+/// The task's summary: the pairs' scores averaged.
+nlohmann::json task_summary(const std::vector<PairScore>& scores) {
   std::vector<double> dice_per_pair, hd95_per_pair, tre_per_pair, epe_per_pair, ndv_per_pair, sdlogj_per_pair;
   std::vector<double> consistency_per_pair; // pairs with both directions only
-  for (PairFiles& in : inputs) {
-    throw_if_cancelled();
-    const ImageGrid& grid = in.grid;
-    nlohmann::json out = {{"case", in.entry.value("case", 0)},
-                          {"subject", in.entry.value("subject", "")},
-                          {"fixed", in.entry.value("fixed", "")},
-                          {"moving", in.entry.value("moving", "")},
-                          {"result", in.entry.value("result", "")}};
-    const std::vector<std::int32_t> warped = warp_labels(in.moving_labels, grid, in.result);
-    std::set<std::int32_t> present(in.fixed_labels.begin(), in.fixed_labels.end());
-    present.insert(warped.begin(), warped.end());
-    nlohmann::json labels = nlohmann::json::array();
-    double dice_sum = 0.0, hd95_sum = 0.0;
-    int hd95_count = 0;
-    for (std::int32_t label : present) {
-      const auto name = names.find(label);
-      // Background, and the gap a moved organ left (deformed state only): nothing to overlap.
-      if (label == 0 || (name != names.end() && name->second == "gap")) continue;
-      const LabelOverlap overlap = label_overlap(in.fixed_labels, warped, grid, label);
-      labels.push_back({{"label", label},
-                        {"name", name != names.end() ? name->second : std::to_string(label)},
-                        {"dice", overlap.dice},
-                        {"hd95_mm", number_or_null(overlap.hd95_mm)}});
-      dice_sum += overlap.dice;
-      if (std::isfinite(overlap.hd95_mm)) {
-        hd95_sum += overlap.hd95_mm;
-        ++hd95_count;
-      }
-    }
-    out["labels"] = labels;
-    const double mean_dice = labels.empty() ? std::nan("") : dice_sum / static_cast<double>(labels.size());
-    const double mean_hd95 = hd95_count ? hd95_sum / hd95_count : std::nan("");
-    out["mean_dice"] = number_or_null(mean_dice);
-    out["mean_hd95_mm"] = number_or_null(mean_hd95);
-
-    std::vector<double> tre;
-    for (const Keypoint& p : in.keypoints) {
-      const Eigen::Vector3d fixed = grid.world_from_index(p.fixed);
-      tre.push_back((in.result.moved(fixed) - grid.world_from_index(p.moving)).norm());
-    }
-    out["tre_mm"] = summary_json(summarize(tre));
-
-    std::vector<double> epe;
-    for (std::size_t v = 0; v < in.mask.size(); ++v)
-      if (in.mask[v]) epe.push_back((in.result.lps_mm[v] - in.truth.lps_mm[v]).norm());
-    const Summary epe_summary = summarize(epe);
-    out["endpoint_error_mm"] = summary_json(epe_summary);
-    out["inverse_consistency_mm"] = nullptr;
-    if (in.backward) {
-      const Summary consistency = summarize(inverse_consistency_errors(in.result, *in.backward, in.mask));
-      out["inverse_consistency_mm"] = summary_json(consistency);
-      consistency_per_pair.push_back(consistency.mean);
-    }
-
-    std::vector<bool> foreground(in.fixed_labels.size());
-    for (std::size_t v = 0; v < foreground.size(); ++v)
-      foreground[v] = in.fixed_labels[v] > 0;
-    const FoldingVolume ndv = non_diffeomorphic_volume(in.result, foreground);
-    const JacobianStatistics j = jacobian_statistics(in.result, foreground);
-    out["ndv"] = {{"percent", ndv.ndv_percent},
-                  {"voxels", ndv.ndv_voxels},
-                  {"folded_cubes", ndv.folded_cubes},
-                  {"cubes", ndv.cubes}};
-    out["jacobian_central_differences"] = {{"folding_fraction", j.folding_fraction},
-                                           {"log_jacobian_sd", j.log_jacobian_sd}};
-
-    nlohmann::json pair_warnings = nlohmann::json::array();
-    for (const Misreading& m : likely_misreadings(in.result, in.truth, in.mask)) {
-      std::ostringstream text;
-      text << (request.results / out["result"].get<std::string>()).string()
-           << ": the result looks like the true field read the wrong way: " << m.mistake
-           << " (endpoint error " << format_number(m.error_as_read_voxels) << " voxels as read, "
-           << format_number(m.error_if_so_voxels)
-           << " if so; convention read: " << to_string(request.convention) << ")";
-      pair_warnings.push_back(text.str());
-      warnings.push_back(text.str());
-    }
-    out["warnings"] = pair_warnings;
-    out["factors"] = in.entry.value("factors", nlohmann::json::object());
-    scored.push_back(out);
-    dice_per_pair.push_back(mean_dice);
-    hd95_per_pair.push_back(mean_hd95);
-    tre_per_pair.push_back(tre.empty() ? std::nan("") : summarize(tre).mean);
-    epe_per_pair.push_back(epe.empty() ? std::nan("") : epe_summary.mean);
-    ndv_per_pair.push_back(ndv.ndv_percent);
-    sdlogj_per_pair.push_back(j.log_jacobian_sd);
+  for (const PairScore& s : scores) {
+    if (s.consistency) consistency_per_pair.push_back(*s.consistency);
+    dice_per_pair.push_back(s.mean_dice);
+    hd95_per_pair.push_back(s.mean_hd95);
+    tre_per_pair.push_back(s.tre);
+    epe_per_pair.push_back(s.epe);
+    ndv_per_pair.push_back(s.ndv);
+    sdlogj_per_pair.push_back(s.sdlogj);
   }
-  auto mean_of = [](const std::vector<double>& values) {
-    double sum = 0.0;
-    int count = 0;
-    for (double v : values)
-      if (std::isfinite(v)) {
-        sum += v;
-        ++count;
-      }
-    return count ? nlohmann::json(sum / count) : nlohmann::json();
-  };
   std::vector<double> finite_dice;
   for (double d : dice_per_pair)
     if (std::isfinite(d)) finite_dice.push_back(d);
+  return {{"pairs", scores.size()},
+          {"mean_dice", finite_mean(dice_per_pair)},
+          {"dice_p30", number_or_null(percentile(finite_dice, 0.3))},
+          {"mean_hd95_mm", finite_mean(hd95_per_pair)},
+          {"mean_tre_mm", finite_mean(tre_per_pair)},
+          {"mean_endpoint_error_mm", finite_mean(epe_per_pair)},
+          {"mean_ndv_percent", finite_mean(ndv_per_pair)},
+          {"mean_log_jacobian_sd", finite_mean(sdlogj_per_pair)},
+          {"inverse_consistency_pairs", consistency_per_pair.size()},
+          {"mean_inverse_consistency_mm", finite_mean(consistency_per_pair)}};
+}
+
+/// What each score of the task's scores means.
+nlohmann::json score_conventions() {
   return {
-      {"task", string_member(truth, "task", truth_path)},
-      {"results", request.results.string()},
-      {"convention", to_string(request.convention)},
-      {"pairs", scored},
-      {"summary",
-       {{"pairs", scored.size()},
-        {"mean_dice", mean_of(dice_per_pair)},
-        {"dice_p30", number_or_null(percentile(finite_dice, 0.3))},
-        {"mean_hd95_mm", mean_of(hd95_per_pair)},
-        {"mean_tre_mm", mean_of(tre_per_pair)},
-        {"mean_endpoint_error_mm", mean_of(epe_per_pair)},
-        {"mean_ndv_percent", mean_of(ndv_per_pair)},
-        {"mean_log_jacobian_sd", mean_of(sdlogj_per_pair)},
-        {"inverse_consistency_pairs", consistency_per_pair.size()},
-        {"mean_inverse_consistency_mm", mean_of(consistency_per_pair)}}},
-      {"by_factor", by_factor(scored)},
-      {"warnings", warnings},
-      {"conventions",
-       {{"dice_p30", "30th percentile of the pairs' mean Dice (robustness, as LUMIR reports it)"},
-        {"tre", "fixed keypoint carried by the result (trilinear) against its moving position, mm"},
-        {"endpoint_error", "|u - u_true| in mm inside the ground truth's exact mask"},
-        {"ndv", "non-diffeomorphic volume: negative tetrahedra of each voxel cube of the fixed foreground, "
-                "percent of the cubes"},
-        {"log_jacobian_sd",
-         "standard deviation of log det(I + grad u), central differences, fixed foreground"},
-        {"inverse_consistency",
-         "|phi_ba(phi_ab(x)) - x| in mm inside the exact mask, where the results also hold the reverse "
-         "direction disp_<moving>_<fixed> (on the moving grid); null otherwise"}}}};
+      {"dice_p30", "30th percentile of the pairs' mean Dice (robustness, as LUMIR reports it)"},
+      {"tre", "fixed keypoint carried by the result (trilinear) against its moving position, mm"},
+      {"endpoint_error", "|u - u_true| in mm inside the ground truth's exact mask"},
+      {"ndv", "non-diffeomorphic volume: negative tetrahedra of each voxel cube of the fixed foreground, "
+              "percent of the cubes"},
+      {"log_jacobian_sd", "standard deviation of log det(I + grad u), central differences, fixed foreground"},
+      {"inverse_consistency",
+       "|phi_ba(phi_ab(x)) - x| in mm inside the exact mask, where the results also hold the reverse "
+       "direction disp_<moving>_<fixed> (on the moving grid); null otherwise"}};
+}
+
+} // namespace
+
+nlohmann::json score_task(const TaskScoreRequest& request) {
+  const std::filesystem::path truth_path = request.truth / "truth.json";
+  const nlohmann::json truth = read_truth(request, truth_path);
+  const nlohmann::json& pairs = truth["pairs"];
+  const std::set<std::string> found = result_files(request, pairs, truth_path);
+  // Read and check everything before scoring.
+  std::vector<PairFiles> inputs;
+  for (const auto& pair : pairs)
+    inputs.push_back(read_pair(request, truth, pair, truth_path, found));
+  const std::map<std::int32_t, std::string> names = label_names(truth);
+  nlohmann::json scored = nlohmann::json::array(), warnings = nlohmann::json::array();
+  std::vector<PairScore> scores;
+  for (PairFiles& in : inputs) {
+    throw_if_cancelled();
+    PairScore score = score_pair(in, names, request);
+    for (const auto& warning : score.out["warnings"])
+      warnings.push_back(warning);
+    scored.push_back(score.out);
+    scores.push_back(std::move(score));
+  }
+  return {{"task", string_member(truth, "task", truth_path)},
+          {"results", request.results.string()},
+          {"convention", to_string(request.convention)},
+          {"pairs", scored},
+          {"summary", task_summary(scores)},
+          {"by_factor", by_factor(scored)},
+          {"warnings", warnings},
+          {"conventions", score_conventions()}};
 }
 
 std::string task_scores_csv(const nlohmann::json& scores) {
