@@ -330,6 +330,20 @@ public:
   }
 
   Sweep read_checked(SweepDepth depth) {
+    const YAML::Node top = read_top();
+    Sweep sweep;
+    sweep.file = m_file;
+    read_base_scene(top, &sweep);
+    read_header_values(top, &sweep);
+    const std::size_t count = read_variations(top, &sweep);
+    m_width = std::max<int>(2, static_cast<int>(std::to_string(count).size()));
+    sweep.subject_count = count;
+    add_subjects(depth, count, &sweep);
+    return sweep;
+  }
+
+  /// The sweep file's one YAML document, a mapping of the sweep's keys (phantasm_sweep: 1).
+  YAML::Node read_top() {
     std::vector<YAML::Node> documents;
     std::string sweep_text;
     if (m_text)
@@ -365,33 +379,41 @@ public:
         top["phantasm_sweep"].Scalar() != "1") {
       fail(top.Mark(), "phantasm_sweep", "expected 'phantasm_sweep: 1' (the sweep format version)");
     }
-    Sweep sweep;
-    sweep.file = m_file;
+    return top;
+  }
+
+  /// The base scene: its path (relative to the sweep) into `sweep`, its text read and checked to
+  /// be one YAML document.
+  void read_base_scene(const YAML::Node& top, Sweep* sweep) {
     if (!top["base_scene"]) fail(top.Mark(), "base_scene", "expected the path of the base scene, found none");
-    sweep.base_scene = m_file.parent_path() / scalar(top["base_scene"], "base_scene");
-    m_base_scene = sweep.base_scene;
-    if (const std::string found = read_scene_text(sweep.base_scene, m_base_text); !found.empty()) {
+    sweep->base_scene = m_file.parent_path() / scalar(top["base_scene"], "base_scene");
+    m_base_scene = sweep->base_scene;
+    if (const std::string found = read_scene_text(sweep->base_scene, m_base_text); !found.empty()) {
       fail(top["base_scene"].Mark(), "base_scene",
-           "expected a scene file, " + found + ": " + sweep.base_scene.string());
+           "expected a scene file, " + found + ": " + sweep->base_scene.string());
     }
     // The base scene's own mistakes are named in the base scene (each subject's scene is made
     // from its first document only, so a second one would be dropped without a word).
     try {
       const std::vector<YAML::Node> base = load_yaml_documents(m_base_text);
       if (base.size() > 1) {
-        throw InputError(sweep.base_scene.string() + ":" + std::to_string(base[1].Mark().line + 1) + ":" +
+        throw InputError(sweep->base_scene.string() + ":" + std::to_string(base[1].Mark().line + 1) + ":" +
                          std::to_string(base[1].Mark().column + 1) + ": expected one YAML document, found " +
                          std::to_string(base.size()) + " (a second '---')");
       }
     } catch (const YAML::Exception& base_error) {
-      throw InputError(sweep.base_scene.string() + ":" + std::to_string(base_error.mark.line + 1) + ":" +
+      throw InputError(sweep->base_scene.string() + ":" + std::to_string(base_error.mark.line + 1) + ":" +
                        std::to_string(base_error.mark.column + 1) + ": expected valid YAML, found " +
                        base_error.msg);
     }
-    sweep.name = top["name"] ? scalar(top["name"], "name") : m_file.stem().string();
-    if (top["name"] && !is_safe_name(sweep.name))
+  }
+
+  /// The sweep's name, seed and repeats.
+  void read_header_values(const YAML::Node& top, Sweep* sweep) {
+    sweep->name = top["name"] ? scalar(top["name"], "name") : m_file.stem().string();
+    if (top["name"] && !is_safe_name(sweep->name))
       fail(top["name"].Mark(), "name",
-           std::string("expected ") + k_safe_name_rule + ", found " + quote_name(sweep.name));
+           std::string("expected ") + k_safe_name_rule + ", found " + quote_name(sweep->name));
     try {
       if (top["seed"]) m_seed = top["seed"].as<std::uint64_t>();
     } catch (const YAML::Exception&) {
@@ -406,30 +428,35 @@ public:
     }
     if (m_repeats < 1 || m_repeats > 100000)
       fail(top["repeats"].Mark(), "repeats", "expected 1 to 100000, found " + std::to_string(m_repeats));
+  }
 
+  /// The variations (vary), their keys into `sweep`; returns the number of subjects, bounded
+  /// before anything is made (each factor is at most 10^6).
+  std::size_t read_variations(const YAML::Node& top, Sweep* sweep) {
     if (top["vary"]) {
       if (!top["vary"].IsMap()) fail(top["vary"].Mark(), "vary", "expected a mapping of key paths to values");
       reject_duplicate_keys(top["vary"], "vary.");
       for (const auto& entry : top["vary"])
         m_variations.push_back(read_variation(scalar(entry.first, "vary"), entry.second));
     }
-    // The count is bounded before anything is made (each factor is at most 10^6).
     std::size_t count = static_cast<std::size_t>(m_repeats);
     for (const auto& v : m_variations) {
-      sweep.varied_keys.push_back(v.key);
+      sweep->varied_keys.push_back(v.key);
       if (!v.values.empty()) count *= v.values.size();
       if (count > k_max_subjects)
         fail(top.Mark(), "vary",
              "expected at most 10^6 subjects, found more (" + std::to_string(count) + " so far)");
     }
-    m_width = std::max<int>(2, static_cast<int>(std::to_string(count).size()));
-    sweep.subject_count = count;
+    return count;
+  }
 
+  /// The subjects `depth` asks for: labels alone, a sample, or every subject made and checked.
+  void add_subjects(SweepDepth depth, std::size_t count, Sweep* sweep) const {
     if (depth == SweepDepth::labels) {
-      sweep.subjects.reserve(count);
+      sweep->subjects.reserve(count);
       for (std::size_t s = 0; s < count; ++s)
-        sweep.subjects.push_back(SweepSubject{label(s), {}, {}});
-      return sweep;
+        sweep->subjects.push_back(SweepSubject{label(s), {}, {}});
+      return;
     }
     if (depth == SweepDepth::sample && count > k_checked_subjects) {
       // Every value of every list at least once, the first subjects (their random draws) and the
@@ -447,12 +474,11 @@ public:
         stride *= n;
       }
       for (const std::size_t s : chosen)
-        sweep.subjects.push_back(make_subject(sweep, s));
-      return sweep;
+        sweep->subjects.push_back(make_subject(*sweep, s));
+      return;
     }
     for (std::size_t s = 0; s < count; ++s)
-      sweep.subjects.push_back(make_subject(sweep, s));
-    return sweep;
+      sweep->subjects.push_back(make_subject(*sweep, s));
   }
 
   std::string label(std::size_t s) const {
