@@ -310,6 +310,215 @@ std::string sidecar_units(const std::string& sidecar, const std::string& fallbac
   return fallback;
 }
 
+using Participants = std::map<std::string, std::map<std::string, std::string>>;
+
+/// The export's own attributes on the root group: format, version, label table, dataset
+/// description and the conventions of its arrays.
+void write_root_attributes(hid_t root, const DatasetLayout& any) {
+  string_attribute(root, "format", "phantasm HDF5 export 2");
+  string_attribute(root, "generated_by", std::string("phantasm ") + version);
+  string_attribute(root, "label_table", read_text(any.dseg_table()));
+  string_attribute(root, "dataset_description", read_text(any.dataset_description()));
+  string_attribute(
+      root, "conventions",
+      "arrays are indexed (i, j, k[, component]) like nibabel's get_fdata(); 'affine' maps (i, j, k, 1) "
+      "to RAS mm; displacement fields are 4-D (X, Y, Z, 3) float32 arrays (the NIfTI file's 5-D "
+      "(X, Y, Z, 1, 3) without its singleton axis) of ITK/elastix displacements, components in LPS "
+      "mm, x_moving = x_fixed + u(x_fixed); landmarks are (N, 3) RAS mm; every array has attributes "
+      "kind, units, frame, axes (its dimensions, space-separated) and source (its file in the "
+      "dataset, whose JSON sidecar is attribute sidecar)");
+}
+
+/// The subject's files as its provenance lists them (paths relative to the dataset).
+nlohmann::json provenance_files(const DatasetLayout& layout, const nlohmann::json& provenance) {
+  const nlohmann::json files =
+      provenance.is_object() && provenance.contains("files") ? provenance["files"] : nlohmann::json();
+  if (!files.is_array() || !std::all_of(files.begin(), files.end(),
+                                        [](const nlohmann::json& entry) { return entry.is_string(); })) {
+    const std::string found =
+        !provenance.is_object() ? "a JSON " + std::string(provenance.type_name()) + " instead of an object"
+        : files.is_null()       ? std::string("no such key")
+                                : "a JSON " + std::string(files.type_name()) +
+                                (files.is_array() ? " with an entry that is not text" : "");
+    throw InputError(layout.provenance().string() +
+                     ": files: expected the list of the subject's files (paths relative to the dataset), "
+                     "found " +
+                     found);
+  }
+  return files;
+}
+
+/// What a file of the subject is in the export: its array's name, kind, units and axes.
+struct Target {
+  std::string key, kind, units, axes;
+  int components = 1;
+  bool landmarks = false;
+  hid_t type = H5T_NATIVE_FLOAT;
+};
+
+/// What each file of a subject is, by the layout that wrote it: the files of fixed names, and
+/// the patterns of the files named after a tissue, sequence or map.
+struct SubjectTargets {
+  std::map<std::string, Target> exact;
+  std::vector<std::pair<PathPattern, std::function<Target(const std::string&)>>> patterns;
+
+  std::optional<Target> of(const std::string& relative) const {
+    if (const auto found = exact.find(relative); found != exact.end()) return found->second;
+    for (const auto& [pattern, make] : patterns) {
+      const std::string part = pattern.match(relative);
+      if (part.empty()) continue;
+      return make(part);
+    }
+    return std::nullopt;
+  }
+};
+
+/// The targets of one state's files: labels, landmarks, fractions, images and parameter maps.
+void add_state_targets(const std::filesystem::path& dataset, const DatasetLayout& layout,
+                       const std::string& subject, PhantomState state, SubjectTargets* targets) {
+  const auto relative_of = [&](const std::filesystem::path& path) {
+    return path.lexically_relative(dataset).generic_string();
+  };
+  const std::string scalar_axes = "i j k";
+  const std::string session = "/" + subject + "/ses-" + session_label(state) + "/";
+  targets->exact[relative_of(layout.dseg(state))] = {
+      session + "dseg", "labels", "label", scalar_axes, 1, false, H5T_NATIVE_INT32};
+  targets->exact[relative_of(layout.landmarks(state))] = {session + "landmarks", "landmarks", "mm",
+                                                          "landmark coordinate", 1,           true};
+  targets->patterns.emplace_back(
+      PathPattern([&](const std::string& x) { return layout.probseg(state, x); }, dataset, false),
+      [session, scalar_axes](const std::string& tissue) {
+        return Target{session + "probseg/" + tissue, "fraction", "1 (fraction of the voxel, 0 to 1)",
+                      scalar_axes};
+      });
+  targets->patterns.emplace_back(
+      PathPattern([&](const std::string& x) { return layout.anat_image(state, x); }, dataset, true),
+      [session, scalar_axes](const std::string& suffix) {
+        return Target{session + suffix, "image", "arbitrary (magnitude)", scalar_axes};
+      });
+  // Last: its form (a suffix next to the labels) would also match the label files above.
+  targets->patterns.emplace_back(
+      PathPattern([&](const std::string& x) { return layout.parameter_map(state, x); }, dataset, true),
+      [session, scalar_axes](const std::string& suffix) {
+        return Target{session + "maps/" + suffix, "parameter_map", "", scalar_axes};
+      });
+}
+
+/// The targets of a subject's files: both states', then the fields, masks and Jacobians both ways.
+SubjectTargets subject_targets(const std::filesystem::path& dataset, const DatasetLayout& layout,
+                               const std::string& subject) {
+  SubjectTargets targets;
+  const auto relative_of = [&](const std::filesystem::path& path) {
+    return path.lexically_relative(dataset).generic_string();
+  };
+  const std::string scalar_axes = "i j k";
+  for (const PhantomState state : {PhantomState::reference, PhantomState::deformed})
+    add_state_targets(dataset, layout, subject, state, &targets);
+  // Fields are named as their files are (without the subject), so that the HDF5 name and the
+  // dataset's name of a field always agree.
+  const auto xfm_key = [&](const std::filesystem::path& path) {
+    std::string name = path.filename().string();
+    name = name.substr(name.find('_') + 1);
+    return "/" + subject + "/xfm/" + name.substr(0, name.find('.'));
+  };
+  auto& exact = targets.exact;
+  for (const auto& [from, to] : {std::pair{PhantomState::reference, PhantomState::deformed},
+                                 std::pair{PhantomState::deformed, PhantomState::reference}}) {
+    exact[relative_of(layout.transform(from, to))] = {xfm_key(layout.transform(from, to)),
+                                                      "displacement_field", "mm", "i j k component", 3};
+    exact[relative_of(layout.transform_mask(from, to))] = {
+        xfm_key(layout.transform_mask(from, to)),
+        "exact_mask",
+        "1 where the field is the solved motion, 0 where it is the smooth extension",
+        scalar_axes,
+        1,
+        false,
+        H5T_NATIVE_UINT8};
+    // One Jacobian per direction, on the field's own (the `to` state's) grid.
+    exact[relative_of(layout.jacobian(from, to))] = {xfm_key(layout.jacobian(from, to)), "jacobian",
+                                                     "1 (volume ratio det(I + grad u))", scalar_axes};
+  }
+  return targets;
+}
+
+/// The attributes of a file's array: its source, kind, axes, frame, units and sidecar.
+std::map<std::string, std::string> array_attributes(const std::string& relative,
+                                                    const std::filesystem::path& path, const Target& target) {
+  std::map<std::string, std::string> attributes{
+      {"source", relative},
+      {"kind", target.kind},
+      {"axes", target.axes},
+      {"frame", target.kind == "displacement_field"
+                    ? "LPS (components: world millimetres, RAS with x and y negated); grid: affine, RAS"
+                : target.landmarks ? "RAS (world millimetres)"
+                                   : "grid: affine, RAS"}};
+  const std::filesystem::path sidecar = sidecar_path(path);
+  std::string sidecar_text;
+  if (std::filesystem::exists(sidecar)) attributes["sidecar"] = sidecar_text = read_text(sidecar);
+  attributes["units"] = sidecar_units(sidecar_text, target.units.empty() ? "see sidecar" : target.units);
+  if (target.kind == "displacement_field") {
+    attributes["convention"] =
+        "ITK/elastix displacement field as a 4-D (X, Y, Z, 3) array (the NIfTI file is 5-D, (X, Y, Z, "
+        "1, 3), with a singleton time axis); components in LPS mm, x_moving = x_fixed + u(x_fixed)";
+  }
+  return attributes;
+}
+
+/// Writes a file of the dataset as its target's array (or landmark table).
+void write_target(hid_t h5, const Target& target, const std::filesystem::path& path,
+                  const std::map<std::string, std::string>& attributes, const Hdf5ExportOptions& options) {
+  if (target.landmarks) {
+    write_landmarks(h5, target.key, path, attributes);
+  } else if (target.components > 1) {
+    const NiftiVolume volume = read_nifti_vectors(path, target.components);
+    write_array<float>(h5, target.key, volume.grid, volume.values, target.components, H5T_NATIVE_FLOAT,
+                       options, attributes);
+  } else {
+    const NiftiVolume volume = read_nifti(path);
+    if (target.type == H5T_NATIVE_INT32)
+      write_array<std::int32_t>(h5, target.key, volume.grid, volume.values, 1, target.type, options,
+                                attributes);
+    else if (target.type == H5T_NATIVE_UINT8)
+      write_array<std::uint8_t>(h5, target.key, volume.grid, volume.values, 1, target.type, options,
+                                attributes);
+    else
+      write_array<float>(h5, target.key, volume.grid, volume.values, 1, target.type, options, attributes);
+  }
+}
+
+/// Exports one subject: its group (provenance and participants row) and an array per file of
+/// its provenance that the export knows; returns the number of arrays.
+std::size_t export_subject(hid_t h5, const std::filesystem::path& dataset, const std::string& id,
+                           const Participants& participants, const Hdf5ExportOptions& options) {
+  const DatasetLayout layout(dataset, id);
+  const std::string subject = "sub-" + id;
+  const std::string provenance_text = read_text(layout.provenance());
+  const nlohmann::json provenance =
+      parse_json_text(provenance_text, layout.provenance(), "the JSON phantasm writes in provenance.json");
+  const nlohmann::json files = provenance_files(layout, provenance);
+  {
+    const Handle group(group_at(h5, "/" + subject), H5Gclose);
+    string_attribute(group.get(), "provenance", provenance_text);
+    const auto row = participants.find(subject);
+    if (row != participants.end()) {
+      for (const auto& [key, value] : row->second)
+        string_attribute(group.get(), key, value);
+    }
+  }
+  const SubjectTargets targets = subject_targets(dataset, layout, subject);
+  std::size_t arrays = 0;
+  for (const auto& entry : files) {
+    throw_if_cancelled(); // the temporary file is removed by the caller
+    const std::string relative = entry.get<std::string>();
+    const std::filesystem::path path = dataset / relative;
+    const std::optional<Target> target = targets.of(relative);
+    if (!target) continue;
+    write_target(h5, *target, path, array_attributes(relative, path, *target), options);
+    ++arrays;
+  }
+  return arrays;
+}
+
 } // namespace
 
 Hdf5ExportSummary export_hdf5(const std::filesystem::path& dataset, const std::filesystem::path& file,
@@ -332,168 +541,12 @@ Hdf5ExportSummary export_hdf5(const std::filesystem::path& dataset, const std::f
                        "create " + temporary.string()),
               H5Fclose);
     Handle root(check_id(H5Gopen2(h5.get(), "/", H5P_DEFAULT), "open /"), H5Gclose);
-    const DatasetLayout any(dataset, subjects.front());
-    string_attribute(root.get(), "format", "phantasm HDF5 export 2");
-    string_attribute(root.get(), "generated_by", std::string("phantasm ") + version);
-    string_attribute(root.get(), "label_table", read_text(any.dseg_table()));
-    string_attribute(root.get(), "dataset_description", read_text(any.dataset_description()));
-    string_attribute(
-        root.get(), "conventions",
-        "arrays are indexed (i, j, k[, component]) like nibabel's get_fdata(); 'affine' maps (i, j, k, "
-        "1) to RAS mm; displacement fields are 4-D (X, Y, Z, 3) float32 arrays (the NIfTI file's 5-D "
-        "(X, Y, Z, 1, 3) without its singleton axis) of ITK/elastix displacements, components in LPS mm, "
-        "x_moving = x_fixed + u(x_fixed); landmarks are (N, 3) RAS mm; every array has attributes kind, "
-        "units, frame, axes (its dimensions, space-separated) and source (its file in the dataset, whose "
-        "JSON sidecar is attribute "
-        "sidecar)");
-    const auto participants = read_participants(dataset / "participants.tsv");
+    write_root_attributes(root.get(), DatasetLayout(dataset, subjects.front()));
+    const Participants participants = read_participants(dataset / "participants.tsv");
     for (const std::string& id : subjects) {
-      const DatasetLayout layout(dataset, id);
-      const std::string subject = "sub-" + id;
-      const std::string provenance_text = read_text(layout.provenance());
-      const nlohmann::json provenance = parse_json_text(provenance_text, layout.provenance(),
-                                                        "the JSON phantasm writes in provenance.json");
-      const nlohmann::json files =
-          provenance.is_object() && provenance.contains("files") ? provenance["files"] : nlohmann::json();
-      if (!files.is_array() || !std::all_of(files.begin(), files.end(),
-                                            [](const nlohmann::json& entry) { return entry.is_string(); })) {
-        const std::string found =
-            !provenance.is_object()
-                ? "a JSON " + std::string(provenance.type_name()) + " instead of an object"
-            : files.is_null() ? std::string("no such key")
-                              : "a JSON " + std::string(files.type_name()) +
-                                    (files.is_array() ? " with an entry that is not text" : "");
-        throw InputError(layout.provenance().string() +
-                         ": files: expected the list of the subject's files (paths relative to the dataset), "
-                         "found " +
-                         found);
-      }
-      {
-        const Handle group(group_at(h5.get(), "/" + subject), H5Gclose);
-        string_attribute(group.get(), "provenance", provenance_text);
-        const auto row = participants.find(subject);
-        if (row != participants.end()) {
-          for (const auto& [key, value] : row->second)
-            string_attribute(group.get(), key, value);
-        }
-      }
-      const auto relative_of = [&](const std::filesystem::path& path) {
-        return path.lexically_relative(dataset).generic_string();
-      };
-      // What each file of the subject is, by the layout that wrote it.
-      struct Target {
-        std::string key, kind, units, axes;
-        int components = 1;
-        bool landmarks = false;
-        hid_t type = H5T_NATIVE_FLOAT;
-      };
-      std::map<std::string, Target> exact;
-      std::vector<std::pair<PathPattern, std::function<Target(const std::string&)>>> patterns;
-      const std::string scalar_axes = "i j k";
-      for (const PhantomState state : {PhantomState::reference, PhantomState::deformed}) {
-        const std::string session = "/" + subject + "/ses-" + session_label(state) + "/";
-        exact[relative_of(layout.dseg(state))] = {session + "dseg", "labels", "label", scalar_axes, 1, false,
-                                                  H5T_NATIVE_INT32};
-        exact[relative_of(layout.landmarks(state))] = {session + "landmarks", "landmarks", "mm",
-                                                       "landmark coordinate", 1,           true};
-        patterns.emplace_back(
-            PathPattern([&](const std::string& x) { return layout.probseg(state, x); }, dataset, false),
-            [session, scalar_axes](const std::string& tissue) {
-              return Target{session + "probseg/" + tissue, "fraction", "1 (fraction of the voxel, 0 to 1)",
-                            scalar_axes};
-            });
-        patterns.emplace_back(
-            PathPattern([&](const std::string& x) { return layout.anat_image(state, x); }, dataset, true),
-            [session, scalar_axes](const std::string& suffix) {
-              return Target{session + suffix, "image", "arbitrary (magnitude)", scalar_axes};
-            });
-        // Last: its form (a suffix next to the labels) would also match the label files above.
-        patterns.emplace_back(
-            PathPattern([&](const std::string& x) { return layout.parameter_map(state, x); }, dataset, true),
-            [session, scalar_axes](const std::string& suffix) {
-              return Target{session + "maps/" + suffix, "parameter_map", "", scalar_axes};
-            });
-      }
-      // Fields are named as their files are (without the subject), so that the HDF5 name and the
-      // dataset's name of a field always agree.
-      const auto xfm_key = [&](const std::filesystem::path& path) {
-        std::string name = path.filename().string();
-        name = name.substr(name.find('_') + 1);
-        return "/" + subject + "/xfm/" + name.substr(0, name.find('.'));
-      };
-      for (const auto& [from, to] : {std::pair{PhantomState::reference, PhantomState::deformed},
-                                     std::pair{PhantomState::deformed, PhantomState::reference}}) {
-        exact[relative_of(layout.transform(from, to))] = {xfm_key(layout.transform(from, to)),
-                                                          "displacement_field", "mm", "i j k component", 3};
-        exact[relative_of(layout.transform_mask(from, to))] = {
-            xfm_key(layout.transform_mask(from, to)),
-            "exact_mask",
-            "1 where the field is the solved motion, 0 where it is the smooth extension",
-            scalar_axes,
-            1,
-            false,
-            H5T_NATIVE_UINT8};
-        // One Jacobian per direction, on the field's own (the `to` state's) grid.
-        exact[relative_of(layout.jacobian(from, to))] = {xfm_key(layout.jacobian(from, to)), "jacobian",
-                                                         "1 (volume ratio det(I + grad u))", scalar_axes};
-      }
-
-      for (const auto& entry : files) {
-        throw_if_cancelled(); // the temporary file is removed below
-        const std::string relative = entry.get<std::string>();
-        const std::filesystem::path path = dataset / relative;
-        std::optional<Target> target;
-        if (const auto found = exact.find(relative); found != exact.end()) {
-          target = found->second;
-        } else {
-          for (const auto& [pattern, make] : patterns) {
-            const std::string part = pattern.match(relative);
-            if (part.empty()) continue;
-            target = make(part);
-            break;
-          }
-        }
-        if (!target) continue;
-        std::map<std::string, std::string> attributes{
-            {"source", relative},
-            {"kind", target->kind},
-            {"axes", target->axes},
-            {"frame", target->kind == "displacement_field"
-                          ? "LPS (components: world millimetres, RAS with x and y negated); grid: affine, RAS"
-                      : target->landmarks ? "RAS (world millimetres)"
-                                          : "grid: affine, RAS"}};
-        const std::filesystem::path sidecar = sidecar_path(path);
-        std::string sidecar_text;
-        if (std::filesystem::exists(sidecar)) attributes["sidecar"] = sidecar_text = read_text(sidecar);
-        attributes["units"] =
-            sidecar_units(sidecar_text, target->units.empty() ? "see sidecar" : target->units);
-        if (target->kind == "displacement_field") {
-          attributes["convention"] =
-              "ITK/elastix displacement field as a 4-D (X, Y, Z, 3) array (the NIfTI file is 5-D, (X, Y, Z, "
-              "1, 3), with a singleton time axis); components in LPS mm, x_moving = x_fixed + u(x_fixed)";
-        }
-        if (target->landmarks) {
-          write_landmarks(h5.get(), target->key, path, attributes);
-        } else if (target->components > 1) {
-          const NiftiVolume volume = read_nifti_vectors(path, target->components);
-          write_array<float>(h5.get(), target->key, volume.grid, volume.values, target->components,
-                             H5T_NATIVE_FLOAT, options, attributes);
-        } else {
-          const NiftiVolume volume = read_nifti(path);
-          if (target->type == H5T_NATIVE_INT32)
-            write_array<std::int32_t>(h5.get(), target->key, volume.grid, volume.values, 1, target->type,
-                                      options, attributes);
-          else if (target->type == H5T_NATIVE_UINT8)
-            write_array<std::uint8_t>(h5.get(), target->key, volume.grid, volume.values, 1, target->type,
-                                      options, attributes);
-          else
-            write_array<float>(h5.get(), target->key, volume.grid, volume.values, 1, target->type, options,
-                               attributes);
-        }
-        ++summary.arrays;
-      }
+      summary.arrays += export_subject(h5.get(), dataset, id, participants, options);
       ++summary.subjects;
-      if (progress) progress(subject);
+      if (progress) progress("sub-" + id);
     }
     check(H5Fflush(h5.get(), H5F_SCOPE_GLOBAL), "flush " + temporary.string());
     // Every other handle is closed (a file with open objects would only close with them).

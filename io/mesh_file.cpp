@@ -285,14 +285,75 @@ private:
   int m_format; ///< 0 ascii, 1 binary little endian, 2 binary big endian
 };
 
-/// Stanford PLY (ascii and binary): the x, y, z of element `vertex` and the index list
-/// `vertex_indices` (or `vertex_index`) of element `face`; other elements and properties are read
-/// past.
-vtkSmartPointer<vtkPolyData> read_ply(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+/// A PLY header: its elements, the body's format (0 ascii, 1 binary little endian, 2 binary big
+/// endian) and where the body starts.
+struct PlyHeader {
   std::vector<PlyElement> elements;
   int format = -1;
+  std::size_t body = 0;
+};
+
+/// A header line's property (the words after 'property'), of the element before it.
+PlyProperty read_ply_property(const std::filesystem::path& path, const std::string& place,
+                              const std::string& line, std::istringstream& words) {
+  std::string a, b, c, d;
+  words >> a;
+  if (a == "list") {
+    words >> b >> c >> d;
+    const auto count_type = ply_type(b), item_type = ply_type(c);
+    if (!count_type || !item_type || d.empty() || *count_type == PlyType::float32 ||
+        *count_type == PlyType::float64)
+      throw_file_error(
+          path, place + ": expected 'property list COUNT_TYPE ITEM_TYPE NAME' (integer count), found '" +
+                    line + "'");
+    return PlyProperty{d, *item_type, true, *count_type};
+  }
+  words >> b;
+  const auto type = ply_type(a);
+  if (!type || b.empty())
+    throw_file_error(path, place + ": expected 'property TYPE NAME', found '" + line + "'");
+  return PlyProperty{b, *type, false, PlyType::uint8};
+}
+
+/// Reads a header line after the first (format, element, property or a comment) into `header`.
+void read_ply_header_line(const std::filesystem::path& path, const std::string& bytes,
+                          const std::string& line, const std::string& place, const std::string& keyword,
+                          std::istringstream& words, PlyHeader* header) {
+  if (keyword.empty() || keyword == "comment" || keyword == "obj_info") return;
+  std::string a, b;
+  if (keyword == "format") {
+    words >> a >> b;
+    header->format = a == "ascii" ? 0 : a == "binary_little_endian" ? 1 : a == "binary_big_endian" ? 2 : -1;
+    if (header->format < 0 || b != "1.0")
+      throw_file_error(
+          path, place + ": expected 'format ascii|binary_little_endian|binary_big_endian 1.0', found '" +
+                    line + "'");
+  } else if (keyword == "element") {
+    words >> a >> b;
+    std::uint64_t count = 0;
+    const auto [end_of_count, error] = std::from_chars(b.data(), b.data() + b.size(), count);
+    // Every element takes at least a byte: a count beyond the file's size is not a mesh.
+    if (a.empty() || error != std::errc() || end_of_count != b.data() + b.size() || count > bytes.size())
+      throw_file_error(path, place +
+                                 ": expected 'element NAME COUNT' with a count the file can hold (at most " +
+                                 std::to_string(bytes.size()) + "), found '" + line + "'");
+    header->elements.push_back(PlyElement{a, count, {}});
+  } else if (keyword == "property") {
+    if (header->elements.empty())
+      throw_file_error(path, place + ": expected 'element' before its properties, found '" + line + "'");
+    header->elements.back().properties.push_back(read_ply_property(path, place, line, words));
+  } else {
+    throw_file_error(path,
+                     place +
+                         ": expected a PLY header keyword (format, element, property, comment, end_header), "
+                         "found '" +
+                         keyword + "'");
+  }
+}
+
+/// The header of a PLY file's bytes, up to its 'end_header' line.
+PlyHeader read_ply_header(const std::filesystem::path& path, const std::string& bytes) {
+  PlyHeader header;
   std::size_t at = 0;
   for (std::size_t number = 1;; ++number) {
     const std::size_t end = bytes.find('\n', at);
@@ -310,115 +371,84 @@ vtkSmartPointer<vtkPolyData> read_ply(const std::filesystem::path& path) {
       continue;
     }
     if (keyword == "end_header") break;
-    if (keyword.empty() || keyword == "comment" || keyword == "obj_info") continue;
-    std::string a, b, c, d;
-    if (keyword == "format") {
-      words >> a >> b;
-      format = a == "ascii" ? 0 : a == "binary_little_endian" ? 1 : a == "binary_big_endian" ? 2 : -1;
-      if (format < 0 || b != "1.0")
-        throw_file_error(
-            path, place + ": expected 'format ascii|binary_little_endian|binary_big_endian 1.0', found '" +
-                      line + "'");
-    } else if (keyword == "element") {
-      words >> a >> b;
-      std::uint64_t count = 0;
-      const auto [end_of_count, error] = std::from_chars(b.data(), b.data() + b.size(), count);
-      // Every element takes at least a byte: a count beyond the file's size is not a mesh.
-      if (a.empty() || error != std::errc() || end_of_count != b.data() + b.size() || count > bytes.size())
-        throw_file_error(path,
-                         place + ": expected 'element NAME COUNT' with a count the file can hold (at most " +
-                             std::to_string(bytes.size()) + "), found '" + line + "'");
-      elements.push_back(PlyElement{a, count, {}});
-    } else if (keyword == "property") {
-      if (elements.empty())
-        throw_file_error(path, place + ": expected 'element' before its properties, found '" + line + "'");
-      PlyProperty property;
-      words >> a;
-      if (a == "list") {
-        words >> b >> c >> d;
-        const auto count_type = ply_type(b), item_type = ply_type(c);
-        if (!count_type || !item_type || d.empty() || *count_type == PlyType::float32 ||
-            *count_type == PlyType::float64)
-          throw_file_error(
-              path, place + ": expected 'property list COUNT_TYPE ITEM_TYPE NAME' (integer count), found '" +
-                        line + "'");
-        property = PlyProperty{d, *item_type, true, *count_type};
-      } else {
-        words >> b;
-        const auto type = ply_type(a);
-        if (!type || b.empty())
-          throw_file_error(path, place + ": expected 'property TYPE NAME', found '" + line + "'");
-        property = PlyProperty{b, *type, false, PlyType::uint8};
-      }
-      elements.back().properties.push_back(property);
-    } else {
-      throw_file_error(
-          path,
-          place +
-              ": expected a PLY header keyword (format, element, property, comment, end_header), found '" +
-              keyword + "'");
-    }
+    read_ply_header_line(path, bytes, line, place, keyword, words, &header);
   }
-  if (format < 0) throw_file_error(path, "expected a 'format' line in the PLY header, found none");
+  if (header.format < 0) throw_file_error(path, "expected a 'format' line in the PLY header, found none");
+  header.body = at;
+  return header;
+}
 
-  Polygons polygons;
-  PlyValues values(path, bytes, at, format);
-  for (const PlyElement& element : elements) {
-    const bool vertex = element.name == "vertex", face = element.name == "face";
-    int xyz[3] = {-1, -1, -1};
-    int indices = -1;
+/// Reads an element's values: the points of element `vertex` and the faces of element `face`
+/// into `polygons`; other elements are read past.
+void read_ply_element(const std::filesystem::path& path, const std::string& bytes, const PlyElement& element,
+                      PlyValues& values, Polygons* polygons) {
+  const bool vertex = element.name == "vertex", face = element.name == "face";
+  int xyz[3] = {-1, -1, -1};
+  int indices = -1;
+  for (std::size_t p = 0; p < element.properties.size(); ++p) {
+    const PlyProperty& property = element.properties[p];
+    for (int c = 0; c < 3 && vertex; ++c)
+      if (!property.list && property.name == std::string(1, static_cast<char>('x' + c)))
+        xyz[c] = static_cast<int>(p);
+    if (face && property.list && (property.name == "vertex_indices" || property.name == "vertex_index"))
+      indices = static_cast<int>(p);
+  }
+  if (vertex && element.count > 0 && (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0)) {
+    std::string found;
+    for (const PlyProperty& property : element.properties)
+      found += (found.empty() ? "" : ", ") + property.name;
+    throw_file_error(path, "expected properties x, y and z of element 'vertex', found " +
+                               (found.empty() ? "none" : found));
+  }
+  if (face && element.count > 0 && indices < 0)
+    throw_file_error(path, "expected a list property 'vertex_indices' of element 'face', found none");
+  for (std::uint64_t e = 0; e < element.count; ++e) {
+    const std::string place = "element " + element.name + " " + std::to_string(e);
+    std::array<float, 3> point{};
+    std::vector<vtkIdType> polygon;
     for (std::size_t p = 0; p < element.properties.size(); ++p) {
       const PlyProperty& property = element.properties[p];
-      for (int c = 0; c < 3 && vertex; ++c)
-        if (!property.list && property.name == std::string(1, static_cast<char>('x' + c)))
-          xyz[c] = static_cast<int>(p);
-      if (face && property.list && (property.name == "vertex_indices" || property.name == "vertex_index"))
-        indices = static_cast<int>(p);
-    }
-    if (vertex && element.count > 0 && (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0)) {
-      std::string found;
-      for (const PlyProperty& property : element.properties)
-        found += (found.empty() ? "" : ", ") + property.name;
-      throw_file_error(path, "expected properties x, y and z of element 'vertex', found " +
-                                 (found.empty() ? "none" : found));
-    }
-    if (face && element.count > 0 && indices < 0)
-      throw_file_error(path, "expected a list property 'vertex_indices' of element 'face', found none");
-    for (std::uint64_t e = 0; e < element.count; ++e) {
-      const std::string place = "element " + element.name + " " + std::to_string(e);
-      std::array<float, 3> point{};
-      std::vector<vtkIdType> polygon;
-      for (std::size_t p = 0; p < element.properties.size(); ++p) {
-        const PlyProperty& property = element.properties[p];
-        if (!property.list) {
-          const double value = values.next(property.type, place);
-          for (int c = 0; c < 3; ++c)
-            if (static_cast<int>(p) == xyz[c]) point[c] = to_float(value);
-          continue;
-        }
-        const double count = values.next(property.count_type, place);
-        if (!(count >= 0.0) || count != std::floor(count) || count > static_cast<double>(values.remaining()))
-          throw_file_error(path, place + ": expected a list length the file can hold, found " +
-                                     format_number(count));
-        for (std::size_t i = 0; i < static_cast<std::size_t>(count); ++i) {
-          const double item = values.next(property.type, place);
-          if (static_cast<int>(p) != indices) continue;
-          if (!(item >= 0.0) || item != std::floor(item) || item > static_cast<double>(bytes.size()))
-            throw_file_error(path, place + ": expected vertex indices (whole numbers from 0), found " +
-                                       format_number(item));
-          polygon.push_back(static_cast<vtkIdType>(item));
-        }
+      if (!property.list) {
+        const double value = values.next(property.type, place);
+        for (int c = 0; c < 3; ++c)
+          if (static_cast<int>(p) == xyz[c]) point[c] = to_float(value);
+        continue;
       }
-      if (vertex) polygons.points.push_back(point);
-      if (face) {
-        if (polygon.size() < 3)
-          throw_file_error(path, place + ": expected a face of at least 3 vertices, found " +
-                                     std::to_string(polygon.size()));
-        polygons.faces.push_back(std::move(polygon));
-        polygons.face_places.push_back(place);
+      const double count = values.next(property.count_type, place);
+      if (!(count >= 0.0) || count != std::floor(count) || count > static_cast<double>(values.remaining()))
+        throw_file_error(path,
+                         place + ": expected a list length the file can hold, found " + format_number(count));
+      for (std::size_t i = 0; i < static_cast<std::size_t>(count); ++i) {
+        const double item = values.next(property.type, place);
+        if (static_cast<int>(p) != indices) continue;
+        if (!(item >= 0.0) || item != std::floor(item) || item > static_cast<double>(bytes.size()))
+          throw_file_error(path, place + ": expected vertex indices (whole numbers from 0), found " +
+                                     format_number(item));
+        polygon.push_back(static_cast<vtkIdType>(item));
       }
+    }
+    if (vertex) polygons->points.push_back(point);
+    if (face) {
+      if (polygon.size() < 3)
+        throw_file_error(path, place + ": expected a face of at least 3 vertices, found " +
+                                   std::to_string(polygon.size()));
+      polygons->faces.push_back(std::move(polygon));
+      polygons->face_places.push_back(place);
     }
   }
+}
+
+/// Stanford PLY (ascii and binary): the x, y, z of element `vertex` and the index list
+/// `vertex_indices` (or `vertex_index`) of element `face`; other elements and properties are read
+/// past.
+vtkSmartPointer<vtkPolyData> read_ply(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const PlyHeader header = read_ply_header(path, bytes);
+  Polygons polygons;
+  PlyValues values(path, bytes, header.body, header.format);
+  for (const PlyElement& element : header.elements)
+    read_ply_element(path, bytes, element, values, &polygons);
   return to_poly_data(path, polygons);
 }
 
