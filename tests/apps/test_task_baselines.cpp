@@ -52,11 +52,11 @@ const Made& small_task() {
 }
 
 /// The main job's pair made coarse (tests/support/coarse_scenes.hpp: 4 mm voxels, 320-triangle
-/// surfaces, one T1w sequence), without meshes, previews or parameter maps.
+/// surfaces, one T1w sequence, no meshes), without previews or parameter maps.
 const Made& colin_task() {
   static const Made made = [] {
     const fs::path root = fresh_folder("baselines-colin");
-    const std::string outputs = "outputs:\n  meshes: false\n  previews: false\n  parameter_maps: false\n";
+    const std::string outputs = "outputs:\n  previews: false\n  parameter_maps: false\n";
     const std::string text = std::regex_replace(coarse_colin_head_text(), std::regex("outputs:\n"), outputs);
     EXPECT_NE(text.find(outputs), std::string::npos);
     write_text_file(root / "colin-coarse.yaml", text);
