@@ -76,9 +76,10 @@ inline std::filesystem::path coarse_copy(const std::filesystem::path& scene,
 
 /// data-synthetic/colin-head.yaml made coarse: 4 mm voxels, 320-triangle base meshes, a body of
 /// 7 mm tets (about 41 000, none under 10 degrees after the sliver repairs), surfaces tessellated
-/// within 1 mm, the first sequence only, images sampled directly, no organ meshes. (The 320-triangle surfaces' patches bend far to
-/// follow the folds, and tessellated within 1 mm the ten meshes of each state came to 170 MB and a
-/// quarter of the run's processor time; the main job and the smaller scenes' tests write meshes.)
+/// within 1 mm, the first sequence only, images sampled directly, no organ meshes. (The
+/// 320-triangle surfaces' patches bend far to follow the folds: their meshes came to 170 MB per
+/// state and a quarter of the run's processor time; the main job and the smaller scenes' tests
+/// write meshes.)
 /// @throws std::runtime_error naming an edit the scene no longer allows (the scene changed)
 inline std::string coarse_colin_head_text() {
   std::string text =
