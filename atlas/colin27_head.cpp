@@ -329,18 +329,118 @@ bool aal_is(int index, int first, int last) {
   return index >= first && index <= last;
 }
 
+/// Where the thalami lie (mm): their lowest point, front and back ends, and the midline (their mean x).
+struct ThalamusExtent {
+  double min_z = std::numeric_limits<double>::infinity();
+  double min_y = std::numeric_limits<double>::infinity();
+  double max_y = -std::numeric_limits<double>::infinity();
+  double midline_x = 0.0;
+};
+
+ThalamusExtent thalamus_extent(const ImageGrid& grid, const Volume& vol, const Mask& brain,
+                               const std::vector<int>& aal) {
+  ThalamusExtent extent;
+  double x_sum = 0.0;
+  std::int64_t voxels = 0;
+  for (int k = 0; k < vol.nz; ++k)
+    for (int j = 0; j < vol.ny; ++j)
+      for (int i = 0; i < vol.nx; ++i) {
+        const std::int64_t n = vol.at(i, j, k);
+        if (!brain[n] || !aal_is(aal[n], 77, 78)) continue;
+        const Eigen::Vector3d p = grid.world_from_index(Eigen::Vector3d(i, j, k));
+        extent.min_z = std::min(extent.min_z, p.z());
+        extent.min_y = std::min(extent.min_y, p.y());
+        extent.max_y = std::max(extent.max_y, p.y());
+        x_sum += p.x();
+        ++voxels;
+      }
+  if (voxels > 0) extent.midline_x = x_sum / double(voxels);
+  return extent;
+}
+
+/// Marks in `out` every run of CSF-class voxels along x, at most `fissure_max_width_mm` wide, that
+/// comes within `ventricle_midline_gap_mm` of the midline: the interhemispheric fissure.
+void mark_fissure(const ImageGrid& grid, const Volume& vol, const Mask& brain,
+                  const std::vector<std::int8_t>& cls, double midline_x, const Colin27Options& options,
+                  Mask& out) {
+  const auto x_of = [&](int i, int j, int k) { return grid.world_from_index(Eigen::Vector3d(i, j, k)).x(); };
+  for (int k = 0; k < vol.nz; ++k)
+    for (int j = 0; j < vol.ny; ++j)
+      for (int i = 0; i < vol.nx;) {
+        const std::int64_t n = vol.at(i, j, k);
+        if (!brain[n] || cls[n] != 1) {
+          ++i;
+          continue;
+        }
+        int end = i;
+        double nearest = std::abs(x_of(i, j, k) - midline_x);
+        while (end + 1 < vol.nx && brain[vol.at(end + 1, j, k)] && cls[vol.at(end + 1, j, k)] == 1) {
+          ++end;
+          nearest = std::min(nearest, std::abs(x_of(end, j, k) - midline_x));
+        }
+        const double width = std::abs(x_of(end, j, k) - x_of(i, j, k)) + grid.spacing_mm.x();
+        if (nearest < options.ventricle_midline_gap_mm && width <= options.fissure_max_width_mm)
+          for (int m = i; m <= end; ++m)
+            out[static_cast<std::size_t>(vol.at(m, j, k))] = 1;
+        i = end + 1;
+      }
+}
+
+/// The CSF that is not a lateral ventricle however deep it lies: the third ventricle (voxels with
+/// thalamus on both sides along x, each within `third_ventricle_reach_mm`) and the fourth
+/// ventricle, the aqueduct and the cisterns around the brainstem and the cerebellum (voxels within
+/// `ventricle_clearance_mm` of either), and the interhemispheric fissure where it leaves the
+/// midline slab (a run of CSF along x, at most `fissure_max_width_mm` wide, that reaches into the
+/// slab: the fissure is not straight, and beside the slab it joined the ventricles).
+Mask not_lateral_ventricle(const ImageGrid& grid, const Volume& vol, const Mask& brain,
+                           const std::vector<int>& aal, const std::vector<std::int8_t>& cls,
+                           const Mask& brainstem, const ThalamusExtent& thalamus,
+                           const Colin27Options& options) {
+  const std::size_t count = static_cast<std::size_t>(vol.size());
+  Mask hindbrain(count);
+  for (std::size_t n = 0; n < count; ++n)
+    hindbrain[n] = brainstem[n] || (brain[n] && aal_is(aal[n], 91, 116));
+  const std::vector<float> from_hindbrain = distance_to(hindbrain, grid);
+  Mask out(count);
+  for (std::size_t n = 0; n < count; ++n)
+    out[n] = from_hindbrain[n] <= options.ventricle_clearance_mm;
+  const int reach = static_cast<int>(std::floor(options.third_ventricle_reach_mm / grid.spacing_mm.x()));
+  // Per voxel: 1 thalamus left of the midline (x below it), 2 right of it, 0 none.
+  std::vector<std::int8_t> side(count, 0);
+  for (int k = 0; k < vol.nz; ++k)
+    for (int j = 0; j < vol.ny; ++j)
+      for (int i = 0; i < vol.nx; ++i) {
+        const std::int64_t n = vol.at(i, j, k);
+        if (!brain[n] || !aal_is(aal[n], 77, 78)) continue;
+        side[n] = grid.world_from_index(Eigen::Vector3d(i, j, k)).x() < thalamus.midline_x ? 1 : 2;
+      }
+  for (int k = 0; k < vol.nz; ++k)
+    for (int j = 0; j < vol.ny; ++j)
+      for (int i = 0; i < vol.nx; ++i) {
+        const std::int64_t n = vol.at(i, j, k);
+        if (!brain[n] || side[n] != 0) continue;
+        int found = 0; // bit 1: left thalamus within reach, bit 2: right
+        for (int s = std::max(0, i - reach); s <= std::min(vol.nx - 1, i + reach); ++s)
+          found |= side[static_cast<std::size_t>(vol.at(s, j, k))];
+        if (found == 3) out[n] = 1;
+      }
+  mark_fissure(grid, vol, brain, cls, thalamus.midline_x, options, out);
+  return out;
+}
+
 /// The lateral ventricles: per CSF component of the deep, off-midline CSF-class voxels, whether
 /// it is one (the largest piece on each side of the midline, if at least the minimum volume).
 /// `csf_component` receives each voxel's component (0: none).
 std::vector<std::uint8_t> lateral_ventricles(const ImageGrid& grid, const Volume& vol, const Mask& brain,
-                                             const std::vector<std::int8_t>& cls, double midline_x,
-                                             const Colin27Options& options,
+                                             const std::vector<std::int8_t>& cls, const Mask& not_ventricle,
+                                             double midline_x, const Colin27Options& options,
                                              std::vector<std::int32_t>& csf_component) {
   const std::size_t count = static_cast<std::size_t>(vol.size());
   // Lateral ventricles: CSF-class voxels deep inside the brain (never near the brain's outer
   // rim, where sulcal CSF is), off a thin midline slab (which cuts the interhemispheric
-  // fissure's CSF from them, as the septum pellucidum does), then on each side of the
-  // midline the largest connected piece, if at least the minimum volume.
+  // fissure's CSF from them, as the septum pellucidum does) and outside `not_ventricle` (the
+  // third and fourth ventricles and the cisterns), then on each side of the midline the largest
+  // connected piece, if at least the minimum volume.
   Mask not_brain(count);
   for (std::size_t n = 0; n < count; ++n)
     not_brain[n] = !brain[n];
@@ -350,7 +450,7 @@ std::vector<std::uint8_t> lateral_ventricles(const ImageGrid& grid, const Volume
     for (int j = 0; j < vol.ny; ++j)
       for (int i = 0; i < vol.nx; ++i) {
         const std::int64_t n = vol.at(i, j, k);
-        if (cls[n] != 1 || depth[n] < options.ventricle_depth_mm) continue;
+        if (cls[n] != 1 || depth[n] < options.ventricle_depth_mm || not_ventricle[n]) continue;
         const double x = grid.world_from_index(Eigen::Vector3d(i, j, k)).x();
         deep_csf[n] = std::abs(x - midline_x) >= options.ventricle_midline_gap_mm;
       }
@@ -380,13 +480,15 @@ std::vector<std::uint8_t> lateral_ventricles(const ImageGrid& grid, const Volume
 
 /// The brainstem (see the comment inside).
 Mask brainstem_mask(const ImageGrid& grid, const Volume& vol, const Mask& brain, const std::vector<int>& aal,
-                    const std::vector<std::int8_t>& cls, double midline_x, double thalamus_min_z,
+                    const std::vector<std::int8_t>& cls, const ThalamusExtent& thalamus,
                     const Colin27Options& options) {
   const std::size_t count = static_cast<std::size_t>(vol.size());
   // Brainstem: the unlabelled part of the brain below the thalamus near the midline. AAL
   // labels grey matter only, so its zero inside the brain is white matter or brainstem; below
-  // the thalamus's lowest point and within a slab around the midline, the largest connected
-  // piece of it (CSF excluded) is the brainstem.
+  // the thalamus's lowest point, within a slab around the midline and under the thalamus from
+  // front to back (extended backwards: the medulla leans back), the largest connected piece of
+  // it (CSF excluded) is the brainstem. Without the front and back limits it took the frontal
+  // lobe's basal white matter (up to 60 mm in front of the pons) and the cerebellum's.
   Mask stem_candidate(count);
   for (int k = 0; k < vol.nz; ++k)
     for (int j = 0; j < vol.ny; ++j)
@@ -394,10 +496,59 @@ Mask brainstem_mask(const ImageGrid& grid, const Volume& vol, const Mask& brain,
         const std::int64_t n = vol.at(i, j, k);
         if (!brain[n] || aal[n] != 0 || cls[n] == 1) continue;
         const Eigen::Vector3d p = grid.world_from_index(Eigen::Vector3d(i, j, k));
-        stem_candidate[n] =
-            p.z() < thalamus_min_z && std::abs(p.x() - midline_x) <= options.brainstem_half_width_mm;
+        stem_candidate[n] = p.z() < thalamus.min_z &&
+                            std::abs(p.x() - thalamus.midline_x) <= options.brainstem_half_width_mm &&
+                            p.y() <= thalamus.max_y &&
+                            p.y() >= thalamus.min_y - options.brainstem_posterior_mm;
       }
   return largest_component(stem_candidate, grid);
+}
+
+/// Labels the brain's voxels: the atlas's deep nuclei (which win over the ventricles they border:
+/// CSF partial volume at their edges is the atlas's call), the lateral ventricles, CSF, the
+/// cerebellum (AAL's, and below the thalamus the unlabelled non-CSF voxels nearer to AAL's
+/// cerebellum than to its cerebrum: the cerebellum's white matter, which AAL leaves unlabelled
+/// as it does the cerebrum's), the brainstem, then white or cortical grey matter by class.
+template <class IsVentricle>
+void label_brain(const ImageGrid& grid, const Volume& vol, const Mask& brain, const std::vector<int>& aal,
+                 const std::vector<std::int8_t>& cls, const Mask& brainstem, const ThalamusExtent& thalamus,
+                 IsVentricle&& is_ventricle, std::vector<std::int32_t>& labels) {
+  const std::size_t count = static_cast<std::size_t>(vol.size());
+  Mask cerebellum(count), cerebrum(count);
+  for (std::size_t n = 0; n < count; ++n) {
+    cerebellum[n] = brain[n] && aal_is(aal[n], 91, 116);
+    cerebrum[n] = brain[n] && aal_is(aal[n], 1, 90);
+  }
+  const std::vector<float> from_cerebellum = distance_to(cerebellum, grid);
+  const std::vector<float> from_cerebrum = distance_to(cerebrum, grid);
+  for (int k = 0; k < vol.nz; ++k)
+    for (int j = 0; j < vol.ny; ++j)
+      for (int i = 0; i < vol.nx; ++i) {
+        const std::int64_t n = vol.at(i, j, k);
+        if (!brain[n]) continue;
+        const int a = aal[n];
+        if (aal_is(a, 71, 72))
+          labels[n] = colin27_caudate;
+        else if (aal_is(a, 73, 74))
+          labels[n] = colin27_putamen;
+        else if (aal_is(a, 75, 76))
+          labels[n] = colin27_pallidum;
+        else if (aal_is(a, 77, 78))
+          labels[n] = colin27_thalamus;
+        else if (is_ventricle(n))
+          labels[n] = colin27_ventricles;
+        else if (cls[n] == 1)
+          labels[n] = colin27_csf;
+        else if (aal_is(a, 91, 116))
+          labels[n] = colin27_cerebellum;
+        else if (brainstem[n])
+          labels[n] = colin27_brainstem;
+        else if (a == 0 && from_cerebellum[n] < from_cerebrum[n] &&
+                 grid.world_from_index(Eigen::Vector3d(i, j, k)).z() < thalamus.min_z)
+          labels[n] = colin27_cerebellum;
+        else
+          labels[n] = cls[n] == 3 ? colin27_white_matter : colin27_cortical_gm;
+      }
 }
 
 /// Divides the tissue outside the skull (labelled scalp) into skin, subcutaneous fat and muscle,
@@ -536,53 +687,17 @@ HeadLabels derive_colin27_head(const std::filesystem::path& templates_dir, const
   for (int pass = 0; pass < options.majority_filter_passes; ++pass)
     cls = majority_filter(cls, brain, grid);
 
-  double thalamus_min_z = std::numeric_limits<double>::infinity(), midline_x_sum = 0.0;
-  std::int64_t thalamus_voxels = 0;
-  for (int k = 0; k < vol.nz; ++k)
-    for (int j = 0; j < vol.ny; ++j)
-      for (int i = 0; i < vol.nx; ++i) {
-        const std::int64_t n = vol.at(i, j, k);
-        if (brain[n] && aal_is(aal[n], 77, 78)) {
-          const Eigen::Vector3d p = grid.world_from_index(Eigen::Vector3d(i, j, k));
-          thalamus_min_z = std::min(thalamus_min_z, p.z());
-          midline_x_sum += p.x();
-          ++thalamus_voxels;
-        }
-      }
-  const double midline_x = thalamus_voxels > 0 ? midline_x_sum / double(thalamus_voxels) : 0.0;
+  const ThalamusExtent thalamus = thalamus_extent(grid, vol, brain, aal);
+  const Mask brainstem = brainstem_mask(grid, vol, brain, aal, cls, thalamus, options);
   std::vector<std::int32_t> csf_component;
-  const std::vector<std::uint8_t> is_ventricle =
-      lateral_ventricles(grid, vol, brain, cls, midline_x, options, csf_component);
-  const Mask brainstem = brainstem_mask(grid, vol, brain, aal, cls, midline_x, thalamus_min_z, options);
-
-  // Labels inside the brain.
+  const std::vector<std::uint8_t> is_ventricle = lateral_ventricles(
+      grid, vol, brain, cls, not_lateral_ventricle(grid, vol, brain, aal, cls, brainstem, thalamus, options),
+      thalamus.midline_x, options, csf_component);
+  head.labels.assign(count, colin27_background);
+  label_brain(
+      grid, vol, brain, aal, cls, brainstem, thalamus,
+      [&](std::int64_t n) { return is_ventricle[csf_component[n]] != 0; }, head.labels);
   std::vector<std::int32_t>& labels = head.labels;
-  labels.assign(count, colin27_background);
-  for (std::size_t n = 0; n < count; ++n) {
-    if (!brain[n]) continue;
-    const int a = aal[n];
-    const bool ventricle = is_ventricle[csf_component[n]] != 0;
-    // The atlas's deep nuclei win over the ventricles they border (CSF partial volume at
-    // their edges is the atlas's call).
-    if (aal_is(a, 71, 72))
-      labels[n] = colin27_caudate;
-    else if (aal_is(a, 73, 74))
-      labels[n] = colin27_putamen;
-    else if (aal_is(a, 75, 76))
-      labels[n] = colin27_pallidum;
-    else if (aal_is(a, 77, 78))
-      labels[n] = colin27_thalamus;
-    else if (ventricle)
-      labels[n] = colin27_ventricles;
-    else if (cls[n] == 1)
-      labels[n] = colin27_csf;
-    else if (aal_is(a, 91, 116))
-      labels[n] = colin27_cerebellum;
-    else if (brainstem[n])
-      labels[n] = colin27_brainstem;
-    else
-      labels[n] = cls[n] == 3 ? colin27_white_matter : colin27_cortical_gm;
-  }
 
   // The brain's white-matter class: the reference level of the tissues outside it.
   double white_matter_sum = 0.0;

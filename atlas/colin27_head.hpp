@@ -54,7 +54,17 @@ struct Colin27Options {
   double ventricle_min_volume_ml = 1.0; ///< smaller deep CSF components are sulcal CSF
   double ventricle_midline_gap_mm = 2.0; ///< deep CSF this close to the midline (x) is not ventricle
   double brainstem_half_width_mm = 20.0; ///< brainstem candidates lie this close to the midline (x)
-  double skin_thickness_mm = 1.5;        ///< skin = head voxels this close to the head's surface
+  /// Brainstem candidates lie under the thalamus from front to back, and up to this much behind it.
+  double brainstem_posterior_mm = 14.0;
+  /// Deep CSF this close to the brainstem or AAL's cerebellum is not lateral ventricle (the fourth
+  /// ventricle, the aqueduct, the cisterns).
+  double ventricle_clearance_mm = 3.0;
+  /// CSF with thalamus on both sides along x, each within this distance, is the third ventricle.
+  double third_ventricle_reach_mm = 12.0;
+  /// A run of CSF along x at most this wide reaching into the midline slab is the interhemispheric
+  /// fissure, not ventricle.
+  double fissure_max_width_mm = 8.0;
+  double skin_thickness_mm = 1.5; ///< skin = head voxels this close to the head's surface
   /// Under the skin, T1 at least this times the mean of the brain's white-matter class is fat
   /// (the brightest tissue of a T1w head); darker soft tissue is muscle.
   double fat_intensity_fraction = 1.15;

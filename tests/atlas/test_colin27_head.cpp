@@ -143,6 +143,72 @@ TEST(Colin27Head, NestingIsSane) {
   EXPECT_LE(ventricles_outside, 100) << "ventricle voxels outside ch2bet's support";
 }
 
+// The brainstem, the lateral ventricles and the cerebellum keep to their anatomy. Before the
+// brainstem was bounded from front to back it took the frontal lobe's basal white matter (its
+// label reached y = 56 mm, 60 mm in front of the thalamus) and the cerebellum's (y = -74 mm);
+// before the ventricles kept clear of the hindbrain and the fissure they held the fourth
+// ventricle and the cisterns around the brainstem and the cerebellum (4724 voxels touching
+// either) and the interhemispheric fissure behind the thalamus (2771 voxels within 4 mm of the
+// midline there; 867 with the hindbrain rule alone); before the cerebellum took its unlabelled
+// white matter, 1863 cerebral white-matter voxels touched it.
+TEST(Colin27Head, BrainstemVentriclesAndCerebellumKeepToTheirAnatomy) {
+  SKIP_WITHOUT_TEMPLATES();
+  const HeadLabels& head = derived();
+  const Eigen::Vector3i d = head.grid.dims;
+  auto at = [&](int i, int j, int k) { return i + std::int64_t(d.x()) * (j + std::int64_t(d.y()) * k); };
+  auto world = [&](int i, int j, int k) { return head.grid.world_from_index(Eigen::Vector3d(i, j, k)); };
+  double stem_front = -1e9, stem_back = 1e9, thalamus_front = -1e9, thalamus_back = 1e9, thalamus_x = 0.0;
+  std::int64_t thalamus_voxels = 0;
+  for (int k = 0; k < d.z(); ++k)
+    for (int j = 0; j < d.y(); ++j)
+      for (int i = 0; i < d.x(); ++i) {
+        const Eigen::Vector3d p = world(i, j, k);
+        if (head.labels[at(i, j, k)] == colin27_brainstem) {
+          stem_front = std::max(stem_front, p.y());
+          stem_back = std::min(stem_back, p.y());
+        }
+        if (head.labels[at(i, j, k)] != colin27_thalamus) continue;
+        thalamus_front = std::max(thalamus_front, p.y());
+        thalamus_back = std::min(thalamus_back, p.y());
+        thalamus_x += p.x();
+        ++thalamus_voxels;
+      }
+  ASSERT_GT(thalamus_voxels, 0);
+  thalamus_x /= double(thalamus_voxels);
+  std::int64_t ventricle_on_hindbrain = 0, white_matter_on_cerebellum = 0, ventricles = 0, fissure = 0;
+  for (int k = 1; k < d.z() - 1; ++k)
+    for (int j = 1; j < d.y() - 1; ++j)
+      for (int i = 1; i < d.x() - 1; ++i) {
+        const std::int32_t label = head.labels[at(i, j, k)];
+        if (label != colin27_ventricles && label != colin27_white_matter) continue;
+        if (label == colin27_ventricles) {
+          ++ventricles;
+          const Eigen::Vector3d p = world(i, j, k);
+          fissure += std::abs(p.x() - thalamus_x) < 4.0 && p.y() < thalamus_back;
+        }
+        for (const std::int64_t m : {at(i + 1, j, k), at(i - 1, j, k), at(i, j + 1, k), at(i, j - 1, k),
+                                     at(i, j, k + 1), at(i, j, k - 1)}) {
+          const std::int32_t next = head.labels[m];
+          if (label == colin27_ventricles)
+            ventricle_on_hindbrain += next == colin27_brainstem || next == colin27_cerebellum;
+          else
+            white_matter_on_cerebellum += next == colin27_cerebellum;
+        }
+      }
+  std::cout << "brainstem y " << stem_back << " to " << stem_front << " mm (thalamus " << thalamus_back
+            << " to " << thalamus_front << "), ventricle voxels on the hindbrain " << ventricle_on_hindbrain
+            << ", near the midline behind the thalamus " << fissure
+            << ", white-matter voxels on the cerebellum " << white_matter_on_cerebellum << "\n";
+  // Midbrain, pons and medulla span about 40 mm from front to back, and none lies in front of
+  // the thalamus.
+  EXPECT_LE(stem_front - stem_back, 50.0);
+  EXPECT_LE(stem_front, thalamus_front);
+  EXPECT_GT(ventricles, 10000); // the lateral ventricles stay (about 23 ml)
+  EXPECT_EQ(ventricle_on_hindbrain, 0);
+  EXPECT_LE(fissure, 400);
+  EXPECT_LE(white_matter_on_cerebellum, 100);
+}
+
 TEST(Colin27Head, DeepNucleiMatchAal) {
   SKIP_WITHOUT_TEMPLATES();
   const HeadLabels& head = derived();
