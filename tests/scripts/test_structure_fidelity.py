@@ -12,7 +12,9 @@
 * Bad input: exit 2, a message naming what is wrong, nothing written.
 """
 
+import contextlib
 import csv
+import io
 import json
 import os
 import subprocess
@@ -115,6 +117,16 @@ class StructureFidelity(unittest.TestCase):
             self.assertEqual(rows[name]["hd95_mm"], 0.0)
             self.assertEqual(rows[name]["derived_far_ml"], 0.0)
 
+    def test_misplaced_volume_counts_what_lies_beyond_the_distance(self):
+        run = numpy.zeros((20, 30, 30), bool)
+        derived = numpy.zeros_like(run)
+        run[4:10, 5:25, 5:25] = True
+        derived[6:12, 5:25, 5:25] = True  # its last layer 4 mm (2 voxels of 2 mm) from the run's plate
+        for far_mm, expected_ml in ((3.9, 0.8), (4.0, 0.0), (1.9, 1.6)):
+            result, _, _ = structure_fidelity.compare(run, derived, SPACING, far_mm)
+            self.assertAlmostEqual(result["derived_far_ml"], expected_ml, places=9, msg=far_mm)
+            self.assertAlmostEqual(result["run_far_ml"], expected_ml, places=9, msg=far_mm)
+
     def test_hd95_matches_nearest_surface_points(self):
         generator = numpy.random.default_rng(5)
         for _ in range(2):
@@ -136,9 +148,13 @@ class StructureFidelity(unittest.TestCase):
                      ((dataset, os.path.join(folder, "absent.nii.gz")), "absent.nii.gz"),
                      ((dataset, labels, "--map", "plate"), "NAME=LABEL")]
             for args, named in cases:
-                result = run_script(*args, "--json", report_file)
-                self.assertEqual(result.returncode, 2, (args, result.stderr))
-                self.assertIn(named, result.stderr)
+                # In this process (the command line itself is run above): main() as the script runs it.
+                stderr = io.StringIO()
+                with contextlib.redirect_stderr(stderr), self.assertRaises(SystemExit) as exit_status:
+                    sys.argv = [SCRIPT, *args, "--json", report_file]
+                    structure_fidelity.main()
+                self.assertEqual(exit_status.exception.code, 2, (args, stderr.getvalue()))
+                self.assertIn(named, stderr.getvalue())
                 self.assertFalse(os.path.exists(report_file))
 
 
