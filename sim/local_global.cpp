@@ -206,19 +206,88 @@ constexpr int k_line_search_evaluations = 8;
 /// The line search's sufficient decrease: E(x + t d) <= E(x) + k_armijo t grad . d.
 constexpr double k_armijo = 1e-4;
 
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
 } // namespace
+
+bool LocalGlobalSolver::Impl::quasi_newton_step(sim_detail::QuasiNewtonHistory& history,
+                                                const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& gradient,
+                                                double previous, const Eigen::MatrixX3d& target,
+                                                Eigen::MatrixX3d& p, Eigen::MatrixX3d& trial, double& energy,
+                                                SolveReport& report) {
+  // The direction: the two-loop recursion around gamma K^-1.
+  auto start = Clock::now();
+  direction = -gradient;
+  history.first_loop(direction);
+  factor->solve(history.newest_y(), scaled, threads);
+  factor->solve(direction, solution, threads);
+  report.global_seconds += seconds_since(start);
+  start = Clock::now();
+  direction = (history.newest_sy() / dot(history.newest_y(), scaled)) * solution;
+  history.second_loop(direction);
+  const double slope = dot(gradient, direction);
+  double step = 1.0;
+  bool accepted = false;
+  for (int evaluation = 0; slope < 0.0 && evaluation < k_line_search_evaluations && !accepted; ++evaluation) {
+    trial = x + step * direction;
+    set_free_positions(trial, p);
+    const double trial_energy = local_step(p, target);
+    if (trial_energy <= previous + k_armijo * step * slope) {
+      energy = trial_energy;
+      accepted = true;
+    } else {
+      // The minimum of the parabola through E(x), the slope there and E(trial), within a
+      // tenth and a half of the step.
+      const double curvature = trial_energy - previous - step * slope;
+      const double next = curvature > 0.0 ? -0.5 * slope * step * step / curvature : 0.5 * step;
+      step = std::clamp(next, 0.1 * step, 0.5 * step);
+    }
+  }
+  report.local_seconds += seconds_since(start);
+  return accepted;
+}
+
+double LocalGlobalSolver::Impl::plain_step(sim_detail::AndersonAcceleration& anderson, bool accelerate,
+                                           const Eigen::MatrixX3d& x, double previous,
+                                           const Eigen::MatrixX3d& target, Eigen::MatrixX3d& p,
+                                           Eigen::MatrixX3d& trial, SolveReport& report) {
+  auto start = Clock::now();
+  factor->solve(rhs, solution, threads);
+  report.global_seconds += seconds_since(start);
+  start = Clock::now();
+  trial = solution;
+  double energy = 0.0;
+  bool accepted = false;
+  // Anderson's proposal (phase 1), kept when it lowers the energy.
+  const bool tried = accelerate && anderson.propose(solution, x, candidate);
+  if (tried) {
+    set_free_positions(candidate, p);
+    const double candidate_energy = local_step(p, target);
+    if (candidate_energy < previous) {
+      trial = candidate;
+      energy = candidate_energy;
+      accepted = true;
+    }
+  }
+  if (!accepted) {
+    set_free_positions(trial, p);
+    energy = local_step(p, target);
+    if (tried) anderson.restart(); // rejected: restart the history from this point
+  }
+  report.local_seconds += seconds_since(start);
+  return energy;
+}
 
 SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d& target,
                                      const StopCriteria& stop, bool record_energies,
                                      const IterationObserver& observer) {
-  using Clock = std::chrono::steady_clock;
-  auto seconds_since = [](Clock::time_point start) {
-    return std::chrono::duration<double>(Clock::now() - start).count();
-  };
   SolveReport report;
   report.solver = "local_global";
   double energy = m->begin_solve(p, target, report, record_energies, observer);
-  auto start = Clock::now();
   const auto nf = static_cast<Eigen::Index>(m->free_vertex.size());
   // Two phases on the same energy, each step lowering it:
   // 1. Local/global with Anderson acceleration of the fixed-point map x -> G(x) (global step
@@ -238,12 +307,11 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
   sim_detail::AndersonAcceleration anderson(nf, m->anderson_history);
   sim_detail::QuasiNewtonHistory history(m->history);
   Eigen::MatrixX3d x = m->free_positions(p);
-  Eigen::MatrixX3d gradient, direction, trial, candidate;
-  Eigen::MatrixX3d scaled; // K^-1 y of the newest pair
+  Eigen::MatrixX3d gradient, trial;
   std::optional<ResidualTest> test;
   for (int iteration = 1;; ++iteration) {
     throw_if_cancelled(); // an iteration takes milliseconds to a second: SIGINT stops here
-    start = Clock::now();
+    const auto start = Clock::now();
     const int contact_changes = m->contacts->update_factor(*m->factor); // (timed with the local step:
     report.contact_changes += contact_changes;                          // the right-hand side depends on it)
     m->gather_rhs(target);
@@ -269,61 +337,10 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
     const double previous = energy;
     bool accepted = false;
     if (quasi_newton && history.size() > 0) {
-      // The direction: the two-loop recursion around gamma K^-1.
-      start = Clock::now();
-      direction = -gradient;
-      history.first_loop(direction);
-      m->factor->solve(history.newest_y(), scaled, m->threads);
-      m->factor->solve(direction, m->solution, m->threads);
-      report.global_seconds += seconds_since(start);
-      start = Clock::now();
-      direction = (history.newest_sy() / dot(history.newest_y(), scaled)) * m->solution;
-      history.second_loop(direction);
-      const double slope = dot(gradient, direction);
-      double step = 1.0;
-      for (int evaluation = 0; slope < 0.0 && evaluation < k_line_search_evaluations && !accepted;
-           ++evaluation) {
-        trial = x + step * direction;
-        m->set_free_positions(trial, p);
-        const double trial_energy = m->local_step(p, target);
-        if (trial_energy <= previous + k_armijo * step * slope) {
-          energy = trial_energy;
-          accepted = true;
-        } else {
-          // The minimum of the parabola through E(x), the slope there and E(trial), within a
-          // tenth and a half of the step.
-          const double curvature = trial_energy - previous - step * slope;
-          const double next = curvature > 0.0 ? -0.5 * slope * step * step / curvature : 0.5 * step;
-          step = std::clamp(next, 0.1 * step, 0.5 * step);
-        }
-      }
-      report.local_seconds += seconds_since(start);
+      accepted = m->quasi_newton_step(history, x, gradient, previous, target, p, trial, energy, report);
       if (!accepted) history.clear(); // the plain step below, from a fresh history
     }
-    if (!accepted) {
-      start = Clock::now();
-      m->factor->solve(m->rhs, m->solution, m->threads);
-      report.global_seconds += seconds_since(start);
-      start = Clock::now();
-      trial = m->solution;
-      // Anderson's proposal (phase 1), kept when it lowers the energy.
-      const bool tried = !quasi_newton && anderson.propose(m->solution, x, candidate);
-      if (tried) {
-        m->set_free_positions(candidate, p);
-        const double candidate_energy = m->local_step(p, target);
-        if (candidate_energy < previous) {
-          trial = candidate;
-          energy = candidate_energy;
-          accepted = true;
-        }
-      }
-      if (!accepted) {
-        m->set_free_positions(trial, p);
-        energy = m->local_step(p, target);
-        if (tried) anderson.restart(); // rejected: restart the history from this point
-      }
-      report.local_seconds += seconds_since(start);
-    }
+    if (!accepted) energy = m->plain_step(anderson, !quasi_newton, x, previous, target, p, trial, report);
     const double change = nf > 0 ? (trial - x).rowwise().norm().maxCoeff() : 0.0;
     x = trial;
     report.iterations = iteration;
@@ -344,6 +361,7 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
   m->finish_report(m->free_positions(p), target, report);
   finish_solve(m->model, StepInertia{m->alpha, target}, p, stop, *test, true, report);
   return report;
+}
 }
 
 } // namespace phantasm

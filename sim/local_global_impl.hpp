@@ -15,6 +15,11 @@
 
 namespace phantasm {
 
+namespace sim_detail {
+class AndersonAcceleration;
+class QuasiNewtonHistory;
+} // namespace sim_detail
+
 struct LocalGlobalSolver::Impl {
   const ElasticModel& model;
   double alpha = 0.0;
@@ -48,6 +53,8 @@ struct LocalGlobalSolver::Impl {
   std::vector<int> tet_offsets, tet_entries, surface_offsets, surface_entries, point_offsets, point_entries,
       volume_offsets, volume_entries, group_offsets, group_entries;
   Eigen::MatrixX3d rhs, coupling_rhs, solution;
+  // solve()'s buffers: its quasi-Newton direction, K^-1 y of the newest pair, Anderson's proposal.
+  Eigen::MatrixX3d direction, scaled, candidate;
 
   Impl(const ElasticModel& m, double a, int t) : model(m), alpha(a), threads(t) {}
 
@@ -82,6 +89,18 @@ struct LocalGlobalSolver::Impl {
   /// at the result, which the last local step computed, and the contacts found there) and the
   /// contact count into the report.
   void finish_report(const Eigen::MatrixX3d& x_free, const Eigen::MatrixX3d& target, SolveReport& report);
+  /// An iteration of solve()'s second phase (L-BFGS around the global matrix): the two-loop
+  /// direction from x (its gradient, its energy `previous`) and a backtracking line search on the
+  /// energy. True when the search accepts a point: the point in `trial`, p and `energy`.
+  bool quasi_newton_step(sim_detail::QuasiNewtonHistory& history, const Eigen::MatrixX3d& x,
+                         const Eigen::MatrixX3d& gradient, double previous, const Eigen::MatrixX3d& target,
+                         Eigen::MatrixX3d& p, Eigen::MatrixX3d& trial, double& energy, SolveReport& report);
+  /// A plain iteration of solve() (the global step after the local step), with Anderson's
+  /// proposal kept where it lowers the energy when `accelerate` (the first phase): the point in
+  /// `trial` and p; returns its energy.
+  double plain_step(sim_detail::AndersonAcceleration& anderson, bool accelerate, const Eigen::MatrixX3d& x,
+                    double previous, const Eigen::MatrixX3d& target, Eigen::MatrixX3d& p,
+                    Eigen::MatrixX3d& trial, SolveReport& report);
 
   /// The free rows of p.
   Eigen::MatrixX3d free_positions(const Eigen::MatrixX3d& p) const {

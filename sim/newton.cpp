@@ -53,15 +53,13 @@ SurfaceHessian surface_hessian(const SurfaceElement& e, const SurfaceMatrix& F) 
          eigen.eigenvectors().transpose();
 }
 
-/// The PSD-projected Hessian over the free coordinates (3 per free vertex, lower triangle).
-/// `entries` is the triplets' workspace, kept between iterations: its memory is reused rather
-/// than faulted in anew each time (a swinging sheet's million entries cost more than the factor).
-Eigen::SparseMatrix<double> assemble_hessian(const ElasticModel& model, const StepInertia& inertia,
-                                             const Eigen::MatrixX3d& p, const std::vector<int>& free_index,
-                                             Eigen::Index free_count,
-                                             std::vector<Eigen::Triplet<double>>& entries) {
-  entries.clear();
-  auto add_block = [&](int a, int b, const Eigen::Matrix3d& block) {
+/// Adds a 3 x 3 block of vertices a, b to the Hessian's triplets over the free coordinates
+/// (lower triangle, nonzero entries; nothing for a fixed vertex).
+struct BlockAdder {
+  const std::vector<int>& free_index;
+  std::vector<Eigen::Triplet<double>>& entries;
+
+  void operator()(int a, int b, const Eigen::Matrix3d& block) const {
     const int fa = free_index[static_cast<std::size_t>(a)];
     const int fb = free_index[static_cast<std::size_t>(b)];
     if (fa < 0 || fb < 0) return;
@@ -69,10 +67,11 @@ Eigen::SparseMatrix<double> assemble_hessian(const ElasticModel& model, const St
       for (int c = 0; c < 3; ++c)
         if (3 * fb + c <= 3 * fa + r && block(r, c) != 0.0)
           entries.emplace_back(3 * fa + r, 3 * fb + c, block(r, c));
-  };
-  for (Eigen::Index v = 0; v < model.vertex_count(); ++v)
-    add_block(static_cast<int>(v), static_cast<int>(v),
-              (inertia.weight * model.masses_kg[v]) * Eigen::Matrix3d::Identity());
+  }
+};
+
+/// The tets' blocks (strain and volume terms, projected onto the PSD cone) and the tet groups'.
+void add_tet_blocks(const ElasticModel& model, const Eigen::MatrixX3d& p, const BlockAdder& add_block) {
   for (const TetElement& e : model.tets) {
     Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
     const SignedSvd svd = signed_svd(deformation_gradient(e, p), rotation);
@@ -101,7 +100,10 @@ Eigen::SparseMatrix<double> assemble_hessian(const ElasticModel& model, const St
         add_block(g.vertices[a], g.vertices[b],
                   H.block<3, 3>(3 * static_cast<Eigen::Index>(a), 3 * static_cast<Eigen::Index>(b)));
   }
-  // Surface elements: w (I - dP/dF) projected onto the PSD cone, through F = X Q.
+}
+
+/// Surface elements: w (I - dP/dF) projected onto the PSD cone, through F = X Q.
+void add_surface_blocks(const ElasticModel& model, const Eigen::MatrixX3d& p, const BlockAdder& add_block) {
   // Each element's Hessian on its own (the same bits for any number of threads).
   std::vector<SurfaceHessian> surface_hessians(model.surfaces.size());
   const auto surface_count = static_cast<std::ptrdiff_t>(model.surfaces.size());
@@ -123,9 +125,12 @@ Eigen::SparseMatrix<double> assemble_hessian(const ElasticModel& model, const St
         add_block(e.vertices[static_cast<std::size_t>(a)], e.vertices[static_cast<std::size_t>(b)], block);
       }
   }
-  // Surface contacts: kc (c c^T) (x) (n n^T), c = (1, -b) over the vertex and the closest
-  // point's triangle (Gauss-Newton: exact for a face contact, without the surface's curvature
-  // at edges and corners).
+}
+
+/// Surface contacts: kc (c c^T) (x) (n n^T), c = (1, -b) over the vertex and the closest point's
+/// triangle (Gauss-Newton: exact for a face contact, without the surface's curvature at edges and
+/// corners).
+void add_contact_blocks(const ElasticModel& model, const Eigen::MatrixX3d& p, const BlockAdder& add_block) {
   for (const SurfaceContact& contact : surface_contacts(model, p)) {
     const std::array<int, 4> vertices = {static_cast<int>(contact.vertex), contact.query.triangle[0],
                                          contact.query.triangle[1], contact.query.triangle[2]};
@@ -139,11 +144,14 @@ Eigen::SparseMatrix<double> assemble_hessian(const ElasticModel& model, const St
           add_block(vertices[static_cast<std::size_t>(a)], vertices[static_cast<std::size_t>(b)],
                     c[a] * c[b] * nn);
   }
-  // Enclosed volumes: w I on their vertices (Gauss-Newton, as for surface elements). A vertex
-  // star's w is the bulk modulus's (huge as nu -> 1/2), where w I would make Newton crawl: its
-  // block is w (I - dP/dX) without the set's curvature, w n n^T with n = grad V / |grad V|
-  // (near the set w/2 dist^2 = K (V - V0)^2 / (2 V0), whose Gauss-Newton matrix this is), and
-  // nothing while V / V0 lies strictly inside the range (the energy is 0 there).
+}
+
+/// Enclosed volumes: w I on their vertices (Gauss-Newton, as for surface elements). A vertex
+/// star's w is the bulk modulus's (huge as nu -> 1/2), where w I would make Newton crawl: its
+/// block is w (I - dP/dX) without the set's curvature, w n n^T with n = grad V / |grad V| (near
+/// the set w/2 dist^2 = K (V - V0)^2 / (2 V0), whose Gauss-Newton matrix this is), and nothing
+/// while V / V0 lies strictly inside the range (the energy is 0 there).
+void add_volume_blocks(const ElasticModel& model, const Eigen::MatrixX3d& p, const BlockAdder& add_block) {
   for (const EnclosedVolume& c : model.volumes) {
     if (!c.vertex_star) {
       for (int v : c.vertices)
@@ -163,6 +171,24 @@ Eigen::SparseMatrix<double> assemble_hessian(const ElasticModel& model, const St
                   scale * G.row(static_cast<Eigen::Index>(a)).transpose() *
                       G.row(static_cast<Eigen::Index>(b)));
   }
+}
+
+/// The PSD-projected Hessian over the free coordinates (3 per free vertex, lower triangle).
+/// `entries` is the triplets' workspace, kept between iterations: its memory is reused rather
+/// than faulted in anew each time (a swinging sheet's million entries cost more than the factor).
+Eigen::SparseMatrix<double> assemble_hessian(const ElasticModel& model, const StepInertia& inertia,
+                                             const Eigen::MatrixX3d& p, const std::vector<int>& free_index,
+                                             Eigen::Index free_count,
+                                             std::vector<Eigen::Triplet<double>>& entries) {
+  entries.clear();
+  const BlockAdder add_block{free_index, entries};
+  for (Eigen::Index v = 0; v < model.vertex_count(); ++v)
+    add_block(static_cast<int>(v), static_cast<int>(v),
+              (inertia.weight * model.masses_kg[v]) * Eigen::Matrix3d::Identity());
+  add_tet_blocks(model, p, add_block);
+  add_surface_blocks(model, p, add_block);
+  add_contact_blocks(model, p, add_block);
+  add_volume_blocks(model, p, add_block);
   if (!model.obstacles.empty()) {
     for (Eigen::Index v = 0; v < model.vertex_count(); ++v)
       add_block(static_cast<int>(v), static_cast<int>(v),
@@ -355,30 +381,123 @@ double largest_displacement(const ElasticModel& model, const FreeRows& free, con
 /// Newton iterations that finish a local/global solve whose distance test fails.
 constexpr int k_finishing_newton_iterations = 200;
 
+using Clock = std::chrono::steady_clock;
+
+/// A solve's energies and times per iteration (when asked), and its observer, whose time is
+/// left out of the solve's.
+class IterationRecord {
+public:
+  IterationRecord(SolveReport& report, bool record_energies, const IterationObserver& observer)
+      : m_report(report), m_record(record_energies), m_observer(observer) {}
+  void add(int iteration, const Eigen::MatrixX3d& p, double energy) {
+    if (m_record) {
+      m_report.energies_J.push_back(energy);
+      m_report.seconds.push_back(elapsed());
+    }
+    if (m_observer) {
+      const auto before = Clock::now();
+      m_observer(iteration, p, energy);
+      m_observer_seconds += std::chrono::duration<double>(Clock::now() - before).count();
+    }
+  }
+
+private:
+  double elapsed() const {
+    return std::chrono::duration<double>(Clock::now() - m_start).count() - m_observer_seconds;
+  }
+  SolveReport& m_report;
+  bool m_record;
+  const IterationObserver& m_observer;
+  const Clock::time_point m_start = Clock::now();
+  double m_observer_seconds = 0.0;
+};
+
+/// At an equilibrium that may be a saddle (a pushed bar held straight has a small residual and
+/// step too): the point lower along the direction of negative curvature, and its energy, or none
+/// when the equilibrium is stable (or enough saddles were left).
+std::optional<std::pair<Eigen::MatrixX3d, double>>
+leave_saddle(const ElasticModel& model, const StepInertia& inertia, const Eigen::MatrixX3d& p,
+             const FreeRows& free, const Eigen::SparseMatrix<double>& H, HessianFactor& factor, double energy,
+             const SolveReport& report) {
+  const std::optional<Eigen::VectorXd> down =
+      report.saddles_left < k_saddle_escapes
+          ? descent_direction(model, inertia, p, free, H, factor, 0.1 * report.largest_displacement_m)
+          : std::nullopt;
+  Eigen::MatrixX3d lower;
+  double lower_energy = energy;
+  for (double t = 1.0; down && t > 1e-3 && !(lower_energy < energy); t *= 0.5) {
+    for (double sign : {1.0, -1.0}) {
+      const Eigen::MatrixX3d q = moved(p, free, *down, sign * t);
+      const double e = model_energy(model, inertia, q);
+      if (e < energy && e < lower_energy) {
+        lower = q;
+        lower_energy = e;
+      }
+    }
+  }
+  if (!(lower_energy < energy)) return std::nullopt;
+  return std::make_pair(lower, lower_energy);
+}
+
+/// Where a line search along a Newton direction ends: the point, its energy, and its gradient
+/// when the search computed it (else empty).
+struct LineSearch {
+  bool accepted = false;
+  Eigen::MatrixX3d trial, gradient;
+  double energy = 0.0;
+};
+
+/// The backtracking line search (Armijo) along `direction` from p (energy `energy`, gradient
+/// `gradient`, slope g . direction).
+LineSearch line_search(const ElasticModel& model, const StepInertia& inertia, const Eigen::MatrixX3d& p,
+                       const FreeRows& free, const Eigen::VectorXd& direction, double slope, double energy,
+                       const Eigen::MatrixX3d& gradient) {
+  LineSearch s;
+  s.trial = p;
+  s.energy = energy;
+  double step = 1.0;
+  auto place = [&](double t) {
+    for (Eigen::Index f = 0; f < free.count(); ++f)
+      s.trial.row(free.vertex[static_cast<std::size_t>(f)]) =
+          p.row(free.vertex[static_cast<std::size_t>(f)]) + t * direction.segment<3>(3 * f).transpose();
+  };
+  // Near the minimizer the decrease a step promises falls below the round-off of E itself and
+  // Armijo's test becomes a coin toss: there, the full Newton step is taken when it lowers the
+  // gradient norm instead (the merit function of Newton's method for the equation grad E = 0).
+  const bool below_roundoff = -slope <= 1e-13 * std::abs(energy);
+  if (below_roundoff) {
+    place(1.0);
+    s.gradient = model_gradient(model, inertia, s.trial);
+    if (free_gradient_norm(model, s.gradient) < free_gradient_norm(model, gradient)) {
+      s.energy = model_energy(model, inertia, s.trial);
+      s.accepted = true;
+    } else {
+      s.gradient.resize(0, 3);
+    }
+  }
+  for (int backtrack = 0; backtrack < 60 && !s.accepted; ++backtrack) {
+    place(step);
+    s.energy = model_energy(model, inertia, s.trial);
+    if (s.energy <= energy + 1e-4 * step * slope) {
+      s.accepted = true;
+      break;
+    }
+    step *= 0.5;
+  }
+  return s;
+}
+
 } // namespace
 
 SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, Eigen::MatrixX3d& p,
                          const StopCriteria& stop, bool record_energies, const IterationObserver& observer) {
-  using Clock = std::chrono::steady_clock;
-  const auto start = Clock::now();
-  double observer_seconds = 0.0;
-  auto elapsed = [&] {
-    return std::chrono::duration<double>(Clock::now() - start).count() - observer_seconds;
-  };
   SolveReport report;
+  IterationRecord record(report, record_energies, observer);
   report.solver = "newton";
   const FreeRows free(model);
   double energy = model_energy(model, inertia, p);
   report.initial_energy_J = energy;
-  if (record_energies) {
-    report.energies_J.push_back(energy);
-    report.seconds.push_back(elapsed());
-  }
-  if (observer) {
-    const auto before = Clock::now();
-    observer(0, p, energy);
-    observer_seconds += std::chrono::duration<double>(Clock::now() - before).count();
-  }
+  record.add(0, p, energy);
   report.stopped_by = "max_iterations";
   HessianFactor factor(free);
   std::vector<Eigen::Triplet<double>> entries;
@@ -408,90 +527,34 @@ SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, 
     distance_known = true;
     if (residual_passes &&
         distance_passes(stop, report.equilibrium_distance_m, report.largest_displacement_m)) {
-      // An equilibrium, but a stable one? A saddle (a pushed bar held straight) has a small
-      // residual and step too: leave it along the direction that lowers the energy.
-      const std::optional<Eigen::VectorXd> down =
-          report.saddles_left < k_saddle_escapes
-              ? descent_direction(model, inertia, p, free, H, factor, 0.1 * report.largest_displacement_m)
-              : std::nullopt;
-      Eigen::MatrixX3d lower;
-      double lower_energy = energy;
-      for (double t = 1.0; down && t > 1e-3 && !(lower_energy < energy); t *= 0.5) {
-        for (double sign : {1.0, -1.0}) {
-          const Eigen::MatrixX3d q = moved(p, free, *down, sign * t);
-          const double e = model_energy(model, inertia, q);
-          if (e < energy && e < lower_energy) {
-            lower = q;
-            lower_energy = e;
-          }
-        }
-      }
-      if (!(lower_energy < energy)) {
+      // An equilibrium, but a stable one? A saddle is left along the direction that lowers the energy.
+      const auto lower = leave_saddle(model, inertia, p, free, H, factor, energy, report);
+      if (!lower) {
         report.stopped_by = "residual";
         break;
       }
       report.saddle_energies_J.push_back(energy);
       ++report.saddles_left;
-      p = lower;
-      energy = lower_energy;
+      p = lower->first;
+      energy = lower->second;
       gradient = model_gradient(model, inertia, p);
       distance_known = false;
       report.iterations = iteration;
       continue;
     }
-    const double slope = g.dot(direction);
-    double step = 1.0;
-    Eigen::MatrixX3d trial = p;
-    double trial_energy = energy;
-    bool accepted = false;
-    Eigen::MatrixX3d trial_gradient;
-    auto place = [&](double t) {
-      for (Eigen::Index f = 0; f < free.count(); ++f)
-        trial.row(free.vertex[static_cast<std::size_t>(f)]) =
-            p.row(free.vertex[static_cast<std::size_t>(f)]) + t * direction.segment<3>(3 * f).transpose();
-    };
-    // Near the minimizer the decrease a step promises falls below the round-off of E itself and
-    // Armijo's test becomes a coin toss: there, the full Newton step is taken when it lowers the
-    // gradient norm instead (the merit function of Newton's method for the equation grad E = 0).
-    const bool below_roundoff = -slope <= 1e-13 * std::abs(energy);
-    if (below_roundoff) {
-      place(1.0);
-      trial_gradient = model_gradient(model, inertia, trial);
-      if (free_gradient_norm(model, trial_gradient) < free_gradient_norm(model, gradient)) {
-        trial_energy = model_energy(model, inertia, trial);
-        accepted = true;
-      } else {
-        trial_gradient.resize(0, 3);
-      }
-    }
-    for (int backtrack = 0; backtrack < 60 && !accepted; ++backtrack) {
-      place(step);
-      trial_energy = model_energy(model, inertia, trial);
-      if (trial_energy <= energy + 1e-4 * step * slope) {
-        accepted = true;
-        break;
-      }
-      step *= 0.5;
-    }
+    const LineSearch search =
+        line_search(model, inertia, p, free, direction, g.dot(direction), energy, gradient);
     report.iterations = iteration;
-    if (!accepted) { // no decrease representable in double precision: converged
+    if (!search.accepted) { // no decrease representable in double precision: converged
       report.stopped_by = "energy";
       break;
     }
     const double previous = energy;
-    p = trial;
-    energy = trial_energy;
+    p = search.trial;
+    energy = search.energy;
     distance_known = false;
-    gradient = trial_gradient.rows() == p.rows() ? trial_gradient : model_gradient(model, inertia, p);
-    if (record_energies) {
-      report.energies_J.push_back(energy);
-      report.seconds.push_back(elapsed());
-    }
-    if (observer) {
-      const auto before = Clock::now();
-      observer(iteration, p, energy);
-      observer_seconds += std::chrono::duration<double>(Clock::now() - before).count();
-    }
+    gradient = search.gradient.rows() == p.rows() ? search.gradient : model_gradient(model, inertia, p);
+    record.add(iteration, p, energy);
     // The energy criterion stops only a solve whose residual test passes too (and, with the
     // distance test, never: the next iteration's step decides).
     if (stop.gradient_norm_N <= 0.0 && !distance_test &&
