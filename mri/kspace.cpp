@@ -279,7 +279,25 @@ void KspacePipeline::transform_object(const Value* object) {
   throw_if_cancelled(); // a cut-short spectrum is garbage: nobody may read it
 }
 
-void KspacePipeline::acquire_coils(const KspaceCoil* coils, int count, const Delivery& to) {
+namespace {
+
+/// Adds noise of sigma per part to the kept samples of a k-space column along y. One stream per
+/// coil and kept column, named by its frequencies along x and z (`seed`), drawn in the order of
+/// the column's kept samples: real, imaginary, next sample.
+void add_column_noise(std::uint64_t seed, double sigma, const std::vector<int>& kept_y,
+                      std::vector<double>& deviates, std::complex<float>* column) {
+  NormalStream noise(seed);
+  noise.fill(deviates.data(), deviates.size());
+  const auto kept = static_cast<int>(kept_y.size());
+  for (int k = 0; k < kept; ++k)
+    column[kept_y[static_cast<std::size_t>(k)]] +=
+        std::complex<float>(static_cast<float>(sigma * deviates[2 * static_cast<std::size_t>(k)]),
+                            static_cast<float>(sigma * deviates[2 * static_cast<std::size_t>(k) + 1]));
+}
+
+} // namespace
+
+void KspacePipeline::transform_in_plane(const KspaceCoil* coils, int count) {
   const Eigen::Vector3i& dims = m_sampling.dims;
   const int nx = dims.x(), ny = dims.y(), nz = dims.z();
   const auto kept_x = static_cast<int>(m_kept_x.size());
@@ -366,15 +384,9 @@ void KspacePipeline::acquire_coils(const KspaceCoil* coils, int count, const Del
             staged.data[j] = 0.0f;
           if (coils[p].noise_sigma > 0.0) {
             const int i = m_kept_x[static_cast<std::size_t>(c)];
-            // One stream per coil and kept k-space column, named by its frequencies along x and
-            // z, drawn in the order of the column's kept samples: real, imaginary, next sample.
-            NormalStream noise(mix_seed(coils[p].noise_seed,
-                                        static_cast<std::uint64_t>(t) * nx + static_cast<std::uint64_t>(i)));
-            noise.fill(deviates.data(), deviates.size());
-            for (int k = 0; k < kept_y; ++k)
-              staged.data[m_kept_y[static_cast<std::size_t>(k)]] += std::complex<float>(
-                  static_cast<float>(sample_sigma * deviates[2 * static_cast<std::size_t>(k)]),
-                  static_cast<float>(sample_sigma * deviates[2 * static_cast<std::size_t>(k) + 1]));
+            add_column_noise(mix_seed(coils[p].noise_seed,
+                                      static_cast<std::uint64_t>(t) * nx + static_cast<std::uint64_t>(i)),
+                             sample_sigma, m_kept_y, deviates, staged.data);
           }
           fftwf_execute_dft(m_plans->y_backward, as_fftwf(staged.data), as_fftwf(column));
         }
@@ -395,8 +407,15 @@ void KspacePipeline::acquire_coils(const KspaceCoil* coils, int count, const Del
       }
     }
   }
-  throw_if_cancelled(); // a cut-short coil image is garbage: nobody may read it
+}
 
+void KspacePipeline::transform_along_z(int count, const Delivery& to) {
+  const Eigen::Vector3i& dims = m_sampling.dims;
+  const int nx = dims.x(), ny = dims.y(), nz = dims.z();
+  const auto kept_z = static_cast<int>(m_kept_z.size());
+  const double total = static_cast<double>(nx) * ny * nz;
+  const std::size_t coil_planes = static_cast<std::size_t>(kept_z) * m_plane;
+  const std::size_t slice = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
   // Along z, one in-plane row j at a time: each coil's kept planes' rows are read whole (far
   // apart in memory, each contiguous), its lines are zero-filled and transformed back from that
   // copy, and the row's voxels are delivered once for all the coils.
@@ -474,6 +493,12 @@ void KspacePipeline::acquire_coils(const KspaceCoil* coils, int count, const Del
       }
     }
   }
+}
+
+void KspacePipeline::acquire_coils(const KspaceCoil* coils, int count, const Delivery& to) {
+  transform_in_plane(coils, count);
+  throw_if_cancelled(); // a cut-short coil image is garbage: nobody may read it
+  transform_along_z(count, to);
   throw_if_cancelled();
 }
 

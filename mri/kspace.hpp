@@ -119,6 +119,12 @@ private:
   };
   /// `count` <= coils_together() coils, delivered as `to` says.
   void acquire_coils(const KspaceCoil* coils, int count, const Delivery& to);
+  /// acquire_coils()'s in-plane part: each coil's kept planes along z, multiplied by its
+  /// sensitivity, truncated, with noise, transformed back in the plane.
+  void transform_in_plane(const KspaceCoil* coils, int count);
+  /// acquire_coils()'s part along z: the coils' planes transformed back along z, one in-plane
+  /// row at a time, and delivered as `to` says.
+  void transform_along_z(int count, const Delivery& to);
   /// set_object() from values of either precision.
   template <class Value>
   void transform_object(const Value* object);

@@ -263,49 +263,29 @@ std::optional<KspaceSampling> kspace_sampling(const AcquisitionSettings& a, cons
   return sampling;
 }
 
-} // namespace
+using TissueParameterTable = std::map<std::string, TissueParameters>;
 
-MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, const VoxelizedPhantom& volumes,
-                           StageReport& report, Reporter& reporter, SynthesisOptions options) {
-  MrImages images;
-  // The states to make: the reference unless given, the deformed one unless passed over.
-  std::optional<ReferenceImages>& given = options.reference;
-  const TissueVolumes* deformed = volumes.deformed && !options.reference_only ? &*volumes.deformed : nullptr;
-  if (given) {
-    bool matches =
-        given->images.size() == mri.sequences.size() && given->maps.has_value() == mri.parameter_maps;
-    for (const MrImage& image : given->images)
-      matches = matches && image.magnitude.size() == volumes.reference.labels.size();
-    if (!matches)
-      throw std::invalid_argument("synthesize_images: reference images of other settings or another grid");
-  }
-  const auto parameters = resolve_tissue_parameters(mri, organs);
-  auto relaxation_of = [&](const std::string& tissue) {
-    const TissueParameters& p = parameters.at(tissue);
-    // The scene's validation made sure every value a sequence needs is there; others may be empty.
-    return Relaxation{p.PD.value_or(0.0), p.T1_ms.value_or(1.0), p.T2_ms.value_or(0.0),
-                      p.T2star_ms.value_or(p.T2_ms.value_or(0.0))};
-  };
-  const ImageGrid& grid = volumes.grid;
-  const AcquisitionSettings& settings = mri.acquisition;
-  std::vector<bool> object_mask(volumes.reference.labels.size());
-  const std::size_t background = volumes.reference.fractions_per_voxel() - 1;
-  volumes.reference.for_each_voxel(0, object_mask.size(), [&](std::size_t v, const float* fractions) {
-    object_mask[v] = fractions[background] < 0.5f;
-  });
-  const ReceiveCoils coils(grid, settings.coils, object_mask);
-  const std::optional<KspaceSampling> sampling = kspace_sampling(settings, grid);
-  // Plans and buffers made once for every coil, sequence and state.
-  std::unique_ptr<KspacePipeline> pipeline;
-  // Two coils at a time: one sweep over the sum of squares for both, for the memory of one
-  // double-precision coil image.
-  if (sampling && !options.per_coil && (!given || deformed))
-    pipeline = std::make_unique<KspacePipeline>(*sampling, std::min(coils.count(), 2));
-  const Acquisition acquisition{grid,           coils,           sampling, settings.bias_percent,
-                                pipeline.get(), options.per_coil};
-  Workspace workspace;
-  images.kspace = acquisition.kspace;
-  images.coils = coils.count();
+/// A tissue's relaxation for the signal equations. The scene's validation made sure every value a
+/// sequence needs is there; others may be empty.
+Relaxation relaxation_of(const TissueParameterTable& parameters, const std::string& tissue) {
+  const TissueParameters& p = parameters.at(tissue);
+  return Relaxation{p.PD.value_or(0.0), p.T1_ms.value_or(1.0), p.T2_ms.value_or(0.0),
+                    p.T2star_ms.value_or(p.T2_ms.value_or(0.0))};
+}
+
+/// Refuses reference images of other settings or another grid.
+void check_given(const ReferenceImages& given, const MriSettings& mri, const VoxelizedPhantom& volumes) {
+  bool matches = given.images.size() == mri.sequences.size() && given.maps.has_value() == mri.parameter_maps;
+  for (const MrImage& image : given.images)
+    matches = matches && image.magnitude.size() == volumes.reference.labels.size();
+  if (!matches)
+    throw std::invalid_argument("synthesize_images: reference images of other settings or another grid");
+}
+
+/// The report's lines on the acquisition: k-space sampling and receive coils.
+void report_acquisition(const Acquisition& acquisition, const AcquisitionSettings& settings,
+                        StageReport& report) {
+  const ImageGrid& grid = acquisition.grid;
   if (acquisition.kspace) {
     const KspaceSampling& k = *acquisition.kspace;
     std::string line = "k-space: object " + std::to_string(k.dims.x()) + "x" + std::to_string(k.dims.y()) +
@@ -323,71 +303,146 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
     report.skipped.push_back("acquired voxel size and slice thickness: they act in k-space, and "
                              "acquisition.kspace is false");
   }
-  if (coils.count() > 1) {
+  if (acquisition.coils.count() > 1) {
     report.modelled.push_back(
-        std::to_string(coils.count()) +
+        std::to_string(acquisition.coils.count()) +
         " receive coils on a ring (sensitivity ~ 1/distance), noise per coil, sum of squares");
   }
+}
+
+/// Sequence q's signal of each tissue (x PD units), reported; refuses a signal that is not finite.
+std::vector<double> tissue_signals(const SequenceSettings& sequence, std::size_t q,
+                                   const std::vector<std::string>& tissues,
+                                   const TissueParameterTable& parameters, StageReport& report) {
+  std::vector<double> tissue_signal;
+  std::string line = sequence.name + " tissue signals (x PD units):";
+  for (const std::string& tissue : tissues) {
+    const Relaxation r = relaxation_of(parameters, tissue);
+    tissue_signal.push_back(sequence_signal(sequence, r));
+    // Relaxation times beyond any tissue's with an excitation of 0 make the signal equations
+    // 0/0: an image of NaN must not be written (the run stops before any file is).
+    if (!std::isfinite(tissue_signal.back())) {
+      throw SettingError(
+          "sequences[" + std::to_string(q) + "].type",
+          "sequence " + sequence.name + ", tissue " + tissue + ": expected a finite signal, found " +
+              (std::isnan(tissue_signal.back()) ? std::string("NaN") : format_number(tissue_signal.back())) +
+              " (T1 " + format_number(r.T1_ms) + " ms, T2 " + format_number(r.T2_ms) + " ms, T2* " +
+              format_number(r.T2star_ms) + " ms, PD " + format_number(r.PD) + "; TR " +
+              format_number(sequence.TR_ms) + " ms, TE " + format_number(sequence.TE_ms) + " ms, flip " +
+              format_number(sequence.flip_deg) + " deg)");
+    }
+    line += " " + tissue + " " + format_number(tissue_signal.back());
+  }
+  report.modelled.push_back(line);
+  return tissue_signal;
+}
+
+/// A sequence's receiver gain and the noise's sigma in scanner units.
+struct ReceiverLevels {
+  double gain = 1.0, sigma = 0.0;
+};
+
+/// The receiver gain: the scene's, or the one that puts the reference tissue at the scanner's
+/// level; and the noise's sigma (a percentage of the reference tissue's signal), reported.
+ReceiverLevels receiver_levels(const SequenceSettings& sequence, const AcquisitionSettings& settings,
+                               const TissueParameterTable& parameters,
+                               const std::vector<double>& tissue_signal, StageReport& report) {
+  double reference_signal = 0.0;
+  const std::string& reference_tissue = settings.noise_reference_tissue;
+  if (parameters.count(reference_tissue)) {
+    reference_signal = sequence_signal(sequence, relaxation_of(parameters, reference_tissue));
+  } else if (settings.noise_percent > 0.0) {
+    report.skipped.push_back("noise of " + sequence.name + ": the reference tissue " + reference_tissue +
+                             " is not in the phantom");
+  }
+  double brightest = 0.0;
+  for (double signal : tissue_signal)
+    brightest = std::max(brightest, std::abs(signal));
+  const double gain =
+      settings.receiver_gain ? *settings.receiver_gain : automatic_receiver_gain(reference_signal, brightest);
+  std::string rule = " (the scene's)";
+  if (!settings.receiver_gain)
+    rule = std::abs(std::abs(reference_signal) * gain - k_receiver_reference_level) <
+                   1e-6 * k_receiver_reference_level
+               ? " (automatic: " + reference_tissue + " at " + format_number(k_receiver_reference_level) + ")"
+               : " (automatic: the brightest tissue at " + format_number(brightest * gain) + ")";
+  report.modelled.push_back(sequence.name + " receiver gain " + format_number(gain) + rule);
+  return {gain, settings.noise_percent / 100.0 * std::abs(reference_signal) * gain};
+}
+
+/// The parameter maps of both states (the given reference's, when given), textured where the
+/// phantom has texture.
+void add_parameter_maps(const VoxelizedPhantom& volumes, const TissueVolumes* deformed,
+                        const TissueParameterTable& parameters, std::optional<ReferenceImages>& given,
+                        MrImages& images, StageReport& report) {
+  images.reference_maps =
+      given ? std::move(given->maps) : parameter_maps(volumes.reference, volumes.tissues, parameters);
+  if (deformed) images.deformed_maps = parameter_maps(*deformed, volumes.tissues, parameters);
+  if (volumes.reference_texture && !given)
+    apply_texture(*images.reference_maps, volumes.reference, volumes.tissues, parameters,
+                  *volumes.reference_texture);
+  if (deformed && volumes.deformed_texture)
+    apply_texture(*images.deformed_maps, *deformed, volumes.tissues, parameters, *volumes.deformed_texture);
+  if (volumes.reference_texture)
+    report.modelled.push_back("texture in the parameter maps and images: " +
+                              volumes.reference_texture->description);
+  report.modelled.push_back("parameter maps PD, T1, T2, T2* (fraction-weighted; PD summed, times averaged)");
+}
+
+/// The receive coils' object mask: the voxels that are mostly object in the reference state.
+std::vector<bool> object_mask(const TissueVolumes& reference) {
+  std::vector<bool> mask(reference.labels.size());
+  const std::size_t background = reference.fractions_per_voxel() - 1;
+  reference.for_each_voxel(
+      0, mask.size(), [&](std::size_t v, const float* fractions) { mask[v] = fractions[background] < 0.5f; });
+  return mask;
+}
+
+} // namespace
+
+MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, const VoxelizedPhantom& volumes,
+                           StageReport& report, Reporter& reporter, SynthesisOptions options) {
+  MrImages images;
+  // The states to make: the reference unless given, the deformed one unless passed over.
+  std::optional<ReferenceImages>& given = options.reference;
+  const TissueVolumes* deformed = volumes.deformed && !options.reference_only ? &*volumes.deformed : nullptr;
+  if (given) check_given(*given, mri, volumes);
+  const auto parameters = resolve_tissue_parameters(mri, organs);
+  const ImageGrid& grid = volumes.grid;
+  const AcquisitionSettings& settings = mri.acquisition;
+  const ReceiveCoils coils(grid, settings.coils, object_mask(volumes.reference));
+  const std::optional<KspaceSampling> sampling = kspace_sampling(settings, grid);
+  // Plans and buffers made once for every coil, sequence and state.
+  std::unique_ptr<KspacePipeline> pipeline;
+  // Two coils at a time: one sweep over the sum of squares for both, for the memory of one
+  // double-precision coil image.
+  if (sampling && !options.per_coil && (!given || deformed))
+    pipeline = std::make_unique<KspacePipeline>(*sampling, std::min(coils.count(), 2));
+  const Acquisition acquisition{grid,           coils,           sampling, settings.bias_percent,
+                                pipeline.get(), options.per_coil};
+  Workspace workspace;
+  images.kspace = acquisition.kspace;
+  images.coils = coils.count();
+  report_acquisition(acquisition, settings, report);
   ProgressBar progress(reporter, "mri", mri.sequences.size() * ((given ? 0 : 1) + (deformed ? 1 : 0)));
   for (std::size_t q = 0; q < mri.sequences.size(); ++q) {
     throw_if_cancelled();
     const SequenceSettings& sequence = mri.sequences[q];
-    std::vector<double> tissue_signal;
-    std::string line = sequence.name + " tissue signals (x PD units):";
-    for (const std::string& tissue : volumes.tissues) {
-      const Relaxation r = relaxation_of(tissue);
-      tissue_signal.push_back(sequence_signal(sequence, r));
-      // Relaxation times beyond any tissue's with an excitation of 0 make the signal equations
-      // 0/0: an image of NaN must not be written (the run stops before any file is).
-      if (!std::isfinite(tissue_signal.back())) {
-        throw SettingError(
-            "sequences[" + std::to_string(q) + "].type",
-            "sequence " + sequence.name + ", tissue " + tissue + ": expected a finite signal, found " +
-                (std::isnan(tissue_signal.back()) ? std::string("NaN")
-                                                  : format_number(tissue_signal.back())) +
-                " (T1 " + format_number(r.T1_ms) + " ms, T2 " + format_number(r.T2_ms) + " ms, T2* " +
-                format_number(r.T2star_ms) + " ms, PD " + format_number(r.PD) + "; TR " +
-                format_number(sequence.TR_ms) + " ms, TE " + format_number(sequence.TE_ms) + " ms, flip " +
-                format_number(sequence.flip_deg) + " deg)");
-      }
-      line += " " + tissue + " " + format_number(tissue_signal.back());
-    }
-    report.modelled.push_back(line);
-    double reference_signal = 0.0;
-    const std::string& reference_tissue = settings.noise_reference_tissue;
-    if (parameters.count(reference_tissue)) {
-      reference_signal = sequence_signal(sequence, relaxation_of(reference_tissue));
-    } else if (settings.noise_percent > 0.0) {
-      report.skipped.push_back("noise of " + sequence.name + ": the reference tissue " + reference_tissue +
-                               " is not in the phantom");
-    }
-    // The receiver gain: the scene's, or the one that puts the reference tissue at the scanner's
-    // level; signals and noise alike are in scanner units from here on.
-    double brightest = 0.0;
-    for (double signal : tissue_signal)
-      brightest = std::max(brightest, std::abs(signal));
-    const double gain = settings.receiver_gain ? *settings.receiver_gain
-                                               : automatic_receiver_gain(reference_signal, brightest);
+    std::vector<double> tissue_signal = tissue_signals(sequence, q, volumes.tissues, parameters, report);
+    // Signals and noise alike are in scanner units from here on.
+    const ReceiverLevels levels = receiver_levels(sequence, settings, parameters, tissue_signal, report);
+    const double gain = levels.gain;
     for (double& signal : tissue_signal)
       signal *= gain;
     // Texture: the textured tissues' signals at each voxel's factors (the same gain).
     std::vector<Relaxation> relaxation;
     for (const std::string& tissue : volumes.tissues)
-      relaxation.push_back(relaxation_of(tissue));
+      relaxation.push_back(relaxation_of(parameters, tissue));
     std::optional<TexturedSignal> reference_texture, deformed_texture;
     if (volumes.reference_texture)
       reference_texture.emplace(sequence, volumes.tissues, relaxation, gain, *volumes.reference_texture);
     if (volumes.deformed_texture)
       deformed_texture.emplace(sequence, volumes.tissues, relaxation, gain, *volumes.deformed_texture);
-    std::string rule = " (the scene's)";
-    if (!settings.receiver_gain)
-      rule =
-          std::abs(std::abs(reference_signal) * gain - k_receiver_reference_level) <
-                  1e-6 * k_receiver_reference_level
-              ? " (automatic: " + reference_tissue + " at " + format_number(k_receiver_reference_level) + ")"
-              : " (automatic: the brightest tissue at " + format_number(brightest * gain) + ")";
-    report.modelled.push_back(sequence.name + " receiver gain " + format_number(gain) + rule);
-    const double sigma = settings.noise_percent / 100.0 * std::abs(reference_signal) * gain;
     // One seed per image (sequence and state): images differ, and every run repeats them.
     if (given) {
       images.reference.push_back(std::move(given->images[q]));
@@ -396,7 +451,7 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
     } else {
       progress.set_detail(sequence.name + ", reference");
       images.reference.push_back(image_of(acquisition, workspace, sequence, mix_seed(mri.seed, 2 * q),
-                                          volumes.reference, tissue_signal, sigma,
+                                          volumes.reference, tissue_signal, levels.sigma,
                                           reference_texture ? &*reference_texture : nullptr));
       images.reference.back().receiver_gain = gain;
       progress.advance();
@@ -404,7 +459,7 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
     if (deformed) {
       progress.set_detail(sequence.name + ", deformed");
       images.deformed.push_back(image_of(acquisition, workspace, sequence, mix_seed(mri.seed, 2 * q + 1),
-                                         *deformed, tissue_signal, sigma,
+                                         *deformed, tissue_signal, levels.sigma,
                                          deformed_texture ? &*deformed_texture : nullptr));
       images.deformed.back().receiver_gain = gain;
       progress.advance();
@@ -414,21 +469,7 @@ MrImages synthesize_images(const MriSettings& mri, const OrganTable& organs, con
   // parameter maps, so that the stage's peak memory is not their sum.
   pipeline.reset();
   workspace = Workspace{};
-  if (mri.parameter_maps) {
-    images.reference_maps =
-        given ? std::move(given->maps) : parameter_maps(volumes.reference, volumes.tissues, parameters);
-    if (deformed) images.deformed_maps = parameter_maps(*deformed, volumes.tissues, parameters);
-    if (volumes.reference_texture && !given)
-      apply_texture(*images.reference_maps, volumes.reference, volumes.tissues, parameters,
-                    *volumes.reference_texture);
-    if (deformed && volumes.deformed_texture)
-      apply_texture(*images.deformed_maps, *deformed, volumes.tissues, parameters, *volumes.deformed_texture);
-    if (volumes.reference_texture)
-      report.modelled.push_back("texture in the parameter maps and images: " +
-                                volumes.reference_texture->description);
-    report.modelled.push_back(
-        "parameter maps PD, T1, T2, T2* (fraction-weighted; PD summed, times averaged)");
-  }
+  if (mri.parameter_maps) add_parameter_maps(volumes, deformed, parameters, given, images, report);
   report.status = "done";
   return images;
 }
