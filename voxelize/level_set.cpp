@@ -124,22 +124,10 @@ struct PatchHeights {
   }
 };
 
-} // namespace
-
-struct LevelSet::Impl {
-  /// Never null: a construction cut short by cancellation leaves an empty grid.
-  openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create();
-};
-
-LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double half_width_voxels,
-                   const std::vector<HeightRange>* height_ranges)
-    : m(std::make_unique<Impl>()), m_voxel_size(voxel_size_mm), m_half_width(half_width_voxels) {
-  initialize_openvdb();
-  const TriangleMesh& base = surface.base_mesh();
-  SignedDistanceMesh mesh(base.faces);
-  mesh.update(base.vertices);
-  const double band = half_width_voxels * voxel_size_mm;
-  const auto nf = static_cast<std::size_t>(base.face_count());
+/// Each base triangle's patch: its bumps (shape matrices symmetrized), height bounds and frame.
+std::vector<PatchHeights> patch_heights(const PatchSurface& surface,
+                                        const std::vector<HeightRange>* height_ranges) {
+  const auto nf = static_cast<std::size_t>(surface.base_mesh().face_count());
   std::vector<PatchHeights> patches(nf);
   for (std::size_t t = 0; t < nf; ++t) {
     PatchHeights& p = patches[t];
@@ -158,66 +146,78 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
       p.normal = f.normal;
     }
   }
-  // A voxel x within the band of the surface point p = b + h n above base point b satisfies
-  // |x - b| <= band + |h| and -band - below <= n . (x - v0) <= band + above, with the patch's
-  // height bounds (patch_height_range). So the candidates are the voxels near each triangle by
-  // its own patch's bounds: a closed shell around the surface. Each candidate then finds its
-  // closest base triangle over the whole mesh (search tree; ties go to the lowest triangle
-  // index, as in SignedDistanceMesh::closest()). Bounding each triangle by its own patch's
-  // heights, not the largest of the surface's, and by the heights its bumps reach together, not
-  // the sum of their amplitudes (about 4 times the true extremes on fitted anatomy), keeps the
-  // shell thin: fewer candidates, each a closest-triangle search.
+  return patches;
+}
+
+/// Marks the candidate voxels of base triangle t: those within `reach` of it and in the slab
+/// -below <= n . (x - v0) <= above.
+void mark_triangle_candidates(const SignedDistanceMesh& mesh, int t, double above, double below,
+                              double voxel_size_mm, openvdb::MaskGrid::Accessor& accessor) {
+  const auto& v = mesh.corners(t);
+  const Eigen::Vector3d& n = mesh.face_normal(t);
+  const double reach = std::max(above, below);
+  const Eigen::Vector3d low = v[0].cwiseMin(v[1]).cwiseMin(v[2]).array() - reach;
+  const Eigen::Vector3d high = v[0].cwiseMax(v[1]).cwiseMax(v[2]).array() + reach;
+  int lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = static_cast<int>(std::ceil(low[a] / voxel_size_mm));
+    hi[a] = static_cast<int>(std::floor(high[a] / voxel_size_mm));
+  }
+  // A degenerate face (zero normal) keeps its whole box.
+  const bool flat = n.squaredNorm() > 0.5;
+  for (int k = lo[2]; k <= hi[2]; ++k) {
+    for (int j = lo[1]; j <= hi[1]; ++j) {
+      const Eigen::Vector3d row = voxel_size_mm * Eigen::Vector3d(0, j, k);
+      // The voxels of this row within the slab -below <= n . (x - v0) <= above: an interval of i.
+      int first = lo[0], last = hi[0];
+      if (flat && std::abs(n.x()) > 1e-12) {
+        const double offset = n.dot(row - v[0]);
+        const double a = (-below - offset) / (n.x() * voxel_size_mm);
+        const double b = (above - offset) / (n.x() * voxel_size_mm);
+        first = std::max(first, static_cast<int>(std::floor(std::min(a, b))));
+        last = std::min(last, static_cast<int>(std::ceil(std::max(a, b))));
+      }
+      for (int i = first; i <= last; ++i) {
+        const openvdb::Coord ijk(i, j, k);
+        if (accessor.isValueOn(ijk)) continue;
+        const Eigen::Vector3d x = voxel_size_mm * Eigen::Vector3d(i, j, k);
+        if (flat && (n.dot(x - v[0]) > above || n.dot(x - v[0]) < -below)) continue;
+        const TriangleClosestPoint on_base = closest_point_on_triangle(x, v[0], v[1], v[2]);
+        if ((x - on_base.point).squaredNorm() > reach * reach) continue;
+        accessor.setValueOn(ijk);
+      }
+    }
+  }
+}
+
+/// The candidate voxels of the band: a closed shell around the surface (see LevelSet's
+/// constructor), in leaf order; none when cancelled.
+std::vector<openvdb::Coord> band_candidates(const SignedDistanceMesh& mesh,
+                                            const std::vector<PatchHeights>& patches, double band,
+                                            double voxel_size_mm) {
   openvdb::MaskGrid candidates(false);
   {
     auto accessor = candidates.getAccessor();
-    for (std::size_t t = 0; t < nf; ++t) {
+    for (std::size_t t = 0; t < patches.size(); ++t) {
       // Built inside an OpenMP loop over organs, so a cancelled run returns (no exception may
       // leave the region) and the caller throws once the loop ends; the grid is left empty.
-      if (cancellation_requested()) return;
-      const auto& v = mesh.corners(static_cast<int>(t));
-      const Eigen::Vector3d& n = mesh.face_normal(static_cast<int>(t));
+      if (cancellation_requested()) return {};
       const double above = band + patches[t].above_mm + 1e-9, below = band + patches[t].below_mm + 1e-9;
-      const double reach = std::max(above, below);
-      const Eigen::Vector3d low = v[0].cwiseMin(v[1]).cwiseMin(v[2]).array() - reach;
-      const Eigen::Vector3d high = v[0].cwiseMax(v[1]).cwiseMax(v[2]).array() + reach;
-      int lo[3], hi[3];
-      for (int a = 0; a < 3; ++a) {
-        lo[a] = static_cast<int>(std::ceil(low[a] / voxel_size_mm));
-        hi[a] = static_cast<int>(std::floor(high[a] / voxel_size_mm));
-      }
-      // A degenerate face (zero normal) keeps its whole box.
-      const bool flat = n.squaredNorm() > 0.5;
-      for (int k = lo[2]; k <= hi[2]; ++k) {
-        for (int j = lo[1]; j <= hi[1]; ++j) {
-          const Eigen::Vector3d row = voxel_size_mm * Eigen::Vector3d(0, j, k);
-          // The voxels of this row within the slab -below <= n . (x - v0) <= above: an interval of i.
-          int first = lo[0], last = hi[0];
-          if (flat && std::abs(n.x()) > 1e-12) {
-            const double offset = n.dot(row - v[0]);
-            const double a = (-below - offset) / (n.x() * voxel_size_mm);
-            const double b = (above - offset) / (n.x() * voxel_size_mm);
-            first = std::max(first, static_cast<int>(std::floor(std::min(a, b))));
-            last = std::min(last, static_cast<int>(std::ceil(std::max(a, b))));
-          }
-          for (int i = first; i <= last; ++i) {
-            const openvdb::Coord ijk(i, j, k);
-            if (accessor.isValueOn(ijk)) continue;
-            const Eigen::Vector3d x = voxel_size_mm * Eigen::Vector3d(i, j, k);
-            if (flat && (n.dot(x - v[0]) > above || n.dot(x - v[0]) < -below)) continue;
-            const TriangleClosestPoint on_base = closest_point_on_triangle(x, v[0], v[1], v[2]);
-            if ((x - on_base.point).squaredNorm() > reach * reach) continue;
-            accessor.setValueOn(ijk);
-          }
-        }
-      }
+      mark_triangle_candidates(mesh, static_cast<int>(t), above, below, voxel_size_mm, accessor);
     }
   }
   std::vector<openvdb::Coord> coords;
   coords.reserve(static_cast<std::size_t>(candidates.activeVoxelCount()));
   for (auto it = candidates.cbeginValueOn(); it; ++it)
     coords.push_back(it.getCoord());
-  candidates.clear();
-  mesh.build_search_tree();
+  return coords;
+}
+
+/// The signed distances of the candidates to the patch surface, clamped to the band.
+std::vector<float> candidate_distances(const SignedDistanceMesh& mesh,
+                                       const std::vector<PatchHeights>& patches,
+                                       const std::vector<openvdb::Coord>& coords, double band,
+                                       double voxel_size_mm) {
   std::vector<float> values(coords.size());
   const auto count = static_cast<std::ptrdiff_t>(coords.size());
   // Candidates come leaf by leaf (8^3 blocks), so each one's search starts from the closest
@@ -263,6 +263,38 @@ LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double hal
     for (std::ptrdiff_t piece = 0; piece < pieces; ++piece)
       evaluate(piece * k_piece, std::min(count, (piece + 1) * k_piece));
   }
+  return values;
+}
+
+} // namespace
+
+struct LevelSet::Impl {
+  /// Never null: a construction cut short by cancellation leaves an empty grid.
+  openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create();
+};
+
+LevelSet::LevelSet(const PatchSurface& surface, double voxel_size_mm, double half_width_voxels,
+                   const std::vector<HeightRange>* height_ranges)
+    : m(std::make_unique<Impl>()), m_voxel_size(voxel_size_mm), m_half_width(half_width_voxels) {
+  initialize_openvdb();
+  const TriangleMesh& base = surface.base_mesh();
+  SignedDistanceMesh mesh(base.faces);
+  mesh.update(base.vertices);
+  const double band = half_width_voxels * voxel_size_mm;
+  const std::vector<PatchHeights> patches = patch_heights(surface, height_ranges);
+  // A voxel x within the band of the surface point p = b + h n above base point b satisfies
+  // |x - b| <= band + |h| and -band - below <= n . (x - v0) <= band + above, with the patch's
+  // height bounds (patch_height_range). So the candidates are the voxels near each triangle by
+  // its own patch's bounds: a closed shell around the surface. Each candidate then finds its
+  // closest base triangle over the whole mesh (search tree; ties go to the lowest triangle
+  // index, as in SignedDistanceMesh::closest()). Bounding each triangle by its own patch's
+  // heights, not the largest of the surface's, and by the heights its bumps reach together, not
+  // the sum of their amplitudes (about 4 times the true extremes on fitted anatomy), keeps the
+  // shell thin: fewer candidates, each a closest-triangle search.
+  const std::vector<openvdb::Coord> coords = band_candidates(mesh, patches, band, voxel_size_mm);
+  if (cancellation_requested()) return;
+  mesh.build_search_tree();
+  const std::vector<float> values = candidate_distances(mesh, patches, coords, band, voxel_size_mm);
   if (cancellation_requested()) return;
   m->grid = openvdb::FloatGrid::create(static_cast<float>(band));
   m->grid->setTransform(openvdb::math::Transform::createLinearTransform(voxel_size_mm));

@@ -127,6 +127,290 @@ std::vector<std::uint8_t> blocks_alike(const std::vector<VoxelizedOrgan>& organs
   return alike;
 }
 
+/// The sample points of a voxel that a surface crosses: n^3 offsets in voxel units (a fastest,
+/// then b, then c), each sample weighing 1 / n^3.
+struct Supersampling {
+  int n = 1;
+  std::size_t samples = 1;
+  std::vector<Eigen::Vector3d> offsets;
+  double weight = 1.0;
+
+  explicit Supersampling(int supersampling) : n(std::max(1, supersampling)) {
+    samples = static_cast<std::size_t>(n) * static_cast<std::size_t>(n) * static_cast<std::size_t>(n);
+    offsets.reserve(samples);
+    for (int c = 0; c < n; ++c)
+      for (int b = 0; b < n; ++b)
+        for (int a = 0; a < n; ++a)
+          offsets.emplace_back((a + 0.5) / n - 0.5, (b + 0.5) / n - 0.5, (c + 0.5) / n - 0.5);
+    weight = 1.0 / (n * n * n);
+  }
+};
+
+/// A slab's partial voxels (TissueVolumes::partial_voxels) and their fractions, as found.
+struct SlabFound {
+  std::vector<std::size_t> voxels;
+  std::vector<float> fractions;
+};
+
+/// What voxelize_tissues() shares with every thread: the grid, the organs, their blocks' values,
+/// the blocks copied from the other state, the sampling and the volumes being written.
+struct TissueSampling {
+  const ImageGrid& grid;
+  const std::vector<VoxelizedOrgan>& organs;
+  const BlockValues& blocks;
+  const std::vector<std::uint8_t>& copied;
+  const Supersampling& sampling;
+  TissueVolumes& out;
+};
+
+/// One thread's work on the blocks of slabs: its probes of the organs' level sets and buffers.
+class BlockSampler {
+public:
+  explicit BlockSampler(const TissueSampling& s)
+      : m_s(s), m_organ_count(s.organs.size()), m_stride(s.out.fractions_per_voxel()), m_row(m_stride),
+        m_centre_distance(m_organ_count), m_organ_share(m_organ_count), m_varies(m_organ_count),
+        m_centres(k_block_voxels), m_centre_values(m_organ_count * k_block_voxels),
+        m_points(s.sampling.samples), m_sample_inside(m_organ_count * s.sampling.samples),
+        m_half_diagonal(0.5 * s.grid.spacing_mm.norm()),
+        m_axes(s.grid.world_from_voxel.topLeftCorner<3, 3>()) {
+    for (const VoxelizedOrgan& organ : s.organs)
+      m_probes.emplace_back(*organ.level_set);
+  }
+
+  /// The voxels of block (ib, jb, kb): each label into the volumes, each partial voxel into `found`.
+  void sample_block(int ib, int jb, int kb, SlabFound& found, std::size_t& sampled) {
+    const int i0 = ib * k_block, j0 = jb * k_block, k0 = kb * k_block;
+    const std::size_t block = m_s.blocks.block_of(i0, j0, k0);
+    if (!m_s.copied.empty() && m_s.copied[block]) return;
+    const Eigen::Vector3i& dims = m_s.grid.dims;
+    const int bx = std::min(k_block, dims.x() - i0), by = std::min(k_block, dims.y() - j0),
+              bz = std::min(k_block, dims.z() - k0);
+    probe_centres(block, i0, j0, k0, bx, by, bz);
+    std::size_t v = 0;
+    for (int k = k0; k < k0 + bz; ++k)
+      for (int j = j0; j < j0 + by; ++j)
+        for (int i = i0; i < i0 + bx; ++i, ++v) {
+          const std::size_t index = voxel_index(dims, i, j, k);
+          const double background = voxel_shares(block, v, sampled);
+          write_voxel(index, background, found);
+        }
+  }
+
+private:
+  static constexpr std::size_t k_block_voxels = k_block * k_block * k_block;
+
+  /// Whether the points p[a + na (b + nb c)] form a lattice: x depends on a alone, y on b alone
+  /// and z on c alone (a grid whose axes are the world's), bit for bit. Then the lattice's
+  /// coordinates along each axis go to m_lattice, for LevelSet::Probe::lattice, which gives the
+  /// same values as probing point by point.
+  bool form_lattice(const Eigen::Vector3d* p, int na, int nb, int nc) {
+    std::vector<double>* lattice = m_lattice;
+    lattice[0].resize(static_cast<std::size_t>(na));
+    lattice[1].resize(static_cast<std::size_t>(nb));
+    lattice[2].resize(static_cast<std::size_t>(nc));
+    for (int a = 0; a < na; ++a)
+      lattice[0][static_cast<std::size_t>(a)] = p[a].x();
+    for (int b = 0; b < nb; ++b)
+      lattice[1][static_cast<std::size_t>(b)] = p[na * b].y();
+    for (int c = 0; c < nc; ++c)
+      lattice[2][static_cast<std::size_t>(c)] = p[na * nb * c].z();
+    for (int c = 0; c < nc; ++c)
+      for (int b = 0; b < nb; ++b)
+        for (int a = 0; a < na; ++a) {
+          const Eigen::Vector3d& x = *p++;
+          if (!(x.x() == lattice[0][static_cast<std::size_t>(a)] &&
+                x.y() == lattice[1][static_cast<std::size_t>(b)] &&
+                x.z() == lattice[2][static_cast<std::size_t>(c)]))
+            return false;
+        }
+    return true;
+  }
+
+  /// The block's voxel centres (i fastest), and the values there of each organ that varies over
+  /// the block, read at all its voxel centres together.
+  void probe_centres(std::size_t block, int i0, int j0, int k0, int bx, int by, int bz) {
+    const auto voxels = static_cast<std::size_t>(bx * by * bz);
+    std::size_t v = 0;
+    for (int k = k0; k < k0 + bz; ++k)
+      for (int j = j0; j < j0 + by; ++j)
+        for (int i = i0; i < i0 + bx; ++i)
+          m_centres[v++] = m_s.grid.world_from_index(Eigen::Vector3d(i, j, k));
+    bool centres_form_lattice = false, formed = false;
+    for (std::size_t o = 0; o < m_organ_count; ++o) {
+      if (!m_s.blocks.varies[block * m_organ_count + o]) continue;
+      if (!formed) {
+        centres_form_lattice = form_lattice(m_centres.data(), bx, by, bz);
+        formed = true;
+      }
+      float* values = &m_centre_values[o * k_block_voxels];
+      if (centres_form_lattice) {
+        m_probes[o].lattice(m_lattice[0].data(), bx, m_lattice[1].data(), by, m_lattice[2].data(), bz,
+                            values);
+      } else {
+        for (std::size_t w = 0; w < voxels; ++w)
+          values[w] = static_cast<float>(m_probes[o](m_centres[w]));
+      }
+    }
+  }
+
+  /// The deepest organ for which inside(o) holds, -1 for none.
+  template <class Inside>
+  int deepest(Inside&& inside) const {
+    int best = -1;
+    for (std::size_t o = 0; o < m_organ_count; ++o) {
+      if (inside(o) && (best < 0 || m_s.organs[o].depth >= m_s.organs[static_cast<std::size_t>(best)].depth))
+        best = static_cast<int>(o);
+    }
+    return best;
+  }
+
+  /// Voxel v of the block: each organ's share of it into m_organ_share; returns the background's.
+  /// A voxel whose centre is farther than half a diagonal from every surface is whole; the
+  /// others are sampled (counted in `sampled`).
+  double voxel_shares(std::size_t block, std::size_t v, std::size_t& sampled) {
+    bool decided = true;
+    for (std::size_t o = 0; o < m_organ_count; ++o) {
+      const std::size_t at = block * m_organ_count + o;
+      m_varies[o] = m_s.blocks.varies[at];
+      m_centre_distance[o] =
+          static_cast<double>(m_varies[o] ? m_centre_values[o * k_block_voxels + v] : m_s.blocks.value[at]);
+      if (std::abs(m_centre_distance[o]) < m_half_diagonal) decided = false;
+    }
+    std::fill(m_organ_share.begin(), m_organ_share.end(), 0.0);
+    double background = 0.0;
+    if (decided) {
+      const int owner = deepest([&](std::size_t o) { return m_centre_distance[o] < 0.0; });
+      (owner < 0 ? background : m_organ_share[static_cast<std::size_t>(owner)]) = 1.0;
+      return background;
+    }
+    ++sampled;
+    sample_voxel(m_centres[v]);
+    const std::size_t samples = m_s.sampling.samples;
+    for (std::size_t s = 0; s < samples; ++s) {
+      const int owner = deepest([&](std::size_t o) { return m_sample_inside[o * samples + s] != 0; });
+      (owner < 0 ? background : m_organ_share[static_cast<std::size_t>(owner)]) += m_s.sampling.weight;
+    }
+    return background;
+  }
+
+  /// Per organ, whether each sample of the voxel centred at `centre` lies inside it.
+  void sample_voxel(const Eigen::Vector3d& centre) {
+    const Supersampling& sampling = m_s.sampling;
+    const int n = sampling.n;
+    for (std::size_t s = 0; s < sampling.samples; ++s)
+      m_points[s] = centre + m_axes * sampling.offsets[s];
+    const bool samples_form_lattice = form_lattice(m_points.data(), n, n, n);
+    for (std::size_t o = 0; o < m_organ_count; ++o) {
+      std::uint8_t* in = &m_sample_inside[o * sampling.samples];
+      if (std::abs(m_centre_distance[o]) >= m_half_diagonal || !m_varies[o]) {
+        // An organ far from the centre, or with one value over the block, is on the centre's
+        // side at every sample.
+        std::fill(in, in + sampling.samples, static_cast<std::uint8_t>(m_centre_distance[o] < 0.0 ? 1 : 0));
+      } else if (samples_form_lattice) {
+        m_probes[o].lattice_inside(m_lattice[0].data(), n, m_lattice[1].data(), n, m_lattice[2].data(), n,
+                                   in);
+      } else {
+        for (std::size_t s = 0; s < sampling.samples; ++s)
+          in[s] = m_probes[o](m_points[s]) < 0.0 ? 1 : 0;
+      }
+    }
+  }
+
+  /// The voxel's label (the organ of the largest share) and, when it is not whole, its fractions:
+  /// every tissue's, then the background's.
+  void write_voxel(std::size_t index, double background, SlabFound& found) {
+    int label = 0;
+    double largest = background;
+    double empty = background; // outside every organ, or in a gap filled with air
+    std::fill(m_row.begin(), m_row.end(), 0.0f);
+    for (std::size_t o = 0; o < m_organ_count; ++o) {
+      if (m_s.organs[o].tissue < 0) {
+        empty += m_organ_share[o];
+      } else {
+        m_row[static_cast<std::size_t>(m_s.organs[o].tissue)] += static_cast<float>(m_organ_share[o]);
+      }
+      if (m_organ_share[o] > largest) {
+        largest = m_organ_share[o];
+        label = m_s.organs[o].label;
+      }
+    }
+    m_row[m_stride - 1] = static_cast<float>(empty);
+    m_s.out.labels[index] = label;
+    if (!m_s.out.whole(label, m_row.data())) {
+      found.voxels.push_back(index);
+      found.fractions.insert(found.fractions.end(), m_row.begin(), m_row.end());
+    }
+  }
+
+  const TissueSampling& m_s;
+  std::size_t m_organ_count, m_stride;
+  std::vector<float> m_row; // a voxel's fractions: every tissue's, then the background's
+  std::vector<LevelSet::Probe> m_probes;
+  std::vector<double> m_centre_distance, m_organ_share;
+  std::vector<std::uint8_t> m_varies;
+  // A block's voxel centres (i fastest), and the varying organs' values there.
+  std::vector<Eigen::Vector3d> m_centres;
+  std::vector<float> m_centre_values;
+  // A sampled voxel's samples, and per organ whether each lies inside.
+  std::vector<Eigen::Vector3d> m_points;
+  std::vector<std::uint8_t> m_sample_inside;
+  std::vector<double> m_lattice[3];
+  double m_half_diagonal;
+  Eigen::Matrix3d m_axes;
+};
+
+/// The other state's partial voxels in slab kb's copied blocks, into `found`.
+void copy_reused_partials(const TissueSampling& s, const TissueVolumes& other_volumes, int kb,
+                          SlabFound& found) {
+  const std::size_t stride = s.out.fractions_per_voxel();
+  const int nx = s.grid.dims.x(), ny = s.grid.dims.y(), nz = s.grid.dims.z();
+  const std::vector<std::size_t>& other = other_volumes.partial_voxels;
+  const auto layer = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
+  const auto first =
+      std::lower_bound(other.begin(), other.end(), static_cast<std::size_t>(kb) * k_block * layer);
+  const auto last = std::lower_bound(first, other.end(),
+                                     static_cast<std::size_t>(std::min(nz, (kb + 1) * k_block)) * layer);
+  for (auto at = first; at != last; ++at) {
+    const auto i = static_cast<int>(*at % static_cast<std::size_t>(nx));
+    const auto j = static_cast<int>(*at / static_cast<std::size_t>(nx) % static_cast<std::size_t>(ny));
+    if (!s.copied[s.blocks.block_of(i, j, kb * k_block)]) continue;
+    found.voxels.push_back(*at);
+    const float* from =
+        &other_volumes.partial_fractions[static_cast<std::size_t>(at - other.begin()) * stride];
+    found.fractions.insert(found.fractions.end(), from, from + stride);
+  }
+}
+
+/// A slab's partial voxels as found (in block order), sorted into ascending voxel order.
+SlabFound sorted_slab(const SlabFound& found, std::size_t stride, std::vector<std::size_t>& order) {
+  order.resize(found.voxels.size());
+  for (std::size_t p = 0; p < order.size(); ++p)
+    order[p] = p;
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return found.voxels[a] < found.voxels[b]; });
+  SlabFound sorted;
+  sorted.voxels.reserve(order.size());
+  sorted.fractions.reserve(order.size() * stride);
+  for (const std::size_t p : order) {
+    sorted.voxels.push_back(found.voxels[p]);
+    sorted.fractions.insert(sorted.fractions.end(),
+                            found.fractions.begin() + static_cast<std::ptrdiff_t>(p * stride),
+                            found.fractions.begin() + static_cast<std::ptrdiff_t>((p + 1) * stride));
+  }
+  return sorted;
+}
+
+/// Each label's tissue (TissueVolumes::label_tissues), -1 for none.
+std::vector<int> label_tissues(const std::vector<VoxelizedOrgan>& organs) {
+  std::vector<int> tissues(1, -1); // 0, the background, even when no organ is voxelized
+  for (const VoxelizedOrgan& organ : organs) {
+    const auto label = static_cast<std::size_t>(organ.label);
+    if (tissues.size() <= label) tissues.resize(label + 1, -1);
+    tissues[label] = organ.tissue;
+  }
+  return tissues;
+}
+
 } // namespace
 
 TissueVolumes voxelize_tissues(const ImageGrid& grid, const std::vector<VoxelizedOrgan>& organs,
@@ -139,84 +423,27 @@ TissueVolumes voxelize_tissues(const ImageGrid& grid, const std::vector<Voxelize
     copied = blocks_alike(organs, blocks, *reuse.organs, block_values(grid, *reuse.organs));
   TissueVolumes out;
   out.tissue_count = tissue_count;
-  out.label_tissues.assign(1, -1); // 0, the background, even when no organ is voxelized
-  for (const VoxelizedOrgan& organ : organs) {
-    const auto label = static_cast<std::size_t>(organ.label);
-    if (out.label_tissues.size() <= label) out.label_tissues.resize(label + 1, -1);
-    out.label_tissues[label] = organ.tissue;
-  }
+  out.label_tissues = label_tissues(organs);
   if (!copied.empty()) {
     // The other state's labels whole; the blocks that are not copied are written over below.
     out.labels = reuse.volumes->labels;
   } else {
     out.labels.assign(count, 0);
   }
-  const int n = std::max(1, supersampling);
-  const auto samples =
-      static_cast<std::size_t>(n) * static_cast<std::size_t>(n) * static_cast<std::size_t>(n);
-  std::vector<Eigen::Vector3d> offsets; // a fastest, then b, then c
-  offsets.reserve(samples);
-  for (int c = 0; c < n; ++c)
-    for (int b = 0; b < n; ++b)
-      for (int a = 0; a < n; ++a)
-        offsets.emplace_back((a + 0.5) / n - 0.5, (b + 0.5) / n - 0.5, (c + 0.5) / n - 0.5);
-  const double half_diagonal = 0.5 * grid.spacing_mm.norm();
-  const Eigen::Matrix3d axes = grid.world_from_voxel.topLeftCorner<3, 3>();
-  const double weight = 1.0 / (n * n * n);
+  const Supersampling sampling(supersampling);
+  const TissueSampling shared{grid, organs, blocks, copied, sampling, out};
   std::size_t sampled = 0;
   std::atomic<int> slabs_done{0};
-  const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
-  constexpr std::size_t block_voxels = k_block * k_block * k_block;
-  const std::size_t organ_count = organs.size();
   const std::size_t stride = out.fractions_per_voxel();
-  // Per slab of blocks: its partial voxels (TissueVolumes::partial_voxels), ascending, and their
-  // fractions. A slab's voxels are the indices from its first voxel layer to its last, so the
-  // slabs in order give the ascending list.
+  // Per slab of blocks: its partial voxels, ascending, and their fractions. A slab's voxels are
+  // the indices from its first voxel layer to its last, so the slabs in order give the ascending
+  // list.
   const auto slab_count = static_cast<std::size_t>(blocks.blocks.z());
-  std::vector<std::vector<std::size_t>> slab_voxels(slab_count);
-  std::vector<std::vector<float>> slab_fractions(slab_count);
+  std::vector<SlabFound> slabs(slab_count);
 #pragma omp parallel reduction(+ : sampled)
   {
-    std::vector<float> row(stride); // a voxel's fractions: every tissue's, then the background's
+    BlockSampler sampler(shared);
     std::vector<std::size_t> order; // a slab's partial voxels in ascending order
-    std::vector<LevelSet::Probe> probes;
-    for (const VoxelizedOrgan& organ : organs)
-      probes.emplace_back(*organ.level_set);
-    std::vector<double> centre_distance(organ_count);
-    std::vector<double> organ_share(organ_count);
-    std::vector<std::uint8_t> varies(organ_count);
-    // A block's voxel centres (i fastest), and the varying organs' values there.
-    std::vector<Eigen::Vector3d> centres(block_voxels);
-    std::vector<float> centre_values(organ_count * block_voxels);
-    // A sampled voxel's samples, and per organ whether each lies inside.
-    std::vector<Eigen::Vector3d> points(samples);
-    std::vector<std::uint8_t> sample_inside(organ_count * samples);
-    std::vector<double> lattice[3];
-    // Whether the points p[a + na (b + nb c)] form a lattice: x depends on a alone, y on b alone
-    // and z on c alone (a grid whose axes are the world's), bit for bit. Then the lattice's
-    // coordinates along each axis go to `lattice`, for LevelSet::Probe::lattice, which gives
-    // the same values as probing point by point.
-    const auto form_lattice = [&lattice](const Eigen::Vector3d* p, int na, int nb, int nc) {
-      lattice[0].resize(static_cast<std::size_t>(na));
-      lattice[1].resize(static_cast<std::size_t>(nb));
-      lattice[2].resize(static_cast<std::size_t>(nc));
-      for (int a = 0; a < na; ++a)
-        lattice[0][static_cast<std::size_t>(a)] = p[a].x();
-      for (int b = 0; b < nb; ++b)
-        lattice[1][static_cast<std::size_t>(b)] = p[na * b].y();
-      for (int c = 0; c < nc; ++c)
-        lattice[2][static_cast<std::size_t>(c)] = p[na * nb * c].z();
-      for (int c = 0; c < nc; ++c)
-        for (int b = 0; b < nb; ++b)
-          for (int a = 0; a < na; ++a) {
-            const Eigen::Vector3d& x = *p++;
-            if (!(x.x() == lattice[0][static_cast<std::size_t>(a)] &&
-                  x.y() == lattice[1][static_cast<std::size_t>(b)] &&
-                  x.z() == lattice[2][static_cast<std::size_t>(c)]))
-              return false;
-          }
-      return true;
-    };
     // The grid in blocks of k_block^3 voxels, a slab of blocks at a time: each organ that varies
     // over a block is read there once, at all its voxel centres together.
 #pragma omp for schedule(dynamic, 1)
@@ -226,162 +453,24 @@ TissueVolumes voxelize_tissues(const ImageGrid& grid, const std::vector<Voxelize
       if (progress_detail_due())
         progress_detail("tissue fractions, slab " + std::to_string(slab) + "/" +
                         std::to_string(blocks.blocks.z()));
-      std::vector<std::size_t> voxels_found; // this slab's partial voxels, in block order
-      std::vector<float> fractions_found;
-      for (int jb = 0; jb < blocks.blocks.y(); ++jb) {
-        for (int ib = 0; ib < blocks.blocks.x(); ++ib) {
-          const int i0 = ib * k_block, j0 = jb * k_block, k0 = kb * k_block;
-          const std::size_t block = blocks.block_of(i0, j0, k0);
-          if (!copied.empty() && copied[block]) continue;
-          const int bx = std::min(k_block, nx - i0), by = std::min(k_block, ny - j0),
-                    bz = std::min(k_block, nz - k0);
-          const auto voxels = static_cast<std::size_t>(bx * by * bz);
-          std::size_t v = 0;
-          for (int k = k0; k < k0 + bz; ++k)
-            for (int j = j0; j < j0 + by; ++j)
-              for (int i = i0; i < i0 + bx; ++i)
-                centres[v++] = grid.world_from_index(Eigen::Vector3d(i, j, k));
-          bool centres_form_lattice = false, formed = false;
-          for (std::size_t o = 0; o < organ_count; ++o) {
-            if (!blocks.varies[block * organ_count + o]) continue;
-            if (!formed) {
-              centres_form_lattice = form_lattice(centres.data(), bx, by, bz);
-              formed = true;
-            }
-            float* values = &centre_values[o * block_voxels];
-            if (centres_form_lattice) {
-              probes[o].lattice(lattice[0].data(), bx, lattice[1].data(), by, lattice[2].data(), bz, values);
-            } else {
-              for (std::size_t w = 0; w < voxels; ++w)
-                values[w] = static_cast<float>(probes[o](centres[w]));
-            }
-          }
-          v = 0;
-          for (int k = k0; k < k0 + bz; ++k) {
-            for (int j = j0; j < j0 + by; ++j) {
-              for (int i = i0; i < i0 + bx; ++i, ++v) {
-                const std::size_t index = voxel_index(grid.dims, i, j, k);
-                const Eigen::Vector3d& centre = centres[v];
-                bool decided = true;
-                for (std::size_t o = 0; o < organ_count; ++o) {
-                  const std::size_t at = block * organ_count + o;
-                  varies[o] = blocks.varies[at];
-                  centre_distance[o] =
-                      static_cast<double>(varies[o] ? centre_values[o * block_voxels + v] : blocks.value[at]);
-                  if (std::abs(centre_distance[o]) < half_diagonal) decided = false;
-                }
-                auto deepest = [&](auto&& inside) {
-                  int best = -1;
-                  for (std::size_t o = 0; o < organ_count; ++o) {
-                    if (inside(o) &&
-                        (best < 0 || organs[o].depth >= organs[static_cast<std::size_t>(best)].depth))
-                      best = static_cast<int>(o);
-                  }
-                  return best;
-                };
-                std::fill(organ_share.begin(), organ_share.end(), 0.0);
-                double background = 0.0;
-                if (decided) {
-                  const int owner = deepest([&](std::size_t o) { return centre_distance[o] < 0.0; });
-                  (owner < 0 ? background : organ_share[static_cast<std::size_t>(owner)]) = 1.0;
-                } else {
-                  ++sampled;
-                  for (std::size_t s = 0; s < samples; ++s)
-                    points[s] = centre + axes * offsets[s];
-                  const bool samples_form_lattice = form_lattice(points.data(), n, n, n);
-                  for (std::size_t o = 0; o < organ_count; ++o) {
-                    std::uint8_t* in = &sample_inside[o * samples];
-                    if (std::abs(centre_distance[o]) >= half_diagonal || !varies[o]) {
-                      // An organ far from the centre, or with one value over the block, is on
-                      // the centre's side at every sample.
-                      std::fill(in, in + samples,
-                                static_cast<std::uint8_t>(centre_distance[o] < 0.0 ? 1 : 0));
-                    } else if (samples_form_lattice) {
-                      probes[o].lattice_inside(lattice[0].data(), n, lattice[1].data(), n, lattice[2].data(),
-                                               n, in);
-                    } else {
-                      for (std::size_t s = 0; s < samples; ++s)
-                        in[s] = probes[o](points[s]) < 0.0 ? 1 : 0;
-                    }
-                  }
-                  for (std::size_t s = 0; s < samples; ++s) {
-                    const int owner =
-                        deepest([&](std::size_t o) { return sample_inside[o * samples + s] != 0; });
-                    (owner < 0 ? background : organ_share[static_cast<std::size_t>(owner)]) += weight;
-                  }
-                }
-                int label = 0;
-                double largest = background;
-                double empty = background; // outside every organ, or in a gap filled with air
-                std::fill(row.begin(), row.end(), 0.0f);
-                for (std::size_t o = 0; o < organ_count; ++o) {
-                  if (organs[o].tissue < 0) {
-                    empty += organ_share[o];
-                  } else {
-                    row[static_cast<std::size_t>(organs[o].tissue)] += static_cast<float>(organ_share[o]);
-                  }
-                  if (organ_share[o] > largest) {
-                    largest = organ_share[o];
-                    label = organs[o].label;
-                  }
-                }
-                row[stride - 1] = static_cast<float>(empty);
-                out.labels[index] = label;
-                if (!out.whole(label, row.data())) {
-                  voxels_found.push_back(index);
-                  fractions_found.insert(fractions_found.end(), row.begin(), row.end());
-                }
-              }
-            }
-          }
-        }
-      }
-      if (!copied.empty()) {
-        // The other state's partial voxels in this slab's copied blocks.
-        const std::vector<std::size_t>& other = reuse.volumes->partial_voxels;
-        const auto layer = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
-        const auto first =
-            std::lower_bound(other.begin(), other.end(), static_cast<std::size_t>(kb) * k_block * layer);
-        const auto last = std::lower_bound(
-            first, other.end(), static_cast<std::size_t>(std::min(nz, (kb + 1) * k_block)) * layer);
-        for (auto at = first; at != last; ++at) {
-          const auto i = static_cast<int>(*at % static_cast<std::size_t>(nx));
-          const auto j = static_cast<int>(*at / static_cast<std::size_t>(nx) % static_cast<std::size_t>(ny));
-          if (!copied[blocks.block_of(i, j, kb * k_block)]) continue;
-          voxels_found.push_back(*at);
-          const float* from =
-              &reuse.volumes->partial_fractions[static_cast<std::size_t>(at - other.begin()) * stride];
-          fractions_found.insert(fractions_found.end(), from, from + stride);
-        }
-      }
-      order.resize(voxels_found.size());
-      for (std::size_t p = 0; p < order.size(); ++p)
-        order[p] = p;
-      std::sort(order.begin(), order.end(),
-                [&](std::size_t a, std::size_t b) { return voxels_found[a] < voxels_found[b]; });
-      std::vector<std::size_t>& voxels = slab_voxels[static_cast<std::size_t>(kb)];
-      std::vector<float>& fractions = slab_fractions[static_cast<std::size_t>(kb)];
-      voxels.reserve(order.size());
-      fractions.reserve(order.size() * stride);
-      for (const std::size_t p : order) {
-        voxels.push_back(voxels_found[p]);
-        fractions.insert(fractions.end(), fractions_found.begin() + static_cast<std::ptrdiff_t>(p * stride),
-                         fractions_found.begin() + static_cast<std::ptrdiff_t>((p + 1) * stride));
-      }
+      SlabFound found; // this slab's partial voxels, in block order
+      for (int jb = 0; jb < blocks.blocks.y(); ++jb)
+        for (int ib = 0; ib < blocks.blocks.x(); ++ib)
+          sampler.sample_block(ib, jb, kb, found, sampled);
+      if (!copied.empty()) copy_reused_partials(shared, *reuse.volumes, kb, found);
+      slabs[static_cast<std::size_t>(kb)] = sorted_slab(found, stride, order);
     }
   }
   throw_if_cancelled();
   std::size_t partial = 0;
-  for (const std::vector<std::size_t>& voxels : slab_voxels)
-    partial += voxels.size();
+  for (const SlabFound& slab : slabs)
+    partial += slab.voxels.size();
   out.partial_voxels.reserve(partial);
   out.partial_fractions.reserve(partial * stride);
-  for (std::size_t slab = 0; slab < slab_count; ++slab) {
-    out.partial_voxels.insert(out.partial_voxels.end(), slab_voxels[slab].begin(), slab_voxels[slab].end());
-    out.partial_fractions.insert(out.partial_fractions.end(), slab_fractions[slab].begin(),
-                                 slab_fractions[slab].end());
-    slab_voxels[slab] = std::vector<std::size_t>(); // freed as it is taken over
-    slab_fractions[slab] = std::vector<float>();
+  for (SlabFound& slab : slabs) {
+    out.partial_voxels.insert(out.partial_voxels.end(), slab.voxels.begin(), slab.voxels.end());
+    out.partial_fractions.insert(out.partial_fractions.end(), slab.fractions.begin(), slab.fractions.end());
+    slab = SlabFound(); // freed as it is taken over
   }
   out.supersampled_voxels = sampled;
   return out;

@@ -167,6 +167,128 @@ void keep_level_sets(const Phantom& phantom, const StateLevelSets& sets,
   }
 }
 
+/// The reference state's level sets (given by `reference_state`, or built, and then kept there
+/// when it asks) and tissue volumes, reported.
+StateLevelSets voxelize_reference(const VoxelizationSettings& settings, const OrganTable& organs,
+                                  const ImageGrid& grid, const Phantom& reference,
+                                  std::optional<ReferenceVoxelization>* reference_state,
+                                  OrganHeightRanges& height_ranges, VoxelizedPhantom& out,
+                                  StageReport& report, ProgressBar& progress) {
+  const double voxel_size = out.grid.spacing_mm.minCoeff();
+  const bool given = reference_state && reference_state->has_value();
+  StateLevelSets sets;
+  if (given) {
+    sets = given_reference(settings, organs, grid, reference, out.tissues, **reference_state, height_ranges,
+                           out.reference);
+    reference_state->reset();
+    progress.advance(reference.organs.size());
+  } else {
+    sets = level_sets_of(settings, organs, grid, reference, out.tissues, voxel_size, height_ranges, progress);
+  }
+  if (reference_state && !given) {
+    ReferenceVoxelization& built = reference_state->emplace();
+    for (const VoxelizedOrgan& organ : sets.organs)
+      built.organs.push_back(organ.label - 1);
+    built.level_sets = sets.level_sets;
+    built.height_ranges = height_ranges; // before the deformed state adds any
+  }
+  std::size_t band = 0;
+  for (const auto& l : sets.level_sets)
+    band += l->active_voxel_count();
+  report.modelled.push_back(
+      "reference: " + std::to_string(sets.level_sets.size()) + " level sets, " + std::to_string(band) +
+      " narrow-band voxels of " + format_number(voxel_size) + " mm, " +
+      (settings.level_sets_from_tessellation
+           ? "surfaces tessellated within " + format_number(settings.tessellation_tolerance_mm) + " mm"
+           : std::string("from the patch surfaces directly")));
+  if (!given) {
+    progress.set_detail("reference tissue fractions");
+    out.reference =
+        voxelize_tissues(out.grid, sets.organs, static_cast<int>(out.tissues.size()), settings.supersampling);
+  }
+  progress.advance();
+  return sets;
+}
+
+/// The deformed state's level sets (the organs that did not move keep the reference's) and
+/// tissue volumes with the gaps the moved organs left, reported.
+void voxelize_deformed(const VoxelizationSettings& settings, const OrganTable& organs, const ImageGrid& grid,
+                       const Phantom& deformed, const PhantomDeformation* deformation,
+                       const Phantom& reference, const StateLevelSets& sets, OrganHeightRanges& height_ranges,
+                       int gap_tissue, VoxelizedPhantom& out, StageReport& report, ProgressBar& progress) {
+  const double voxel_size = out.grid.spacing_mm.minCoeff();
+  progress.set_detail("deformed level sets");
+  StateLevelSets moved = level_sets_of(settings, organs, grid, deformed, out.tissues, voxel_size,
+                                       height_ranges, progress, {&reference, &sets});
+  std::size_t shared = 0;
+  for (std::size_t k = 0; k < moved.level_sets.size(); ++k)
+    shared += std::count(sets.level_sets.begin(), sets.level_sets.end(), moved.level_sets[k]) > 0 ? 1 : 0;
+  report.modelled.push_back("deformed: " + std::to_string(moved.level_sets.size() - shared) +
+                            " level sets of moved organs; the " + std::to_string(shared) +
+                            " organs that did not move keep their reference level set");
+  std::vector<VoxelizedOrgan> with_gaps = moved.organs;
+  if (deformation) {
+    const std::vector<VoxelizedOrgan> gaps =
+        gap_organs(settings.gap_fill, gap_tissue, organs, *deformation, sets.organs, report);
+    with_gaps.insert(with_gaps.end(), gaps.begin(), gaps.end());
+  }
+  progress.set_detail("deformed tissue fractions");
+  // Where no organ differs from the reference state (blocks away from the moved surfaces and
+  // the gaps), the reference voxels are the deformed ones: copied, the same bytes.
+  out.deformed = voxelize_tissues(out.grid, with_gaps, static_cast<int>(out.tissues.size()),
+                                  settings.supersampling, TissuesToReuse{&out.reference, &sets.organs});
+  progress.advance();
+  if (settings.keep_level_sets) keep_level_sets(deformed, moved, out.deformed_level_sets);
+}
+
+/// The reference state's landmarks carried by the deformation, and the displacement fields both
+/// ways with their Jacobians and exact masks, reported (and their folds warned of).
+void add_motion(const Phantom& reference, const PhantomDeformation& deformation, double landmark_tolerance_mm,
+                const std::function<void()>& landmark_done, VoxelizedPhantom& out, StageReport& report,
+                ProgressBar& progress) {
+  // Tissue outside the solved bodies does not move: the extension only smooths the step at a
+  // moved boundary, over two voxels [choice].
+  const double extension = 2.0 * out.grid.spacing_mm.maxCoeff();
+  progress.set_detail("displacement fields");
+  const DeformationMap map(deformation.bodies, extension);
+  // The landmarks first: their distance transforms (8 bytes per voxel of an organ's label box)
+  // then do not add to the fields' memory (34 bytes per voxel of the grid), the peak.
+  progress.set_detail("landmarks");
+  out.landmarks = organ_landmarks(reference, &deformation, &map, landmark_tolerance_mm, &report.warnings,
+                                  landmark_done, {&out.grid, &out.reference.labels});
+  progress.set_detail("displacement fields");
+  // Organs that stay where they are carry zero displacement in both fields (by their labels).
+  StillTissue still{&out.reference.labels, out.deformed ? &out.deformed->labels : nullptr,
+                    still_organ_labels(deformation)};
+  out.motion = compute_motion_fields(out.grid, map, still);
+  progress.advance();
+  report.modelled.push_back("displacement fields both ways: barycentric in the solved tets (exact), outside "
+                            "them a Shepard extension of the moved boundary fading out over " +
+                            format_number(extension) + " mm (not exact; see the mask)");
+  report.accuracy["largest displacement mm"] = out.motion->max_displacement_mm;
+  report.accuracy["smallest Jacobian determinant"] = out.motion->min_jacobian;
+  report.accuracy["smallest Jacobian determinant in the exact mask"] = out.motion->min_exact_jacobian;
+  report.accuracy["largest composition error in the exact masks mm"] = out.motion->max_composition_error_mm;
+  report.modelled.push_back(std::to_string(out.motion->inconsistent_voxels) +
+                            " voxels left out of the exact masks: composing the two fields there misses "
+                            "identity by more than " +
+                            format_number(composition_tolerance_voxels) + " voxel");
+  // Both fields checked alike: each in its own exact mask, its folds named by the labels of
+  // its own grid (the deformed grid's gap label included).
+  std::vector<std::string> label_names;
+  for (const Organ& organ : reference.organs)
+    label_names.push_back(organ.name);
+  label_names.push_back(k_gap_label_name);
+  const MotionFields& m = *out.motion;
+  if (auto warning = fold_warning("from-def_to-ref (the reference grid)", m.jacobian, m.ref_to_def_exact,
+                                  out.reference.labels, label_names))
+    report.warnings.push_back(*warning);
+  if (auto warning =
+          fold_warning("from-ref_to-def (the deformed grid)", m.def_to_ref_jacobian, m.def_to_ref_exact,
+                       out.deformed ? out.deformed->labels : out.reference.labels, label_names))
+    report.warnings.push_back(*warning);
+}
+
 } // namespace
 
 VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const OrganTable& organs,
@@ -178,7 +300,6 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
   for (const Organ& organ : reference.organs)
     if (std::find(out.tissues.begin(), out.tissues.end(), organ.tissue) == out.tissues.end())
       out.tissues.push_back(organ.tissue);
-  const double voxel_size = out.grid.spacing_mm.minCoeff();
   const int states = deformed ? 2 : 1;
   // Steps: each organ's level set and the tissue fractions per state, the displacement fields,
   // and each surfaced organ's landmarks (the deepest-point search takes seconds per organ of
@@ -203,112 +324,17 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
   // The reference level sets outlive the deformed state's voxelization: they are its gaps' shapes.
   progress.set_detail("reference level sets");
   OrganHeightRanges height_ranges(reference.organs.size());
-  const bool given = reference_state && reference_state->has_value();
-  StateLevelSets sets;
-  if (given) {
-    sets = given_reference(settings, organs, grid, reference, out.tissues, **reference_state, height_ranges,
-                           out.reference);
-    reference_state->reset();
-    progress.advance(reference.organs.size());
-  } else {
-    sets = level_sets_of(settings, organs, grid, reference, out.tissues, voxel_size, height_ranges, progress);
-  }
-  if (reference_state && !given) {
-    ReferenceVoxelization& built = reference_state->emplace();
-    for (const VoxelizedOrgan& organ : sets.organs)
-      built.organs.push_back(organ.label - 1);
-    built.level_sets = sets.level_sets;
-    built.height_ranges = height_ranges; // before the deformed state adds any
-  }
-  {
-    std::size_t band = 0;
-    for (const auto& l : sets.level_sets)
-      band += l->active_voxel_count();
-    report.modelled.push_back(
-        "reference: " + std::to_string(sets.level_sets.size()) + " level sets, " + std::to_string(band) +
-        " narrow-band voxels of " + format_number(voxel_size) + " mm, " +
-        (settings.level_sets_from_tessellation
-             ? "surfaces tessellated within " + format_number(settings.tessellation_tolerance_mm) + " mm"
-             : std::string("from the patch surfaces directly")));
-    if (!given) {
-      progress.set_detail("reference tissue fractions");
-      out.reference = voxelize_tissues(out.grid, sets.organs, static_cast<int>(out.tissues.size()),
-                                       settings.supersampling);
-    }
-    progress.advance();
-  }
-  if (deformed) {
-    progress.set_detail("deformed level sets");
-    StateLevelSets moved = level_sets_of(settings, organs, grid, *deformed, out.tissues, voxel_size,
-                                         height_ranges, progress, {&reference, &sets});
-    std::size_t shared = 0;
-    for (std::size_t k = 0; k < moved.level_sets.size(); ++k)
-      shared += std::count(sets.level_sets.begin(), sets.level_sets.end(), moved.level_sets[k]) > 0 ? 1 : 0;
-    report.modelled.push_back("deformed: " + std::to_string(moved.level_sets.size() - shared) +
-                              " level sets of moved organs; the " + std::to_string(shared) +
-                              " organs that did not move keep their reference level set");
-    std::vector<VoxelizedOrgan> with_gaps = moved.organs;
-    if (deformation) {
-      const std::vector<VoxelizedOrgan> gaps =
-          gap_organs(settings.gap_fill, gap_tissue, organs, *deformation, sets.organs, report);
-      with_gaps.insert(with_gaps.end(), gaps.begin(), gaps.end());
-    }
-    progress.set_detail("deformed tissue fractions");
-    // Where no organ differs from the reference state (blocks away from the moved surfaces and
-    // the gaps), the reference voxels are the deformed ones: copied, the same bytes.
-    out.deformed = voxelize_tissues(out.grid, with_gaps, static_cast<int>(out.tissues.size()),
-                                    settings.supersampling, TissuesToReuse{&out.reference, &sets.organs});
-    progress.advance();
-    if (settings.keep_level_sets) keep_level_sets(*deformed, moved, out.deformed_level_sets);
-  }
+  const StateLevelSets sets = voxelize_reference(settings, organs, grid, reference, reference_state,
+                                                 height_ranges, out, report, progress);
+  if (deformed)
+    voxelize_deformed(settings, organs, grid, *deformed, deformation, reference, sets, height_ranges,
+                      gap_tissue, out, report, progress);
   if (settings.keep_level_sets) keep_level_sets(reference, sets, out.reference_level_sets);
   report.modelled.push_back("fractions from " + std::to_string(settings.supersampling) +
                             "^3 samples in the " + std::to_string(out.reference.supersampled_voxels) +
                             " voxels within half a voxel diagonal of a surface");
-  if (deformation) {
-    // Tissue outside the solved bodies does not move: the extension only smooths the step at a
-    // moved boundary, over two voxels [choice].
-    const double extension = 2.0 * out.grid.spacing_mm.maxCoeff();
-    progress.set_detail("displacement fields");
-    const DeformationMap map(deformation->bodies, extension);
-    // The landmarks first: their distance transforms (8 bytes per voxel of an organ's label box)
-    // then do not add to the fields' memory (34 bytes per voxel of the grid), the peak.
-    progress.set_detail("landmarks");
-    out.landmarks = organ_landmarks(reference, deformation, &map, landmark_tolerance_mm, &report.warnings,
-                                    landmark_done, {&out.grid, &out.reference.labels});
-    progress.set_detail("displacement fields");
-    // Organs that stay where they are carry zero displacement in both fields (by their labels).
-    StillTissue still{&out.reference.labels, out.deformed ? &out.deformed->labels : nullptr,
-                      still_organ_labels(*deformation)};
-    out.motion = compute_motion_fields(out.grid, map, still);
-    progress.advance();
-    report.modelled.push_back(
-        "displacement fields both ways: barycentric in the solved tets (exact), outside "
-        "them a Shepard extension of the moved boundary fading out over " +
-        format_number(extension) + " mm (not exact; see the mask)");
-    report.accuracy["largest displacement mm"] = out.motion->max_displacement_mm;
-    report.accuracy["smallest Jacobian determinant"] = out.motion->min_jacobian;
-    report.accuracy["smallest Jacobian determinant in the exact mask"] = out.motion->min_exact_jacobian;
-    report.accuracy["largest composition error in the exact masks mm"] = out.motion->max_composition_error_mm;
-    report.modelled.push_back(std::to_string(out.motion->inconsistent_voxels) +
-                              " voxels left out of the exact masks: composing the two fields there misses "
-                              "identity by more than " +
-                              format_number(composition_tolerance_voxels) + " voxel");
-    // Both fields checked alike: each in its own exact mask, its folds named by the labels of
-    // its own grid (the deformed grid's gap label included).
-    std::vector<std::string> label_names;
-    for (const Organ& organ : reference.organs)
-      label_names.push_back(organ.name);
-    label_names.push_back(k_gap_label_name);
-    const MotionFields& m = *out.motion;
-    if (auto warning = fold_warning("from-def_to-ref (the reference grid)", m.jacobian, m.ref_to_def_exact,
-                                    out.reference.labels, label_names))
-      report.warnings.push_back(*warning);
-    if (auto warning =
-            fold_warning("from-ref_to-def (the deformed grid)", m.def_to_ref_jacobian, m.def_to_ref_exact,
-                         out.deformed ? out.deformed->labels : out.reference.labels, label_names))
-      report.warnings.push_back(*warning);
-  }
+  if (deformation)
+    add_motion(reference, *deformation, landmark_tolerance_mm, landmark_done, out, report, progress);
   if (!deformation)
     out.landmarks = organ_landmarks(reference, nullptr, nullptr, landmark_tolerance_mm, &report.warnings,
                                     landmark_done, {&out.grid, &out.reference.labels});
