@@ -87,6 +87,132 @@ double PatchSurface::area(double max_deviation_mm) const {
   return surface_area(tessellate(max_deviation_mm));
 }
 
+namespace {
+
+/// Every undirected base edge split into as many segments as its finer neighbour needs. Its
+/// points are computed once, from the lower vertex index, so both sides share them exactly;
+/// bumps vanish on base edges, so the surface there is the straight edge.
+class EdgeSplits {
+public:
+  /// The splits of the edges of `base` (whose triangle across edge k of t is neighbours(t, k)),
+  /// their inner points appended to `points`.
+  EdgeSplits(const TriangleMesh& base, const Eigen::MatrixX3i& neighbours, const std::vector<int>& level,
+             std::vector<Eigen::Vector3d>& points) {
+    for (Eigen::Index t = 0; t < base.face_count(); ++t) {
+      for (int k = 0; k < 3; ++k) {
+        const auto key = std::minmax(base.faces(t, k), base.faces(t, (k + 1) % 3));
+        if (m_edges.count(key)) continue;
+        const int finer =
+            std::max(level[static_cast<std::size_t>(t)], level[static_cast<std::size_t>(neighbours(t, k))]);
+        const int segments = 1 << finer;
+        m_edges[key] = {segments, static_cast<int>(points.size())};
+        const Eigen::Vector3d a = base.vertex(key.first), b = base.vertex(key.second);
+        for (int s = 1; s < segments; ++s)
+          points.push_back(a + (double(s) / segments) * (b - a));
+      }
+    }
+  }
+
+  /// The segments of the edge (from, to).
+  int segments(int from, int to) const { return m_edges.at(std::minmax(from, to)).segments; }
+
+  /// The point at fraction numerator/denominator along the directed edge (from, to).
+  int point(int from, int to, int numerator, int denominator) const {
+    if (numerator == 0) return from;
+    if (numerator == denominator) return to;
+    const EdgeSplit& e = m_edges.at(std::minmax(from, to));
+    const int steps = numerator * (e.segments / denominator);
+    return e.first_point + (from < to ? steps : e.segments - steps) - 1;
+  }
+
+private:
+  struct EdgeSplit {
+    int segments;
+    int first_point;
+  };
+  std::map<std::pair<int, int>, EdgeSplit> m_edges;
+};
+
+/// The triangles of base triangle t at level n = 2^level: its grid's points (those inside it
+/// from `grid` when given, else evaluated; those on its edges from the edges' splits) appended to
+/// `points`, its sub-triangles to `triangles`, fanned from their centre where a finer neighbour
+/// splits an edge further.
+void tessellate_patch(const PatchSurface& surface, Eigen::Index t, int n, const EdgeSplits& edges,
+                      const std::vector<Eigen::Vector3d>& grid, std::vector<Eigen::Vector3d>& points,
+                      std::vector<Eigen::Vector3i>& triangles) {
+  const TriangleMesh& base = surface.base_mesh();
+  const int f0 = base.faces(t, 0), f1 = base.faces(t, 1), f2 = base.faces(t, 2);
+  std::vector<int> id(static_cast<std::size_t>((n + 1) * (n + 2) / 2));
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i + j <= n; ++i) {
+      int global;
+      if (j == 0) {
+        global = edges.point(f0, f1, i, n);
+      } else if (i == 0) {
+        global = edges.point(f0, f2, j, n);
+      } else if (i + j == n) {
+        global = edges.point(f1, f2, j, n);
+      } else {
+        global = static_cast<int>(points.size());
+        points.push_back(grid.empty() ? surface.surface_point(t, double(i) / n, double(j) / n)
+                                      : grid[static_cast<std::size_t>(grid_index(i, j, n))]);
+      }
+      id[static_cast<std::size_t>(grid_index(i, j, n))] = global;
+    }
+  }
+  // The finer points of a base edge between two consecutive grid points (exclusive), in order.
+  auto between = [&](int ia, int ja, int ib, int jb) {
+    std::vector<int> inner;
+    int from, to, na, nb;
+    if (ja == 0 && jb == 0) {
+      from = f0, to = f1, na = ia, nb = ib;
+    } else if (ia == 0 && ib == 0) {
+      from = f0, to = f2, na = ja, nb = jb;
+    } else if (ia + ja == n && ib + jb == n) {
+      from = f1, to = f2, na = ja, nb = jb;
+    } else {
+      return inner;
+    }
+    const int segments = edges.segments(from, to);
+    const int m = segments / n;
+    const int direction = nb > na ? 1 : -1;
+    for (int s = 1; s < m; ++s)
+      inner.push_back(edges.point(from, to, na * m + direction * s, segments));
+    return inner;
+  };
+  auto emit = [&](std::array<std::pair<int, int>, 3> corners) {
+    std::vector<int> polygon;
+    for (int k = 0; k < 3; ++k) {
+      const auto [ia, ja] = corners[static_cast<std::size_t>(k)];
+      const auto [ib, jb] = corners[static_cast<std::size_t>((k + 1) % 3)];
+      polygon.push_back(id[static_cast<std::size_t>(grid_index(ia, ja, n))]);
+      for (int p : between(ia, ja, ib, jb))
+        polygon.push_back(p);
+    }
+    if (polygon.size() == 3) {
+      triangles.push_back({polygon[0], polygon[1], polygon[2]});
+      return;
+    }
+    // A fan from the sub-triangle's centre keeps the finer edge points of the neighbour.
+    double cu = 0.0, cv = 0.0;
+    for (const auto& [i, j] : corners)
+      cu += i, cv += j;
+    const int centre = static_cast<int>(points.size());
+    points.push_back(surface.surface_point(t, cu / (3.0 * n), cv / (3.0 * n)));
+    for (std::size_t k = 0; k < polygon.size(); ++k) {
+      triangles.push_back({polygon[k], polygon[(k + 1) % polygon.size()], centre});
+    }
+  };
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i + j < n; ++i) {
+      emit({{{i, j}, {i + 1, j}, {i, j + 1}}});
+      if (i + j < n - 1) emit({{{i + 1, j}, {i + 1, j + 1}, {i, j + 1}}});
+    }
+  }
+}
+
+} // namespace
+
 TriangleMesh PatchSurface::tessellate(double max_deviation_mm, TessellationStats* stats) const {
   const Eigen::Index nf = m_base.face_count();
   std::vector<int> level(static_cast<std::size_t>(nf));
@@ -118,111 +244,13 @@ TriangleMesh PatchSurface::tessellate(double max_deviation_mm, TessellationStats
   std::vector<Eigen::Vector3d> points;
   for (Eigen::Index v = 0; v < m_base.vertex_count(); ++v)
     points.push_back(m_base.vertex(v));
-
-  // Every undirected edge is split into as many segments as its finer neighbour needs. Its
-  // points are computed once, from the lower vertex index, so both sides share them exactly;
-  // bumps vanish on base edges, so the surface there is the straight edge.
-  struct EdgeSplit {
-    int segments;
-    int first_point;
-  };
-  std::map<std::pair<int, int>, EdgeSplit> edges;
-  for (Eigen::Index t = 0; t < nf; ++t) {
-    for (int k = 0; k < 3; ++k) {
-      const auto key = std::minmax(m_base.faces(t, k), m_base.faces(t, (k + 1) % 3));
-      if (edges.count(key)) continue;
-      const int finer =
-          std::max(level[static_cast<std::size_t>(t)], level[static_cast<std::size_t>(m_neighbours(t, k))]);
-      const int segments = 1 << finer;
-      edges[key] = {segments, static_cast<int>(points.size())};
-      const Eigen::Vector3d a = m_base.vertex(key.first), b = m_base.vertex(key.second);
-      for (int s = 1; s < segments; ++s)
-        points.push_back(a + (double(s) / segments) * (b - a));
-    }
-  }
-  // The point at fraction numerator/denominator along the directed edge (from, to).
-  auto edge_point = [&](int from, int to, int numerator, int denominator) {
-    if (numerator == 0) return from;
-    if (numerator == denominator) return to;
-    const EdgeSplit& e = edges.at(std::minmax(from, to));
-    const int steps = numerator * (e.segments / denominator);
-    return e.first_point + (from < to ? steps : e.segments - steps) - 1;
-  };
-
+  const EdgeSplits edges(m_base, m_neighbours, level, points);
   std::vector<Eigen::Vector3i> triangles;
   for (Eigen::Index t = 0; t < nf; ++t) {
     if (cancellation_requested()) return TriangleMesh();
-    const int n = 1 << level[static_cast<std::size_t>(t)];
-    const int f0 = m_base.faces(t, 0), f1 = m_base.faces(t, 1), f2 = m_base.faces(t, 2);
-    std::vector<int> id(static_cast<std::size_t>((n + 1) * (n + 2) / 2));
-    for (int j = 0; j <= n; ++j) {
-      for (int i = 0; i + j <= n; ++i) {
-        int global;
-        if (j == 0) {
-          global = edge_point(f0, f1, i, n);
-        } else if (i == 0) {
-          global = edge_point(f0, f2, j, n);
-        } else if (i + j == n) {
-          global = edge_point(f1, f2, j, n);
-        } else {
-          global = static_cast<int>(points.size());
-          const std::vector<Eigen::Vector3d>& grid = grids[static_cast<std::size_t>(t)];
-          points.push_back(grid.empty() ? surface_point(t, double(i) / n, double(j) / n)
-                                        : grid[static_cast<std::size_t>(grid_index(i, j, n))]);
-        }
-        id[static_cast<std::size_t>(grid_index(i, j, n))] = global;
-      }
-    }
-    // The finer points of a base edge between two consecutive grid points (exclusive), in order.
-    auto between = [&](int ia, int ja, int ib, int jb) {
-      std::vector<int> inner;
-      int from, to, na, nb;
-      if (ja == 0 && jb == 0) {
-        from = f0, to = f1, na = ia, nb = ib;
-      } else if (ia == 0 && ib == 0) {
-        from = f0, to = f2, na = ja, nb = jb;
-      } else if (ia + ja == n && ib + jb == n) {
-        from = f1, to = f2, na = ja, nb = jb;
-      } else {
-        return inner;
-      }
-      const int segments = edges.at(std::minmax(from, to)).segments;
-      const int m = segments / n;
-      const int direction = nb > na ? 1 : -1;
-      for (int s = 1; s < m; ++s)
-        inner.push_back(edge_point(from, to, na * m + direction * s, segments));
-      return inner;
-    };
-    auto emit = [&](std::array<std::pair<int, int>, 3> corners) {
-      std::vector<int> polygon;
-      for (int k = 0; k < 3; ++k) {
-        const auto [ia, ja] = corners[static_cast<std::size_t>(k)];
-        const auto [ib, jb] = corners[static_cast<std::size_t>((k + 1) % 3)];
-        polygon.push_back(id[static_cast<std::size_t>(grid_index(ia, ja, n))]);
-        for (int p : between(ia, ja, ib, jb))
-          polygon.push_back(p);
-      }
-      if (polygon.size() == 3) {
-        triangles.push_back({polygon[0], polygon[1], polygon[2]});
-        return;
-      }
-      // A fan from the sub-triangle's centre keeps the finer edge points of the neighbour.
-      double cu = 0.0, cv = 0.0;
-      for (const auto& [i, j] : corners)
-        cu += i, cv += j;
-      const int centre = static_cast<int>(points.size());
-      points.push_back(surface_point(t, cu / (3.0 * n), cv / (3.0 * n)));
-      for (std::size_t k = 0; k < polygon.size(); ++k) {
-        triangles.push_back({polygon[k], polygon[(k + 1) % polygon.size()], centre});
-      }
-    };
-    for (int j = 0; j < n; ++j) {
-      for (int i = 0; i + j < n; ++i) {
-        emit({{{i, j}, {i + 1, j}, {i, j + 1}}});
-        if (i + j < n - 1) emit({{{i + 1, j}, {i + 1, j + 1}, {i, j + 1}}});
-      }
-    }
-    std::vector<Eigen::Vector3d>().swap(grids[static_cast<std::size_t>(t)]); // copied into points
+    std::vector<Eigen::Vector3d>& grid = grids[static_cast<std::size_t>(t)];
+    tessellate_patch(*this, t, 1 << level[static_cast<std::size_t>(t)], edges, grid, points, triangles);
+    std::vector<Eigen::Vector3d>().swap(grid); // copied into points
   }
 
   TriangleMesh mesh;

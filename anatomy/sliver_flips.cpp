@@ -20,60 +20,103 @@
 
 namespace phantasm {
 
-int flip_slivers(TetMesh& mesh, double bound_deg, int passes) {
-  const bool labelled = mesh.subdomains.size() == mesh.tets.rows();
-  std::vector<Eigen::Vector4i> tets;
-  std::vector<int> region;
-  for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
-    tets.push_back(mesh.tets.row(t).transpose());
-    region.push_back(labelled ? mesh.subdomains[t] : 0);
-  }
-  std::vector<char> alive(tets.size(), 1);
-  std::map<FaceKey, std::vector<int>> faces;
-  std::vector<std::vector<int>> star(static_cast<std::size_t>(mesh.vertices.rows()));
-  const auto enter = [&](int t) {
-    for (int k = 0; k < 4; ++k) {
-      faces[face_key(tets[static_cast<std::size_t>(t)], k)].push_back(t);
-      star[static_cast<std::size_t>(tets[static_cast<std::size_t>(t)][k])].push_back(t);
+namespace {
+
+/// A flip: the tets it removes and the tets it makes in their place.
+struct Flip {
+  std::vector<int> old;
+  std::vector<Eigen::Vector4i> made;
+  double gain = 0.0; ///< smallest angle of the new tets less that of the old, degrees
+};
+
+/// The mesh's tets as the flips change them: each tet's subdomain and whether it is still in the
+/// mesh, the tets on each face and around each vertex.
+class FlipRepair {
+public:
+  explicit FlipRepair(TetMesh& mesh)
+      : m_mesh(mesh), m_labelled(mesh.subdomains.size() == mesh.tets.rows()),
+        m_star(static_cast<std::size_t>(mesh.vertices.rows())) {
+    for (Eigen::Index t = 0; t < mesh.tets.rows(); ++t) {
+      m_tets.push_back(mesh.tets.row(t).transpose());
+      m_region.push_back(m_labelled ? mesh.subdomains[t] : 0);
     }
-  };
-  const auto leave = [&](int t) {
+    m_alive.assign(m_tets.size(), 1);
+    for (std::size_t t = 0; t < m_tets.size(); ++t)
+      enter(static_cast<int>(t));
+  }
+
+  /// One pass over the tets under bound_deg: each takes the best of its flips; returns how many.
+  int pass(double bound_deg) {
+    int flips = 0;
+    for (std::size_t t = 0; t < m_tets.size(); ++t) {
+      if (!m_alive[t] || quality(m_tets[t]) >= bound_deg) continue;
+      Flip best, candidate;
+      for (int k = 0; k < 4; ++k)
+        if (face_flip(static_cast<int>(t), k, candidate) && candidate.gain > best.gain) best = candidate;
+      for (int i = 0; i < 4; ++i)
+        for (int j = i + 1; j < 4; ++j)
+          if (edge_flip(static_cast<int>(t), m_tets[t][i], m_tets[t][j], candidate) &&
+              candidate.gain > best.gain)
+            best = candidate;
+      if (best.made.empty()) continue;
+      apply(best, m_region[t]);
+      ++flips;
+    }
+    return flips;
+  }
+
+  /// The mesh's tets (and subdomains) replaced by those still alive, in order.
+  void write_back() const {
+    const auto count = static_cast<Eigen::Index>(std::count(m_alive.begin(), m_alive.end(), 1));
+    m_mesh.tets.resize(count, 4);
+    if (m_labelled) m_mesh.subdomains.resize(count);
+    Eigen::Index next = 0;
+    for (std::size_t t = 0; t < m_tets.size(); ++t) {
+      if (!m_alive[t]) continue;
+      m_mesh.tets.row(next) = m_tets[t].transpose();
+      if (m_labelled) m_mesh.subdomains[next] = m_region[t];
+      ++next;
+    }
+  }
+
+private:
+  void enter(int t) {
     for (int k = 0; k < 4; ++k) {
-      const FaceKey key = face_key(tets[static_cast<std::size_t>(t)], k);
-      std::vector<int>& around = faces[key];
+      m_faces[face_key(m_tets[static_cast<std::size_t>(t)], k)].push_back(t);
+      m_star[static_cast<std::size_t>(m_tets[static_cast<std::size_t>(t)][k])].push_back(t);
+    }
+  }
+  void leave(int t) {
+    for (int k = 0; k < 4; ++k) {
+      const FaceKey key = face_key(m_tets[static_cast<std::size_t>(t)], k);
+      std::vector<int>& around = m_faces[key];
       around.erase(std::find(around.begin(), around.end(), t));
-      if (around.empty()) faces.erase(key);
-      std::vector<int>& at = star[static_cast<std::size_t>(tets[static_cast<std::size_t>(t)][k])];
+      if (around.empty()) m_faces.erase(key);
+      std::vector<int>& at = m_star[static_cast<std::size_t>(m_tets[static_cast<std::size_t>(t)][k])];
       at.erase(std::find(at.begin(), at.end(), t));
     }
-  };
-  for (std::size_t t = 0; t < tets.size(); ++t)
-    enter(static_cast<int>(t));
-  const auto volume = [&](const Eigen::Vector4i& tet) {
-    const std::array<Eigen::Vector3d, 4> p = tet_corners(mesh, tet);
+  }
+  double volume(const Eigen::Vector4i& tet) const {
+    const std::array<Eigen::Vector3d, 4> p = tet_corners(m_mesh, tet);
     return signed_volume(p[0], p[1], p[2], p[3]);
-  };
-  const auto quality = [&](const Eigen::Vector4i& tet) {
-    const std::array<double, 6> angles = dihedral_angles_deg(tet_corners(mesh, tet));
+  }
+  double quality(const Eigen::Vector4i& tet) const {
+    const std::array<double, 6> angles = dihedral_angles_deg(tet_corners(m_mesh, tet));
     return *std::min_element(angles.begin(), angles.end());
-  };
-  const auto oriented = [&](Eigen::Vector4i tet) {
+  }
+  Eigen::Vector4i oriented(Eigen::Vector4i tet) const {
     if (volume(tet) < 0.0) std::swap(tet[0], tet[1]);
     return tet;
-  };
-  struct Flip {
-    std::vector<int> old;
-    std::vector<Eigen::Vector4i> made;
-    double gain = 0.0; ///< smallest angle of the new tets less that of the old, degrees
-  };
-  // A flip is kept when its tets fill the old ones' volume (so none overlaps another or leaves a
-  // gap), none is flat, and the smallest angle rises.
-  const auto judge = [&](Flip& flip) {
+  }
+
+  /// A flip is kept when its tets fill the old ones' volume (so none overlaps another or leaves
+  /// a gap), none is flat, and the smallest angle rises.
+  bool judge(Flip& flip) const {
     double before = 0.0, after = 0.0, old_quality = 180.0, new_quality = 180.0;
     int old_slivers = 0, new_slivers = 0;
     for (const int t : flip.old) {
-      before += volume(tets[static_cast<std::size_t>(t)]);
-      const double q = quality(tets[static_cast<std::size_t>(t)]);
+      before += volume(m_tets[static_cast<std::size_t>(t)]);
+      const double q = quality(m_tets[static_cast<std::size_t>(t)]);
       old_quality = std::min(old_quality, q);
       old_slivers += q < k_sliver_deg;
     }
@@ -88,51 +131,49 @@ int flip_slivers(TetMesh& mesh, double bound_deg, int passes) {
     if (!(std::abs(after - before) <= 1e-9 * std::abs(before)) || new_slivers > old_slivers) return false;
     flip.gain = new_quality - old_quality;
     return flip.gain > 1e-9;
-  };
-  const auto face_flip = [&](int t, int k, Flip& flip) { // 2-3
-    const Eigen::Vector4i& tet = tets[static_cast<std::size_t>(t)];
+  }
+
+  /// The 2-3 flip of tet t's face opposite its vertex k.
+  bool face_flip(int t, int k, Flip& flip) const {
+    const Eigen::Vector4i& tet = m_tets[static_cast<std::size_t>(t)];
     const FaceKey key = face_key(tet, k);
-    const auto found = faces.find(key);
-    if (found == faces.end() || found->second.size() != 2) return false;
+    const auto found = m_faces.find(key);
+    if (found == m_faces.end() || found->second.size() != 2) return false;
     const int u = found->second[0] == t ? found->second[1] : found->second[0];
-    if (region[static_cast<std::size_t>(u)] != region[static_cast<std::size_t>(t)]) return false;
+    if (m_region[static_cast<std::size_t>(u)] != m_region[static_cast<std::size_t>(t)]) return false;
     const int d = tet[k];
     int e = -1;
     for (int j = 0; j < 4; ++j)
-      if (std::find(key.begin(), key.end(), tets[static_cast<std::size_t>(u)][j]) == key.end())
-        e = tets[static_cast<std::size_t>(u)][j];
+      if (std::find(key.begin(), key.end(), m_tets[static_cast<std::size_t>(u)][j]) == key.end())
+        e = m_tets[static_cast<std::size_t>(u)][j];
     flip.old = {t, u};
     flip.made.clear();
     for (int i = 0; i < 3; ++i)
       flip.made.push_back(oriented(Eigen::Vector4i(key[static_cast<std::size_t>(i)],
                                                    key[static_cast<std::size_t>((i + 1) % 3)], d, e)));
     return judge(flip);
-  };
-  // Edge removal: the n tets around an inner edge (a, b) (n from 3, the 3-2 flip, to 7) replaced
-  // by the 2(n - 2) tets joining a and b to a fan triangulation of the ring of their other
-  // vertices; the best of the n fans.
-  const auto edge_flip = [&](int t, int a, int b, Flip& flip) {
-    std::vector<int> ring;
-    for (const int u : star[static_cast<std::size_t>(a)])
-      if ((tets[static_cast<std::size_t>(u)].array() == b).any()) ring.push_back(u);
-    if (ring.size() < 3 || ring.size() > 7) return false;
+  }
+
+  /// The ring of vertices around the inner edge (a, b) in order, given the tets around it
+  /// (`ring`, all in tet t's subdomain); empty when the ring is not closed.
+  std::vector<int> edge_ring(int t, int a, int b, const std::vector<int>& ring) const {
     std::map<int, std::vector<int>> holding; // ring vertex -> the ring's tets holding it
     for (const int u : ring) {
-      if (region[static_cast<std::size_t>(u)] != region[static_cast<std::size_t>(t)]) return false;
+      if (m_region[static_cast<std::size_t>(u)] != m_region[static_cast<std::size_t>(t)]) return {};
       for (int j = 0; j < 4; ++j) {
-        const int w = tets[static_cast<std::size_t>(u)][j];
+        const int w = m_tets[static_cast<std::size_t>(u)][j];
         if (w != a && w != b) holding[w].push_back(u);
       }
     }
     // A closed ring: as many vertices as tets, each in two of them, each face around the edge
     // shared by two tets (inside, not boundary).
-    if (holding.size() != ring.size()) return false;
+    if (holding.size() != ring.size()) return {};
     for (const auto& [w, held] : holding) {
-      if (held.size() != 2) return false;
+      if (held.size() != 2) return {};
       FaceKey key{a, b, w};
       std::sort(key.begin(), key.end());
-      const auto found = faces.find(key);
-      if (found == faces.end() || found->second.size() != 2) return false;
+      const auto found = m_faces.find(key);
+      if (found == m_faces.end() || found->second.size() != 2) return {};
     }
     // The ring's vertices in order around the edge.
     std::vector<int> polygon{holding.begin()->first};
@@ -140,13 +181,26 @@ int flip_slivers(TetMesh& mesh, double bound_deg, int passes) {
     while (polygon.size() < ring.size()) {
       int next = -1;
       for (int j = 0; j < 4; ++j) {
-        const int w = tets[static_cast<std::size_t>(through)][j];
+        const int w = m_tets[static_cast<std::size_t>(through)][j];
         if (w != a && w != b && w != polygon.back()) next = w;
       }
       const std::vector<int>& held = holding[next];
       through = held[0] == through ? held[1] : held[0];
       polygon.push_back(next);
     }
+    return polygon;
+  }
+
+  /// Edge removal: the n tets around an inner edge (a, b) (n from 3, the 3-2 flip, to 7) replaced
+  /// by the 2(n - 2) tets joining a and b to a fan triangulation of the ring of their other
+  /// vertices; the best of the n fans.
+  bool edge_flip(int t, int a, int b, Flip& flip) const {
+    std::vector<int> ring;
+    for (const int u : m_star[static_cast<std::size_t>(a)])
+      if ((m_tets[static_cast<std::size_t>(u)].array() == b).any()) ring.push_back(u);
+    if (ring.size() < 3 || ring.size() > 7) return false;
+    const std::vector<int> polygon = edge_ring(t, a, b, ring);
+    if (polygon.empty()) return false;
     const auto n = static_cast<int>(polygon.size());
     bool found = false;
     Flip trial;
@@ -167,57 +221,54 @@ int flip_slivers(TetMesh& mesh, double bound_deg, int passes) {
       if (n == 3) break; // one triangle: every apex gives it
     }
     return found;
-  };
+  }
+
+  /// Replaces the flip's old tets by its new ones, in subdomain `kept_region`: the old slots
+  /// are reused first, in order; more are appended.
+  void apply(const Flip& best, int kept_region) {
+    for (const int u : best.old) {
+      leave(u);
+      m_alive[static_cast<std::size_t>(u)] = 0;
+    }
+    const std::vector<int>& slots = best.old;
+    for (std::size_t m = 0; m < best.made.size(); ++m) {
+      int slot;
+      if (m < slots.size()) {
+        slot = slots[m];
+      } else {
+        slot = static_cast<int>(m_tets.size());
+        m_tets.emplace_back();
+        m_region.push_back(kept_region);
+        m_alive.push_back(0);
+      }
+      m_tets[static_cast<std::size_t>(slot)] = best.made[m];
+      m_region[static_cast<std::size_t>(slot)] = kept_region;
+      m_alive[static_cast<std::size_t>(slot)] = 1;
+      enter(slot);
+    }
+  }
+
+  TetMesh& m_mesh;
+  bool m_labelled;
+  std::vector<Eigen::Vector4i> m_tets;
+  std::vector<int> m_region;
+  std::vector<char> m_alive;
+  std::map<FaceKey, std::vector<int>> m_faces;
+  std::vector<std::vector<int>> m_star;
+};
+
+} // namespace
+
+int flip_slivers(TetMesh& mesh, double bound_deg, int passes) {
+  FlipRepair repair(mesh);
   int flips = 0;
   for (int pass = 0; pass < passes; ++pass) {
-    int flips_in_pass = 0;
-    for (std::size_t t = 0; t < tets.size(); ++t) {
-      if (!alive[t] || quality(tets[t]) >= bound_deg) continue;
-      Flip best, candidate;
-      for (int k = 0; k < 4; ++k)
-        if (face_flip(static_cast<int>(t), k, candidate) && candidate.gain > best.gain) best = candidate;
-      for (int i = 0; i < 4; ++i)
-        for (int j = i + 1; j < 4; ++j)
-          if (edge_flip(static_cast<int>(t), tets[t][i], tets[t][j], candidate) && candidate.gain > best.gain)
-            best = candidate;
-      if (best.made.empty()) continue;
-      const int kept_region = region[t];
-      for (const int u : best.old) {
-        leave(u);
-        alive[static_cast<std::size_t>(u)] = 0;
-      }
-      std::vector<int> slots = best.old; // reused first, in order; more are appended
-      for (std::size_t m = 0; m < best.made.size(); ++m) {
-        int slot;
-        if (m < slots.size()) {
-          slot = slots[m];
-        } else {
-          slot = static_cast<int>(tets.size());
-          tets.emplace_back();
-          region.push_back(kept_region);
-          alive.push_back(0);
-        }
-        tets[static_cast<std::size_t>(slot)] = best.made[m];
-        region[static_cast<std::size_t>(slot)] = kept_region;
-        alive[static_cast<std::size_t>(slot)] = 1;
-        enter(slot);
-      }
-      ++flips_in_pass;
-    }
+    const int flips_in_pass = repair.pass(bound_deg);
     flips += flips_in_pass;
     if (flips_in_pass == 0) break;
   }
   if (flips == 0) return 0;
-  const auto count = static_cast<Eigen::Index>(std::count(alive.begin(), alive.end(), 1));
-  mesh.tets.resize(count, 4);
-  if (labelled) mesh.subdomains.resize(count);
-  Eigen::Index next = 0;
-  for (std::size_t t = 0; t < tets.size(); ++t) {
-    if (!alive[t]) continue;
-    mesh.tets.row(next) = tets[t].transpose();
-    if (labelled) mesh.subdomains[next] = region[t];
-    ++next;
-  }
+  repair.write_back();
   return flips;
 }
 
