@@ -1,6 +1,7 @@
 #include "report/html_text.hpp"
 
 #include <cstdio>
+#include <utility>
 
 namespace phantasm {
 
@@ -16,6 +17,25 @@ std::string html_escape(std::string_view text) {
     case '\'': out += "&#39;"; break;
     default: out += c;
     }
+  }
+  return out;
+}
+
+std::string html_unescape(std::string_view html) {
+  static constexpr std::pair<std::string_view, char> k_entities[] = {
+      {"&amp;", '&'}, {"&lt;", '<'}, {"&gt;", '>'}, {"&quot;", '"'}, {"&#39;", '\''}};
+  std::string out;
+  out.reserve(html.size());
+  for (std::size_t i = 0; i < html.size();) {
+    bool replaced = false;
+    for (const auto& [entity, c] : k_entities)
+      if (html.substr(i, entity.size()) == entity) {
+        out += c;
+        i += entity.size();
+        replaced = true;
+        break;
+      }
+    if (!replaced) out += html[i++];
   }
   return out;
 }
@@ -53,6 +73,21 @@ std::string significant(double value, int digits) {
   char text[64];
   std::snprintf(text, sizeof text, "%.*g", digits, value);
   return text;
+}
+
+std::string table_page_html(const std::string& title_html, const std::string& body) {
+  static const char* const k_style =
+      "body{font-family:sans-serif;max-width:1400px;margin:1em auto;padding:0 1em;color:#222}"
+      "h1{font-size:1.5em}h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:1.6em}"
+      "table{border-collapse:collapse;margin:.5em 0;display:block;max-width:100%;overflow-x:auto}"
+      "td,th{border:1px solid #ccc;padding:.2em .5em;text-align:left;vertical-align:top}"
+      "td.n{text-align:right;font-variant-numeric:tabular-nums}"
+      ".ok{background:#e6f4e6}.bad{background:#fde8e8}.warn{background:#fff4d6}"
+      "img.thumb{height:90px;image-rendering:pixelated;background:#000}"
+      "pre{white-space:pre-wrap;margin:0;max-width:40em}.plots{display:flex;flex-wrap:wrap;gap:.6em}";
+  return "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>" + title_html +
+         "</title><style>" + k_style + "</style></head><body>\n<h1>" + title_html + "</h1>\n" + body +
+         "</body></html>\n";
 }
 
 } // namespace phantasm

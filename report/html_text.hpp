@@ -11,6 +11,10 @@ namespace phantasm {
 /// or a log line shows as text wherever it lands (element content or attribute value).
 std::string html_escape(std::string_view text);
 
+/// The text html_escape() was given: its five entities turned back into characters (any other
+/// entity is left as it is).
+std::string html_unescape(std::string_view html);
+
 /// RFC 4648 base64 of `bytes` (with padding), as data: URLs want it.
 std::string base64_encode(std::string_view bytes);
 
@@ -19,5 +23,9 @@ std::string png_data_url(std::string_view png_bytes);
 
 /// A number with `digits` significant digits ("%.*g"): 0.000123, 12.3, 1.23e+06.
 std::string significant(double value, int digits = 3);
+
+/// A self-contained page of tables and plots (no script): its title (HTML, escaped already) as
+/// <title> and <h1>, then `body`.
+std::string table_page_html(const std::string& title_html, const std::string& body);
 
 } // namespace phantasm

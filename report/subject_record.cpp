@@ -231,6 +231,15 @@ void write_timings(const std::filesystem::path& dataset, const std::string& subj
   write_json_file(timing_path(dataset, subject), {{"stages", stages}});
 }
 
+std::string read_dataset_text(const std::filesystem::path& file, const char* what) {
+  return read_text(file, what);
+}
+
+std::vector<StageTiming> read_stage_timings(const std::filesystem::path& dataset,
+                                            const std::string& subject) {
+  return read_timings(timing_path(dataset, subject));
+}
+
 SubjectRecord read_subject_record(const std::filesystem::path& dataset, const std::string& subject) {
   const DatasetLayout layout(dataset, subject);
   SubjectRecord record;

@@ -73,6 +73,15 @@ std::filesystem::path timing_path(const std::filesystem::path& dataset, const st
 void write_timings(const std::filesystem::path& dataset, const std::string& subject,
                    const std::vector<StageTiming>& timings);
 
+/// A text file of the dataset, whole.
+/// @param what what the file should hold, named in the message
+/// @throws InputError naming the file when it cannot be read
+std::string read_dataset_text(const std::filesystem::path& file, const char* what);
+
+/// The stage times of a subject's run (timing_path); empty when they were not recorded.
+/// @throws InputError naming the file when it is damaged
+std::vector<StageTiming> read_stage_timings(const std::filesystem::path& dataset, const std::string& subject);
+
 /// Reads a complete subject (provenance.json present) and makes its pictures.
 /// @throws InputError naming the file that is missing or damaged (a file provenance.json lists,
 ///         a table that does not parse, volumes on different grids)

@@ -355,7 +355,7 @@ std::string failed_subject_report_html(const std::string& subject, const std::st
                                        const std::vector<std::string>& log_lines) {
   std::string body =
       "<h2 id=\"warnings\">Warnings and errors</h2>\n<div class=\"bad\"><p>The run of this subject "
-      "failed; nothing of it can be vouched for.</p><pre>" +
+      "failed; nothing of it can be vouched for.</p><pre class=\"reason\">" +
       html_escape(reason) + "</pre></div>\n";
   if (!log_lines.empty()) {
     body += "<h2>The run's log until then</h2><pre>";

@@ -3,6 +3,7 @@
 #include "io/atomic_file.hpp"
 #include "io/dataset_layout.hpp"
 #include "pipeline/cost_estimate.hpp"
+#include "report/dataset_page.hpp"
 
 #include <chrono>
 #include <iostream>
@@ -111,6 +112,13 @@ void add_batch_command(CLI::App& app, std::function<int()>& action) {
       if (summary.interrupted) {
         std::cerr << "phantasm: batch interrupted; complete subjects stay, run the batch again to finish\n";
         return static_cast<int>(exit_interrupted);
+      }
+      // The dataset's page (derivatives/phantasm/index.html): every subject made so far, by any shard.
+      try {
+        const std::filesystem::path page = write_dataset_page(options->output);
+        if (!options->quiet) std::cerr << "[batch] wrote " << page.string() << "\n";
+      } catch (const std::exception& error) {
+        std::cerr << "phantasm: warning: the dataset page was not written: " << error.what() << '\n';
       }
       if (!options->quiet || !summary.failed.empty()) {
         std::cerr << "[batch] " << summary.ran << " subjects made, " << summary.skipped

@@ -8,6 +8,7 @@
 #include "io/json_file.hpp"
 #include "io/nifti_file.hpp"
 #include "io/output_path.hpp"
+#include "report/benchmark_page.hpp"
 
 #include <iostream>
 #include <memory>
@@ -17,7 +18,7 @@ namespace phantasm::cli {
 void add_eval_command(CLI::App& app, std::function<int()>& action) {
   struct Options {
     std::string dataset, field, labels, json, subject, fixed = "ref";
-    std::string results, truth, csv, convention = "learn2reg";
+    std::string results, truth, csv, html, convention = "learn2reg";
     bool identity = false, quiet = false;
     int read_delay_ms = 0;
   };
@@ -55,11 +56,16 @@ void add_eval_command(CLI::App& app, std::function<int()>& action) {
                           "mrtrix-displacement");
   auto* csv =
       command->add_option("--csv", options->csv, "Write a task's scores per pair as CSV to this file");
+  auto* html = command->add_option(
+      "--html", options->html,
+      "Write a task's scores as a page to this file: per pair, per structure, against each varied factor "
+      "(docs/report.md)");
   // A task's options mean nothing without --results (and a subject's nothing with it): refused,
   // not ignored.
   truth->needs(results);
   convention->needs(results);
   csv->needs(results);
+  html->needs(results);
   command->add_flag("-q,--quiet", options->quiet, "Do not print the table");
   // For tests that interrupt an evaluation while it reads; hidden from --help.
   command->add_option("--read-delay-ms", options->read_delay_ms)->group("")->check(CLI::NonNegativeNumber);
@@ -74,6 +80,7 @@ void add_eval_command(CLI::App& app, std::function<int()>& action) {
       if (!options->json.empty()) require_replaceable_file(options->json, "--json");
       if (!options->results.empty()) {
         if (!options->csv.empty()) require_replaceable_file(options->csv, "--csv");
+        if (!options->html.empty()) require_replaceable_file(options->html, "--html");
         TaskScoreRequest task;
         task.task = options->dataset;
         task.results = options->results;
@@ -81,8 +88,11 @@ void add_eval_command(CLI::App& app, std::function<int()>& action) {
                                             : std::filesystem::path(options->truth);
         task.convention = field_convention_from_string(options->convention, "--convention");
         const nlohmann::json scores = score_task(task);
+        const std::string page =
+            options->html.empty() ? std::string() : benchmark_page_html({{method_name(scores), scores}});
         if (!options->json.empty()) write_json_file(options->json, scores);
         if (!options->csv.empty()) write_file_atomically(options->csv, task_scores_csv(scores));
+        if (!options->html.empty()) write_file_atomically(options->html, page);
         if (!options->quiet) std::cout << task_scores_table(scores);
         for (const auto& warning : scores["warnings"])
           std::cerr << "phantasm: warning: " << warning.get<std::string>() << '\n';

@@ -40,11 +40,13 @@ inline std::string raw_library_marker(const std::string& message) {
 }
 
 /// Whether a dataset file holds a run's measured times, which differ from run to run: a subject's
-/// timing.json and its report (derivatives/phantasm/sub-<id>.html, docs/report.md).
+/// timing.json, its report (derivatives/phantasm/sub-<id>.html) and the dataset's page
+/// (derivatives/phantasm/index.html, which also differs from shard to shard; docs/report.md).
 inline bool holds_run_times(const std::filesystem::path& relative) {
   const std::string name = relative.filename().string();
-  return name == "timing.json" || (relative.parent_path().filename() == "phantasm" &&
-                                   name.rfind("sub-", 0) == 0 && relative.extension() == ".html");
+  return name == "timing.json" ||
+         (relative.parent_path().filename() == "phantasm" && relative.extension() == ".html" &&
+          (name.rfind("sub-", 0) == 0 || name == "index.html"));
 }
 
 /// Every regular file under a folder, by path relative to it, with its bytes; files that hold a

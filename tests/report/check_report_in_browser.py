@@ -1,11 +1,17 @@
-"""Opens a subject's HTML report in headless Chromium (Debian's chromium) and checks what a reader
+"""Opens a subject's HTML report (or a dataset's or a benchmark's page) in headless Chromium (Debian's chromium) and checks what a reader
 sees: the page loads with no console error, no exception and no request outside the file; every
 image is loaded and not blank (more than one colour, or not fully transparent); the warnings
 section comes first, and its warning box shows when the run warned; a <script> from the scene
 file shows as text and does not run. Talks to Chromium over its DevTools pipe (file descriptors
 3 and 4, messages ended by a NUL byte), so it needs no network and no Python package.
 
-usage: check_report_in_browser.py REPORT.html [--expect-warnings] [--screenshot PNG]
+A dataset's page (--kind dataset) and a benchmark's page (--kind benchmark) have no script and
+no warnings-first rule; their links may point at files inside --root (the dataset folder) that
+exist, nothing else. Every plot (SVG) of any page must have a size and data (points, or lines
+through points); --min-plots counts them.
+
+usage: check_report_in_browser.py REPORT.html [--kind subject|dataset|benchmark] [--root DIR]
+       [--min-plots N] [--expect-warnings] [--expect-text TEXT] [--screenshot PNG]
 exit 0 when every check holds; otherwise 1, with one line per failed check."""
 import argparse
 import base64
@@ -107,9 +113,15 @@ PAGE_FACTS = r"""
   });
   const headings = Array.from(document.querySelectorAll('h2')).map((h) => ({id: h.id, text: h.textContent,
                                                                             top: h.getBoundingClientRect().top}));
+  const plots = Array.from(document.querySelectorAll('svg')).map((svg) => {
+    const box = svg.getBoundingClientRect();
+    return {label: svg.getAttribute('aria-label') || '', width: box.width, height: box.height,
+            points: svg.querySelectorAll('circle').length +
+                    Array.from(svg.querySelectorAll('polyline')).filter((l) => l.points.numberOfItems > 0).length};
+  });
   const warningBox = document.querySelector('#warnings + .warn, #warnings + .bad');
   return JSON.stringify({
-    images, headings,
+    images, headings, plots,
     warningBoxTop: warningBox ? warningBox.getBoundingClientRect().top : null,
     scripts: document.scripts.length,
     injected: window.phantasmInjected === true,
@@ -121,7 +133,20 @@ PAGE_FACTS = r"""
 """
 
 
-def check(report, expect_warnings, screenshot):
+def outside_root(reference, report, root):
+    """Why a link of a dataset or benchmark page is not allowed ("" when it is): it must be a
+    relative path to a file inside root that exists."""
+    if ":" in reference.split("/")[0] or reference.startswith("/"):
+        return "reference outside the dataset: "
+    target = os.path.realpath(os.path.join(os.path.dirname(os.path.abspath(report)), reference.split("#")[0]))
+    if not target.startswith(os.path.realpath(root) + os.sep):
+        return "reference outside the dataset: "
+    if not os.path.isfile(target):
+        return "link to a file that does not exist: "
+    return ""
+
+
+def check(report, expect_warnings, screenshot, kind="subject", root=None):
     failures = []
     profile = tempfile.mkdtemp(prefix="phantasm-chromium-")
     browser = DevTools(profile)
@@ -158,15 +183,29 @@ def check(report, expect_warnings, screenshot):
             if requested != url and not requested.startswith("data:"):
                 failures.append("request outside the file: " + requested[:200])
     for outside in facts["external"]:
-        failures.append("reference outside the file: " + outside[:200])
-    if not facts["images"]:
+        if kind == "subject":
+            failures.append("reference outside the file: " + outside[:200])
+        elif outside_root(outside, report, root):
+            failures.append(outside_root(outside, report, root) + outside[:200])
+    if not facts["images"] and kind != "benchmark":
         failures.append("no image in the page")
+    for plot in facts["plots"]:
+        if plot["width"] == 0 or plot["height"] == 0:
+            failures.append("plot not shown: " + plot["label"])
+        elif plot["points"] == 0:
+            failures.append("blank plot (no data point): " + plot["label"])
     for image in facts["images"]:
         if not image["complete"] or image["width"] == 0:
             failures.append("image not loaded: " + image["alt"])
         elif image["colours"] < 2 or image["opaque"] == 0:
             failures.append("blank image: " + image["alt"] + " (" + str(image["colours"]) + " colours, " +
                             str(image["opaque"]) + " opaque pixels)")
+    if kind != "subject":
+        if facts["injected"]:
+            failures.append("a <script> from a file of the dataset ran")
+        if facts["scripts"] != 0:
+            failures.append("expected no script, found " + str(facts["scripts"]))
+        return failures, facts
     headings = facts["headings"]
     if not headings or headings[0]["id"] != "warnings":
         failures.append("the first section is not the warnings: " + (headings[0]["text"] if headings else "none"))
@@ -191,17 +230,27 @@ def main():
     parser.add_argument("--expect-text", action="append", default=[],
                         help="text the page must show (e.g. a <script> tag of the scene, as text)")
     parser.add_argument("--screenshot")
+    parser.add_argument("--kind", choices=["subject", "dataset", "benchmark"], default="subject")
+    parser.add_argument("--root", help="the folder a dataset or benchmark page may link into (default: its own)")
+    parser.add_argument("--min-plots", type=int, default=0, help="plots (SVG) the page must hold at least")
     args = parser.parse_args()
     if shutil.which("chromium") is None:
         print("chromium is not installed (scripts/install-deps.sh installs it)")
         return 1
-    failures, facts = check(args.report, args.expect_warnings, args.screenshot)
+    if not os.path.isfile(args.report):
+        print("no such page: " + args.report)
+        return 1
+    failures, facts = check(args.report, args.expect_warnings, args.screenshot, args.kind,
+                            args.root or os.path.dirname(os.path.abspath(args.report)))
+    if len(facts["plots"]) < args.min_plots:
+        failures.append("expected " + str(args.min_plots) + " plots at least, found " + str(len(facts["plots"])))
     for text in args.expect_text:
         if text not in facts["text"]:
             failures.append("the page does not show the text " + text)
     for failure in failures:
         print(failure)
-    print(str(len(facts["images"])) + " images, " + str(len(facts["headings"])) + " sections, " +
+    print(str(len(facts["images"])) + " images, " + str(len(facts["plots"])) + " plots, " +
+          str(len(facts["headings"])) + " sections, " +
           str(len(failures)) + " failed checks")
     return 1 if failures else 0
 
