@@ -534,7 +534,71 @@ nlohmann::json field_sidecar(PhantomState from, PhantomState to, const std::stri
           {"Jacobian", jacobian}};
 }
 
-/// Labels, fractions, .vdb grids, landmarks, both fields with masks and sidecars, the Jacobian.
+/// Both displacement fields with their exactness masks and sidecars, and their Jacobians.
+void plan_fields(const Scene& scene, const VoxelizedPhantom& v, const DatasetLayout& layout,
+                 DatasetPlan& plan) {
+  // transform(from, to) lives on `to`'s grid: the reference grid's field carries reference
+  // points into the deformed state (ref_to_def), and brings deformed images onto it.
+  const auto on_reference_grid = [](PhantomState to) { return to == PhantomState::reference; };
+  const std::pair<PhantomState, PhantomState> directions[] = {
+      {PhantomState::deformed, PhantomState::reference}, {PhantomState::reference, PhantomState::deformed}};
+  if (scene.outputs.displacement_fields) {
+    for (const auto& [from, to] : directions) {
+      const bool ref_grid = on_reference_grid(to);
+      const std::filesystem::path field = layout.transform(from, to);
+      plan.file(field, [&v, ref_grid](const std::filesystem::path& p) {
+        // The ITK/elastix convention (README.md, Output): 5-D, components in LPS mm.
+        write_nifti(p, v.grid,
+                    lps_from_ras_components(ref_grid ? v.motion->ref_to_def : v.motion->def_to_ref),
+                    {NiftiIntent::displacement, 3, "phantasm displacement, LPS mm"});
+      });
+      const std::filesystem::path mask = layout.transform_mask(from, to);
+      plan.file(mask, [&v, ref_grid](const std::filesystem::path& p) {
+        const auto& exact = ref_grid ? v.motion->ref_to_def_exact : v.motion->def_to_ref_exact;
+        write_nifti_labels(p, v.grid, std::vector<std::int32_t>(exact.begin(), exact.end()),
+                           {NiftiIntent::none, 1, "1 where the field is exact"});
+      });
+      plan.json(sidecar_path(field),
+                [from = from, to = to, name = mask.filename().string(),
+                 jacobian = scene.outputs.jacobian
+                                ? layout.jacobian(from, to).filename().string()
+                                : std::string()] { return field_sidecar(from, to, name, jacobian); });
+      plan.json(sidecar_path(mask), [&v, ref_grid, field = field.filename().string()] {
+        // The values' hash lets phantasm eval refuse a mask changed after the run.
+        const auto& exact = ref_grid ? v.motion->ref_to_def_exact : v.motion->def_to_ref_exact;
+        std::string inside(exact.size(), '\0');
+        for (std::size_t i = 0; i < exact.size(); ++i)
+          inside[i] = exact[i] != 0 ? 1 : 0;
+        return nlohmann::json{{"Description", "1 where the field " + field +
+                                                  " is the solved motion, 0 where it is the smooth "
+                                                  "extension outside the simulated bodies"},
+                              {"Units", "n/a (0 or 1)"},
+                              {"ValuesSha256", sha256_hex(inside)},
+                              {"ValuesSha256Description",
+                               "SHA-256 of the mask's values, one byte per voxel (1 inside), i fastest"}};
+      });
+    }
+  }
+  if (scene.outputs.jacobian) {
+    for (const auto& [from, to] : directions) {
+      const bool ref_grid = on_reference_grid(to);
+      const std::filesystem::path path = layout.jacobian(from, to);
+      plan.file(path, [&v, ref_grid](const std::filesystem::path& p) {
+        write_nifti(p, v.grid, ref_grid ? v.motion->jacobian : v.motion->def_to_ref_jacobian,
+                    {NiftiIntent::none, 1, "det(I + grad u) of the field"});
+      });
+      plan.json(sidecar_path(path), [field = layout.transform(from, to).filename().string(), t = to] {
+        return nlohmann::json{
+            {"Description", "det(I + grad u) of the displacement field " + field +
+                                " (central differences, on the ses-" + session_label(t) +
+                                " grid): the local volume ratio of the other state to this one"},
+            {"Units", "n/a (ratio of volumes)"}};
+      });
+    }
+  }
+}
+
+/// Labels, fractions, .vdb grids, landmarks, and the fields (plan_fields).
 void plan_volumes(const Scene& scene, const VoxelizedPhantom& v, const DatasetLayout& layout,
                   DatasetPlan& plan) {
   const std::vector<std::pair<PhantomState, const TissueVolumes*>> states = {
@@ -603,66 +667,7 @@ void plan_volumes(const Scene& scene, const VoxelizedPhantom& v, const DatasetLa
       });
     }
   }
-  if (!v.motion) return;
-  // transform(from, to) lives on `to`'s grid: the reference grid's field carries reference
-  // points into the deformed state (ref_to_def), and brings deformed images onto it.
-  const auto on_reference_grid = [](PhantomState to) { return to == PhantomState::reference; };
-  const std::pair<PhantomState, PhantomState> directions[] = {
-      {PhantomState::deformed, PhantomState::reference}, {PhantomState::reference, PhantomState::deformed}};
-  if (scene.outputs.displacement_fields) {
-    for (const auto& [from, to] : directions) {
-      const bool ref_grid = on_reference_grid(to);
-      const std::filesystem::path field = layout.transform(from, to);
-      plan.file(field, [&v, ref_grid](const std::filesystem::path& p) {
-        // The ITK/elastix convention (README.md, Output): 5-D, components in LPS mm.
-        write_nifti(p, v.grid,
-                    lps_from_ras_components(ref_grid ? v.motion->ref_to_def : v.motion->def_to_ref),
-                    {NiftiIntent::displacement, 3, "phantasm displacement, LPS mm"});
-      });
-      const std::filesystem::path mask = layout.transform_mask(from, to);
-      plan.file(mask, [&v, ref_grid](const std::filesystem::path& p) {
-        const auto& exact = ref_grid ? v.motion->ref_to_def_exact : v.motion->def_to_ref_exact;
-        write_nifti_labels(p, v.grid, std::vector<std::int32_t>(exact.begin(), exact.end()),
-                           {NiftiIntent::none, 1, "1 where the field is exact"});
-      });
-      plan.json(sidecar_path(field),
-                [from = from, to = to, name = mask.filename().string(),
-                 jacobian = scene.outputs.jacobian
-                                ? layout.jacobian(from, to).filename().string()
-                                : std::string()] { return field_sidecar(from, to, name, jacobian); });
-      plan.json(sidecar_path(mask), [&v, ref_grid, field = field.filename().string()] {
-        // The values' hash lets phantasm eval refuse a mask changed after the run.
-        const auto& exact = ref_grid ? v.motion->ref_to_def_exact : v.motion->def_to_ref_exact;
-        std::string inside(exact.size(), '\0');
-        for (std::size_t i = 0; i < exact.size(); ++i)
-          inside[i] = exact[i] != 0 ? 1 : 0;
-        return nlohmann::json{{"Description", "1 where the field " + field +
-                                                  " is the solved motion, 0 where it is the smooth "
-                                                  "extension outside the simulated bodies"},
-                              {"Units", "n/a (0 or 1)"},
-                              {"ValuesSha256", sha256_hex(inside)},
-                              {"ValuesSha256Description",
-                               "SHA-256 of the mask's values, one byte per voxel (1 inside), i fastest"}};
-      });
-    }
-  }
-  if (scene.outputs.jacobian) {
-    for (const auto& [from, to] : directions) {
-      const bool ref_grid = on_reference_grid(to);
-      const std::filesystem::path path = layout.jacobian(from, to);
-      plan.file(path, [&v, ref_grid](const std::filesystem::path& p) {
-        write_nifti(p, v.grid, ref_grid ? v.motion->jacobian : v.motion->def_to_ref_jacobian,
-                    {NiftiIntent::none, 1, "det(I + grad u) of the field"});
-      });
-      plan.json(sidecar_path(path), [field = layout.transform(from, to).filename().string(), t = to] {
-        return nlohmann::json{
-            {"Description", "det(I + grad u) of the displacement field " + field +
-                                " (central differences, on the ses-" + session_label(t) +
-                                " grid): the local volume ratio of the other state to this one"},
-            {"Units", "n/a (ratio of volumes)"}};
-      });
-    }
-  }
+  if (v.motion) plan_fields(scene, v, layout, plan);
 }
 
 /// Every file of the dataset, in the order it is written; provenance.json last (its list of files

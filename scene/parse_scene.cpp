@@ -106,6 +106,12 @@ void parse_outputs(CheckedMap& map, OutputSettings& outputs) {
     map.context().problem(map.get("subject"), map.child_path("subject"),
                           "expected a BIDS label (letters and digits only), found '" + outputs.subject + "'");
   }
+  // The profile sets the switches' defaults: a switch the scene gives wins over it.
+  std::string profile;
+  if (map.choice("profile", profile, {"full", "benchmark"}) && profile == "benchmark") {
+    outputs.profile = OutputProfile::benchmark;
+    outputs.meshes = outputs.vdb = outputs.previews = outputs.fractions = outputs.parameter_maps = false;
+  }
   map.boolean("images", outputs.images);
   map.boolean("labels", outputs.labels);
   map.boolean("fractions", outputs.fractions);

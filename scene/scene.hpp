@@ -20,8 +20,14 @@
 
 namespace phantasm {
 
+/// A set of outputs named at once (outputs.profile): full writes every output the switches ask
+/// for; benchmark leaves out what a registration benchmark does not read (organ meshes, OpenVDB
+/// grids, previews, tissue fractions, parameter maps) unless the scene asks for them by name.
+enum class OutputProfile { full, benchmark };
+
 struct OutputSettings {
   std::string subject = "01";
+  OutputProfile profile = OutputProfile::full;
   bool images = true;
   bool labels = true;
   bool fractions = true;

@@ -333,6 +333,10 @@ const std::vector<SettingField<OutputSettings>>& declared_settings<OutputSetting
     SettingsDeclaration<O> d;
     // What a run writes; only the parameter maps reach a cache (the reference images' entry holds them).
     d.field("subject", &O::subject, "", "a BIDS label", "the dataset's subject label")
+        .choice("profile", &O::profile,
+                {{"full", OutputProfile::full}, {"benchmark", OutputProfile::benchmark}},
+                "the switches' defaults: every output, or none of meshes, vdb, previews, fractions and "
+                "parameter_maps")
         .field("images", &O::images, "", "", "MR images")
         .field("labels", &O::labels, "", "", "label volumes")
         .field("fractions", &O::fractions, "", "", "tissue fraction volumes")
@@ -416,10 +420,10 @@ std::vector<const void*> settings_members(const MriSettings& s) {
 }
 
 std::vector<const void*> settings_members(const OutputSettings& s) {
-  const auto& [subject, images, labels, fractions, fields, jacobian, landmarks, meshes, vdb, previews, maps] =
-      s;
-  return {&subject,   &images, &labels, &fractions, &fields, &jacobian,
-          &landmarks, &meshes, &vdb,    &previews,  &maps};
+  const auto& [subject, profile, images, labels, fractions, fields, jacobian, landmarks, meshes, vdb,
+               previews, maps] = s;
+  return {&subject,  &profile,   &images, &labels, &fractions, &fields,
+          &jacobian, &landmarks, &meshes, &vdb,    &previews,  &maps};
 }
 
 namespace {
