@@ -214,7 +214,7 @@ double seconds_since(Clock::time_point start) {
 
 } // namespace
 
-bool LocalGlobalSolver::Impl::quasi_newton_step(sim_detail::QuasiNewtonHistory& history,
+bool LocalGlobalSolver::Impl::quasi_newton_step(sim_detail::QuasiNewtonHistory& pairs,
                                                 const Eigen::MatrixX3d& x, const Eigen::MatrixX3d& gradient,
                                                 double previous, const Eigen::MatrixX3d& target,
                                                 Eigen::MatrixX3d& p, Eigen::MatrixX3d& trial, double& energy,
@@ -222,13 +222,13 @@ bool LocalGlobalSolver::Impl::quasi_newton_step(sim_detail::QuasiNewtonHistory& 
   // The direction: the two-loop recursion around gamma K^-1.
   auto start = Clock::now();
   direction = -gradient;
-  history.first_loop(direction);
-  factor->solve(history.newest_y(), scaled, threads);
+  pairs.first_loop(direction);
+  factor->solve(pairs.newest_y(), scaled, threads);
   factor->solve(direction, solution, threads);
   report.global_seconds += seconds_since(start);
   start = Clock::now();
-  direction = (history.newest_sy() / dot(history.newest_y(), scaled)) * solution;
-  history.second_loop(direction);
+  direction = (pairs.newest_sy() / dot(pairs.newest_y(), scaled)) * solution;
+  pairs.second_loop(direction);
   const double slope = dot(gradient, direction);
   double step = 1.0;
   bool accepted = false;
@@ -361,7 +361,6 @@ SolveReport LocalGlobalSolver::solve(Eigen::MatrixX3d& p, const Eigen::MatrixX3d
   m->finish_report(m->free_positions(p), target, report);
   finish_solve(m->model, StepInertia{m->alpha, target}, p, stop, *test, true, report);
   return report;
-}
 }
 
 } // namespace phantasm

@@ -90,9 +90,10 @@ struct LocalGlobalSolver::Impl {
   /// contact count into the report.
   void finish_report(const Eigen::MatrixX3d& x_free, const Eigen::MatrixX3d& target, SolveReport& report);
   /// An iteration of solve()'s second phase (L-BFGS around the global matrix): the two-loop
-  /// direction from x (its gradient, its energy `previous`) and a backtracking line search on the
-  /// energy. True when the search accepts a point: the point in `trial`, p and `energy`.
-  bool quasi_newton_step(sim_detail::QuasiNewtonHistory& history, const Eigen::MatrixX3d& x,
+  /// direction from x (its gradient, its energy `previous`; `pairs` the L-BFGS history) and a
+  /// backtracking line search on the energy. True when the search accepts a point: the point in
+  /// `trial`, p and `energy`.
+  bool quasi_newton_step(sim_detail::QuasiNewtonHistory& pairs, const Eigen::MatrixX3d& x,
                          const Eigen::MatrixX3d& gradient, double previous, const Eigen::MatrixX3d& target,
                          Eigen::MatrixX3d& p, Eigen::MatrixX3d& trial, double& energy, SolveReport& report);
   /// A plain iteration of solve() (the global step after the local step), with Anderson's
