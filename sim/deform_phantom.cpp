@@ -94,13 +94,21 @@ PhantomDeformation deform_phantom(const DeformationSettings& deformation, const 
   add_collisions(deformation.collisions, organs, phantom, built.bodies, stiffness, model, report);
 
   Eigen::MatrixX3d p = model.rest_positions_m;
-  if (!built.bodies.empty()) solve_frames(deformation, model, loads, p, result, report, reporter);
   // Growth prescribes the grown tets' volume in the result: their rest volume is rescaled until
-  // the solve meets it (sim/growth.hpp).
-  for (int round = 0; deformation.mode == DeformationMode::quasi_static && !built.bodies.empty() &&
-                      recalibrate_growth(deformation, built, p, round, report);
-       ++round)
-    solve_frames(deformation, model, loads, p, result, report, reporter);
+  // the solve meets it (sim/growth.hpp). The solves that only measure how far the rest volumes
+  // reach are rough (sim/load_schedule.hpp), each starting from the last one's positions; once
+  // a rough solve meets the prescription, an exact solve from there decides.
+  const bool calibrating = deformation.mode == DeformationMode::quasi_static && !built.bodies.empty() &&
+                           std::any_of(built.grown_tets.begin(), built.grown_tets.end(),
+                                       [](std::size_t tets) { return tets > 0; });
+  bool rough = calibrating;
+  if (!built.bodies.empty()) solve_frames(deformation, model, loads, p, result, report, reporter, rough);
+  for (int round = 0; calibrating; ++round) {
+    const std::vector<double> ratios = built.growth_rest_ratio;
+    if (!recalibrate_growth(deformation, built, p, round, rough, report)) break;
+    if (built.growth_rest_ratio == ratios) rough = false; // met roughly: the exact solve
+    solve_frames(deformation, model, loads, p, result, report, reporter, rough);
+  }
   collect_deformations(organs, phantom, assignment, built.bodies, p / k_mm, result);
   check_inversions(deformation, result, report);
   return result;

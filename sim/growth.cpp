@@ -14,6 +14,11 @@
 namespace phantasm::sim_detail {
 namespace {
 
+/// The steepest secant slope (reached ratio over rest ratio) a calibration step trusts: a grown
+/// region's tets reach at most their own rest-volume change, less what the tissue around
+/// resists, plus what grown neighbours push on them.
+constexpr double k_largest_growth_slope = 2.0;
+
 std::string growth_load_key(std::size_t k, const LoadSettings& load) {
   return "deformation.loads[" + std::to_string(k) + "]." + (load.regions.empty() ? "organ" : "region");
 }
@@ -89,7 +94,7 @@ void apply_growth(const DeformationSettings& deformation, const OrganTable& orga
 }
 
 bool recalibrate_growth(const DeformationSettings& deformation, BodyModel& built, const Eigen::MatrixX3d& p_m,
-                        int round, StageReport& report) {
+                        int round, bool rough, StageReport& report) {
   ElasticModel& model = built.model;
   const std::size_t loads = built.growth_rest_ratio.size();
   std::vector<double> rest(loads, 0.0), deformed(loads, 0.0);
@@ -113,7 +118,7 @@ bool recalibrate_growth(const DeformationSettings& deformation, BodyModel& built
     const LoadSettings& load = deformation.loads[k];
     const double reached = deformed[k] / rest[k], wanted = 1.0 + load.volume_change;
     previous_reached[k] = reached;
-    if (std::abs(reached - wanted) <= k_growth_tolerance) continue;
+    if (std::abs(reached - wanted) <= (rough ? k_rough_growth_tolerance : k_growth_tolerance)) continue;
     if (round >= k_growth_rounds || !(reached > 0.0)) {
       throw SettingError(growth_load_key(k, load),
                          "expected a volume change the tissue around can take up, found " +
@@ -124,19 +129,25 @@ bool recalibrate_growth(const DeformationSettings& deformation, BodyModel& built
                              "or a smaller change)");
     }
     // The reached ratio is about linear in the rest ratio: the secant through the last two
-    // solves (the first through no growth, which reaches no change); where the two coincide,
-    // a step that assumes the rest ratio reached in full.
+    // solves (the first through no growth, which reaches no change); where the two coincide or
+    // their slope is not one the tissue around can give (the tets reaching more than twice
+    // their own change), a step that assumes the rest ratio reached in full.
     const double ratio = built.growth_rest_ratio[k];
     double next = ratio * wanted / reached;
     if (!built.growth_previous_ratio.empty()) {
       const double slope =
           (reached - built.growth_previous_reached[k]) / (ratio - built.growth_previous_ratio[k]);
-      if (std::isfinite(slope) && slope > 0.0)
+      if (std::isfinite(slope) && slope > 0.0 && slope <= k_largest_growth_slope)
         next = std::clamp(ratio + (wanted - reached) / slope, 0.5 * ratio, 2.0 * ratio);
     }
     rescale[k] = next / ratio;
     built.growth_rest_ratio[k] = next;
     rescaled = true;
+  }
+  if (!rescaled && rough) {
+    // Met on a rough solve: the same rest volumes solved exactly, to be measured again. The
+    // secant keeps its earlier point (a second point at the same ratio has no slope).
+    return true;
   }
   built.growth_previous_ratio = previous_ratio;
   built.growth_previous_reached = previous_reached;

@@ -30,17 +30,23 @@ void apply_growth(const DeformationSettings& deformation, const OrganTable& orga
 /// solves that may meet it (recalibrate_growth).
 inline constexpr double k_growth_tolerance = 1e-3;
 inline constexpr int k_growth_rounds = 8;
+/// The miss a rough solve must be within before the exact solve that decides (a quarter of the
+/// tolerance: the exact solve seldom moves the tets' volume by more than that).
+inline constexpr double k_rough_growth_tolerance = 0.25 * k_growth_tolerance;
 
 /// A growth load prescribes its tets' volume change in the result: after the solve of `round`
 /// (0 first), the volume each load's tets reach in `p_m` (m) against their rest volume before
 /// growth. Where one misses 1 + g by more than k_growth_tolerance, its tets' rest-volume ratio is
 /// moved along the secant of the reached ratio through the last two solves (the tissue around
-/// takes up less than the rest-volume change) and true says to solve again; else each load's figures go into
-/// `report` and false says done.
+/// takes up less than the rest-volume change) and true says to solve again. Where all meet
+/// k_rough_growth_tolerance after a `rough` solve (sim/load_schedule.hpp: no finishing Newton
+/// steps), true says to solve the same rest volumes again exactly; after an exact solve, each
+/// load's figures go into `report` and false says done: only an exact solve's volumes are ever
+/// reported as met.
 /// @throws SettingError (deformation.loads[k].organ or .region) when a load still misses after
 ///   k_growth_rounds solves or inverts its tets: no room to give way
 bool recalibrate_growth(const DeformationSettings& deformation, BodyModel& built, const Eigen::MatrixX3d& p_m,
-                        int round, StageReport& report);
+                        int round, bool rough, StageReport& report);
 
 /// Checks that every growth load grew some tets and reports each one as modelled.
 /// @throws SettingError (deformation.loads[k].organ, or .region) for an organ or regions no

@@ -17,9 +17,15 @@ double profile(MotionProfile motion, double period_s, double t);
 /// times with the loads and obstacles on their motion profiles. p (metres, one row per model
 /// vertex) goes from rest to the last frame's positions; every frame's SolveReport, the load
 /// and obstacle errors go into `result`, what was solved into `report`.
+/// A `rough` solve (a growth calibration's measurement, sim/growth.hpp) stops at the residual
+/// test alone, against its own initial residual (a small change of the rest volumes from the
+/// last solve's positions is solved to the same fraction as the first change from rest): no
+/// distance test, and none of the Newton steps that finish it. The calibration's last solve is
+/// never rough.
 /// @throws SettingError for a position-based solver in quasi-static mode
 /// @throws InputError when nothing holds the model in quasi-static mode, or when a solve goes non-finite
 void solve_frames(const DeformationSettings& deformation, ElasticModel& model, Loads& loads,
-                  Eigen::MatrixX3d& p, PhantomDeformation& result, StageReport& report, Reporter& reporter);
+                  Eigen::MatrixX3d& p, PhantomDeformation& result, StageReport& report, Reporter& reporter,
+                  bool rough = false);
 
 } // namespace phantasm::sim_detail
