@@ -192,6 +192,7 @@ std::string derivatives_bidsignore() {
          "/sub-*/scene.yaml\n"
          "/sub-*/timing.json\n"
          "/sub-*.html\n"
+         "/index.html\n"
          "/cache/\n";
 }
 
