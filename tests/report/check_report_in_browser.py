@@ -11,7 +11,7 @@ exist, nothing else. Every plot (SVG) of any page must have a size and data (poi
 through points); --min-plots counts them.
 
 usage: check_report_in_browser.py REPORT.html [--kind subject|dataset|benchmark] [--root DIR]
-       [--min-plots N] [--expect-warnings] [--expect-text TEXT] [--screenshot PNG]
+       [--min-plots N] [--expect-warnings] [--expect-text TEXT] [--screenshot PNG [--screenshot-at ID]]
 exit 0 when every check holds; otherwise 1, with one line per failed check."""
 import argparse
 import base64
@@ -146,7 +146,7 @@ def outside_root(reference, report, root):
     return ""
 
 
-def check(report, expect_warnings, screenshot, kind="subject", root=None):
+def check(report, expect_warnings, screenshot, kind="subject", root=None, screenshot_at=None):
     failures = []
     profile = tempfile.mkdtemp(prefix="phantasm-chromium-")
     browser = DevTools(profile)
@@ -162,6 +162,9 @@ def check(report, expect_warnings, screenshot, kind="subject", root=None):
         facts = json.loads(browser.send("Runtime.evaluate", {"expression": PAGE_FACTS, "returnByValue": True})
                            ["result"]["value"])
         if screenshot:
+            if screenshot_at:
+                browser.send("Runtime.evaluate", {"expression": "document.getElementById(%s).scrollIntoView()"
+                                                                % json.dumps(screenshot_at)})
             shot = browser.send("Page.captureScreenshot", {"format": "png"})["data"]
             with open(screenshot, "wb") as out:
                 out.write(base64.b64decode(shot))
@@ -229,7 +232,8 @@ def main():
     parser.add_argument("--expect-warnings", action="store_true")
     parser.add_argument("--expect-text", action="append", default=[],
                         help="text the page must show (e.g. a <script> tag of the scene, as text)")
-    parser.add_argument("--screenshot")
+    parser.add_argument("--screenshot", help="write what the window shows as this PNG")
+    parser.add_argument("--screenshot-at", help="scroll the element of this id to the top first")
     parser.add_argument("--kind", choices=["subject", "dataset", "benchmark"], default="subject")
     parser.add_argument("--root", help="the folder a dataset or benchmark page may link into (default: its own)")
     parser.add_argument("--min-plots", type=int, default=0, help="plots (SVG) the page must hold at least")
@@ -241,7 +245,7 @@ def main():
         print("no such page: " + args.report)
         return 1
     failures, facts = check(args.report, args.expect_warnings, args.screenshot, args.kind,
-                            args.root or os.path.dirname(os.path.abspath(args.report)))
+                            args.root or os.path.dirname(os.path.abspath(args.report)), args.screenshot_at)
     if len(facts["plots"]) < args.min_plots:
         failures.append("expected " + str(args.min_plots) + " plots at least, found " + str(len(facts["plots"])))
     for text in args.expect_text:
