@@ -9,14 +9,13 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <functional>
 #include <map>
 
 namespace phantasm {
 namespace {
 
 /// A number of the scores (a member path like {"tre_mm", "mean"}); NaN when null or absent.
-double score(const nlohmann::json& object, std::initializer_list<const char*> path) {
+double score(const nlohmann::json& object, const std::vector<const char*>& path) {
   const nlohmann::json* at = &object;
   for (const char* key : path) {
     if (!at->is_object() || !at->contains(key)) return std::nan("");
@@ -37,31 +36,20 @@ std::string json_as_text(const nlohmann::json& value) {
 }
 
 /// A figure of a pair, as the page plots it against each factor.
+/// A figure of each pair plotted against the factors: its label and its member path in the scores.
 struct PairFigure {
   const char* label;
-  std::function<double(const nlohmann::json&)> of;
+  std::vector<const char*> path;
 };
 
 const std::vector<PairFigure>& pair_figures() {
   static const std::vector<PairFigure> figures = {
-      {"mean Dice", [](const nlohmann::json& p) { return score(p, {"mean_dice"}); }},
-      {"mean HD95 (mm)", [](const nlohmann::json& p) { return score(p, {"mean_hd95_mm"}); }},
-      {"mean TRE (mm)",
-       [](const nlohmann::json& p) {
-         return score(p, {"tre_mm", "mean"});
-       }},
-      {"mean endpoint error (mm)",
-       [](const nlohmann::json& p) {
-         return score(p, {"endpoint_error_mm", "mean"});
-       }},
-      {"NDV (% of the cubes)",
-       [](const nlohmann::json& p) {
-         return score(p, {"ndv", "percent"});
-       }},
-      {"folding fraction (central differences)",
-       [](const nlohmann::json& p) {
-         return score(p, {"jacobian_central_differences", "folding_fraction"});
-       }},
+      {"mean Dice", {"mean_dice"}},
+      {"mean HD95 (mm)", {"mean_hd95_mm"}},
+      {"mean TRE (mm)", {"tre_mm", "mean"}},
+      {"mean endpoint error (mm)", {"endpoint_error_mm", "mean"}},
+      {"NDV (% of the cubes)", {"ndv", "percent"}},
+      {"folding fraction (central differences)", {"jacobian_central_differences", "folding_fraction"}},
   };
   return figures;
 }
@@ -117,7 +105,7 @@ std::string factor_plots(const std::vector<MethodScores>& methods) {
         for (const nlohmann::json& pair : m.scores.at("pairs")) {
           const nlohmann::json factors_of_pair = pair.value("factors", nlohmann::json::object());
           if (factors_of_pair.contains(factor))
-            line.points.emplace_back(json_as_text(factors_of_pair[factor]), figure.of(pair));
+            line.points.emplace_back(json_as_text(factors_of_pair[factor]), score(pair, figure.path));
         }
         series.push_back(std::move(line));
       }

@@ -49,21 +49,20 @@ std::size_t count_of(const std::string& text, const std::string& what) {
   return n;
 }
 
-/// The cx of each <circle> of an SVG, in order.
-std::vector<double> circle_xs(const std::string& svg) {
-  std::vector<double> xs;
-  static const std::regex pattern("<circle cx=\"([-0-9.e]+)\"");
+/// The cx (or cy) of each <circle> of an SVG, in order.
+std::vector<double> circle_coordinates(const std::string& svg, bool y) {
+  std::vector<double> values;
+  static const std::regex pattern("<circle cx=\"([-0-9.e]+)\" cy=\"([-0-9.e]+)\"");
   for (std::sregex_iterator m(svg.begin(), svg.end(), pattern), end; m != end; ++m)
-    xs.push_back(std::stod((*m)[1]));
-  return xs;
+    values.push_back(std::stod((*m)[y ? 2 : 1]));
+  return values;
 }
 
+std::vector<double> circle_xs(const std::string& svg) {
+  return circle_coordinates(svg, false);
+}
 std::vector<double> circle_ys(const std::string& svg) {
-  std::vector<double> ys;
-  static const std::regex pattern("<circle cx=\"[-0-9.e]+\" cy=\"([-0-9.e]+)\"");
-  for (std::sregex_iterator m(svg.begin(), svg.end(), pattern), end; m != end; ++m)
-    ys.push_back(std::stod((*m)[1]));
-  return ys;
+  return circle_coordinates(svg, true);
 }
 
 DatasetSubjectRow written_row(const std::string& subject, const std::string& scale, double displacement) {
