@@ -11,6 +11,7 @@
 #include "mri/mri_plan.hpp"
 #include "pipeline/anatomy_cache.hpp"
 #include "pipeline/anatomy_checks.hpp"
+#include "pipeline/body_mesh_cache.hpp"
 #include "pipeline/cost_estimate.hpp"
 #include "pipeline/growth_atlas.hpp"
 #include "pipeline/material_maps_stage.hpp"
@@ -163,7 +164,9 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
   StageReport& sim = result.stages[1];
   if (scene.deformation.mode != DeformationMode::none) {
     const StageLines lines(sim);
-    result.deformation = deform_phantom(deformation, scene.organs, result.phantom, sim, reporter);
+    // The bodies' tet meshes are the anatomy's for every subject: kept beside it, meshed once.
+    result.deformation = deform_phantom(deformation, scene.organs, result.phantom, sim, reporter,
+                                        body_mesh_cache(anatomy_key, cache, sim, reporter));
     lines.print_new(sim, reporter);
     result.deformed = deformed_phantom(result.phantom, *result.deformation);
   }

@@ -80,6 +80,22 @@ std::uint32_t body_mesh_seed(std::uint64_t scene_seed, std::size_t b) {
   return seed;
 }
 
+/// What shapes body b's mesh of nested organs besides the organs' shapes: the body, its regions
+/// (organs by name, each with the region holding it), the criteria and the seed, one per line.
+std::string nested_mesh_inputs(const OrganTable& organs, std::size_t b,
+                               const std::vector<std::size_t>& regions, const std::vector<int>& parents,
+                               const TetMeshCriteria& c, std::uint32_t seed) {
+  std::ostringstream out;
+  out.precision(17);
+  out << "body " << b << " " << organs[b].name << "\nregions";
+  for (std::size_t k = 0; k < regions.size(); ++k)
+    out << " " << regions[k] << ":" << organs[regions[k]].name << "<" << parents[k];
+  out << "\ncriteria " << c.facet_size_mm << " " << c.facet_distance_mm << " " << c.facet_angle_deg << " "
+      << c.cell_size_mm << " " << c.cell_radius_edge_ratio << " " << c.sliver_bound_deg << "\nseed " << seed
+      << "\n";
+  return out.str();
+}
+
 /// The tet mesh body b is solved on, and for each of its tets the organ whose material it takes.
 /// Alone, the organ's own mesh; with organs nested in it (closed shapes carried by b), one mesh of
 /// all of them at anatomy.tet_size_mm whose tets each lie in one organ's own region (the innermost
@@ -89,7 +105,7 @@ std::uint32_t body_mesh_seed(std::uint64_t scene_seed, std::size_t b) {
 std::shared_ptr<const TetMesh> body_mesh(const DeformationSettings& deformation, const OrganTable& organs,
                                          const Phantom& phantom, const std::vector<int>& body_of,
                                          std::size_t b, std::vector<std::size_t>& organ_of_tet,
-                                         StageReport& report) {
+                                         StageReport& report, const BodyMeshSource& source) {
   const Organ& organ = phantom.organs[b];
   // Nested organs ordered by depth, so that each one's container comes before it.
   std::vector<std::size_t> carried{b};
@@ -141,9 +157,16 @@ std::shared_ptr<const TetMesh> body_mesh(const DeformationSettings& deformation,
   progress_detail(organs[b].name + ": one tet mesh of it and the " + std::to_string(regions.size() - 1) +
                   " organs nested in it (CGAL Mesh_3, tet size " + format_number(phantom.tet_size_mm) +
                   " mm)");
-  SliverRepairs repairs;
-  auto mesh = std::make_shared<TetMesh>(
-      mesh_nested_solid(nested, criteria, body_mesh_seed(phantom.seed, b), &repairs));
+  const std::uint32_t seed = body_mesh_seed(phantom.seed, b);
+  const auto build = [&] {
+    NestedBodyMesh built;
+    built.mesh = mesh_nested_solid(nested, criteria, seed, &built.repairs);
+    return built;
+  };
+  NestedBodyMesh made =
+      source ? source(nested_mesh_inputs(organs, b, regions, nested.parent, criteria, seed), build) : build();
+  const SliverRepairs repairs = made.repairs;
+  auto mesh = std::make_shared<TetMesh>(std::move(made.mesh));
   organ_of_tet.clear();
   for (Eigen::Index t = 0; t < mesh->tets.rows(); ++t)
     organ_of_tet.push_back(regions[static_cast<std::size_t>(mesh->subdomains[t])]);
@@ -171,13 +194,14 @@ std::shared_ptr<const TetMesh> body_mesh(const DeformationSettings& deformation,
 /// A solid organ b as a body of its tets (body_mesh), each with the material of its organ; its
 /// boundary is held when it lies inside another organ.
 Body add_solid_body(const DeformationSettings& deformation, const OrganTable& organs, const Phantom& phantom,
-                    const BodyAssignment& assignment, std::size_t b, BodyModel& built, StageReport& report) {
+                    const BodyAssignment& assignment, std::size_t b, BodyModel& built, StageReport& report,
+                    const BodyMeshSource& body_meshes) {
   const std::size_t n = organs.size();
   const std::vector<int>& body_of = assignment.body_of;
   ElasticModel& model = built.model;
   std::vector<std::size_t> organ_of_tet;
   std::shared_ptr<const TetMesh> shared =
-      body_mesh(deformation, organs, phantom, body_of, b, organ_of_tet, report);
+      body_mesh(deformation, organs, phantom, body_of, b, organ_of_tet, report, body_meshes);
   const TetMesh& mesh = *shared;
   std::vector<TetMaterial> materials;
   std::map<std::string, int> tets_per_organ;
@@ -232,7 +256,8 @@ Body add_solid_body(const DeformationSettings& deformation, const OrganTable& or
 } // namespace
 
 BodyModel build_body_model(const DeformationSettings& deformation, const OrganTable& organs,
-                           const Phantom& phantom, const BodyAssignment& assignment, StageReport& report) {
+                           const Phantom& phantom, const BodyAssignment& assignment, StageReport& report,
+                           const BodyMeshSource& body_meshes) {
   BodyModel built;
   for (std::size_t b = 0; b < assignment.body_of.size(); ++b) {
     if (assignment.body_of[b] != static_cast<int>(b)) continue;
@@ -240,7 +265,8 @@ BodyModel build_body_model(const DeformationSettings& deformation, const OrganTa
     if (!organ.solid) {
       built.bodies.push_back(add_shell_body(deformation, organs, organ, b, built.model, report));
     } else {
-      built.bodies.push_back(add_solid_body(deformation, organs, phantom, assignment, b, built, report));
+      built.bodies.push_back(
+          add_solid_body(deformation, organs, phantom, assignment, b, built, report, body_meshes));
     }
   }
   report_growth(deformation, built.grown_tets, report);

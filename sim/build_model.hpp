@@ -27,9 +27,11 @@ struct BodyModel {
 /// organ's tet mesh, or with organs nested in it one tet mesh of all of them (at the phantom's
 /// tet size), each tet with the material of its subdomain's organ; a surface organ as a shell of its
 /// triangles (with its enclosed volume kept when the settings ask). What was modelled goes into `report`.
+/// @param body_meshes where tet meshes of nested organs come from (empty: built here)
 /// @throws InputError for an undefined material, or an enclosed volume asked of an open sheet
 BodyModel build_body_model(const DeformationSettings& deformation, const OrganTable& organs,
-                           const Phantom& phantom, const BodyAssignment& assignment, StageReport& report);
+                           const Phantom& phantom, const BodyAssignment& assignment, StageReport& report,
+                           const BodyMeshSource& body_meshes = {});
 
 /// The mean diagonal of the model's elastic matrix per vertex (N/m): the scale of the stiff
 /// penalties (displacement springs, contacts), 10^4 times this.

@@ -72,7 +72,8 @@ void check_inversions(const DeformationSettings& deformation, PhantomDeformation
 } // namespace
 
 PhantomDeformation deform_phantom(const DeformationSettings& deformation, const OrganTable& organs,
-                                  const Phantom& phantom, StageReport& report, Reporter& reporter) {
+                                  const Phantom& phantom, StageReport& report, Reporter& reporter,
+                                  const BodyMeshSource& body_meshes) {
   using namespace sim_detail;
   const BodyAssignment assignment = assign_bodies(deformation, organs, phantom, report);
   // Building a body's conforming tet mesh of its nested organs (CGAL Mesh_3) can take minutes on
@@ -80,7 +81,7 @@ PhantomDeformation deform_phantom(const DeformationSettings& deformation, const 
   BodyModel built = [&] {
     ProgressBar meshing(reporter, "bodies", 1);
     meshing.set_detail("building the bodies' tet meshes and constraints");
-    return build_body_model(deformation, organs, phantom, assignment, report);
+    return build_body_model(deformation, organs, phantom, assignment, report, body_meshes);
   }();
   ElasticModel& model = built.model;
   PhantomDeformation result;

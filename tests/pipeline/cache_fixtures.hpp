@@ -3,6 +3,7 @@
 // Helpers shared by the tests of the caches (anatomy, reference state, reference images).
 
 #include "pipeline/dataset_writer.hpp"
+#include "pipeline/run_pipeline.hpp"
 #include "scene/scene.hpp"
 #include "tests/support/files.hpp"
 
@@ -39,6 +40,28 @@ inline std::map<std::string, std::string> files_of(const RunSummary& run,
   for (const std::filesystem::path& file : run.files)
     files[file.generic_string()] = read_file(folder / file);
   return files;
+}
+
+/// A run of the scene into `output` with its caches in `cache` (none when empty): its summary
+/// and every file it wrote, with its bytes.
+inline std::pair<RunSummary, std::map<std::string, std::string>>
+run_with_cache(const Scene& scene, const std::filesystem::path& output, const std::filesystem::path& cache) {
+  RunOptions options;
+  options.output = output;
+  options.anatomy_cache = cache;
+  Reporter quiet = Reporter::silent();
+  const RunSummary summary = run_scene(scene, options, quiet);
+  return {summary, files_of(summary, output)};
+}
+
+/// The entries (.bin) of a cache folder whose names start with `prefix`.
+inline std::vector<std::filesystem::path> cache_entries(const std::filesystem::path& cache,
+                                                        const std::string& prefix) {
+  std::vector<std::filesystem::path> entries;
+  for (const auto& entry : std::filesystem::directory_iterator(cache))
+    if (entry.path().filename().string().rfind(prefix, 0) == 0 && entry.path().extension() == ".bin")
+      entries.push_back(entry.path());
+  return entries;
 }
 
 /// Whether a dataset file is the run's record (log, provenance), not its data.
