@@ -1,9 +1,9 @@
 #include "anatomy/anatomy_plan.hpp"
 
+#include "anatomy/shape_source.hpp"
 #include "anatomy/tet_mesh.hpp"
 #include "core/format.hpp"
 
-#include <cmath>
 #include <sstream>
 
 namespace phantasm {
@@ -22,16 +22,10 @@ StageReport plan_anatomy(const AnatomySettings& anatomy, const OrganTable& organ
     if (!organ.inside.empty()) line << ", inside " << organ.inside << " (depth " << organs[i].depth << ")";
     if (!organ.solid) {
       line << ", surface only (no interior mesh)";
-    } else if (organ.shape.kind == ShapeKind::ellipsoid) {
+    } else if (const ShapeSource& source = shape_source(organ.shape.kind); source.plan_tet_size) {
       // Its tets' size follows from the base size (anatomy/tet_mesh.hpp, criteria_for_boundary_size)
-      // and the surface area (Thomsen's approximation for an ellipsoid, within about 1 %).
-      const Eigen::Vector3d r = organ.shape.radii_mm;
-      constexpr double p = 1.6075;
-      const double area =
-          4.0 * M_PI *
-          std::pow((std::pow(r.x() * r.y(), p) + std::pow(r.x() * r.z(), p) + std::pow(r.y() * r.z(), p)) /
-                       3.0,
-                   1.0 / p);
+      // and the surface area.
+      const double area = source.area_volume(organ.shape).first;
       line << ", solid (tetrahedral interior, tets of about "
            << format_number(criteria_for_boundary_size(area, base).cell_size_mm) << " mm)";
     } else {

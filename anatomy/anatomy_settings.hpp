@@ -14,6 +14,7 @@
 
 namespace phantasm {
 
+/// The organ shape sources; each has its member of the registry (anatomy/shape_source.hpp).
 enum class ShapeKind { ellipsoid, superquadric, box, sheet, mesh, label_volume };
 
 /// Which surfaces of the organs nested in a simulated body its conforming tet mesh follows with
@@ -83,10 +84,11 @@ struct WorldBox {
   bool intersects(const WorldBox& other) const;
 };
 
-/// The world-space bounding box of an analytic shape (ellipsoid, superquadric, box, sheet), or
-/// nothing for shapes whose extent is known only once their file is read (meshes, label volumes).
+/// The world-space bounding box of a shape as written (its source's `bounds`), or nothing for
+/// shapes whose extent is known only once their file is read (meshes, label volumes).
 std::optional<WorldBox> analytic_shape_bounds(const ShapeSettings& shape);
 
+/// The shape source's name (its member of the registry, anatomy/shape_sources/).
 const char* to_string(ShapeKind kind);
 const char* to_string(TetInterfaces interfaces);
 

@@ -1,7 +1,8 @@
 #include "anatomy/phantom.hpp"
 
+#include "anatomy/shape_build.hpp"
+#include "anatomy/shape_source.hpp"
 #include "anatomy/smooth_warp.hpp"
-#include "anatomy/structured_mesh.hpp"
 #include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
@@ -49,10 +50,16 @@ Variation draw_variation(const AnatomySettings& anatomy) {
   return variation;
 }
 
+/// A shape given by its settings alone (no file read): scaled by the seeded variation.
+bool analytic(ShapeKind kind) {
+  return shape_source(kind).input == ShapeInput::none;
+}
+
 ShapeSettings varied(const ShapeSettings& shape, const Eigen::Vector3d& global,
                      const Eigen::Vector3d& jitter) {
   ShapeSettings s = shape;
-  if (shape.kind == ShapeKind::mesh || shape.kind == ShapeKind::label_volume) return s;
+  // Shapes read from files vary by the shared warp instead (varied_targets).
+  if (!analytic(shape.kind)) return s;
   s.center_mm = global.cwiseProduct(shape.center_mm);
   s.radii_mm = global.cwiseProduct(jitter).cwiseProduct(shape.radii_mm);
   s.size_mm = global.cwiseProduct(jitter).cwiseProduct(shape.size_mm);
@@ -85,10 +92,6 @@ constexpr double k_fit_sample_spacing_mm = 1.0;
 /// The quality bound of solid organs' tet meshes: every tet positive, no dihedral angle below 10
 /// degrees, so no tet is near-degenerate.
 constexpr double k_min_dihedral_deg = 10.0;
-
-bool analytic(ShapeKind kind) {
-  return kind == ShapeKind::ellipsoid || kind == ShapeKind::superquadric || kind == ShapeKind::box;
-}
 
 std::uint32_t organ_seed(std::uint64_t scene_seed, std::size_t organ_index) {
   std::seed_seq sequence{static_cast<std::uint32_t>(scene_seed), static_cast<std::uint32_t>(scene_seed >> 32),
@@ -154,26 +157,7 @@ const Organ* Phantom::find(const std::string& name) const {
 
 std::unique_ptr<ImplicitShape> target_shape(const ShapeSettings& shape, const ShapeData* file,
                                             const std::string& organ) {
-  const Eigen::Matrix3d rotation = rotation_from_degrees(shape.rotation_deg);
-  switch (shape.kind) {
-  case ShapeKind::ellipsoid: return make_ellipsoid(shape.center_mm, shape.radii_mm, rotation);
-  case ShapeKind::superquadric:
-    return make_superquadric(shape.center_mm, shape.radii_mm, shape.exponent_1, shape.exponent_2, rotation);
-  case ShapeKind::box: return make_box(shape.center_mm, shape.size_mm, rotation);
-  case ShapeKind::sheet: return nullptr;
-  case ShapeKind::mesh:
-    if (file == nullptr || !file->mesh) throw InputError("organ " + organ + ": its mesh file was not loaded");
-    return make_mesh_shape(*file->mesh, "organ " + organ + " (" + shape.file.string() + ")");
-  case ShapeKind::label_volume:
-    if (file == nullptr || !file->label_grid || !file->labels)
-      throw InputError("organ " + organ + ": its label volume was not loaded");
-    return make_label_shape(
-        *file->label_grid, *file->labels,
-        file->target_labels.empty() ? std::vector<std::int32_t>{shape.label} : file->target_labels,
-        shape.smoothing_mm,
-        "organ " + organ + " (" + (file->source.empty() ? shape.file.string() : file->source) + ")");
-  }
-  return nullptr;
+  return shape_build(shape.kind).target(shape, file, organ);
 }
 
 namespace {
@@ -241,19 +225,14 @@ Organ organ_without_geometry(const OrganSettings& s, std::shared_ptr<const Impli
   return organ;
 }
 
-/// Builds one organ's geometry: a sheet, a structured box, a solid or a fitted surface.
+/// Builds one organ's geometry: its source's own (a sheet, a structured box), or a fitted solid
+/// or surface.
 void build_organ_geometry(Organ& organ, const AnatomySettings& anatomy, std::size_t o,
                           const ShapeSettings& shape, ProgressBar& progress) {
   const OrganSettings& s = anatomy.organs[o];
-  const Eigen::Matrix3d rotation = rotation_from_degrees(shape.rotation_deg);
-  if (shape.kind == ShapeKind::sheet) {
-    organ.sheet = structured_sheet(shape.size_mm.head<2>(), shape.cells.head<2>(), rotation, shape.center_mm);
-  } else if (shape.kind == ShapeKind::box) {
-    TetMesh tets = structured_box(shape.size_mm, shape.cells, rotation, shape.center_mm);
-    TriangleMesh base = boundary_surface(tets, &organ.tet_vertex_of_surface_vertex);
-    organ.surface.emplace(base, "organ " + s.name); // flat faces: a box needs no bumps
-    if (s.solid) organ.solid = std::move(tets);
-    organ.fit = measure_fit(*organ.surface, *organ.target, 1e-3 * organ.target->bounding_radius(), 4);
+  const ShapeBuild& build = shape_build(shape.kind);
+  if (build.geometry != nullptr) {
+    build.geometry(organ, s, shape);
   } else if (s.solid) {
     build_solid(organ, anatomy, o);
     progress.set_detail(s.name + ": measuring the fit");
@@ -263,10 +242,9 @@ void build_organ_geometry(Organ& organ, const AnatomySettings& anatomy, std::siz
     PatchFitOptions options;
     options.base_triangles = base_triangles(anatomy, o);
     progress.set_detail(s.name + ": fitting about " + std::to_string(options.base_triangles) + " patches");
-    const Eigen::Vector3d hint = shape.kind == ShapeKind::mesh || shape.kind == ShapeKind::label_volume
-                                     ? Eigen::Vector3d::Ones()
-                                     : Eigen::Vector3d(shape.radii_mm);
-    organ.surface.emplace(fit_patch_surface(*organ.target, hint, rotation, options, "organ " + s.name));
+    const Eigen::Vector3d hint = build.fit_hint ? build.fit_hint(shape) : Eigen::Vector3d::Ones();
+    organ.surface.emplace(fit_patch_surface(*organ.target, hint, rotation_from_degrees(shape.rotation_deg),
+                                            options, "organ " + s.name));
     progress.set_detail(s.name + ": measuring the fit");
     organ.fit = measure_fit(*organ.surface, *organ.target, 5e-3 * organ.target->bounding_radius(), 4,
                             surface_sample_level_for_spacing(*organ.surface, k_fit_sample_spacing_mm));

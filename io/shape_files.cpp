@@ -1,5 +1,6 @@
 #include "io/shape_files.hpp"
 
+#include "anatomy/shape_source.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
 #include "io/mesh_file.hpp"
@@ -152,11 +153,12 @@ std::map<std::string, ShapeData> read_shape_files(const AnatomySettings& anatomy
   for (std::size_t i = 0; i < anatomy.organs.size(); ++i) {
     const OrganSettings& organ = anatomy.organs[i];
     const ShapeSettings& shape = organ.shape;
-    if (shape.kind != ShapeKind::mesh && shape.kind != ShapeKind::label_volume) continue;
+    const ShapeInput input = shape_source(shape.kind).input;
+    if (input == ShapeInput::none) continue;
     const bool atlas = !shape.atlas.empty();
     std::string key = prefix(i) + (atlas ? "atlas" : "file");
     try {
-      if (shape.kind == ShapeKind::mesh) {
+      if (input == ShapeInput::triangle_mesh) {
         files[organ.name].mesh = read_triangle_mesh(shape.file);
         check_mesh_bounds(shape.file, *files[organ.name].mesh);
         continue;

@@ -1,5 +1,6 @@
 #include "pipeline/anatomy_checks.hpp"
 
+#include "anatomy/shape_source.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
 
@@ -21,11 +22,11 @@ bool inside_obstacle(const ObstacleSettings& o, const Eigen::Vector3d& x) {
   return (x - o.point_mm).dot(o.normal) < 0.0; // the normal points out of it, towards the tissue
 }
 
-/// An organ read from a mesh file larger than its container. Only mesh files are checked here:
-/// analytic shapes are checked by the scene's validation, and an organ from a label volume nests by
-/// construction (its surface bounds its labels united with those inside it), where a fitted
-/// surface's base mesh may reach a few millimetres beyond its container's without any error of
-/// the scene's.
+/// An organ read from a mesh file larger than its container. Only shapes whose source says so
+/// (NestingCheck::when_built: mesh files) are checked here: analytic shapes are checked by the
+/// scene's validation, and an organ from a label volume nests by construction (its surface bounds
+/// its labels united with those inside it), where a fitted surface's base mesh may reach a few
+/// millimetres beyond its container's without any error of the scene's.
 void check_nesting(const Scene& scene, const Phantom& phantom) {
   for (std::size_t i = 0; i < phantom.organs.size(); ++i) {
     const Organ& organ = phantom.organs[i];
@@ -33,7 +34,8 @@ void check_nesting(const Scene& scene, const Phantom& phantom) {
     const std::vector<OrganSettings>& declared = scene.anatomy.organs;
     const auto settings = std::find_if(declared.begin(), declared.end(),
                                        [&](const OrganSettings& o) { return o.name == organ.name; });
-    if (settings == declared.end() || settings->shape.kind != ShapeKind::mesh) continue;
+    if (settings == declared.end() || shape_source(settings->shape.kind).nesting != NestingCheck::when_built)
+      continue;
     const Organ* container = phantom.find(organ.inside);
     if (container == nullptr) continue;
     const std::optional<Eigen::Vector3d> size = extent(organ), room = extent(*container);

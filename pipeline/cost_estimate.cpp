@@ -1,5 +1,6 @@
 #include "pipeline/cost_estimate.hpp"
 
+#include "anatomy/shape_source.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
 #include "pipeline/cost_rates.hpp"
@@ -18,39 +19,15 @@ namespace {
 
 using namespace cost_rates;
 
-/// Surface area of an ellipsoid, mm^2 (Thomsen's approximation, within about 1 %).
-double ellipsoid_area(const Eigen::Vector3d& r) {
-  constexpr double p = 1.6075;
-  return 4.0 * M_PI *
-         std::pow((std::pow(r.x() * r.y(), p) + std::pow(r.x() * r.z(), p) + std::pow(r.y() * r.z(), p)) /
-                      3.0,
-                  1.0 / p);
-}
-
-/// Area and volume of an organ's shape as written. Shapes known only from their file (meshes,
-/// label volumes, atlases) are guessed from the grid: the outermost fills the inscribed ellipsoid
-/// of the field of view, each level of nesting a fraction of its container.
+/// Area and volume of an organ's shape as written (its source's). Shapes known only from their
+/// file (meshes, label volumes, atlases) are guessed from the grid: the outermost fills the
+/// inscribed ellipsoid of the field of view, each level of nesting a fraction of its container.
 std::pair<double, double> shape_area_volume(const ShapeSettings& shape, const GridSettings& grid, int depth) {
-  switch (shape.kind) {
-  case ShapeKind::ellipsoid:
-    return {ellipsoid_area(shape.radii_mm), 4.0 / 3.0 * M_PI * shape.radii_mm.prod()};
-  case ShapeKind::superquadric: {
-    // Exponents below 1 make it boxier (up to the bounding box, 6/pi of the ellipsoid's volume).
-    const double boxy = std::clamp(2.0 - 0.5 * (shape.exponent_1 + shape.exponent_2), 0.5, 1.5);
-    const double factor = 1.0 + (6.0 / M_PI - 1.0) * std::clamp(boxy - 1.0, 0.0, 1.0);
-    return {factor * ellipsoid_area(shape.radii_mm), factor * 4.0 / 3.0 * M_PI * shape.radii_mm.prod()};
-  }
-  case ShapeKind::box: {
-    const Eigen::Vector3d s = shape.size_mm;
-    return {2.0 * (s.x() * s.y() + s.y() * s.z() + s.x() * s.z()), s.prod()};
-  }
-  case ShapeKind::sheet: return {shape.size_mm.x() * shape.size_mm.y(), 0.0};
-  case ShapeKind::mesh:
-  case ShapeKind::label_volume: break;
-  }
+  const ShapeSource& source = shape_source(shape.kind);
+  if (source.area_volume != nullptr) return source.area_volume(shape);
   const Eigen::Vector3d radii = 0.5 * k_file_shape_extent * grid.field_of_view_mm *
                                 std::pow(k_file_shape_nesting, static_cast<double>(depth));
-  return {ellipsoid_area(radii), 4.0 / 3.0 * M_PI * radii.prod()};
+  return {ellipsoid_area_mm2(radii), 4.0 / 3.0 * M_PI * radii.prod()};
 }
 
 /// Cell size bound of an organ's own tets for its base size (anatomy/tet_mesh.cpp,
@@ -104,19 +81,17 @@ struct OrganTotals {
   std::vector<double> fit_peaks;            // every fitted organ's
 };
 
-/// An organ's patches and its own tets (structured meshes of boxes and sheets, or meshed from its
-/// base size), adding the meshed ones to `totals`.
+/// An organ's patches and its own tets (structured meshes of its source, as boxes and sheets,
+/// or meshed from its base size), adding the meshed ones to `totals`.
 void organ_mesh(const OrganSettings& settings, double area, double volume, OrganCost* organ,
                 OrganTotals* totals) {
-  const Eigen::Vector3d cells = settings.shape.cells.cast<double>();
-  if (settings.shape.kind == ShapeKind::sheet) {
-    organ->patches = 2.0 * cells.x() * cells.y();
-  } else if (settings.shape.kind == ShapeKind::box) {
-    // A structured hexahedral mesh, five tets per cell, its boundary quads split in two.
-    organ->patches = 4.0 * (cells.x() * cells.y() + cells.y() * cells.z() + cells.x() * cells.z());
-    if (settings.solid) {
-      organ->tets = 5.0 * cells.prod();
-      organ->tet_size_mm = (settings.shape.size_mm.array() / cells.array()).maxCoeff();
+  const ShapeSource& source = shape_source(settings.shape.kind);
+  if (source.structured != nullptr) {
+    const StructuredCounts counts = source.structured(settings.shape, settings.solid);
+    organ->patches = counts.patches;
+    if (counts.tets > 0.0) {
+      organ->tets = counts.tets;
+      organ->tet_size_mm = counts.tet_size_mm;
       organ->tet_size_from = "shape.cells";
     }
   } else {
@@ -150,12 +125,11 @@ void body_mesh(const Scene& scene, const OrganSettings& settings, double area, d
   }
 }
 
-/// The time and memory of fitting an organ's patches to its shape (none for boxes and sheets,
-/// structured meshes), into `totals`; `index` is the organ's place in the estimate.
+/// The time and memory of fitting an organ's patches to its shape (none for structured meshes,
+/// as boxes and sheets), into `totals`; `index` is the organ's place in the estimate.
 void organ_fit(const OrganSettings& settings, const OrganCost& organ, std::size_t index,
                OrganTotals* totals) {
-  const bool fitted = settings.shape.kind != ShapeKind::sheet && settings.shape.kind != ShapeKind::box;
-  if (!fitted) return;
+  if (shape_source(settings.shape.kind).structured != nullptr) return;
   // Fitting and measuring the fit take longer on coarse base meshes (their patches deviate
   // more from the target, so the measurement refines more) and on large ones (more patches).
   const double coarseness = 320.0 / std::max(1, organ.base_mesh_triangles);
@@ -182,7 +156,7 @@ OrganCost organ_cost(const Scene& scene, std::size_t i, double tolerance, bool d
   const auto [area, volume] = shape_area_volume(settings.shape, scene.grid, depth);
   organ.area_mm2 = area;
   organ.volume_mm3 = settings.solid ? volume : 0.0;
-  if (settings.shape.kind == ShapeKind::mesh || settings.shape.kind == ShapeKind::label_volume) {
+  if (shape_source(settings.shape.kind).input != ShapeInput::none) {
     ++totals->file_shapes;
     totals->file_shape_organ = settings.name;
   }

@@ -1,3 +1,4 @@
+#include "anatomy/shape_source.hpp"
 #include "core/format.hpp"
 #include "core/tissue_table.hpp"
 #include "mri/sequence_type.hpp"
@@ -81,9 +82,10 @@ public:
                 "expected a tissue of the built-in table or of the scene's tissues section, found '" +
                     organ.tissue + "'");
       }
-      if (organ.shape.kind == ShapeKind::sheet && organ.solid) {
+      if (!shape_source(organ.shape.kind).has_interior && organ.solid) {
         problem(indexed("anatomy.organs", i, "shape.type"),
-                "a sheet has no interior: expected 'solid: false' on this organ, found solid (the default)");
+                std::string("a ") + to_string(organ.shape.kind) +
+                    " has no interior: expected 'solid: false' on this organ, found solid (the default)");
       }
       if (!organ.material.empty() && m_scene.deformation.find_material(organ.material) == nullptr) {
         problem(indexed("anatomy.organs", i, "material"),
@@ -124,9 +126,8 @@ public:
       if (organs[i].inside.empty()) continue;
       const OrganSettings* container = m_scene.find_organ(organs[i].inside);
       if (container == nullptr) continue;
-      // The bounds of an ellipsoid or a box are its extent; those of a superquadric may be larger.
-      const ShapeKind kind = organs[i].shape.kind;
-      if (kind != ShapeKind::ellipsoid && kind != ShapeKind::box) continue;
+      // Only shapes whose bounds are their extent (those of a superquadric may be larger).
+      if (shape_source(organs[i].shape.kind).nesting != NestingCheck::by_bounds) continue;
       const std::optional<WorldBox> own = analytic_shape_bounds(organs[i].shape);
       const std::optional<WorldBox> outer = analytic_shape_bounds(container->shape);
       if (!own || !outer) continue;
@@ -359,7 +360,7 @@ public:
       if (!organ) {
         problem(indexed("tissue_regions", i, "organ"),
                 "expected the name of an organ in this scene, found '" + region.organ + "'");
-      } else if (organ->shape.kind != ShapeKind::label_volume || organ->shape.atlas.empty()) {
+      } else if (organ->shape.atlas.empty()) { // only sources of atlas labels name an atlas
         problem(indexed("tissue_regions", i, "organ"),
                 "expected an organ whose shape is a label volume of an atlas (the region's labels are "
                 "the atlas's), found '" +

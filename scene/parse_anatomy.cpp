@@ -1,6 +1,9 @@
+#include "anatomy/shape_source.hpp"
 #include "core/path_kind.hpp"
 #include "scene/parse_sections.hpp"
 #include "scene/parse_segmentation.hpp"
+
+#include <algorithm>
 
 namespace phantasm::scene_detail {
 namespace {
@@ -50,97 +53,104 @@ void parse_labels(CheckedMap& map, ShapeSettings& shape) {
   }
 }
 
+/// A parameter's range for messages.
+NumberRule rule_of(const ShapeParameter& p) {
+  return NumberRule{p.min, p.max, p.min_exclusive, p.max_exclusive, p.unit};
+}
+
+/// Kind::extent2: two numbers into x and y, z set to 0.
+void parse_extent2(CheckedMap& map, const ShapeParameter& p, ShapeSettings& shape) {
+  const NumberRule rule = rule_of(p);
+  const std::string expected = "a list of 2 numbers" + rule.describe().substr(std::string("a number").size());
+  const YAML::Node size = map.get(p.key);
+  if (!size.IsDefined()) {
+    if (p.required) map.missing(p.key, expected);
+  } else if (!size.IsSequence() || size.size() != 2) {
+    map.context().problem(size, map.child_path(p.key), "expected " + expected + ", found " + describe(size));
+  } else {
+    for (std::size_t i = 0; i < 2; ++i) {
+      read_number(map.context(), size[i], map.child_path(p.key) + "[" + std::to_string(i) + "]", rule,
+                  (shape.*p.vector)[static_cast<int>(i)]);
+    }
+    (shape.*p.vector).z() = 0.0;
+  }
+}
+
+/// Kind::cells: `axes` integers in [1, 1000], the other axes 1.
+void parse_cells(CheckedMap& map, const ShapeParameter& p, ShapeSettings& shape) {
+  const YAML::Node cells = map.get(p.key);
+  const std::size_t axes = static_cast<std::size_t>(p.axes);
+  const std::string expected = "a list of " + std::to_string(axes) + " integers in [1, 1000]";
+  if (!cells.IsDefined()) {
+    if (p.required) map.missing(p.key, expected);
+  } else if (!cells.IsSequence() || cells.size() != axes) {
+    map.context().problem(cells, map.child_path(p.key),
+                          "expected " + expected + ", found " + describe(cells));
+  } else {
+    shape.cells.setOnes();
+    for (std::size_t i = 0; i < axes; ++i) {
+      long long count = 1;
+      if (read_integer(map.context(), cells[i], map.child_path(p.key) + "[" + std::to_string(i) + "]", 1,
+                       1000, count)) {
+        shape.cells[static_cast<int>(i)] = static_cast<int>(count);
+      }
+    }
+  }
+}
+
+/// Kind::file: an existing file relative to the scene's folder (of the accepted extensions), or,
+/// where allowed, an atlas instead.
+void parse_file(CheckedMap& map, const ShapeParameter& p, const std::filesystem::path& scene_folder,
+                ShapeSettings& shape) {
+  if (p.atlas_allowed && map.has("atlas")) {
+    // A label volume derived at run time from installed data (docs/anatomy-colin27.md).
+    map.choice("atlas", shape.atlas, {"colin27"}, true);
+    if (map.has(p.key)) {
+      map.context().problem(map.get(p.key), map.child_path(p.key),
+                            "expected either file or atlas, found both");
+    }
+    return;
+  }
+  std::string file;
+  if (!map.string(p.key, file, p.required)) return;
+  shape.file = std::filesystem::path(file).is_absolute() ? std::filesystem::path(file) : scene_folder / file;
+  if (const std::string kind_at = path_kind(shape.file); kind_at != "a regular file") {
+    map.context().problem(map.get(p.key), map.child_path(p.key),
+                          "expected an existing file, found " +
+                              (kind_at == "no such file" ? std::string("no file") : kind_at) + " at '" +
+                              shape.file.string() + "'");
+  } else if (!p.extensions.empty()) {
+    const std::string extension = shape.file.extension().string();
+    if (std::find(p.extensions.begin(), p.extensions.end(), extension) == p.extensions.end()) {
+      std::string accepted;
+      for (std::size_t i = 0; i < p.extensions.size(); ++i)
+        accepted += (i == 0 ? "" : i + 1 == p.extensions.size() ? " or " : ", ") + p.extensions[i];
+      map.context().problem(map.get(p.key), map.child_path(p.key),
+                            "expected a " + accepted + " mesh, found '" + extension + "'");
+    }
+  }
+}
+
+/// A shape: its type, then the keys its member of the shape source registry reads.
 void parse_shape(CheckedMap& map, const std::filesystem::path& scene_folder, ShapeSettings& shape) {
   std::string kind;
-  if (!map.choice("type", kind, {"ellipsoid", "superquadric", "box", "sheet", "mesh", "label_volume"},
-                  true)) {
+  if (!map.choice("type", kind, shape_source_names(), true)) {
     map.accept_remaining_keys();
     return;
   }
-  const NumberRule coordinate{-1e5, 1e5, false, false, "mm"};
-  if (kind == "ellipsoid" || kind == "superquadric") {
-    shape.kind = kind == "ellipsoid" ? ShapeKind::ellipsoid : ShapeKind::superquadric;
-    map.vec3("center_mm", shape.center_mm, coordinate, true);
-    map.vec3("radii_mm", shape.radii_mm, positive("mm"), true, true);
-    map.vec3("rotation_deg", shape.rotation_deg, between(-360.0, 360.0, "degrees"));
-    if (shape.kind == ShapeKind::superquadric) {
-      // Exponents below 0.1 or above 4 make creases sharper than a patch mesh can follow.
-      map.number("exponent_1", shape.exponent_1, between(0.1, 4.0, ""), true);
-      map.number("exponent_2", shape.exponent_2, between(0.1, 4.0, ""), true);
+  const ShapeSource& source = *find_shape_source(kind);
+  shape.kind = source.kind;
+  for (const ShapeParameter& p : source.parameters) {
+    switch (p.kind) {
+    case ShapeParameter::Kind::vector3:
+      map.vec3(p.key, shape.*p.vector, rule_of(p), p.required, p.scalar_allowed);
+      break;
+    case ShapeParameter::Kind::extent2: parse_extent2(map, p, shape); break;
+    case ShapeParameter::Kind::cells: parse_cells(map, p, shape); break;
+    case ShapeParameter::Kind::number: map.number(p.key, shape.*p.number, rule_of(p), p.required); break;
+    case ShapeParameter::Kind::file: parse_file(map, p, scene_folder, shape); break;
+    case ShapeParameter::Kind::labels: parse_labels(map, shape); break;
     }
-    return;
-  }
-  if (kind == "box" || kind == "sheet") {
-    shape.kind = kind == "box" ? ShapeKind::box : ShapeKind::sheet;
-    map.vec3("center_mm", shape.center_mm, coordinate, true);
-    map.vec3("rotation_deg", shape.rotation_deg, between(-360.0, 360.0, "degrees"));
-    const YAML::Node cells = map.get("cells");
-    const std::size_t axes = kind == "box" ? 3 : 2;
-    const std::string expected = "a list of " + std::to_string(axes) + " integers in [1, 1000]";
-    if (kind == "box") {
-      map.vec3("size_mm", shape.size_mm, positive("mm"), true);
-    } else {
-      const YAML::Node size = map.get("size_mm");
-      if (!size.IsDefined()) {
-        map.missing("size_mm", "a list of 2 numbers in mm greater than 0");
-      } else if (!size.IsSequence() || size.size() != 2) {
-        map.context().problem(size, map.child_path("size_mm"),
-                              "expected a list of 2 numbers in mm greater than 0, found " + describe(size));
-      } else {
-        for (std::size_t i = 0; i < 2; ++i) {
-          read_number(map.context(), size[i], map.child_path("size_mm") + "[" + std::to_string(i) + "]",
-                      positive("mm"), shape.size_mm[static_cast<int>(i)]);
-        }
-        shape.size_mm.z() = 0.0;
-      }
-    }
-    if (!cells.IsDefined()) {
-      map.missing("cells", expected);
-    } else if (!cells.IsSequence() || cells.size() != axes) {
-      map.context().problem(cells, map.child_path("cells"),
-                            "expected " + expected + ", found " + describe(cells));
-    } else {
-      shape.cells.setOnes();
-      for (std::size_t i = 0; i < axes; ++i) {
-        long long count = 1;
-        if (read_integer(map.context(), cells[i], map.child_path("cells") + "[" + std::to_string(i) + "]", 1,
-                         1000, count)) {
-          shape.cells[static_cast<int>(i)] = static_cast<int>(count);
-        }
-      }
-    }
-    return;
-  }
-  shape.kind = kind == "mesh" ? ShapeKind::mesh : ShapeKind::label_volume;
-  if (shape.kind == ShapeKind::label_volume && map.has("atlas")) {
-    // A label volume derived at run time from installed data (docs/anatomy-colin27.md).
-    map.choice("atlas", shape.atlas, {"colin27"}, true);
-    if (map.has("file")) {
-      map.context().problem(map.get("file"), map.child_path("file"),
-                            "expected either file or atlas, found both");
-    }
-  } else {
-    std::string file;
-    if (map.string("file", file, true)) {
-      shape.file =
-          std::filesystem::path(file).is_absolute() ? std::filesystem::path(file) : scene_folder / file;
-      if (const std::string kind_at = path_kind(shape.file); kind_at != "a regular file") {
-        map.context().problem(map.get("file"), map.child_path("file"),
-                              "expected an existing file, found " +
-                                  (kind_at == "no such file" ? std::string("no file") : kind_at) + " at '" +
-                                  shape.file.string() + "'");
-      } else if (kind == "mesh") {
-        const std::string extension = shape.file.extension().string();
-        if (extension != ".stl" && extension != ".obj" && extension != ".ply" && extension != ".vtp") {
-          map.context().problem(map.get("file"), map.child_path("file"),
-                                "expected a .stl, .obj, .ply or .vtp mesh, found '" + extension + "'");
-        }
-      }
-    }
-  }
-  if (shape.kind == ShapeKind::label_volume) {
-    parse_labels(map, shape);
-    map.number("smoothing_mm", shape.smoothing_mm, NumberRule{0.0, 10.0, false, false, "mm"});
   }
 }
 

@@ -1,5 +1,6 @@
 #include "scene/scene_json.hpp"
 
+#include "anatomy/shape_source.hpp"
 #include "mri/sequence_type.hpp"
 #include "scene/settings_declarations.hpp"
 
@@ -27,34 +28,34 @@ nlohmann::json optional_value(const std::optional<double>& value) {
   return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
 }
 
-nlohmann::json organ_json(const OrganSettings& organ) {
-  nlohmann::json shape = {{"type", to_string(organ.shape.kind)}};
-  if (organ.shape.kind == ShapeKind::ellipsoid || organ.shape.kind == ShapeKind::superquadric) {
-    shape["center_mm"] = vec3(organ.shape.center_mm);
-    shape["radii_mm"] = vec3(organ.shape.radii_mm);
-    shape["rotation_deg"] = vec3(organ.shape.rotation_deg);
-    if (organ.shape.kind == ShapeKind::superquadric) {
-      shape["exponent_1"] = organ.shape.exponent_1;
-      shape["exponent_2"] = organ.shape.exponent_2;
-    }
-  } else if (organ.shape.kind == ShapeKind::box || organ.shape.kind == ShapeKind::sheet) {
-    shape["center_mm"] = vec3(organ.shape.center_mm);
-    shape["size_mm"] = vec3(organ.shape.size_mm);
-    shape["rotation_deg"] = vec3(organ.shape.rotation_deg);
-    shape["cells"] = {organ.shape.cells.x(), organ.shape.cells.y(), organ.shape.cells.z()};
-  } else {
-    if (organ.shape.atlas.empty())
-      shape["file"] = organ.shape.file.string();
-    else
-      shape["atlas"] = organ.shape.atlas;
-    if (organ.shape.kind == ShapeKind::label_volume) {
-      if (organ.shape.atlas.empty() && organ.shape.labels.size() <= 1)
-        shape["label"] = organ.shape.label;
+/// A shape's settings: its type and the keys its member of the shape source registry reads.
+nlohmann::json shape_json(const ShapeSettings& shape) {
+  nlohmann::json j = {{"type", to_string(shape.kind)}};
+  for (const ShapeParameter& p : shape_source(shape.kind).parameters) {
+    switch (p.kind) {
+    case ShapeParameter::Kind::vector3:
+    case ShapeParameter::Kind::extent2: j[p.key] = vec3(shape.*p.vector); break;
+    case ShapeParameter::Kind::cells: j[p.key] = {shape.cells.x(), shape.cells.y(), shape.cells.z()}; break;
+    case ShapeParameter::Kind::number: j[p.key] = shape.*p.number; break;
+    case ShapeParameter::Kind::file:
+      if (shape.atlas.empty())
+        j[p.key] = shape.file.string();
       else
-        shape["label"] = organ.shape.labels;
-      shape["smoothing_mm"] = organ.shape.smoothing_mm;
+        j["atlas"] = shape.atlas;
+      break;
+    case ShapeParameter::Kind::labels:
+      if (shape.atlas.empty() && shape.labels.size() <= 1)
+        j[p.key] = shape.label;
+      else
+        j[p.key] = shape.labels;
+      break;
     }
   }
+  return j;
+}
+
+nlohmann::json organ_json(const OrganSettings& organ) {
+  const nlohmann::json shape = shape_json(organ.shape);
   return {{"name", organ.name},
           {"tissue", organ.tissue},
           {"material", organ.material},

@@ -1,5 +1,6 @@
 #include "scene/settings_declarations.hpp"
 
+#include "anatomy/shape_source.hpp"
 #include "mri/sequence_type.hpp"
 
 namespace phantasm {
@@ -27,11 +28,12 @@ const char* const k_positive = "above 0";
 const char* const k_time = "0 to 1e5";
 const char* const k_triangles = "20 to 200000";
 
-/// The sequence types of the registry by name.
-std::vector<std::pair<std::string, SequenceKind>> sequence_kinds() {
-  std::vector<std::pair<std::string, SequenceKind>> kinds;
-  for (const SequenceType* type : sequence_types())
-    kinds.emplace_back(type->name, type->kind);
+/// The members of a registry (sequence types, shape sources) by name.
+template <typename Member>
+auto kinds_by_name(const std::vector<const Member*>& members) {
+  std::vector<std::pair<std::string, decltype(Member::kind)>> kinds;
+  for (const Member* member : members)
+    kinds.emplace_back(member->name, member->kind);
   return kinds;
 }
 
@@ -62,13 +64,7 @@ const std::vector<SettingField<ShapeSettings>>& declared_settings<ShapeSettings>
   static const auto fields = [] {
     SettingsDeclaration<ShapeSettings> d;
     d.shaping(cached_anatomy)
-        .choice("type", &ShapeSettings::kind,
-                {{"ellipsoid", ShapeKind::ellipsoid},
-                 {"superquadric", ShapeKind::superquadric},
-                 {"box", ShapeKind::box},
-                 {"sheet", ShapeKind::sheet},
-                 {"mesh", ShapeKind::mesh},
-                 {"label_volume", ShapeKind::label_volume}},
+        .choice("type", &ShapeSettings::kind, kinds_by_name(shape_sources()),
                 "the shape's source: an analytic shape, a mesh file or a label volume")
         .field("center_mm", &ShapeSettings::center_mm, "mm", k_coordinate, "centre of an analytic shape, RAS")
         .field("radii_mm", &ShapeSettings::radii_mm, "mm", k_positive,
@@ -208,7 +204,8 @@ const std::vector<SettingField<SequenceSettings>>& declared_settings<SequenceSet
     d.shaping(cached_reference_images)
         .field("name", &SequenceSettings::name, "", "a BIDS suffix",
                "the image's BIDS suffix (T1w, T2w, ...)")
-        .choice("type", &SequenceSettings::kind, sequence_kinds(), "the sequence (mri/sequences/)")
+        .choice("type", &SequenceSettings::kind, kinds_by_name(sequence_types()),
+                "the sequence (mri/sequences/)")
         .field("TR_ms", &SequenceSettings::TR_ms, "ms", k_time, "repetition time")
         .field("TE_ms", &SequenceSettings::TE_ms, "ms", "above 0 to 1e5",
                "echo time (bSSFP: TR / 2 unless given)")

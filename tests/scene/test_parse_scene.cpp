@@ -1,7 +1,12 @@
+#include "anatomy/shape_source.hpp"
 #include "scene/scene.hpp"
 #include "scene/scene_json.hpp"
 
 #include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <set>
 
 using namespace phantasm;
 
@@ -415,4 +420,85 @@ TEST(ParseScene, CollisionsNameTwoDifferentOrgansOfTheScene) {
   ASSERT_EQ(result.scene->deformation.collisions.size(), 1u);
   EXPECT_EQ(result.scene->deformation.collisions[0].organs, (std::vector<std::string>{"ball", "cube"}));
   EXPECT_EQ(scene_settings_json(*result.scene)["deformation"]["collisions"][0]["organs"][1], "cube");
+}
+
+namespace {
+
+/// A shape of `source` in YAML flow style, each key of its member given a valid value (files
+/// made in `folder`); `left_out` names a key to leave out.
+std::string shape_yaml(const ShapeSource& source, const std::filesystem::path& folder,
+                       const std::string& left_out = "") {
+  std::string yaml = std::string("{type: ") + source.name;
+  for (const ShapeParameter& p : source.parameters) {
+    if (p.key == left_out) continue;
+    yaml += std::string(", ") + p.key + ": ";
+    switch (p.kind) {
+    case ShapeParameter::Kind::vector3: yaml += "[1.5, 2.5, 3.5]"; break;
+    case ShapeParameter::Kind::extent2: yaml += "[1.5, 2.5]"; break;
+    case ShapeParameter::Kind::cells: yaml += p.axes == 3 ? "[2, 3, 4]" : "[2, 3]"; break;
+    case ShapeParameter::Kind::number: yaml += "1.5"; break;
+    case ShapeParameter::Kind::labels: yaml += "3"; break;
+    case ShapeParameter::Kind::file: {
+      const std::filesystem::path file =
+          folder / (std::string(source.name) + (p.extensions.empty() ? ".nii.gz" : p.extensions.front()));
+      std::ofstream(file) << "data\n";
+      yaml += file.string();
+      break;
+    }
+    }
+  }
+  return yaml + "}";
+}
+
+std::string organ_with_shape(const ShapeSource& source, const std::string& shape) {
+  return replaced(replaced(k_minimal, "{type: ellipsoid, center_mm: [0, 0, 0], radii_mm: 20}", shape),
+                  "      tissue: white_matter\n",
+                  std::string("      tissue: white_matter\n") +
+                      (source.has_interior ? "" : "      solid: false\n"));
+}
+
+} // namespace
+
+TEST(ShapeSourceParsing, EveryMembersKeysParseAndAreRecordedInProvenance) {
+  const std::filesystem::path folder = std::filesystem::temp_directory_path() / "phantasm-shape-sources";
+  std::filesystem::create_directories(folder);
+  for (const ShapeSource* source : shape_sources()) {
+    const SceneLoadResult result = parse(organ_with_shape(*source, shape_yaml(*source, folder)));
+    ASSERT_TRUE(result.scene) << source->name << ": " << format_diagnostics(result.problems);
+    const ShapeSettings& shape = result.scene->anatomy.organs.at(0).shape;
+    EXPECT_EQ(shape.kind, source->kind);
+    const nlohmann::json j = scene_settings_json(*result.scene)["anatomy"]["organs"][0]["shape"];
+    std::set<std::string> keys{"type"};
+    for (const ShapeParameter& p : source->parameters) {
+      keys.insert(p.key);
+      if (p.kind == ShapeParameter::Kind::vector3) {
+        EXPECT_EQ(shape.*p.vector, Eigen::Vector3d(1.5, 2.5, 3.5)) << source->name << "." << p.key;
+      } else if (p.kind == ShapeParameter::Kind::number) {
+        EXPECT_EQ(shape.*p.number, 1.5) << source->name << "." << p.key;
+      }
+    }
+    std::set<std::string> written;
+    for (const auto& item : j.items())
+      written.insert(item.key());
+    EXPECT_EQ(written, keys) << source->name;
+    EXPECT_EQ(j["type"], source->name);
+  }
+  std::filesystem::remove_all(folder);
+}
+
+TEST(ShapeSourceParsing, EveryRequiredKeyLeftOutIsReportedAtItsPath) {
+  const std::filesystem::path folder =
+      std::filesystem::temp_directory_path() / "phantasm-shape-sources-missing";
+  std::filesystem::create_directories(folder);
+  for (const ShapeSource* source : shape_sources()) {
+    for (const ShapeParameter& p : source->parameters) {
+      if (!p.required) continue;
+      const std::string problem = only_problem(organ_with_shape(*source, shape_yaml(*source, folder, p.key)));
+      EXPECT_NE(problem.find(std::string("anatomy.organs[0].shape.") + p.key + ": expected"),
+                std::string::npos)
+          << source->name << ": " << problem;
+      EXPECT_NE(problem.find("found no such key"), std::string::npos) << problem;
+    }
+  }
+  std::filesystem::remove_all(folder);
 }
