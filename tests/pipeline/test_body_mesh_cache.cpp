@@ -1,8 +1,10 @@
 // The body mesh cache (pipeline/body_mesh_cache.hpp): a stored mesh decodes to the bytes it was
 // stored from and refuses damaged bytes; runs of a scene whose body holds nested organs write the
 // same files without the cache, with it cold (meshing and storing the body) and warm (reading it);
-// a damaged entry is meshed again.
+// a damaged entry is meshed again; the inputs the deformation stage names change with what
+// shapes the mesh only.
 
+#include "anatomy/phantom.hpp"
 #include "core/byte_codec.hpp"
 #include "pipeline/body_mesh_cache.hpp"
 #include "pipeline/run_pipeline.hpp"
@@ -11,6 +13,8 @@
 #include "tests/support/files.hpp"
 
 #include <gtest/gtest.h>
+
+#include <functional>
 
 using namespace phantasm;
 using namespace phantasm::testing;
@@ -101,4 +105,40 @@ TEST(BodyMeshCache, RunsWithTheCacheColdWarmAndWithoutWriteTheSameFiles) {
     }
   }
   EXPECT_TRUE(read_file(entries[0]) == stored);
+}
+
+// What the deformation stage names as a body mesh's inputs (beside the anatomy's key) changes
+// with what shapes the mesh and with nothing else: a load's volume change or a material's
+// stiffness leave it as it is; a nested organ given its holder's material under
+// anatomy.tet_interfaces: materials (one region fewer) or another seed change it. The source
+// stops the stage once it has the inputs (no mesh, no solve).
+TEST(BodyMeshCache, TheInputsChangeWithTheMeshsRegionsAndSeedOnly) {
+  struct Stop {};
+  Scene scene = scene_of(k_balls);
+  scene.anatomy.tet_interfaces = TetInterfaces::materials;
+  Reporter quiet = Reporter::silent();
+  const Phantom phantom = build_phantom(scene.anatomy, {}, quiet);
+  const auto inputs_of = [&](const std::function<void(DeformationSettings&, Phantom&)>& change) {
+    DeformationSettings deformation = scene.deformation;
+    Phantom changed = phantom;
+    change(deformation, changed);
+    std::string inputs;
+    const BodyMeshSource record = [&](const std::string& text,
+                                      const std::function<NestedBodyMesh()>&) -> NestedBodyMesh {
+      inputs = text;
+      throw Stop{};
+    };
+    StageReport report;
+    EXPECT_THROW(deform_phantom(deformation, scene.organs, changed, report, quiet, record), Stop);
+    return inputs;
+  };
+  const std::string base = inputs_of([](DeformationSettings&, Phantom&) {});
+  EXPECT_NE(base.find("regions"), std::string::npos) << base;
+  EXPECT_EQ(inputs_of([](DeformationSettings& d, Phantom&) { d.loads[0].volume_change = -0.2; }), base);
+  EXPECT_EQ(inputs_of([](DeformationSettings& d, Phantom&) { d.materials[1].youngs_modulus_Pa *= 2; }), base);
+  const std::string merged =
+      inputs_of([](DeformationSettings& d, Phantom&) { d.organs[3].material = "fluid"; });
+  EXPECT_NE(merged, base);
+  EXPECT_LT(merged.size(), base.size()); // the right ball is no region of its own
+  EXPECT_NE(inputs_of([](DeformationSettings&, Phantom& p) { p.seed += 1; }), base);
 }
