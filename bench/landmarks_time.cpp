@@ -9,11 +9,13 @@
 // checked for the same landmarks; with CSV_PREFIX, the CSVs are also written to
 // CSV_PREFIX-reference.csv and CSV_PREFIX-deformed.csv. DEPTH says how depths are measured:
 // "labels" (the default, as a run does: the reference state is voxelized first, during the set-up,
-// and its labels given) or "surfaces" (every depth from the tessellated surfaces).
+// and its labels given) or "surfaces" (every depth from the tessellated surfaces). Then the dense
+// landmarks (dense_landmarks, the scene's outputs.dense_landmarks per organ) are timed once.
 // Usage: landmarks_time SCENE [CACHE [VOXEL_MM [REPEATS [CSV_PREFIX [DEPTH]]]]]
 
 #include "pipeline/run_pipeline.hpp"
 #include "scene/scene.hpp"
+#include "voxelize/dense_landmarks.hpp"
 #include "voxelize/landmarks.hpp"
 #include "voxelize/motion_fields.hpp"
 #include "voxelize/voxelize_phantom.hpp"
@@ -137,6 +139,20 @@ int main(int argc, char** argv) {
     std::printf("landmarks: %.2f s wall, %.2f s CPU, peak resident %.0f MB above the %.0f MB before\n",
                 seconds, cpu, resident_mb("VmHWM") - resident_before, resident_before);
     std::fflush(stdout);
+  }
+  {
+    const double cpu_before = cpu_seconds();
+    const auto start = std::chrono::steady_clock::now();
+    std::vector<std::string> warnings;
+    const std::vector<Landmark> dense =
+        dense_landmarks(phantom, deformation, map ? &*map : nullptr, scene.voxelization.dense_landmarks,
+                        phantom.seed, &warnings);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    for (const std::string& w : warnings)
+      std::printf("warning: %s\n", w.c_str());
+    std::printf("dense landmarks: %zu (%d per organ asked), %.2f s wall, %.2f s CPU, deformed CSV %016llx\n",
+                dense.size(), scene.voxelization.dense_landmarks, seconds, cpu_seconds() - cpu_before,
+                static_cast<unsigned long long>(fnv1a(landmarks_csv(dense, true))));
   }
   const std::string reference_csv = landmarks_csv(landmarks, false),
                     deformed_csv = landmarks_csv(landmarks, true);

@@ -7,6 +7,7 @@
 #include "core/sha256.hpp"
 #include "evaluation/evaluation_json.hpp"
 #include "evaluation/registration_metrics.hpp"
+#include "evaluation/score_task.hpp"
 #include "io/dataset_layout.hpp"
 #include "io/dataset_tables.hpp"
 #include "io/json_file.hpp"
@@ -170,6 +171,34 @@ void score_landmarks(const DatasetLayout& layout, PhantomState fixed, PhantomSta
   }
 }
 
+/// Dense landmarks, when the dataset has them: each fixed one carried by the result against its
+/// moving position, summarized over all and per organ ("dense_landmark_displacement_mm",
+/// "dense_tre_mm"; null without them, or without a field).
+void score_dense_landmarks(const DatasetLayout& layout, PhantomState fixed, PhantomState moving,
+                           const std::optional<DisplacementField>& field, nlohmann::json* result) {
+  (*result)["dense_landmark_displacement_mm"] = nullptr;
+  (*result)["dense_tre_mm"] = nullptr;
+  std::error_code error;
+  if (!std::filesystem::exists(layout.dense_landmarks(fixed), error)) return;
+  std::map<std::string, Eigen::Vector3d> moving_by_name;
+  for (const auto& row : read_landmarks(layout.dense_landmarks(moving)))
+    moving_by_name[row.name] = row.ras_mm;
+  std::vector<std::string> organs;
+  std::vector<double> displacement, tre;
+  for (const auto& row : read_landmarks(layout.dense_landmarks(fixed))) {
+    const auto found = moving_by_name.find(row.name);
+    if (found == moving_by_name.end()) {
+      throw InputError(layout.dense_landmarks(moving).string() + ": expected landmark '" + row.name +
+                       "' of " + layout.dense_landmarks(fixed).filename().string() + ", found none");
+    }
+    organs.push_back(row.organ);
+    displacement.push_back((found->second - row.ras_mm).norm());
+    if (field) tre.push_back((field->moved(row.ras_mm) - found->second).norm());
+  }
+  (*result)["dense_landmark_displacement_mm"] = dense_tre_json(organs, displacement);
+  if (field) (*result)["dense_tre_mm"] = dense_tre_json(organs, tre);
+}
+
 /// Label overlap, per label of either map, into `result` ("labels", "mean_dice").
 void score_overlaps(const std::vector<std::int32_t>& fixed_labels, const std::vector<std::int32_t>& warped,
                     const ImageGrid& grid, const std::map<std::int32_t, std::string>& names,
@@ -271,6 +300,7 @@ nlohmann::json evaluate_registration(const EvaluationRequest& request) {
   const std::optional<DisplacementField> field =
       read_result(request, grid, moving_grid, moving_labels, &result, &warped);
   score_landmarks(layout, fixed, moving, field, &result, &not_available);
+  score_dense_landmarks(layout, fixed, moving, field, &result);
   score_overlaps(fixed_labels, warped, grid, names, &result);
   if (field) {
     score_field(layout, fixed, moving, grid, fixed_labels, *field, &result);
@@ -284,6 +314,8 @@ nlohmann::json evaluate_registration(const EvaluationRequest& request) {
       {"field", "ITK/elastix: 5-D NIfTI on the fixed grid, LPS mm, x_moving = x_fixed + u(x_fixed)"},
       {"tre",
        "distance between a fixed landmark carried by the result (trilinear field) and its moving position"},
+      {"dense_tre", "the TRE on the dense landmarks (seeded material points of each organ), over all and "
+                    "per organ (by_structure); null for a dataset without them"},
       {"hd95", "larger of the two directed 95th percentiles of surface-voxel distances"},
       {"endpoint_error", "|u - u_true| inside the ground truth's exact mask"},
       {"jacobian", "det(I + grad u), central differences; folding counted before clipping to [1e-9, 1e9] for "
@@ -314,6 +346,14 @@ std::string evaluation_table(const nlohmann::json& e) {
   };
   summary_line("landmark motion mm   ", e["landmark_displacement_mm"], "no landmarks in the dataset");
   summary_line("TRE mm               ", e["tre_mm"], "no landmarks in the dataset");
+  if (e.value("dense_tre_mm", nlohmann::json()).is_object()) {
+    summary_line("dense TRE mm         ", e["dense_tre_mm"], "no dense landmarks in the dataset");
+    for (const auto& s : e["dense_tre_mm"]["by_structure"]) {
+      std::string name = s["structure"].get<std::string>();
+      name.resize(std::max<std::size_t>(name.size(), 19), ' ');
+      summary_line("  " + name, s, "");
+    }
+  }
   summary_line("endpoint error mm    ", e["endpoint_error_mm"], "no voxel in both exact masks");
   if (!e["jacobian"].is_null()) {
     out << "  log-Jacobian sd        " << number(e["jacobian"]["log_jacobian_sd"]) << "\n"

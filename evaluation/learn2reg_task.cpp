@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -76,6 +77,31 @@ std::string keypoint_row(const Eigen::Vector3d& ijk) {
   return text;
 }
 
+/// Points of both states matched by name, in the fixed file's order (those of one state only are
+/// left out), in voxel coordinates of each grid.
+struct CorrespondingPoints {
+  std::vector<std::string> names, organs;
+  std::vector<Eigen::Vector3d> fixed, moving;
+};
+
+CorrespondingPoints corresponding_points(const std::filesystem::path& fixed_file,
+                                         const std::filesystem::path& moving_file,
+                                         const ImageGrid& fixed_grid, const ImageGrid& moving_grid) {
+  CorrespondingPoints out;
+  std::map<std::string, Eigen::Vector3d> moving_by_name;
+  for (const auto& row : read_landmarks(moving_file))
+    moving_by_name[row.name] = row.ras_mm;
+  for (const auto& row : read_landmarks(fixed_file)) {
+    const auto found = moving_by_name.find(row.name);
+    if (found == moving_by_name.end()) continue;
+    out.names.push_back(row.name);
+    out.organs.push_back(row.organ);
+    out.fixed.push_back(fixed_grid.index_from_world(row.ras_mm));
+    out.moving.push_back(moving_grid.index_from_world(found->second));
+  }
+  return out;
+}
+
 /// Everything one pair needs, read and checked before anything is written.
 struct PairInputs {
   PairInputs(TaskPair p, DatasetLayout l) : pair(std::move(p)), layout(std::move(l)) {}
@@ -84,8 +110,8 @@ struct PairInputs {
   ImageGrid grid;
   std::vector<std::int32_t> fixed_labels, moving_labels;
   std::filesystem::path fixed_image, moving_image;
-  std::vector<Eigen::Vector3d> fixed_points, moving_points; ///< voxel coordinates, row by row
-  std::vector<std::string> point_names;
+  CorrespondingPoints landmarks;
+  std::optional<CorrespondingPoints> dense; ///< the dense landmarks, when the dataset has them
   DisplacementField truth;
   std::filesystem::path truth_mask;
 };
@@ -108,18 +134,14 @@ PairInputs read_pair(const std::filesystem::path& dataset, const std::string& su
   for (const auto& image : {in.fixed_image, in.moving_image})
     require_grid(in.grid, read_nifti(image).grid, image, layout.dseg(PhantomState::reference));
 
-  // Landmarks by name, in the fixed file's order; those of one state only are left out.
-  const std::vector<LandmarkRow> fixed_rows = read_landmarks(layout.landmarks(PhantomState::reference));
-  std::map<std::string, Eigen::Vector3d> moving_by_name;
-  for (const auto& row : read_landmarks(layout.landmarks(PhantomState::deformed)))
-    moving_by_name[row.name] = row.ras_mm;
-  for (const auto& row : fixed_rows) {
-    const auto found = moving_by_name.find(row.name);
-    if (found == moving_by_name.end()) continue;
-    in.point_names.push_back(row.name);
-    in.fixed_points.push_back(in.grid.index_from_world(row.ras_mm));
-    in.moving_points.push_back(moving_grid.index_from_world(found->second));
-  }
+  in.landmarks = corresponding_points(layout.landmarks(PhantomState::reference),
+                                      layout.landmarks(PhantomState::deformed), in.grid, moving_grid);
+  // A dataset written without dense landmarks (outputs.dense_landmarks: 0, or before they existed)
+  // has no such files: its task has none.
+  std::error_code error;
+  if (std::filesystem::exists(layout.dense_landmarks(PhantomState::reference), error))
+    in.dense = corresponding_points(layout.dense_landmarks(PhantomState::reference),
+                                    layout.dense_landmarks(PhantomState::deformed), in.grid, moving_grid);
 
   // The truth on the fixed (reference) grid: the field that brings the moving (deformed) image there.
   const std::filesystem::path field_path = layout.transform(PhantomState::deformed, PhantomState::reference);
@@ -240,7 +262,7 @@ void write_task_pair(const std::filesystem::path& task, const std::string& name,
       mask[v] = labels[v] > 0 ? 1 : 0;
     write_nifti_labels(task / task_file("masksTr", name, id, ".nii.gz"), p.grid, mask);
     std::string csv;
-    for (const auto& point : fixed ? p.fixed_points : p.moving_points)
+    for (const auto& point : fixed ? p.landmarks.fixed : p.landmarks.moving)
       csv += keypoint_row(point) + "\n";
     write_file_atomically(task / task_file("keypointsTr", name, id, ".csv"), csv);
     training->push_back({{"image", task_file("imagesTr", name, id, ".nii.gz")},
@@ -260,21 +282,31 @@ nlohmann::json write_truth_pair(const std::filesystem::path& truth, const std::s
   write_file_atomically(truth / ("mask_" + stem + ".nii.gz"),
                         whole_file(p.truth_mask, "a file of the dataset"));
   std::string csv = "name,fixed_i,fixed_j,fixed_k,moving_i,moving_j,moving_k\n";
-  for (std::size_t r = 0; r < p.point_names.size(); ++r)
-    csv += p.point_names[r] + "," + keypoint_row(p.fixed_points[r]) + "," + keypoint_row(p.moving_points[r]) +
-           "\n";
+  const CorrespondingPoints& l = p.landmarks;
+  for (std::size_t r = 0; r < l.names.size(); ++r)
+    csv += l.names[r] + "," + keypoint_row(l.fixed[r]) + "," + keypoint_row(l.moving[r]) + "\n";
   write_file_atomically(truth / ("keypoints_" + stem + ".csv"), csv);
-  return {{"case", p.pair.case_index},
-          {"subject", p.pair.subject},
-          {"fixed", task_file("imagesTr", name, p.pair.fixed_id, ".nii.gz")},
-          {"moving", task_file("imagesTr", name, p.pair.moving_id, ".nii.gz")},
-          {"fixed_id", p.pair.fixed_id},
-          {"moving_id", p.pair.moving_id},
-          {"result", learn2reg_result_name(p.pair)},
-          {"displacement", learn2reg_result_name(p.pair)},
-          {"mask", "mask_" + stem + ".nii.gz"},
-          {"keypoints", "keypoints_" + stem + ".csv"},
-          {"factors", factors.count(p.pair.subject) ? factors.at(p.pair.subject) : nlohmann::json::object()}};
+  nlohmann::json entry = {
+      {"case", p.pair.case_index},
+      {"subject", p.pair.subject},
+      {"fixed", task_file("imagesTr", name, p.pair.fixed_id, ".nii.gz")},
+      {"moving", task_file("imagesTr", name, p.pair.moving_id, ".nii.gz")},
+      {"fixed_id", p.pair.fixed_id},
+      {"moving_id", p.pair.moving_id},
+      {"result", learn2reg_result_name(p.pair)},
+      {"displacement", learn2reg_result_name(p.pair)},
+      {"mask", "mask_" + stem + ".nii.gz"},
+      {"keypoints", "keypoints_" + stem + ".csv"},
+      {"factors", factors.count(p.pair.subject) ? factors.at(p.pair.subject) : nlohmann::json::object()}};
+  if (p.dense) {
+    std::string dense = "name,organ,fixed_i,fixed_j,fixed_k,moving_i,moving_j,moving_k\n";
+    for (std::size_t r = 0; r < p.dense->names.size(); ++r)
+      dense += p.dense->names[r] + "," + p.dense->organs[r] + "," + keypoint_row(p.dense->fixed[r]) + "," +
+               keypoint_row(p.dense->moving[r]) + "\n";
+    write_file_atomically(truth / ("dense_keypoints_" + stem + ".csv"), dense);
+    entry["dense_keypoints"] = "dense_keypoints_" + stem + ".csv";
+  }
+  return entry;
 }
 
 /// The task's <name>_dataset.json (Learn2Reg's description of a task).
@@ -384,7 +416,10 @@ nlohmann::json make_learn2reg_task(const TaskRequest& request) {
                          "voxel x is carried to x + u(x) in the moving image"},
         {"mask", "voxels where the displacement is exact (inside the organs in both states)"},
         {"keypoints",
-         "corresponding landmarks, voxel coordinates (i, j, k) of the fixed and the moving image"}}}};
+         "corresponding landmarks, voxel coordinates (i, j, k) of the fixed and the moving image"},
+        {"dense_keypoints",
+         "the dataset's dense landmarks (seeded material points of each organ, with the organ), "
+         "voxel coordinates of both images; pairs of a dataset without them have none"}}}};
   write_json_file(truth / "truth.json", truth_json);
   return {{"task", task.string()}, {"truth", truth.string()}, {"pairs", truth_pairs}};
 }

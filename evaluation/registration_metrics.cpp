@@ -11,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 
 namespace phantasm {
 namespace {
@@ -113,6 +114,20 @@ Summary summarize(std::vector<double> values) {
   s.p95 = values[below] + (position - static_cast<double>(below)) * (values[above] - values[below]);
   s.max = values.back();
   return s;
+}
+
+std::vector<StructureSummary> summarize_by_structure(const std::vector<std::string>& structures,
+                                                     const std::vector<double>& values) {
+  std::vector<std::string> order;
+  std::map<std::string, std::vector<double>> grouped;
+  for (std::size_t i = 0; i < values.size() && i < structures.size(); ++i) {
+    if (!grouped.count(structures[i])) order.push_back(structures[i]);
+    grouped[structures[i]].push_back(values[i]);
+  }
+  std::vector<StructureSummary> out;
+  for (const std::string& structure : order)
+    out.push_back({structure, summarize(grouped[structure])});
+  return out;
 }
 
 std::vector<std::int32_t> warp_labels(const std::vector<std::int32_t>& moving, const ImageGrid& moving_grid,

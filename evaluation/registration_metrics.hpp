@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace phantasm {
@@ -36,6 +37,16 @@ struct Summary {
   double mean = 0.0, sd = 0.0, p95 = 0.0, max = 0.0;
 };
 Summary summarize(std::vector<double> values);
+
+/// The summary of one structure's values (an organ's dense landmarks' TRE).
+struct StructureSummary {
+  std::string structure;
+  Summary summary;
+};
+/// Values grouped by structure (structures[i] names values[i]'s), one summary per structure in
+/// the order the structures first appear.
+std::vector<StructureSummary> summarize_by_structure(const std::vector<std::string>& structures,
+                                                     const std::vector<double>& values);
 
 /// Resamples a moving label map onto the fixed grid of `field`: each fixed voxel takes the label
 /// of the moving voxel nearest to x + u(x) (0 outside the moving grid).

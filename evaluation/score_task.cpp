@@ -52,13 +52,17 @@ std::vector<Eigen::Vector3d> voxel_displacements(const DisplacementField& field)
 
 struct Keypoint {
   std::string name;
+  std::string organ;             ///< the dense keypoints' organ; empty for the landmarks
   Eigen::Vector3d fixed, moving; ///< voxel coordinates
 };
 
+/// A truth keypoints file: name, fixed i,j,k, moving i,j,k per line (keypoints_...csv), or with
+/// the organ after the name when the header says so (dense_keypoints_...csv).
 std::vector<Keypoint> read_keypoints(const std::filesystem::path& path) {
   std::istringstream in(whole_file(path, "the pair's keypoints (CSV)"));
   std::string line;
   std::getline(in, line);
+  const bool with_organ = line.rfind("name,organ,", 0) == 0;
   std::vector<Keypoint> points;
   int number = 1;
   while (std::getline(in, line)) {
@@ -67,6 +71,9 @@ std::vector<Keypoint> read_keypoints(const std::filesystem::path& path) {
     std::istringstream fields(line);
     Keypoint p;
     std::getline(fields, p.name, ',');
+    if (with_organ && (!std::getline(fields, p.organ, ',') || p.organ.empty()))
+      throw InputError(path.string() + ":" + std::to_string(number) +
+                       ": expected name, organ and six finite voxel coordinates, found '" + line + "'");
     double values[6];
     for (double& value : values) {
       std::string cell;
@@ -120,6 +127,9 @@ nlohmann::json by_factor(const nlohmann::json& pairs) {
           {"pairs", members.size()},
           {"mean_dice", mean([](const nlohmann::json& p) { return p["mean_dice"]; })},
           {"mean_tre_mm", mean([](const nlohmann::json& p) { return p["tre_mm"]["mean"]; })},
+          {"mean_dense_tre_mm", mean([](const nlohmann::json& p) {
+             return p["dense_tre_mm"].is_object() ? p["dense_tre_mm"]["mean"] : nlohmann::json();
+           })},
           {"mean_endpoint_error_mm",
            mean([](const nlohmann::json& p) { return p["endpoint_error_mm"]["mean"]; })},
           {"mean_ndv_percent", mean([](const nlohmann::json& p) { return p["ndv"]["percent"]; })}};
@@ -145,6 +155,7 @@ struct PairFiles {
   std::optional<DisplacementField> backward;
   std::vector<bool> mask;
   std::vector<Keypoint> keypoints;
+  std::optional<std::vector<Keypoint>> dense_keypoints; ///< when the truth holds them
 };
 
 } // namespace
@@ -345,6 +356,8 @@ PairFiles read_pair(const TaskScoreRequest& request, const nlohmann::json& truth
   for (std::size_t v = 0; v < mask.values.size(); ++v)
     in.mask[v] = mask.values[v] > 0.5;
   in.keypoints = read_keypoints(request.truth / string_member(pair, "keypoints", truth_path));
+  if (pair.contains("dense_keypoints"))
+    in.dense_keypoints = read_keypoints(request.truth / string_member(pair, "dense_keypoints", truth_path));
   return in;
 }
 
@@ -361,7 +374,8 @@ std::map<std::int32_t, std::string> label_names(const nlohmann::json& truth) {
 struct PairScore {
   nlohmann::json out;
   double mean_dice = 0.0, mean_hd95 = 0.0, tre = 0.0, epe = 0.0, ndv = 0.0, sdlogj = 0.0;
-  std::optional<double> consistency; // pairs with both directions only
+  double dense_tre = std::nan(""), dense_tre_p95 = std::nan(""); // pairs with dense keypoints only
+  std::optional<double> consistency;                             // pairs with both directions only
 };
 
 /// Dice and HD95 per label of the fixed labels against the moving labels carried by the result,
@@ -412,6 +426,24 @@ nlohmann::json misreading_warnings(const PairFiles& in, const TaskScoreRequest& 
   return pair_warnings;
 }
 
+/// TRE per structure on the dense keypoints, where the truth holds them ("dense_tre_mm", null otherwise).
+void score_dense_keypoints(const PairFiles& in, PairScore* score) {
+  score->out["dense_tre_mm"] = nullptr;
+  if (!in.dense_keypoints) return;
+  std::vector<std::string> organs;
+  std::vector<double> tre;
+  for (const Keypoint& p : *in.dense_keypoints) {
+    organs.push_back(p.organ);
+    tre.push_back(
+        (in.result.moved(in.grid.world_from_index(p.fixed)) - in.grid.world_from_index(p.moving)).norm());
+  }
+  score->out["dense_tre_mm"] = dense_tre_json(organs, tre);
+  if (tre.empty()) return;
+  const Summary all = summarize(tre);
+  score->dense_tre = all.mean;
+  score->dense_tre_p95 = all.p95;
+}
+
 /// One pair scored: overlaps, TRE, endpoint error, inverse consistency, folding and warnings.
 PairScore score_pair(const PairFiles& in, const std::map<std::int32_t, std::string>& names,
                      const TaskScoreRequest& request) {
@@ -431,6 +463,7 @@ PairScore score_pair(const PairFiles& in, const std::map<std::int32_t, std::stri
     tre.push_back((in.result.moved(fixed) - grid.world_from_index(p.moving)).norm());
   }
   out["tre_mm"] = summary_json(summarize(tre));
+  score_dense_keypoints(in, &score);
 
   std::vector<double> epe;
   for (std::size_t v = 0; v < in.mask.size(); ++v)
@@ -480,7 +513,10 @@ nlohmann::json finite_mean(const std::vector<double>& values) {
 nlohmann::json task_summary(const std::vector<PairScore>& scores) {
   std::vector<double> dice_per_pair, hd95_per_pair, tre_per_pair, epe_per_pair, ndv_per_pair, sdlogj_per_pair;
   std::vector<double> consistency_per_pair; // pairs with both directions only
+  std::vector<double> dense_tre_per_pair, dense_p95_per_pair;
   for (const PairScore& s : scores) {
+    dense_tre_per_pair.push_back(s.dense_tre);
+    dense_p95_per_pair.push_back(s.dense_tre_p95);
     if (s.consistency) consistency_per_pair.push_back(*s.consistency);
     dice_per_pair.push_back(s.mean_dice);
     hd95_per_pair.push_back(s.mean_hd95);
@@ -497,6 +533,8 @@ nlohmann::json task_summary(const std::vector<PairScore>& scores) {
           {"dice_p30", number_or_null(percentile(finite_dice, 0.3))},
           {"mean_hd95_mm", finite_mean(hd95_per_pair)},
           {"mean_tre_mm", finite_mean(tre_per_pair)},
+          {"mean_dense_tre_mm", finite_mean(dense_tre_per_pair)},
+          {"mean_dense_tre_p95_mm", finite_mean(dense_p95_per_pair)},
           {"mean_endpoint_error_mm", finite_mean(epe_per_pair)},
           {"mean_ndv_percent", finite_mean(ndv_per_pair)},
           {"mean_log_jacobian_sd", finite_mean(sdlogj_per_pair)},
@@ -509,6 +547,9 @@ nlohmann::json score_conventions() {
   return {
       {"dice_p30", "30th percentile of the pairs' mean Dice (robustness, as LUMIR reports it)"},
       {"tre", "fixed keypoint carried by the result (trilinear) against its moving position, mm"},
+      {"dense_tre",
+       "TRE on the dense landmarks (a few hundred seeded material points per organ, exact in both "
+       "states), over all and per structure; null for a task without them"},
       {"endpoint_error", "|u - u_true| in mm inside the ground truth's exact mask"},
       {"ndv", "non-diffeomorphic volume: negative tetrahedra of each voxel cube of the fixed foreground, "
               "percent of the cubes"},
@@ -550,21 +591,36 @@ nlohmann::json score_task(const TaskScoreRequest& request) {
           {"conventions", score_conventions()}};
 }
 
+nlohmann::json dense_tre_json(const std::vector<std::string>& organs, const std::vector<double>& tre) {
+  nlohmann::json out = summary_json(summarize(tre));
+  nlohmann::json by_structure = nlohmann::json::array();
+  for (const StructureSummary& s : summarize_by_structure(organs, tre)) {
+    nlohmann::json entry = summary_json(s.summary);
+    entry["structure"] = s.structure;
+    by_structure.push_back(entry);
+  }
+  out["by_structure"] = by_structure;
+  return out;
+}
+
 std::string task_scores_csv(const nlohmann::json& scores) {
   std::ostringstream out;
-  out << "case,subject,result,mean_dice,mean_hd95_mm,tre_mm_mean,endpoint_error_mm_mean,endpoint_error_mm_"
-         "p95,"
-         "ndv_percent,log_jacobian_sd,folding_fraction_central,warnings\n";
+  out << "case,subject,result,mean_dice,mean_hd95_mm,tre_mm_mean,dense_tre_mm_mean,dense_tre_mm_p95,"
+         "endpoint_error_mm_mean,endpoint_error_mm_p95,ndv_percent,log_jacobian_sd,folding_fraction_central,"
+         "warnings\n";
   auto cell = [](const nlohmann::json& value) {
     return value.is_number() ? format_number(value.get<double>()) : std::string();
   };
   for (const auto& p : scores["pairs"]) {
+    const nlohmann::json dense =
+        p.value("dense_tre_mm", nlohmann::json()).is_object() ? p["dense_tre_mm"] : nlohmann::json::object();
     out << p["case"].get<int>() << ',' << p["subject"].get<std::string>() << ','
         << p["result"].get<std::string>() << ',' << cell(p["mean_dice"]) << ',' << cell(p["mean_hd95_mm"])
-        << ',' << cell(p["tre_mm"]["mean"]) << ',' << cell(p["endpoint_error_mm"]["mean"]) << ','
-        << cell(p["endpoint_error_mm"]["p95"]) << ',' << cell(p["ndv"]["percent"]) << ','
-        << cell(p["jacobian_central_differences"]["log_jacobian_sd"]) << ','
-        << cell(p["jacobian_central_differences"]["folding_fraction"]) << ',' << p["warnings"].size() << '\n';
+        << ',' << cell(p["tre_mm"]["mean"]) << ',' << cell(dense["mean"]) << ',' << cell(dense["p95"]) << ','
+        << cell(p["endpoint_error_mm"]["mean"]) << ',' << cell(p["endpoint_error_mm"]["p95"]) << ','
+        << cell(p["ndv"]["percent"]) << ',' << cell(p["jacobian_central_differences"]["log_jacobian_sd"])
+        << ',' << cell(p["jacobian_central_differences"]["folding_fraction"]) << ',' << p["warnings"].size()
+        << '\n';
   }
   return out.str();
 }
@@ -587,7 +643,9 @@ std::string task_scores_table(const nlohmann::json& scores) {
   }
   const nlohmann::json& s = scores["summary"];
   out << "  mean Dice " << number(s["mean_dice"]) << " (30th percentile " << number(s["dice_p30"])
-      << "), TRE " << number(s["mean_tre_mm"]) << " mm, endpoint error "
+      << "), TRE " << number(s["mean_tre_mm"])
+      << " mm (dense landmarks: " << number(s.value("mean_dense_tre_mm", nlohmann::json())) << " mm, p95 "
+      << number(s.value("mean_dense_tre_p95_mm", nlohmann::json())) << " mm), endpoint error "
       << number(s["mean_endpoint_error_mm"]) << " mm, NDV " << number(s["mean_ndv_percent"]) << " %\n";
   if (s["inverse_consistency_pairs"].get<std::size_t>() > 0)
     out << "  inverse consistency " << number(s["mean_inverse_consistency_mm"]) << " mm (mean over "

@@ -44,6 +44,12 @@ struct TaskScoreRequest {
 /// datatype, NaN or infinite values, a ground truth of another task
 nlohmann::json score_task(const TaskScoreRequest& request);
 
+/// TRE on dense landmarks as JSON: the summary over every point (count, mean, sd, p95, max) and
+/// "by_structure", one summary per organ (with its name) in the order the organs first appear.
+/// @param organs per point, its organ
+/// @param tre per point, its TRE (mm)
+nlohmann::json dense_tre_json(const std::vector<std::string>& organs, const std::vector<double>& tre);
+
 /// One line per pair (CSV with a header).
 std::string task_scores_csv(const nlohmann::json& scores);
 /// The scores as a table a person reads.

@@ -115,6 +115,10 @@ std::filesystem::path DatasetLayout::landmarks(PhantomState state) const {
   return session_derivatives(state) / "landmarks" / (prefix(state) + "_landmarks.csv");
 }
 
+std::filesystem::path DatasetLayout::dense_landmarks(PhantomState state) const {
+  return session_derivatives(state) / "landmarks" / (prefix(state) + "_desc-dense_landmarks.csv");
+}
+
 std::filesystem::path DatasetLayout::mesh(PhantomState state, const std::string& organ) const {
   return output_file(session_derivatives(state) / "meshes",
                      prefix(state) + "_organ-" + bids_entity_value(organ) + "_mesh.vtp");

@@ -61,6 +61,8 @@ public:
   std::filesystem::path jacobian(PhantomState from, PhantomState to) const;
   /// derivatives/phantasm/sub-<id>/ses-<state>/landmarks/sub-<id>_ses-<state>_landmarks.csv
   std::filesystem::path landmarks(PhantomState state) const;
+  /// The dense landmarks beside them: sub-<id>_ses-<state>_desc-dense_landmarks.csv
+  std::filesystem::path dense_landmarks(PhantomState state) const;
   /// An organ's surface (the tessellated patch surface, or its sheet), VTK PolyData, in
   /// ses-<state>/meshes; the organ entity is bids_entity_value(organ).
   std::filesystem::path mesh(PhantomState state, const std::string& organ) const;

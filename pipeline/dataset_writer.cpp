@@ -599,6 +599,29 @@ void plan_fields(const Scene& scene, const VoxelizedPhantom& v, const DatasetLay
   }
 }
 
+/// One state's landmarks and, when the scene asks for them, its dense landmarks: CSV files with sidecars.
+void plan_landmarks(const VoxelizedPhantom& v, const DatasetLayout& layout, PhantomState state,
+                    DatasetPlan& plan) {
+  const bool deformed = state == PhantomState::deformed;
+  const auto sidecar = [](const char* description) {
+    return [description] {
+      return nlohmann::json{{"Description", description},
+                            {"Columns", {"name", "organ", "x_mm", "y_mm", "z_mm"}},
+                            {"Units", "mm, world RAS (the images' affine frame)"}};
+    };
+  };
+  plan.text(layout.landmarks(state), [&v, deformed] { return landmarks_csv(v.landmarks, deformed); });
+  plan.json(sidecar_path(layout.landmarks(state)),
+            sidecar("named material points of the organs, the same points in both states"));
+  if (v.dense_landmarks.empty()) return;
+  plan.text(layout.dense_landmarks(state),
+            [&v, deformed] { return landmarks_csv(v.dense_landmarks, deformed); });
+  plan.json(
+      sidecar_path(layout.dense_landmarks(state)),
+      sidecar("seeded material points spread over each organ's own material (outputs.dense_landmarks per "
+              "organ), the same points in both states, row by row"));
+}
+
 /// Labels, fractions, .vdb grids, landmarks, and the fields (plan_fields).
 void plan_volumes(const Scene& scene, const VoxelizedPhantom& v, const DatasetLayout& layout,
                   DatasetPlan& plan) {
@@ -656,17 +679,8 @@ void plan_volumes(const Scene& scene, const VoxelizedPhantom& v, const DatasetLa
     }
   }
   if (scene.outputs.landmarks) {
-    for (const auto& [state, volumes] : states) {
-      if (!volumes) continue;
-      plan.text(layout.landmarks(state),
-                [&v, state = state] { return landmarks_csv(v.landmarks, state == PhantomState::deformed); });
-      plan.json(sidecar_path(layout.landmarks(state)), [] {
-        return nlohmann::json{
-            {"Description", "named material points of the organs, the same points in both states"},
-            {"Columns", {"name", "organ", "x_mm", "y_mm", "z_mm"}},
-            {"Units", "mm, world RAS (the images' affine frame)"}};
-      });
-    }
+    for (const auto& [state, volumes] : states)
+      if (volumes) plan_landmarks(v, layout, state, plan);
   }
   if (v.motion) plan_fields(scene, v, layout, plan);
 }

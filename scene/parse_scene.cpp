@@ -118,6 +118,7 @@ void parse_outputs(CheckedMap& map, OutputSettings& outputs) {
   map.boolean("displacement_fields", outputs.displacement_fields);
   map.boolean("jacobian", outputs.jacobian);
   map.boolean("landmarks", outputs.landmarks);
+  map.integer("dense_landmarks", outputs.dense_landmarks, 0, 9999);
   map.boolean("meshes", outputs.meshes);
   map.boolean("vdb", outputs.vdb);
   map.boolean("previews", outputs.previews);

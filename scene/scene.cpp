@@ -64,6 +64,7 @@ void resolve_stage_settings(Scene& scene) {
   voxelization.displacement_fields = outputs.displacement_fields;
   voxelization.jacobian = outputs.jacobian;
   voxelization.landmarks = outputs.landmarks;
+  voxelization.dense_landmarks = outputs.landmarks ? outputs.dense_landmarks : 0;
   voxelization.gap_fill = voxelization.gap_tissue.empty() ? default_gap_tissue(deformation, scene.organs)
                                                           : voxelization.gap_tissue;
   voxelization.organ_bounds_mm.clear();

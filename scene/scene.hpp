@@ -34,6 +34,7 @@ struct OutputSettings {
   bool displacement_fields = true;
   bool jacobian = true;
   bool landmarks = true;
+  int dense_landmarks = 300; ///< per closed organ, with the landmarks; 0: none
   bool meshes = true;
   bool vdb = false;
   bool previews = true;

@@ -171,6 +171,8 @@ const std::vector<SettingField<VoxelizationSettings>>& declared_settings<Voxeliz
         .derived_from("outputs.jacobian")
         .field("landmarks", &V::landmarks, "", "", "landmarks are made")
         .derived_from("outputs.landmarks")
+        .field("dense_landmarks", &V::dense_landmarks, "", "", "dense landmarks per organ")
+        .derived_from("outputs.dense_landmarks and outputs.landmarks")
         .field("gap_fill", &V::gap_fill, "", "", "the tissue of every gap")
         .derived_from("deformation.gap_tissue or the organs")
         .shaping(cached_reference_state)
@@ -340,6 +342,8 @@ const std::vector<SettingField<OutputSettings>>& declared_settings<OutputSetting
         .field("displacement_fields", &O::displacement_fields, "", "", "displacement fields")
         .field("jacobian", &O::jacobian, "", "", "Jacobian determinants")
         .field("landmarks", &O::landmarks, "", "", "landmarks")
+        .field("dense_landmarks", &O::dense_landmarks, "points per organ", "0 to 9999",
+               "seeded material points per closed organ beside the landmarks, exact in both states (0: none)")
         .field("meshes", &O::meshes, "", "", "organ meshes")
         .field("vdb", &O::vdb, "", "", "OpenVDB level sets")
         .field("previews", &O::previews, "", "", "preview images")
@@ -377,9 +381,10 @@ std::vector<const void*> settings_members(const AnatomySettings& s) {
 
 std::vector<const void*> settings_members(const VoxelizationSettings& s) {
   const auto& [supersampling, tolerance, gap_tissue, from_tessellation, deformed, keep_level_sets, labels,
-               fractions, fields, jacobian, landmarks, gap_fill, bounds] = s;
-  return {&supersampling, &tolerance, &gap_tissue, &from_tessellation, &deformed, &keep_level_sets, &labels,
-          &fractions,     &fields,    &jacobian,   &landmarks,         &gap_fill, &bounds};
+               fractions, fields, jacobian, landmarks, dense_landmarks, gap_fill, bounds] = s;
+  return {&supersampling, &tolerance, &gap_tissue, &from_tessellation, &deformed,  &keep_level_sets,
+          &labels,        &fractions, &fields,     &jacobian,          &landmarks, &dense_landmarks,
+          &gap_fill,      &bounds};
 }
 
 std::vector<const void*> settings_members(const TissueOverride& s) {
@@ -417,10 +422,10 @@ std::vector<const void*> settings_members(const MriSettings& s) {
 }
 
 std::vector<const void*> settings_members(const OutputSettings& s) {
-  const auto& [subject, profile, images, labels, fractions, fields, jacobian, landmarks, meshes, vdb,
-               previews, maps] = s;
-  return {&subject,  &profile,   &images, &labels, &fractions, &fields,
-          &jacobian, &landmarks, &meshes, &vdb,    &previews,  &maps};
+  const auto& [subject, profile, images, labels, fractions, fields, jacobian, landmarks, dense_landmarks,
+               meshes, vdb, previews, maps] = s;
+  return {&subject,   &profile,         &images, &labels, &fractions, &fields, &jacobian,
+          &landmarks, &dense_landmarks, &meshes, &vdb,    &previews,  &maps};
 }
 
 namespace {

@@ -101,6 +101,11 @@ private:
   std::vector<int> m_uses;
 };
 
+} // namespace
+
+// Outside the unnamed namespace: OrganMaterial (landmarks.hpp) holds it.
+namespace landmarks_detail {
+
 /// Which side of an organ's surface a point lies on, decided as the voxelizer decides it
 /// (voxelize/level_set.cpp): the closest triangle of the base mesh, the side of it from the base
 /// mesh's pseudonormals, and then the height of that patch's bumps above the closest base point.
@@ -134,6 +139,36 @@ private:
   const PatchSurface* m_surface;
   SignedDistanceMesh m_base;
 };
+
+} // namespace landmarks_detail
+
+using landmarks_detail::OrganSide;
+
+struct OrganMaterial::Sides {
+  std::vector<OrganSide> sides; ///< the organ's own surface first, then the nested organs'
+  std::vector<int> hints;       ///< per surface: the closest base triangle of the last point
+};
+
+OrganMaterial::OrganMaterial(const Phantom& phantom, std::size_t organ) : m_sides(std::make_unique<Sides>()) {
+  m_sides->sides.emplace_back(*phantom.organs[organ].surface);
+  for (const Organ& nested : phantom.organs)
+    if (nested.inside == phantom.organs[organ].name && nested.surface)
+      m_sides->sides.emplace_back(*nested.surface);
+  m_sides->hints.assign(m_sides->sides.size(), -1);
+}
+
+OrganMaterial::~OrganMaterial() = default;
+OrganMaterial::OrganMaterial(OrganMaterial&&) noexcept = default;
+
+bool OrganMaterial::contains(const Eigen::Vector3d& x) {
+  std::vector<int>& hints = m_sides->hints;
+  if (!m_sides->sides[0].inside(x, hints[0])) return false;
+  for (std::size_t s = 1; s < m_sides->sides.size(); ++s)
+    if (m_sides->sides[s].inside(x, hints[s])) return false;
+  return true;
+}
+
+namespace {
 
 /// How far a point is inside an organ's own material: the distance to the organ's surface or to
 /// the nearest organ nested in it, whichever is closer (mm); outside that material a value <= 0.
@@ -435,23 +470,13 @@ std::optional<Eigen::Vector3d> deepest_labelled_point(const Phantom& phantom, st
                       order.begin() + static_cast<std::ptrdiff_t>(end), order.end(), deeper);
     sorted = end;
   };
-  std::vector<OrganSide> sides{OrganSide(*phantom.organs[o].surface)};
-  for (std::size_t n = 0; n < phantom.organs.size(); ++n)
-    if (phantom.organs[n].inside == phantom.organs[o].name && phantom.organs[n].surface)
-      sides.emplace_back(*phantom.organs[n].surface);
-  std::vector<int> hints(sides.size(), -1);
+  OrganMaterial material(phantom, o);
   const auto centre = [&](std::size_t v) {
     const auto b = static_cast<std::int64_t>(v);
     const std::int64_t row = b / block.dims.x();
     return grid.world_from_index(Eigen::Vector3d(static_cast<double>(first.x() + b % block.dims.x()),
                                                  static_cast<double>(first.y() + row % block.dims.y()),
                                                  static_cast<double>(first.z() + row / block.dims.y())));
-  };
-  const auto in_material = [&](const Eigen::Vector3d& x) {
-    if (!sides[0].inside(x, hints[0])) return false;
-    for (std::size_t s = 1; s < sides.size(); ++s)
-      if (sides[s].inside(x, hints[s])) return false;
-    return true;
   };
   const Eigen::MatrixX3d& rest = phantom.organs[o].surface->rest_positions();
   const double step = (rest.colwise().maxCoeff() - rest.colwise().minCoeff()).maxCoeff() / 40.0;
@@ -467,7 +492,7 @@ std::optional<Eigen::Vector3d> deepest_labelled_point(const Phantom& phantom, st
         near |= (t - x).norm() < step;
       if (near) continue;
     }
-    if (!in_material(x)) continue;
+    if (!material.contains(x)) continue;
     if (!deepest) {
       deepest = x;
       if (!map || exact_around(*map, x, moved)) return x;

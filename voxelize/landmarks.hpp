@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -63,6 +64,26 @@ std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDef
                                       std::vector<std::string>* warnings = nullptr,
                                       const std::function<void()>& organ_done = {},
                                       const ReferenceLabels& labels = {});
+
+/// Whether points lie in an organ's own material: inside its surface and outside the organs
+/// nested in it, each side decided from the patches as the voxelizer decides it (the closest base
+/// triangle, its pseudonormals, then the height of the patch's bumps), so exact whatever a
+/// tessellation would show. The test organ_landmarks() makes of its deepest points.
+class OrganMaterial {
+public:
+  /// @param organ index of a closed organ (one with a surface) in phantom.organs
+  OrganMaterial(const Phantom& phantom, std::size_t organ);
+  ~OrganMaterial();
+  OrganMaterial(OrganMaterial&&) noexcept;
+
+  /// Whether x (RAS mm) lies in the organ's own material. Not for several threads at once (it
+  /// keeps the last point's closest triangles to start the next search from).
+  bool contains(const Eigen::Vector3d& x);
+
+private:
+  struct Sides;
+  std::unique_ptr<Sides> m_sides;
+};
 
 /// CSV text of one state: "name,organ,x_mm,y_mm,z_mm" (world RAS mm), one landmark per line.
 std::string landmarks_csv(const std::vector<Landmark>& landmarks, bool deformed);

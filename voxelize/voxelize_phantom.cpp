@@ -3,6 +3,7 @@
 #include "core/cancellation.hpp"
 #include "core/format.hpp"
 #include "geometry/triangle_mesh.hpp"
+#include "voxelize/dense_landmarks.hpp"
 #include "voxelize/fold_warning.hpp"
 #include "voxelize/gap_fill.hpp"
 #include "voxelize/landmarks.hpp"
@@ -244,8 +245,8 @@ void voxelize_deformed(const VoxelizationSettings& settings, const OrganTable& o
 /// The reference state's landmarks carried by the deformation, and the displacement fields both
 /// ways with their Jacobians and exact masks, reported (and their folds warned of).
 void add_motion(const Phantom& reference, const PhantomDeformation& deformation, double landmark_tolerance_mm,
-                const std::function<void()>& landmark_done, VoxelizedPhantom& out, StageReport& report,
-                ProgressBar& progress) {
+                int dense_per_organ, const std::function<void()>& landmark_done, VoxelizedPhantom& out,
+                StageReport& report, ProgressBar& progress) {
   // Tissue outside the solved bodies does not move: the extension only smooths the step at a
   // moved boundary, over two voxels [choice].
   const double extension = 2.0 * out.grid.spacing_mm.maxCoeff();
@@ -256,6 +257,8 @@ void add_motion(const Phantom& reference, const PhantomDeformation& deformation,
   progress.set_detail("landmarks");
   out.landmarks = organ_landmarks(reference, &deformation, &map, landmark_tolerance_mm, &report.warnings,
                                   landmark_done, {&out.grid, &out.reference.labels});
+  out.dense_landmarks =
+      dense_landmarks(reference, &deformation, &map, dense_per_organ, reference.seed, &report.modelled);
   progress.set_detail("displacement fields");
   // Organs that stay where they are carry zero displacement in both fields (by their labels).
   StillTissue still{&out.reference.labels, out.deformed ? &out.deformed->labels : nullptr,
@@ -334,10 +337,14 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
                             "^3 samples in the " + std::to_string(out.reference.supersampled_voxels) +
                             " voxels within half a voxel diagonal of a surface");
   if (deformation)
-    add_motion(reference, *deformation, landmark_tolerance_mm, landmark_done, out, report, progress);
-  if (!deformation)
+    add_motion(reference, *deformation, landmark_tolerance_mm, settings.dense_landmarks, landmark_done, out,
+               report, progress);
+  if (!deformation) {
     out.landmarks = organ_landmarks(reference, nullptr, nullptr, landmark_tolerance_mm, &report.warnings,
                                     landmark_done, {&out.grid, &out.reference.labels});
+    out.dense_landmarks = dense_landmarks(reference, nullptr, nullptr, settings.dense_landmarks,
+                                          reference.seed, &report.modelled);
+  }
   report.modelled.push_back(
       "landmarks: each organ's deepest point from the distance transform of its reference label (depth "
       "within a voxel), or, for an organ the grid cuts, thinner than a voxel or whose surface is cheaper "

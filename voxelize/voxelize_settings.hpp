@@ -28,6 +28,7 @@ struct VoxelizationSettings {
   bool displacement_fields = true; ///< outputs.displacement_fields
   bool jacobian = true;            ///< outputs.jacobian
   bool landmarks = true;           ///< outputs.landmarks
+  int dense_landmarks = 0;         ///< per organ, outputs.dense_landmarks (0 without landmarks)
   /// The tissue of every gap (docs/volumes-and-images.md, "The gap"): gap_tissue, or when it is
   /// empty the scene's default (CSF when the container holds CSF, else air); "air" fills the gap
   /// with background (no signal).

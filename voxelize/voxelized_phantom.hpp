@@ -194,6 +194,8 @@ struct VoxelizedPhantom {
   std::optional<MotionFields> motion;                             ///< when the scene deforms
   std::optional<TextureMaps> reference_texture, deformed_texture; ///< when the scene asks for texture
   std::vector<Landmark> landmarks; ///< both states (equal when nothing deforms)
+  std::vector<Landmark>
+      dense_landmarks; ///< seeded material points per organ, both states (dense_landmarks.hpp)
   /// The organs' level sets by organ name, kept when the scene asks for .vdb output. Shared and
   /// opaque, so that holding them needs no OpenVDB (LevelSet::grid() gives the grid to write).
   std::vector<std::pair<std::string, std::shared_ptr<const LevelSet>>> reference_level_sets,

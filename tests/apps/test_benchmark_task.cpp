@@ -11,8 +11,11 @@
 #include "tests/support/subprocess.hpp"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <gtest/gtest.h>
+#include <map>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 using namespace phantasm::testing;
 namespace fs = std::filesystem;
@@ -168,6 +171,74 @@ TEST(EvalTask, TheGroundTruthScoresZeroErrorAndDrawsNoWarning) {
   EXPECT_EQ(pair["ndv"]["percent"].get<double>(), 0.0);
   EXPECT_TRUE(s.scores["warnings"].empty()) << s.scores["warnings"];
   EXPECT_EQ(s.run.err.find("warning"), std::string::npos) << s.run.err;
+}
+
+// The dataset's dense landmarks reach the truth (name, organ, fixed and moving voxel
+// coordinates) and are scored per structure: no registration scores each organ's true motion
+// (its mean and 95th percentile, computed here from the file), the truth itself scores zero
+// within the trilinear interpolation of its field.
+TEST(EvalTask, DenseKeypointsScoreTheTrueMotionWithoutRegistrationAndZeroForTheTruth) {
+  const Made& m = small_task();
+  const nlohmann::json truth = nlohmann::json::parse(read_file(m.truth / "truth.json"));
+  ASSERT_TRUE(truth["pairs"][0].contains("dense_keypoints"));
+  const std::string csv = read_file(m.truth / truth["pairs"][0]["dense_keypoints"].get<std::string>());
+  std::istringstream lines(csv);
+  std::string line;
+  std::getline(lines, line);
+  EXPECT_EQ(line, "name,organ,fixed_i,fixed_j,fixed_k,moving_i,moving_j,moving_k");
+  const phantasm::ImageGrid grid = fixed_grid();
+  std::map<std::string, std::vector<double>> motion; // per organ, |moving - fixed| in mm
+  while (std::getline(lines, line)) {
+    std::vector<std::string> cells;
+    std::istringstream fields(line);
+    for (std::string cell; std::getline(fields, cell, ',');)
+      cells.push_back(cell);
+    ASSERT_EQ(cells.size(), 8u) << line;
+    const Eigen::Vector3d fixed(std::stod(cells[2]), std::stod(cells[3]), std::stod(cells[4]));
+    const Eigen::Vector3d moving(std::stod(cells[5]), std::stod(cells[6]), std::stod(cells[7]));
+    motion[cells[1]].push_back((grid.world_from_index(moving) - grid.world_from_index(fixed)).norm());
+  }
+  // The small head's three organs, 300 points each (the default) where the map is exact over
+  // enough of the organ: its grey matter's 77 coarse tets leave much of it outside.
+  ASSERT_EQ(motion.size(), 3u);
+  std::size_t rows = 0;
+  for (const auto& [organ, values] : motion) {
+    EXPECT_LE(values.size(), 300u) << organ;
+    EXPECT_GE(values.size(), 200u) << organ;
+    rows += values.size();
+  }
+
+  const Scored none = score(
+      result_folder("dense-none", [](const Eigen::Vector3d&) { return Eigen::Vector3d::Zero().eval(); }));
+  ASSERT_EQ(none.run.exit_code, 0) << none.run.err;
+  const nlohmann::json& dense = none.scores["pairs"][0]["dense_tre_mm"];
+  ASSERT_EQ(dense["count"].get<std::size_t>(), rows);
+  ASSERT_EQ(dense["by_structure"].size(), 3u);
+  double moved_most = 0.0;
+  for (const auto& s : dense["by_structure"]) {
+    std::vector<double> values = motion.at(s["structure"].get<std::string>());
+    double sum = 0.0;
+    for (double v : values)
+      sum += v;
+    std::sort(values.begin(), values.end());
+    const double at = 0.95 * static_cast<double>(values.size() - 1);
+    const auto below = static_cast<std::size_t>(at);
+    const double p95 =
+        values[below] + (at - static_cast<double>(below)) * (values[below + 1] - values[below]);
+    EXPECT_NEAR(s["mean"].get<double>(), sum / static_cast<double>(values.size()), 1e-5) << s["structure"];
+    EXPECT_NEAR(s["p95"].get<double>(), p95, 1e-5) << s["structure"];
+    moved_most = std::max(moved_most, s["max"].get<double>());
+  }
+  EXPECT_GT(moved_most, 0.5); // the points move: otherwise the test would prove nothing
+  EXPECT_NEAR(none.scores["summary"]["mean_dense_tre_mm"].get<double>(), dense["mean"].get<double>(), 1e-12);
+
+  const Scored exact = score(result_folder("dense-truth", [](const Eigen::Vector3d& u) { return u; }));
+  ASSERT_EQ(exact.run.exit_code, 0) << exact.run.err;
+  const nlohmann::json& zero = exact.scores["pairs"][0]["dense_tre_mm"];
+  // The small head's voxels are 2 mm: within a tenth of a voxel on average, and a few points
+  // where a moved organ slides along one that stays (the field steps within a voxel there).
+  EXPECT_LT(zero["mean"].get<double>(), 0.2);
+  EXPECT_LT(zero["mean"].get<double>(), 0.2 * dense["mean"].get<double>());
 }
 
 TEST(EvalTask, EachMisreadingOfTheTruthScoresWrongAndDrawsTheWarningThatNamesIt) {

@@ -12,6 +12,10 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <map>
+#include <sstream>
+
 using namespace phantasm::testing;
 namespace fs = std::filesystem;
 
@@ -152,6 +156,54 @@ TEST(EvalCommand, IdentityGivesTheTrueMotionAndTheGroundTruthScoresPerfectly) {
       evaluate({"--labels", (folder / "warped.nii.gz").string()}, folder / "l.json");
   EXPECT_TRUE(by_labels["tre_mm"].is_null());
   EXPECT_EQ(by_labels["labels"], truth["labels"]);
+}
+
+// The dense landmarks (ses-*/landmarks/*_desc-dense_landmarks.csv, the landmarks' format): the
+// same names in both states, up to 300 per organ; without registration each organ's TRE is its true
+// motion (mean over its points, from the files), with the ground truth's field a tenth of it.
+TEST(EvalCommand, DenseLandmarksAreScoredPerOrganAsTheirTrueMotionWithoutRegistration) {
+  std::map<std::string, std::map<std::string, Eigen::Vector3d>> states;
+  std::map<std::string, std::string> organ_of;
+  for (const std::string session : {"ref", "def"}) {
+    std::istringstream csv(read_file(subject_folder() / ("ses-" + session) / "landmarks" /
+                                     ("sub-01_ses-" + session + "_desc-dense_landmarks.csv")));
+    std::string line;
+    std::getline(csv, line);
+    EXPECT_EQ(line, "name,organ,x_mm,y_mm,z_mm");
+    while (std::getline(csv, line)) {
+      // name and organ hold no spaces: the row read as five words
+      std::replace(line.begin(), line.end(), ',', ' ');
+      std::istringstream fields(line);
+      std::string name, organ;
+      Eigen::Vector3d x;
+      ASSERT_TRUE(fields >> name >> organ >> x.x() >> x.y() >> x.z()) << line;
+      states[session][name] = x;
+      organ_of[name] = organ;
+    }
+  }
+  ASSERT_GE(states["ref"].size(), 600u);
+  ASSERT_EQ(states["def"].size(), states["ref"].size());
+  std::map<std::string, std::pair<double, int>> motion; // per organ: sum of |def - ref|, count
+  for (const auto& [name, x] : states["ref"]) {
+    ASSERT_TRUE(states["def"].count(name)) << name;
+    motion[organ_of[name]].first += (states["def"][name] - x).norm();
+    ++motion[organ_of[name]].second;
+  }
+  const fs::path folder = fresh_folder("eval-dense");
+  const nlohmann::json identity = evaluate({"--identity"}, folder / "identity.json");
+  ASSERT_EQ(identity["dense_tre_mm"]["by_structure"].size(), 3u);
+  for (const auto& s : identity["dense_tre_mm"]["by_structure"]) {
+    const auto& [sum, count] = motion.at(s["structure"].get<std::string>());
+    EXPECT_EQ(s["count"].get<int>(), count);
+    EXPECT_LE(count, 300);
+    EXPECT_NEAR(s["mean"].get<double>(), sum / count, 1e-9) << s["structure"];
+  }
+  EXPECT_GT(identity["dense_tre_mm"]["max"].get<double>(), 0.5);
+  const fs::path truth_field = subject_folder() / "xfm" / "sub-01_from-def_to-ref_mode-image_xfm.nii.gz";
+  const nlohmann::json truth = evaluate({"--field", truth_field.string()}, folder / "truth.json");
+  EXPECT_LT(truth["dense_tre_mm"]["mean"].get<double>(), 0.2);
+  EXPECT_LT(truth["dense_tre_mm"]["mean"].get<double>(),
+            0.2 * identity["dense_tre_mm"]["mean"].get<double>());
 }
 
 // The convention cross-check: transformix writes the field of a known affine (LPS, x_moving =

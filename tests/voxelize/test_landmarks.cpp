@@ -9,6 +9,7 @@
 #include "scene/scene.hpp"
 #include "sim/deform_phantom.hpp"
 #include "tests/support/patch_bumps.hpp"
+#include "voxelize/dense_landmarks.hpp"
 #include "voxelize/landmarks.hpp"
 #include "voxelize/motion_fields.hpp"
 #include "voxelize/voxelize_phantom.hpp"
@@ -18,7 +19,9 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <functional>
 #include <limits>
+#include <map>
 #include <string>
 
 using namespace phantasm;
@@ -343,5 +346,128 @@ TEST(OrganLandmarks, DeepestPointsFromTheLabelsAreAsDeepAsFromTheSurfacesToWithi
       EXPECT_EQ(from_labels.deformed_mm, map.forward(from_labels.reference_mm, &exact));
       EXPECT_TRUE(exact);
     }
+  }
+}
+
+namespace {
+
+/// A shell (a sphere of 20 mm) that stays, around a core (a sphere of 12 mm) the solver moves:
+/// one body, the cube [-30, 30]^3 in six tets that all hold the core's material, moved by an
+/// affine map.
+struct MovedCore {
+  Phantom phantom;
+  PhantomDeformation deformation;
+  Eigen::Matrix3d A;
+  Eigen::Vector3d b = Eigen::Vector3d(1.5, -0.5, 0.8);
+};
+
+MovedCore moved_core() {
+  MovedCore c;
+  c.phantom.organs.push_back(organ("shell", "", sphere(20.0)));
+  c.phantom.organs.push_back(organ("core", "shell", sphere(12.0)));
+  c.A << 1.1, 0.05, 0.0, 0.0, 0.95, 0.02, 0.03, 0.0, 1.0;
+  DeformedBody body;
+  body.organ = "core";
+  body.rest_mm.resize(8, 3);
+  body.deformed_mm.resize(8, 3);
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d x =
+        60.0 * Eigen::Vector3d(k & 1, (k >> 1) & 1, (k >> 2) & 1) - Eigen::Vector3d::Constant(30.0);
+    body.rest_mm.row(k) = x.transpose();
+    body.deformed_mm.row(k) = (c.A * x + c.b).transpose();
+  }
+  const int axes[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+  body.tets.resize(6, 4);
+  for (int t = 0; t < 6; ++t) {
+    const int first = 1 << axes[t][0], second = first | (1 << axes[t][1]);
+    body.tets.row(t) << 0, first, second, 7;
+  }
+  body.tet_organ.assign(6, 1);
+  c.deformation.bodies.push_back(body);
+  c.deformation.organs.push_back({"shell", "fixed", {}, {}});
+  c.deformation.organs.push_back({"core", "solver", {}, {}});
+  return c;
+}
+
+} // namespace
+
+// Dense landmarks: as many as asked per organ, each in its organ's own material (the shell's
+// outside the core: signed distances to tessellations, not the patches' test the points were
+// picked with), spread over it, the moved core's carried exactly by the map (the affine motion
+// of its tets), the shell's unchanged.
+TEST(DenseLandmarks, AreMaterialPointsSpreadOverTheirOrgansAndExactInBothStates) {
+  const MovedCore c = moved_core();
+  const DeformationMap map(c.deformation.bodies, 4.0);
+  std::vector<std::string> warnings;
+  const std::vector<Landmark> points = dense_landmarks(c.phantom, &c.deformation, &map, 150, 7, &warnings);
+  EXPECT_TRUE(warnings.empty()) << warnings.front();
+  ASSERT_EQ(points.size(), 300u);
+  // The clearance in each organ's own material (as clearance() above, each surface tessellated once).
+  const MeshDistance shell(c.phantom.organs[0].surface->tessellate(0.25)),
+      core(c.phantom.organs[1].surface->tessellate(0.25));
+  const std::map<std::string, std::function<double(const Eigen::Vector3d&)>> material = {
+      {"shell",
+       [&](const Eigen::Vector3d& x) {
+         return std::min(-shell.signed_distance(x), core.signed_distance(x));
+       }},
+      {"core", [&](const Eigen::Vector3d& x) { return -core.signed_distance(x); }}};
+  for (const std::string organ_name : {"shell", "core"}) {
+    SCOPED_TRACE(organ_name);
+    Eigen::AlignedBox3d box;
+    int count = 0;
+    for (const Landmark& l : points) {
+      if (l.organ != organ_name) continue;
+      ++count;
+      box.extend(l.reference_mm);
+      EXPECT_EQ(l.name.rfind(organ_name + "_point_", 0), 0u) << l.name;
+      EXPECT_GT(material.at(organ_name)(l.reference_mm), 0.0) << l.reference_mm.transpose();
+      if (organ_name == "shell") {
+        EXPECT_EQ(l.deformed_mm, l.reference_mm);
+      } else {
+        bool exact = false;
+        EXPECT_EQ(l.deformed_mm, map.forward(l.reference_mm, &exact));
+        EXPECT_TRUE(exact);
+        EXPECT_LT((l.deformed_mm - (c.A * l.reference_mm + c.b)).norm(), 1e-9);
+      }
+    }
+    EXPECT_EQ(count, 150);
+    // The icosahedral spheres' faces lie within 20 % of their vertices' radius: the points span
+    // at least 70 % of the organ's width along every axis.
+    const double radius = organ_name == std::string("shell") ? 20.0 : 12.0;
+    EXPECT_GT(box.sizes().minCoeff(), 0.7 * 2.0 * radius) << box.sizes().transpose();
+  }
+}
+
+// The same phantom, count and seed give the same bytes, on one thread and on two; another seed
+// other points; a count of 0 none.
+TEST(DenseLandmarks, AreTheSameBytesForTheSameSeedOnAnyThreadCount) {
+  const MovedCore c = moved_core();
+  const DeformationMap map(c.deformation.bodies, 4.0);
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const std::string one = landmarks_csv(dense_landmarks(c.phantom, &c.deformation, &map, 100, 3), true);
+  omp_set_num_threads(2);
+  const std::string two = landmarks_csv(dense_landmarks(c.phantom, &c.deformation, &map, 100, 3), true);
+  omp_set_num_threads(threads);
+  EXPECT_EQ(std::count(one.begin(), one.end(), '\n'), 1 + 200);
+  EXPECT_EQ(one, two);
+  EXPECT_NE(one, landmarks_csv(dense_landmarks(c.phantom, &c.deformation, &map, 100, 4), true));
+  EXPECT_TRUE(dense_landmarks(c.phantom, &c.deformation, &map, 0, 3).empty());
+}
+
+// An organ filled by the one nested in it has no own material: no dense landmark of it, and a
+// note saying so; the nested organ still gets its points.
+TEST(DenseLandmarks, AnOrganWithoutMaterialOfItsOwnGetsNoneAndANote) {
+  Phantom phantom;
+  phantom.organs.push_back(organ("outer", "", sphere(20.0)));
+  phantom.organs.push_back(organ("filling", "outer", sphere(20.0)));
+  std::vector<std::string> warnings;
+  const std::vector<Landmark> points = dense_landmarks(phantom, nullptr, nullptr, 50, 1, &warnings);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].find("outer: 0 of the 50"), std::string::npos) << warnings[0];
+  ASSERT_EQ(points.size(), 50u);
+  for (const Landmark& l : points) {
+    EXPECT_EQ(l.organ, "filling");
+    EXPECT_EQ(l.deformed_mm, l.reference_mm);
   }
 }
