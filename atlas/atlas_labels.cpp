@@ -42,15 +42,19 @@ std::vector<std::string> atlas_names() {
   return {"colin27"};
 }
 
-AtlasLabels derive_atlas_labels(const std::string& atlas, const std::filesystem::path& templates_dir) {
+std::vector<std::filesystem::path> atlas_input_files(const std::string& atlas,
+                                                     const std::filesystem::path& templates_dir) {
   if (atlas != "colin27") throw InputError("atlas: expected one of colin27, found '" + atlas + "'");
+  return {templates_dir / "ch2.nii.gz", templates_dir / "ch2bet.nii.gz", templates_dir / "aal.nii.gz"};
+}
+
+AtlasLabels derive_atlas_labels(const std::string& atlas, const std::filesystem::path& templates_dir) {
+  const std::vector<std::filesystem::path> inputs = atlas_input_files(atlas, templates_dir);
   AtlasLabels result;
   result.head = padded(derive_colin27_head(templates_dir), 2);
   result.source = "atlas colin27 (" + templates_dir.string() + ")";
-  for (const char* name : {"ch2.nii.gz", "ch2bet.nii.gz", "aal.nii.gz"}) {
-    result.provenance.push_back("colin27 input " + (templates_dir / name).string() + " sha256 " +
-                                file_sha256(templates_dir / name));
-  }
+  for (const std::filesystem::path& input : inputs)
+    result.provenance.push_back("colin27 input " + input.string() + " sha256 " + file_sha256(input));
   const auto& labels = result.head.labels;
   const std::string bytes(reinterpret_cast<const char*>(labels.data()), labels.size() * sizeof(labels[0]));
   const Eigen::Vector3i& dims = result.head.grid.dims;

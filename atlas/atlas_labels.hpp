@@ -20,6 +20,12 @@ struct AtlasLabels {
 /// The atlases a scene may name.
 std::vector<std::string> atlas_names();
 
+/// The installed files a named atlas is derived from (for "colin27": ch2.nii.gz, ch2bet.nii.gz and
+/// aal.nii.gz in templates_dir), in a fixed order.
+/// @throws InputError for an unknown atlas
+std::vector<std::filesystem::path> atlas_input_files(const std::string& atlas,
+                                                     const std::filesystem::path& templates_dir);
+
 /// Derives the label volume of a named atlas ("colin27": derive_colin27_head with default options,
 /// padded by two background voxels on every side so that labels cut by the template's field of
 /// view, the neck, close there; the world positions of the voxels are unchanged). Deterministic.

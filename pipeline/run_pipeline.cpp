@@ -11,6 +11,7 @@
 #include "mri/mri_plan.hpp"
 #include "pipeline/anatomy_cache.hpp"
 #include "pipeline/anatomy_checks.hpp"
+#include "pipeline/atlas_labels_cache.hpp"
 #include "pipeline/body_mesh_cache.hpp"
 #include "pipeline/cost_estimate.hpp"
 #include "pipeline/growth_atlas.hpp"
@@ -72,10 +73,12 @@ private:
 /// Derives the label volumes organs name by atlas (once per run) and records what was derived,
 /// from which inputs, and the sources to cite, in the log and the provenance.
 /// @param derived_volumes receives each derived volume by atlas name (null: kept nowhere)
+/// @param cache the anatomy cache's folder, which keeps the derived volumes (empty: none)
 AtlasLoader atlas_loader(StageReport& report, Reporter& reporter,
-                         std::map<std::string, AtlasLabelVolume>* derived_volumes = nullptr) {
-  return [&report, &reporter, derived_volumes](const std::string& atlas) {
-    AtlasLabels derived = derive_atlas_labels(atlas);
+                         std::map<std::string, AtlasLabelVolume>* derived_volumes = nullptr,
+                         const std::filesystem::path& cache = {}) {
+  return [&report, &reporter, derived_volumes, cache](const std::string& atlas) {
+    AtlasLabels derived = derive_atlas_labels_cached(atlas, cache, reporter);
     for (const std::string& line : derived.provenance) {
       report.modelled.push_back(line);
       reporter.modelled(report.stage, line);
@@ -108,7 +111,7 @@ Phantom build_anatomy(const Scene& scene, const std::filesystem::path& cache, St
                       Reporter& reporter, std::string& anatomy_key,
                       std::map<std::string, AtlasLabelVolume>& atlases) {
   const std::map<std::string, ShapeData> files =
-      read_shape_files(scene.anatomy, atlas_loader(report, reporter, &atlases), scene.grid.grid());
+      read_shape_files(scene.anatomy, atlas_loader(report, reporter, &atlases, cache), scene.grid.grid());
   if (!cache.empty()) anatomy_key = anatomy_cache_key(scene.anatomy, files);
   Phantom phantom = build_phantom_cached(scene.anatomy, files, cache, report, reporter);
   for (const Organ& organ : phantom.organs) {
