@@ -4,24 +4,13 @@
 #include "geometry/ras_lps.hpp"
 #include "io/nifti_file.hpp"
 
+#include <Eigen/LU>
+
 #include <cmath>
+#include <stdexcept>
 
 namespace phantasm {
 namespace {
-
-struct ConventionName {
-  FieldConvention convention;
-  const char* name;
-};
-constexpr ConventionName k_names[] = {{FieldConvention::itk, "itk"},
-                                      {FieldConvention::learn2reg, "learn2reg"},
-                                      {FieldConvention::mrtrix_deformation, "mrtrix-deformation"},
-                                      {FieldConvention::mrtrix_displacement, "mrtrix-displacement"}};
-
-/// d(RAS mm) / d(voxel index): the linear part of the grid's affine.
-Eigen::Matrix3d ras_from_index(const ImageGrid& grid) {
-  return grid.world_from_voxel.topLeftCorner<3, 3>();
-}
 
 std::string dims_text(const Eigen::Vector3i& d) {
   return std::to_string(d.x()) + " x " + std::to_string(d.y()) + " x " + std::to_string(d.z());
@@ -33,17 +22,48 @@ bool is_integer_datatype(int datatype) {
 
 } // namespace
 
+// The members, one per file of evaluation/field_conventions/.
+const FieldConventionType& itk_field_convention();
+const FieldConventionType& learn2reg_field_convention();
+const FieldConventionType& mrtrix_deformation_field_convention();
+const FieldConventionType& mrtrix_displacement_field_convention();
+
+const std::vector<const FieldConventionType*>& field_convention_types() {
+  // The registrations: a new convention adds its line here and its declaration above
+  // (docs/architecture.md, Adding a variant).
+  static const std::vector<const FieldConventionType*> types{
+      &itk_field_convention(), &learn2reg_field_convention(), &mrtrix_deformation_field_convention(),
+      &mrtrix_displacement_field_convention()};
+  return types;
+}
+
+const FieldConventionType& field_convention_type(FieldConvention convention) {
+  for (const FieldConventionType* type : field_convention_types())
+    if (type->convention == convention) return *type;
+  throw std::logic_error("a field convention without a member of the convention registry");
+}
+
+FieldFrame::FieldFrame(const ImageGrid& g)
+    : grid(g), ras_from_index(g.world_from_voxel.topLeftCorner<3, 3>()),
+      index_from_ras(ras_from_index.inverse()) {}
+
+std::string field_convention_help(FieldConvention default_convention) {
+  std::string help = std::string("Convention of the result fields: ") +
+                     field_convention_type(default_convention).name + " (default)";
+  for (const FieldConventionType* type : field_convention_types())
+    if (type->convention != default_convention) help += std::string(", ") + type->name;
+  return help;
+}
+
 std::string to_string(FieldConvention convention) {
-  for (const auto& n : k_names)
-    if (n.convention == convention) return n.name;
-  return "itk";
+  return field_convention_type(convention).name;
 }
 
 FieldConvention field_convention_from_string(const std::string& name, const std::string& option) {
   std::string known;
-  for (const auto& n : k_names) {
-    if (name == n.name) return n.convention;
-    known += (known.empty() ? "" : ", ") + std::string(n.name);
+  for (const FieldConventionType* type : field_convention_types()) {
+    if (name == type->name) return type->convention;
+    known += (known.empty() ? "" : ", ") + std::string(type->name);
   }
   throw InputError(option + ": expected one of " + known + ", found '" + name + "'");
 }
@@ -66,37 +86,31 @@ void write_field(const std::filesystem::path& path, const DisplacementField& fie
                  FieldConvention convention) {
   const ImageGrid& grid = field.grid;
   const std::size_t count = field.lps_mm.size();
-  const Eigen::Matrix3d index_from_ras = ras_from_index(grid).inverse();
+  const FieldConventionType& type = field_convention_type(convention);
+  const FieldFrame frame(grid);
   std::vector<float> values(3 * count);
   for (int k = 0; k < grid.dims.z(); ++k)
     for (int j = 0; j < grid.dims.y(); ++j)
       for (int i = 0; i < grid.dims.x(); ++i) {
         const std::size_t v = voxel_index(grid.dims, i, j, k);
-        const Eigen::Vector3d ras = ras_from_lps(field.lps_mm[v]);
-        Eigen::Vector3d stored = ras;
-        switch (convention) {
-        case FieldConvention::itk: stored = field.lps_mm[v]; break;
-        case FieldConvention::learn2reg: stored = index_from_ras * ras; break;
-        case FieldConvention::mrtrix_deformation:
-          stored = grid.world_from_index(Eigen::Vector3d(i, j, k)) + ras;
-          break;
-        case FieldConvention::mrtrix_displacement: stored = ras; break;
-        }
+        const Eigen::Vector3d stored =
+            type.stored(frame, Eigen::Vector3d(i, j, k), ras_from_lps(field.lps_mm[v]));
         for (int c = 0; c < 3; ++c)
           values[c * count + v] = static_cast<float>(stored[c]);
       }
   NiftiWriteOptions options;
   options.components = 3;
   options.intent = NiftiIntent::displacement;
-  options.components_in_fourth_dimension = convention != FieldConvention::itk;
-  options.description = "displacement, " + to_string(convention) + " convention";
+  options.components_in_fourth_dimension = type.components_in_fourth_dimension;
+  options.description = "displacement, " + std::string(type.name) + " convention";
   write_nifti(path, grid, values, options);
 }
 
 DisplacementField read_field(const std::filesystem::path& path, FieldConvention convention,
                              const ImageGrid& fixed) {
+  const FieldConventionType& type = field_convention_type(convention);
   const NiftiVolume volume =
-      convention == FieldConvention::itk ? read_nifti_vectors(path, 3) : read_nifti_vectors_4d(path, 3);
+      type.components_in_fourth_dimension ? read_nifti_vectors_4d(path, 3) : read_nifti_vectors(path, 3);
   if (volume.grid.dims != fixed.dims) {
     throw InputError(path.string() + ": expected a field on the fixed grid (" + dims_text(fixed.dims) +
                      " voxels, 3 components), found " + dims_text(volume.grid.dims) + " voxels");
@@ -104,10 +118,10 @@ DisplacementField read_field(const std::filesystem::path& path, FieldConvention 
   // The world-coordinate conventions (ITK, MRtrix3) read their vectors in the file's space: one on
   // another grid of the same size is another field. A Learn2Reg file's vectors are voxels of the
   // fixed grid whatever its header says (the challenge's files carry an identity or none).
-  if (convention != FieldConvention::learn2reg &&
+  if (type.world_frame &&
       (volume.grid.world_from_voxel - fixed.world_from_voxel).cwiseAbs().maxCoeff() > 1e-3) {
     throw InputError(path.string() + ": expected a field on the fixed grid's voxel-to-world matrix (" +
-                     to_string(convention) + " vectors are in world mm), found another one");
+                     type.name + " vectors are in world mm), found another one");
   }
   if (is_integer_datatype(volume.datatype)) {
     throw InputError(path.string() + ": expected float32 or float64 displacements, found NIfTI datatype " +
@@ -115,7 +129,7 @@ DisplacementField read_field(const std::filesystem::path& path, FieldConvention 
                      " (whole numbers cannot hold sub-voxel displacements)");
   }
   const std::size_t count = static_cast<std::size_t>(fixed.voxel_count());
-  const Eigen::Matrix3d ras_per_index = ras_from_index(fixed);
+  const FieldFrame frame(fixed);
   std::vector<Eigen::Vector3d> ras(count);
   for (int k = 0; k < fixed.dims.z(); ++k)
     for (int j = 0; j < fixed.dims.y(); ++j)
@@ -128,14 +142,7 @@ DisplacementField read_field(const std::filesystem::path& path, FieldConvention 
                            ": expected finite displacements, found NaN or infinity at voxel (" +
                            std::to_string(i) + ", " + std::to_string(j) + ", " + std::to_string(k) + ")");
         }
-        switch (convention) {
-        case FieldConvention::itk: ras[v] = ras_from_lps(stored); break;
-        case FieldConvention::learn2reg: ras[v] = ras_per_index * stored; break;
-        case FieldConvention::mrtrix_deformation:
-          ras[v] = stored - fixed.world_from_index(Eigen::Vector3d(i, j, k));
-          break;
-        case FieldConvention::mrtrix_displacement: ras[v] = stored; break;
-        }
+        ras[v] = type.displacement(frame, Eigen::Vector3d(i, j, k), stored);
       }
   return field_from_ras(fixed, ras);
 }

@@ -2,6 +2,7 @@
 #include "core/error.hpp"
 #include "core/safe_name.hpp"
 #include "evaluation/evaluate_registration.hpp"
+#include "evaluation/field_conventions.hpp"
 #include "evaluation/learn2reg_task.hpp"
 #include "evaluation/score_task.hpp"
 #include "io/atomic_file.hpp"
@@ -50,10 +51,8 @@ void add_eval_command(CLI::App& app, std::function<int()>& action) {
   results->excludes(field)->excludes(labels)->excludes(identity)->excludes(subject)->excludes(fixed);
   auto* truth = command->add_option("--truth", options->truth,
                                     "The task's ground-truth folder (default: TASK-truth beside it)");
-  auto* convention =
-      command->add_option("--convention", options->convention,
-                          "Convention of the result fields: learn2reg (default), itk, mrtrix-deformation, "
-                          "mrtrix-displacement");
+  auto* convention = command->add_option("--convention", options->convention,
+                                         field_convention_help(FieldConvention::learn2reg));
   auto* csv =
       command->add_option("--csv", options->csv, "Write a task's scores per pair as CSV to this file");
   auto* html = command->add_option(

@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <set>
 
 using namespace phantasm;
 
@@ -55,8 +56,8 @@ TEST(FieldConventions, EveryConventionReadsBackTheFieldItWrote) {
   const ImageGrid grid = oblique_grid({9, 8, 7});
   const DisplacementField field = bump(grid, 2.0);
   const auto folder = phantasm::testing::fresh_folder("field-conventions");
-  for (FieldConvention c : {FieldConvention::itk, FieldConvention::learn2reg,
-                            FieldConvention::mrtrix_deformation, FieldConvention::mrtrix_displacement}) {
+  for (const FieldConventionType* type : field_convention_types()) {
+    const FieldConvention c = type->convention;
     const auto path = folder / (to_string(c) + ".nii.gz");
     write_field(path, field, c);
     const DisplacementField back = read_field(path, c, grid);
@@ -74,6 +75,42 @@ TEST(FieldConventions, EveryConventionReadsBackTheFieldItWrote) {
     largest = std::max(largest, (misread.lps_mm[v] - field.lps_mm[v]).norm());
   EXPECT_GT(largest, 0.5);
   EXPECT_THROW(field_convention_from_string("ants", "--convention"), InputError);
+}
+
+TEST(FieldConventions, EveryMemberHasItsOwnNameHelpAndBothDirections) {
+  std::set<std::string> names;
+  const std::string help = field_convention_help(FieldConvention::learn2reg);
+  EXPECT_EQ(help.find("Convention of the result fields: learn2reg (default), "), 0u) << help;
+  for (const FieldConventionType* type : field_convention_types()) {
+    EXPECT_TRUE(names.insert(type->name).second) << type->name;
+    EXPECT_EQ(&field_convention_type(type->convention), type);
+    EXPECT_EQ(to_string(type->convention), type->name);
+    EXPECT_GT(std::string(type->description).size(), 10u) << type->name;
+    EXPECT_NE(type->stored, nullptr) << type->name;
+    EXPECT_NE(type->displacement, nullptr) << type->name;
+    EXPECT_NE(help.find(type->name), std::string::npos) << help;
+  }
+}
+
+TEST(FieldConventions, AFileReadInAConventionItIsConfusedWithIsAnotherField) {
+  const ImageGrid grid = oblique_grid({9, 8, 7});
+  const DisplacementField field = bump(grid, 2.0);
+  const auto folder = phantasm::testing::fresh_folder("field-confusions");
+  for (const FieldConventionType* type : field_convention_types()) {
+    const auto path = folder / (std::string(type->name) + ".nii.gz");
+    write_field(path, field, type->convention);
+    // A file of the 4-D layout can be read in any 4-D convention: each names what it is taken for.
+    if (type->components_in_fourth_dimension) EXPECT_FALSE(type->confusions.empty()) << type->name;
+    for (const FieldConfusion& confusion : type->confusions) {
+      EXPECT_NE(confusion.with, type->convention) << type->name;
+      EXPECT_FALSE(std::string(confusion.mistake).empty()) << type->name;
+      const DisplacementField misread = read_field(path, confusion.with, grid);
+      double largest = 0.0;
+      for (std::size_t v = 0; v < field.lps_mm.size(); ++v)
+        largest = std::max(largest, (misread.lps_mm[v] - field.lps_mm[v]).norm());
+      EXPECT_GT(largest, 0.5) << type->name << " read as " << to_string(confusion.with);
+    }
+  }
 }
 
 TEST(FieldConventions, AFieldOfAnotherGridOrWithNanIsRefusedNamingTheFile) {
