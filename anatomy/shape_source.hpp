@@ -34,10 +34,10 @@ struct ShapeParameter {
   bool min_exclusive = false, max_exclusive = false;
   const char* unit = "";
   bool required = false;
-  bool scalar_allowed = false;         ///< Kind::vector3
-  int axes = 3;                        ///< Kind::cells
-  std::vector<std::string> extensions; ///< Kind::file: the accepted extensions (empty: any)
-  bool atlas_allowed = false;          ///< Kind::file
+  bool scalar_allowed = false;              ///< Kind::vector3
+  int axes = 3;                             ///< Kind::cells
+  std::vector<std::string> extensions = {}; ///< Kind::file: the accepted extensions (empty: any)
+  bool atlas_allowed = false;               ///< Kind::file
 };
 
 /// How the nesting of an organ of this source in its container is checked.
