@@ -123,7 +123,8 @@ double hausdorff_order(const ImplicitShape& target, const std::vector<int>& size
 // Shapes rays from a centre cannot sample, on base meshes extracted from their own surfaces: the
 // fitted error falls at least as edge^1.5 (measured orders are printed) over three sizes, each
 // twice the patches of the one before. Measured with a fourth, finer size (twice the time of the
-// three): torus 1.88, folded spheroid 1.88, horseshoe 1.84; over the three: 2.0, 2.5, 1.7.
+// three): torus 1.88, folded spheroid 1.88, horseshoe 1.84; over the three: 2.0, 2.1, 1.7. The
+// folded spheroid's finer pair alone (404 and 842 patches) gives 1.71, above the bound too.
 TEST(PatchFit, TorusFitConvergesWithOrderAtLeastOneAndAHalf) {
   const auto torus = make_torus({0, 0, 0}, 30, 10);
   EXPECT_GE(hausdorff_order(*torus, {160, 320, 640}, "torus"), 1.5);
@@ -131,7 +132,7 @@ TEST(PatchFit, TorusFitConvergesWithOrderAtLeastOneAndAHalf) {
 
 TEST(PatchFit, FoldedSpheroidFitConvergesWithOrderAtLeastOneAndAHalf) {
   const auto folded = make_folded_spheroid(40, 0.3, 5, 30, 0.04);
-  EXPECT_GE(hausdorff_order(*folded, {320, 640, 1280}, "folded spheroid"), 1.5);
+  EXPECT_GE(hausdorff_order(*folded, {160, 320, 640}, "folded spheroid"), 1.5);
 }
 
 TEST(PatchFit, HorseshoeFitConvergesWithOrderAtLeastOneAndAHalf) {
