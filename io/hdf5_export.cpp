@@ -385,6 +385,8 @@ void add_state_targets(const std::filesystem::path& dataset, const DatasetLayout
       session + "dseg", "labels", "label", scalar_axes, 1, false, H5T_NATIVE_INT32};
   targets->exact[relative_of(layout.landmarks(state))] = {session + "landmarks", "landmarks", "mm",
                                                           "landmark coordinate", 1,           true};
+  targets->exact[relative_of(layout.dense_landmarks(state))] = {
+      session + "dense_landmarks", "landmarks", "mm", "landmark coordinate", 1, true};
   targets->patterns.emplace_back(
       PathPattern([&](const std::string& x) { return layout.probseg(state, x); }, dataset, false),
       [session, scalar_axes](const std::string& tissue) {

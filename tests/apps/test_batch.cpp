@@ -192,8 +192,8 @@ TEST(BatchCommand, Hdf5ExportHoldsEveryImageLabelMapAndField) {
       run_command({PHANTASM_PYTHON, (k_source_dir / "tests" / "apps" / "check_hdf5.py").string(),
                    (root / "sweep.h5").string(), (root / "out").string()});
   EXPECT_EQ(check.exit_code, 0) << check.out << check.err;
-  EXPECT_NE(check.out.find("checked 84 arrays: displacement_field 6, exact_mask 6, fraction 18, image 12, "
-                           "jacobian 6, labels 6, landmarks 6, parameter_map 24"),
+  EXPECT_NE(check.out.find("checked 90 arrays: displacement_field 6, exact_mask 6, fraction 18, image 12, "
+                           "jacobian 6, labels 6, landmarks 12, parameter_map 24"),
             std::string::npos)
       << check.out;
   const CommandResult empty =

@@ -448,9 +448,9 @@ TEST(TaskCommand, ASweepGivesOnePairPerSubjectAndEachTruthScoresZero) {
     std::istringstream fields(line);
     for (std::string cell; std::getline(fields, cell, ',');)
       cells.push_back(cell);
-    ASSERT_EQ(cells.size(), 12u) << line;
-    EXPECT_EQ(cells[6], "0") << line;  // endpoint error mean, mm
-    EXPECT_EQ(cells[11], "0") << line; // warnings
+    ASSERT_EQ(cells.size(), 14u) << line;
+    EXPECT_EQ(cells[8], "0") << line;  // endpoint error mean, mm
+    EXPECT_EQ(cells[13], "0") << line; // warnings
   }
   EXPECT_EQ(rows, 3);
   // Results per varied factor of the sweep (participants.tsv: the seed, 11, 12 and 13).

@@ -362,7 +362,7 @@ TEST(RunCommand, QuietPrintsNothingAndAPipeGetsPlainProgressLines) {
   const CommandResult plain =
       run_command({k_phantasm, "run", k_small_scene.string(), "-o", (root / "p").string()});
   EXPECT_EQ(plain.exit_code, 0);
-  EXPECT_NE(plain.err.find("writing 100% (78/78)"), std::string::npos) << plain.err;
+  EXPECT_NE(plain.err.find("writing 100% (82/82)"), std::string::npos) << plain.err;
   EXPECT_EQ(plain.err.find('\r'), std::string::npos);
   EXPECT_NE(plain.err.find("[voxelize] skipped: .vdb grids"), std::string::npos) << plain.err;
 }
