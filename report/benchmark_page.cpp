@@ -47,6 +47,7 @@ const std::vector<PairFigure>& pair_figures() {
       {"mean Dice", {"mean_dice"}},
       {"mean HD95 (mm)", {"mean_hd95_mm"}},
       {"mean TRE (mm)", {"tre_mm", "mean"}},
+      {"mean TRE on the dense landmarks (mm)", {"dense_tre_mm", "mean"}},
       {"mean endpoint error (mm)", {"endpoint_error_mm", "mean"}},
       {"NDV (% of the cubes)", {"ndv", "percent"}},
       {"folding fraction (central differences)", {"jacobian_central_differences", "folding_fraction"}},
@@ -56,16 +57,18 @@ const std::vector<PairFigure>& pair_figures() {
 
 std::string summary_table(const std::vector<MethodScores>& methods) {
   std::string html = "<table><tr><th>method</th><th>pairs</th><th>mean Dice</th><th>Dice, 30th percentile "
-                     "(robustness)</th><th>mean HD95 (mm)</th><th>mean TRE (mm)</th><th>mean endpoint error "
-                     "(mm)</th><th>mean NDV (%)</th><th>mean SD of log det J</th><th>warnings</th></tr>\n";
+                     "(robustness)</th><th>mean HD95 (mm)</th><th>mean TRE (mm)</th><th>mean dense TRE "
+                     "(mm)</th><th>mean endpoint error (mm)</th><th>mean NDV (%)</th><th>mean SD of log det "
+                     "J</th><th>warnings</th></tr>\n";
   for (const MethodScores& m : methods) {
     const nlohmann::json& s = m.scores.at("summary");
     html += "<tr><td>" + html_escape(m.method) + "</td>" + number_cell(score(s, {"pairs"}), 6) +
             number_cell(score(s, {"mean_dice"}), 4) + number_cell(score(s, {"dice_p30"}), 4) +
             number_cell(score(s, {"mean_hd95_mm"})) + number_cell(score(s, {"mean_tre_mm"})) +
-            number_cell(score(s, {"mean_endpoint_error_mm"})) + number_cell(score(s, {"mean_ndv_percent"})) +
-            number_cell(score(s, {"mean_log_jacobian_sd"})) + "<td class=\"n\">" +
-            std::to_string(m.scores.value("warnings", nlohmann::json::array()).size()) + "</td></tr>\n";
+            number_cell(score(s, {"mean_dense_tre_mm"})) + number_cell(score(s, {"mean_endpoint_error_mm"})) +
+            number_cell(score(s, {"mean_ndv_percent"})) + number_cell(score(s, {"mean_log_jacobian_sd"})) +
+            "<td class=\"n\">" + std::to_string(m.scores.value("warnings", nlohmann::json::array()).size()) +
+            "</td></tr>\n";
   }
   return html + "</table>\n";
 }
@@ -150,10 +153,10 @@ std::string pairs_table(const MethodScores& m, const std::vector<std::string>& f
       "<h3>" + html_escape(m.method) + "</h3><table><tr><th>case</th><th>subject</th><th>result</th>";
   for (const std::string& factor : factors)
     html += "<th>" + html_escape(factor) + "</th>";
-  html +=
-      "<th>mean Dice</th><th>mean HD95 (mm)</th><th>TRE (mm)</th><th>endpoint error (mm)</th><th>endpoint "
-      "error p95 (mm)</th><th>NDV (%)</th><th>folding fraction</th><th>SD of log det "
-      "J</th><th>warnings</th></tr>\n";
+  html += "<th>mean Dice</th><th>mean HD95 (mm)</th><th>TRE (mm)</th><th>dense TRE (mm)</th><th>endpoint "
+          "error (mm)</th><th>endpoint "
+          "error p95 (mm)</th><th>NDV (%)</th><th>folding fraction</th><th>SD of log det "
+          "J</th><th>warnings</th></tr>\n";
   for (const nlohmann::json& p : m.scores.at("pairs")) {
     const nlohmann::json pair_factors = p.value("factors", nlohmann::json::object());
     html += "<tr><td class=\"n\">" + html_escape(json_as_text(p.value("case", nlohmann::json()))) +
@@ -164,7 +167,8 @@ std::string pairs_table(const MethodScores& m, const std::vector<std::string>& f
               (pair_factors.contains(factor) ? html_escape(json_as_text(pair_factors[factor])) : "") +
               "</td>";
     html += number_cell(score(p, {"mean_dice"}), 4) + number_cell(score(p, {"mean_hd95_mm"})) +
-            number_cell(score(p, {"tre_mm", "mean"})) + number_cell(score(p, {"endpoint_error_mm", "mean"})) +
+            number_cell(score(p, {"tre_mm", "mean"})) + number_cell(score(p, {"dense_tre_mm", "mean"})) +
+            number_cell(score(p, {"endpoint_error_mm", "mean"})) +
             number_cell(score(p, {"endpoint_error_mm", "p95"})) + number_cell(score(p, {"ndv", "percent"})) +
             number_cell(score(p, {"jacobian_central_differences", "folding_fraction"})) +
             number_cell(score(p, {"jacobian_central_differences", "log_jacobian_sd"})) + "<td class=\"n\">" +

@@ -233,6 +233,7 @@ nlohmann::json pair_scores(int c, const std::string& scale, double dice_a, doubl
           {"mean_dice", (dice_a + dice_b) / 2},
           {"mean_hd95_mm", 1.0},
           {"tre_mm", {{"mean", tre}}},
+          {"dense_tre_mm", {{"mean", 2 * tre}}},
           {"endpoint_error_mm", {{"mean", tre / 2}, {"p95", tre}}},
           {"ndv", {{"percent", 0.0}}},
           {"jacobian_central_differences", {{"folding_fraction", 0.0}, {"log_jacobian_sd", 0.1}}},
@@ -246,7 +247,11 @@ nlohmann::json method_scores(const std::string& results, double shift) {
       {"pairs",
        {pair_scores(1, "0.5", 0.9 - shift, 0.7 - shift, 2.0, 1.0 + shift),
         pair_scores(2, "2.5", 0.8 - shift, 0.5 - shift, nullptr, 3.0 + shift)}},
-      {"summary", {{"pairs", 2}, {"mean_dice", 0.725 - shift}, {"dice_p30", 0.67 - shift}}},
+      {"summary",
+       {{"pairs", 2},
+        {"mean_dice", 0.725 - shift},
+        {"dice_p30", 0.67 - shift},
+        {"mean_dense_tre_mm", 4.0 + 2 * shift}}},
       {"warnings", {"disp_2.nii.gz: the result looks like the true field read the wrong way " + k_script}}};
 }
 
@@ -278,13 +283,15 @@ TEST(BenchmarkPage, MethodsSideBySideWithTheirScoresAgainstEachFactor) {
   EXPECT_EQ(summary[1][3], "0.67"); // the robustness figure
   EXPECT_EQ(summary[2][0], "none");
   EXPECT_EQ(summary[2][3], "0.47");
-  // Six figures against the one factor, each with a series per method.
-  EXPECT_EQ(count_of(html, "<svg"), 6u);
-  for (const char* figure : {"mean Dice", "mean HD95 (mm)", "mean TRE (mm)", "NDV (% of the cubes)"})
+  EXPECT_EQ(summary[1][6], "4"); // the mean TRE on the dense landmarks
+  // Seven figures against the one factor, each with a series per method.
+  EXPECT_EQ(count_of(html, "<svg"), 7u);
+  for (const char* figure : {"mean Dice", "mean HD95 (mm)", "mean TRE (mm)",
+                             "mean TRE on the dense landmarks (mm)", "NDV (% of the cubes)"})
     EXPECT_EQ(count_of(html, "aria-label=\"" + std::string(figure) + " against deformation.scale\""), 1u)
         << figure;
-  EXPECT_EQ(count_of(html, "&#9679; elastix"), 6u);
-  EXPECT_EQ(count_of(html, "&#9679; none"), 6u);
+  EXPECT_EQ(count_of(html, "&#9679; elastix"), 7u);
+  EXPECT_EQ(count_of(html, "&#9679; none"), 7u);
   EXPECT_NE(html.find("ventricles " + html_escape(k_script)), std::string::npos);
   EXPECT_EQ(count_of(html, "read the wrong way " + html_escape(k_script)), 2u);
 }
