@@ -189,15 +189,34 @@ submit() {
   shift
   PHANTASM=$phantasm /usr/bin/sbatch --parsable --array=1-3 --chdir="$tmp/jobs" "$@" "$recipe" "$sweep" "$out"
 }
+task_state() { /usr/bin/scontrol -o show job "${job}_$1" 2>/dev/null | grep -o 'JobState=[A-Z_]*' | cut -d= -f2; }
+array_ended() { [ -z "$(/usr/bin/squeue -h -j "$job" -o %i 2>/dev/null)" ]; }
+# Waits for the array $job to end and requires every task to have completed. (Polled five times
+# a second: `sbatch --wait` polls at 2, 8 and then every 32 s, most of a short array's time.)
+wait_for_array() {
+  wait_until "job $job to end" 900 array_ended
+  for task in 1 2 3; do
+    [ "$(task_state "$task")" = COMPLETED ] || fail "task $task of job $job ended $(task_state "$task"), expected COMPLETED"
+  done
+}
+# The local batch's anatomy cache (derivatives/phantasm/cache) copied into the dataset folder $1,
+# so that its subjects read their anatomy, reference state and images instead of making them
+# again: the folder must still end equal to the local batch's, cache included. The cancelled and
+# resumed array (2.) starts cold: that a batch makes the same cache is checked there.
+seed_cache() {
+  mkdir -p "$1/derivatives/phantasm"
+  cp -a "$tmp/local/derivatives/phantasm/cache" "$1/derivatives/phantasm/cache"
+}
 
 # 1. An array of three one-subject shards.
-job=$(submit "$tmp/cluster" --wait) || fail "the array job failed (sbatch --wait exited with $?)"
+seed_cache "$tmp/cluster"
+job=$(submit "$tmp/cluster") || fail "sbatch exited with $?"
+wait_for_array
 same_as_local "$tmp/cluster"
 
 # 2. Task 2 cancelled while it makes sub-02, the array submitted again.
 out=$tmp/resumed
 job=$(submit "$out")
-task_state() { /usr/bin/scontrol -o show job "${job}_$1" 2>/dev/null | grep -o 'JobState=[A-Z_]*' | cut -d= -f2; }
 task2_log=$tmp/jobs/phantasm-sweep-${job}_2.log
 # Working: running, and its batch has started the subject (its first line says so; a small
 # head takes about 6 s).
@@ -206,7 +225,6 @@ wait_until "task 2 of job $job to start its subject" 600 task2_working
 sleep 1
 [ ! -e "$out/derivatives/phantasm/sub-02/provenance.json" ] || fail "sub-02 was complete before task 2 was cancelled"
 /usr/bin/scancel "${job}_2"
-array_ended() { [ -z "$(/usr/bin/squeue -h -j "$job" -o %i 2>/dev/null)" ]; }
 wait_until "job $job to end" 900 array_ended
 [ "$(task_state 2)" = CANCELLED ] || fail "task 2 ended $(task_state 2), expected CANCELLED"
 for task in 1 3; do
@@ -215,7 +233,9 @@ done
 [ ! -e "$out/derivatives/phantasm/sub-02/provenance.json" ] || fail "the cancelled task 2 completed sub-02"
 echo "job $job: task 2 cancelled while making sub-02; tasks 1 and 3 completed"
 
-resubmitted=$(submit "$out" --wait) || fail "the resubmitted array failed (sbatch --wait exited with $?)"
+job=$(submit "$out") || fail "sbatch exited with $?"
+resubmitted=$job
+wait_for_array
 same_as_local "$out"
 # Nothing lost and nothing made twice: task 2 made sub-02, tasks 1 and 3 found theirs complete.
 grep -q '^\[batch\] 1 subjects made, 0 already complete, 0 failed' "$tmp/jobs/phantasm-sweep-${resubmitted}_2.log" ||
@@ -227,6 +247,7 @@ done
 echo "job $resubmitted: the resubmitted array made sub-02 only; the dataset equals the local batch"
 
 # 3. Snakemake's cluster mode (docs/batch.md): one sbatch job per subject, submitted by Snakemake.
+seed_cache "$tmp/snakemake-out"
 /usr/bin/snakemake -s "$source_dir/scripts/Snakefile" --directory "$tmp/snakemake" --jobs 3 --latency-wait 30 \
   --rerun-incomplete --cluster "sbatch --cpus-per-task={threads} --mem=4G --output=phantasm-%j.log" \
   --config sweep="$sweep" out="$tmp/snakemake-out" threads=2 phantasm="$phantasm" >"$tmp/log/snakemake.log" 2>&1 ||
