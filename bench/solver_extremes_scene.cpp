@@ -5,12 +5,13 @@
 // displacement, with what the first solve reported (converged, relative residual, the Newton
 // step at its result). Exit status 1 when a solve reported converged lies more than 1 % off.
 // Usage: solver_extremes_scene SCENE.yaml
-//        solver_extremes_scene SCENE.yaml volumes NU [ANATOMY_CACHE [scene]]: every material of
-//        Poisson ratio 0.45 or more set to NU (0: as the scene has them), solved by Newton (to 1e-7; `scene`:
-//        the scene's own solver, to 1e-6) with the bulk term per tet, on tet groups and on tet groups and
-//        tets; prints each body's inverted tets and smallest det F and each organ's volume change (its patch
-//        surface's base mesh, moved with the tets; and the sum of the tets of its material region), as
-//        docs/deformation.md's volume table.
+//        solver_extremes_scene SCENE.yaml volumes NU [ANATOMY_CACHE [SOLVE [TERM...]]]: every material
+//        of Poisson ratio 0.45 or more set to NU (0: as the scene has them), solved (SOLVE: `newton`, the
+//        default, to 1e-7; `scene`: the scene's own solver, to 1e-6; `defaults`: the scene's own solver and
+//        stop test) with each bulk term TERM (default per_tet, tet_groups and tet_groups_and_tets); prints
+//        each body's inverted tets and smallest det F and each organ's volume change (its patch surface's
+//        base mesh, moved with the tets; and the sum of the tets of its material region), as
+//        docs/deformation.md's volume table. An empty ANATOMY_CACHE builds the anatomy without a cache.
 
 #include "geometry/tet_quality.hpp"
 #include "pipeline/run_pipeline.hpp"
@@ -43,17 +44,20 @@ double body_tet_volume_mm3(const Eigen::MatrixX3d& x, const Eigen::MatrixX4i& te
                        x.row(tets(t, 2)).transpose(), x.row(tets(t, 3)).transpose());
 }
 
-/// Each organ's volume change at Poisson ratio nu, per tet and with the default bulk term.
-int organ_volumes(const Scene& scene, const Phantom& phantom, double nu, bool scene_solver, Reporter& quiet) {
+/// How organ_volumes solves: Newton to 1e-7, the scene's solver to 1e-6, or the scene's solver as is.
+enum class VolumeSolve { newton, scene, defaults };
+
+/// Each organ's volume change at Poisson ratio nu with each bulk term of `terms`.
+int organ_volumes(const Scene& scene, const Phantom& phantom, double nu, VolumeSolve how,
+                  const std::vector<VolumeFormulation>& terms, Reporter& quiet) {
   std::printf("| bulk term | organ | volume change (surface) | volume change (its tets) | solve |\n"
               "|---|---|---|---|---|\n");
-  for (VolumeFormulation v :
-       {VolumeFormulation::tet, VolumeFormulation::tet_group, VolumeFormulation::tet_group_and_tet}) {
+  for (VolumeFormulation v : terms) {
     DeformationSettings d = scene.deformation;
     d.volume = v;
-    if (scene_solver) {
+    if (how == VolumeSolve::scene) {
       d.solver.relative_residual_tolerance = 1e-6;
-    } else {
+    } else if (how == VolumeSolve::newton) {
       d.solver.method = SolverMethod::newton;
       d.solver.relative_residual_tolerance = 1e-7;
       d.solver.max_iterations = 200;
@@ -65,8 +69,12 @@ int organ_volumes(const Scene& scene, const Phantom& phantom, double nu, bool sc
     const PhantomDeformation result = deform_phantom(d, scene.organs, phantom, report, quiet);
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::string solve;
-    for (const SolveReport& r : result.solves)
-      solve += std::to_string(r.iterations) + " it., " + (r.converged ? "converged" : "not converged");
+    for (const SolveReport& r : result.solves) {
+      char residual[64];
+      std::snprintf(residual, sizeof residual, " (rel. residual %.2g)", r.relative_residual);
+      solve +=
+          std::to_string(r.iterations) + " it., " + (r.converged ? "converged" : "not converged") + residual;
+    }
     char time[32];
     std::snprintf(time, sizeof time, ", %.0f s", seconds);
     for (const DeformedBody& body : result.bodies)
@@ -97,13 +105,36 @@ int organ_volumes(const Scene& scene, const Phantom& phantom, double nu, bool sc
 
 } // namespace
 
+/// The solve and the bulk terms of `volumes` (argv[5] and after); false on a name it does not know.
+bool volume_arguments(int argc, char** argv, VolumeSolve& how, std::vector<VolumeFormulation>& terms) {
+  const std::string solve = argc >= 6 ? argv[5] : "newton";
+  if (solve != "newton" && solve != "scene" && solve != "defaults") return false;
+  how = solve == "scene"      ? VolumeSolve::scene
+        : solve == "defaults" ? VolumeSolve::defaults
+                              : VolumeSolve::newton;
+  const std::vector<VolumeFormulation> all = {VolumeFormulation::tet, VolumeFormulation::tet_group,
+                                              VolumeFormulation::tet_group_and_tet};
+  for (int a = 6; a < argc; ++a) {
+    const auto named = std::find_if(
+        all.begin(), all.end(), [&](VolumeFormulation v) { return std::string(to_string(v)) == argv[a]; });
+    if (named == all.end()) return false;
+    terms.push_back(*named);
+  }
+  if (terms.empty()) terms = all;
+  return true;
+}
+
 int main(int argc, char** argv) {
   SceneLoadResult loaded;
-  const bool usage = argc == 2 || (argc >= 4 && argc <= 6 && std::string(argv[2]) == "volumes");
+  VolumeSolve how = VolumeSolve::newton;
+  std::vector<VolumeFormulation> terms;
+  const bool usage = argc == 2 || (argc >= 4 && std::string(argv[2]) == "volumes" &&
+                                   volume_arguments(argc, argv, how, terms));
   if (usage) loaded = load_scene(argv[1]);
   if (!usage || !loaded.scene) {
     std::cerr << (usage ? format_diagnostics(loaded.problems)
-                        : "usage: solver_extremes_scene SCENE.yaml [volumes NU [ANATOMY_CACHE [scene]]]\n");
+                        : "usage: solver_extremes_scene SCENE.yaml [volumes NU [ANATOMY_CACHE "
+                          "[newton|scene|defaults [BULK_TERM...]]]]\n");
     return 2;
   }
   const Scene& scene = *loaded.scene;
@@ -111,7 +142,7 @@ int main(int argc, char** argv) {
   try {
     const Phantom phantom =
         simulate(scene, quiet, SimulationStage::anatomy, argc >= 5 ? argv[4] : std::string()).phantom;
-    if (argc >= 4) return organ_volumes(scene, phantom, std::atof(argv[3]), argc == 6, quiet);
+    if (argc >= 4) return organ_volumes(scene, phantom, std::atof(argv[3]), how, terms, quiet);
     auto solve = [&](const DeformationSettings& settings, StageReport& report) {
       const auto start = std::chrono::steady_clock::now();
       PhantomDeformation d = deform_phantom(settings, scene.organs, phantom, report, quiet);
