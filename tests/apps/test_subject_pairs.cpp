@@ -17,6 +17,7 @@
 #include "tests/apps/cli_fixtures.hpp"
 #include "tests/apps/transformix_parameters.hpp"
 #include "tests/support/error_message.hpp"
+#include "tests/support/shared_output.hpp"
 #include "tests/support/subprocess.hpp"
 
 #include <gtest/gtest.h>
@@ -57,23 +58,27 @@ DisplacementField affine_field(const ImageGrid& grid, const Eigen::Matrix3d& a, 
   return field;
 }
 
-/// A batch of the three-subject population and its pairs (all), in a fresh folder.
+/// A batch of the three-subject population and its pairs (all), which the tests of this file read
+/// (made once per build of the program: tests/support/shared_output.hpp), and a fresh folder
+/// `root` of the test's own for what it writes.
 struct Population {
   fs::path root, dataset, pairs;
 };
 
 Population make_population(const std::string& name) {
-  Population p;
-  p.root = fresh_folder(name);
-  p.dataset = p.root / "dataset";
-  p.pairs = p.root / "pairs";
-  const CommandResult batch = run_command(
-      {k_phantasm, "batch", k_population.string(), "-o", p.dataset.string(), "--jobs", "2", "--quiet"});
-  EXPECT_EQ(batch.exit_code, 0) << batch.err;
-  const CommandResult pair =
-      run_command({k_phantasm, "pair", p.dataset.string(), "-o", p.pairs.string(), "-q"});
-  EXPECT_EQ(pair.exit_code, 0) << pair.err;
-  return p;
+  const std::vector<fs::path> inputs = {k_population,
+                                        k_source_dir / "tests/data/scenes/population-balls.yaml"};
+  const fs::path shared = shared_output("population-balls-pairs", inputs, [](const fs::path& folder) {
+    const CommandResult batch = run_command({k_phantasm, "batch", k_population.string(), "-o",
+                                             (folder / "dataset").string(), "--jobs", "2", "--quiet"});
+    EXPECT_EQ(batch.exit_code, 0) << batch.err;
+    if (batch.exit_code != 0) return false;
+    const CommandResult pair = run_command(
+        {k_phantasm, "pair", (folder / "dataset").string(), "-o", (folder / "pairs").string(), "-q"});
+    EXPECT_EQ(pair.exit_code, 0) << pair.err;
+    return pair.exit_code == 0;
+  });
+  return {fresh_folder(name), shared / "dataset", shared / "pairs"};
 }
 
 fs::path pair_file(const Population& p, const std::string& i, const std::string& j,
