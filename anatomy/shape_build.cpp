@@ -1,6 +1,6 @@
 #include "anatomy/shape_build.hpp"
 
-#include <stdexcept>
+#include "core/registry.hpp"
 
 namespace phantasm {
 
@@ -12,18 +12,25 @@ const ShapeBuild& sheet_shape_build();
 const ShapeBuild& mesh_shape_build();
 const ShapeBuild& label_volume_shape_build();
 
-const std::vector<const ShapeBuild*>& shape_builds() {
+namespace {
+
+const Registry<ShapeBuild, ShapeKind>& shape_build_registry() {
   // The registrations, beside those of shape_sources() (docs/architecture.md, Adding a variant).
-  static const std::vector<const ShapeBuild*> builds{&ellipsoid_shape_build(), &superquadric_shape_build(),
-                                                     &box_shape_build(),       &sheet_shape_build(),
-                                                     &mesh_shape_build(),      &label_volume_shape_build()};
+  static const Registry<ShapeBuild, ShapeKind> builds("shape build", &ShapeBuild::kind,
+                                                      {&ellipsoid_shape_build(), &superquadric_shape_build(),
+                                                       &box_shape_build(), &sheet_shape_build(),
+                                                       &mesh_shape_build(), &label_volume_shape_build()});
   return builds;
 }
 
+} // namespace
+
+const std::vector<const ShapeBuild*>& shape_builds() {
+  return shape_build_registry().members();
+}
+
 const ShapeBuild& shape_build(ShapeKind kind) {
-  for (const ShapeBuild* build : shape_builds())
-    if (build->kind == kind) return *build;
-  throw std::logic_error("a shape kind without a member of the shape build registry");
+  return shape_build_registry().at(kind);
 }
 
 } // namespace phantasm

@@ -1,7 +1,8 @@
 #include "anatomy/shape_source.hpp"
 
+#include "core/registry.hpp"
+
 #include <cmath>
-#include <stdexcept>
 
 namespace phantasm {
 
@@ -13,32 +14,34 @@ const ShapeSource& sheet_shape_source();
 const ShapeSource& mesh_shape_source();
 const ShapeSource& label_volume_shape_source();
 
-const std::vector<const ShapeSource*>& shape_sources() {
+namespace {
+
+const Registry<ShapeSource, ShapeKind>& shape_source_registry() {
   // The registrations: a new source adds its line here and its declaration above
   // (docs/architecture.md, Adding a variant).
-  static const std::vector<const ShapeSource*> sources{
-      &ellipsoid_shape_source(), &superquadric_shape_source(), &box_shape_source(),
-      &sheet_shape_source(),     &mesh_shape_source(),         &label_volume_shape_source()};
+  static const Registry<ShapeSource, ShapeKind> sources(
+      "shape source", &ShapeSource::kind,
+      {&ellipsoid_shape_source(), &superquadric_shape_source(), &box_shape_source(), &sheet_shape_source(),
+       &mesh_shape_source(), &label_volume_shape_source()});
   return sources;
 }
 
+} // namespace
+
+const std::vector<const ShapeSource*>& shape_sources() {
+  return shape_source_registry().members();
+}
+
 const ShapeSource& shape_source(ShapeKind kind) {
-  for (const ShapeSource* source : shape_sources())
-    if (source->kind == kind) return *source;
-  throw std::logic_error("a shape kind without a member of the shape source registry");
+  return shape_source_registry().at(kind);
 }
 
 const ShapeSource* find_shape_source(const std::string& name) {
-  for (const ShapeSource* source : shape_sources())
-    if (name == source->name) return source;
-  return nullptr;
+  return shape_source_registry().find(name);
 }
 
 std::vector<std::string> shape_source_names() {
-  std::vector<std::string> names;
-  for (const ShapeSource* source : shape_sources())
-    names.emplace_back(source->name);
-  return names;
+  return shape_source_registry().names();
 }
 
 double ellipsoid_area_mm2(const Eigen::Vector3d& r) {

@@ -1,13 +1,13 @@
 #include "evaluation/field_conventions.hpp"
 
 #include "core/error.hpp"
+#include "core/registry.hpp"
 #include "geometry/ras_lps.hpp"
 #include "io/nifti_file.hpp"
 
 #include <Eigen/LU>
 
 #include <cmath>
-#include <stdexcept>
 
 namespace phantasm {
 namespace {
@@ -28,19 +28,26 @@ const FieldConventionType& learn2reg_field_convention();
 const FieldConventionType& mrtrix_deformation_field_convention();
 const FieldConventionType& mrtrix_displacement_field_convention();
 
-const std::vector<const FieldConventionType*>& field_convention_types() {
+namespace {
+
+const Registry<FieldConventionType, FieldConvention>& field_convention_registry() {
   // The registrations: a new convention adds its line here and its declaration above
   // (docs/architecture.md, Adding a variant).
-  static const std::vector<const FieldConventionType*> types{
-      &itk_field_convention(), &learn2reg_field_convention(), &mrtrix_deformation_field_convention(),
-      &mrtrix_displacement_field_convention()};
+  static const Registry<FieldConventionType, FieldConvention> types(
+      "field convention", &FieldConventionType::convention,
+      {&itk_field_convention(), &learn2reg_field_convention(), &mrtrix_deformation_field_convention(),
+       &mrtrix_displacement_field_convention()});
   return types;
 }
 
+} // namespace
+
+const std::vector<const FieldConventionType*>& field_convention_types() {
+  return field_convention_registry().members();
+}
+
 const FieldConventionType& field_convention_type(FieldConvention convention) {
-  for (const FieldConventionType* type : field_convention_types())
-    if (type->convention == convention) return *type;
-  throw std::logic_error("a field convention without a member of the convention registry");
+  return field_convention_registry().at(convention);
 }
 
 FieldFrame::FieldFrame(const ImageGrid& g)
@@ -60,12 +67,9 @@ std::string to_string(FieldConvention convention) {
 }
 
 FieldConvention field_convention_from_string(const std::string& name, const std::string& option) {
-  std::string known;
-  for (const FieldConventionType* type : field_convention_types()) {
-    if (name == type->name) return type->convention;
-    known += (known.empty() ? "" : ", ") + std::string(type->name);
-  }
-  throw InputError(option + ": expected one of " + known + ", found '" + name + "'");
+  if (const FieldConventionType* type = field_convention_registry().find(name)) return type->convention;
+  throw InputError(option + ": expected one of " + field_convention_registry().all_names_text(", ") +
+                   ", found '" + name + "'");
 }
 
 std::vector<Eigen::Vector3d> ras_displacements(const DisplacementField& field) {

@@ -1,6 +1,6 @@
 #include "mri/sequence_type.hpp"
 
-#include <stdexcept>
+#include "core/registry.hpp"
 
 namespace phantasm {
 
@@ -11,32 +11,34 @@ const SequenceType& inversion_recovery_sequence();
 const SequenceType& bssfp_sequence();
 const SequenceType& mprage_sequence();
 
-const std::vector<const SequenceType*>& sequence_types() {
+namespace {
+
+const Registry<SequenceType, SequenceKind>& sequence_registry() {
   // The registrations: a new sequence adds its line here and its declaration above
   // (docs/architecture.md, Adding a variant).
-  static const std::vector<const SequenceType*> types{&spin_echo_sequence(), &spoiled_gre_sequence(),
-                                                      &inversion_recovery_sequence(), &bssfp_sequence(),
-                                                      &mprage_sequence()};
+  static const Registry<SequenceType, SequenceKind> types("sequence", &SequenceType::kind,
+                                                          {&spin_echo_sequence(), &spoiled_gre_sequence(),
+                                                           &inversion_recovery_sequence(), &bssfp_sequence(),
+                                                           &mprage_sequence()});
   return types;
 }
 
+} // namespace
+
+const std::vector<const SequenceType*>& sequence_types() {
+  return sequence_registry().members();
+}
+
 const SequenceType& sequence_type(SequenceKind kind) {
-  for (const SequenceType* type : sequence_types())
-    if (type->kind == kind) return *type;
-  throw std::logic_error("a sequence kind without a member of the sequence registry");
+  return sequence_registry().at(kind);
 }
 
 const SequenceType* find_sequence_type(const std::string& name) {
-  for (const SequenceType* type : sequence_types())
-    if (name == type->name) return type;
-  return nullptr;
+  return sequence_registry().find(name);
 }
 
 std::vector<std::string> sequence_type_names() {
-  std::vector<std::string> names;
-  for (const SequenceType* type : sequence_types())
-    names.emplace_back(type->name);
-  return names;
+  return sequence_registry().names();
 }
 
 const char* to_string(SequenceKind kind) {
