@@ -4,6 +4,7 @@
 #include "core/error.hpp"
 #include "core/format.hpp"
 #include "pipeline/cost_rates.hpp"
+#include "sim/solver_type.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -260,12 +261,11 @@ void stage_seconds(const Scene& scene, const OrganTotals& totals, double crossed
   const double steps =
       deformed ? std::max(1, scene.deformation.frames) * std::max(1, scene.deformation.load_steps) : 0.0;
   const bool contacts = !scene.deformation.collisions.empty() || !scene.deformation.obstacles.empty();
-  e.sim_seconds = (totals.simulated_tets * k_seconds_per_tet_step +
-                   totals.shell_triangles * (scene.deformation.solver.method == SolverMethod::newton
-                                                 ? k_seconds_per_shell_triangle_newton_step
-                                                 : k_seconds_per_shell_triangle_step) +
-                   (contacts ? k_seconds_per_contact_step : 0.0)) *
-                  steps;
+  e.sim_seconds =
+      (totals.simulated_tets * k_seconds_per_tet_step +
+       totals.shell_triangles * solver_type(scene.deformation.solver.method).seconds_per_shell_triangle_step +
+       (contacts ? k_seconds_per_contact_step : 0.0)) *
+      steps;
   e.voxelize_seconds = e.dense_voxels * e.states * k_seconds_per_dense_voxel +
                        e.band_voxels * k_seconds_per_band_voxel + e.supersamples * k_seconds_per_sample +
                        e.patches * e.states * k_seconds_per_level_set_patch_at_1mm / voxel_area +

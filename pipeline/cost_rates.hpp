@@ -75,13 +75,8 @@ inline constexpr double k_file_shape_seconds_per_mm3 = 1.6e-6;
 inline constexpr double k_seconds_per_tet = 50e-6;
 /// Per simulated tet per frame and load step: local/global iterations to convergence.
 inline constexpr double k_seconds_per_tet_step = 3e-6;
-/// Per shell triangle per frame and load step: a shell's solve takes more iterations than a
-/// solid's (cloth.yaml's swing: hundreds per frame).
-inline constexpr double k_seconds_per_shell_triangle_step = 80e-6;
-/// The same with Newton: each iteration forms and factors the sheet's projected Hessian
-/// (cloth.yaml: about 26 iterations of 85 ms per frame on its 3200 triangles, over its first 20
-/// frames as over all 60).
-inline constexpr double k_seconds_per_shell_triangle_newton_step = 700e-6;
+// Per shell triangle per frame and load step: the solver's own rate
+// (SolverType::seconds_per_shell_triangle_step, sim/solver_types/).
 /// Per frame and load step of a scene with obstacles or collisions: contact detection and the
 /// factor's updates (tests/data/scenes/two-balls.yaml, breast.yaml).
 inline constexpr double k_seconds_per_contact_step = 0.1;

@@ -3,6 +3,7 @@
 #include "core/tissue_table.hpp"
 #include "mri/sequence_type.hpp"
 #include "scene/parse_sections.hpp"
+#include "sim/solver_type.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -224,11 +225,9 @@ public:
       problem("deformation.mode", "expected quasi_static or dynamic when obstacles are given, found 'none'");
     }
     check_stiffness_under_gravity();
-    const bool position_based =
-        d.solver.method == SolverMethod::gauss_seidel_pbd || d.solver.method == SolverMethod::xpbd;
-    if (position_based && d.mode == DeformationMode::quasi_static) {
+    if (solver_type(d.solver.method).steps_in_time && d.mode == DeformationMode::quasi_static) {
       problem("deformation.solver.method",
-              std::string("expected local_global, jacobi_chebyshev or newton for a quasi_static scene (") +
+              "expected " + static_solver_names() + " for a quasi_static scene (" +
                   to_string(d.solver.method) + " steps in time: it needs mode dynamic), found " +
                   to_string(d.solver.method));
     }

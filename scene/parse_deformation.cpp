@@ -1,18 +1,12 @@
 #include "scene/parse_sections.hpp"
+#include "sim/solver_type.hpp"
 
 namespace phantasm::scene_detail {
 namespace {
 
 void parse_solver(CheckedMap& map, SolverSettings& solver) {
   std::string method;
-  if (map.choice("method", method,
-                 {"local_global", "newton", "gauss_seidel_pbd", "jacobi_chebyshev", "xpbd"})) {
-    if (method == "local_global") solver.method = SolverMethod::local_global;
-    if (method == "newton") solver.method = SolverMethod::newton;
-    if (method == "gauss_seidel_pbd") solver.method = SolverMethod::gauss_seidel_pbd;
-    if (method == "jacobi_chebyshev") solver.method = SolverMethod::jacobi_chebyshev;
-    if (method == "xpbd") solver.method = SolverMethod::xpbd;
-  }
+  if (map.choice("method", method, solver_type_names())) solver.method = find_solver_type(method)->method;
   map.integer("max_iterations", solver.max_iterations, 1, 1000000);
   map.number("relative_energy_tolerance", solver.relative_energy_tolerance, between(0.0, 1.0, ""));
   map.number("position_tolerance_mm", solver.position_tolerance_mm, non_negative("mm"));

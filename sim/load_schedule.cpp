@@ -6,9 +6,8 @@
 #include "core/error.hpp"
 #include "core/format.hpp"
 #include "sim/build_model.hpp"
-#include "sim/local_global.hpp"
-#include "sim/newton.hpp"
-#include "sim/position_based.hpp"
+#include "sim/prepared_solver.hpp"
+#include "sim/solver_type.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -19,27 +18,21 @@ namespace {
 
 /// The solver of the scene, and what kind of stepping it does.
 struct FrameSolver {
-  const SolverSettings* settings = nullptr;
-  bool jacobi = false;
-  bool position_based = false;
   bool dynamic = false;
   double h = 0.0; ///< time step, s
   int frames = 0; ///< dynamic frames, or quasi-static load steps
   StopCriteria stop;
-  std::unique_ptr<LocalGlobalSolver> local_global; ///< local_global and jacobi_chebyshev
+  std::unique_ptr<PreparedSolver> solver; ///< the scene's method (sim/solvers/)
 };
 
 /// @throws SettingError for a position-based solver in quasi-static mode (which the scene's
 /// validation rejects first)
-/// @throws InputError for a local/global matrix nothing holds
+/// @throws InputError for a model nothing holds (a local/global matrix that cannot be factored)
 FrameSolver make_frame_solver(const DeformationSettings& deformation, const ElasticModel& model) {
   FrameSolver s;
   const SolverSettings& solver = deformation.solver;
-  s.settings = &solver;
-  s.jacobi = solver.method == SolverMethod::jacobi_chebyshev;
-  s.position_based = solver.method == SolverMethod::xpbd || solver.method == SolverMethod::gauss_seidel_pbd;
   s.dynamic = deformation.mode == DeformationMode::dynamic;
-  if (s.position_based && !s.dynamic) {
+  if (solver_type(solver.method).steps_in_time && !s.dynamic) {
     throw SettingError("deformation.solver.method",
                        std::string(to_string(solver.method)) +
                            " steps in time; it cannot solve for a static equilibrium");
@@ -57,9 +50,7 @@ FrameSolver make_frame_solver(const DeformationSettings& deformation, const Elas
   // last; dynamic mode makes one solve per frame.
   s.frames = s.dynamic ? deformation.frames : deformation.load_steps;
   try {
-    if (solver.method == SolverMethod::local_global || s.jacobi)
-      s.local_global =
-          std::make_unique<LocalGlobalSolver>(model, s.dynamic ? 1.0 / (s.h * s.h) : 0.0, solver.threads);
+    s.solver = solver_entry(solver.method).make(model, s.dynamic ? 1.0 / (s.h * s.h) : 0.0, solver);
   } catch (const Cancelled&) {
     throw;
   } catch (const std::runtime_error& error) {
@@ -86,22 +77,6 @@ void move_loads(const DeformationSettings& deformation, const FrameSolver& s, in
         [&](const ObstacleSettings& o) { return s.dynamic ? profile(o.motion, o.period_s, t) : increment; },
         model);
   }
-}
-
-/// One frame's solve from p (replaced by its result).
-SolveReport solve_frame(FrameSolver& s, const ElasticModel& model, const StepInertia& inertia,
-                        Eigen::MatrixX3d& p) {
-  if (s.position_based) { // they start from the prediction s (Macklin et al.)
-    for (Eigen::Index v = 0; v < p.rows(); ++v)
-      if (!model.fixed[static_cast<std::size_t>(v)]) p.row(v) = inertia.target_m.row(v);
-  }
-  return s.jacobi           ? s.local_global->solve_jacobi_chebyshev(p, inertia.target_m, s.stop)
-         : s.local_global   ? s.local_global->solve(p, inertia.target_m, s.stop)
-         : s.position_based ? position_based_solve(s.settings->method == SolverMethod::xpbd
-                                                       ? PositionBasedVariant::xpbd
-                                                       : PositionBasedVariant::gauss_seidel_pbd,
-                                                   model, inertia, p, s.stop)
-                            : newton_solve(model, inertia, p, s.stop);
 }
 
 /// The last solve, the displacement loads' error and the obstacles' penetration into `report`.
@@ -225,7 +200,7 @@ void solve_frames(const DeformationSettings& deformation, ElasticModel& model, L
       inertia.target_m = p + h * velocity + h * h * acceleration;
     }
     const Eigen::MatrixX3d previous = p;
-    SolveReport solve = solve_frame(s, model, inertia, p);
+    SolveReport solve = s.solver->solve(model, inertia, p, s.stop);
     if (!p.allFinite()) throw InputError("deformation: the solver produced non-finite positions");
     if (s.dynamic) velocity = (p - previous) / h;
     result.solves.push_back(std::move(solve));

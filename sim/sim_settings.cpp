@@ -69,17 +69,6 @@ const char* to_string(DeformationMode mode) {
   return "?";
 }
 
-const char* to_string(SolverMethod method) {
-  switch (method) {
-  case SolverMethod::local_global: return "local_global";
-  case SolverMethod::newton: return "newton";
-  case SolverMethod::gauss_seidel_pbd: return "gauss_seidel_pbd";
-  case SolverMethod::jacobi_chebyshev: return "jacobi_chebyshev";
-  case SolverMethod::xpbd: return "xpbd";
-  }
-  return "?";
-}
-
 const char* to_string(VolumeFormulation volume) {
   switch (volume) {
   case VolumeFormulation::tet: return "per_tet";

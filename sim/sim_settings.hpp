@@ -173,6 +173,7 @@ std::vector<OrganMotion> classify_organ_motion(const DeformationSettings& deform
 std::string growth_target(const LoadSettings& load);
 
 const char* to_string(DeformationMode mode);
+/// the solver's name in the scene (sim/solver_type.hpp)
 const char* to_string(SolverMethod method);
 const char* to_string(LoadKind kind);
 /// the scene's words: per_tet, vertex_stars, tet_groups, tet_groups_and_tets
