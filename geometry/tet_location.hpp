@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 
+#include <cstdint>
 #include <optional>
 #include <vector>
 
@@ -22,8 +23,14 @@ struct TetLocation {
   Eigen::Vector4d weights = Eigen::Vector4d::Zero(); ///< of the tet's corners, sum 1
 };
 
+/// How far a tet's bounding box is widened when the locator's grid lists it in the cells the box
+/// meets, mm: a point whose weights put it in the tet (up to rounding) lies in a cell that lists it.
+inline constexpr double k_grid_margin_mm = 1e-6;
+
 /// Point location in a tet mesh at fixed vertex positions: per tet the inverse of its edge matrix
-/// (so barycentric coordinates cost one 3x3 product) and its bounding box.
+/// (so barycentric coordinates cost one 3x3 product) and its bounding box, and a uniform grid of
+/// cells over the mesh's box listing, in list order, the tets whose box meets each cell (so a
+/// point inside the mesh tries the few tets of its cell, not the whole list).
 class TetMeshLocator {
 public:
   TetMeshLocator() = default;
@@ -42,7 +49,8 @@ public:
 
   /// The first tet (in the order of the list) that holds x: its bounding box, widened by
   /// box_tolerance_mm, holds x and its smallest weight is >= -weight_tolerance. Nothing when no
-  /// tet does (x outside the mesh).
+  /// tet does (x outside the mesh). With box_tolerance_mm at most k_grid_margin_mm, tries the
+  /// tets of x's grid cell only (they are all the tets whose box may hold x).
   /// @param x point, mm
   /// @param weight_tolerance how far below zero a weight may be (dimensionless)
   /// @param box_tolerance_mm how far outside a tet's box x may be, mm
@@ -51,7 +59,9 @@ public:
 
   /// The tet whose smallest weight at x is largest: the first tet holding x (smallest weight >= 0)
   /// when there is one, else the tet x is least outside of, to extrapolate from (continuous
-  /// across the faceted boundary). Tries every tet in list order. The tet is -1 for an empty mesh.
+  /// across the faceted boundary). A point inside tries the tets of its grid cell (every tet
+  /// holding it is listed there, in list order); one no tet holds tries every tet in list order.
+  /// The tet is -1 for an empty mesh.
   TetLocation nearest(const Eigen::Vector3d& x) const;
 
   /// Bounding box of the mesh, mm.
@@ -62,9 +72,21 @@ public:
   const Eigen::Vector3d& tet_high(Eigen::Index t) const { return m_tet_high[static_cast<std::size_t>(t)]; }
 
 private:
+  /// Lists every tet in the grid cells its box (widened by k_grid_margin_mm) meets.
+  void build_grid();
+  /// The grid cell holding x, -1 outside the grid.
+  Eigen::Index cell_of(const Eigen::Vector3d& x) const;
+
   std::vector<Eigen::Matrix3d> m_inverse;
   std::vector<Eigen::Vector3d> m_origin, m_tet_low, m_tet_high;
   Eigen::Vector3d m_low = Eigen::Vector3d::Constant(1e300), m_high = Eigen::Vector3d::Constant(-1e300);
+  // The grid: m_cells cells of m_cell_mm from m_grid_low; cell c lists the tets
+  // m_cell_tets[m_cell_start[c] .. m_cell_start[c + 1]).
+  Eigen::Vector3d m_grid_low = Eigen::Vector3d::Zero();
+  Eigen::Array3i m_cells = Eigen::Array3i::Zero();
+  double m_cell_mm = 1.0;
+  std::vector<std::int64_t> m_cell_start;
+  std::vector<std::int32_t> m_cell_tets;
 };
 
 } // namespace phantasm

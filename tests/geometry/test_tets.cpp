@@ -7,8 +7,10 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <limits>
 #include <optional>
 #include <random>
+#include <vector>
 
 using namespace phantasm;
 
@@ -119,6 +121,54 @@ TEST(TetLocation, FindsTheSameTetAsBruteForce) {
   }
   EXPECT_GT(found, 500);
   EXPECT_GT(missed, 500);
+}
+
+// The locator's grid lists every tet a point may lie in: at the mesh's vertices, edge midpoints
+// and face centroids (held by several tets at once, and on the faces of the grid's cells), and in
+// a mesh of two cubes far apart (a box the tets fill little of), nearest and find return what
+// trying every tet in list order returns: the first holding tet, or the one least outside.
+TEST(TetLocation, TheGridGivesWhatEveryTetInListOrderGivesAtSharedCornersAndFaces) {
+  TetMeshData m = subdivided_cube(5, 10.0, 0.15, 7);
+  const TetMeshData far = subdivided_cube(2, 3.0, 0.1, 8);
+  const Eigen::Index nv = m.vertices.rows(), nt = m.tets.rows();
+  m.vertices.conservativeResize(nv + far.vertices.rows(), 3);
+  m.vertices.bottomRows(far.vertices.rows()) = far.vertices.rowwise() + Eigen::RowVector3d(60.0, -40.0, 25.0);
+  m.tets.conservativeResize(nt + far.tets.rows(), 4);
+  m.tets.bottomRows(far.tets.rows()) = far.tets.array() + static_cast<int>(nv);
+  const TetMeshLocator locator(m.vertices, m.tets);
+  std::vector<Eigen::Vector3d> points;
+  for (Eigen::Index v = 0; v < m.vertices.rows(); ++v)
+    points.push_back(m.vertices.row(v).transpose());
+  for (Eigen::Index t = 0; t < m.tets.rows(); ++t)
+    for (int a = 0; a < 4; ++a)
+      for (int b = a + 1; b < 4; ++b) {
+        points.push_back(0.5 * (corner(m, t, a) + corner(m, t, b)));
+        points.push_back(
+            (corner(m, t, 0) + corner(m, t, 1) + corner(m, t, 2) + corner(m, t, 3) - corner(m, t, a)) / 3.0);
+      }
+  points.push_back(Eigen::Vector3d(30.0, -20.0, 12.0)); // between the cubes
+  points.push_back(Eigen::Vector3d(-0.5, 5.0, 5.0));    // just outside
+  int held = 0, shared = 0;
+  for (const Eigen::Vector3d& x : points) {
+    Eigen::Index first = -1, first_found = -1, least_outside = -1, holders = 0;
+    double best = -std::numeric_limits<double>::infinity();
+    for (Eigen::Index t = 0; t < m.tets.rows(); ++t) {
+      const Eigen::Vector4d w = locator.barycentric(t, x);
+      const bool in_box = (x.array() >= locator.tet_low(t).array() - 1e-9).all() &&
+                          (x.array() <= locator.tet_high(t).array() + 1e-9).all();
+      if (w.minCoeff() >= 0.0) ++holders;
+      if (first < 0 && w.minCoeff() >= 0.0) first = t;
+      if (first_found < 0 && in_box && w.minCoeff() >= -1e-12) first_found = t;
+      if (w.minCoeff() > best) best = w.minCoeff(), least_outside = t;
+    }
+    held += first >= 0;
+    shared += holders > 1;
+    EXPECT_EQ(locator.nearest(x).tet, first >= 0 ? first : least_outside) << x.transpose();
+    const std::optional<TetLocation> found = locator.find(x);
+    EXPECT_EQ(found ? found->tet : -1, first_found) << x.transpose();
+  }
+  EXPECT_GT(held, 1000);
+  EXPECT_GT(shared, 1000) << "points held by several tets, where list order decides";
 }
 
 TEST(TetBoundary, SubdividedCubeHasItsSurfaceOrientedOutward) {
