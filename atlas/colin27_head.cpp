@@ -508,7 +508,8 @@ Mask brainstem_mask(const ImageGrid& grid, const Volume& vol, const Mask& brain,
 /// CSF partial volume at their edges is the atlas's call), the lateral ventricles, CSF, the
 /// cerebellum (AAL's, and below the thalamus the unlabelled non-CSF voxels nearer to AAL's
 /// cerebellum than to its cerebrum: the cerebellum's white matter, which AAL leaves unlabelled
-/// as it does the cerebrum's), the brainstem, then white or cortical grey matter by class.
+/// as it does the cerebrum's; its voxels of the white-matter class are cerebellar white matter,
+/// the rest its cortex), the brainstem, then white or cortical grey matter by class.
 template <class IsVentricle>
 void label_brain(const ImageGrid& grid, const Volume& vol, const Mask& brain, const std::vector<int>& aal,
                  const std::vector<std::int8_t>& cls, const Mask& brainstem, const ThalamusExtent& thalamus,
@@ -527,6 +528,8 @@ void label_brain(const ImageGrid& grid, const Volume& vol, const Mask& brain, co
         const std::int64_t n = vol.at(i, j, k);
         if (!brain[n]) continue;
         const int a = aal[n];
+        // Inside the cerebellum the brain's white-matter class (step 2) is its white matter.
+        const std::int32_t cerebellar = cls[n] == 3 ? colin27_cerebellar_white_matter : colin27_cerebellum;
         if (aal_is(a, 71, 72))
           labels[n] = colin27_caudate;
         else if (aal_is(a, 73, 74))
@@ -540,12 +543,12 @@ void label_brain(const ImageGrid& grid, const Volume& vol, const Mask& brain, co
         else if (cls[n] == 1)
           labels[n] = colin27_csf;
         else if (aal_is(a, 91, 116))
-          labels[n] = colin27_cerebellum;
+          labels[n] = cerebellar;
         else if (brainstem[n])
           labels[n] = colin27_brainstem;
         else if (a == 0 && from_cerebellum[n] < from_cerebrum[n] &&
                  grid.world_from_index(Eigen::Vector3d(i, j, k)).z() < thalamus.min_z)
-          labels[n] = colin27_cerebellum;
+          labels[n] = cerebellar;
         else
           labels[n] = cls[n] == 3 ? colin27_white_matter : colin27_cortical_gm;
       }
@@ -726,7 +729,8 @@ HeadLabels derive_colin27_head(const std::filesystem::path& templates_dir, const
                 {colin27_brainstem, "brainstem", "white_matter"},
                 {colin27_subcutaneous_fat, "subcutaneous_fat", "fat_subcutaneous"},
                 {colin27_muscle, "muscle", "muscle_skeletal"},
-                {colin27_bone_marrow, "bone_marrow", "bone_marrow"}};
+                {colin27_bone_marrow, "bone_marrow", "bone_marrow"},
+                {colin27_cerebellar_white_matter, "cerebellar_white_matter", "white_matter"}};
   return head;
 }
 

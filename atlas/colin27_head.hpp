@@ -22,11 +22,12 @@ enum Colin27Label : std::int32_t {
   colin27_putamen = 8,
   colin27_pallidum = 9,
   colin27_thalamus = 10,
-  colin27_cerebellum = 11,
+  colin27_cerebellum = 11, ///< the cerebellar cortex (grey matter); its white matter is label 16
   colin27_brainstem = 12,
-  colin27_subcutaneous_fat = 13, ///< soft tissue under the skin brighter than white matter (fat)
-  colin27_muscle = 14,           ///< the other soft tissue under the skin (muscle, connective tissue)
-  colin27_bone_marrow = 15,      ///< skull voxels brighter than bone, enclosed by skull (diploe)
+  colin27_subcutaneous_fat = 13,        ///< soft tissue under the skin brighter than white matter (fat)
+  colin27_muscle = 14,                  ///< the other soft tissue under the skin (muscle, connective tissue)
+  colin27_bone_marrow = 15,             ///< skull voxels brighter than bone, enclosed by skull (diploe)
+  colin27_cerebellar_white_matter = 16, ///< the cerebellum's voxels of the brain's white-matter class
 };
 
 /// One row of the label table.

@@ -49,7 +49,7 @@ TEST(Colin27Head, EveryLabelIsPresentWithPlausibleVolumes) {
   const HeadLabels& head = derived();
   EXPECT_EQ(head.grid.dims, Eigen::Vector3i(181, 217, 181));
   const std::vector<double> ml = label_volumes_ml(head);
-  ASSERT_EQ(ml.size(), 16U);
+  ASSERT_EQ(ml.size(), 17U);
   for (const HeadLabelInfo& info : head.table) {
     std::cout << info.label << ' ' << info.name << ' ' << ml[info.label] << " ml\n";
     EXPECT_GT(ml[info.label], 0.0) << info.name;
@@ -65,6 +65,7 @@ TEST(Colin27Head, EveryLabelIsPresentWithPlausibleVolumes) {
   double intracranial = 0.0;
   for (int l = colin27_csf; l <= colin27_brainstem; ++l)
     intracranial += ml[l];
+  intracranial += ml[colin27_cerebellar_white_matter];
   std::cout << "grey matter " << gm << " ml, intracranial " << intracranial << " ml\n";
   EXPECT_GE(intracranial, 1200.0);
   EXPECT_LE(intracranial, 1900.0);
@@ -118,6 +119,53 @@ TEST(Colin27Head, TissuesOutsideTheBrainFollowTheScan) {
       }
   EXPECT_EQ(marrow_touching_other, 0);
   EXPECT_EQ(fat_touching_background, 0);
+}
+
+// The cerebellum divides by the scan's intensity as the cerebrum does: its white matter (the
+// brain's white-matter class inside it) is brighter on the T1w scan than its cortex, lies inside
+// the cerebellum (no voxel of it touches CSF, the cerebrum's white matter or the background), and
+// holds a plausible share of it: about a fifth of an adult cerebellum is white matter.
+TEST(Colin27Head, CerebellarWhiteMatterFollowsTheScan) {
+  SKIP_WITHOUT_TEMPLATES();
+  const HeadLabels& head = derived();
+  const NiftiVolume t1 = read_nifti(templates / "ch2.nii.gz");
+  double cortex_sum = 0.0, cortex_count = 0.0, white_sum = 0.0, white_count = 0.0;
+  for (std::size_t n = 0; n < head.labels.size(); ++n) {
+    if (head.labels[n] == colin27_cerebellum) {
+      cortex_sum += t1.values[n];
+      cortex_count += 1.0;
+    } else if (head.labels[n] == colin27_cerebellar_white_matter) {
+      white_sum += t1.values[n];
+      white_count += 1.0;
+    }
+  }
+  ASSERT_GT(white_count, 0.0);
+  const double cortex = cortex_sum / cortex_count, white = white_sum / white_count;
+  const std::vector<double> ml = label_volumes_ml(head);
+  const double share =
+      ml[colin27_cerebellar_white_matter] / (ml[colin27_cerebellar_white_matter] + ml[colin27_cerebellum]);
+  std::cout << "cerebellum: mean T1 cortex " << cortex << ", white matter " << white << "; white matter "
+            << ml[colin27_cerebellar_white_matter] << " ml, share " << share << "\n";
+  EXPECT_GT(white, 1.1 * cortex);
+  EXPECT_GE(share, 0.1);
+  EXPECT_LE(share, 0.35);
+  const Eigen::Vector3i d = head.grid.dims;
+  auto at = [&](int i, int j, int k) { return i + std::int64_t(d.x()) * (j + std::int64_t(d.y()) * k); };
+  std::int64_t touching_outside = 0;
+  for (int k = 1; k < d.z() - 1; ++k)
+    for (int j = 1; j < d.y() - 1; ++j)
+      for (int i = 1; i < d.x() - 1; ++i) {
+        if (head.labels[at(i, j, k)] != colin27_cerebellar_white_matter) continue;
+        for (const std::int64_t m : {at(i + 1, j, k), at(i - 1, j, k), at(i, j + 1, k), at(i, j - 1, k),
+                                     at(i, j, k + 1), at(i, j, k - 1)}) {
+          const std::int32_t next = head.labels[m];
+          touching_outside +=
+              next == colin27_csf || next == colin27_white_matter || next == colin27_background;
+        }
+      }
+  std::cout << "cerebellar white-matter faces on CSF, cerebral white matter or background: "
+            << touching_outside << "\n";
+  EXPECT_LE(touching_outside, 200);
 }
 
 TEST(Colin27Head, NestingIsSane) {
@@ -190,9 +238,11 @@ TEST(Colin27Head, BrainstemVentriclesAndCerebellumKeepToTheirAnatomy) {
                                      at(i, j, k + 1), at(i, j, k - 1)}) {
           const std::int32_t next = head.labels[m];
           if (label == colin27_ventricles)
-            ventricle_on_hindbrain += next == colin27_brainstem || next == colin27_cerebellum;
+            ventricle_on_hindbrain += next == colin27_brainstem || next == colin27_cerebellum ||
+                                      next == colin27_cerebellar_white_matter;
           else
-            white_matter_on_cerebellum += next == colin27_cerebellum;
+            white_matter_on_cerebellum +=
+                next == colin27_cerebellum || next == colin27_cerebellar_white_matter;
         }
       }
   std::cout << "brainstem y " << stem_back << " to " << stem_front << " mm (thalamus " << thalamus_back
@@ -268,7 +318,7 @@ TEST(AtlasCommand, WritesALabelVolumeNibabelReads) {
                                         "d = numpy.asarray(img.dataobj)\n"
                                         "assert d.shape == (181, 217, 181), d.shape\n"
                                         "assert numpy.allclose(img.affine, ref.affine), img.affine\n"
-                                        "assert set(numpy.unique(d)) == set(range(16)), numpy.unique(d)\n"
+                                        "assert set(numpy.unique(d)) == set(range(17)), numpy.unique(d)\n"
                                         "print('ok')\n";
   const CommandResult check = run_command(
       {PHANTASM_PYTHON, (folder / "check.py").string(), out.string(), (templates / "ch2.nii.gz").string()});
