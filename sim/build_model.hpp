@@ -18,9 +18,6 @@ struct BodyModel {
   double region_growth_moved_m = 0.0;    ///< the largest rest-surface motion of a grown atlas region
   std::vector<int> growth_load_of_tet;   ///< per tet of the model, the growth load growing it (-1: none)
   std::vector<double> growth_rest_ratio; ///< per load, the rest-volume ratio applied to its tets (1: none)
-  /// per load, the rest-volume ratio and the volume ratio its tets reached in the solve before
-  /// the last one (the secant of recalibrate_growth; 1 and 1 before the first: no growth)
-  std::vector<double> growth_previous_ratio, growth_previous_reached;
 };
 
 /// The model of every body of `assignment` [choices documented in docs/deformation.md]: a solid

@@ -97,18 +97,23 @@ PhantomDeformation deform_phantom(const DeformationSettings& deformation, const 
   Eigen::MatrixX3d p = model.rest_positions_m;
   // Growth prescribes the grown tets' volume in the result: their rest volume is rescaled until
   // the solve meets it (sim/growth.hpp). The solves that only measure how far the rest volumes
-  // reach are rough (sim/load_schedule.hpp), each starting from the last one's positions; once
-  // a rough solve meets the prescription, an exact solve from there decides.
+  // reach are rough (sim/load_schedule.hpp), each starting about where its result will be and
+  // stopping at the residual the first one stopped at; once a rough solve meets the
+  // prescription, an exact solve from there decides.
   const bool calibrating = deformation.mode == DeformationMode::quasi_static && !built.bodies.empty() &&
                            std::any_of(built.grown_tets.begin(), built.grown_tets.end(),
                                        [](std::size_t tets) { return tets > 0; });
   bool rough = calibrating;
   if (!built.bodies.empty()) solve_frames(deformation, model, loads, p, result, report, reporter, rough);
+  GrowthCalibration calibration;
+  if (calibrating && !result.solves.empty() && !result.solves.front().residuals_N.empty())
+    calibration.first_residual_N = result.solves.front().residuals_N.front();
   for (int round = 0; calibrating; ++round) {
     const std::vector<double> ratios = built.growth_rest_ratio;
-    if (!recalibrate_growth(deformation, built, p, round, rough, report)) break;
+    if (!recalibrate_growth(deformation, built, p, round, rough, report, calibration)) break;
     if (built.growth_rest_ratio == ratios) rough = false; // met roughly: the exact solve
-    solve_frames(deformation, model, loads, p, result, report, reporter, rough);
+    solve_frames(rough ? rough_solve_settings(deformation, model, p, calibration) : deformation, model, loads,
+                 p, result, report, reporter, rough);
   }
   collect_deformations(organs, phantom, assignment, built.bodies, p / k_mm, result);
   check_inversions(deformation, result, report);

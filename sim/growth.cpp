@@ -6,6 +6,9 @@
 #include "sim/body_embedding.hpp"
 #include "sim/growth_regions.hpp"
 
+#include <Eigen/LU>
+#include <Eigen/QR>
+
 #include <algorithm>
 #include <cmath>
 #include <optional>
@@ -30,9 +33,6 @@ void apply_growth(const DeformationSettings& deformation, const OrganTable& orga
                   BodyModel& built) {
   built.grown_tets.resize(deformation.loads.size(), 0);
   built.growth_rest_ratio.resize(deformation.loads.size(), 1.0);
-  // No growth reaches no change: the secant's first point (recalibrate_growth).
-  built.growth_previous_ratio.resize(deformation.loads.size(), 1.0);
-  built.growth_previous_reached.resize(deformation.loads.size(), 1.0);
   built.growth_load_of_tet.resize(first_tet + organ_of_tet.size(), -1);
   const std::vector<std::vector<std::int32_t>> region_labels = growth_region_labels(deformation);
   // The load growing each tet: an organ's, then a region's (which takes precedence).
@@ -93,78 +93,86 @@ void apply_growth(const DeformationSettings& deformation, const OrganTable& orga
   }
 }
 
-bool recalibrate_growth(const DeformationSettings& deformation, BodyModel& built, const Eigen::MatrixX3d& p_m,
-                        int round, bool rough, StageReport& report) {
-  ElasticModel& model = built.model;
+namespace {
+
+/// Per load, the rest volume of its tets before growth and their volume at p_m (m^3).
+struct GrowthVolumes {
+  std::vector<double> rest, deformed;
+};
+
+GrowthVolumes growth_volumes(const BodyModel& built, const Eigen::MatrixX3d& p_m) {
   const std::size_t loads = built.growth_rest_ratio.size();
-  std::vector<double> rest(loads, 0.0), deformed(loads, 0.0);
+  GrowthVolumes v{std::vector<double>(loads, 0.0), std::vector<double>(loads, 0.0)};
   for (std::size_t t = 0; t < built.growth_load_of_tet.size(); ++t) {
     const int k = built.growth_load_of_tet[t];
     if (k < 0) continue;
-    const TetElement& e = model.tets[t];
-    const auto& v = e.vertices;
-    const Eigen::Vector3d a = p_m.row(v[1]) - p_m.row(v[0]), b = p_m.row(v[2]) - p_m.row(v[0]),
-                          c = p_m.row(v[3]) - p_m.row(v[0]);
-    deformed[static_cast<std::size_t>(k)] += a.cross(b).dot(c) / 6.0;
-    rest[static_cast<std::size_t>(k)] +=
+    const TetElement& e = built.model.tets[t];
+    const auto& x = e.vertices;
+    const Eigen::Vector3d a = p_m.row(x[1]) - p_m.row(x[0]), b = p_m.row(x[2]) - p_m.row(x[0]),
+                          c = p_m.row(x[3]) - p_m.row(x[0]);
+    v.deformed[static_cast<std::size_t>(k)] += a.cross(b).dot(c) / 6.0;
+    v.rest[static_cast<std::size_t>(k)] +=
         e.rest_volume_m3 / built.growth_rest_ratio[static_cast<std::size_t>(k)];
   }
-  // Per load, the factor its tets' rest volume is rescaled by (1: it meets its prescription).
-  std::vector<double> rescale(loads, 1.0);
-  std::vector<double> previous_ratio = built.growth_rest_ratio, previous_reached(loads, 1.0);
-  bool rescaled = false;
-  for (std::size_t k = 0; k < loads; ++k) {
-    if (!(rest[k] > 0.0)) continue;
-    const LoadSettings& load = deformation.loads[k];
-    const double reached = deformed[k] / rest[k], wanted = 1.0 + load.volume_change;
-    previous_reached[k] = reached;
-    if (std::abs(reached - wanted) <= (rough ? k_rough_growth_tolerance : k_growth_tolerance)) continue;
-    if (round >= k_growth_rounds || !(reached > 0.0)) {
-      throw SettingError(growth_load_key(k, load),
-                         "expected a volume change the tissue around can take up, found " +
-                             format_number(100.0 * load.volume_change) + " % for " + growth_target(load) +
-                             ", which reaches " + format_number(100.0 * (reached - 1.0)) + " % after " +
-                             std::to_string(round + 1) +
-                             " solves (no room to give way: a softer or more compressible tissue around it, "
-                             "or a smaller change)");
+  return v;
+}
+
+/// The next rest-volume ratios of the calibrated loads and the combination of the last solves
+/// (coefficients of their differences from the newest, newest first) that they are.
+struct CalibrationStep {
+  Eigen::VectorXd ratios, combination;
+};
+
+/// The differences of the `q` solves before the newest from it, newest first (columns).
+Eigen::MatrixXd differences(const std::vector<Eigen::VectorXd>& points, Eigen::Index q) {
+  const std::size_t m = points.size() - 1;
+  Eigen::MatrixXd d(points[m].size(), q);
+  for (Eigen::Index i = 0; i < q; ++i)
+    d.col(i) = points[m - 1 - static_cast<std::size_t>(i)] - points[m];
+  return d;
+}
+
+/// Whether every ratio of `next` is finite and within half and twice the ratio it moves from.
+bool plausible(const Eigen::VectorXd& next, const Eigen::VectorXd& ratio) {
+  return next.allFinite() && (next.array() >= 0.5 * ratio.array()).all() &&
+         (next.array() <= 2.0 * ratio.array()).all();
+}
+
+/// The reached ratios are about linear in the rest ratios, each load's in all of them (a region
+/// shrinks as its neighbour grows). Once the solves span every load (the rest state among
+/// them), the step that meets every prescription on the plane through the last ones; before,
+/// or where that plane is singular or its step implausible, each load along the secant of its
+/// own last two solves, with the step that assumes the rest ratio reached in full where that
+/// secant's slope is not one the tissue around can give (the tets reaching more than twice
+/// their own change).
+CalibrationStep calibration_step(const GrowthCalibration& c, const Eigen::VectorXd& wanted) {
+  const std::size_t m = c.ratios.size() - 1;
+  const Eigen::VectorXd &ratio = c.ratios[m], &reached = c.reached[m];
+  const auto n = ratio.size(), q = std::min<Eigen::Index>(n, static_cast<Eigen::Index>(m));
+  const Eigen::MatrixXd dr = differences(c.ratios, q), dv = differences(c.reached, q);
+  if (q == n) {
+    const Eigen::FullPivLU<Eigen::MatrixXd> lu(dv);
+    if (lu.isInvertible()) {
+      const Eigen::VectorXd combination = lu.solve(wanted - reached);
+      const Eigen::VectorXd next = ratio + dr * combination;
+      if (plausible(next, ratio)) return {next, combination};
     }
-    // The reached ratio is about linear in the rest ratio: the secant through the last two
-    // solves (the first through no growth, which reaches no change); where the two coincide or
-    // their slope is not one the tissue around can give (the tets reaching more than twice
-    // their own change), a step that assumes the rest ratio reached in full.
-    const double ratio = built.growth_rest_ratio[k];
-    double next = ratio * wanted / reached;
-    if (!built.growth_previous_ratio.empty()) {
-      const double slope =
-          (reached - built.growth_previous_reached[k]) / (ratio - built.growth_previous_ratio[k]);
-      if (std::isfinite(slope) && slope > 0.0 && slope <= k_largest_growth_slope)
-        next = std::clamp(ratio + (wanted - reached) / slope, 0.5 * ratio, 2.0 * ratio);
-    }
-    rescale[k] = next / ratio;
-    built.growth_rest_ratio[k] = next;
-    rescaled = true;
   }
-  if (!rescaled && rough) {
-    // Met on a rough solve: the same rest volumes solved exactly, to be measured again. The
-    // secant keeps its earlier point (a second point at the same ratio has no slope).
-    return true;
+  Eigen::VectorXd next(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    next[k] = ratio[k] * wanted[k] / reached[k];
+    const double slope = dv(k, 0) / dr(k, 0);
+    if (std::isfinite(slope) && slope > 0.0 && slope <= k_largest_growth_slope)
+      next[k] = std::clamp(ratio[k] + (wanted[k] - reached[k]) / slope, 0.5 * ratio[k], 2.0 * ratio[k]);
   }
-  built.growth_previous_ratio = previous_ratio;
-  built.growth_previous_reached = previous_reached;
-  if (!rescaled) {
-    for (std::size_t k = 0; k < loads; ++k)
-      if (rest[k] > 0.0)
-        report.modelled.push_back("growth of " + growth_target(deformation.loads[k]) +
-                                  ": its tets' volume changed by " +
-                                  format_number(100.0 * (deformed[k] / rest[k] - 1.0)) +
-                                  " % as prescribed, from a rest-volume change of " +
-                                  format_number(100.0 * (built.growth_rest_ratio[k] - 1.0)) + " % (" +
-                                  std::to_string(round + 1) + " solves)");
-    return false;
-  }
-  // Fg of each rescaled tet: Q / s, weights times s^3 = the rescale of its volume; a group of
-  // tets (deformation.volume: tet_groups) holding one is made again from its tets' Q and
-  // volumes (F_g = sum_t V_t F_t / V_g) with its bulk weight in proportion to its volume.
+  return {next, dr.colPivHouseholderQr().solve(next - ratio)};
+}
+
+/// Fg of each rescaled tet: Q / s, weights times s^3 = the rescale of its volume; a group of tets
+/// (deformation.volume: tet_groups) holding one is made again from its tets' Q and volumes
+/// (F_g = sum_t V_t F_t / V_g) with its bulk weight in proportion to its volume.
+void rescale_growth(const std::vector<double>& rescale, BodyModel& built) {
+  ElasticModel& model = built.model;
   std::vector<char> changed(model.tets.size(), 0);
   for (std::size_t t = 0; t < built.growth_load_of_tet.size(); ++t) {
     const int k = built.growth_load_of_tet[t];
@@ -196,7 +204,90 @@ bool recalibrate_growth(const DeformationSettings& deformation, BodyModel& built
       }
     }
   }
+}
+
+/// The largest combination coefficient the next solve's start takes from the last solves'
+/// positions (a larger one extrapolates further than the solves say anything about).
+constexpr double k_largest_start_coefficient = 4.0;
+
+} // namespace
+
+bool recalibrate_growth(const DeformationSettings& deformation, BodyModel& built, Eigen::MatrixX3d& p_m,
+                        int round, bool rough, StageReport& report, GrowthCalibration& calibration) {
+  const GrowthVolumes v = growth_volumes(built, p_m);
+  // The calibrated loads: those with tets.
+  std::vector<std::size_t> active;
+  for (std::size_t k = 0; k < v.rest.size(); ++k)
+    if (v.rest[k] > 0.0) active.push_back(k);
+  const auto n = static_cast<Eigen::Index>(active.size());
+  Eigen::VectorXd ratio(n), reached(n), wanted(n);
+  bool met = true;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const std::size_t k = active[static_cast<std::size_t>(i)];
+    const LoadSettings& load = deformation.loads[k];
+    ratio[i] = built.growth_rest_ratio[k];
+    reached[i] = v.deformed[k] / v.rest[k];
+    wanted[i] = 1.0 + load.volume_change;
+    if (std::abs(reached[i] - wanted[i]) <= (rough ? k_rough_growth_tolerance : k_growth_tolerance)) continue;
+    met = false;
+    if (round >= k_growth_rounds || !(reached[i] > 0.0)) {
+      throw SettingError(growth_load_key(k, load),
+                         "expected a volume change the tissue around can take up, found " +
+                             format_number(100.0 * load.volume_change) + " % for " + growth_target(load) +
+                             ", which reaches " + format_number(100.0 * (reached[i] - 1.0)) + " % after " +
+                             std::to_string(round + 1) +
+                             " solves (no room to give way: a softer or more compressible tissue around it, "
+                             "or a smaller change)");
+    }
+  }
+  // Met on a rough solve: the same rest volumes solved exactly, to be measured again (this
+  // solve's point is left out: the next one has the same ratios).
+  if (met && rough) return true;
+  if (met) {
+    for (const std::size_t k : active)
+      report.modelled.push_back("growth of " + growth_target(deformation.loads[k]) +
+                                ": its tets' volume changed by " +
+                                format_number(100.0 * (v.deformed[k] / v.rest[k] - 1.0)) +
+                                " % as prescribed, from a rest-volume change of " +
+                                format_number(100.0 * (built.growth_rest_ratio[k] - 1.0)) + " % (" +
+                                std::to_string(round + 1) + " solves)");
+    return false;
+  }
+  if (calibration.ratios.empty()) { // no growth reaches no change, at rest
+    calibration.ratios.push_back(Eigen::VectorXd::Ones(n));
+    calibration.reached.push_back(Eigen::VectorXd::Ones(n));
+    calibration.positions_m.push_back(built.model.rest_positions_m);
+  }
+  calibration.ratios.push_back(ratio);
+  calibration.reached.push_back(reached);
+  calibration.positions_m.push_back(p_m);
+  const CalibrationStep step = calibration_step(calibration, wanted);
+  std::vector<double> rescale(built.growth_rest_ratio.size(), 1.0);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const std::size_t k = active[static_cast<std::size_t>(i)];
+    rescale[k] = step.ratios[i] / ratio[i];
+    built.growth_rest_ratio[k] = step.ratios[i];
+  }
+  rescale_growth(rescale, built);
+  // The next solve starts where the same combination of the last solves' positions is: about
+  // its result, as the volumes are about linear in the rest ratios.
+  if (step.combination.allFinite() && step.combination.cwiseAbs().maxCoeff() <= k_largest_start_coefficient) {
+    const std::size_t m = calibration.positions_m.size() - 1;
+    for (Eigen::Index i = 0; i < step.combination.size(); ++i)
+      p_m += step.combination[i] *
+             (calibration.positions_m[m - 1 - static_cast<std::size_t>(i)] - calibration.positions_m[m]);
+  }
   return true;
+}
+
+DeformationSettings rough_solve_settings(const DeformationSettings& deformation, const ElasticModel& model,
+                                         const Eigen::MatrixX3d& p_m, const GrowthCalibration& calibration) {
+  DeformationSettings settings = deformation;
+  const double start = free_gradient_norm(model, model_gradient(model, StepInertia{}, p_m));
+  const double target = deformation.solver.relative_residual_tolerance * calibration.first_residual_N;
+  if (start > 0.0 && target > 0.0)
+    settings.solver.relative_residual_tolerance = std::min(1.0, target / start);
+  return settings;
 }
 
 void report_growth(const DeformationSettings& deformation, const std::vector<std::size_t>& grown_tets,

@@ -34,19 +34,40 @@ inline constexpr int k_growth_rounds = 8;
 /// tolerance: the exact solve seldom moves the tets' volume by more than that).
 inline constexpr double k_rough_growth_tolerance = 0.25 * k_growth_tolerance;
 
+/// The solves of a growth calibration so far (recalibrate_growth): per solve the rest-volume
+/// ratio of each growth load's tets, the volume ratio they reached and the positions (m), the
+/// first entry the rest state (no growth reaches no change, at rest).
+struct GrowthCalibration {
+  std::vector<Eigen::VectorXd> ratios, reached;
+  std::vector<Eigen::MatrixX3d> positions_m;
+  /// The residual of the first solve at its start (N): the rough solves stop at its
+  /// relative_residual_tolerance times this (rough_solve_settings).
+  double first_residual_N = 0.0;
+};
+
 /// A growth load prescribes its tets' volume change in the result: after the solve of `round`
 /// (0 first), the volume each load's tets reach in `p_m` (m) against their rest volume before
-/// growth. Where one misses 1 + g by more than k_growth_tolerance, its tets' rest-volume ratio is
-/// moved along the secant of the reached ratio through the last two solves (the tissue around
-/// takes up less than the rest-volume change) and true says to solve again. Where all meet
-/// k_rough_growth_tolerance after a `rough` solve (sim/load_schedule.hpp: no finishing Newton
-/// steps), true says to solve the same rest volumes again exactly; after an exact solve, each
-/// load's figures go into `report` and false says done: only an exact solve's volumes are ever
-/// reported as met.
+/// growth. Where one misses 1 + g by more than k_growth_tolerance, the rest-volume ratios move to
+/// where the reached ratios, taken as linear in them, meet every prescription: through the last
+/// solves of `calibration` (as many as there are loads, the rest state among them: the loads'
+/// couplings, a region shrinking as its neighbour grows, are measured, not ignored), or, before
+/// there are enough, per load along the secant of its own reached ratio; `p_m` moves by the same
+/// combination of the last solves' positions (the start of the next solve, about its result);
+/// true says to solve again. Where all meet k_rough_growth_tolerance after a `rough` solve
+/// (sim/load_schedule.hpp: no finishing Newton steps), true says to solve the same rest volumes
+/// again exactly; after an exact solve, each load's figures go into `report` and false says
+/// done: only an exact solve's volumes are ever reported as met.
 /// @throws SettingError (deformation.loads[k].organ or .region) when a load still misses after
 ///   k_growth_rounds solves or inverts its tets: no room to give way
-bool recalibrate_growth(const DeformationSettings& deformation, BodyModel& built, const Eigen::MatrixX3d& p_m,
-                        int round, bool rough, StageReport& report);
+bool recalibrate_growth(const DeformationSettings& deformation, BodyModel& built, Eigen::MatrixX3d& p_m,
+                        int round, bool rough, StageReport& report, GrowthCalibration& calibration);
+
+/// The settings of a rough calibration solve from `p_m`: the scene's, with the residual
+/// tolerance that stops it at the residual the first solve stopped at (its tolerance times
+/// calibration.first_residual_N), so that a solve started near its result takes the few
+/// iterations it needs, not a thousandfold reduction of a small start.
+DeformationSettings rough_solve_settings(const DeformationSettings& deformation, const ElasticModel& model,
+                                         const Eigen::MatrixX3d& p_m, const GrowthCalibration& calibration);
 
 /// Checks that every growth load grew some tets and reports each one as modelled.
 /// @throws SettingError (deformation.loads[k].organ, or .region) for an organ or regions no
