@@ -46,7 +46,8 @@ int locking_rows(std::FILE* table, const std::vector<int>& cells) {
       const auto start = std::chrono::steady_clock::now();
       std::vector<double> tips;
       for (double nu : {0.45, 0.49, 0.499}) {
-        ExtremeCase c{1e5, nu, 0.0, 0.0};
+        ExtremeCase c; // 100 kPa, quasi-static
+        c.poisson_ratio = nu;
         c.volume = v;
         c.cells_across = n;
         const ExtremeCantilever k = extreme_cantilever(c);
