@@ -9,6 +9,7 @@
 #include "io/nifti_file.hpp"
 #include "tests/apps/cli_fixtures.hpp"
 #include "tests/support/coarse_scenes.hpp"
+#include "tests/support/shared_output.hpp"
 #include "tests/support/subprocess.hpp"
 
 #include <gtest/gtest.h>
@@ -46,8 +47,16 @@ Made made_task(const fs::path& scene, const fs::path& root, const fs::path& cach
   return m;
 }
 
+/// The small head's dataset and task, which four tests of this file read: made once per build of
+/// the program and bytes of the scene (tests/support/shared_output.hpp), not once per test process.
 const Made& small_task() {
-  static const Made made = made_task(k_small_scene, fresh_folder("baselines-small"));
+  static const Made made = [] {
+    const fs::path root = shared_output("baselines-small-task", {k_small_scene}, [](const fs::path& folder) {
+      made_task(k_small_scene, folder);
+      return !::testing::Test::HasFailure();
+    });
+    return Made{root / "out", root / "task", root / "task-truth"};
+  }();
   return made;
 }
 
