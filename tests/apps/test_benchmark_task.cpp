@@ -8,6 +8,7 @@
 #include "io/nifti_file.hpp"
 #include "tests/apps/cli_fixtures.hpp"
 #include "tests/apps/transformix_parameters.hpp"
+#include "tests/support/shared_output.hpp"
 #include "tests/support/subprocess.hpp"
 
 #include <Eigen/Geometry>
@@ -25,21 +26,25 @@ namespace {
 const std::string k_checker = (k_source_dir / "tests" / "apps" / "check_learn2reg_task.py").string();
 const std::string k_result = "disp_0001_0000_0001_0001.nii.gz";
 
-/// A small-head dataset and its task (T1w fixed, T1w moving), made once for the tests of this file.
+/// A small-head dataset and its task (T1w fixed, T1w moving), which the tests of this file read:
+/// made once per build of the program and bytes of the scene (tests/support/shared_output.hpp),
+/// not once per test process.
 struct Made {
   fs::path dataset, task, truth;
 };
 const Made& small_task() {
   static const Made made = [] {
-    const fs::path root = fresh_folder("benchmark-task");
-    Made m{root / "out", root / "task", root / "task-truth"};
-    const CommandResult run =
-        run_command({k_phantasm, "run", k_small_scene.string(), "-o", m.dataset.string(), "-q"});
-    EXPECT_EQ(run.exit_code, 0) << run.err;
-    const CommandResult task =
-        run_command({k_phantasm, "task", m.dataset.string(), "-o", m.task.string(), "--name", "SMALL"});
-    EXPECT_EQ(task.exit_code, 0) << task.err;
-    return m;
+    const fs::path root = shared_output("benchmark-small-task", {k_small_scene}, [](const fs::path& folder) {
+      const CommandResult run =
+          run_command({k_phantasm, "run", k_small_scene.string(), "-o", (folder / "out").string(), "-q"});
+      EXPECT_EQ(run.exit_code, 0) << run.err;
+      if (run.exit_code != 0) return false;
+      const CommandResult task = run_command({k_phantasm, "task", (folder / "out").string(), "-o",
+                                              (folder / "task").string(), "--name", "SMALL"});
+      EXPECT_EQ(task.exit_code, 0) << task.err;
+      return task.exit_code == 0;
+    });
+    return Made{root / "out", root / "task", root / "task-truth"};
   }();
   return made;
 }
