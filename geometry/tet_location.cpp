@@ -48,8 +48,11 @@ void TetMeshLocator::build_grid() {
   // Cells about as large as a tet's box, and no more than 8 per tet (a mesh that fills little
   // of its box, a thin shell, gets larger cells).
   double mean_extent = 0.0;
-  for (std::size_t t = 0; t < n; ++t)
-    mean_extent += (m_tet_high[t] - m_tet_low[t]).maxCoeff() / static_cast<double>(n);
+  for (std::size_t t = 0; t < n; ++t) {
+    const double extent = (m_tet_high[t] - m_tet_low[t]).maxCoeff();
+    mean_extent += extent / static_cast<double>(n);
+    m_largest_extent_mm = std::max(m_largest_extent_mm, extent);
+  }
   m_grid_low = m_low.array() - k_grid_margin_mm;
   const Eigen::Vector3d size = (m_high - m_low).array() + 2.0 * k_grid_margin_mm;
   m_cell_mm = std::max({mean_extent, std::cbrt(size.prod() / (8.0 * static_cast<double>(n))), 1e-3});
@@ -144,16 +147,53 @@ TetLocation TetMeshLocator::nearest(const Eigen::Vector3d& x) const {
       if (w.minCoeff() >= 0.0) return {t, w};
     }
   }
+  return least_outside(x);
+}
+
+TetLocation TetMeshLocator::least_outside(const Eigen::Vector3d& x) const {
   double best = -std::numeric_limits<double>::infinity();
   TetLocation result;
-  for (std::size_t t = 0; t < m_inverse.size(); ++t) {
-    const Eigen::Vector4d w = barycentric(static_cast<Eigen::Index>(t), x);
+  const auto consider = [&](Eigen::Index t) {
+    const Eigen::Vector4d w = barycentric(t, x);
     const double smallest = w.minCoeff();
-    if (smallest > best) {
+    if (smallest > best || (smallest == best && t < result.tet)) {
       best = smallest;
-      result = {static_cast<Eigen::Index>(t), w};
-      if (smallest >= 0.0) break;
+      result = {t, w};
     }
+  };
+  if (m_cell_start.empty()) {
+    for (Eigen::Index t = 0; t < tet_count(); ++t)
+      consider(t);
+    return result;
+  }
+  // x's cell (outside the grid too) and the first ring of cells that meets the grid.
+  Eigen::Array3i at;
+  int ring = 0, last_ring = 0;
+  for (int a = 0; a < 3; ++a) {
+    const double cell = std::floor((x[a] - m_grid_low[a]) / m_cell_mm);
+    at[a] = static_cast<int>(std::clamp(cell, -1e9, 1e9));
+    ring = std::max({ring, -at[a], at[a] - (m_cells[a] - 1)});
+    last_ring = std::max({last_ring, at[a], m_cells[a] - 1 - at[a]});
+  }
+  for (; ring <= last_ring; ++ring) {
+    // A tet listed in no cell of the rings so far lies, along some axis, more than ring - 1
+    // cells from x: its smallest weight is below -(ring - 1) cells / (3 largest extent), so
+    // once that is below the best, no tet farther out can match it.
+    if (-(ring - 1) * m_cell_mm / (3.0 * m_largest_extent_mm) < best) break;
+    Eigen::Array3i low, high;
+    for (int a = 0; a < 3; ++a) {
+      low[a] = std::max(0, at[a] - ring);
+      high[a] = std::min(m_cells[a] - 1, at[a] + ring);
+    }
+    for (int k = low[2]; k <= high[2]; ++k)
+      for (int j = low[1]; j <= high[1]; ++j)
+        for (int i = low[0]; i <= high[0]; ++i) {
+          if (std::max({std::abs(i - at[0]), std::abs(j - at[1]), std::abs(k - at[2])}) != ring) continue;
+          const auto c =
+              static_cast<std::size_t>((static_cast<std::int64_t>(k) * m_cells[1] + j) * m_cells[0] + i);
+          for (auto n = m_cell_start[c]; n < m_cell_start[c + 1]; ++n)
+            consider(m_cell_tets[static_cast<std::size_t>(n)]);
+        }
   }
   return result;
 }

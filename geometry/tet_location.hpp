@@ -59,9 +59,11 @@ public:
 
   /// The tet whose smallest weight at x is largest: the first tet holding x (smallest weight >= 0)
   /// when there is one, else the tet x is least outside of, to extrapolate from (continuous
-  /// across the faceted boundary). A point inside tries the tets of its grid cell (every tet
-  /// holding it is listed there, in list order); one no tet holds tries every tet in list order.
-  /// The tet is -1 for an empty mesh.
+  /// across the faceted boundary), the first in list order of those as little outside. A point
+  /// inside tries the tets of its grid cell (every tet holding it is listed there, in list
+  /// order); one no tet holds tries the cells in rings around its own until no tet farther out
+  /// can be as little outside (a tet whose box x lies D outside of along an axis where the box
+  /// is E long has a weight below -D / (3 E)). The tet is -1 for an empty mesh.
   TetLocation nearest(const Eigen::Vector3d& x) const;
 
   /// Bounding box of the mesh, mm.
@@ -76,6 +78,8 @@ private:
   void build_grid();
   /// The grid cell holding x, -1 outside the grid.
   Eigen::Index cell_of(const Eigen::Vector3d& x) const;
+  /// nearest for a point no tet holds.
+  TetLocation least_outside(const Eigen::Vector3d& x) const;
 
   std::vector<Eigen::Matrix3d> m_inverse;
   std::vector<Eigen::Vector3d> m_origin, m_tet_low, m_tet_high;
@@ -85,6 +89,7 @@ private:
   Eigen::Vector3d m_grid_low = Eigen::Vector3d::Zero();
   Eigen::Array3i m_cells = Eigen::Array3i::Zero();
   double m_cell_mm = 1.0;
+  double m_largest_extent_mm = 0.0; ///< of a tet's box along an axis
   std::vector<std::int64_t> m_cell_start;
   std::vector<std::int32_t> m_cell_tets;
 };

@@ -125,8 +125,9 @@ TEST(TetLocation, FindsTheSameTetAsBruteForce) {
 
 // The locator's grid lists every tet a point may lie in: at the mesh's vertices, edge midpoints
 // and face centroids (held by several tets at once, and on the faces of the grid's cells), and in
-// a mesh of two cubes far apart (a box the tets fill little of), nearest and find return what
-// trying every tet in list order returns: the first holding tet, or the one least outside.
+// a mesh of two cubes far apart (a box the tets fill little of), and at points outside near and
+// far, nearest and find return what trying every tet in list order returns: the first holding
+// tet, or the first of those least outside.
 TEST(TetLocation, TheGridGivesWhatEveryTetInListOrderGivesAtSharedCornersAndFaces) {
   TetMeshData m = subdivided_cube(5, 10.0, 0.15, 7);
   const TetMeshData far = subdivided_cube(2, 3.0, 0.1, 8);
@@ -146,8 +147,13 @@ TEST(TetLocation, TheGridGivesWhatEveryTetInListOrderGivesAtSharedCornersAndFace
         points.push_back(
             (corner(m, t, 0) + corner(m, t, 1) + corner(m, t, 2) + corner(m, t, 3) - corner(m, t, a)) / 3.0);
       }
-  points.push_back(Eigen::Vector3d(30.0, -20.0, 12.0)); // between the cubes
-  points.push_back(Eigen::Vector3d(-0.5, 5.0, 5.0));    // just outside
+  points.push_back(Eigen::Vector3d(30.0, -20.0, 12.0));   // between the cubes
+  points.push_back(Eigen::Vector3d(-0.5, 5.0, 5.0));      // just outside
+  points.push_back(Eigen::Vector3d(400.0, -300.0, 90.0)); // far outside the grid
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> around(-15.0, 75.0);
+  for (int i = 0; i < 300; ++i) // mostly outside, at every distance
+    points.push_back(Eigen::Vector3d(around(random), around(random) - 40.0, around(random)));
   int held = 0, shared = 0;
   for (const Eigen::Vector3d& x : points) {
     Eigen::Index first = -1, first_found = -1, least_outside = -1, holders = 0;
