@@ -226,10 +226,10 @@ public:
     }
     check_stiffness_under_gravity();
     if (solver_type(d.solver.method).steps_in_time && d.mode == DeformationMode::quasi_static) {
-      problem("deformation.solver.method",
-              "expected " + static_solver_names() + " for a quasi_static scene (" +
-                  to_string(d.solver.method) + " steps in time: it needs mode dynamic), found " +
-                  to_string(d.solver.method));
+      problem("deformation.solver.method", "expected " + static_solver_names() +
+                                               " for a quasi_static scene (" + to_string(d.solver.method) +
+                                               " steps in time: it needs mode dynamic), found " +
+                                               to_string(d.solver.method));
     }
   }
 
