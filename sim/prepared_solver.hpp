@@ -34,6 +34,13 @@ struct SolverEntry {
                                           const SolverSettings& settings) = nullptr;
 };
 
+/// The `make` of an entry whose solver is constructed from (model, inertia_weight, settings).
+template <class Solver>
+std::unique_ptr<PreparedSolver> make_prepared_solver(const ElasticModel& model, double inertia_weight,
+                                                     const SolverSettings& settings) {
+  return std::make_unique<Solver>(model, inertia_weight, settings);
+}
+
 /// Every registered entry point, beside the members of solver_types().
 const std::vector<const SolverEntry*>& solver_entries();
 

@@ -23,11 +23,7 @@ private:
 
 const SolverEntry& jacobi_chebyshev_solver_entry() {
   static const SolverEntry entry{SolverMethod::jacobi_chebyshev,
-                                 [](const ElasticModel& model, double inertia_weight,
-                                    const SolverSettings& settings) -> std::unique_ptr<PreparedSolver> {
-                                   return std::make_unique<JacobiChebyshevFrameSolver>(model, inertia_weight,
-                                                                                       settings);
-                                 }};
+                                 &make_prepared_solver<JacobiChebyshevFrameSolver>};
   return entry;
 }
 

@@ -21,12 +21,7 @@ private:
 } // namespace
 
 const SolverEntry& local_global_solver_entry() {
-  static const SolverEntry entry{SolverMethod::local_global,
-                                 [](const ElasticModel& model, double inertia_weight,
-                                    const SolverSettings& settings) -> std::unique_ptr<PreparedSolver> {
-                                   return std::make_unique<LocalGlobalFrameSolver>(model, inertia_weight,
-                                                                                   settings);
-                                 }};
+  static const SolverEntry entry{SolverMethod::local_global, &make_prepared_solver<LocalGlobalFrameSolver>};
   return entry;
 }
 

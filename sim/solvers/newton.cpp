@@ -7,6 +7,7 @@ namespace {
 /// Newton's method, its Hessian formed and factored in every iteration: nothing to prepare.
 class NewtonFrameSolver : public PreparedSolver {
 public:
+  NewtonFrameSolver(const ElasticModel&, double, const SolverSettings&) {}
   SolveReport solve(const ElasticModel& model, const StepInertia& inertia, Eigen::MatrixX3d& p,
                     const StopCriteria& stop) override {
     return newton_solve(model, inertia, p, stop);
@@ -16,11 +17,7 @@ public:
 } // namespace
 
 const SolverEntry& newton_solver_entry() {
-  static const SolverEntry entry{
-      SolverMethod::newton,
-      [](const ElasticModel&, double, const SolverSettings&) -> std::unique_ptr<PreparedSolver> {
-        return std::make_unique<NewtonFrameSolver>();
-      }};
+  static const SolverEntry entry{SolverMethod::newton, &make_prepared_solver<NewtonFrameSolver>};
   return entry;
 }
 
