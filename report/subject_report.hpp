@@ -16,10 +16,12 @@ struct SubjectRecord;
 /// derivatives/phantasm/sub-<id>.html (where fMRIPrep puts its subject reports).
 std::filesystem::path subject_report_path(const std::filesystem::path& dataset, const std::string& subject);
 
-/// The report's HTML: warnings and errors first, then what was modelled, the images of both
-/// states with label contours and the displacement and Jacobian overlays, landmarks, organ
-/// volumes, the solves' convergence, stage times against the estimate, a methods paragraph.
-/// Every text taken from the scene or a result file is HTML-escaped.
+/// The report's HTML: its sections in the order of their registry (report/report_section.hpp),
+/// warnings and errors first, then what was modelled, the images of both states with label
+/// contours and the displacement and Jacobian overlays, landmarks, organ volumes, the solves'
+/// convergence, stage times against the estimate, a methods paragraph. Every text taken from the
+/// scene or a result file is HTML-escaped.
+/// @throws InputError naming provenance.json when it is not of the shape phantasm writes
 std::string subject_report_html(const SubjectRecord& record);
 
 /// The report of a subject whose run failed: why, and the log so far.

@@ -1,6 +1,7 @@
 // The registry of deformation solvers: one member per solver (sim/solver_types/NAME.cpp), each
 // the one place that knows its name in the scene, its help, whether it steps in time (then a
-// quasi-static scene is refused), and its term of the cost estimate. The standard library only,
+// quasi-static scene is refused), its term of the cost estimate and the literature of its method
+// (which the report's methods paragraph cites). The standard library only,
 // so the scene and the cost estimate read the members without the solvers; how a member solves
 // lives beside it in sim/solvers/NAME.cpp (sim/prepared_solver.hpp). Adding a solver:
 // docs/architecture.md, "Adding a variant".
@@ -13,6 +14,12 @@
 
 namespace phantasm {
 
+/// The method a solver implements as the literature names it, and where it was published.
+struct SolverLiterature {
+  const char* method = nullptr;    ///< "Projective Dynamics" ("... by the local_global solver of ...")
+  const char* reference = nullptr; ///< authors, title, journal, volume, year (plain text), as cited
+};
+
 /// One solver of the registry.
 struct SolverType {
   SolverMethod method;
@@ -22,6 +29,9 @@ struct SolverType {
   bool steps_in_time = false;
   /// The cost estimate's processor time per shell triangle per frame and load step, s.
   double seconds_per_shell_triangle_step = 0.0;
+  /// Its method in the literature, cited by the report's methods paragraph; none (nulls) for a
+  /// method of the project's own or of textbooks.
+  SolverLiterature literature = {};
 };
 
 /// Every registered solver, in the docs' order.
