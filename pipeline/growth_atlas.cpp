@@ -3,6 +3,7 @@
 #include "atlas/atlas_regions.hpp"
 #include "atlas/colin27_head.hpp"
 #include "sim/growth_regions.hpp"
+#include "sim/load_type.hpp"
 
 #include <memory>
 #include <string>
@@ -13,7 +14,7 @@ DeformationSettings with_growth_atlas(const DeformationSettings& deformation, St
                                       Reporter& reporter) {
   DeformationSettings result = deformation;
   for (const LoadSettings& load : deformation.loads) {
-    if (load.kind != LoadKind::growth || load.regions.empty()) continue;
+    if (!load_type(load.kind).changes_rest_volume || load.regions.empty()) continue;
     if (result.region_atlas && result.region_atlas->name == load.atlas) continue;
     AtlasRegions read = read_atlas_regions(load.atlas, default_colin27_templates_dir());
     for (const std::string& line : read.provenance) {

@@ -3,6 +3,7 @@
 #include "core/tissue_table.hpp"
 #include "mri/sequence_type.hpp"
 #include "scene/parse_sections.hpp"
+#include "sim/load_type.hpp"
 #include "sim/solver_type.hpp"
 
 #include <algorithm>
@@ -151,52 +152,41 @@ public:
     }
   }
 
+  /// A load's organs (they exist; the one it acts on is not fixed) and its member's own checks.
+  void check_load(const DeformationSettings& d, std::size_t i, const std::vector<LoadOrgan>& organs) {
+    const LoadSettings& load = d.loads[i];
+    const LoadType& type = load_type(load.kind);
+    for (const LoadParameter& p : type.parameters) {
+      if (p.kind != LoadParameter::Kind::organs) continue;
+      const std::vector<std::string>& names = load.*p.names;
+      for (std::size_t j = 0; j < names.size(); ++j)
+        check_organ_reference(indexed("deformation.loads", i, p.key) + "[" + std::to_string(j) + "]",
+                              names[j]);
+    }
+    if (type.check != nullptr)
+      for (const LoadProblem& found : type.check(d, i, organs))
+        problem(indexed("deformation.loads", i, found.key), found.message);
+    for (const LoadParameter& p : type.parameters) {
+      if (p.kind != LoadParameter::Kind::organ || (p.recorded != nullptr && !p.recorded(load))) continue;
+      const std::string& organ = load.*p.text;
+      check_organ_reference(indexed("deformation.loads", i, p.key), organ);
+      for (const std::string& fixed : d.fixed)
+        if (fixed == organ)
+          problem(indexed("deformation.loads", i, p.key), "expected an organ that is not fixed, found '" +
+                                                              organ + "', listed under deformation.fixed");
+    }
+  }
+
   void check_deformation() {
     const DeformationSettings& d = m_scene.deformation;
     for (std::size_t i = 0; i < d.fixed.size(); ++i) {
       check_organ_reference(indexed("deformation.fixed", i, ""), d.fixed[i]);
     }
-    for (std::size_t i = 0; i < d.loads.size(); ++i) {
-      const LoadSettings& load = d.loads[i];
-      for (std::size_t j = 0; j < load.organs.size(); ++j) {
-        check_organ_reference(indexed("deformation.loads", i, "organs") + "[" + std::to_string(j) + "]",
-                              load.organs[j]);
-      }
-      for (std::size_t j = 0; load.kind == LoadKind::growth && !load.organ.empty() && j < i; ++j) {
-        if (d.loads[j].kind == LoadKind::growth && d.loads[j].organ == load.organ)
-          problem(indexed("deformation.loads", i, "organ"),
-                  "expected one growth per organ, found a second for '" + load.organ +
-                      "' (the first is "
-                      "deformation.loads[" +
-                      std::to_string(j) + "])");
-      }
-      // A region named twice (groups are resolved when the atlas is read, before the anatomy).
-      for (std::size_t j = 0; load.kind == LoadKind::growth && j <= i; ++j) {
-        const std::vector<std::string>& earlier = d.loads[j].regions;
-        for (std::size_t r = 0; r < load.regions.size(); ++r) {
-          const auto end = j == i ? earlier.begin() + static_cast<std::ptrdiff_t>(r) : earlier.end();
-          if (d.loads[j].kind == LoadKind::growth && std::find(earlier.begin(), end, load.regions[r]) != end)
-            problem(indexed("deformation.loads", i, "region"),
-                    "expected one growth per region, found a second for '" + load.regions[r] +
-                        "' (the first is deformation.loads[" + std::to_string(j) + "])");
-        }
-      }
-      const OrganSettings* grown = load.kind == LoadKind::growth ? m_scene.find_organ(load.organ) : nullptr;
-      if (grown != nullptr && !grown->solid)
-        problem(indexed("deformation.loads", i, "organ"),
-                "expected a solid organ (growth changes the volume of its tets), found '" + load.organ +
-                    "', a surface organ (solid: false)");
-      if (load.kind != LoadKind::gravity && !(load.kind == LoadKind::growth && !load.regions.empty())) {
-        check_organ_reference(indexed("deformation.loads", i, "organ"), load.organ);
-        for (const auto& fixed : d.fixed) {
-          if (fixed == load.organ) {
-            problem(indexed("deformation.loads", i, "organ"), "expected an organ that is not fixed, found '" +
-                                                                  load.organ +
-                                                                  "', listed under deformation.fixed");
-          }
-        }
-      }
-    }
+    std::vector<LoadOrgan> load_organs;
+    for (const OrganSettings& organ : m_scene.anatomy.organs)
+      load_organs.push_back({organ.name, organ.solid});
+    for (std::size_t i = 0; i < d.loads.size(); ++i)
+      check_load(d, i, load_organs);
     if (d.mode == DeformationMode::none && !d.loads.empty()) {
       problem("deformation.mode", "expected quasi_static or dynamic when loads are given, found 'none'");
     }
@@ -241,7 +231,7 @@ public:
     if (d.mode == DeformationMode::none) return;
     double gravity = 0.0;
     for (const LoadSettings& load : d.loads)
-      if (load.kind == LoadKind::gravity) gravity = std::max(gravity, load.acceleration_m_s2.norm());
+      if (load_type(load.kind).accelerates_masses) gravity = std::max(gravity, load.acceleration_m_s2.norm());
     if (!(gravity > 0.0)) return;
     const double size_m = m_scene.grid.field_of_view_mm.maxCoeff() / 1000.0;
     constexpr double k_largest_strain = 1e6;

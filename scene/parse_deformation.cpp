@@ -1,4 +1,5 @@
 #include "scene/parse_sections.hpp"
+#include "sim/load_type.hpp"
 #include "sim/solver_type.hpp"
 
 namespace phantasm::scene_detail {
@@ -14,13 +15,18 @@ void parse_solver(CheckedMap& map, SolverSettings& solver) {
   map.integer("threads", solver.threads, 0, 1024);
 }
 
-void parse_motion(CheckedMap& map, MotionProfile& profile, double& period_s) {
+/// `key`: how a load or an obstacle moves in a dynamic scene (constant, ramp or sine).
+void parse_motion_profile(CheckedMap& map, const std::string& key, MotionProfile& profile, bool required) {
   std::string motion;
-  if (map.choice("motion", motion, {"constant", "ramp", "sine"})) {
+  if (map.choice(key, motion, {"constant", "ramp", "sine"}, required)) {
     profile = motion == "ramp"   ? MotionProfile::ramp
               : motion == "sine" ? MotionProfile::sine
                                  : MotionProfile::constant;
   }
+}
+
+void parse_motion(CheckedMap& map, MotionProfile& profile, double& period_s) {
+  parse_motion_profile(map, "motion", profile, false);
   map.number("period_s", period_s, positive("s"));
 }
 
@@ -74,79 +80,117 @@ void parse_list(CheckedMap& map, const std::string& key, const char* what, std::
   }
 }
 
-/// A growth load's regions: `region` (a name or a list of names of regions or groups) and the
-/// `atlas` they are of; the names are resolved when the atlas is read.
-void parse_growth_regions(CheckedMap& map, LoadSettings& load) {
-  map.choice("atlas", load.atlas, {"aal"}, true);
-  const YAML::Node region = map.get("region");
-  if (!region.IsDefined()) {
-    map.missing("region", "a region of the atlas or a list of them (Hippocampus_L, [Hippocampus, cortex])");
-  } else if (region.IsSequence()) {
-    if (map.string_list("region", load.regions) && load.regions.empty())
-      map.context().problem(region, map.child_path("region"), "expected at least one region, found []");
+/// A load parameter's range for messages.
+NumberRule rule_of(const LoadParameter& p) {
+  return NumberRule{p.min, p.max, p.min_exclusive, p.max_exclusive, p.unit};
+}
+
+/// Whether the map has any of `keys` (each then known to it).
+bool has_any(CheckedMap& map, const std::vector<std::string>& keys) {
+  bool any = false;
+  for (const std::string& key : keys)
+    any = map.has(key) || any;
+  return any;
+}
+
+/// Kind::name_or_names: one name or a non-empty list of them.
+void parse_name_or_names(CheckedMap& map, const std::string& key, const LoadParameter& p, bool required,
+                         LoadSettings& load) {
+  const YAML::Node node = map.get(key);
+  std::vector<std::string>& names = load.*p.names;
+  if (!node.IsDefined()) {
+    if (required) map.missing(key, p.expected);
+  } else if (node.IsSequence()) {
+    if (map.string_list(key, names) && names.empty())
+      map.context().problem(node, map.child_path(key), "expected at least one " + key + ", found []");
   } else {
     std::string name;
-    if (map.string("region", name)) load.regions = {name};
+    if (map.string(key, name)) names = {name};
   }
 }
 
+/// Kind::vector3 with `unit_vector`: three numbers, not all zero, then normalized.
+void parse_direction(CheckedMap& map, const std::string& key, const LoadParameter& p, bool required,
+                     LoadSettings& load) {
+  Eigen::Vector3d& direction = load.*p.vector;
+  if (!map.vec3(key, direction, rule_of(p), required)) return;
+  if (!(direction.norm() > 1e-12)) {
+    map.context().problem(map.get(key), map.child_path(key),
+                          "expected a non-zero " + key + ", found [0, 0, 0]");
+  } else {
+    direction.normalize();
+  }
+}
+
+/// The parameters [first, last) of a load, read from `map` (their keys relative to `prefix`, the
+/// path of the mapping they are in: "rotation." or empty).
+void parse_load_parameters(CheckedMap& map, const std::vector<LoadParameter>& parameters, std::size_t first,
+                           std::size_t last, const std::string& prefix, LoadSettings& load);
+
+/// A Kind::mapping parameter at `index` and the parameters of its keys after it.
+/// @return the index after its keys
+std::size_t parse_mapping(CheckedMap& map, const std::vector<LoadParameter>& parameters, std::size_t index,
+                          const std::string& prefix, bool required, LoadSettings& load) {
+  const LoadParameter& p = parameters[index];
+  const std::string path = prefix + p.key + ".";
+  std::size_t end = index + 1;
+  while (end < parameters.size() && std::string(parameters[end].key).rfind(path, 0) == 0)
+    ++end;
+  const std::string key = p.key + prefix.size();
+  if (map.has(key)) {
+    CheckedMap inner(map.context(), map.get(key), map.child_path(key));
+    if (inner.valid()) parse_load_parameters(inner, parameters, index + 1, end, path, load);
+  } else if (required) {
+    map.missing(key, p.expected);
+  }
+  return end;
+}
+
+void parse_load_parameters(CheckedMap& map, const std::vector<LoadParameter>& parameters, std::size_t first,
+                           std::size_t last, const std::string& prefix, LoadSettings& load) {
+  for (std::size_t i = first; i < last;) {
+    const LoadParameter& p = parameters[i];
+    const std::string key = p.key + prefix.size(); // its key in this mapping
+    if (!p.excluded_by.empty() && has_any(map, p.excluded_by)) {
+      if (map.has(key))
+        map.context().problem(map.get(key), map.child_path(key),
+                              "expected " + key + " or " + p.excluded_by.front() + ", not both, found both");
+      ++i;
+      continue;
+    }
+    const bool required = p.required && !(p.unless != nullptr && map.has(p.unless)) &&
+                          (p.required_with.empty() || has_any(map, p.required_with));
+    switch (p.kind) {
+    case LoadParameter::Kind::number: map.number(key, load.*p.number, rule_of(p), required); break;
+    case LoadParameter::Kind::vector3:
+      if (p.unit_vector)
+        parse_direction(map, key, p, required, load);
+      else
+        map.vec3(key, load.*p.vector, rule_of(p), required);
+      break;
+    case LoadParameter::Kind::organ: map.string(key, load.*p.text, required); break;
+    case LoadParameter::Kind::organs: map.string_list(key, load.*p.names, required); break;
+    case LoadParameter::Kind::name_or_names: parse_name_or_names(map, key, p, required, load); break;
+    case LoadParameter::Kind::choice: map.choice(key, load.*p.text, p.choices, required); break;
+    case LoadParameter::Kind::motion: parse_motion_profile(map, key, load.motion, required); break;
+    case LoadParameter::Kind::mapping:
+      i = parse_mapping(map, parameters, i, prefix, required, load);
+      continue;
+    }
+    ++i;
+  }
+}
+
+/// A load: its type, then the keys its member of the load type registry reads.
 void parse_load(CheckedMap& map, LoadSettings& load) {
   std::string kind;
-  if (!map.choice("type", kind, {"gravity", "displacement", "growth"}, true)) {
+  if (!map.choice("type", kind, load_type_names(), true)) {
     map.accept_remaining_keys();
     return;
   }
-  const NumberRule coordinate{-1e5, 1e5, false, false, "mm"};
-  if (kind == "gravity") {
-    load.kind = LoadKind::gravity;
-    map.vec3("acceleration_m_s2", load.acceleration_m_s2, NumberRule{-1e4, 1e4, false, false, "m/s^2"}, true);
-    map.string_list("organs", load.organs);
-  } else if (kind == "growth") {
-    // The rest volume of the organ's tets, or of the tets in atlas regions, changes by
-    // volume_change; -1 would leave no tissue.
-    load.kind = LoadKind::growth;
-    if (map.has("region") || map.has("atlas")) {
-      parse_growth_regions(map, load);
-      if (map.has("organ"))
-        map.context().problem(map.get("organ"), map.child_path("organ"),
-                              "expected organ or region, not both, found both");
-    } else {
-      map.string("organ", load.organ, true);
-    }
-    map.number("volume_change", load.volume_change, NumberRule{-1.0, 10.0, true, false, ""}, true);
-    return;
-  } else {
-    load.kind = LoadKind::displacement;
-    map.string("organ", load.organ, true);
-    // A turn alone (a clamp twisting a bar's end) needs no displacement.
-    const bool turned = map.has("rotation");
-    map.vec3("displacement_mm", load.displacement_mm, NumberRule{-1e3, 1e3, false, false, "mm"}, !turned);
-    if (turned) {
-      CheckedMap rotation(map.context(), map.get("rotation"), map.child_path("rotation"));
-      if (rotation.valid()) {
-        rotation.number("angle_deg", load.rotation_deg, between(-360.0, 360.0, "degrees"), true);
-        rotation.vec3("center_mm", load.rotation_center_mm, coordinate, true);
-        if (rotation.vec3("axis", load.rotation_axis, NumberRule{-1e6, 1e6, false, false, ""}, true)) {
-          if (!(load.rotation_axis.norm() > 1e-12)) {
-            map.context().problem(rotation.get("axis"), rotation.child_path("axis"),
-                                  "expected a non-zero axis, found [0, 0, 0]");
-          } else {
-            load.rotation_axis.normalize();
-          }
-        }
-      }
-    }
-    if (map.has("region")) {
-      CheckedMap region(map.context(), map.get("region"), map.child_path("region"));
-      if (region.valid()) {
-        region.vec3("center_mm", load.region_center_mm, coordinate, true);
-        region.number("radius_mm", load.region_radius_mm, positive("mm"), true);
-      }
-    } else {
-      map.missing("region", "a mapping with center_mm and radius_mm (the part of the surface moved)");
-    }
-  }
-  parse_motion(map, load.motion, load.period_s);
+  const LoadType& type = *find_load_type(kind);
+  load.kind = type.kind;
+  parse_load_parameters(map, type.parameters, 0, type.parameters.size(), "", load);
 }
 
 } // namespace

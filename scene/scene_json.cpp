@@ -3,6 +3,7 @@
 #include "anatomy/shape_source.hpp"
 #include "mri/sequence_type.hpp"
 #include "scene/settings_declarations.hpp"
+#include "sim/load_type.hpp"
 
 #include <variant>
 
@@ -69,26 +70,26 @@ nlohmann::json organ_json(const OrganSettings& organ) {
           {"shape", shape}};
 }
 
+/// A load's settings: its type and the keys its member of the load type registry records (a key
+/// of a nested mapping under the mapping's key).
 nlohmann::json load_json(const LoadSettings& load) {
-  if (load.kind == LoadKind::growth && !load.regions.empty())
-    return {{"type", "growth"},
-            {"region", load.regions},
-            {"atlas", load.atlas},
-            {"volume_change", load.volume_change}};
-  if (load.kind == LoadKind::growth)
-    return {{"type", "growth"}, {"organ", load.organ}, {"volume_change", load.volume_change}};
-  nlohmann::json j = {
-      {"type", to_string(load.kind)}, {"motion", to_string(load.motion)}, {"period_s", load.period_s}};
-  if (load.kind == LoadKind::gravity) {
-    j["acceleration_m_s2"] = vec3(load.acceleration_m_s2);
-    j["organs"] = load.organs;
-  } else {
-    j["organ"] = load.organ;
-    j["displacement_mm"] = vec3(load.displacement_mm);
-    j["region"] = {{"center_mm", vec3(load.region_center_mm)}, {"radius_mm", load.region_radius_mm}};
-    j["rotation"] = {{"angle_deg", load.rotation_deg},
-                     {"axis", vec3(load.rotation_axis)},
-                     {"center_mm", vec3(load.rotation_center_mm)}};
+  const LoadType& type = load_type(load.kind);
+  nlohmann::json j = {{"type", type.name}};
+  for (const LoadParameter& p : type.parameters) {
+    if (p.recorded != nullptr && !p.recorded(load)) continue;
+    const std::string path = p.key;
+    const std::size_t dot = path.find('.');
+    nlohmann::json& value = dot == std::string::npos ? j[path] : j[path.substr(0, dot)][path.substr(dot + 1)];
+    switch (p.kind) {
+    case LoadParameter::Kind::number: value = load.*p.number; break;
+    case LoadParameter::Kind::vector3: value = vec3(load.*p.vector); break;
+    case LoadParameter::Kind::organ:
+    case LoadParameter::Kind::choice: value = load.*p.text; break;
+    case LoadParameter::Kind::organs:
+    case LoadParameter::Kind::name_or_names: value = load.*p.names; break;
+    case LoadParameter::Kind::motion: value = to_string(load.motion); break;
+    case LoadParameter::Kind::mapping: value = nlohmann::json::object(); break;
+    }
   }
   return j;
 }

@@ -4,6 +4,7 @@
 #include "sim/build_model.hpp"
 #include "sim/growth.hpp"
 #include "sim/load_schedule.hpp"
+#include "sim/load_type.hpp"
 #include "sim/loads.hpp"
 
 #include "core/format.hpp"
@@ -20,14 +21,7 @@ std::string load_names(const DeformationSettings& deformation) {
   std::string names;
   for (const LoadSettings& load : deformation.loads) {
     if (!names.empty()) names += ", ";
-    names += load.kind == LoadKind::gravity
-                 ? "gravity (" + format_number(load.acceleration_m_s2.norm()) + " m/s^2)"
-             : load.kind == LoadKind::growth ? "the growth of " + growth_target(load) + " by " +
-                                                   format_number(100.0 * load.volume_change) + " %"
-                                             : "the displacement of " + load.organ + " by " +
-                                                   format_number(load.displacement_mm.norm()) + " mm";
-    if (load.kind == LoadKind::displacement && load.rotation_deg != 0.0)
-      names += " and a turn of " + format_number(load.rotation_deg) + " degrees";
+    names += load_type(load.kind).summary(load);
   }
   if (!deformation.obstacles.empty())
     names += (names.empty() ? "" : ", ") + std::to_string(deformation.obstacles.size()) + " obstacle(s)";

@@ -5,6 +5,7 @@
 #include "core/format.hpp"
 #include "sim/body_embedding.hpp"
 #include "sim/growth_regions.hpp"
+#include "sim/load_type.hpp"
 
 #include <Eigen/LU>
 #include <Eigen/QR>
@@ -39,7 +40,7 @@ void apply_growth(const DeformationSettings& deformation, const OrganTable& orga
   std::vector<std::optional<std::size_t>> load_of_tet(organ_of_tet.size());
   for (std::size_t k = 0; k < deformation.loads.size(); ++k) {
     const LoadSettings& load = deformation.loads[k];
-    if (load.kind != LoadKind::growth) continue;
+    if (!load_type(load.kind).changes_rest_volume) continue;
     if (deformation.volume == VolumeFormulation::vertex_star) {
       throw SettingError("deformation.volume",
                          "expected per_tet or tet_groups with a growth load (a vertex star's bulk term "
@@ -294,7 +295,7 @@ void report_growth(const DeformationSettings& deformation, const std::vector<std
                    StageReport& report) {
   for (std::size_t k = 0; k < deformation.loads.size(); ++k) {
     const LoadSettings& load = deformation.loads[k];
-    if (load.kind != LoadKind::growth) continue;
+    if (!load_type(load.kind).changes_rest_volume) continue;
     if (k >= grown_tets.size() || grown_tets[k] == 0) {
       throw SettingError(growth_load_key(k, load),
                          load.regions.empty()

@@ -2,6 +2,7 @@
 
 #include "core/edit_distance.hpp"
 #include "core/error.hpp"
+#include "sim/load_type.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -48,7 +49,7 @@ std::vector<std::vector<std::int32_t>> growth_region_labels(const DeformationSet
   std::map<std::int32_t, std::pair<std::size_t, std::string>> first; // label: load, name given
   for (std::size_t k = 0; k < deformation.loads.size(); ++k) {
     const LoadSettings& load = deformation.loads[k];
-    if (load.kind != LoadKind::growth || load.regions.empty()) continue;
+    if (!load_type(load.kind).changes_rest_volume || load.regions.empty()) continue;
     const std::string key = "deformation.loads[" + std::to_string(k) + "].region";
     const RegionAtlas* atlas = deformation.region_atlas.get();
     if (atlas == nullptr || atlas->name != load.atlas) {

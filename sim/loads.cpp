@@ -1,10 +1,10 @@
-// The scene's loads on the model: gravity, displacement springs on the organs' surface points,
-// the held boundary released near them, and obstacles placed at rest or moved.
+// The scene's loads on the model, each by its load type's entry (sim/load_types/apply_*.cpp), the
+// held boundary released near displacement loads, and obstacles placed at rest or moved.
 #include "sim/loads.hpp"
 
 #include "core/error.hpp"
 #include "core/format.hpp"
-#include "sim/growth.hpp"
+#include "core/registry.hpp"
 
 #include <Eigen/Geometry>
 
@@ -19,92 +19,49 @@ Eigen::Vector3d loaded_position_m(const LoadSettings& load, const Eigen::Vector3
   return centre_m + turn * (rest_m - centre_m) + amount * k_mm * load.displacement_mm;
 }
 
+// The second halves of the load types, one per file of sim/load_types/apply_*.cpp.
+const LoadEntry& gravity_load_entry();
+const LoadEntry& displacement_load_entry();
+const LoadEntry& growth_load_entry();
+
+namespace {
+
+const Registry<LoadEntry, LoadKind>& load_entry_registry() {
+  // The registrations: a new load type adds its line here and its declaration above, beside its
+  // member in sim/load_types.cpp (docs/architecture.md, Adding a variant).
+  static const Registry<LoadEntry, LoadKind> entries(
+      "load entry", &LoadEntry::kind,
+      {&gravity_load_entry(), &displacement_load_entry(), &growth_load_entry()});
+  return entries;
+}
+
+} // namespace
+
+const std::vector<const LoadEntry*>& load_entries() {
+  return load_entry_registry().members();
+}
+
+const LoadEntry& load_entry(LoadKind kind) {
+  return load_entry_registry().at(kind);
+}
+
+std::size_t loaded_organ(const LoadSettings& load, std::size_t index, const OrganTable& organs) {
+  const int organ = organs.index_of(load.organ);
+  if (organ < 0) {
+    throw SettingError("deformation.loads[" + std::to_string(index) + "].organ",
+                       "expected an organ of the phantom, found '" + load.organ + "'");
+  }
+  return static_cast<std::size_t>(organ);
+}
+
 Loads add_loads(const std::vector<LoadSettings>& load_settings, const OrganTable& organs,
                 const Phantom& phantom, const BodyAssignment& assignment, BodyModel& built,
                 double nominal_stiffness, StageReport& report) {
-  const std::size_t n = organs.size();
-  const std::vector<int>& body_of = assignment.body_of;
-  const std::vector<Body>& bodies = built.bodies;
-  ElasticModel& model = built.model;
   Loads loads;
-  Eigen::MatrixX3d& acceleration = loads.acceleration;
-  std::vector<PushedPoints>& pushes = loads.pushes;
-  acceleration = Eigen::MatrixX3d::Zero(model.vertex_count(), 3);
-  for (std::size_t k = 0; k < load_settings.size(); ++k) {
-    const LoadSettings& load = load_settings[k];
-    if (load.kind == LoadKind::gravity) {
-      for (const Body& body : bodies) {
-        bool acts = load.organs.empty();
-        for (std::size_t i = 0; i < n; ++i)
-          if (body_of[i] == body.organ &&
-              std::find(load.organs.begin(), load.organs.end(), organs[i].name) != load.organs.end())
-            acts = true;
-        if (!acts) continue;
-        acceleration.middleRows(body.first_vertex, body.vertex_count).rowwise() =
-            load.acceleration_m_s2.transpose();
-      }
-      report.modelled.push_back("gravity " + format_vector(load.acceleration_m_s2) +
-                                " m/s^2 on the bodies' lumped masses");
-      continue;
-    }
-    if (load.kind == LoadKind::growth && !load.regions.empty()) {
-      loads.growth_moved_m = std::max(loads.growth_moved_m, built.region_growth_moved_m);
-      continue;
-    }
-    const int organ = organs.index_of(load.organ);
-    if (organ < 0) {
-      throw SettingError("deformation.loads[" + std::to_string(k) + "].organ",
-                         "expected an organ of the phantom, found '" + load.organ + "'");
-    }
-    const std::size_t i = static_cast<std::size_t>(organ);
-    if (load.kind == LoadKind::growth) {
-      const Organ& grown = phantom.organs[i];
-      loads.growth_moved_m = std::max(
-          loads.growth_moved_m, growth_displacement_m(load, grown.surface ? grown.surface->rest_positions()
-                                                            : grown.solid ? grown.solid->vertices
-                                                                          : Eigen::MatrixX3d()));
-      continue;
-    }
-    if (body_of[i] < 0 || (!phantom.organs[i].surface && !phantom.organs[i].sheet)) {
-      report.skipped.push_back("displacement of " + load.organ +
-                               ": the organ is not part of a simulated body");
-      continue;
-    }
-    PushedPoints push;
-    push.load = &load;
-    const Eigen::MatrixX3d& rest = phantom.organs[i].surface ? phantom.organs[i].surface->rest_positions()
-                                                             : phantom.organs[i].sheet->vertices;
-    const double stiffness = 1e4 * nominal_stiffness;
-    for (Eigen::Index v = 0; v < rest.rows(); ++v) {
-      const Eigen::Vector3d x = rest.row(v).transpose();
-      if ((x - load.region_center_mm).norm() > load.region_radius_mm) continue;
-      const Embedding e = embed(phantom, assignment, bodies, i, v, x);
-      PointConstraint c;
-      c.vertices = e.vertices;
-      c.coefficients = e.coefficients;
-      c.count = e.coefficients.tail<3>().isZero() ? 1 : 4;
-      c.stiffness_N_m = stiffness;
-      push.rest_m.push_back(interpolate(e, model.rest_positions_m));
-      c.target_m = loaded_position_m(load, push.rest_m.back(), 1.0);
-      push.constraints.push_back(model.points.size());
-      model.points.push_back(c);
-    }
-    if (push.constraints.empty()) {
-      report.skipped.push_back("displacement of " + load.organ + ": no surface point lies within " +
-                               format_number(load.region_radius_mm) + " mm of " +
-                               format_vector(load.region_center_mm));
-      continue;
-    }
-    report.modelled.push_back(
-        "displacement " + format_vector(load.displacement_mm) + " mm" +
-        (load.rotation_deg != 0.0 ? " and turn of " + format_number(load.rotation_deg) + " degrees about " +
-                                        format_vector(load.rotation_axis) + " through " +
-                                        format_vector(load.rotation_center_mm) + " mm"
-                                  : std::string()) +
-        " of " + std::to_string(push.constraints.size()) + " surface points of " + load.organ +
-        ", by springs of " + format_number(stiffness) + " N/m (10^4 x the mean elastic stiffness)");
-    pushes.push_back(std::move(push));
-  }
+  loads.acceleration = Eigen::MatrixX3d::Zero(built.model.vertex_count(), 3);
+  LoadTarget target{organs, phantom, assignment, built, nominal_stiffness, report, loads};
+  for (std::size_t k = 0; k < load_settings.size(); ++k)
+    load_entry(load_settings[k].kind).add(load_settings[k], k, target);
   return loads;
 }
 

@@ -29,11 +29,41 @@ struct Loads {
   double growth_moved_m = 0.0;      ///< the largest rest-surface motion of a growth load (sim/growth.hpp)
 };
 
-/// Gravity on the bodies it acts on, and every displacement load as springs of 10^4 x
-/// `nominal_stiffness` from the organ's surface points in its region (embedded in their body) to
-/// their displaced places, added to `built.model.points` at full displacement. Loads that reach
-/// no body go into `report` as skipped. Growth loads act on the bodies' tets (build_body_model);
-/// here only their scale of motion is kept.
+/// What a load type's second half reads and changes when its load acts on the model.
+struct LoadTarget {
+  const OrganTable& organs;
+  const Phantom& phantom;
+  const BodyAssignment& assignment;
+  BodyModel& built;
+  double nominal_stiffness;
+  StageReport& report;
+  Loads& loads;
+};
+
+/// How a load type acts on the model: the second half of its member of the load type registry
+/// (sim/load_type.hpp), keyed by the same kind, in sim/load_types/apply_NAME.cpp.
+struct LoadEntry {
+  LoadKind kind;
+  /// Adds `load`, deformation.loads[index], to the target's model and loads, saying what was
+  /// modelled or skipped in its report.
+  void (*add)(const LoadSettings& load, std::size_t index, LoadTarget& target) = nullptr;
+};
+
+/// Every load type's entry, in the registry's order.
+const std::vector<const LoadEntry*>& load_entries();
+
+/// The entry of a kind (every kind has one).
+const LoadEntry& load_entry(LoadKind kind);
+
+/// The index of the organ a load acts on (its `organ`).
+/// @throws SettingError at deformation.loads[index].organ when the phantom has no such organ
+std::size_t loaded_organ(const LoadSettings& load, std::size_t index, const OrganTable& organs);
+
+/// Every load on the model by its type's entry: gravity on the bodies it acts on, every
+/// displacement load as springs of 10^4 x `nominal_stiffness` from the organ's surface points in
+/// its region (embedded in their body) to their displaced places, added to `built.model.points`
+/// at full displacement. Loads that reach no body go into `report` as skipped. Growth loads act on
+/// the bodies' tets (build_body_model); here only their scale of motion is kept.
 Loads add_loads(const std::vector<LoadSettings>& load_settings, const OrganTable& organs,
                 const Phantom& phantom, const BodyAssignment& assignment, BodyModel& built,
                 double nominal_stiffness, StageReport& report);

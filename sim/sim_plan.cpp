@@ -1,6 +1,7 @@
 #include "sim/sim_plan.hpp"
 
 #include "core/format.hpp"
+#include "sim/load_type.hpp"
 
 #include <algorithm>
 #include <sstream>
@@ -64,19 +65,7 @@ StageReport plan_sim(const DeformationSettings& d, const OrganTable& organs) {
   }
   for (const auto& load : d.loads) {
     std::ostringstream line;
-    if (load.kind == LoadKind::gravity) {
-      line << "gravity " << format_vector(load.acceleration_m_s2) << " m/s^2";
-    } else if (load.kind == LoadKind::growth) {
-      line << "growth of " << growth_target(load) << " by " << 100.0 * load.volume_change
-           << " % of its rest volume";
-    } else {
-      line << "displacement " << format_vector(load.displacement_mm) << " mm";
-      if (load.rotation_deg != 0.0)
-        line << " and turn of " << load.rotation_deg << " degrees about " << format_vector(load.rotation_axis)
-             << " through " << format_vector(load.rotation_center_mm) << " mm";
-      line << " of " << load.organ << " within " << load.region_radius_mm << " mm of "
-           << format_vector(load.region_center_mm);
-    }
+    line << load_type(load.kind).plan(load);
     if (d.mode == DeformationMode::dynamic) line << ", " << to_string(load.motion) << " motion";
     report.modelled.push_back(line.str());
   }

@@ -1,5 +1,7 @@
 #include "sim/sim_settings.hpp"
 
+#include "sim/load_type.hpp"
+
 #include <algorithm>
 
 namespace phantasm {
@@ -20,16 +22,13 @@ std::vector<OrganMotion> classify_organ_motion(const DeformationSettings& d, con
       motion[i] = OrganMotion::fixed;
       continue;
     }
-    for (const auto& load : d.loads) {
-      const bool acts = load.kind != LoadKind::gravity ? load.organ == name
-                                                       : load.organs.empty() || contains(load.organs, name);
-      if (acts) motion[i] = OrganMotion::simulated;
-    }
+    for (const auto& load : d.loads)
+      if (load_type(load.kind).acts_on(load, name)) motion[i] = OrganMotion::simulated;
   }
   // A growing organ pushes on (or pulls) the tissue around it: the solid organs holding it are
   // simulated with it, up to a fixed one or a surface organ.
   for (const auto& load : d.loads) {
-    if (load.kind != LoadKind::growth) continue;
+    if (!load_type(load.kind).changes_rest_volume) continue;
     // Atlas regions may lie in any solid organ: those that are not fixed are simulated.
     for (std::size_t i = 0; !load.regions.empty() && i < organs.size() && i < d.organs.size(); ++i)
       if (d.organs[i].solid && motion[i] != OrganMotion::fixed) motion[i] = OrganMotion::simulated;
@@ -77,10 +76,6 @@ const char* to_string(VolumeFormulation volume) {
   case VolumeFormulation::tet_group_and_tet: return "tet_groups_and_tets";
   }
   return "?";
-}
-
-const char* to_string(LoadKind kind) {
-  return kind == LoadKind::gravity ? "gravity" : kind == LoadKind::growth ? "growth" : "displacement";
 }
 
 const char* to_string(ObstacleShape shape) {

@@ -175,6 +175,7 @@ std::string growth_target(const LoadSettings& load);
 const char* to_string(DeformationMode mode);
 /// the solver's name in the scene (sim/solver_type.hpp)
 const char* to_string(SolverMethod method);
+/// the load type's name in the scene (sim/load_type.hpp)
 const char* to_string(LoadKind kind);
 /// the scene's words: per_tet, vertex_stars, tet_groups, tet_groups_and_tets
 const char* to_string(VolumeFormulation volume);
