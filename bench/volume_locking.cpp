@@ -26,6 +26,7 @@
 #include "scene/scene.hpp"
 #include "sim/cantilever.hpp"
 #include "sim/deform_phantom.hpp"
+#include "sim/load_type.hpp"
 #include "sim/local_global.hpp"
 #include "sim/newton.hpp"
 
@@ -208,9 +209,10 @@ int head(const std::string& path, bool newton, bool gravity_only) {
       d.volume = v;
       if (newton) d.solver.method = SolverMethod::newton;
       if (gravity_only)
-        d.loads.erase(std::remove_if(d.loads.begin(), d.loads.end(),
-                                     [](const LoadSettings& l) { return l.kind != LoadKind::gravity; }),
-                      d.loads.end());
+        d.loads.erase(
+            std::remove_if(d.loads.begin(), d.loads.end(),
+                           [](const LoadSettings& l) { return !load_type(l.kind).accelerates_masses; }),
+            d.loads.end());
       for (MaterialSettings& m : d.materials)
         if (m.name == "brain") m.poisson_ratio = nu;
       StageReport report;
