@@ -39,7 +39,7 @@ std::string json_number(double value) {
 
 unsigned keys_changed_by(unsigned keys) {
   // Each cached result's key holds the key of the one it is made from.
-  if (keys & cached_anatomy) keys |= cached_reference_state;
+  if (keys & cached_anatomy) keys |= cached_reference_state | cached_body_meshes;
   if (keys & cached_reference_state) keys |= cached_reference_images;
   return keys;
 }

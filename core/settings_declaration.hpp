@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -40,13 +41,17 @@ std::string json_string(const std::string& text);
 std::string json_number(double value);
 
 /// The cached results a run keeps across runs, as bits: a setting names those it shapes. Each is
-/// made from the one before (the reference state from the anatomy, the reference images from the
-/// state), so its key holds the key before it: a setting that shapes the anatomy changes all three.
+/// made from one before it (the reference state and the bodies' tet meshes from the anatomy, the
+/// reference images from the state), so its key holds that one's key: a setting that shapes the
+/// anatomy changes all four.
 enum CacheKeys : unsigned {
   no_cached_result = 0,
   cached_anatomy = 1,          ///< organ geometry (pipeline/anatomy_cache.hpp)
   cached_reference_state = 2,  ///< level sets, labels, fractions (pipeline/reference_cache.hpp)
   cached_reference_images = 4, ///< reference MR images and maps (pipeline/reference_images_cache.hpp)
+  /// the deformation's tet meshes of bodies with nested organs (pipeline/body_mesh_cache.hpp): its
+  /// key names the body and the organs it carries, which the organs' motion decides
+  cached_body_meshes = 8,
 };
 
 /// The keys that change with a setting that shapes `keys`: those and every one made after them.
@@ -63,7 +68,7 @@ struct SettingValue<double> {
   static std::string shown(double v) { return format_number(v); }
   static std::string type() { return "number"; }
   static std::string json(double v) { return json_number(v); }
-  static void change(double& v) { v = v * 1.5 + 1.0; }
+  static void change(double& v) { v += 1.0 + 0.5 * std::abs(v); } // larger, whatever v is
 };
 
 template <typename T>

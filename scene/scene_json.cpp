@@ -25,10 +25,6 @@ nlohmann::json vec3(const Eigen::Vector3d& v) {
   return nlohmann::json::array({v.x(), v.y(), v.z()});
 }
 
-nlohmann::json optional_value(const std::optional<double>& value) {
-  return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
-}
-
 /// A shape's settings: its type and the keys its member of the shape source registry reads.
 nlohmann::json shape_json(const ShapeSettings& shape) {
   nlohmann::json j = {{"type", to_string(shape.kind)}};
@@ -111,16 +107,13 @@ nlohmann::json sequence_value_json(const SequenceValue& value) {
 nlohmann::json scene_settings_json(const Scene& scene) {
   nlohmann::json materials = nlohmann::json::object();
   for (const auto& m : scene.deformation.materials) {
-    materials[m.name] = {{"youngs_modulus_Pa", m.youngs_modulus_Pa},
-                         {"poisson_ratio", m.poisson_ratio},
-                         {"density_kg_m3", m.density_kg_m3}};
+    nlohmann::json& material = materials[m.name] = declared_json(m);
+    material.erase("name"); // the material's key
   }
   nlohmann::json tissues = nlohmann::json::object();
   for (const auto& t : scene.mri.tissues) {
-    tissues[t.tissue] = {{"T1_ms", optional_value(t.T1_ms)},
-                         {"T2_ms", optional_value(t.T2_ms)},
-                         {"T2star_ms", optional_value(t.T2star_ms)},
-                         {"PD", optional_value(t.PD)}};
+    nlohmann::json& tissue = tissues[t.tissue] = declared_json(t);
+    tissue.erase("tissue"); // the tissue's key
   }
   nlohmann::json organs = nlohmann::json::array();
   for (const auto& organ : scene.anatomy.organs)
@@ -130,7 +123,7 @@ nlohmann::json scene_settings_json(const Scene& scene) {
     loads.push_back(load_json(load));
   nlohmann::json collisions = nlohmann::json::array();
   for (const auto& c : scene.deformation.collisions)
-    collisions.push_back({{"organs", c.organs}});
+    collisions.push_back(declared_json(c));
   nlohmann::json obstacles = nlohmann::json::array();
   for (const auto& o : scene.deformation.obstacles) {
     nlohmann::json j = {{"type", to_string(o.shape)},
@@ -151,12 +144,19 @@ nlohmann::json scene_settings_json(const Scene& scene) {
     sequences.push_back(sequence_json(s));
   nlohmann::json regions = nlohmann::json::array();
   for (const auto& r : scene.mri.regions)
-    regions.push_back({{"organ", r.organ}, {"label", r.label}, {"tissue", r.tissue}});
+    regions.push_back(declared_json(r));
 
   const DeformationSettings& d = scene.deformation;
-  const AcquisitionSettings& a = scene.mri.acquisition;
   nlohmann::json anatomy = declared_json(scene.anatomy);
   anatomy["organs"] = organs;
+  nlohmann::json deformation = declared_json(d);
+  deformation["solver"] = declared_json(d.solver);
+  deformation["loads"] = loads;
+  deformation["obstacles"] = obstacles;
+  deformation["collisions"] = collisions;
+  deformation["gap_tissue"] = scene.voxelization.gap_fill; // the gap's tissue as resolved
+  nlohmann::json acquisition = declared_json(scene.mri.acquisition);
+  if (!scene.mri.acquisition.receiver_gain) acquisition["receiver_gain"] = "automatic"; // as the docs name it
   return {
       {"name", scene.name},
       {"seed", scene.seed},
@@ -165,39 +165,12 @@ nlohmann::json scene_settings_json(const Scene& scene) {
       {"materials", materials},
       {"tissues", tissues},
       {"anatomy", anatomy},
-      {"deformation",
-       {{"mode", to_string(d.mode)},
-        {"solver",
-         {{"method", to_string(d.solver.method)},
-          {"max_iterations", d.solver.max_iterations},
-          {"relative_energy_tolerance", d.solver.relative_energy_tolerance},
-          {"position_tolerance_mm", d.solver.position_tolerance_mm},
-          {"relative_residual_tolerance", d.solver.relative_residual_tolerance},
-          {"threads", d.solver.threads}}},
-        {"time_step_s", d.time_step_s},
-        {"frames", d.frames},
-        {"fixed", d.fixed},
-        {"load_steps", d.load_steps},
-        {"volume", to_string(d.volume)},
-        {"loads", loads},
-        {"obstacles", obstacles},
-        {"collisions", collisions},
-        {"gap_tissue", scene.voxelization.gap_fill}}},
+      {"deformation", deformation},
       {"voxelization", declared_json(scene.voxelization)},
       {"sequences", sequences},
       {"tissue_regions", regions},
       {"texture", declared_json(scene.mri.texture)},
-      {"acquisition",
-       {{"kspace", a.kspace},
-        {"kspace_oversampling", a.kspace_oversampling},
-        {"acquired_voxel_mm", a.acquired_voxel_mm ? vec3(*a.acquired_voxel_mm) : nlohmann::json()},
-        {"slice_thickness_mm", a.slice_thickness_mm},
-        {"noise_percent", a.noise_percent},
-        {"noise_reference_tissue", a.noise_reference_tissue},
-        {"bias_percent", a.bias_percent},
-        {"coils", a.coils},
-        {"receiver_gain", a.receiver_gain ? nlohmann::json(*a.receiver_gain) : nlohmann::json("automatic")},
-        {"image_datatype", to_string(a.image_datatype)}}},
+      {"acquisition", acquisition},
       {"outputs", declared_json(scene.outputs)},
   };
 }

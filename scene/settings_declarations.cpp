@@ -2,6 +2,12 @@
 
 #include "anatomy/shape_source.hpp"
 #include "mri/sequence_type.hpp"
+#include "sim/load_type.hpp"
+#include "sim/solver_type.hpp"
+
+#include <cmath>
+#include <memory>
+#include <stdexcept>
 
 namespace phantasm {
 
@@ -21,6 +27,25 @@ struct SettingValue<WorldBox> {
   static WorldBox some() { return WorldBox{Eigen::Vector3d::Zero(), Eigen::Vector3d::Ones()}; }
 };
 
+/// The atlas of growth regions a run reads (set by the pipeline, not a scene key) by its name.
+template <>
+struct SettingValue<std::shared_ptr<const RegionAtlas>> {
+  using V = std::shared_ptr<const RegionAtlas>;
+  static std::string exact(const V& v) { return v ? SettingValue<std::string>::exact(v->name) : "none"; }
+  static std::string shown(const V& v) { return v ? v->name + " (" + v->source + ")" : "(none)"; }
+  static std::string type() { return "atlas"; }
+  static std::string json(const V& v) { return v ? json_string(v->name) : "null"; }
+  static void change(V& v) {
+    if (v) {
+      v.reset();
+    } else {
+      auto atlas = std::make_shared<RegionAtlas>();
+      atlas->name = "aal";
+      v = std::move(atlas);
+    }
+  }
+};
+
 namespace {
 
 const char* const k_coordinate = "-1e5 to 1e5";
@@ -28,13 +53,94 @@ const char* const k_positive = "above 0";
 const char* const k_time = "0 to 1e5";
 const char* const k_triangles = "20 to 200000";
 
-/// The members of a registry (sequence types, shape sources) by name.
+/// The members of a registry (sequence types, shape sources, solvers, load types) by name, each
+/// with its value of `kind`.
+template <typename Member, typename Kind>
+std::vector<std::pair<std::string, Kind>> by_name(const std::vector<const Member*>& members,
+                                                  Kind Member::*kind) {
+  std::vector<std::pair<std::string, Kind>> kinds;
+  for (const Member* member : members)
+    kinds.emplace_back(member->name, member->*kind);
+  return kinds;
+}
+
+/// The members of a registry whose value is `kind`, by name.
 template <typename Member>
 auto kinds_by_name(const std::vector<const Member*>& members) {
-  std::vector<std::pair<std::string, decltype(Member::kind)>> kinds;
-  for (const Member* member : members)
-    kinds.emplace_back(member->name, member->kind);
-  return kinds;
+  return by_name(members, &Member::kind);
+}
+
+/// How a load or an obstacle moves in a dynamic scene, by the scene's names.
+std::vector<std::pair<std::string, MotionProfile>> motion_profiles() {
+  return {
+      {"constant", MotionProfile::constant}, {"ramp", MotionProfile::ramp}, {"sine", MotionProfile::sine}};
+}
+
+/// Whether a load parameter reads the member.
+bool reads(const LoadParameter& p, double LoadSettings::*m) {
+  return p.kind == LoadParameter::Kind::number && p.number == m;
+}
+bool reads(const LoadParameter& p, Eigen::Vector3d LoadSettings::*m) {
+  return p.kind == LoadParameter::Kind::vector3 && p.vector == m;
+}
+bool reads(const LoadParameter& p, std::string LoadSettings::*m) {
+  return (p.kind == LoadParameter::Kind::organ || p.kind == LoadParameter::Kind::choice) && p.text == m;
+}
+bool reads(const LoadParameter& p, std::vector<std::string> LoadSettings::*m) {
+  return (p.kind == LoadParameter::Kind::organs || p.kind == LoadParameter::Kind::name_or_names) &&
+         p.names == m;
+}
+
+/// A load parameter's accepted values as text ("above -1 to 10", "aal").
+std::string bounds_of(const LoadParameter& p) {
+  std::string text;
+  for (const std::string& choice : p.choices)
+    text += (text.empty() ? "" : ", ") + choice;
+  if (p.kind == LoadParameter::Kind::organ) text = "an organ that is not fixed";
+  if (p.kind == LoadParameter::Kind::organs) text = "organs of the scene";
+  const bool low = std::isfinite(p.min), high = std::isfinite(p.max);
+  const std::string min = (p.min_exclusive ? "above " : "") + format_number(p.min);
+  const std::string max = (p.max_exclusive ? "below " : "") + format_number(p.max);
+  if (low && high)
+    text = min + " to " + max;
+  else if (low)
+    text = p.min_exclusive ? min : min + " or above";
+  else if (high)
+    text = p.max_exclusive ? max : max + " or below";
+  if (p.unit_vector) text += ", not zero";
+  return text;
+}
+
+/// The names of the load types that read a parameter for which `matches` holds ("gravity,
+/// displacement"), and the first such parameter.
+template <typename Matches>
+std::pair<std::string, const LoadParameter*> load_types_reading(Matches&& matches) {
+  std::string names;
+  const LoadParameter* first = nullptr;
+  for (const LoadType* type : load_types()) {
+    for (const LoadParameter& p : type->parameters) {
+      if (!matches(p)) continue;
+      names += (names.empty() ? "" : ", ") + std::string(type->name);
+      if (first == nullptr) first = &p;
+      break;
+    }
+  }
+  return {names, first};
+}
+
+/// A member of LoadSettings as the load type registry (sim/load_type.hpp) declares it: its scene
+/// key, unit and bounds from the first type that reads it, its help after the types that do.
+template <typename T>
+void load_field(SettingsDeclaration<LoadSettings>& d, T LoadSettings::*member, const std::string& help) {
+  const auto [types, p] = load_types_reading([member](const LoadParameter& q) { return reads(q, member); });
+  if (p == nullptr) throw std::logic_error("a member of LoadSettings that no load type reads: " + help);
+  d.field(p->key, member, p->unit, bounds_of(*p), types + ": " + help);
+}
+
+/// Whether a field is the list `name` or a field of its elements.
+template <typename S>
+bool in_list(const SettingField<S>& f, const std::string& name) {
+  return f.name == name || f.name.rfind(name + "[].", 0) == 0;
 }
 
 } // namespace
@@ -354,6 +460,193 @@ const std::vector<SettingField<OutputSettings>>& declared_settings<OutputSetting
   return fields;
 }
 
+template <>
+const std::vector<SettingField<MaterialSettings>>& declared_settings<MaterialSettings>() {
+  static const auto fields = [] {
+    using M = MaterialSettings;
+    SettingsDeclaration<M> d;
+    // The solve's stiffness and masses; no cached result holds them.
+    d.field("name", &M::name, "", "a safe name", "the material's name, its key")
+        .field("youngs_modulus_Pa", &M::youngs_modulus_Pa, "Pa", "above 0 to 1e12", "Young's modulus")
+        .field("poisson_ratio", &M::poisson_ratio, "", "0 to below 0.5", "Poisson ratio")
+        .field("density_kg_m3", &M::density_kg_m3, "kg/m^3", "above 0 to 1e5", "density, for lumped masses");
+    return d.fields();
+  }();
+  return fields;
+}
+
+template <>
+const std::vector<SettingField<SolverSettings>>& declared_settings<SolverSettings>() {
+  static const auto fields = [] {
+    using V = SolverSettings;
+    SettingsDeclaration<V> d;
+    d.choice("method", &V::method, by_name(solver_types(), &SolverType::method),
+             "the solver (sim/solver_types/); those that step in time need mode dynamic")
+        .field("max_iterations", &V::max_iterations, "", "1 to 1000000", "iterations per solve at most")
+        .field("relative_energy_tolerance", &V::relative_energy_tolerance, "", "0 to 1",
+               "stop when an iteration lowers the energy by less than this fraction of it")
+        .field("position_tolerance_mm", &V::position_tolerance_mm, "mm", "0 or above",
+               "stop when no vertex moves further in one iteration")
+        .field("relative_residual_tolerance", &V::relative_residual_tolerance, "", "0 to 1",
+               "converged when the largest free gradient row is at most this fraction of the force scale")
+        .field("threads", &V::threads, "", "0 to 1024", "solver threads (0: all cores)");
+    return d.fields();
+  }();
+  return fields;
+}
+
+template <>
+const std::vector<SettingField<LoadSettings>>& declared_settings<LoadSettings>() {
+  static const auto fields = [] {
+    using L = LoadSettings;
+    SettingsDeclaration<L> d;
+    // Which organs a load acts on decides the bodies, and so the organs each body's tet mesh
+    // carries (sim/sim_settings.hpp, classify_organ_motion); its amounts reach no cached result.
+    d.shaping(cached_body_meshes)
+        .choice("type", &L::kind, by_name(load_types(), &LoadType::kind),
+                "the load type (sim/load_types/), which decides its other keys");
+    load_field(d, &L::organs, "the organs it acts on (empty: every organ that is not fixed)");
+    load_field(d, &L::organ, "the organ it acts on");
+    load_field(d, &L::regions, "the atlas regions whose tets grow (instead of an organ)");
+    d.shaping(no_cached_result);
+    load_field(d, &L::atlas, "the atlas the regions are of");
+    load_field(d, &L::acceleration_m_s2, "the acceleration of the masses");
+    load_field(d, &L::displacement_mm, "the displacement of the region's surface points");
+    load_field(d, &L::region_center_mm, "the centre of the sphere holding the moved surface points");
+    load_field(d, &L::region_radius_mm, "the radius of that sphere");
+    load_field(d, &L::rotation_deg, "the turn of the region's points (right-handed)");
+    load_field(d, &L::rotation_axis, "the axis of the turn (normalized)");
+    load_field(d, &L::rotation_center_mm, "a point of the turn's axis");
+    const std::string moving = load_types_reading([](const LoadParameter& p) {
+                                 return p.kind == LoadParameter::Kind::motion;
+                               }).first;
+    d.choice("motion", &L::motion, motion_profiles(), moving + ": how it evolves in a dynamic scene");
+    load_field(d, &L::period_s, "the ramp's duration or the sine's period");
+    load_field(d, &L::volume_change, "the rest volume's relative change (-0.05: 5 % atrophy)");
+    return d.fields();
+  }();
+  return fields;
+}
+
+template <>
+const std::vector<SettingField<ObstacleSettings>>& declared_settings<ObstacleSettings>() {
+  static const auto fields = [] {
+    using O = ObstacleSettings;
+    SettingsDeclaration<O> d;
+    // Obstacles do not make an organ simulated: they reach no cached result.
+    d.choice("type", &O::shape,
+             {{"half_space", ObstacleShape::half_space}, {"sphere", ObstacleShape::sphere}},
+             "the obstacle's shape")
+        .field("point_mm", &O::point_mm, "mm", k_coordinate,
+               "half_space: a point of its plane; sphere: its centre (scene key center_mm)")
+        .field("normal", &O::normal, "", "-1e6 to 1e6, not zero",
+               "half_space: unit normal out of the obstacle, towards the tissue")
+        .field("radius_mm", &O::radius_mm, "mm", k_positive, "sphere: its radius")
+        .field("displacement_mm", &O::displacement_mm, "mm", "-1000 to 1000",
+               "how far it moves: over the load steps, or by its motion in a dynamic scene")
+        .choice("motion", &O::motion, motion_profiles(), "how it moves in a dynamic scene")
+        .field("period_s", &O::period_s, "s", k_positive, "the ramp's duration or the sine's period");
+    return d.fields();
+  }();
+  return fields;
+}
+
+template <>
+const std::vector<SettingField<CollisionSettings>>& declared_settings<CollisionSettings>() {
+  static const auto fields = [] {
+    SettingsDeclaration<CollisionSettings> d;
+    d.field("organs", &CollisionSettings::organs, "", "two organ names",
+            "two simulated organs whose surfaces may not pass through each other");
+    return d.fields();
+  }();
+  return fields;
+}
+
+template <>
+const std::vector<SettingField<OrganMechanics>>& declared_settings<OrganMechanics>() {
+  static const auto fields = [] {
+    using O = OrganMechanics;
+    SettingsDeclaration<O> d;
+    // Whether an organ is solid decides which organs a growth simulates; its material decides
+    // which nested organs a body's mesh merges (anatomy.tet_interfaces: materials).
+    d.shaping(cached_body_meshes)
+        .field("material", &O::material, "", "a material of the scene's materials", "the organ's material")
+        .field("solid", &O::solid, "", "", "tetrahedralized interior, or a surface simulated as a shell")
+        .shaping(no_cached_result)
+        .field("thickness_mm", &O::thickness_mm, "mm", "above 0 to 1000", "a shell's wall thickness")
+        .field("enclosed_volume_tolerance", &O::enclosed_volume_tolerance, "", "0 to 0.5",
+               "a closed shell's enclosed volume kept within this fraction of rest (unset: free)");
+    return d.fields();
+  }();
+  return fields;
+}
+
+template <>
+const std::vector<SettingField<DeformationSettings>>& declared_settings<DeformationSettings>() {
+  static const auto fields = [] {
+    using D = DeformationSettings;
+    SettingsDeclaration<D> d;
+    // The mode, the fixed organs and the loads decide which organs are simulated, and so the
+    // bodies whose tet meshes the body mesh cache keeps; nothing of the deformation reaches the
+    // anatomy, the reference state or its images.
+    d.shaping(cached_body_meshes)
+        .choice("mode", &D::mode,
+                {{"none", DeformationMode::none},
+                 {"quasi_static", DeformationMode::quasi_static},
+                 {"dynamic", DeformationMode::dynamic}},
+                "none: the deformed state is the reference; quasi_static: equilibrium; dynamic: frames")
+        .shaping(no_cached_result)
+        .nested("solver", &D::solver, declared_settings<SolverSettings>())
+        .field("time_step_s", &D::time_step_s, "s", "1e-6 to 10", "time step (dynamic)")
+        .field("frames", &D::frames, "", "1 to 100000", "frames (dynamic)")
+        .shaping(cached_body_meshes)
+        .custom<std::vector<std::string>>("fixed", &D::fixed, "list of text", "", "organs held in place",
+                                          SettingValue<std::vector<std::string>>::exact,
+                                          SettingValue<std::vector<std::string>>::shown,
+                                          [](std::vector<std::string>& names) {
+                                            // An organ freed, or one more held: the organs' motion changes.
+                                            if (names.empty())
+                                              names.emplace_back();
+                                            else
+                                              names.pop_back();
+                                          })
+        .list("loads", &D::loads, "the loads", declared_settings<LoadSettings>())
+        .list("obstacles", &D::obstacles, "rigid obstacles no simulated vertex may enter",
+              declared_settings<ObstacleSettings>())
+        .list("collisions", &D::collisions, "pairs of organs in frictionless contact",
+              declared_settings<CollisionSettings>())
+        .shaping(no_cached_result)
+        .field("load_steps", &D::load_steps, "", "1 to 10000",
+               "quasi-static: loads and obstacles applied in this many equal increments")
+        .choice("volume", &D::volume,
+                {{"per_tet", VolumeFormulation::tet},
+                 {"tet_groups", VolumeFormulation::tet_group},
+                 {"tet_groups_and_tets", VolumeFormulation::tet_group_and_tet},
+                 {"vertex_stars", VolumeFormulation::vertex_star}},
+                "where the solid bodies' bulk term lives")
+        .list("materials", &D::materials, "the elastic materials organs refer to",
+              declared_settings<MaterialSettings>())
+        .list("organs", &D::organs, "what the deformation reads of each organ, in scene order",
+              declared_settings<OrganMechanics>())
+        .field("region_atlas", &D::region_atlas, "", "",
+               "the atlas whose regions growth loads name (read by the run; not a scene key)")
+        .not_in_scene_file();
+    // derived_from() and key_elsewhere() mark one field: a list's are its count and its elements'.
+    std::vector<SettingField<D>> all = d.fields();
+    for (SettingField<D>& f : all) {
+      if (in_list(f, "materials")) {
+        f.in_section = false;
+        f.help += " (scene key materials)";
+      } else if (in_list(f, "organs")) {
+        f.derived = true;
+        f.help += " (set by the scene from anatomy.organs)";
+      }
+    }
+    return all;
+  }();
+  return fields;
+}
+
 // Every data member of each settings struct, in the struct's order. A member added to a struct
 // stops the build here ("N names provided, but the struct has N + 1 members"): declare it above
 // with the cached results it shapes, then name it here.
@@ -428,6 +721,46 @@ std::vector<const void*> settings_members(const OutputSettings& s) {
           &landmarks, &dense_landmarks, &meshes, &vdb,    &previews,  &maps};
 }
 
+std::vector<const void*> settings_members(const MaterialSettings& s) {
+  const auto& [name, youngs_modulus, poisson_ratio, density] = s;
+  return {&name, &youngs_modulus, &poisson_ratio, &density};
+}
+
+std::vector<const void*> settings_members(const SolverSettings& s) {
+  const auto& [method, iterations, energy, position, residual, threads] = s;
+  return {&method, &iterations, &energy, &position, &residual, &threads};
+}
+
+std::vector<const void*> settings_members(const LoadSettings& s) {
+  const auto& [kind, organs, acceleration, organ, displacement, region_center, region_radius, rotation, axis,
+               rotation_center, motion, period, volume_change, regions, atlas] = s;
+  return {&kind,          &organs,        &acceleration,  &organ,   &displacement,
+          &region_center, &region_radius, &rotation,      &axis,    &rotation_center,
+          &motion,        &period,        &volume_change, &regions, &atlas};
+}
+
+std::vector<const void*> settings_members(const ObstacleSettings& s) {
+  const auto& [shape, point, normal, radius, displacement, motion, period] = s;
+  return {&shape, &point, &normal, &radius, &displacement, &motion, &period};
+}
+
+std::vector<const void*> settings_members(const CollisionSettings& s) {
+  const auto& [organs] = s;
+  return {&organs};
+}
+
+std::vector<const void*> settings_members(const OrganMechanics& s) {
+  const auto& [material, solid, thickness, tolerance] = s;
+  return {&material, &solid, &thickness, &tolerance};
+}
+
+std::vector<const void*> settings_members(const DeformationSettings& s) {
+  const auto& [mode, solver, time_step, frames, fixed, loads, obstacles, collisions, load_steps, volume,
+               materials, organs, region_atlas] = s;
+  return {&mode,       &solver,     &time_step, &frames,    &fixed,  &loads,       &obstacles,
+          &collisions, &load_steps, &volume,    &materials, &organs, &region_atlas};
+}
+
 namespace {
 
 std::string keys_text(unsigned keys) {
@@ -435,6 +768,7 @@ std::string keys_text(unsigned keys) {
   if (keys & cached_anatomy) out += "anatomy";
   if (keys & cached_reference_state) out += std::string(out.empty() ? "" : ", ") + "reference state";
   if (keys & cached_reference_images) out += std::string(out.empty() ? "" : ", ") + "reference images";
+  if (keys & cached_body_meshes) out += std::string(out.empty() ? "" : ", ") + "body mesh";
   return out.empty() ? "no cache" : out;
 }
 
@@ -458,6 +792,7 @@ std::vector<std::string> settings_table(const Scene& scene) {
   std::vector<std::string> rows;
   add_rows(rows, "grid", scene.grid);
   add_rows(rows, "anatomy", scene.anatomy);
+  add_rows(rows, "deformation", scene.deformation);
   add_rows(rows, "voxelization", scene.voxelization);
   add_rows(rows, "mri", scene.mri);
   add_rows(rows, "outputs", scene.outputs);

@@ -14,7 +14,8 @@ namespace phantasm {
 /// The declared fields of a settings struct, in the order of its keys' texts. Declared for
 /// GridSettings, ShapeSettings, OrganSettings, AnatomySettings, VoxelizationSettings,
 /// TissueOverride, SequenceSettings, AcquisitionSettings, TissueRegionSettings, TextureSettings,
-/// MriSettings and OutputSettings.
+/// MriSettings, OutputSettings, MaterialSettings, SolverSettings, LoadSettings, ObstacleSettings,
+/// CollisionSettings, OrganMechanics and DeformationSettings.
 template <typename S>
 const std::vector<SettingField<S>>& declared_settings();
 
@@ -33,6 +34,13 @@ std::vector<const void*> settings_members(const TissueRegionSettings& s);
 std::vector<const void*> settings_members(const TextureSettings& s);
 std::vector<const void*> settings_members(const MriSettings& s);
 std::vector<const void*> settings_members(const OutputSettings& s);
+std::vector<const void*> settings_members(const MaterialSettings& s);
+std::vector<const void*> settings_members(const SolverSettings& s);
+std::vector<const void*> settings_members(const LoadSettings& s);
+std::vector<const void*> settings_members(const ObstacleSettings& s);
+std::vector<const void*> settings_members(const CollisionSettings& s);
+std::vector<const void*> settings_members(const OrganMechanics& s);
+std::vector<const void*> settings_members(const DeformationSettings& s);
 
 /// One line per declared setting of a scene's stages: "section.name  type  unit  bounds  default:
 /// value  shapes: caches  help", for `phantasm info --settings` and docs/scene-format.md's table.

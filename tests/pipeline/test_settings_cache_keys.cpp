@@ -1,9 +1,11 @@
 // Settings declared once (scene/settings_declarations.hpp) against the caches' keys: each declared
 // setting, changed in turn, changes the key of every cached result it shapes (and of those made
-// from them) and no other key. A setting a key forgets, or one a key reads without declaring that
-// it shapes it, fails here: a stale cache hit, or a cache that never hits.
+// from them: the reference state, its images and the bodies' tet meshes) and no other key. A
+// setting a key forgets, or one a key reads without declaring that it shapes it, fails here: a
+// stale cache hit, or a cache that never hits.
 
 #include "pipeline/anatomy_cache.hpp"
+#include "pipeline/body_mesh_cache.hpp"
 #include "pipeline/reference_cache.hpp"
 #include "pipeline/reference_images_cache.hpp"
 #include "scene/settings_declarations.hpp"
@@ -22,13 +24,29 @@ namespace {
 
 const fs::path k_small_head = fs::path(PHANTASM_SOURCE_DIR) / "tests" / "data" / "scenes" / "small-head.yaml";
 
-/// The anatomy, reference state and reference images keys of a scene, in that order.
-std::array<std::string, 3> keys_of(const Scene& scene) {
+/// The deformation's part of its bodies' tet mesh keys: a body mesh's key holds the anatomy's and
+/// names the body and the organs it carries (sim/build_model.cpp, nested_mesh_inputs), which
+/// follow from each organ's motion and, with anatomy.tet_interfaces: materials, from the organs'
+/// materials. One key for all of a scene's bodies: it changes when any of theirs may.
+std::string body_mesh_key(const Scene& scene, const std::string& anatomy_key) {
+  std::string inputs;
+  const std::vector<OrganMotion> motion = classify_organ_motion(scene.deformation, scene.organs);
+  for (std::size_t i = 0; i < motion.size(); ++i) {
+    inputs += scene.organs[i].name + " moves " + std::to_string(static_cast<int>(motion[i]));
+    if (scene.anatomy.tet_interfaces == TetInterfaces::materials && i < scene.deformation.organs.size())
+      inputs += " of " + scene.deformation.organs[i].material;
+    inputs += "\n";
+  }
+  return body_mesh_cache_key(anatomy_key, inputs);
+}
+
+/// The anatomy, reference state, reference images and body mesh keys of a scene, in that order.
+std::array<std::string, 4> keys_of(const Scene& scene) {
   const std::map<std::string, ShapeData> files; // analytic shapes only
   const std::string anatomy = anatomy_cache_key(scene.anatomy, files);
   const std::string reference =
       reference_cache_key(anatomy, scene.voxelization, scene.organs, scene.grid.grid());
-  return {anatomy, reference, reference_images_key(reference, scene.mri)};
+  return {anatomy, reference, reference_images_key(reference, scene.mri), body_mesh_key(scene, anatomy)};
 }
 
 /// A scene whose every list holds an element, so that a change of a list's field has one to
@@ -51,28 +69,64 @@ Scene base_scene() {
   return scene;
 }
 
-/// Changes each declared field of the part of a scene `part` returns, in turn, and checks the
-/// keys: those of keys_changed_by(field.keys) change, the others do not. With `resolve`, the
-/// scene's derived values are filled again after a change of a setting read from the file (a
-/// setting such as outputs.parameter_maps reaches a key through them).
+/// Scenes whose deformation gives each deformation setting that decides the bodies a change that
+/// does: the small head (grey matter displaced, the scalp fixed); gravity on every organ in a
+/// dynamic scene; the growth of the scalp; the growth of an atlas region with the organs meshed
+/// by material.
+std::vector<Scene> deformation_scenes() {
+  std::vector<Scene> scenes{base_scene(), base_scene(), base_scene(), base_scene()};
+  scenes[1].deformation.mode = DeformationMode::dynamic;
+  scenes[1].deformation.fixed.clear();
+  scenes[1].deformation.loads = {LoadSettings{}};
+  for (std::size_t k : {2, 3}) {
+    scenes[k].deformation.fixed.clear();
+    scenes[k].deformation.loads = {LoadSettings{}};
+    scenes[k].deformation.loads[0].kind = LoadKind::growth;
+  }
+  scenes[2].deformation.loads[0].organ = "scalp";
+  scenes[3].deformation.loads[0].regions = {"Hippocampus_L"};
+  scenes[3].deformation.loads[0].atlas = "aal";
+  scenes[3].anatomy.tet_size_mm = 4.0;
+  scenes[3].anatomy.tet_interfaces = TetInterfaces::materials;
+  return scenes;
+}
+
+/// Changes each declared field of the part of a scene `part` returns, in turn, in each of the
+/// scenes, and checks the keys: none but those of keys_changed_by(field.keys) changes in any
+/// scene, and each of those changes in one of them at least (in every scene the change of a
+/// setting that shapes a key by its text; in some, that of one that decides which organs move).
+/// With `resolve`, the scene's derived values are filled again after a change of a setting read
+/// from the file (a setting such as outputs.parameter_maps reaches a key through them).
 template <typename S>
-void expect_each_setting_changes_its_keys(const std::function<S&(Scene&)>& part, bool resolve) {
-  Scene base = base_scene();
-  const std::array<std::string, 3> base_keys = keys_of(base);
-  ASSERT_EQ(base_keys[0].size(), 64u) << "no build id: the caches would be off";
-  const std::array<unsigned, 3> bits{cached_anatomy, cached_reference_state, cached_reference_images};
-  const std::array<const char*, 3> names{"anatomy", "reference state", "reference images"};
+void expect_each_setting_changes_its_keys(const std::function<S&(Scene&)>& part, bool resolve,
+                                          const std::vector<Scene>& scenes = {base_scene()}) {
+  const std::array<unsigned, 4> bits{cached_anatomy, cached_reference_state, cached_reference_images,
+                                     cached_body_meshes};
+  const std::array<const char*, 4> names{"anatomy", "reference state", "reference images", "body mesh"};
   for (const SettingField<S>& field : declared_settings<S>()) {
     SCOPED_TRACE(field.name);
-    Scene changed = base;
-    const std::string before = field.exact(part(changed));
-    field.change(part(changed));
-    ASSERT_NE(field.exact(part(changed)), before) << "the change changed nothing";
-    if (resolve && !field.derived) resolve_stage_settings(changed);
-    const std::array<std::string, 3> keys = keys_of(changed);
     const unsigned expected = keys_changed_by(field.keys);
-    for (std::size_t k = 0; k < keys.size(); ++k)
-      EXPECT_EQ(keys[k] != base_keys[k], (expected & bits[k]) != 0) << "the " << names[k] << " key";
+    std::array<bool, 4> changed_somewhere{};
+    for (const Scene& base : scenes) {
+      const std::array<std::string, 4> base_keys = keys_of(base);
+      ASSERT_EQ(base_keys[0].size(), 64u) << "no build id: the caches would be off";
+      Scene changed = base;
+      const std::string before = field.exact(part(changed));
+      field.change(part(changed));
+      ASSERT_NE(field.exact(part(changed)), before) << "the change changed nothing";
+      if (resolve && !field.derived) resolve_stage_settings(changed);
+      const std::array<std::string, 4> keys = keys_of(changed);
+      for (std::size_t k = 0; k < keys.size(); ++k) {
+        changed_somewhere[k] = changed_somewhere[k] || keys[k] != base_keys[k];
+        if ((expected & bits[k]) == 0) {
+          EXPECT_EQ(keys[k], base_keys[k]) << "the " << names[k] << " key";
+        }
+      }
+    }
+    for (std::size_t k = 0; k < bits.size(); ++k)
+      if (expected & bits[k]) {
+        EXPECT_TRUE(changed_somewhere[k]) << "the " << names[k] << " key never changed";
+      }
   }
 }
 
@@ -94,6 +148,14 @@ TEST(SettingsCacheKeys, EachVoxelizationSettingChangesItsKeysAndNoOther) {
 
 TEST(SettingsCacheKeys, EachMriSettingChangesItsKeysAndNoOther) {
   expect_each_setting_changes_its_keys<MriSettings>([](Scene& s) -> MriSettings& { return s.mri; }, false);
+}
+
+// Nothing of the deformation reaches the anatomy, the reference state or its images; the mode,
+// the fixed organs, the loads' organs and the organs' mechanics decide the bodies whose tet
+// meshes the body mesh cache keeps.
+TEST(SettingsCacheKeys, EachDeformationSettingChangesItsKeysAndNoOther) {
+  expect_each_setting_changes_its_keys<DeformationSettings>(
+      [](Scene& s) -> DeformationSettings& { return s.deformation; }, false, deformation_scenes());
 }
 
 // The outputs reach the stages' settings through resolve_stage_settings(): only the parameter
