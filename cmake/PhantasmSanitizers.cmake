@@ -8,8 +8,22 @@
 # dereference and an access outside an object still end the run under ASan (SEGV, heap- or
 # stack-buffer-overflow). The fuzz build (clang, below) keeps the whole of -fsanitize=undefined
 # on the parsers and readers that take hostile input.
+# clang's "bounds" adds local-bounds, which ends the program on an illegal instruction with no
+# message or stack where ASan would report the overflow with its file and line: clang gets
+# array-bounds, the check g++'s "bounds" makes.
+# clang's OpenMP runtime is libomp, while OpenBLAS (under CHOLMOD) needs g++'s libgomp. libomp
+# defines libgomp's entry points with libgomp's symbol versions (GOMP_parallel@GOMP_4.0,
+# omp_set_num_threads@OMP_1.0, ...), and every program that runs OpenMP code links libomp itself,
+# so the loader finds it before libgomp, which only OpenBLAS asks for: OpenBLAS's parallel regions
+# run on libomp's threads and read the thread count sim/newton.cpp sets (SingleThreadedBlas).
+# libgomp is loaded but none of its functions is called (LD_DEBUG=bindings shows every omp_ and
+# GOMP_ symbol of OpenBLAS, CHOLMOD and LAPACK bound to libomp).
 if(PHANTASM_SANITIZE)
-  set(_phantasm_ubsan signed-integer-overflow,shift,integer-divide-by-zero,bounds,float-cast-overflow,bool,enum)
+  set(_phantasm_bounds bounds)
+  if(CMAKE_CXX_COMPILER_ID MATCHES "Clang")
+    set(_phantasm_bounds array-bounds)
+  endif()
+  set(_phantasm_ubsan signed-integer-overflow,shift,integer-divide-by-zero,${_phantasm_bounds},float-cast-overflow,bool,enum)
   string(APPEND _phantasm_ubsan ,return,unreachable,vla-bound,builtin,nonnull-attribute,returns-nonnull-attribute)
   set(_phantasm_san -fsanitize=address,${_phantasm_ubsan} -fno-omit-frame-pointer -fno-sanitize-recover=all)
   add_compile_options(${_phantasm_san})

@@ -111,10 +111,11 @@ nlohmann::json by_factor(const nlohmann::json& pairs) {
   nlohmann::json result = nlohmann::json::object();
   for (const auto& [factor, values] : groups) {
     for (const auto& [value, members] : values) {
+      const std::vector<const nlohmann::json*>& group = members; // a lambda may not capture a binding
       auto mean = [&](const std::function<nlohmann::json(const nlohmann::json&)>& pick) {
         double sum = 0.0;
         int count = 0;
-        for (const nlohmann::json* p : members) {
+        for (const nlohmann::json* p : group) {
           const nlohmann::json x = pick(*p);
           if (x.is_number()) {
             sum += x.get<double>();

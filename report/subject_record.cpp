@@ -117,8 +117,12 @@ void read_pictures(SubjectRecord& record, const DatasetLayout& layout, const std
   // A run in which nothing deforms writes the reference state only.
   record.reference_only = !is_listed(layout.dseg(PhantomState::deformed));
   for (const std::string& suffix : suffixes) {
-    const std::string reference = grey_slices_png(
-        montage_for(), read_volume(record, layout.anat_image(PhantomState::reference, suffix)));
+    // The volume before the montage: the first volume read sets record.dims, which the montage is
+    // made for (as one call's arguments their order would be unspecified: clang builds the montage
+    // first, of 0 x 0 x 0 voxels).
+    const std::vector<double> values =
+        read_volume(record, layout.anat_image(PhantomState::reference, suffix));
+    const std::string reference = grey_slices_png(montage_for(), values);
     const std::filesystem::path deformed = layout.anat_image(PhantomState::deformed, suffix);
     record.images.push_back(
         {suffix, reference,

@@ -5,8 +5,11 @@
 # the rest in it and keeps what was built.
 # release: optimized (-O3), tests and benchmarks; asan: AddressSanitizer + UBSan, tests only, at
 # -O1 with line tables only (-g1): enough for the sanitizers' stack traces, and the build is
-# shorter than with full debug information. fuzz: the libFuzzer targets of fuzz/ with clang
-# (ASan + UBSan, -O1 -g1, assertions on) and only the libraries they link (scripts/fuzz.sh).
+# shorter than with full debug information; compiled by clang 14, which takes less processor time
+# than g++ for the same sanitizers (docs/performance.md, Build and tests). A tree configured
+# earlier keeps its compiler: remove build/asan to rebuild it with clang. fuzz: the libFuzzer
+# targets of fuzz/ with clang (ASan + UBSan, -O1 -g1, assertions on) and only the libraries they
+# link (scripts/fuzz.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -14,7 +17,9 @@ kind=${1:-release}
 shift $(($# > 0 ? 1 : 0))
 case "$kind" in
   release) flags=(-DCMAKE_BUILD_TYPE=Release) ;;
-  asan) flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" -DPHANTASM_SANITIZE=ON -DPHANTASM_BUILD_BENCHMARKS=OFF) ;;
+  asan) flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG"
+              -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14
+              -DPHANTASM_SANITIZE=ON -DPHANTASM_BUILD_BENCHMARKS=OFF) ;;
   fuzz) flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1"
               -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 -DPHANTASM_FUZZ=ON
               -DPHANTASM_BUILD_TESTS=OFF -DPHANTASM_BUILD_BENCHMARKS=OFF) ;;

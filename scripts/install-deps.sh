@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config ninja-build clang-format
-  clang-14 libclang-rt-14-dev lld
+  clang-14 libclang-rt-14-dev libomp-14-dev llvm-14 lld
   libeigen3-dev
   libsuitesparse-dev libopenblas0-openmp libopenblas-openmp-dev
   libopenvdb-dev libboost-iostreams-dev libtbb-dev

@@ -24,5 +24,8 @@ time bash scripts/fuzz.sh 20
 
 echo "== ASan + UBSan build and tests"
 time bash scripts/build.sh asan
+# The tree is compiled by clang (scripts/build.sh): its sanitizers print a report's stack with
+# file and line through llvm-symbolizer (the llvm-14 package; scripts/install-deps.sh).
+export ASAN_SYMBOLIZER_PATH=/usr/lib/llvm-14/bin/llvm-symbolizer
 time env ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build/asan --output-on-failure --parallel "$jobs" -L fast "$@"

@@ -40,8 +40,14 @@ inline bool lane_any(Mask m) {
 #include "sim/tet_projection_lanes.inc"
 } // namespace sse2
 
+// The AVX2 lanes are compiled for AVX2 whatever the build's target; avx2_available() chooses
+// them at run time. clang applies the target attribute to each function of the block instead.
+#if defined(__clang__)
+#pragma clang attribute push(__attribute__((target("avx2"))), apply_to = function)
+#else
 #pragma GCC push_options
 #pragma GCC target("avx2")
+#endif
 namespace avx2 {
 constexpr int kLanes = 4;
 using Lane = double __attribute__((vector_size(32)));
@@ -54,7 +60,11 @@ inline bool lane_any(Mask m) {
 }
 #include "sim/tet_projection_lanes.inc"
 } // namespace avx2
+#if defined(__clang__)
+#pragma clang attribute pop
+#else
 #pragma GCC pop_options
+#endif
 
 } // namespace
 
