@@ -180,14 +180,34 @@ private:
             static_cast<float>(std::exp(-0.5 * t * t / (sigma * sigma)));
       const int n = m_dims[axis];
       std::vector<float> line(static_cast<std::size_t>(n));
+      // Running counts of the values other than 0 and other than 1: a window of 0s gives exactly
+      // 0 and one of 1s exactly 1 (its sum adds the same weights as its normalizer), so most of
+      // the box, away from the surface, needs no sum.
+      std::vector<int> not_zero(static_cast<std::size_t>(n) + 1), not_one(static_cast<std::size_t>(n) + 1);
       Eigen::Vector3i at(0, 0, 0);
       const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
       for (at[a2] = 0; at[a2] < m_dims[a2]; ++at[a2])
         for (at[a1] = 0; at[a1] < m_dims[a1]; ++at[a1]) {
           Eigen::Vector3i p = at;
-          for (p[axis] = 0; p[axis] < n; ++p[axis])
-            line[static_cast<std::size_t>(p[axis])] = m_inside[local_index(p)];
           for (p[axis] = 0; p[axis] < n; ++p[axis]) {
+            const auto q = static_cast<std::size_t>(p[axis]);
+            line[q] = m_inside[local_index(p)];
+            not_zero[q + 1] = not_zero[q] + (line[q] != 0.0f);
+            not_one[q + 1] = not_one[q] + (line[q] != 1.0f);
+          }
+          if (not_zero[static_cast<std::size_t>(n)] == 0 || not_one[static_cast<std::size_t>(n)] == 0)
+            continue;
+          for (p[axis] = 0; p[axis] < n; ++p[axis]) {
+            const auto first = static_cast<std::size_t>(std::max(0, p[axis] - half));
+            const auto end = static_cast<std::size_t>(std::min(n, p[axis] + half + 1));
+            if (not_zero[end] == not_zero[first]) {
+              m_inside[local_index(p)] = 0.0f;
+              continue;
+            }
+            if (not_one[end] == not_one[first]) {
+              m_inside[local_index(p)] = 1.0f;
+              continue;
+            }
             double sum = 0.0, weight = 0.0;
             for (int t = -half; t <= half; ++t) {
               const int q = p[axis] + t;

@@ -7,7 +7,9 @@
 #include "anatomy/phantom.hpp"
 #include "geometry/distance_transform.hpp"
 
+#include "tests/support/centred_grid.hpp"
 #include <Eigen/LU>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -18,16 +20,6 @@
 using namespace phantasm;
 
 namespace {
-
-/// A 1 mm grid of n^3 voxels centred at the origin.
-ImageGrid grid_of(int n) {
-  ImageGrid grid;
-  grid.dims = Eigen::Vector3i::Constant(n);
-  grid.spacing_mm = Eigen::Vector3d::Ones();
-  grid.world_from_voxel.setIdentity();
-  grid.world_from_voxel.topRightCorner<3, 1>() = Eigen::Vector3d::Constant(-(n - 1) / 2.0);
-  return grid;
-}
 
 /// Label 1 on a ball of radius 16 mm at the origin, with a cylindrical bore of radius 5 mm along
 /// x (not star-shaped: rays from the centre leave it more than once), shifted by `shift_mm`.
@@ -116,7 +108,7 @@ std::vector<Eigen::Vector3d> sample_points(const PatchSurface& surface, int leve
 // surface measured against the labels shifted by 3 mm (a surface 3 mm off in places): each time
 // the reported mean, 95th percentile and maximum lie within a voxel of the distance maps' figures.
 TEST(FitFigures, DistanceToTheSourceAgreesWithTheLabelsDistanceMapsWithinAVoxel) {
-  const ImageGrid grid = grid_of(48);
+  const ImageGrid grid = phantasm::testing::centred_cube_grid(48);
   const std::vector<std::int32_t> labels = bored_ball(grid, Eigen::Vector3d::Zero());
   const auto target = make_label_shape(grid, labels, {1}, 1.0, "bored ball");
   ASSERT_FALSE(target->star_shaped());
