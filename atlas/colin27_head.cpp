@@ -554,8 +554,92 @@ void label_brain(const ImageGrid& grid, const Volume& vol, const Mask& brain, co
       }
 }
 
+/// The mask eroded (erode) or dilated by one voxel through its six faces; the volume's border
+/// counts as outside.
+Mask step_mask(const Mask& mask, const ImageGrid& grid, bool erode) {
+  const Volume vol(grid);
+  Mask out = mask;
+  for (int k = 0; k < vol.nz; ++k)
+    for (int j = 0; j < vol.ny; ++j)
+      for (int i = 0; i < vol.nx; ++i) {
+        const std::int64_t n = vol.at(i, j, k);
+        if (erode == !mask[n]) continue; // erosion changes inside voxels only, dilation outside ones
+        const bool border =
+            i == 0 || j == 0 || k == 0 || i == vol.nx - 1 || j == vol.ny - 1 || k == vol.nz - 1;
+        if (border) { // outside the volume is outside the mask: erode there, never dilate
+          out[n] = 0;
+          continue;
+        }
+        bool any_other = false;
+        for (const std::int64_t m : {n - 1, n + 1, n - vol.nx, n + vol.nx, n - std::int64_t(vol.nx) * vol.ny,
+                                     n + std::int64_t(vol.nx) * vol.ny})
+          any_other = any_other || mask[m] != mask[n];
+        if (any_other) out[n] = erode ? 0 : 1;
+      }
+  return out;
+}
+
+/// The eyes and the orbital fat behind them (see the comments inside); labels them in place.
+void label_eyes(const ImageGrid& grid, const std::vector<int>& intensity, double white_matter_mean,
+                const Colin27Options& options, std::vector<std::int32_t>& labels) {
+  const Volume vol(grid);
+  const std::size_t count = labels.size();
+  const auto extracranial = [](std::int32_t l) {
+    return l == colin27_skull || l == colin27_subcutaneous_fat || l == colin27_muscle;
+  };
+  const auto world = [&grid, &vol](std::int64_t n) {
+    return grid.world_from_index(Eigen::Vector3d(double(n % vol.nx), double((n / vol.nx) % vol.ny),
+                                                 double(n / (std::int64_t(vol.nx) * vol.ny))));
+  };
+  Mask in_box(count);
+  for (std::int64_t n = 0; n < vol.size(); ++n) {
+    const Eigen::Vector3d x = world(n);
+    in_box[n] = std::abs(x.x()) >= options.orbit_abs_x_mm[0] &&
+                std::abs(x.x()) <= options.orbit_abs_x_mm[1] && x.y() >= options.orbit_y_mm[0] &&
+                x.y() <= options.orbit_y_mm[1] && x.z() >= options.orbit_z_mm[0] &&
+                x.z() <= options.orbit_z_mm[1];
+  }
+  // Vitreous is darker than muscle and brighter than air and cortical bone: within the orbit box,
+  // under the skin and outside the skull's cavity, the voxels of that range, opened to cut them
+  // from the dark bone and muscle they touch; each side's largest piece, holes filled (the lens),
+  // is its eye.
+  Mask dark(count);
+  for (std::size_t n = 0; n < count; ++n)
+    dark[n] = in_box[n] && extracranial(labels[n]) &&
+              intensity[n] >= options.vitreous_intensity_fraction[0] * white_matter_mean &&
+              intensity[n] <= options.vitreous_intensity_fraction[1] * white_matter_mean;
+  for (int e = 0; e < options.eye_opening_voxels; ++e)
+    dark = step_mask(dark, grid, true);
+  for (int e = 0; e < options.eye_opening_voxels; ++e)
+    dark = step_mask(dark, grid, false);
+  const double fat_level = options.fat_intensity_fraction * white_matter_mean;
+  for (const double side : {-1.0, 1.0}) {
+    Mask half(count);
+    for (std::size_t n = 0; n < count; ++n)
+      half[n] = dark[n] && in_box[n] && world(std::int64_t(n)).x() * side > 0.0;
+    const Mask eye = fill_holes(largest_component(half, grid), grid);
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    std::int64_t voxels = 0;
+    for (std::size_t n = 0; n < count; ++n)
+      if (eye[n] && extracranial(labels[n])) {
+        labels[n] = colin27_eye;
+        centre += world(std::int64_t(n));
+        ++voxels;
+      }
+    if (voxels == 0) continue;
+    centre /= double(voxels);
+    // Orbital fat: the fat-bright voxels behind the eye's centre, within reach of it.
+    for (std::size_t n = 0; n < count; ++n)
+      if (in_box[n] && extracranial(labels[n]) && intensity[n] >= fat_level &&
+          world(std::int64_t(n)).y() < centre.y() &&
+          (world(std::int64_t(n)) - centre).norm() <= options.orbital_fat_reach_mm)
+        labels[n] = colin27_orbital_fat;
+  }
+}
+
 /// Divides the tissue outside the skull (labelled scalp) into skin, subcutaneous fat and muscle,
-/// and the skull into cortical bone and marrow (see the comments inside).
+/// takes the eyes and the orbital fat out of them and the skull (label_eyes), and divides the
+/// skull into cortical bone and marrow (see the comments inside).
 void label_extracranial_tissues(const ImageGrid& grid, const std::vector<int>& intensity,
                                 const std::vector<float>& from_outside, double white_matter_mean,
                                 double bone_level, const Colin27Options& options,
@@ -577,6 +661,9 @@ void label_extracranial_tissues(const ImageGrid& grid, const std::vector<int>& i
     cls = majority_filter(cls, soft, grid);
   for (std::size_t n = 0; n < count; ++n)
     if (soft[n]) labels[n] = cls[n] == 2 ? colin27_subcutaneous_fat : colin27_muscle;
+  // The eyes and the orbital fat come out of the skull, fat and muscle before the marrow, which
+  // stays enclosed by the bone left.
+  label_eyes(grid, intensity, white_matter_mean, options, labels);
   // Marrow (diploe): skull voxels brighter than marrow_intensity_fraction times white matter
   // whose six neighbours are all skull, so that the cortical tables stay bone on both sides.
   const double marrow_level = std::max(bone_level, options.marrow_intensity_fraction * white_matter_mean);
@@ -730,7 +817,9 @@ HeadLabels derive_colin27_head(const std::filesystem::path& templates_dir, const
                 {colin27_subcutaneous_fat, "subcutaneous_fat", "fat_subcutaneous"},
                 {colin27_muscle, "muscle", "muscle_skeletal"},
                 {colin27_bone_marrow, "bone_marrow", "bone_marrow"},
-                {colin27_cerebellar_white_matter, "cerebellar_white_matter", "white_matter"}};
+                {colin27_cerebellar_white_matter, "cerebellar_white_matter", "white_matter"},
+                {colin27_eye, "eye", "vitreous"},
+                {colin27_orbital_fat, "orbital_fat", "fat_subcutaneous"}};
   return head;
 }
 

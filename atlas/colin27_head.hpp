@@ -28,6 +28,8 @@ enum Colin27Label : std::int32_t {
   colin27_muscle = 14,                  ///< the other soft tissue under the skin (muscle, connective tissue)
   colin27_bone_marrow = 15,             ///< skull voxels brighter than bone, enclosed by skull (diploe)
   colin27_cerebellar_white_matter = 16, ///< the cerebellum's voxels of the brain's white-matter class
+  colin27_eye = 17,                     ///< the eyeballs: the dark (vitreous) globes in the orbits
+  colin27_orbital_fat = 18,             ///< the bright fat behind each eyeball, in its orbit
 };
 
 /// One row of the label table.
@@ -72,6 +74,20 @@ struct Colin27Options {
   /// Skull voxels enclosed by skull with T1 at least this times the white-matter mean are marrow
   /// (diploe); darker ones stay cortical bone.
   double marrow_intensity_fraction = 0.5;
+  /// The orbits' search box (world RAS mm, the template's MNI space): |x|, y and z ranges. Each
+  /// eye is the largest dark piece on its side within it.
+  double orbit_abs_x_mm[2] = {12.0, 55.0};
+  double orbit_y_mm[2] = {25.0, 85.0};
+  double orbit_z_mm[2] = {-60.0, -15.0};
+  /// Vitreous: T1 between these times the white-matter mean (darker than muscle, brighter than
+  /// air and bone).
+  double vitreous_intensity_fraction[2] = {0.23, 0.6};
+  /// Erosions (then as many dilations) of the dark voxels that cut an eye from the dark bone and
+  /// muscle touching it.
+  int eye_opening_voxels = 2;
+  /// Orbital fat: fat-bright voxels (fat_intensity_fraction) of the orbit box behind an eye's
+  /// centre and within this distance of it.
+  double orbital_fat_reach_mm = 28.0;
 };
 
 /// Derives the labelled Colin 27 head from the templates of Debian's mricron-data package

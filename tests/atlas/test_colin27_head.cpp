@@ -49,7 +49,7 @@ TEST(Colin27Head, EveryLabelIsPresentWithPlausibleVolumes) {
   const HeadLabels& head = derived();
   EXPECT_EQ(head.grid.dims, Eigen::Vector3i(181, 217, 181));
   const std::vector<double> ml = label_volumes_ml(head);
-  ASSERT_EQ(ml.size(), 17U);
+  ASSERT_EQ(ml.size(), 19U);
   for (const HeadLabelInfo& info : head.table) {
     std::cout << info.label << ' ' << info.name << ' ' << ml[info.label] << " ml\n";
     EXPECT_GT(ml[info.label], 0.0) << info.name;
@@ -80,7 +80,7 @@ TEST(Colin27Head, TissuesOutsideTheBrainFollowTheScan) {
   SKIP_WITHOUT_TEMPLATES();
   const HeadLabels& head = derived();
   const NiftiVolume t1 = read_nifti(templates / "ch2.nii.gz");
-  std::vector<double> sum(16, 0.0), count(16, 0.0);
+  std::vector<double> sum(head.table.size(), 0.0), count(head.table.size(), 0.0);
   for (std::size_t n = 0; n < head.labels.size(); ++n) {
     sum[static_cast<std::size_t>(head.labels[n])] += t1.values[n];
     count[static_cast<std::size_t>(head.labels[n])] += 1.0;
@@ -119,6 +119,61 @@ TEST(Colin27Head, TissuesOutsideTheBrainFollowTheScan) {
       }
   EXPECT_EQ(marrow_touching_other, 0);
   EXPECT_EQ(fat_touching_background, 0);
+}
+
+// The eyes and the orbital fat behind them: one vitreous globe in each orbit, dark on the T1w scan
+// (below muscle, like CSF), of an adult eyeball's volume (an axial length of about 24 mm: 6-8 ml,
+// the lens and the eye's coats included), placed as mirror images about the midline; the orbital
+// fat brighter than white matter, behind the eyes, on both sides.
+TEST(Colin27Head, EachOrbitHoldsADarkEyeWithItsFatBehindIt) {
+  SKIP_WITHOUT_TEMPLATES();
+  const HeadLabels& head = derived();
+  const NiftiVolume t1 = read_nifti(templates / "ch2.nii.gz");
+  struct Side {
+    double ml = 0.0, sum = 0.0;
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  };
+  Side eye[2], fat[2];
+  double muscle_sum = 0.0, muscle_count = 0.0, wm_sum = 0.0, wm_count = 0.0;
+  const Eigen::Vector3i d = head.grid.dims;
+  for (std::size_t n = 0; n < head.labels.size(); ++n) {
+    const std::int32_t l = head.labels[n];
+    if (l == colin27_muscle) muscle_sum += t1.values[n], muscle_count += 1.0;
+    if (l == colin27_white_matter) wm_sum += t1.values[n], wm_count += 1.0;
+    if (l != colin27_eye && l != colin27_orbital_fat) continue;
+    const Eigen::Vector3d x = head.grid.world_from_index(
+        Eigen::Vector3d(double(n % std::size_t(d.x())), double(n / std::size_t(d.x()) % std::size_t(d.y())),
+                        double(n / (std::size_t(d.x()) * std::size_t(d.y())))));
+    Side& s = (l == colin27_eye ? eye : fat)[x.x() > 0.0 ? 1 : 0];
+    s.ml += 0.001;
+    s.sum += t1.values[n];
+    s.centre += 0.001 * x;
+  }
+  for (int side = 0; side < 2; ++side) {
+    ASSERT_GT(eye[side].ml, 0.0);
+    ASSERT_GT(fat[side].ml, 0.0);
+    eye[side].centre /= eye[side].ml;
+    fat[side].centre /= fat[side].ml;
+    std::cout << (side ? "right" : "left") << " eye " << eye[side].ml << " ml at "
+              << eye[side].centre.transpose() << ", mean T1 " << eye[side].sum / (1000.0 * eye[side].ml)
+              << "; orbital fat " << fat[side].ml << " ml, mean T1 "
+              << fat[side].sum / (1000.0 * fat[side].ml) << "\n";
+    EXPECT_GE(eye[side].ml, 5.0);
+    EXPECT_LE(eye[side].ml, 9.0);
+    EXPECT_LT(eye[side].sum / (1000.0 * eye[side].ml), muscle_sum / muscle_count);
+    EXPECT_GT(fat[side].sum / (1000.0 * fat[side].ml), 1.15 * wm_sum / wm_count);
+    EXPECT_GE(fat[side].ml, 1.0);
+    EXPECT_LT(fat[side].centre.y(), eye[side].centre.y()); // behind the eye
+    EXPECT_GT(eye[side].centre.z(), -60.0);                // in the orbit: below the frontal lobe,
+    EXPECT_LT(eye[side].centre.z(), -15.0);                // in front of the temporal poles
+    EXPECT_GT(eye[side].centre.y(), 45.0);
+  }
+  // Mirror images about the midline within a few mm (the template is nearly symmetric).
+  EXPECT_NEAR(eye[0].centre.x(), -eye[1].centre.x(), 4.0);
+  EXPECT_NEAR(eye[0].centre.y(), eye[1].centre.y(), 4.0);
+  EXPECT_NEAR(eye[0].centre.z(), eye[1].centre.z(), 4.0);
+  EXPECT_GT(eye[1].centre.x() - eye[0].centre.x(), 50.0); // interpupillary distance, adults 54-74 mm
+  EXPECT_LT(eye[1].centre.x() - eye[0].centre.x(), 80.0);
 }
 
 // The cerebellum divides by the scan's intensity as the cerebrum does: its white matter (the
@@ -318,7 +373,7 @@ TEST(AtlasCommand, WritesALabelVolumeNibabelReads) {
                                         "d = numpy.asarray(img.dataobj)\n"
                                         "assert d.shape == (181, 217, 181), d.shape\n"
                                         "assert numpy.allclose(img.affine, ref.affine), img.affine\n"
-                                        "assert set(numpy.unique(d)) == set(range(17)), numpy.unique(d)\n"
+                                        "assert set(numpy.unique(d)) == set(range(19)), numpy.unique(d)\n"
                                         "print('ok')\n";
   const CommandResult check = run_command(
       {PHANTASM_PYTHON, (folder / "check.py").string(), out.string(), (templates / "ch2.nii.gz").string()});

@@ -5,10 +5,10 @@
 
 using namespace phantasm;
 
-TEST(TissueTable, BuiltinTableHoldsTwentySixTissuesAtTwoFieldStrengths) {
+TEST(TissueTable, BuiltinTableHoldsTwentySevenTissuesAtTwoFieldStrengths) {
   const TissueTable& table = TissueTable::builtin();
-  EXPECT_EQ(table.tissue_names().size(), 26u);
-  EXPECT_EQ(table.records().size(), 52u);
+  EXPECT_EQ(table.tissue_names().size(), 27u);
+  EXPECT_EQ(table.records().size(), 54u);
   for (const auto& name : table.tissue_names()) {
     EXPECT_EQ(table.field_strengths(name), (std::vector<double>{1.5, 3.0})) << name;
   }
