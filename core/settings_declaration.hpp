@@ -1,10 +1,12 @@
 // Settings declared once: each field of a settings struct with its name, type, unit, bounds,
-// help and the cached results it shapes, and what every reader of settings (the caches' keys,
-// `phantasm info --settings`, the docs' table, the tests) takes from that declaration.
+// help and the cached results it shapes, and what every reader of settings (the scene's parser,
+// the caches' keys, `phantasm info --settings`, the docs' table, the tests) takes from that
+// declaration.
 // scene/settings_declarations.hpp declares the settings of every stage with it.
 #pragma once
 
 #include "core/format.hpp"
+#include "core/number_rule.hpp"
 
 #include <Eigen/Core>
 
@@ -167,6 +169,97 @@ struct SettingValue<std::vector<T>> {
   static void change(std::vector<T>& v) { v.emplace_back(); }
 };
 
+/// Reads the value of one key of a section of settings (the scene's checked YAML mapping,
+/// scene/declared_keys.hpp): each returns false when the key is absent or after reporting a
+/// problem with it (a required key that is absent is one).
+class SettingReader {
+public:
+  virtual ~SettingReader() = default;
+  virtual bool number(const std::string& key, double& out, const NumberRule& rule, bool required) = 0;
+  virtual bool integer(const std::string& key, int& out, const NumberRule& rule, bool required) = 0;
+  virtual bool boolean(const std::string& key, bool& out, bool required) = 0;
+  virtual bool text(const std::string& key, std::string& out, bool required) = 0;
+  virtual bool texts(const std::string& key, std::vector<std::string>& out, bool required) = 0;
+  /// With scalar_allowed one number stands for all three.
+  virtual bool vec3(const std::string& key, Eigen::Vector3d& out, const NumberRule& rule, bool required,
+                    bool scalar_allowed) = 0;
+  virtual bool choice(const std::string& key, std::string& out, const std::vector<std::string>& choices,
+                      bool required) = 0;
+};
+
+/// How a value of type T is read by a SettingReader, for the types a scene key holds as a plain
+/// value; `readable` is false for the others (their keys are read by hand).
+template <typename T>
+struct SettingRead {
+  static constexpr bool readable = false;
+};
+
+/// What reading a key takes from its field's declaration.
+struct ReadSpec {
+  const std::string& key;
+  const NumberRule& rule;
+  bool required;
+  bool scalar_allowed;
+};
+
+template <>
+struct SettingRead<double> {
+  static constexpr bool readable = true;
+  static bool read(SettingReader& r, const ReadSpec& k, double& v) {
+    return r.number(k.key, v, k.rule, k.required);
+  }
+};
+
+template <>
+struct SettingRead<int> {
+  static constexpr bool readable = true;
+  static bool read(SettingReader& r, const ReadSpec& k, int& v) {
+    return r.integer(k.key, v, k.rule, k.required);
+  }
+};
+
+template <>
+struct SettingRead<bool> {
+  static constexpr bool readable = true;
+  static bool read(SettingReader& r, const ReadSpec& k, bool& v) { return r.boolean(k.key, v, k.required); }
+};
+
+template <>
+struct SettingRead<std::string> {
+  static constexpr bool readable = true;
+  static bool read(SettingReader& r, const ReadSpec& k, std::string& v) {
+    return r.text(k.key, v, k.required);
+  }
+};
+
+template <>
+struct SettingRead<std::vector<std::string>> {
+  static constexpr bool readable = true;
+  static bool read(SettingReader& r, const ReadSpec& k, std::vector<std::string>& v) {
+    return r.texts(k.key, v, k.required);
+  }
+};
+
+template <>
+struct SettingRead<Eigen::Vector3d> {
+  static constexpr bool readable = true;
+  static bool read(SettingReader& r, const ReadSpec& k, Eigen::Vector3d& v) {
+    return r.vec3(k.key, v, k.rule, k.required, k.scalar_allowed);
+  }
+};
+
+/// An optional value is set when its key is read.
+template <typename T>
+struct SettingRead<std::optional<T>> {
+  static constexpr bool readable = SettingRead<T>::readable;
+  static bool read(SettingReader& r, const ReadSpec& k, std::optional<T>& v) {
+    T value{};
+    if (!SettingRead<T>::read(r, k, value)) return false;
+    v = value;
+    return true;
+  }
+};
+
 /// One declared field of a settings struct S: a setting the scene file gives, or a value the
 /// scene fills from other settings (`derived`), as one line of every table of settings.
 template <typename S>
@@ -174,8 +267,15 @@ struct SettingField {
   std::string name;   ///< path inside S: "supersampling", "shape.radii_mm", "organs[].name"
   std::string type;   ///< "number", "integer", "boolean", "text", "choice of a, b", ...
   std::string unit;   ///< "mm", "ms", ... ; empty for none
-  std::string bounds; ///< the values the scene parser accepts, as text; empty when any
+  std::string bounds; ///< the values the scene parser accepts, as text (from `rule` when it has one)
   std::string help;
+  /// The numbers the scene parser accepts (a number's, a vector's components', an integer's);
+  /// unset for a setting that is no number.
+  std::optional<NumberRule> rule;
+  bool required = false;       ///< the scene file must give it
+  bool scalar_allowed = false; ///< 3 numbers: one number stands for all three
+  /// Reads it from its key of the scene file's section (null: read by hand, or no plain key).
+  std::function<bool(SettingReader&, const SettingField&, S&)> read;
   unsigned keys = no_cached_result; ///< the cached results it shapes (CacheKeys)
   bool derived = false;             ///< filled by the scene from other settings, not read from the file
   /// Written in its own section of the scene file and provenance.json; false for a key of
@@ -189,6 +289,12 @@ struct SettingField {
   /// must be the member of some field (settings_members() lists them all).
   std::function<const void*(const S&)> member;
 };
+
+/// Reads a declared field's key with its reader into `s`.
+template <typename S>
+bool read_field(SettingReader& reader, const SettingField<S>& f, S& s) {
+  return f.read && f.read(reader, f, s);
+}
 
 /// The text of the fields of `s` that shape any of `keys`, one "name value" line each, in
 /// declaration order: what a cache key hashes.
@@ -210,7 +316,8 @@ public:
     return *this;
   }
 
-  /// A setting held by member `m` of a type SettingValue knows.
+  /// A setting held by member `m` of a type SettingValue knows, its accepted values described
+  /// by `bounds` (empty: any; a name's rule, "a tissue").
   template <typename T>
   SettingsDeclaration& field(std::string name, T S::*m, std::string unit, std::string bounds,
                              std::string help) {
@@ -220,7 +327,39 @@ public:
     f.shown = [m](const S& s) { return SettingValue<T>::shown(s.*m); };
     f.json = [m](const S& s) { return SettingValue<T>::json(s.*m); };
     f.change = [m](S& s) { SettingValue<T>::change(s.*m); };
+    f.read = reader_of(m);
     m_fields.push_back(std::move(f));
+    return *this;
+  }
+
+  /// A numeric setting (a number, an integer, 3 of them) whose accepted values are `rule`'s
+  /// range: its bounds text is written from it, and the parser checks with it (in `unit`).
+  template <typename T>
+  SettingsDeclaration& field(std::string name, T S::*m, std::string unit, NumberRule rule, std::string help) {
+    rule.unit = unit;
+    const bool integer = SettingValue<T>::type().find("integer") != std::string::npos;
+    const std::string bounds = rule.bounds_text(integer);
+    field(std::move(name), m, std::move(unit), bounds, std::move(help));
+    m_fields.back().rule = std::move(rule);
+    return *this;
+  }
+
+  /// Marks the last field added as required: the scene file must give it.
+  SettingsDeclaration& required() {
+    m_fields.back().required = true;
+    return *this;
+  }
+
+  /// Marks the last field added (3 numbers) as given by one number for all three as well.
+  SettingsDeclaration& scalar_allowed() {
+    m_fields.back().scalar_allowed = true;
+    return *this;
+  }
+
+  /// Adds a condition beyond its rule to the last field's bounds text ("not zero").
+  SettingsDeclaration& bounds_note(const std::string& note) {
+    std::string& bounds = m_fields.back().bounds;
+    bounds += (bounds.empty() ? "" : ", ") + note;
     return *this;
   }
 
@@ -245,6 +384,16 @@ public:
           return;
         }
     };
+    f.read = [m, choices](SettingReader& reader, const SettingField<S>& field, S& s) {
+      std::vector<std::string> accepted;
+      for (const auto& c : choices)
+        accepted.push_back(c.first);
+      std::string given;
+      if (!reader.choice(field.name, given, accepted, field.required)) return false;
+      for (const auto& c : choices)
+        if (c.first == given) s.*m = c.second;
+      return true;
+    };
     m_fields.push_back(std::move(f));
     return *this;
   }
@@ -259,6 +408,7 @@ public:
     f.shown = [m, shown](const S& s) { return shown(s.*m); };
     f.json = [m](const S& s) { return SettingValue<T>::json(s.*m); };
     f.change = [m, change](S& s) { change(s.*m); };
+    f.read = reader_of(m);
     m_fields.push_back(std::move(f));
     return *this;
   }
@@ -350,6 +500,19 @@ public:
   const std::vector<SettingField<S>>& fields() const { return m_fields; }
 
 private:
+  /// How a member of type T is read from its key; null for a type no plain key holds.
+  template <typename T>
+  static std::function<bool(SettingReader&, const SettingField<S>&, S&)> reader_of(T S::*m) {
+    if constexpr (SettingRead<T>::readable) {
+      return [m](SettingReader& reader, const SettingField<S>& f, S& s) {
+        const NumberRule rule = f.rule.value_or(NumberRule{});
+        return SettingRead<T>::read(reader, ReadSpec{f.name, rule, f.required, f.scalar_allowed}, s.*m);
+      };
+    } else {
+      return nullptr;
+    }
+  }
+
   template <typename T>
   SettingField<S> base(std::string name, std::string type, std::string unit, std::string bounds,
                        std::string help, T S::*m) const {
@@ -367,6 +530,7 @@ private:
   template <typename N, typename T>
   SettingField<S> relabel(std::string name, const SettingField<N>& n, T S::*m) const {
     SettingField<S> f = base(std::move(name), n.type, n.unit, n.bounds, n.help, m);
+    f.rule = n.rule;
     f.keys = n.keys;
     f.derived = n.derived;
     f.in_section = n.in_section;

@@ -68,6 +68,9 @@ struct TissueRegionSettings {
 /// Where a texture's deviations come from.
 enum class TextureSource { none, scan, random };
 
+/// Where a random texture's figures (standard deviation and correlation length) come from.
+enum class RandomSpectrum { given, scan };
+
 /// Spatial variation of T1 and PD within tissues (docs/volumes-and-images.md, "Tissue regions and
 /// texture"): off by default.
 struct TextureSettings {
@@ -79,6 +82,9 @@ struct TextureSettings {
   double max_deviation = 0.3;       ///< d clamped to +-max_deviation
   double random_sd = 0.05;          ///< random: standard deviation of d
   double correlation_mm = 2.0;      ///< random: the smoothing Gaussian's standard deviation
+  /// random: given, one field with random_sd and correlation_mm; scan, a field per tissue with the
+  /// standard deviation and correlation length measured on the scan (voxelize/texture_spectrum.hpp)
+  RandomSpectrum spectrum = RandomSpectrum::given;
 };
 
 const char* to_string(TextureSource source);

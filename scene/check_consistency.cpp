@@ -376,9 +376,16 @@ public:
                 "expected a tissue of an organ or tissue region in this scene, found '" + texture.tissues[i] +
                     "'");
     }
-    if (texture.source != TextureSource::scan && !texture.scan.empty())
-      problem("texture.scan", "expected a scan only with source: scan, found one with source: " +
-                                  std::string(to_string(texture.source)));
+    const bool reads_scan =
+        texture.source == TextureSource::scan ||
+        (texture.source == TextureSource::random && texture.spectrum == RandomSpectrum::scan);
+    if (texture.spectrum == RandomSpectrum::scan && texture.source != TextureSource::random)
+      problem("texture.spectrum", "expected spectrum: scan only with source: random, found source: " +
+                                      std::string(to_string(texture.source)));
+    if (!reads_scan && !texture.scan.empty())
+      problem("texture.scan",
+              "expected a scan only with source: scan or spectrum: scan, found one with source: " +
+                  std::string(to_string(texture.source)));
   }
 
 private:

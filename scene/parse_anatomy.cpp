@@ -1,5 +1,6 @@
 #include "anatomy/shape_source.hpp"
 #include "core/path_kind.hpp"
+#include "scene/declared_keys.hpp"
 #include "scene/parse_sections.hpp"
 #include "scene/parse_segmentation.hpp"
 
@@ -13,10 +14,12 @@ namespace {
 void parse_labels(CheckedMap& map, ShapeSettings& shape) {
   const YAML::Node node = map.get("label");
   const std::string path = map.child_path("label");
+  const NumberRule rule = declared_rule<ShapeSettings>("label");
+  const std::string integer = rule.describe_integer();
   const std::string expected =
-      shape.atlas.empty() ? "an integer in [1, 65535] or a list of them"
-                          : "a label (an integer in [1, 65535] or a name of the atlas's label table) "
-                            "or a list of them";
+      shape.atlas.empty()
+          ? integer + " or a list of them"
+          : "a label (" + integer + " or a name of the atlas's label table) or a list of them";
   if (!node.IsDefined()) {
     map.missing("label", expected);
     return;
@@ -40,7 +43,9 @@ void parse_labels(CheckedMap& map, ShapeSettings& shape) {
                       text.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_") == std::string::npos;
     if (number || shape.atlas.empty()) {
       long long value = 0;
-      if (!read_integer(map.context(), item, item_path, 1, 65535, value)) continue;
+      if (!read_integer(map.context(), item, item_path, static_cast<long long>(rule.min),
+                        static_cast<long long>(rule.max), value))
+        continue;
       map.context().remember(item, item_path);
       if (shape.label == 0) shape.label = static_cast<int>(value);
       shape.labels.push_back(std::to_string(value));
@@ -76,11 +81,13 @@ void parse_extent2(CheckedMap& map, const ShapeParameter& p, ShapeSettings& shap
   }
 }
 
-/// Kind::cells: `axes` integers in [1, 1000], the other axes 1.
+/// Kind::cells: `axes` integers in the declared bounds of `cells`, the other axes 1.
 void parse_cells(CheckedMap& map, const ShapeParameter& p, ShapeSettings& shape) {
   const YAML::Node cells = map.get(p.key);
   const std::size_t axes = static_cast<std::size_t>(p.axes);
-  const std::string expected = "a list of " + std::to_string(axes) + " integers in [1, 1000]";
+  const NumberRule rule = declared_rule<ShapeSettings>("cells");
+  const std::string expected = "a list of " + std::to_string(axes) + " integers" +
+                               rule.describe_integer().substr(std::string("an integer").size());
   if (!cells.IsDefined()) {
     if (p.required) map.missing(p.key, expected);
   } else if (!cells.IsSequence() || cells.size() != axes) {
@@ -90,8 +97,8 @@ void parse_cells(CheckedMap& map, const ShapeParameter& p, ShapeSettings& shape)
     shape.cells.setOnes();
     for (std::size_t i = 0; i < axes; ++i) {
       long long count = 1;
-      if (read_integer(map.context(), cells[i], map.child_path(p.key) + "[" + std::to_string(i) + "]", 1,
-                       1000, count)) {
+      if (read_integer(map.context(), cells[i], map.child_path(p.key) + "[" + std::to_string(i) + "]",
+                       static_cast<long long>(rule.min), static_cast<long long>(rule.max), count)) {
         shape.cells[static_cast<int>(i)] = static_cast<int>(count);
       }
     }
@@ -157,13 +164,7 @@ void parse_shape(CheckedMap& map, const std::filesystem::path& scene_folder, Sha
 /// The anatomy's settings and its list of organs.
 void parse_settings_and_organs(CheckedMap& map, const std::filesystem::path& scene_folder,
                                AnatomySettings& anatomy) {
-  map.number("variation", anatomy.variation, between(0.0, 0.3, "relative size"));
-  map.integer("base_mesh_triangles", anatomy.base_mesh_triangles, 20, 200000);
-  map.number("tet_size_mm", anatomy.tet_size_mm, between(0.5, 500.0, "mm"));
-  map.number("tet_facet_distance_mm", anatomy.tet_facet_distance_mm, between(0.05, 100.0, "mm"));
-  std::string interfaces;
-  if (map.choice("tet_interfaces", interfaces, {"organs", "materials"}))
-    anatomy.tet_interfaces = interfaces == "materials" ? TetInterfaces::materials : TetInterfaces::organs;
+  read_declared(map, anatomy);
   for (const char* key : {"tet_facet_distance_mm", "tet_interfaces"}) {
     if (map.has(key) && !(anatomy.tet_size_mm > 0.0)) {
       map.context().problem(
@@ -187,20 +188,11 @@ void parse_settings_and_organs(CheckedMap& map, const std::filesystem::path& sce
     CheckedMap entry(map.context(), organs[i], path + "[" + std::to_string(i) + "]");
     if (!entry.valid()) continue;
     OrganSettings organ;
-    if (entry.string("name", organ.name, true))
-      check_name(map.context(), entry.get("name"), entry.child_path("name"), organ.name);
-    if (entry.string("tissue", organ.tissue, true))
-      check_name(map.context(), entry.get("tissue"), entry.child_path("tissue"), organ.tissue);
-    entry.string("material", organ.material);
-    entry.string("inside", organ.inside);
-    entry.boolean("solid", organ.solid);
-    entry.integer("base_mesh_triangles", organ.base_mesh_triangles, 20, 200000);
-    entry.number("thickness_mm", organ.thickness_mm, NumberRule{0.0, 1e3, true, false, "mm"});
-    if (entry.has("enclosed_volume_tolerance")) {
-      double tolerance = 0.0;
-      if (entry.number("enclosed_volume_tolerance", tolerance, NumberRule{0.0, 0.5, false, false, ""}))
-        organ.enclosed_volume_tolerance = tolerance;
-    }
+    for (const char* key : {"name", "tissue"}) // names that reach file names
+      if (read_declared_keys(entry, organ, {key}).count(key))
+        check_name(map.context(), entry.get(key), entry.child_path(key),
+                   key[0] == 'n' ? organ.name : organ.tissue);
+    read_declared(entry, organ, {"name", "tissue"});
     if (entry.has("shape")) {
       CheckedMap shape(map.context(), entry.get("shape"), entry.child_path("shape"));
       if (shape.valid()) parse_shape(shape, scene_folder, organ.shape);

@@ -1,46 +1,30 @@
+#include "scene/declared_keys.hpp"
 #include "scene/parse_sections.hpp"
 #include "sim/load_type.hpp"
-#include "sim/solver_type.hpp"
 
 namespace phantasm::scene_detail {
 namespace {
 
-void parse_solver(CheckedMap& map, SolverSettings& solver) {
-  std::string method;
-  if (map.choice("method", method, solver_type_names())) solver.method = find_solver_type(method)->method;
-  map.integer("max_iterations", solver.max_iterations, 1, 1000000);
-  map.number("relative_energy_tolerance", solver.relative_energy_tolerance, between(0.0, 1.0, ""));
-  map.number("position_tolerance_mm", solver.position_tolerance_mm, non_negative("mm"));
-  map.number("relative_residual_tolerance", solver.relative_residual_tolerance, between(0.0, 1.0, ""));
-  map.integer("threads", solver.threads, 0, 1024);
+/// A load's `key` (its motion: constant, ramp or sine) as LoadSettings' declaration reads it,
+/// required as its load type says.
+void parse_motion_profile(CheckedMap& map, const std::string& key, bool required, LoadSettings& load) {
+  SettingField<LoadSettings> motion = declared_field<LoadSettings>(key);
+  motion.required = required;
+  CheckedMapReader reader(map);
+  read_field(reader, motion, load);
 }
 
-/// `key`: how a load or an obstacle moves in a dynamic scene (constant, ramp or sine).
-void parse_motion_profile(CheckedMap& map, const std::string& key, MotionProfile& profile, bool required) {
-  std::string motion;
-  if (map.choice(key, motion, {"constant", "ramp", "sine"}, required)) {
-    profile = motion == "ramp"   ? MotionProfile::ramp
-              : motion == "sine" ? MotionProfile::sine
-                                 : MotionProfile::constant;
-  }
-}
-
-void parse_motion(CheckedMap& map, MotionProfile& profile, double& period_s) {
-  parse_motion_profile(map, "motion", profile, false);
-  map.number("period_s", period_s, positive("s"));
-}
-
+/// An obstacle: its type, then the keys that type reads (a sphere's centre is its point_mm),
+/// their bounds those of ObstacleSettings' declaration.
 void parse_obstacle(CheckedMap& map, ObstacleSettings& obstacle) {
-  std::string shape;
-  if (!map.choice("type", shape, {"half_space", "sphere"}, true)) {
+  if (read_declared_keys(map, obstacle, {"type"}).empty()) {
     map.accept_remaining_keys();
     return;
   }
-  const NumberRule coordinate{-1e5, 1e5, false, false, "mm"};
-  if (shape == "half_space") {
-    obstacle.shape = ObstacleShape::half_space;
+  const NumberRule coordinate = declared_rule<ObstacleSettings>("point_mm");
+  if (obstacle.shape == ObstacleShape::half_space) {
     map.vec3("point_mm", obstacle.point_mm, coordinate, true);
-    if (map.vec3("normal", obstacle.normal, NumberRule{-1e6, 1e6, false, false, ""}, true)) {
+    if (map.vec3("normal", obstacle.normal, declared_rule<ObstacleSettings>("normal"), true)) {
       if (!(obstacle.normal.norm() > 1e-12)) {
         map.context().problem(
             map.get("normal"), map.child_path("normal"),
@@ -51,12 +35,10 @@ void parse_obstacle(CheckedMap& map, ObstacleSettings& obstacle) {
       }
     }
   } else {
-    obstacle.shape = ObstacleShape::sphere;
     map.vec3("center_mm", obstacle.point_mm, coordinate, true);
-    map.number("radius_mm", obstacle.radius_mm, positive("mm"), true);
+    map.number("radius_mm", obstacle.radius_mm, declared_rule<ObstacleSettings>("radius_mm"), true);
   }
-  map.vec3("displacement_mm", obstacle.displacement_mm, NumberRule{-1e3, 1e3, false, false, "mm"});
-  parse_motion(map, obstacle.motion, obstacle.period_s);
+  read_declared_keys(map, obstacle, {"displacement_mm", "motion", "period_s"});
 }
 
 /// A list of mappings under `key`, each read by `parse` into a new element of `out`.
@@ -80,7 +62,8 @@ void parse_list(CheckedMap& map, const std::string& key, const char* what, std::
   }
 }
 
-/// A load parameter's range for messages.
+/// A load parameter's range for messages (the load type registry holds it, and the
+/// declaration of LoadSettings shows it).
 NumberRule rule_of(const LoadParameter& p) {
   return NumberRule{p.min, p.max, p.min_exclusive, p.max_exclusive, p.unit};
 }
@@ -172,7 +155,7 @@ void parse_load_parameters(CheckedMap& map, const std::vector<LoadParameter>& pa
     case LoadParameter::Kind::organs: map.string_list(key, load.*p.names, required); break;
     case LoadParameter::Kind::name_or_names: parse_name_or_names(map, key, p, required, load); break;
     case LoadParameter::Kind::choice: map.choice(key, load.*p.text, p.choices, required); break;
-    case LoadParameter::Kind::motion: parse_motion_profile(map, key, load.motion, required); break;
+    case LoadParameter::Kind::motion: parse_motion_profile(map, key, required, load); break;
     case LoadParameter::Kind::mapping:
       i = parse_mapping(map, parameters, i, prefix, required, load);
       continue;
@@ -197,28 +180,13 @@ void parse_load(CheckedMap& map, LoadSettings& load) {
 
 void parse_deformation(CheckedMap& map, DeformationSettings& deformation,
                        VoxelizationSettings& voxelization) {
-  std::string mode;
-  if (map.choice("mode", mode, {"none", "quasi_static", "dynamic"}, true)) {
-    deformation.mode = mode == "quasi_static" ? DeformationMode::quasi_static
-                       : mode == "dynamic"    ? DeformationMode::dynamic
-                                              : DeformationMode::none;
-  }
+  read_declared_keys(map, deformation, {"mode"});
   if (map.has("solver")) {
     CheckedMap solver(map.context(), map.get("solver"), map.child_path("solver"));
-    if (solver.valid()) parse_solver(solver, deformation.solver);
+    if (solver.valid()) read_declared(solver, deformation.solver);
   }
-  map.number("time_step_s", deformation.time_step_s, between(1e-6, 10.0, "s"));
-  map.integer("frames", deformation.frames, 1, 100000);
-  map.string_list("fixed", deformation.fixed);
-  map.integer("load_steps", deformation.load_steps, 1, 10000);
-  std::string volume;
-  if (map.choice("volume", volume, {"per_tet", "tet_groups", "tet_groups_and_tets", "vertex_stars"})) {
-    deformation.volume = volume == "tet_groups"            ? VolumeFormulation::tet_group
-                         : volume == "tet_groups_and_tets" ? VolumeFormulation::tet_group_and_tet
-                         : volume == "vertex_stars"        ? VolumeFormulation::vertex_star
-                                                           : VolumeFormulation::tet;
-  }
-  map.string("gap_tissue", voxelization.gap_tissue);
+  read_declared(map, deformation, {"mode"}); // time_step_s, frames, fixed, load_steps, volume
+  read_declared_keys(map, voxelization, {"gap_tissue"});
   parse_list(map, "loads", "loads", deformation.loads, parse_load);
   parse_list(map, "obstacles", "obstacles", deformation.obstacles, parse_obstacle);
   parse_list(

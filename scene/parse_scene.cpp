@@ -1,5 +1,6 @@
 #include "core/safe_name.hpp"
 #include "core/sha256.hpp"
+#include "scene/declared_keys.hpp"
 #include "scene/parse_sections.hpp"
 #include "scene/yaml_documents.hpp"
 
@@ -25,10 +26,8 @@ bool is_bids_label(const std::string& text) {
 }
 
 void parse_grid(CheckedMap& map, GridSettings& grid) {
-  map.vec3("field_of_view_mm", grid.field_of_view_mm, positive("mm"), true, true);
-  map.vec3("voxel_size_mm", grid.voxel_size_mm, positive("mm"), true, true);
-  map.vec3("center_mm", grid.center_mm, NumberRule{-1e5, 1e5, false, false, "mm"});
-  if (map.string("orientation", grid.orientation) && !direction_from_axis_code(grid.orientation)) {
+  const std::set<std::string> read = read_declared(map, grid);
+  if (read.count("orientation") && !direction_from_axis_code(grid.orientation)) {
     map.context().problem(map.get("orientation"), map.child_path("orientation"),
                           "expected a 3-letter axis code with one of R/L, A/P, S/I each (e.g. RAS, "
                           "LPS), found '" +
@@ -44,10 +43,7 @@ void parse_materials(CheckedMap& map, std::vector<MaterialSettings>& materials) 
     CheckedMap entry(map.context(), map.get(name), map.child_path(name));
     MaterialSettings material;
     material.name = name;
-    entry.number("youngs_modulus_Pa", material.youngs_modulus_Pa, NumberRule{0.0, 1e12, true, false, "Pa"},
-                 true);
-    entry.number("poisson_ratio", material.poisson_ratio, NumberRule{0.0, 0.5, false, true, ""}, true);
-    entry.number("density_kg_m3", material.density_kg_m3, NumberRule{0.0, 1e5, true, false, "kg/m^3"});
+    read_declared(entry, material, {"name"}); // its name is its key
     materials.push_back(material);
   }
 }
@@ -60,69 +56,37 @@ void parse_tissues(CheckedMap& map, std::vector<TissueOverride>& tissues) {
     CheckedMap entry(map.context(), map.get(name), map.child_path(name));
     TissueOverride tissue;
     tissue.tissue = name;
-    double value = 0.0;
-    if (entry.number("T1_ms", value, positive("ms"))) tissue.T1_ms = value;
-    if (entry.number("T2_ms", value, positive("ms"))) tissue.T2_ms = value;
-    if (entry.number("T2star_ms", value, positive("ms"))) tissue.T2star_ms = value;
-    if (entry.number("PD", value, between(0.0, 1.5, "units of CSF proton density"))) tissue.PD = value;
+    read_declared(entry, tissue, {"tissue"}); // its tissue is its key
     tissues.push_back(tissue);
   }
 }
 
 void parse_voxelization(CheckedMap& map, VoxelizationSettings& voxelization) {
-  map.integer("supersampling", voxelization.supersampling, 1, 16);
-  map.number("tessellation_tolerance_mm", voxelization.tessellation_tolerance_mm,
-             NumberRule{0.0, 10.0, true, false, "mm"});
+  read_declared(map, voxelization);
 }
 
 void parse_acquisition(CheckedMap& map, AcquisitionSettings& acquisition) {
-  map.boolean("kspace", acquisition.kspace);
-  const bool oversampling = map.integer("kspace_oversampling", acquisition.kspace_oversampling, 1, 8);
-  Eigen::Vector3d acquired_voxel;
-  if (map.vec3("acquired_voxel_mm", acquired_voxel, positive("mm"), false, true)) {
-    acquisition.acquired_voxel_mm = acquired_voxel;
-    if (oversampling) {
-      map.context().problem(map.get("acquired_voxel_mm"), map.child_path("acquired_voxel_mm"),
-                            "expected either acquired_voxel_mm or kspace_oversampling, found both");
-    }
+  // The acquired voxel size replaces the oversampling: the two together are refused.
+  const std::vector<std::string> sampling = {"kspace", "kspace_oversampling", "acquired_voxel_mm"};
+  const std::set<std::string> read = read_declared_keys(map, acquisition, sampling);
+  if (read.count("acquired_voxel_mm") && read.count("kspace_oversampling")) {
+    map.context().problem(map.get("acquired_voxel_mm"), map.child_path("acquired_voxel_mm"),
+                          "expected either acquired_voxel_mm or kspace_oversampling, found both");
   }
-  map.number("slice_thickness_mm", acquisition.slice_thickness_mm, between(0.0, 100.0, "mm"));
-  map.number("noise_percent", acquisition.noise_percent, between(0.0, 100.0, "percent"));
-  map.string("noise_reference_tissue", acquisition.noise_reference_tissue);
-  map.number("bias_percent", acquisition.bias_percent, between(0.0, 100.0, "percent"));
-  map.integer("coils", acquisition.coils, 1, 64);
-  double gain = 0.0;
-  if (map.number("receiver_gain", gain, positive("scanner units per proton-density unit")))
-    acquisition.receiver_gain = gain;
-  std::string datatype;
-  if (map.choice("image_datatype", datatype, {"float32", "int16", "uint16"}))
-    acquisition.image_datatype = datatype == "int16"    ? ImageDatatype::int16
-                                 : datatype == "uint16" ? ImageDatatype::uint16
-                                                        : ImageDatatype::float32;
+  read_declared(map, acquisition, sampling);
 }
 
 void parse_outputs(CheckedMap& map, OutputSettings& outputs) {
-  if (map.string("subject", outputs.subject) && !is_bids_label(outputs.subject)) {
+  if (read_declared_keys(map, outputs, {"subject"}).count("subject") && !is_bids_label(outputs.subject)) {
     map.context().problem(map.get("subject"), map.child_path("subject"),
                           "expected a BIDS label (letters and digits only), found '" + outputs.subject + "'");
   }
   // The profile sets the switches' defaults: a switch the scene gives wins over it.
-  std::string profile;
-  if (map.choice("profile", profile, {"full", "benchmark"}) && profile == "benchmark") {
-    outputs.profile = OutputProfile::benchmark;
+  if (read_declared_keys(map, outputs, {"profile"}).count("profile") &&
+      outputs.profile == OutputProfile::benchmark) {
     outputs.meshes = outputs.vdb = outputs.previews = outputs.fractions = outputs.parameter_maps = false;
   }
-  map.boolean("images", outputs.images);
-  map.boolean("labels", outputs.labels);
-  map.boolean("fractions", outputs.fractions);
-  map.boolean("displacement_fields", outputs.displacement_fields);
-  map.boolean("jacobian", outputs.jacobian);
-  map.boolean("landmarks", outputs.landmarks);
-  map.integer("dense_landmarks", outputs.dense_landmarks, 0, 9999);
-  map.boolean("meshes", outputs.meshes);
-  map.boolean("vdb", outputs.vdb);
-  map.boolean("previews", outputs.previews);
-  map.boolean("parameter_maps", outputs.parameter_maps);
+  read_declared(map, outputs, {"subject", "profile"});
 }
 
 } // namespace scene_detail
@@ -178,7 +142,7 @@ SceneLoadResult parse_scene(const std::string& text, const std::filesystem::path
     }
     if (top.string("name", scene.name, true)) check_name(context, top.get("name"), "name", scene.name);
     top.unsigned_integer("seed", scene.seed, true);
-    top.number("field_strength_T", scene.mri.field_strength_T, NumberRule{0.0, 11.7, true, false, "T"}, true);
+    read_declared_keys(top, scene.mri, {"field_strength_T"});
 
     if (top.has("grid")) {
       CheckedMap grid(context, top.get("grid"), "grid");

@@ -3,6 +3,7 @@
 #include "core/error.hpp"
 #include "core/path_kind.hpp"
 #include "io/nifti_file.hpp"
+#include "scene/declared_keys.hpp"
 
 #include <fstream>
 #include <set>
@@ -223,7 +224,7 @@ void parse_segmentation(CheckedMap& map, const std::filesystem::path& scene_fold
     }
   }
   double smoothing_mm = 1.0;
-  map.number("smoothing_mm", smoothing_mm, NumberRule{0.0, 10.0, false, false, "mm"});
+  map.number("smoothing_mm", smoothing_mm, declared_rule<ShapeSettings>("smoothing_mm"));
   const std::vector<MappedOrgan> organs = parse_mapping(map);
   if (!found || organs.empty()) return;
   std::map<std::string, std::size_t> organ_of_name;

@@ -1,14 +1,13 @@
 #include "mri/sequence_type.hpp"
+#include "scene/declared_keys.hpp"
 #include "scene/parse_sections.hpp"
 
 namespace phantasm::scene_detail {
 namespace {
 
-const NumberRule k_time_rule{0.0, 1e5, true, false, "ms"};
-
 /// Reads a sequence: name, type and TR_ms, then the keys its member of the registry reads.
 void parse_sequence(CheckedMap& map, SequenceSettings& sequence) {
-  if (map.string("name", sequence.name, true) && !is_bids_label(sequence.name)) {
+  if (read_declared_keys(map, sequence, {"name"}).count("name") && !is_bids_label(sequence.name)) {
     map.context().problem(map.get("name"), map.child_path("name"),
                           "expected a BIDS suffix (letters and digits, e.g. T1w), found '" + sequence.name +
                               "'");
@@ -20,7 +19,7 @@ void parse_sequence(CheckedMap& map, SequenceSettings& sequence) {
   }
   const SequenceType& type = *find_sequence_type(kind);
   sequence.kind = type.kind;
-  map.number("TR_ms", sequence.TR_ms, k_time_rule, true);
+  read_declared_keys(map, sequence, {"TR_ms"}); // every type's key; the others are the type's
   for (const SequenceParameter& p : type.parameters) {
     switch (p.kind) {
     case SequenceParameter::Kind::number:

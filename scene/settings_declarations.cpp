@@ -6,6 +6,7 @@
 #include "sim/solver_type.hpp"
 
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 
@@ -48,10 +49,68 @@ struct SettingValue<std::shared_ptr<const RegionAtlas>> {
 
 namespace {
 
-const char* const k_coordinate = "-1e5 to 1e5";
-const char* const k_positive = "above 0";
-const char* const k_time = "0 to 1e5";
-const char* const k_triangles = "20 to 200000";
+/// Numbers in [min, max] (the unit is the field's).
+NumberRule range(double min, double max) {
+  return between(min, max, "");
+}
+
+/// Numbers in (min, max].
+NumberRule above(double min, double max = std::numeric_limits<double>::infinity()) {
+  NumberRule rule = between(min, max, "");
+  rule.min_exclusive = true;
+  return rule;
+}
+
+const NumberRule k_coordinate = range(-1e5, 1e5); ///< a position in mm: within 100 m of the origin
+const NumberRule k_positive = above(0.0);
+const NumberRule k_triangles = range(20, 200000);
+
+/// Numbers in [0, 0.5) (a Poisson ratio).
+NumberRule below_half() {
+  NumberRule rule = range(0.0, 0.5);
+  rule.max_exclusive = true;
+  return rule;
+}
+
+/// The accepted values of a registry's parameter.
+template <typename Parameter>
+NumberRule rule_of(const Parameter& p) {
+  return NumberRule{p.min, p.max, p.min_exclusive, p.max_exclusive, p.unit};
+}
+
+/// The rule of the first parameter of a registry's members for which `reads` holds: the registry
+/// holds the bounds its members' keys are parsed with.
+template <typename Member, typename Reads>
+NumberRule registry_rule(const std::vector<const Member*>& members, Reads&& reads) {
+  for (const Member* member : members)
+    for (const auto& p : member->parameters)
+      if (reads(p)) return rule_of(p);
+  throw std::logic_error("a declared setting that no member of its registry reads");
+}
+
+/// The bounds of a shape's number or vector, from the shape source registry (anatomy/shape_source.hpp).
+NumberRule shape_rule(double ShapeSettings::*m) {
+  return registry_rule(shape_sources(), [m](const ShapeParameter& p) {
+    return p.kind == ShapeParameter::Kind::number && p.number == m;
+  });
+}
+NumberRule shape_rule(Eigen::Vector3d ShapeSettings::*m) {
+  return registry_rule(shape_sources(), [m](const ShapeParameter& p) {
+    return p.kind != ShapeParameter::Kind::number && p.vector == m;
+  });
+}
+
+/// The bounds of a sequence's number or integer, from the sequence registry (mri/sequence_type.hpp).
+NumberRule sequence_rule(double SequenceSettings::*m) {
+  return registry_rule(sequence_types(), [m](const SequenceParameter& p) {
+    return p.kind == SequenceParameter::Kind::number && p.number == m;
+  });
+}
+NumberRule sequence_rule(int SequenceSettings::*m) {
+  return registry_rule(sequence_types(), [m](const SequenceParameter& p) {
+    return p.kind == SequenceParameter::Kind::integer && p.integer == m;
+  });
+}
 
 /// The members of a registry (sequence types, shape sources, solvers, load types) by name, each
 /// with its value of `kind`.
@@ -91,23 +150,13 @@ bool reads(const LoadParameter& p, std::vector<std::string> LoadSettings::*m) {
          p.names == m;
 }
 
-/// A load parameter's accepted values as text ("above -1 to 10", "aal").
+/// A load parameter's accepted values as text when it is no number ("aal", "organs of the scene").
 std::string bounds_of(const LoadParameter& p) {
   std::string text;
   for (const std::string& choice : p.choices)
     text += (text.empty() ? "" : ", ") + choice;
   if (p.kind == LoadParameter::Kind::organ) text = "an organ that is not fixed";
   if (p.kind == LoadParameter::Kind::organs) text = "organs of the scene";
-  const bool low = std::isfinite(p.min), high = std::isfinite(p.max);
-  const std::string min = (p.min_exclusive ? "above " : "") + format_number(p.min);
-  const std::string max = (p.max_exclusive ? "below " : "") + format_number(p.max);
-  if (low && high)
-    text = min + " to " + max;
-  else if (low)
-    text = p.min_exclusive ? min : min + " or above";
-  else if (high)
-    text = p.max_exclusive ? max : max + " or below";
-  if (p.unit_vector) text += ", not zero";
   return text;
 }
 
@@ -134,7 +183,12 @@ template <typename T>
 void load_field(SettingsDeclaration<LoadSettings>& d, T LoadSettings::*member, const std::string& help) {
   const auto [types, p] = load_types_reading([member](const LoadParameter& q) { return reads(q, member); });
   if (p == nullptr) throw std::logic_error("a member of LoadSettings that no load type reads: " + help);
-  d.field(p->key, member, p->unit, bounds_of(*p), types + ": " + help);
+  if (p->kind == LoadParameter::Kind::number || p->kind == LoadParameter::Kind::vector3) {
+    d.field(p->key, member, p->unit, rule_of(*p), types + ": " + help);
+    if (p->unit_vector) d.bounds_note("not zero");
+  } else {
+    d.field(p->key, member, p->unit, bounds_of(*p), types + ": " + help);
+  }
 }
 
 /// Whether a field is the list `name` or a field of its elements.
@@ -153,7 +207,11 @@ const std::vector<SettingField<GridSettings>>& declared_settings<GridSettings>()
     d.shaping(cached_reference_state)
         .field("field_of_view_mm", &GridSettings::field_of_view_mm, "mm", k_positive,
                "extent of the image grid along i, j, k")
+        .required()
+        .scalar_allowed()
         .field("voxel_size_mm", &GridSettings::voxel_size_mm, "mm", k_positive, "voxel size along i, j, k")
+        .required()
+        .scalar_allowed()
         .field("center_mm", &GridSettings::center_mm, "mm", k_coordinate, "RAS position of the grid's centre")
         .custom<std::string>(
             "orientation", &GridSettings::orientation, "axis code", "",
@@ -172,25 +230,26 @@ const std::vector<SettingField<ShapeSettings>>& declared_settings<ShapeSettings>
     d.shaping(cached_anatomy)
         .choice("type", &ShapeSettings::kind, kinds_by_name(shape_sources()),
                 "the shape's source: an analytic shape, a mesh file or a label volume")
-        .field("center_mm", &ShapeSettings::center_mm, "mm", k_coordinate, "centre of an analytic shape, RAS")
-        .field("radii_mm", &ShapeSettings::radii_mm, "mm", k_positive,
+        .field("center_mm", &ShapeSettings::center_mm, "mm", shape_rule(&ShapeSettings::center_mm),
+               "centre of an analytic shape, RAS")
+        .field("radii_mm", &ShapeSettings::radii_mm, "mm", shape_rule(&ShapeSettings::radii_mm),
                "semi-axes of an ellipsoid or superquadric before rotation")
-        .field("rotation_deg", &ShapeSettings::rotation_deg, "degrees", "",
-               "rotations about x, then y, then z")
-        .field("exponent_1", &ShapeSettings::exponent_1, "", "0.1 to 4",
+        .field("rotation_deg", &ShapeSettings::rotation_deg, "degrees",
+               shape_rule(&ShapeSettings::rotation_deg), "rotations about x, then y, then z")
+        .field("exponent_1", &ShapeSettings::exponent_1, "", shape_rule(&ShapeSettings::exponent_1),
                "superquadric north-south exponent (1: ellipsoid)")
-        .field("exponent_2", &ShapeSettings::exponent_2, "", "0.1 to 4",
+        .field("exponent_2", &ShapeSettings::exponent_2, "", shape_rule(&ShapeSettings::exponent_2),
                "superquadric east-west exponent (1: ellipsoid)")
-        .field("size_mm", &ShapeSettings::size_mm, "mm", k_positive,
+        .field("size_mm", &ShapeSettings::size_mm, "mm", shape_rule(&ShapeSettings::size_mm),
                "box edge lengths; sheet: x and y extent")
-        .field("cells", &ShapeSettings::cells, "", "1 to 1000",
+        .field("cells", &ShapeSettings::cells, "", range(1, 1000),
                "box: hexahedral cells per axis (5 tets each); sheet: x, y")
         .field("file", &ShapeSettings::file, "", "", "mesh or label volume, relative to the scene's folder")
         .field("atlas", &ShapeSettings::atlas, "", "colin27", "label volume made from installed data")
-        .field("label", &ShapeSettings::label, "", "1 to 65535",
+        .field("label", &ShapeSettings::label, "", range(1, 65535),
                "label volume: the first label given by number")
         .field("labels", &ShapeSettings::labels, "", "", "label volume: every label, by number or name")
-        .field("smoothing_mm", &ShapeSettings::smoothing_mm, "mm", "0 to 10",
+        .field("smoothing_mm", &ShapeSettings::smoothing_mm, "mm", shape_rule(&ShapeSettings::smoothing_mm),
                "label volume: Gaussian smoothing of the labels' indicator (0: none)");
     return d.fields();
   }();
@@ -203,16 +262,18 @@ const std::vector<SettingField<OrganSettings>>& declared_settings<OrganSettings>
     SettingsDeclaration<OrganSettings> d;
     d.shaping(cached_anatomy)
         .field("name", &OrganSettings::name, "", "a safe name", "the organ's name")
+        .required()
         .field("tissue", &OrganSettings::tissue, "", "a safe name", "its tissue")
+        .required()
         .field("material", &OrganSettings::material, "", "", "a material of the scene's materials")
         .field("inside", &OrganSettings::inside, "", "", "the organ containing it; empty for the outermost")
         .field("solid", &OrganSettings::solid, "", "", "tetrahedralized interior, or a surface only")
         .field("base_mesh_triangles", &OrganSettings::base_mesh_triangles, "", k_triangles,
                "this organ's patch base mesh size (0: anatomy.base_mesh_triangles)")
         .nested("shape", &OrganSettings::shape, declared_settings<ShapeSettings>())
-        .field("thickness_mm", &OrganSettings::thickness_mm, "mm", "above 0 to 1000",
+        .field("thickness_mm", &OrganSettings::thickness_mm, "mm", above(0.0, 1000.0),
                "wall thickness of a surface organ simulated as a shell")
-        .field("enclosed_volume_tolerance", &OrganSettings::enclosed_volume_tolerance, "", "0 to 0.5",
+        .field("enclosed_volume_tolerance", &OrganSettings::enclosed_volume_tolerance, "", range(0.0, 0.5),
                "a closed shell's enclosed volume kept within this fraction of rest (unset: free)");
     return d.fields();
   }();
@@ -224,13 +285,13 @@ const std::vector<SettingField<AnatomySettings>>& declared_settings<AnatomySetti
   static const auto fields = [] {
     SettingsDeclaration<AnatomySettings> d;
     d.shaping(cached_anatomy)
-        .field("variation", &AnatomySettings::variation, "relative size", "0 to 0.3",
+        .field("variation", &AnatomySettings::variation, "relative size", range(0.0, 0.3),
                "seeded relative variation of organ sizes (0: exact)")
         .field("base_mesh_triangles", &AnatomySettings::base_mesh_triangles, "", k_triangles,
                "patch base mesh size per organ (the anatomy's accuracy knob)")
-        .field("tet_size_mm", &AnatomySettings::tet_size_mm, "mm", "0.5 to 500",
+        .field("tet_size_mm", &AnatomySettings::tet_size_mm, "mm", range(0.5, 500.0),
                "element size of one conforming tet mesh per simulated body (0: each organ's own mesh)")
-        .field("tet_facet_distance_mm", &AnatomySettings::tet_facet_distance_mm, "mm", "0.05 to 100",
+        .field("tet_facet_distance_mm", &AnatomySettings::tet_facet_distance_mm, "mm", range(0.05, 100.0),
                "bound of those meshes' interface distance to the surfaces (0: a tenth of tet_size_mm)")
         .choice("tet_interfaces", &AnatomySettings::tet_interfaces,
                 {{"organs", TetInterfaces::organs}, {"materials", TetInterfaces::materials}},
@@ -250,9 +311,9 @@ const std::vector<SettingField<VoxelizationSettings>>& declared_settings<Voxeliz
     using V = VoxelizationSettings;
     SettingsDeclaration<V> d;
     d.shaping(cached_reference_state)
-        .field("supersampling", &V::supersampling, "", "1 to 16",
+        .field("supersampling", &V::supersampling, "", range(1, 16),
                "samples per voxel edge of the partial-volume fractions")
-        .field("tessellation_tolerance_mm", &V::tessellation_tolerance_mm, "mm", "above 0 to 10",
+        .field("tessellation_tolerance_mm", &V::tessellation_tolerance_mm, "mm", above(0.0, 10.0),
                "patch surface tessellation deviation")
         .shaping(no_cached_result)
         .field("gap_tissue", &V::gap_tissue, "", "air or an organ's tissue",
@@ -299,7 +360,7 @@ const std::vector<SettingField<TissueOverride>>& declared_settings<TissueOverrid
         .field("T1_ms", &TissueOverride::T1_ms, "ms", k_positive, "T1 at the scene's field strength")
         .field("T2_ms", &TissueOverride::T2_ms, "ms", k_positive, "T2")
         .field("T2star_ms", &TissueOverride::T2star_ms, "ms", k_positive, "T2*")
-        .field("PD", &TissueOverride::PD, "units of CSF proton density", "0 to 1.5", "proton density");
+        .field("PD", &TissueOverride::PD, "units of CSF proton density", range(0.0, 1.5), "proton density");
     return d.fields();
   }();
   return fields;
@@ -312,20 +373,26 @@ const std::vector<SettingField<SequenceSettings>>& declared_settings<SequenceSet
     d.shaping(cached_reference_images)
         .field("name", &SequenceSettings::name, "", "a BIDS suffix",
                "the image's BIDS suffix (T1w, T2w, ...)")
+        .required()
         .choice("type", &SequenceSettings::kind, kinds_by_name(sequence_types()),
                 "the sequence (mri/sequences/)")
-        .field("TR_ms", &SequenceSettings::TR_ms, "ms", k_time, "repetition time")
-        .field("TE_ms", &SequenceSettings::TE_ms, "ms", "above 0 to 1e5",
+        // TR_ms is every type's key; the others are their types' (mri/sequences/).
+        .field("TR_ms", &SequenceSettings::TR_ms, "ms", above(0.0, 1e5), "repetition time")
+        .required()
+        .field("TE_ms", &SequenceSettings::TE_ms, "ms", sequence_rule(&SequenceSettings::TE_ms),
                "echo time (bSSFP: TR / 2 unless given)")
-        .field("flip_deg", &SequenceSettings::flip_deg, "degrees", "0 to 180", "flip angle")
-        .field("TI_ms", &SequenceSettings::TI_ms, "ms", k_time, "inversion time (inversion recovery, MPRAGE)")
+        .field("flip_deg", &SequenceSettings::flip_deg, "degrees", sequence_rule(&SequenceSettings::flip_deg),
+               "flip angle")
+        .field("TI_ms", &SequenceSettings::TI_ms, "ms", sequence_rule(&SequenceSettings::TI_ms),
+               "inversion time (inversion recovery, MPRAGE)")
         .choice("readout", &SequenceSettings::readout,
                 {{"gradient_echo", Readout::gradient_echo}, {"spin_echo", Readout::spin_echo}},
                 "inversion recovery's readout")
-        .field("echo_spacing_ms", &SequenceSettings::echo_spacing_ms, "ms", k_time,
+        .field("echo_spacing_ms", &SequenceSettings::echo_spacing_ms, "ms",
+               sequence_rule(&SequenceSettings::echo_spacing_ms),
                "MPRAGE: gradient-echo spacing in the train")
-        .field("turbo_factor", &SequenceSettings::turbo_factor, "", "1 to 1024",
-               "MPRAGE: echoes per inversion");
+        .field("turbo_factor", &SequenceSettings::turbo_factor, "",
+               sequence_rule(&SequenceSettings::turbo_factor), "MPRAGE: echoes per inversion");
     return d.fields();
   }();
   return fields;
@@ -338,19 +405,20 @@ const std::vector<SettingField<AcquisitionSettings>>& declared_settings<Acquisit
     SettingsDeclaration<A> d;
     d.shaping(cached_reference_images)
         .field("kspace", &A::kspace, "", "", "simulate k-space truncation (Gibbs ringing)")
-        .field("kspace_oversampling", &A::kspace_oversampling, "", "1 to 8",
+        .field("kspace_oversampling", &A::kspace_oversampling, "", range(1, 8),
                "object samples per acquired sample along each axis")
         .field("acquired_voxel_mm", &A::acquired_voxel_mm, "mm", k_positive,
                "acquired voxel size along i, j, k (instead of kspace_oversampling)")
-        .field("slice_thickness_mm", &A::slice_thickness_mm, "mm", "0 to 100",
+        .scalar_allowed()
+        .field("slice_thickness_mm", &A::slice_thickness_mm, "mm", range(0.0, 100.0),
                "rectangular slice profile along k (0: a 3-D acquisition)")
-        .field("noise_percent", &A::noise_percent, "percent", "0 to 100",
+        .field("noise_percent", &A::noise_percent, "percent", range(0.0, 100.0),
                "100 sigma / signal of the reference tissue")
         .field("noise_reference_tissue", &A::noise_reference_tissue, "", "a tissue",
                "the noise's reference tissue")
-        .field("bias_percent", &A::bias_percent, "percent", "0 to 100",
+        .field("bias_percent", &A::bias_percent, "percent", range(0.0, 100.0),
                "peak-to-peak multiplicative bias field")
-        .field("coils", &A::coils, "", "1 to 64", "receive coils combined by sum of squares")
+        .field("coils", &A::coils, "", range(1, 64), "receive coils combined by sum of squares")
         .field("receiver_gain", &A::receiver_gain, "scanner units per proton-density unit", k_positive,
                "the same gain for every image (unset: each sequence's automatic gain)")
         .shaping(no_cached_result)
@@ -371,9 +439,12 @@ const std::vector<SettingField<TissueRegionSettings>>& declared_settings<TissueR
     d.shaping(cached_reference_images)
         .field("organ", &TissueRegionSettings::organ, "", "an organ of an atlas's labels",
                "the organ the region lies in")
+        .required()
         .field("label", &TissueRegionSettings::label, "", "a label of that atlas",
                "the atlas label that selects the region's voxels (and names its dseg label)")
-        .field("tissue", &TissueRegionSettings::tissue, "", "a tissue", "the region's tissue");
+        .required()
+        .field("tissue", &TissueRegionSettings::tissue, "", "a tissue", "the region's tissue")
+        .required();
     return d.fields();
   }();
   return fields;
@@ -391,13 +462,16 @@ const std::vector<SettingField<TextureSettings>>& declared_settings<TextureSetti
             "where the deviations come from (none: no texture)")
         .field("tissues", &T::tissues, "", "tissues of the phantom", "the textured tissues (empty: all)")
         .field("scan", &T::scan, "", "a NIfTI file covering the anatomy",
-               "source: scan, the scan (empty: the atlas's T1 scan)")
-        .field("T1_gain", &T::T1_gain, "", "0 to 5", "T1 x exp(-T1_gain d)")
-        .field("PD_gain", &T::PD_gain, "", "0 to 5", "PD x exp(PD_gain d)")
-        .field("max_deviation", &T::max_deviation, "", "above 0 to 0.9", "d clamped to +-max_deviation")
-        .field("random_sd", &T::random_sd, "", "0 to 0.5", "source: random, standard deviation of d")
-        .field("correlation_mm", &T::correlation_mm, "mm", "0 to 50",
-               "source: random, standard deviation of the smoothing Gaussian");
+               "source: scan or spectrum: scan, the scan (empty: the atlas's T1 scan)")
+        .field("T1_gain", &T::T1_gain, "", range(0.0, 5.0), "T1 x exp(-T1_gain d)")
+        .field("PD_gain", &T::PD_gain, "", range(0.0, 5.0), "PD x exp(PD_gain d)")
+        .field("max_deviation", &T::max_deviation, "", above(0.0, 0.9), "d clamped to +-max_deviation")
+        .field("random_sd", &T::random_sd, "", range(0.0, 0.5), "source: random, standard deviation of d")
+        .field("correlation_mm", &T::correlation_mm, "mm", range(0.0, 50.0),
+               "source: random, standard deviation of the smoothing Gaussian")
+        .choice("spectrum", &T::spectrum, {{"given", RandomSpectrum::given}, {"scan", RandomSpectrum::scan}},
+                "source: random, the figures: given (random_sd, correlation_mm) or measured per tissue on "
+                "the scan");
     return d.fields();
   }();
   return fields;
@@ -408,8 +482,9 @@ const std::vector<SettingField<MriSettings>>& declared_settings<MriSettings>() {
   static const auto fields = [] {
     SettingsDeclaration<MriSettings> d;
     d.shaping(cached_reference_images)
-        .field("field_strength_T", &MriSettings::field_strength_T, "T", "above 0 to 11.7",
+        .field("field_strength_T", &MriSettings::field_strength_T, "T", above(0.0, 11.7),
                "main field strength")
+        .required()
         .list("tissues", &MriSettings::tissues, "tissue values replacing or completing the built-in table",
               declared_settings<TissueOverride>())
         .list("sequences", &MriSettings::sequences, "the images to make",
@@ -448,7 +523,7 @@ const std::vector<SettingField<OutputSettings>>& declared_settings<OutputSetting
         .field("displacement_fields", &O::displacement_fields, "", "", "displacement fields")
         .field("jacobian", &O::jacobian, "", "", "Jacobian determinants")
         .field("landmarks", &O::landmarks, "", "", "landmarks")
-        .field("dense_landmarks", &O::dense_landmarks, "points per organ", "0 to 9999",
+        .field("dense_landmarks", &O::dense_landmarks, "points per organ", range(0, 9999),
                "seeded material points per closed organ beside the landmarks, exact in both states (0: none)")
         .field("meshes", &O::meshes, "", "", "organ meshes")
         .field("vdb", &O::vdb, "", "", "OpenVDB level sets")
@@ -467,9 +542,11 @@ const std::vector<SettingField<MaterialSettings>>& declared_settings<MaterialSet
     SettingsDeclaration<M> d;
     // The solve's stiffness and masses; no cached result holds them.
     d.field("name", &M::name, "", "a safe name", "the material's name, its key")
-        .field("youngs_modulus_Pa", &M::youngs_modulus_Pa, "Pa", "above 0 to 1e12", "Young's modulus")
-        .field("poisson_ratio", &M::poisson_ratio, "", "0 to below 0.5", "Poisson ratio")
-        .field("density_kg_m3", &M::density_kg_m3, "kg/m^3", "above 0 to 1e5", "density, for lumped masses");
+        .field("youngs_modulus_Pa", &M::youngs_modulus_Pa, "Pa", above(0.0, 1e12), "Young's modulus")
+        .required()
+        .field("poisson_ratio", &M::poisson_ratio, "", below_half(), "Poisson ratio")
+        .required()
+        .field("density_kg_m3", &M::density_kg_m3, "kg/m^3", above(0.0, 1e5), "density, for lumped masses");
     return d.fields();
   }();
   return fields;
@@ -482,14 +559,14 @@ const std::vector<SettingField<SolverSettings>>& declared_settings<SolverSetting
     SettingsDeclaration<V> d;
     d.choice("method", &V::method, by_name(solver_types(), &SolverType::method),
              "the solver (sim/solver_types/); those that step in time need mode dynamic")
-        .field("max_iterations", &V::max_iterations, "", "1 to 1000000", "iterations per solve at most")
-        .field("relative_energy_tolerance", &V::relative_energy_tolerance, "", "0 to 1",
+        .field("max_iterations", &V::max_iterations, "", range(1, 1000000), "iterations per solve at most")
+        .field("relative_energy_tolerance", &V::relative_energy_tolerance, "", range(0.0, 1.0),
                "stop when an iteration lowers the energy by less than this fraction of it")
-        .field("position_tolerance_mm", &V::position_tolerance_mm, "mm", "0 or above",
+        .field("position_tolerance_mm", &V::position_tolerance_mm, "mm", non_negative(""),
                "stop when no vertex moves further in one iteration")
-        .field("relative_residual_tolerance", &V::relative_residual_tolerance, "", "0 to 1",
+        .field("relative_residual_tolerance", &V::relative_residual_tolerance, "", range(0.0, 1.0),
                "converged when the largest free gradient row is at most this fraction of the force scale")
-        .field("threads", &V::threads, "", "0 to 1024", "solver threads (0: all cores)");
+        .field("threads", &V::threads, "", range(0, 1024), "solver threads (0: all cores)");
     return d.fields();
   }();
   return fields;
@@ -537,12 +614,14 @@ const std::vector<SettingField<ObstacleSettings>>& declared_settings<ObstacleSet
     d.choice("type", &O::shape,
              {{"half_space", ObstacleShape::half_space}, {"sphere", ObstacleShape::sphere}},
              "the obstacle's shape")
+        .required()
         .field("point_mm", &O::point_mm, "mm", k_coordinate,
                "half_space: a point of its plane; sphere: its centre (scene key center_mm)")
-        .field("normal", &O::normal, "", "-1e6 to 1e6, not zero",
+        .field("normal", &O::normal, "", range(-1e6, 1e6),
                "half_space: unit normal out of the obstacle, towards the tissue")
+        .bounds_note("not zero")
         .field("radius_mm", &O::radius_mm, "mm", k_positive, "sphere: its radius")
-        .field("displacement_mm", &O::displacement_mm, "mm", "-1000 to 1000",
+        .field("displacement_mm", &O::displacement_mm, "mm", range(-1000.0, 1000.0),
                "how far it moves: over the load steps, or by its motion in a dynamic scene")
         .choice("motion", &O::motion, motion_profiles(), "how it moves in a dynamic scene")
         .field("period_s", &O::period_s, "s", k_positive, "the ramp's duration or the sine's period");
@@ -573,8 +652,8 @@ const std::vector<SettingField<OrganMechanics>>& declared_settings<OrganMechanic
         .field("material", &O::material, "", "a material of the scene's materials", "the organ's material")
         .field("solid", &O::solid, "", "", "tetrahedralized interior, or a surface simulated as a shell")
         .shaping(no_cached_result)
-        .field("thickness_mm", &O::thickness_mm, "mm", "above 0 to 1000", "a shell's wall thickness")
-        .field("enclosed_volume_tolerance", &O::enclosed_volume_tolerance, "", "0 to 0.5",
+        .field("thickness_mm", &O::thickness_mm, "mm", above(0.0, 1000.0), "a shell's wall thickness")
+        .field("enclosed_volume_tolerance", &O::enclosed_volume_tolerance, "", range(0.0, 0.5),
                "a closed shell's enclosed volume kept within this fraction of rest (unset: free)");
     return d.fields();
   }();
@@ -595,10 +674,11 @@ const std::vector<SettingField<DeformationSettings>>& declared_settings<Deformat
                  {"quasi_static", DeformationMode::quasi_static},
                  {"dynamic", DeformationMode::dynamic}},
                 "none: the deformed state is the reference; quasi_static: equilibrium; dynamic: frames")
+        .required()
         .shaping(no_cached_result)
         .nested("solver", &D::solver, declared_settings<SolverSettings>())
-        .field("time_step_s", &D::time_step_s, "s", "1e-6 to 10", "time step (dynamic)")
-        .field("frames", &D::frames, "", "1 to 100000", "frames (dynamic)")
+        .field("time_step_s", &D::time_step_s, "s", range(1e-6, 10.0), "time step (dynamic)")
+        .field("frames", &D::frames, "", range(1, 100000), "frames (dynamic)")
         .shaping(cached_body_meshes)
         .custom<std::vector<std::string>>("fixed", &D::fixed, "list of text", "", "organs held in place",
                                           SettingValue<std::vector<std::string>>::exact,
@@ -616,7 +696,7 @@ const std::vector<SettingField<DeformationSettings>>& declared_settings<Deformat
         .list("collisions", &D::collisions, "pairs of organs in frictionless contact",
               declared_settings<CollisionSettings>())
         .shaping(no_cached_result)
-        .field("load_steps", &D::load_steps, "", "1 to 10000",
+        .field("load_steps", &D::load_steps, "", range(1, 10000),
                "quasi-static: loads and obstacles applied in this many equal increments")
         .choice("volume", &D::volume,
                 {{"per_tet", VolumeFormulation::tet},
@@ -703,8 +783,8 @@ std::vector<const void*> settings_members(const TissueRegionSettings& s) {
 }
 
 std::vector<const void*> settings_members(const TextureSettings& s) {
-  const auto& [source, tissues, scan, T1_gain, PD_gain, max_deviation, random_sd, correlation] = s;
-  return {&source, &tissues, &scan, &T1_gain, &PD_gain, &max_deviation, &random_sd, &correlation};
+  const auto& [source, tissues, scan, T1_gain, PD_gain, max_deviation, random_sd, correlation, spectrum] = s;
+  return {&source, &tissues, &scan, &T1_gain, &PD_gain, &max_deviation, &random_sd, &correlation, &spectrum};
 }
 
 std::vector<const void*> settings_members(const MriSettings& s) {

@@ -38,50 +38,6 @@ std::string closest_key(const std::string& key, const std::vector<std::string>& 
 
 } // namespace
 
-std::string NumberRule::describe() const {
-  std::string text = "a number";
-  if (unit[0] != '\0') text += std::string(" in ") + unit;
-  const bool has_min = std::isfinite(min), has_max = std::isfinite(max);
-  if (has_min && has_max) {
-    text += std::string(" in ") + (min_exclusive ? "(" : "[") + format_number(min) + ", " +
-            format_number(max) + (max_exclusive ? ")" : "]");
-  } else if (has_min) {
-    text += (min_exclusive ? " greater than " : " at least ") + format_number(min);
-  } else if (has_max) {
-    text += (max_exclusive ? " less than " : " at most ") + format_number(max);
-  }
-  return text;
-}
-
-bool NumberRule::accepts(double value) const {
-  if (min_exclusive ? !(value > min) : !(value >= min)) return false;
-  if (max_exclusive ? !(value < max) : !(value <= max)) return false;
-  return true;
-}
-
-NumberRule positive(const char* unit) {
-  NumberRule rule;
-  rule.min = 0.0;
-  rule.min_exclusive = true;
-  rule.unit = unit;
-  return rule;
-}
-
-NumberRule non_negative(const char* unit) {
-  NumberRule rule;
-  rule.min = 0.0;
-  rule.unit = unit;
-  return rule;
-}
-
-NumberRule between(double min, double max, const char* unit) {
-  NumberRule rule;
-  rule.min = min;
-  rule.max = max;
-  rule.unit = unit;
-  return rule;
-}
-
 YamlContext::YamlContext(std::string file, std::vector<Diagnostic>& problems,
                          std::map<std::string, SourceLocation>& locations)
     : m_file(std::move(file)), m_problems(problems), m_locations(locations) {}

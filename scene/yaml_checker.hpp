@@ -5,6 +5,7 @@
 // Reading YAML with a diagnostic for every mistake. Internal to the scene target: yaml-cpp
 // types do not appear in the scene's public header.
 
+#include "core/number_rule.hpp"
 #include "scene/diagnostic.hpp"
 
 #include <Eigen/Core>
@@ -17,22 +18,6 @@
 #include <vector>
 
 namespace phantasm::scene_detail {
-
-/// The allowed range of a number, and its unit for messages.
-struct NumberRule {
-  double min = -std::numeric_limits<double>::infinity();
-  double max = std::numeric_limits<double>::infinity();
-  bool min_exclusive = false;
-  bool max_exclusive = false;
-  const char* unit = "";
-
-  std::string describe() const; ///< e.g. "a number in mm greater than 0"
-  bool accepts(double value) const;
-};
-
-NumberRule positive(const char* unit);
-NumberRule non_negative(const char* unit);
-NumberRule between(double min, double max, const char* unit);
 
 /// Collects problems and key locations while a file is read.
 class YamlContext {

@@ -75,11 +75,20 @@ TEST(SettingsDeclarations, LoadSettingsAreDeclaredFromTheLoadTypeRegistry) {
       ASSERT_TRUE(fields.count(p.key)) << "a scene key of a load type that no declared setting has";
       EXPECT_EQ(fields.at(p.key)->unit, p.unit);
       EXPECT_NE(fields.at(p.key)->help.find(type->name), std::string::npos);
+      // The bounds the parser checks (the parameter's) are the declared ones.
+      if (p.kind == LoadParameter::Kind::number || p.kind == LoadParameter::Kind::vector3) {
+        ASSERT_TRUE(fields.at(p.key)->rule);
+        const NumberRule& rule = *fields.at(p.key)->rule;
+        EXPECT_EQ(rule.min, p.min);
+        EXPECT_EQ(rule.max, p.max);
+        EXPECT_EQ(rule.min_exclusive, p.min_exclusive);
+        EXPECT_EQ(rule.max_exclusive, p.max_exclusive);
+      }
     }
   }
   EXPECT_EQ(fields.at("volume_change")->bounds, "above -1 to 10");
   EXPECT_EQ(fields.at("region.radius_mm")->bounds, "above 0");
-  EXPECT_EQ(fields.at("rotation.axis")->bounds, "-1e+06 to 1e+06, not zero");
+  EXPECT_EQ(fields.at("rotation.axis")->bounds, "-1e6 to 1e6, not zero");
   EXPECT_EQ(fields.at("organ")->help, "displacement, growth: the organ it acts on");
   EXPECT_EQ(fields.at("type")->keys, unsigned{cached_body_meshes});
   EXPECT_EQ(fields.at("acceleration_m_s2")->keys, unsigned{no_cached_result});
