@@ -7,9 +7,11 @@
 #include "io/nifti_file.hpp"
 #include "io/shape_files.hpp"
 #include "voxelize/material_maps.hpp"
+#include "voxelize/texture_spectrum.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <set>
 
 namespace phantasm {
@@ -123,6 +125,13 @@ std::vector<float> scan_on_grid(const std::filesystem::path& path, const Voxeliz
   return on_grid;
 }
 
+/// A measured figure with 3 significant digits, for the description.
+std::string three_digits(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", value);
+  return text;
+}
+
 void attach_texture(const Scene& scene, VoxelizedPhantom& v, StageReport& report) {
   const TextureSettings& t = scene.mri.texture;
   const std::vector<bool> textured = textured_tissues(t, v.tissues);
@@ -131,14 +140,48 @@ void attach_texture(const Scene& scene, VoxelizedPhantom& v, StageReport& report
   for (std::size_t k = 0; k < textured.size(); ++k)
     if (textured[k]) names += (names.empty() ? "" : ", ") + v.tissues[k];
   std::string description;
+  const std::filesystem::path path =
+      t.scan.empty() ? default_colin27_templates_dir() / "ch2.nii.gz" : std::filesystem::path(t.scan);
+  const std::uint64_t seed = scene.seed * 0x9E3779B97F4A7C15ull + 0x7E57u;
   if (t.source == TextureSource::scan) {
-    const std::filesystem::path path =
-        t.scan.empty() ? default_colin27_templates_dir() / "ch2.nii.gz" : std::filesystem::path(t.scan);
     v.reference_texture =
         texture_from_intensity(v.reference, textured, scan_on_grid(path, v, textured), gains);
     description = "from the scan " + path.string() + ": d = intensity / its mean over the tissue - 1";
+  } else if (t.spectrum == RandomSpectrum::scan) {
+    // Each textured tissue's figures measured on the scan (d as the scan texture's, clamped
+    // alike), then a seeded field per tissue with them: the correlated part's standard deviation,
+    // the white share (the scan's noise, which the images add their own of) left out.
+    std::vector<int> region(v.reference.labels.size(), -1);
+    for (std::size_t voxel = 0; voxel < region.size(); ++voxel) {
+      const int tissue = v.reference.label_tissues[static_cast<std::size_t>(v.reference.labels[voxel])];
+      if (tissue >= 0 && textured[static_cast<std::size_t>(tissue)]) region[voxel] = tissue;
+    }
+    TextureSpectrumOptions options;
+    options.max_deviation = t.max_deviation;
+    const std::vector<TextureSpectrum> measured = measure_texture_spectra(
+        v.grid, scan_on_grid(path, v, textured), region, static_cast<int>(v.tissues.size()), options);
+    std::vector<TextureField> fields(v.tissues.size());
+    std::string figures;
+    for (std::size_t k = 0; k < measured.size(); ++k) {
+      if (!textured[k] || !measured[k].voxels) continue;
+      const TextureSpectrum& m = measured[k];
+      fields[k] = {m.texture_sd, m.correlation_mm};
+      figures += (figures.empty() ? "" : "; ") + v.tissues[k] + " sd " + three_digits(m.texture_sd) + ", s " +
+                 three_digits(m.correlation_mm) + " mm (measured sd " + three_digits(m.deviation_sd) +
+                 ", white share " + three_digits(m.white_share) + ", " + std::to_string(m.voxels) +
+                 " voxels)";
+      report.accuracy["texture " + v.tissues[k] + " sd"] = m.texture_sd;
+      report.accuracy["texture " + v.tissues[k] + " correlation mm"] = m.correlation_mm;
+      report.accuracy["texture " + v.tissues[k] + " white share"] = m.white_share;
+    }
+    v.reference_texture = texture_from_random_fields(v.grid, v.reference, textured, seed, fields, gains);
+    description = "from seeded random fields (seed " + std::to_string(scene.seed) +
+                  "), one per tissue, with the spectrum measured on the scan " + path.string() +
+                  " (d = intensity / its mean over the tissue - 1; its autocorrelation at lags of 1 to 12 "
+                  "voxels fitted by a exp(-r^2 / (4 s^2)), white Gaussian noise smoothed by a Gaussian of s, "
+                  "the white share 1 - a left out): " +
+                  figures;
   } else {
-    const std::uint64_t seed = scene.seed * 0x9E3779B97F4A7C15ull + 0x7E57u;
     v.reference_texture =
         texture_from_random_field(v.grid, v.reference, textured, seed, t.correlation_mm, t.random_sd, gains);
     description = "from a seeded random field (seed " + std::to_string(scene.seed) +
@@ -175,7 +218,8 @@ std::string material_maps_key_text(const Scene& scene) {
   const TextureSettings& t = scene.mri.texture;
   text += std::string("texture ") + to_string(t.source) + " " + t.scan + " " + exact_text(t.T1_gain) + " " +
           exact_text(t.PD_gain) + " " + exact_text(t.max_deviation) + " " + exact_text(t.random_sd) + " " +
-          exact_text(t.correlation_mm) + " seed " + std::to_string(scene.seed);
+          exact_text(t.correlation_mm) + " spectrum " +
+          (t.spectrum == RandomSpectrum::scan ? "scan" : "given") + " seed " + std::to_string(scene.seed);
   for (const std::string& tissue : t.tissues)
     text += " " + tissue;
   return text + "\n";

@@ -300,6 +300,75 @@ TextureMaps texture_from_random_field(const ImageGrid& grid, const TissueVolumes
   return texture_of(volumes, textured, field, gains);
 }
 
+TextureMaps texture_from_random_fields(const ImageGrid& grid, const TissueVolumes& volumes,
+                                       const std::vector<bool>& textured, std::uint64_t seed,
+                                       const std::vector<TextureField>& fields, const TextureGains& gains) {
+  const auto count = static_cast<std::size_t>(grid.voxel_count());
+  if (volumes.labels.size() != count)
+    throw std::invalid_argument("texture_from_random_fields: volumes of another grid");
+  const std::size_t tissues = textured.size();
+  if (fields.size() < tissues)
+    throw std::invalid_argument("texture_from_random_fields: a field per tissue expected");
+  // The box of each textured tissue's voxels.
+  std::vector<Eigen::Vector3i> low(tissues, grid.dims), high(tissues, Eigen::Vector3i::Constant(-1));
+  for (int k = 0; k < grid.dims.z(); ++k)
+    for (int j = 0; j < grid.dims.y(); ++j)
+      for (int i = 0; i < grid.dims.x(); ++i) {
+        const int tissue = textured_tissue(volumes, textured, index_of(grid.dims, i, j, k));
+        if (tissue < 0) continue;
+        const auto t = static_cast<std::size_t>(tissue);
+        low[t] = low[t].cwiseMin(Eigen::Vector3i(i, j, k));
+        high[t] = high[t].cwiseMax(Eigen::Vector3i(i, j, k));
+      }
+  std::vector<float> deviation(count, 0.0f);
+  for (std::size_t t = 0; t < tissues; ++t) {
+    if (!textured[t] || high[t].x() < 0) continue;
+    const TextureField& figures = fields[t];
+    Eigen::Vector3i from, dims;
+    for (int a = 0; a < 3; ++a) {
+      const int margin = static_cast<int>(std::ceil(3.0 * figures.correlation_mm / grid.spacing_mm[a])) + 1;
+      from[a] = low[t][a] - margin; // beyond the grid too: no edge within the smoothing's reach
+      dims[a] = high[t][a] + margin - from[a] + 1;
+    }
+    // One generator per tissue: its seed mixes the run's with the tissue's index (splitmix64).
+    std::uint64_t mixed = seed + 0x9E3779B97F4A7C15ull * (static_cast<std::uint64_t>(t) + 1);
+    mixed = (mixed ^ (mixed >> 30)) * 0xBF58476D1CE4E5B9ull;
+    mixed = (mixed ^ (mixed >> 27)) * 0x94D049BB133111EBull;
+    std::mt19937_64 random(mixed ^ (mixed >> 31));
+    std::normal_distribution<double> normal(0.0, 1.0);
+    std::vector<float> field(static_cast<std::size_t>(dims.x()) * static_cast<std::size_t>(dims.y()) *
+                             static_cast<std::size_t>(dims.z()));
+    for (float& value : field)
+      value = static_cast<float>(normal(random));
+    for (int axis = 0; axis < 3; ++axis)
+      blur_axis(field, dims, axis, figures.correlation_mm / grid.spacing_mm[axis]);
+    double sum = 0.0, squares = 0.0;
+    std::size_t n = 0;
+    auto for_tissue_voxels = [&](auto&& visit) {
+      for (int k = 0; k < dims.z(); ++k)
+        for (int j = 0; j < dims.y(); ++j)
+          for (int i = 0; i < dims.x(); ++i) {
+            const Eigen::Vector3i at = from + Eigen::Vector3i(i, j, k);
+            if ((at.array() < 0).any() || (at.array() >= grid.dims.array()).any()) continue;
+            const std::size_t v = index_of(grid.dims, at.x(), at.y(), at.z());
+            if (textured_tissue(volumes, textured, v) == static_cast<int>(t))
+              visit(v, field[index_of(dims, i, j, k)]);
+          }
+    };
+    for_tissue_voxels([&](std::size_t, float value) {
+      sum += value;
+      squares += static_cast<double>(value) * value;
+      ++n;
+    });
+    const double mean = sum / static_cast<double>(n);
+    const double sd = std::sqrt(std::max(0.0, squares / static_cast<double>(n) - mean * mean));
+    for_tissue_voxels([&](std::size_t v, float value) {
+      deviation[v] = sd > 0.0 ? static_cast<float>((value - mean) / sd * figures.deviation_sd) : 0.0f;
+    });
+  }
+  return texture_of(volumes, textured, deviation, gains);
+}
+
 TextureMaps carry_texture(const ImageGrid& grid, const TextureMaps& reference,
                           const std::vector<float>& def_to_ref) {
   TextureMaps out;

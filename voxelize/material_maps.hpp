@@ -89,6 +89,25 @@ TextureMaps texture_from_random_field(const ImageGrid& grid, const TissueVolumes
                                       const std::vector<bool>& textured, std::uint64_t seed,
                                       double correlation_mm, double deviation_sd, const TextureGains& gains);
 
+/// The figures of one tissue's random texture.
+struct TextureField {
+  double deviation_sd = 0.0;   ///< standard deviation of d over the tissue's voxels
+  double correlation_mm = 0.0; ///< standard deviation of the Gaussian that smooths the white noise
+};
+
+/// A texture from seeded random fields, one per textured tissue, each with its own figures (as
+/// measured on a scan: voxelize/texture_spectrum.hpp): for tissue t, white Gaussian noise drawn
+/// from a generator seeded by `seed` and t over the box of the tissue's voxels (widened by three
+/// of its smoothing Gaussian's standard deviations, past the grid's edges if need be, so that no
+/// edge falls within the smoothing's reach of a tissue voxel), smoothed, scaled to
+/// fields[t].deviation_sd over the tissue's voxels, is the deviation d of those voxels. The same
+/// seed gives the same maps.
+/// @param fields per tissue of the volumes (used for the textured ones)
+/// @throws std::invalid_argument for volumes of another grid or too few fields
+TextureMaps texture_from_random_fields(const ImageGrid& grid, const TissueVolumes& volumes,
+                                       const std::vector<bool>& textured, std::uint64_t seed,
+                                       const std::vector<TextureField>& fields, const TextureGains& gains);
+
 /// The reference state's texture carried to the deformed state (carry_values(), 1 outside the grid).
 TextureMaps carry_texture(const ImageGrid& grid, const TextureMaps& reference,
                           const std::vector<float>& def_to_ref);

@@ -54,16 +54,20 @@ void expect_texture_moves(const fs::path& out) {
 
 } // namespace
 
-// A random texture and a scan texture: in both, the deformed T1 and PD maps are the reference
-// maps warped through the ground-truth field inside the exact mask (and not the unwarped ones);
-// the maps' sidecars and the provenance record the texture.
+// A random texture, a scan texture and a random texture with the scan's spectrum: in each, the deformed T1
+// and PD maps are the reference maps warped through the ground-truth field inside the exact mask (and not the
+// unwarped ones); the maps' sidecars and the provenance record the texture.
 TEST(MaterialMapsRun, TextureMovesWithTheTissue) {
   const fs::path root = fresh_folder("texture-moves");
   for (const std::string& texture :
        {std::string("texture: {source: random, correlation_mm: 4, random_sd: 0.08}"),
         // the scan named relative to the scene's folder, as organs' files are
         "texture: {source: scan, tissues: [gray_matter, white_matter], scan: " +
-            smooth_scan(root / "scan.nii.gz", 70.0).filename().string() + "}"}) {
+            smooth_scan(root / "scan.nii.gz", 70.0).filename().string() + "}",
+        // a field per tissue with the spectrum measured on the scan
+        std::string(
+            "texture: {source: random, spectrum: scan, PD_gain: 1, tissues: [gray_matter, white_matter], "
+            "scan: scan.nii.gz}")}) {
     SCOPED_TRACE(texture);
     const fs::path out = root / "out";
     const CommandResult run = run_command(
@@ -77,12 +81,17 @@ TEST(MaterialMapsRun, TextureMovesWithTheTissue) {
     EXPECT_EQ(nlohmann::json::parse(read_file(anat / "sub-01_ses-def_T2map.json")).at("Texture"), "none");
     const std::string provenance = read_file(out / "derivatives" / "phantasm" / "sub-01" / "provenance.json");
     EXPECT_NE(provenance.find("\"texture\""), std::string::npos);
+    if (texture.find("spectrum: scan") != std::string::npos) { // the measured figures recorded
+      EXPECT_NE(sidecar.at("Texture").get<std::string>().find("white_matter sd "), std::string::npos)
+          << sidecar.dump();
+    }
   }
 }
 
 // Bad settings: a texture scan that does not cover the anatomy (named, with the tissue), a
 // region's tissue without the values a sequence needs at the field strength, a region of an organ
-// that is not an atlas's, a textured tissue the phantom lacks: exit 2, nothing written.
+// that is not an atlas's, a textured tissue the phantom lacks, spectrum: scan without a random
+// source, a spectrum's scan that does not cover the anatomy: exit 2, nothing written.
 TEST(MaterialMapsRun, BadTextureAndRegionSettingsAreNamedAndNothingIsWritten) {
   const fs::path root = fresh_folder("texture-bad");
   const fs::path small_scan = smooth_scan(root / "small.nii.gz", 20.0);
@@ -92,6 +101,9 @@ TEST(MaterialMapsRun, BadTextureAndRegionSettingsAreNamedAndNothingIsWritten) {
       {"tissue_regions:\n  - {organ: white_matter, label: caudate, tissue: globus_pallidus}\n",
        {"tissue_regions[0].organ", "label volume of an atlas", "globus_pallidus", "T1_ms"}},
       {"texture: {source: random, tissues: [bone_marrow]}", {"texture.tissues[0]", "bone_marrow"}},
+      {"texture: {source: scan, spectrum: scan}", {"texture.spectrum", "source: random"}},
+      {"texture: {source: random, spectrum: scan, scan: " + small_scan.string() + "}",
+       {small_scan.string(), "covers the anatomy", "texture.scan"}},
   };
   for (const auto& [extra, expected] : cases) {
     SCOPED_TRACE(extra);
