@@ -85,6 +85,19 @@ std::set<std::string> read_declared_keys(CheckedMap& map, S& s, const std::vecto
   return read;
 }
 
+/// Reads the declared key `key` into `s`, required as the caller says: for a key that one variant
+/// of a family needs and another does not (a sequence type's parameter), its type and choices
+/// still the declaration's.
+/// @return whether the key was present and accepted
+template <typename S>
+bool read_declared_key(CheckedMap& map, S& s, const std::string& key, bool required) {
+  SettingField<S> f = declared_field<S>(key);
+  if (!f.read) throw std::logic_error("declared setting " + key + " has no plain key");
+  f.required = required;
+  CheckedMapReader reader(map);
+  return read_field(reader, f, s);
+}
+
 /// Reads every plain key of S's declaration but those of `except`, in declaration order.
 /// @return the keys read (present and accepted)
 template <typename S>

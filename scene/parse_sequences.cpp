@@ -30,12 +30,10 @@ void parse_sequence(CheckedMap& map, SequenceSettings& sequence) {
     case SequenceParameter::Kind::integer:
       map.integer(p.key, sequence.*p.integer, static_cast<int>(p.min), static_cast<int>(p.max), p.required);
       break;
-    case SequenceParameter::Kind::readout: {
-      std::string readout;
-      if (map.choice(p.key, readout, {"gradient_echo", "spin_echo"}, p.required))
-        sequence.readout = readout == "spin_echo" ? Readout::spin_echo : Readout::gradient_echo;
+    case SequenceParameter::Kind::readout:
+      // The readouts and their names are the declaration's (scene/settings_declarations.cpp).
+      read_declared_key(map, sequence, p.key, p.required);
       break;
-    }
     }
   }
 }

@@ -189,6 +189,30 @@ TEST(ParseScene, SequenceTimingsAreCheckedAgainstEachOther) {
             std::string::npos);
 }
 
+TEST(ParseScene, InversionRecoveryReadoutIsOneOfTheDeclaredReadouts) {
+  const std::string ir = "{name: FLAIR, type: inversion_recovery, TR_ms: 9000, TI_ms: 2500, TE_ms: 80";
+  const auto scene_of = [&](const std::string& readout) {
+    return k_minimal + "sequences:\n  - " + ir + readout + "}\n";
+  };
+  const Scene spin = *parse(scene_of(", readout: spin_echo")).scene;
+  EXPECT_EQ(spin.mri.sequences.at(0).readout, Readout::spin_echo);
+  const Scene gradient = *parse(scene_of(", readout: gradient_echo")).scene;
+  EXPECT_EQ(gradient.mri.sequences.at(0).readout, Readout::gradient_echo);
+  const std::string wrong = only_problem(scene_of(", readout: echo_planar"));
+  EXPECT_NE(wrong.find("sequences[0].readout: expected one of gradient_echo, spin_echo, found 'echo_planar'"),
+            std::string::npos)
+      << wrong;
+  // The inversion-recovery type requires it.
+  const std::string missing = only_problem(scene_of(""));
+  EXPECT_NE(missing.find("readout"), std::string::npos) << missing;
+  EXPECT_NE(missing.find("gradient_echo, spin_echo"), std::string::npos) << missing;
+  // Other types do not know it.
+  EXPECT_NE(only_problem(k_minimal + "sequences:\n  - {name: T2w, type: spin_echo, TR_ms: 4000, TE_ms: 100, "
+                                     "readout: spin_echo}\n")
+                .find("found unknown key 'readout'"),
+            std::string::npos);
+}
+
 TEST(ParseScene, BssfpEchoTimeDefaultsToHalfTheRepetitionTime) {
   const Scene s =
       *parse(k_minimal + "sequences:\n  - {name: bSSFP, type: bssfp, TR_ms: 5, flip_deg: 50}\n").scene;
