@@ -50,6 +50,39 @@ TEST(TissueTable, MissingValuesStayEmpty) {
   EXPECT_FALSE(table.has_tissue("brain"));
 }
 
+// The deep nuclei's T2* at 3 T: iron shortens it, so the pallidum (most iron) lies below the
+// putamen, the putamen below the caudate, and no nucleus above the cortex; each value names its
+// source, and what no source gave stays empty.
+TEST(TissueTable, DeepNucleiT2starAtThreeTeslaFollowIronAndNameTheirSources) {
+  const TissueTable& table = TissueTable::builtin();
+  const TissueRecord* pallidum = table.find("globus_pallidus", 3.0);
+  const TissueRecord* putamen = table.find("putamen", 3.0);
+  const TissueRecord* caudate = table.find("caudate_nucleus", 3.0);
+  const TissueRecord* thalamus = table.find("thalamus", 3.0);
+  const TissueRecord* cortex = table.find("gray_matter", 3.0);
+  for (const TissueRecord* r : {pallidum, putamen, caudate, thalamus, cortex}) {
+    ASSERT_NE(r, nullptr);
+    ASSERT_TRUE(r->T2star_ms.has_value()) << r->tissue;
+    EXPECT_FALSE(r->T2star_source.empty()) << r->tissue;
+  }
+  EXPECT_LT(*pallidum->T2star_ms, *putamen->T2star_ms);
+  EXPECT_LT(*putamen->T2star_ms, *caudate->T2star_ms);
+  EXPECT_LE(*caudate->T2star_ms, *cortex->T2star_ms);
+  EXPECT_LE(*thalamus->T2star_ms, *cortex->T2star_ms);
+  EXPECT_NE(pallidum->T2star_source.find("Gelman"), std::string::npos);
+  EXPECT_NE(thalamus->T2star_source.find("B0_sim-mapping"), std::string::npos);
+  EXPECT_FALSE(thalamus->T1_ms || thalamus->T2_ms || thalamus->PD);
+  EXPECT_FALSE(pallidum->T1_ms || pallidum->PD);
+  for (const char* name : {"cerebellar_cortex", "cerebellar_white_matter", "pons"}) {
+    for (double field : {1.5, 3.0}) {
+      const TissueRecord* r = table.find(name, field);
+      ASSERT_NE(r, nullptr) << name;
+      EXPECT_FALSE(r->T1_ms || r->T2_ms || r->T2star_ms || r->PD) << name << " at " << field << " T";
+      EXPECT_EQ(r->status, "no source") << name;
+    }
+  }
+}
+
 TEST(TissueTable, MalformedCsvNamesTheRowAndColumn) {
   const std::string header = "tissue,field_T,T1_ms,T2_ms,T2star_ms,PD_rel,T1_source,T2_source,T2star_source,"
                              "PD_source,status,notes\n";
