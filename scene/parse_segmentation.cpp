@@ -19,7 +19,8 @@ struct MappedOrgan {
   std::string inside; ///< the mapping's organ that contains it; empty for the outermost
   bool solid = false;
   std::vector<std::string> names;
-  YAML::Node at = YAML::Node(); ///< its entry in the scene (a list mapping), else undefined
+  std::string material = std::string(); ///< a key of the scene's materials; empty for none
+  YAML::Node at = YAML::Node();         ///< its entry in the scene (a list mapping), else undefined
 };
 
 /// FreeSurfer's structures (the aseg names of FreeSurferColorLUT.txt, which SynthSeg shares) as
@@ -92,7 +93,35 @@ long long label_value(const std::string& text) {
   return value <= 65535 ? value : -1;
 }
 
-/// The mapping's organs: the built-in `freesurfer`, or a list of {organ, tissue, inside, solid, labels}.
+/// Whether `name` matches the shell-style pattern: `*` any run of characters (none too), `?` any
+/// one character, every other character itself.
+bool matches(const std::string& pattern, const std::string& name) {
+  std::size_t p = 0, n = 0, star = std::string::npos, resume = 0;
+  while (n < name.size()) {
+    if (p < pattern.size() && (pattern[p] == '?' || pattern[p] == name[n])) {
+      ++p;
+      ++n;
+    } else if (p < pattern.size() && pattern[p] == '*') {
+      star = p++;
+      resume = n;
+    } else if (star != std::string::npos) {
+      p = star + 1;
+      n = ++resume;
+    } else {
+      return false;
+    }
+  }
+  while (p < pattern.size() && pattern[p] == '*')
+    ++p;
+  return p == pattern.size();
+}
+
+bool is_pattern(const std::string& name) {
+  return name.find_first_of("*?") != std::string::npos;
+}
+
+/// The mapping's organs: the built-in `freesurfer`, or a list of {organ, tissue, material, inside, solid,
+/// labels}.
 std::vector<MappedOrgan> parse_mapping(CheckedMap& map) {
   const YAML::Node node = map.get("mapping");
   const std::string path = map.child_path("mapping");
@@ -125,6 +154,8 @@ std::vector<MappedOrgan> parse_mapping(CheckedMap& map) {
       check_name(map.context(), entry.get("organ"), entry.child_path("organ"), organ.name);
     if (entry.string("tissue", organ.tissue, true))
       check_name(map.context(), entry.get("tissue"), entry.child_path("tissue"), organ.tissue);
+    if (entry.string("material", organ.material))
+      check_name(map.context(), entry.get("material"), entry.child_path("material"), organ.material);
     entry.string("inside", organ.inside);
     entry.boolean("solid", organ.solid);
     entry.string_list("labels", organ.names, true);
@@ -225,20 +256,8 @@ void parse_segmentation(CheckedMap& map, const std::filesystem::path& scene_fold
   }
   double smoothing_mm = 1.0;
   map.number("smoothing_mm", smoothing_mm, declared_rule<ShapeSettings>("smoothing_mm"));
-  const std::vector<MappedOrgan> organs = parse_mapping(map);
+  std::vector<MappedOrgan> organs = parse_mapping(map);
   if (!found || organs.empty()) return;
-  std::map<std::string, std::size_t> organ_of_name;
-  for (std::size_t o = 0; o < organs.size(); ++o) {
-    for (const std::string& name : organs[o].names) {
-      const auto [first, added] = organ_of_name.emplace(name, o);
-      if (!added) {
-        map.context().problem(organs[o].at, map.child_path("mapping") + "[" + std::to_string(o) + "].labels",
-                              "expected each name in one organ, found '" + name + "' in organ " +
-                                  organs[o].name + " and in organ " + organs[first->second].name);
-        return;
-      }
-    }
-  }
 
   std::map<std::int32_t, std::string> table;
   std::set<std::int32_t> present;
@@ -247,6 +266,38 @@ void parse_segmentation(CheckedMap& map, const std::filesystem::path& scene_fold
   } catch (const InputError& error) {
     map.context().problem(map.get("table"), map.child_path("table"), error.what());
     return;
+  }
+  // Patterns (`*`, `?`) stand for the table's names they match, in the table's order.
+  for (std::size_t o = 0; o < organs.size(); ++o) {
+    std::vector<std::string> names;
+    for (const std::string& name : organs[o].names) {
+      if (!is_pattern(name)) {
+        names.push_back(name);
+        continue;
+      }
+      const std::size_t before = names.size();
+      for (const auto& [label, entry] : table)
+        if (matches(name, entry)) names.push_back(entry);
+      if (names.size() == before) {
+        map.context().problem(organs[o].at, map.child_path("mapping") + "[" + std::to_string(o) + "].labels",
+                              "expected a name of " + files[1].string() + " matching the pattern '" + name +
+                                  "' (organ " + organs[o].name + "), found none");
+        return;
+      }
+    }
+    organs[o].names = names;
+  }
+  std::map<std::string, std::size_t> organ_of_name;
+  for (std::size_t o = 0; o < organs.size(); ++o) {
+    for (const std::string& name : organs[o].names) {
+      const auto [first, added] = organ_of_name.emplace(name, o);
+      if (!added && first->second != o) { // twice in one organ (two patterns, say) is no conflict
+        map.context().problem(organs[o].at, map.child_path("mapping") + "[" + std::to_string(o) + "].labels",
+                              "expected each name in one organ, found '" + name + "' in organ " +
+                                  organs[o].name + " and in organ " + organs[first->second].name);
+        return;
+      }
+    }
   }
   try {
     ImageGrid grid;
@@ -292,6 +343,7 @@ void parse_segmentation(CheckedMap& map, const std::filesystem::path& scene_fold
     OrganSettings organ;
     organ.name = organs[o].name;
     organ.tissue = organs[o].tissue;
+    organ.material = organs[o].material;
     organ.solid = organs[o].solid;
     std::string inside = organs[o].inside;
     for (std::size_t depth = 0; depth <= organs.size() && !inside.empty(); ++depth) {

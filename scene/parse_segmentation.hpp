@@ -17,7 +17,8 @@ namespace phantasm::scene_detail {
 std::map<std::int32_t, std::string> read_label_table(const std::filesystem::path& file);
 
 /// Parses `anatomy.segmentation` and appends its organs with voxels to `anatomy.organs` in the mapping's
-/// order, each inside its nearest container with voxels.
+/// order, each inside its nearest container with voxels. A mapping's name with `*` or `?` is a
+/// shell-style pattern standing for the table's names it matches (one matching none is an error).
 void parse_segmentation(CheckedMap& map, const std::filesystem::path& scene_folder, AnatomySettings& anatomy);
 
 } // namespace phantasm::scene_detail

@@ -10,7 +10,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <map>
 #include <set>
+#include <sstream>
 
 using namespace phantasm;
 using phantasm::testing::k_lut;
@@ -301,4 +304,123 @@ TEST(Segmentation, EveryLabelOfAReconAllAsegGetsAnOrganOfTheFreeSurferMapping) {
   EXPECT_EQ(result.scene->anatomy.organs.size(), 26u);
   EXPECT_EQ(result.scene->find_organ("right_cerebellum_white_matter")->inside, "right_cerebellum");
   EXPECT_EQ(result.scene->find_organ("left_cerebellum")->inside, "csf");
+}
+
+TEST(Segmentation, NamePatternsTakeEveryNameOfTheTableTheyMatch) {
+  const fs::path folder = write_aseg_fixture("segmentation-patterns");
+  const SceneLoadResult result = load(folder, scene_text(R"(
+    file: aseg.nii.gz
+    table: aseg_dseg.tsv
+    mapping:
+      - {organ: head, tissue: csf, material: soft, solid: true, labels: [CSF, Brain-Stem]}
+      - {organ: left, tissue: gray_matter, material: soft, inside: head, labels: ["Left-*"]}
+      - {organ: right, tissue: gray_matter, inside: head, labels: ["Right-Cerebral-*", "Right-Thalamu?", "Right-*"]})",
+                                                         "materials:\n  soft: {youngs_modulus_Pa: 3000, "
+                                                         "poisson_ratio: 0.45, density_kg_m3: 1040}\n"));
+  ASSERT_TRUE(result.scene) << format_diagnostics(result.problems);
+  // Left-Caudate is in the table but has no voxels; a name matched twice within one organ
+  // (Right-Thalamus, by Right-Thalamu? and Right-*) is no conflict.
+  EXPECT_EQ(organ_lines(*result.scene), (std::vector<std::string>{
+                                            "head < : csf solid [16 24]",
+                                            "left < head: gray_matter [2 3 4 10 17]",
+                                            "right < head: gray_matter [41 42 43 49 53]",
+                                        }));
+  EXPECT_EQ(result.scene->anatomy.organs[1].material, "soft");
+  EXPECT_EQ(result.scene->anatomy.organs[2].material, "");
+}
+
+TEST(Segmentation, APatternMatchingNoNameOrANameTwoPatternsGiveTwoOrgansIsRefused) {
+  const fs::path folder = write_aseg_fixture("segmentation-bad-patterns");
+  std::string problems = refusal(folder, scene_text(R"({file: aseg.nii.gz, table: aseg_dseg.tsv, mapping: [
+      {organ: a, tissue: csf, labels: ["*"]},
+      {organ: b, tissue: csf, labels: ["Middle-*"]}]})"));
+  EXPECT_NE(problems.find("anatomy.segmentation.mapping[1].labels: expected a name of " +
+                          (folder / "aseg_dseg.tsv").string() +
+                          " matching the pattern 'Middle-*' (organ b), found none"),
+            std::string::npos)
+      << problems;
+  problems = refusal(folder, scene_text(R"({file: aseg.nii.gz, table: FreeSurferColorLUT.txt, mapping: [
+      {organ: a, tissue: csf, labels: [CSF, Brain-Stem, "*-Cerebral-*"]},
+      {organ: b, tissue: csf, labels: ["*-Thalamus", "Left-*"]}]})"));
+  EXPECT_NE(problems.find("scene.yaml:10:"), std::string::npos) << problems;
+  EXPECT_NE(problems.find("anatomy.segmentation.mapping[1].labels: expected each name in one organ, found "
+                          "'Left-Cerebral-White-Matter' in organ b and in organ a"),
+            std::string::npos)
+      << problems;
+  // A pattern's mistake is a scene error, not a label without an organ further on.
+  EXPECT_EQ(problems.find("has voxels but no organ"), std::string::npos) << problems;
+}
+
+namespace {
+
+const fs::path k_templates = "/usr/share/mricron/templates";
+
+/// A dseg.tsv whose first two columns are index and name: label -> name.
+std::map<std::int32_t, std::string> read_index_names(const fs::path& file) {
+  std::map<std::int32_t, std::string> table;
+  std::istringstream in(phantasm::testing::read_file(file));
+  std::string line;
+  std::getline(in, line); // the header
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    std::int32_t index = 0;
+    std::string name;
+    if (fields >> index >> name) table.emplace(index, name);
+  }
+  return table;
+}
+const fs::path k_macaque_table =
+    fs::path(PHANTASM_SOURCE_DIR) / "data-synthetic" / "macaque" / "inia19-NeuroMaps_dseg.tsv";
+
+} // namespace
+
+// The NeuroMaps labels come without names: the shipped table is derived from the mricron-data
+// files by scripts/inia19_table.py, and deriving it again gives the same file, byte for byte.
+TEST(Segmentation, TheShippedMacaqueTableIsTheOneItsScriptDerives) {
+  if (!fs::exists(k_templates / "inia19-NeuroMaps.nii.gz")) GTEST_SKIP() << "mricron-data is not installed";
+  const fs::path folder = phantasm::testing::fresh_folder("segmentation-inia19-table");
+  const auto run = phantasm::testing::run_command(
+      {PHANTASM_PYTHON, (fs::path(PHANTASM_SOURCE_DIR) / "scripts" / "inia19_table.py").string(),
+       (folder / "derived_dseg.tsv").string()});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.err.find("Otsu thresholds 74 and 99; 724 labels"), std::string::npos) << run.err;
+  const std::string derived = phantasm::testing::read_file(folder / "derived_dseg.tsv");
+  EXPECT_EQ(derived, phantasm::testing::read_file(k_macaque_table))
+      << "data-synthetic/macaque/inia19-NeuroMaps_dseg.tsv is stale: run scripts/inia19_table.py";
+  // Its names: side by number (n left, 1000 + n right), class by intensity, n again.
+  const auto table = read_index_names(folder / "derived_dseg.tsv");
+  EXPECT_EQ(table.size(), 724u);
+  for (const auto& [label, name] : table) {
+    const std::string side = label < 1000 ? "left_" : "right_";
+    char number[8];
+    std::snprintf(number, sizeof number, "_%04d", label % 1000);
+    EXPECT_EQ(name.rfind(side, 0), 0u) << label << " " << name;
+    EXPECT_EQ(name.substr(name.size() - 5), number) << label << " " << name;
+    const std::string kind = name.substr(side.size(), name.size() - side.size() - 5);
+    EXPECT_TRUE(kind == "grey" || kind == "white") << label << " " << name;
+  }
+}
+
+// The shipped macaque scene's two organs take every NeuroMaps label by the table's patterns:
+// the brain the grey ones, the white matter nested in it the white ones.
+TEST(Segmentation, TheMacaqueSceneMakesABrainHoldingItsWhiteMatterFromEveryLabel) {
+  if (!fs::exists(k_templates / "inia19-NeuroMaps.nii.gz")) GTEST_SKIP() << "mricron-data is not installed";
+  const SceneLoadResult result =
+      load_scene(fs::path(PHANTASM_SOURCE_DIR) / "data-synthetic" / "macaque-brain.yaml");
+  ASSERT_TRUE(result.scene) << format_diagnostics(result.problems);
+  const auto table = read_index_names(k_macaque_table);
+  std::size_t grey = 0;
+  for (const auto& [label, name] : table)
+    grey += name.find("_grey_") != std::string::npos;
+  const auto& organs = result.scene->anatomy.organs;
+  ASSERT_EQ(organs.size(), 2u);
+  EXPECT_EQ(organs[0].name, "brain");
+  EXPECT_TRUE(organs[0].solid);
+  EXPECT_EQ(organs[0].material, "brain");
+  EXPECT_EQ(organs[0].shape.labels.size(), grey);
+  EXPECT_EQ(organs[1].name, "white_matter");
+  EXPECT_EQ(organs[1].inside, "brain");
+  EXPECT_EQ(organs[1].shape.labels.size(), table.size() - grey);
+  for (const std::string& label : organs[1].shape.labels)
+    EXPECT_NE(table.at(std::stoi(label)).find("_white_"), std::string::npos) << label;
 }

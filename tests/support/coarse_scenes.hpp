@@ -35,6 +35,15 @@ constexpr int k_coarse_max_frames = 10;
 inline std::filesystem::path coarse_copy(const std::filesystem::path& scene,
                                          const std::filesystem::path& folder) {
   YAML::Node root = YAML::LoadFile(scene.string());
+  // The files the scene names keep naming the same files from the copy's folder.
+  const auto keep_path = [&](YAML::Node node) {
+    if (node && node.IsScalar() && std::filesystem::path(node.Scalar()).is_relative())
+      node = (scene.parent_path() / node.Scalar()).string();
+  };
+  if (root["anatomy"] && root["anatomy"]["segmentation"]) {
+    keep_path(root["anatomy"]["segmentation"]["file"]);
+    keep_path(root["anatomy"]["segmentation"]["table"]);
+  }
   auto largest = [](const YAML::Node& node) {
     double value = 0.0;
     if (node.IsScalar()) value = node.as<double>();
