@@ -186,6 +186,26 @@ void parse_deformation(CheckedMap& map, DeformationSettings& deformation,
     if (solver.valid()) read_declared(solver, deformation.solver);
   }
   read_declared(map, deformation, {"mode"}); // time_step_s, frames, fixed, load_steps, volume
+  if (map.has("head_scale")) {
+    // A change of the whole head after the solve: scale, shape (axes) and the point that stays.
+    CheckedMap head(map.context(), map.get("head_scale"), map.child_path("head_scale"));
+    if (head.valid()) {
+      read_declared(head, deformation.head_scale);
+      const Eigen::Vector3d factors = deformation.head_scale.factors();
+      if (!(factors.minCoeff() >= 0.7 && factors.maxCoeff() <= 1.3)) {
+        const std::string key = head.has("axes") ? "axes" : "scale";
+        head.context().problem(head.get(key), head.child_path(key),
+                               "expected scale times each of axes within [0.7, 1.3] (a head grown or shrunk "
+                               "by at most 30 % along every axis), found " +
+                                   format_vector(factors));
+      }
+      if (deformation.mode == DeformationMode::none && !deformation.head_scale.identity()) {
+        map.context().problem(map.get("head_scale"), map.child_path("head_scale"),
+                              "expected mode quasi_static or dynamic (the head's size changes the deformed "
+                              "state), found mode none");
+      }
+    }
+  }
   read_declared_keys(map, voxelization, {"gap_tissue"});
   parse_list(map, "loads", "loads", deformation.loads, parse_load);
   parse_list(map, "obstacles", "obstacles", deformation.obstacles, parse_obstacle);

@@ -151,6 +151,7 @@ nlohmann::json scene_settings_json(const Scene& scene) {
   anatomy["organs"] = organs;
   nlohmann::json deformation = declared_json(d);
   deformation["solver"] = declared_json(d.solver);
+  deformation["head_scale"] = declared_json(d.head_scale);
   deformation["loads"] = loads;
   deformation["obstacles"] = obstacles;
   deformation["collisions"] = collisions;

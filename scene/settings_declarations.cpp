@@ -661,6 +661,24 @@ const std::vector<SettingField<OrganMechanics>>& declared_settings<OrganMechanic
 }
 
 template <>
+const std::vector<SettingField<HeadScaleSettings>>& declared_settings<HeadScaleSettings>() {
+  static const auto fields = [] {
+    using H = HeadScaleSettings;
+    SettingsDeclaration<H> d;
+    // Applied to the deformed positions after the solve: the template (anatomy, reference state,
+    // bodies' tet meshes) is the same for every size.
+    d.field("scale", &H::scale, "", range(0.7, 1.3),
+            "the linear scale of the whole head after the solve (volumes change by its cube)")
+        .field("axes", &H::axes, "", range(0.8, 1.25),
+               "shape: per-axis factors (x, y, z) on top of the scale, about the centre")
+        .field("center_mm", &H::center_mm, "mm", k_coordinate,
+               "the point that stays (unset: the centre of the box of the organs at rest)");
+    return d.fields();
+  }();
+  return fields;
+}
+
+template <>
 const std::vector<SettingField<DeformationSettings>>& declared_settings<DeformationSettings>() {
   static const auto fields = [] {
     using D = DeformationSettings;
@@ -704,6 +722,7 @@ const std::vector<SettingField<DeformationSettings>>& declared_settings<Deformat
                  {"tet_groups_and_tets", VolumeFormulation::tet_group_and_tet},
                  {"vertex_stars", VolumeFormulation::vertex_star}},
                 "where the solid bodies' bulk term lives")
+        .nested("head_scale", &D::head_scale, declared_settings<HeadScaleSettings>())
         .list("materials", &D::materials, "the elastic materials organs refer to",
               declared_settings<MaterialSettings>())
         .list("organs", &D::organs, "what the deformation reads of each organ, in scene order",
@@ -834,11 +853,16 @@ std::vector<const void*> settings_members(const OrganMechanics& s) {
   return {&material, &solid, &thickness, &tolerance};
 }
 
+std::vector<const void*> settings_members(const HeadScaleSettings& s) {
+  const auto& [scale, axes, center] = s;
+  return {&scale, &axes, &center};
+}
+
 std::vector<const void*> settings_members(const DeformationSettings& s) {
   const auto& [mode, solver, time_step, frames, fixed, loads, obstacles, collisions, load_steps, volume,
-               materials, organs, region_atlas] = s;
-  return {&mode,       &solver,     &time_step, &frames,    &fixed,  &loads,       &obstacles,
-          &collisions, &load_steps, &volume,    &materials, &organs, &region_atlas};
+               head_scale, materials, organs, region_atlas] = s;
+  return {&mode,       &solver,     &time_step, &frames,     &fixed,     &loads,  &obstacles,
+          &collisions, &load_steps, &volume,    &head_scale, &materials, &organs, &region_atlas};
 }
 
 namespace {

@@ -15,7 +15,7 @@ namespace phantasm {
 /// GridSettings, ShapeSettings, OrganSettings, AnatomySettings, VoxelizationSettings,
 /// TissueOverride, SequenceSettings, AcquisitionSettings, TissueRegionSettings, TextureSettings,
 /// MriSettings, OutputSettings, MaterialSettings, SolverSettings, LoadSettings, ObstacleSettings,
-/// CollisionSettings, OrganMechanics and DeformationSettings.
+/// CollisionSettings, OrganMechanics, HeadScaleSettings and DeformationSettings.
 template <typename S>
 const std::vector<SettingField<S>>& declared_settings();
 
@@ -40,6 +40,7 @@ std::vector<const void*> settings_members(const LoadSettings& s);
 std::vector<const void*> settings_members(const ObstacleSettings& s);
 std::vector<const void*> settings_members(const CollisionSettings& s);
 std::vector<const void*> settings_members(const OrganMechanics& s);
+std::vector<const void*> settings_members(const HeadScaleSettings& s);
 std::vector<const void*> settings_members(const DeformationSettings& s);
 
 /// One line per declared setting of a scene's stages: "section.name  type  unit  bounds  default:

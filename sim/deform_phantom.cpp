@@ -63,6 +63,52 @@ void check_inversions(const DeformationSettings& deformation, PhantomDeformation
   }
 }
 
+/// The growth of the whole head that deformation.head_scale asks: about its centre, or about the
+/// centre of the box of every organ's positions at rest.
+HeadAffine head_affine(const HeadScaleSettings& settings, const Phantom& phantom) {
+  HeadAffine head;
+  head.factors = settings.factors();
+  if (settings.center_mm) {
+    head.center = *settings.center_mm;
+    return head;
+  }
+  Eigen::Vector3d low = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), high = -low;
+  auto extend = [&](const Eigen::MatrixX3d& points) {
+    if (points.rows() == 0) return;
+    low = low.cwiseMin(points.colwise().minCoeff().transpose());
+    high = high.cwiseMax(points.colwise().maxCoeff().transpose());
+  };
+  for (const Organ& organ : phantom.organs) {
+    if (organ.surface) extend(organ.surface->rest_positions());
+    if (organ.sheet) extend(organ.sheet->vertices);
+    if (organ.solid) extend(organ.solid->vertices);
+  }
+  head.center =
+      (low.array() <= high.array()).all() ? Eigen::Vector3d(0.5 * (low + high)) : Eigen::Vector3d::Zero();
+  return head;
+}
+
+/// Grows the whole head by deformation.head_scale after the solve: every organ's deformed
+/// positions (fixed and rigid organs too) and the bodies' deformed tets. Stress-free, so the solved
+/// state needs no other change: for an isotropic scale A F A^-1 = F (docs/batch.md, Population
+/// sweeps).
+void grow_head(const DeformationSettings& deformation, const Phantom& phantom, PhantomDeformation& result,
+               StageReport& report) {
+  if (deformation.head_scale.identity()) return;
+  result.head = head_affine(deformation.head_scale, phantom);
+  for (OrganDeformation& organ : result.organs) {
+    result.head.apply_rows(organ.surface_mm);
+    result.head.apply_rows(organ.solid_mm);
+  }
+  for (DeformedBody& body : result.bodies)
+    result.head.apply_rows(body.deformed_mm);
+  report.modelled.push_back("the whole head grown after the solve by " + format_vector(result.head.factors) +
+                            " (x, y, z) about " + format_vector(result.head.center) +
+                            " mm: volumes change by " + format_number(result.head.determinant()) +
+                            " (head_scale)");
+  report.accuracy["head scale volume factor"] = result.head.determinant();
+}
+
 } // namespace
 
 PhantomDeformation deform_phantom(const DeformationSettings& deformation, const OrganTable& organs,
@@ -110,6 +156,7 @@ PhantomDeformation deform_phantom(const DeformationSettings& deformation, const 
                  p, result, report, reporter, rough);
   }
   collect_deformations(organs, phantom, assignment, built.bodies, p / k_mm, result);
+  grow_head(deformation, phantom, result, report);
   check_inversions(deformation, result, report);
   return result;
 }

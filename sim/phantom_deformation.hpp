@@ -38,12 +38,40 @@ struct OrganDeformation {
   Eigen::MatrixX3d solid_mm;   ///< tet vertices (solid organs)
 };
 
+/// The homogeneous growth of the whole head that follows the solve (deformation.head_scale): y =
+/// center + factors * (x - center), per axis. The identity leaves every position's bits as they are.
+struct HeadAffine {
+  Eigen::Vector3d factors = Eigen::Vector3d::Ones();
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+
+  bool identity() const { return (factors.array() == 1.0).all(); }
+  /// det A: the change of every volume.
+  double determinant() const { return factors.prod(); }
+  /// The grown position of a point of the solved (regional) state.
+  Eigen::Vector3d apply(const Eigen::Vector3d& x) const {
+    return identity() ? x : Eigen::Vector3d(center + factors.cwiseProduct(x - center));
+  }
+  /// Its inverse: the solved (regional) position of a grown point.
+  Eigen::Vector3d unapply(const Eigen::Vector3d& y) const {
+    return identity() ? y : Eigen::Vector3d(center + (y - center).cwiseQuotient(factors));
+  }
+  /// Every row of `points` grown in place.
+  void apply_rows(Eigen::MatrixX3d& points) const {
+    if (identity()) return;
+    for (Eigen::Index r = 0; r < points.rows(); ++r)
+      points.row(r) = apply(points.row(r).transpose()).transpose();
+  }
+};
+
 struct PhantomDeformation {
   std::vector<OrganDeformation> organs; ///< scene order
   std::vector<DeformedBody> bodies;
   std::vector<SolveReport> solves;      ///< one per frame
   double attachment_error_mm = 0.0;     ///< largest distance of a pushed point from its target
   double obstacle_penetration_mm = 0.0; ///< deepest free vertex inside an obstacle
+  /// The growth of the whole head applied after the solve (deformation.head_scale): already in
+  /// every deformed position above (organs and bodies); the solve's own state is its inverse.
+  HeadAffine head;
 };
 
 } // namespace phantasm

@@ -97,6 +97,14 @@ StageReport plan_sim(const DeformationSettings& d, const OrganTable& organs) {
   else if (d.load_steps > 1)
     solver << ", loads applied in " << d.load_steps << " steps";
   report.modelled.push_back(solver.str());
+  if (!d.head_scale.identity()) {
+    report.modelled.push_back("then the whole head grown by " + format_vector(d.head_scale.factors()) +
+                              " (x, y, z) about " +
+                              (d.head_scale.center_mm ? format_vector(*d.head_scale.center_mm) + " mm"
+                                                      : std::string("its centre")) +
+                              ", fixed organs included: volumes change by " +
+                              format_number(d.head_scale.factors().prod()) + " (deformation.head_scale)");
+  }
   return report;
 }
 

@@ -130,6 +130,22 @@ struct OrganMechanics {
   std::optional<double> enclosed_volume_tolerance;
 };
 
+/// A homogeneous growth of the whole head (deformation.head_scale), applied after the solve:
+/// every deformed position x goes to c + A (x - c), A = scale diag(axes) and c = center_mm (unset:
+/// the centre of the box of the phantom's organs at rest). Stress-free, so for an isotropic A the
+/// solve on the grown head is the grown solve (A F A^-1 = F): the subject's map is A after the
+/// regional one, exact wherever that is (docs/batch.md, Population sweeps).
+struct HeadScaleSettings {
+  double scale = 1.0;                       ///< the linear scale of the whole head
+  Eigen::Vector3d axes{1.0, 1.0, 1.0};      ///< shape: per-axis factors (x, y, z) on top of it
+  std::optional<Eigen::Vector3d> center_mm; ///< the fixed point; unset: the head's centre
+
+  /// The factors along x, y and z.
+  Eigen::Vector3d factors() const { return scale * axes; }
+  /// No change of size or shape: the deformation is the solve's alone.
+  bool identity() const { return (factors().array() == 1.0).all(); }
+};
+
 struct DeformationSettings {
   DeformationMode mode = DeformationMode::none;
   SolverSettings solver;
@@ -146,6 +162,7 @@ struct DeformationSettings {
   /// tets, det F -1.86); groups with a capped share per tet do neither (docs/deformation.md,
   /// Volume locking)
   VolumeFormulation volume = VolumeFormulation::tet_group_and_tet;
+  HeadScaleSettings head_scale;            ///< a change of the whole head's size and shape after the solve
   std::vector<MaterialSettings> materials; ///< the scene's materials section
   /// Per organ in scene order, set by the scene from anatomy.organs.
   std::vector<OrganMechanics> organs;

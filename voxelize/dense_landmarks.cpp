@@ -30,14 +30,15 @@ std::uint64_t organ_seed(std::uint64_t seed, const std::string& organ) {
 }
 
 /// Where a reference point of one organ lies in the deformed state, when that is exact: itself
-/// for an organ that stays; for one that moves, the map where it is exact and, when the bodies
-/// tell which organ each tet holds, only inside a tet of this organ (a point of its material in
-/// a neighbour's tet, where the tet mesh cuts a corner of the surface, would take the
+/// (grown with the head, PhantomDeformation::head) for an organ that stays; for one that moves, the map where
+/// it is exact and, when the bodies tell which organ each tet holds, only inside a tet of this organ (a point
+/// of its material in a neighbour's tet, where the tet mesh cuts a corner of the surface, would take the
 /// neighbour's motion).
 class OrganMotion {
 public:
   OrganMotion(const PhantomDeformation* deformation, const DeformationMap* map, std::size_t organ) {
     if (!deformation || !map) return;
+    m_head = deformation->head;
     const std::string& moved_by = deformation->organs[organ].moved_by;
     if (moved_by != "solver" && moved_by.rfind("embedded", 0) != 0) return;
     m_map = map;
@@ -55,7 +56,7 @@ public:
   }
 
   std::optional<Eigen::Vector3d> deformed(const Eigen::Vector3d& x) const {
-    if (!m_map) return x;
+    if (!m_map) return m_head.apply(x);
     bool exact = false;
     const Eigen::Vector3d y = m_map->forward(x, &exact);
     if (!exact) return std::nullopt;
@@ -77,7 +78,8 @@ private:
     Eigen::MatrixX4i tets; ///< the body's tets of this organ
     TetMeshLocator rest;
   };
-  const DeformationMap* m_map = nullptr; ///< null: the organ stays
+  const DeformationMap* m_map = nullptr; ///< null: the organ stays (grown with the head)
+  HeadAffine m_head;                     ///< the head's growth after the solve
   std::vector<OwnTets> m_own;
 };
 

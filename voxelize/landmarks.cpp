@@ -321,7 +321,8 @@ Candidate refine(Candidate best, const OwnMaterial& material, double step) {
 
 /// True when the ground-truth map around x (the 8 corners of a cube of half the map's extension,
 /// two voxels wide, which holds every voxel a trilinear lookup at x reads) is the exact motion of
-/// x's material: solved tets for an organ the solver moved, no motion at all for one it did not.
+/// x's material: solved tets for an organ the solver moved, no motion at all (but the head's
+/// growth) for one it did not.
 bool exact_around(const DeformationMap& map, const Eigen::Vector3d& x, bool moved) {
   const double half = 0.5 * map.extension_mm();
   for (int corner = 0; corner < 9; ++corner) {
@@ -332,7 +333,7 @@ bool exact_around(const DeformationMap& map, const Eigen::Vector3d& x, bool move
     }
     bool exact = false;
     const Eigen::Vector3d y = map.forward(q, &exact);
-    if (!exact || (!moved && y != q)) return false;
+    if (!exact || (!moved && y != map.head().apply(q))) return false;
   }
   return true;
 }
@@ -529,7 +530,7 @@ std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDef
     const Eigen::MatrixX3d& rest = organ.surface->rest_positions();
     const Eigen::MatrixX3d& moved = deformation ? deformation->organs[o].surface_mm : rest;
     // Organs the solver moved carry their deepest point through the map (exact inside the
-    // solved tets); the others did not move.
+    // solved tets); the others did not move but by the head's growth.
     const bool moved_organ = deformation && (deformation->organs[o].moved_by == "solver" ||
                                              deformation->organs[o].moved_by.rfind("embedded", 0) == 0);
     std::optional<Eigen::Vector3d> deepest;
@@ -538,7 +539,9 @@ std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDef
     distances.done(o);
     if (deepest) {
       out.push_back({organ.name + "_deepest", organ.name, *deepest,
-                     moved_organ && map ? map->forward(*deepest) : *deepest});
+                     moved_organ && map ? map->forward(*deepest)
+                     : map              ? map->head().apply(*deepest)
+                                        : *deepest});
     } else if (warnings) {
       warnings->push_back("landmark " + organ.name + "_deepest left out: no point of " + organ.name +
                           "'s own material (inside its surface, outside the organs nested in it) was found; "

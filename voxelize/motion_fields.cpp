@@ -14,17 +14,18 @@
 
 namespace phantasm {
 
-DeformationMap::DeformationMap(std::vector<DeformedBody> bodies, double extension_mm)
-    : m_bodies(std::move(bodies)), m_extension(extension_mm) {
+DeformationMap::DeformationMap(std::vector<DeformedBody> bodies, double extension_mm, const HeadAffine& head)
+    : m_bodies(std::move(bodies)), m_extension(extension_mm), m_head(head) {
   for (const DeformedBody& body : m_bodies) {
-    // Boundary faces with a moved vertex drive the extension.
+    // Boundary faces with a moved vertex drive the extension: moved by the solve (the head's
+    // growth, which moves every face, is applied after the extension).
     const Eigen::MatrixX3i faces = tet_boundary_faces(body.rest_mm, body.tets);
     for (Eigen::Index f = 0; f < faces.rows(); ++f) {
       MovedFace face;
       bool moved = false;
       for (int k = 0; k < 3; ++k) {
         face.rest[k] = body.rest_mm.row(faces(f, k)).transpose();
-        face.deformed[k] = body.deformed_mm.row(faces(f, k)).transpose();
+        face.deformed[k] = m_head.unapply(body.deformed_mm.row(faces(f, k)).transpose());
         moved |= (face.deformed[k] - face.rest[k]).norm() > 1e-9;
       }
       if (moved) {
@@ -199,7 +200,7 @@ Eigen::Vector3d DeformationMap::forward(const Eigen::Vector3d& x, bool* exact) c
 Eigen::Vector3d DeformationMap::forward_outside(const Eigen::Vector3d& x, bool* exact) const {
   const Eigen::Vector3d u = extension(x);
   if (exact) *exact = !near_moved_boundary(x);
-  return x + u;
+  return m_head.apply(x + u);
 }
 
 Eigen::Vector3d DeformationMap::inverse(const Eigen::Vector3d& x, bool* exact) const {
@@ -211,7 +212,9 @@ Eigen::Vector3d DeformationMap::inverse(const Eigen::Vector3d& x, bool* exact) c
   return inverse_outside(x, exact);
 }
 
-Eigen::Vector3d DeformationMap::inverse_outside(const Eigen::Vector3d& x, bool* exact) const {
+Eigen::Vector3d DeformationMap::inverse_outside(const Eigen::Vector3d& x_def, bool* exact) const {
+  // The solved state's point, then the extension's inverse there.
+  const Eigen::Vector3d x = m_head.unapply(x_def);
   Eigen::Vector3d y = x;
   for (int iteration = 0; iteration < 30; ++iteration) {
     const Eigen::Vector3d next = x - extension(y);
@@ -353,26 +356,27 @@ namespace {
 /// det(I + grad u) of the field `u` (3 * voxel_count, component-major) at every voxel into
 /// `jacobian`: central differences in index space (one-sided at the border, next to still
 /// tissue, and at a voxel of the `exact` mask next to one outside it; none between two still
-/// voxels), mapped to world derivatives by the inverse of the grid's linear part; 1 at a voxel
-/// of still tissue (`still` in the field's state). Inside the exact mask the determinant thus
+/// voxels), mapped to world derivatives by the inverse of the grid's linear part;
+/// `still_jacobian` (1, or the head's growth's) at a voxel of still tissue (`still` in the
+/// field's state). Inside the exact mask the determinant thus
 /// reads exact values only: a neighbour outside holds the extension or a composition that missed,
 /// and a central difference across it made the head's deformed grid report thousands of folds
 /// that no tet had. Returns the smallest.
 double jacobian_determinants(const ImageGrid& grid, const std::vector<float>& u, const StillTissue& still,
                              bool deformed, const std::vector<std::uint8_t>& exact,
-                             std::vector<float>& jacobian) {
+                             std::vector<float>& jacobian, double still_jacobian) {
   const auto count = static_cast<std::size_t>(grid.voxel_count());
   const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
   auto at = [&](int i, int j, int k) { return voxel_index(grid.dims, i, j, k); };
   const Eigen::Matrix3d index_from_world = grid.world_from_voxel.topLeftCorner<3, 3>().inverse();
-  double min_jacobian = 1.0;
+  double min_jacobian = std::min(1.0, still_jacobian);
 #pragma omp parallel for schedule(static) reduction(min : min_jacobian)
   for (int k = 0; k < nz; ++k) {
     if (cancellation_requested()) continue; // no exception may leave an OpenMP region
     for (int j = 0; j < ny; ++j) {
       for (int i = 0; i < nx; ++i) {
         if (still.at(at(i, j, k), deformed)) {
-          jacobian[at(i, j, k)] = 1.0f; // its motion: the identity
+          jacobian[at(i, j, k)] = static_cast<float>(still_jacobian); // its motion: the head's growth
           continue;
         }
         const int index[3] = {i, j, k};
@@ -436,7 +440,8 @@ MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& 
   MotionFields f = identity_motion_fields(count);
   const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
   auto at = [&](int i, int j, int k) { return voxel_index(grid.dims, i, j, k); };
-  if (map.bodies().empty()) return f;
+  const HeadAffine& head = map.head();
+  if (map.bodies().empty() && head.identity()) return f;
   // Inside the bodies: tet by tet. Outside: the extension, voxel by voxel in parallel (each
   // voxel's value depends on nothing else, so the result does not depend on the threads).
   std::vector<std::uint8_t> inside_ref(count, 0), inside_def(count, 0);
@@ -461,8 +466,9 @@ MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& 
         if (!forward && !backward) continue;
         const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
         // No moved face near: both maps are the identity there, exactly: the zero displacement
-        // and the exact mark the fields start with.
-        if (map.far_from_moved_boundary(x)) continue;
+        // and the exact mark the fields start with. (With the head's growth every voxel moves:
+        // forward_outside and inverse_outside give it.)
+        if (head.identity() && map.far_from_moved_boundary(x)) continue;
         bool exact = true;
         if (forward) {
           const Eigen::Vector3d to_def = map.forward_outside(x, &exact) - x;
@@ -484,15 +490,25 @@ MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& 
   inside_ref = std::vector<std::uint8_t>();
   inside_def = std::vector<std::uint8_t>();
   // Still tissue inside a body's tets (a voxel whose label is the container's, on the body's
-  // side of the faceted boundary): zero and exact too, in each state.
+  // side of the faceted boundary): zero and exact too, in each state; with the head's growth,
+  // the growth (forward) and its inverse (backward), exact, everywhere in still tissue.
   if (still.reference_labels || still.deformed_labels) {
 #pragma omp parallel for schedule(static)
-    for (std::size_t v = 0; v < count; ++v) {
+    for (std::ptrdiff_t n = 0; n < static_cast<std::ptrdiff_t>(count); ++n) {
+      const auto v = static_cast<std::size_t>(n);
       for (const bool deformed : {false, true}) {
         if (!still.at(v, deformed)) continue;
         std::vector<float>& u = deformed ? f.def_to_ref : f.ref_to_def;
+        Eigen::Vector3d moved = Eigen::Vector3d::Zero();
+        if (!head.identity()) {
+          const auto row = static_cast<std::int64_t>(v) / grid.dims.x();
+          const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(
+              static_cast<double>(static_cast<std::int64_t>(v) % grid.dims.x()),
+              static_cast<double>(row % grid.dims.y()), static_cast<double>(row / grid.dims.y())));
+          moved = (deformed ? head.unapply(x) : head.apply(x)) - x;
+        }
         for (std::size_t c = 0; c < 3; ++c)
-          u[c * count + v] = 0.0f;
+          u[c * count + v] = static_cast<float>(moved[static_cast<Eigen::Index>(c)]);
         (deformed ? f.def_to_ref_exact : f.ref_to_def_exact)[v] = 1;
       }
     }
@@ -507,14 +523,17 @@ MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& 
   throw_if_cancelled();
   check_compositions(grid, f);
   throw_if_cancelled();
-  exact_jacobians(grid, still, f);
+  exact_jacobians(grid, still, f, head.determinant());
   throw_if_cancelled();
   return f;
 }
 
-void exact_jacobians(const ImageGrid& grid, const StillTissue& still, MotionFields& f) {
-  f.min_jacobian = jacobian_determinants(grid, f.ref_to_def, still, false, f.ref_to_def_exact, f.jacobian);
-  jacobian_determinants(grid, f.def_to_ref, still, true, f.def_to_ref_exact, f.def_to_ref_jacobian);
+void exact_jacobians(const ImageGrid& grid, const StillTissue& still, MotionFields& f,
+                     double still_jacobian) {
+  f.min_jacobian =
+      jacobian_determinants(grid, f.ref_to_def, still, false, f.ref_to_def_exact, f.jacobian, still_jacobian);
+  jacobian_determinants(grid, f.def_to_ref, still, true, f.def_to_ref_exact, f.def_to_ref_jacobian,
+                        1.0 / still_jacobian);
   long folded = 0;
   double smallest = std::numeric_limits<double>::infinity();
   for (std::size_t v = 0; v < f.ref_to_def_exact.size(); ++v) {

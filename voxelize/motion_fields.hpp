@@ -19,12 +19,16 @@ namespace phantasm {
 /// from 1 on the face to 0 at extension_mm (continuous with the body's own motion). Tissue
 /// outside the bodies does not move, so the zero displacement is exact there too, except within
 /// extension_mm of a moved boundary face in either state (the extension, and the gap a boundary
-/// leaves when it moves away from its container, have no exact correspondence).
+/// leaves when it moves away from its container, have no exact correspondence). A growth of the
+/// whole head after the solve (PhantomDeformation::head, deformation.head_scale) follows all of
+/// it: the map is head o (the solved map), exact wherever the solved map is; the bodies' deformed
+/// positions already hold it, and tissue outside them moves by it alone.
 class DeformationMap {
 public:
-  /// @param bodies the solved bodies (rest and deformed tet meshes, mm)
+  /// @param bodies the solved bodies (rest and deformed tet meshes, mm; deformed with `head`)
   /// @param extension_mm width of the fading extension outside the bodies, mm
-  DeformationMap(std::vector<DeformedBody> bodies, double extension_mm);
+  /// @param head the growth of the whole head after the solve (identity: none)
+  DeformationMap(std::vector<DeformedBody> bodies, double extension_mm, const HeadAffine& head = {});
 
   /// Deformed position of a reference point (RAS mm); *exact tells whether it is the solved motion.
   Eigen::Vector3d forward(const Eigen::Vector3d& x_ref, bool* exact = nullptr) const;
@@ -44,14 +48,18 @@ public:
   Eigen::Vector3d inverse_outside(const Eigen::Vector3d& x_def, bool* exact) const;
   /// True when no moved face lies within extension_mm of x in either state, as far as one look
   /// at x's bucket in each state tells (false when in doubt): then forward_outside and
-  /// inverse_outside give x itself, exactly, and the zero displacement there is exact. Most of
-  /// a grid lies there; the fields skip those voxels.
+  /// inverse_outside give x itself (with no head growth), exactly, and the zero displacement
+  /// there is exact. Most of a grid lies there; the fields skip those voxels. (Points of the
+  /// solved state: with a head growth, a deformed point's is head().unapply of it.)
   bool far_from_moved_boundary(const Eigen::Vector3d& x) const;
 
   const std::vector<DeformedBody>& bodies() const { return m_bodies; }
   double extension_mm() const { return m_extension; }
+  /// The growth of the whole head after the solve: the motion of tissue that the solve left still.
+  const HeadAffine& head() const { return m_head; }
 
-  /// A boundary face of a body with a moved vertex, in both states.
+  /// A boundary face of a body with a moved vertex, in both states (the deformed one as solved,
+  /// before the head's growth).
   struct MovedFace {
     std::array<Eigen::Vector3d, 3> rest, deformed;
   };
@@ -75,6 +83,7 @@ private:
 
   std::vector<DeformedBody> m_bodies;
   double m_extension = 10.0;
+  HeadAffine m_head;
   std::vector<MovedFace> m_moved_faces;
   /// Per state (rest [0], deformed [1]): the moved faces within extension_mm of each cell of a
   /// uniform grid of cells of about extension_mm, in face order (compressed rows), so a query
@@ -96,7 +105,8 @@ private:
 };
 
 /// The voxels of tissue that does not move (organs fixed in place or rigid), by their labels on
-/// the grid in each state. Its motion is known exactly, zero: such a voxel carries zero
+/// the grid in each state. Its motion is known exactly, zero (or the head's growth alone, when the
+/// head grows: then its displacement and Jacobian are the growth's): such a voxel carries zero
 /// displacement in the field of its state, inside or outside the bodies' tets, and is exact; the
 /// extension of a moved boundary stops at it; its Jacobian is 1, and a Jacobian next to it takes
 /// its differences on the moving side only (the motion is discontinuous there: tissue slides
@@ -123,7 +133,8 @@ std::vector<std::uint8_t> still_organ_labels(const PhantomDeformation& deformati
 /// Jacobians 1.
 MotionFields identity_motion_fields(std::size_t voxel_count);
 
-/// The fields of `map` on every voxel of `grid`, with the voxels of `still` held at zero.
+/// The fields of `map` on every voxel of `grid`, with the voxels of `still` held at zero (at the
+/// head's growth, when it grows).
 MotionFields compute_motion_fields(const ImageGrid& grid, const DeformationMap& map,
                                    const StillTissue& still = {});
 
@@ -140,7 +151,9 @@ void check_compositions(const ImageGrid& grid, MotionFields& f);
 /// Both fields' Jacobian determinants (jacobian, def_to_ref_jacobian), read inside each exact
 /// mask from exact values only (one-sided differences where a neighbour lies outside the mask or
 /// in still tissue), with min_jacobian, and inside the ref_to_def mask min_exact_jacobian and
-/// folded_exact_voxels. Called by compute_motion_fields after check_compositions.
-void exact_jacobians(const ImageGrid& grid, const StillTissue& still, MotionFields& f);
+/// folded_exact_voxels. Still tissue takes the head's growth's: `still_jacobian` forward, its
+/// inverse backward. Called by compute_motion_fields after check_compositions.
+void exact_jacobians(const ImageGrid& grid, const StillTissue& still, MotionFields& f,
+                     double still_jacobian = 1.0);
 
 } // namespace phantasm

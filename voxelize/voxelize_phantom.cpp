@@ -228,9 +228,34 @@ void voxelize_deformed(const VoxelizationSettings& settings, const OrganTable& o
                             " level sets of moved organs; the " + std::to_string(shared) +
                             " organs that did not move keep their reference level set");
   std::vector<VoxelizedOrgan> with_gaps = moved.organs;
+  std::vector<std::shared_ptr<const LevelSet>> grown; // read by the tissue fractions below
   if (deformation) {
+    // The space a moved organ leaves in its container is its reference shape; when the whole
+    // head grows after the solve (deformation.head_scale), its grown reference shape.
+    std::vector<VoxelizedOrgan> left = sets.organs;
+    if (!deformation->head.identity()) {
+      auto moves = [&](int o) {
+        const std::string& by = deformation->organs[static_cast<std::size_t>(o)].moved_by;
+        return by == "solver" || by.rfind("embedded in ", 0) == 0;
+      };
+      for (VoxelizedOrgan& v : left) {
+        const int o = v.label - 1;
+        const int container = organs[static_cast<std::size_t>(o)].parent;
+        if (!moves(o) || container < 0 || moves(container) ||
+            !reference.organs[static_cast<std::size_t>(o)].surface)
+          continue;
+        PatchSurface surface = *reference.organs[static_cast<std::size_t>(o)].surface;
+        Eigen::MatrixX3d positions = surface.rest_positions();
+        deformation->head.apply_rows(positions);
+        surface.set_positions(positions);
+        const std::optional<std::vector<HeightRange>>& ranges = height_ranges[static_cast<std::size_t>(o)];
+        grown.push_back(
+            std::make_shared<const LevelSet>(surface, voxel_size, 3.0, ranges ? &*ranges : nullptr));
+        v.level_set = grown.back().get();
+      }
+    }
     const std::vector<VoxelizedOrgan> gaps =
-        gap_organs(settings.gap_fill, gap_tissue, organs, *deformation, sets.organs, report);
+        gap_organs(settings.gap_fill, gap_tissue, organs, *deformation, left, report);
     with_gaps.insert(with_gaps.end(), gaps.begin(), gaps.end());
   }
   progress.set_detail("deformed tissue fractions");
@@ -251,7 +276,7 @@ void add_motion(const Phantom& reference, const PhantomDeformation& deformation,
   // moved boundary, over two voxels [choice].
   const double extension = 2.0 * out.grid.spacing_mm.maxCoeff();
   progress.set_detail("displacement fields");
-  const DeformationMap map(deformation.bodies, extension);
+  const DeformationMap map(deformation.bodies, extension, deformation.head);
   // The landmarks first: their distance transforms (8 bytes per voxel of an organ's label box)
   // then do not add to the fields' memory (34 bytes per voxel of the grid), the peak.
   progress.set_detail("landmarks");

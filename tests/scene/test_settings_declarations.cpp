@@ -171,7 +171,10 @@ TEST(SettingsDeclarations, ProvenanceSectionsAreWrittenFromTheDeclarations) {
   EXPECT_EQ(settings.at("deformation").at("mode"), "none");
   EXPECT_EQ(settings.at("deformation").at("time_step_s").dump(), nlohmann::json(1.0 / 30.0).dump());
   EXPECT_EQ(settings.at("deformation").at("gap_tissue"), scene.voxelization.gap_fill); // as resolved
-  EXPECT_EQ(settings.at("deformation").size(), 11u); // six settings, the solver, three lists, the gap
+  EXPECT_EQ(settings.at("deformation").at("head_scale").dump(),
+            R"({"axes":[1.0,1.0,1.0],"center_mm":null,"scale":1.0})");
+  // six settings, the solver, the head's scale, three lists, the gap
+  EXPECT_EQ(settings.at("deformation").size(), 12u);
   EXPECT_EQ(settings.at("acquisition").at("receiver_gain"), "automatic");
   EXPECT_TRUE(settings.at("acquisition").at("acquired_voxel_mm").is_null());
   EXPECT_EQ(settings.at("acquisition").at("image_datatype"), "float32");
