@@ -46,6 +46,64 @@ void fit(const std::vector<double>& r2, const std::vector<double>& log_rho, Text
       slope < 0.0 ? std::min(k_max_correlation_mm, std::sqrt(-1.0 / (4.0 * slope))) : k_max_correlation_mm;
 }
 
+/// The regions eroded by the 6-connected element (a voxel stays if its six neighbours inside the
+/// grid are of its region: the grid's edge is no border), each region as deep as up to `steps`
+/// erosions leave it at least `min_voxels` voxels and `min_share` of its own.
+std::vector<int> eroded_regions(const Eigen::Vector3i& dims, const std::vector<int>& region, int region_count,
+                                int steps, std::size_t min_voxels, double min_share) {
+  // depth[v]: the erosions voxel v survives, up to steps.
+  std::vector<int> depth(region.size(), 0);
+  std::vector<int> eroded = region;
+  std::vector<int> next;
+  for (int step = 0; step < steps; ++step) {
+    next = eroded;
+    for (int k = 0; k < dims.z(); ++k)
+      for (int j = 0; j < dims.y(); ++j)
+        for (int i = 0; i < dims.x(); ++i) {
+          const std::size_t v = voxel_index(dims, i, j, k);
+          const int r = eroded[v];
+          if (r < 0) continue;
+          const int at[3] = {i, j, k};
+          for (int axis = 0; axis < 3 && next[v] >= 0; ++axis)
+            for (int side = -1; side <= 1; side += 2) {
+              Eigen::Vector3i n(i, j, k);
+              n[axis] = at[axis] + side;
+              if (n[axis] >= 0 && n[axis] < dims[axis] &&
+                  eroded[voxel_index(dims, n.x(), n.y(), n.z())] != r) {
+                next[v] = -1;
+                break;
+              }
+            }
+          if (next[v] >= 0) depth[v] = step + 1;
+        }
+    eroded.swap(next);
+  }
+  const auto regions = static_cast<std::size_t>(std::max(0, region_count));
+  const auto levels = static_cast<std::size_t>(steps) + 1;
+  std::vector<std::size_t> at_least(regions * levels, 0); // voxels of depth >= level
+  for (std::size_t v = 0; v < region.size(); ++v) {
+    const int r = region[v];
+    if (r < 0 || r >= region_count) continue;
+    for (int level = 0; level <= depth[v]; ++level)
+      ++at_least[static_cast<std::size_t>(r) * levels + static_cast<std::size_t>(level)];
+  }
+  std::vector<int> chosen(regions, 0);
+  for (std::size_t r = 0; r < regions; ++r) {
+    const std::size_t whole = at_least[r * levels];
+    for (std::size_t level = 1; level < levels; ++level) {
+      const std::size_t kept = at_least[r * levels + level];
+      if (kept < min_voxels || static_cast<double>(kept) < min_share * static_cast<double>(whole)) break;
+      chosen[r] = static_cast<int>(level);
+    }
+  }
+  std::vector<int> measured(region.size(), -1);
+  for (std::size_t v = 0; v < region.size(); ++v) {
+    const int r = region[v];
+    if (r >= 0 && r < region_count && depth[v] >= chosen[static_cast<std::size_t>(r)]) measured[v] = r;
+  }
+  return measured;
+}
+
 } // namespace
 
 std::vector<TextureSpectrum> measure_texture_spectra(const ImageGrid& grid,
@@ -57,8 +115,11 @@ std::vector<TextureSpectrum> measure_texture_spectra(const ImageGrid& grid,
     throw std::invalid_argument("measure_texture_spectra: volumes of another grid");
   const auto regions = static_cast<std::size_t>(std::max(0, region_count));
   std::vector<TextureSpectrum> out(regions);
+  const std::vector<int> measured =
+      eroded_regions(grid.dims, region, region_count, std::max(0, options.erode_voxels), options.min_pairs,
+                     options.min_eroded_share);
   auto region_of = [&](std::size_t v) -> int {
-    const int r = region[v];
+    const int r = measured[v];
     return r >= 0 && r < region_count && std::isfinite(intensity[v]) ? r : -1;
   };
 

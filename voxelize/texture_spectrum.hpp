@@ -21,11 +21,18 @@ struct TextureSpectrumOptions {
   double min_correlation = 0.1;
   std::size_t min_pairs = 100; ///< a lag with fewer voxel pairs within the region is left out
   double max_deviation = std::numeric_limits<double>::infinity(); ///< d clamped to +-max_deviation first
+  /// A voxel is measured only if every voxel within this many steps along the axes is of its
+  /// region (the region eroded by a 6-connected element this many times; the grid's edge is no
+  /// border): a voxel at a region's border mixes two tissues (partial volume), whose contrast
+  /// would count as texture. A region is eroded only as deep as it keeps min_pairs voxels and
+  /// min_eroded_share of its own (a thin one, as the skull's marrow, is measured whole).
+  int erode_voxels = 1;
+  double min_eroded_share = 0.25; ///< see erode_voxels
 };
 
 /// The texture of one region.
 struct TextureSpectrum {
-  std::size_t voxels = 0;    ///< voxels of the region with a finite intensity
+  std::size_t voxels = 0;    ///< voxels measured: of the region (eroded), with a finite intensity
   double mean = 0.0;         ///< their mean intensity
   double deviation_sd = 0.0; ///< standard deviation of d over them (white noise included)
   /// The autocorrelation of d at lags 1..max_lag voxels, per axis (i, j, k): the mean of d(x) d(x + lag)
@@ -43,7 +50,8 @@ struct TextureSpectrum {
 };
 
 /// Measures each region's texture in `intensity` (one value per voxel of `grid`; NaN values are
-/// left out): region[v] is the region of voxel v, in [0, region_count), or -1 for none.
+/// left out): region[v] is the region of voxel v, in [0, region_count), or -1 for none; each region
+/// eroded by options.erode_voxels first.
 /// With no lag fitted (the correlation at one voxel already below min_correlation), s is 0 and
 /// the amplitude 0; with one, the amplitude is taken as 1; with several, both are fitted (least
 /// squares on log rho against r^2, weighted by rho^2), the amplitude capped at 1.

@@ -164,5 +164,62 @@ TEST(TextureSpectrum, WhiteNoiseIsNoTexture) {
   EXPECT_EQ(s.white_share, 1.0);
 }
 
+// Two tissues of constant intensity (100 and 50) meet in a plane, the voxels on either side of it a
+// mix of both (80 and 60), as a scan's partial volume makes them: measured whole, each region's
+// border layer counts as texture (sd about 0.05); eroded by one voxel (the default), each
+// tissue's deviation is 0. A region too thin to keep a quarter of its voxels is measured whole.
+TEST(TextureSpectrum, PartialVolumeAtATissueBorderIsNoTexture) {
+  const ImageGrid g = spectrum_grid(32, 1.0);
+  const auto count = static_cast<std::size_t>(g.voxel_count());
+  std::vector<float> intensity(count);
+  std::vector<int> region(count);
+  for (int k = 0; k < 32; ++k)
+    for (int j = 0; j < 32; ++j)
+      for (int i = 0; i < 32; ++i) {
+        const std::size_t v = voxel_index(g.dims, i, j, k);
+        region[v] = i < 16 ? 0 : 1;
+        intensity[v] = i < 15 ? 100.0f : i == 15 ? 80.0f : i == 16 ? 60.0f : 50.0f;
+      }
+  TextureSpectrumOptions whole;
+  whole.erode_voxels = 0;
+  const std::vector<TextureSpectrum> raw = measure_texture_spectra(g, intensity, region, 2, whole);
+  EXPECT_GT(raw[0].deviation_sd, 0.04);
+  EXPECT_GT(raw[1].deviation_sd, 0.04);
+  EXPECT_EQ(raw[0].voxels, 16u * 32u * 32u);
+
+  const std::vector<TextureSpectrum> eroded = measure_texture_spectra(g, intensity, region, 2);
+  for (const TextureSpectrum& s : eroded) {
+    EXPECT_EQ(s.voxels, 15u * 32u * 32u); // the layer at the border, not the grid's edge
+    EXPECT_EQ(s.deviation_sd, 0.0);
+    EXPECT_EQ(s.texture_sd, 0.0);
+  }
+  EXPECT_DOUBLE_EQ(eroded[0].mean, 100.0);
+  EXPECT_DOUBLE_EQ(eroded[1].mean, 50.0);
+
+  // A slab two voxels thick keeps nothing after one erosion: it is measured whole. (A region
+  // eroded to less than a quarter of its voxels would be too.)
+  for (std::size_t v = 0; v < count; ++v)
+    region[v] = region[v] == 0 && intensity[v] != 80.0f ? 1 : region[v];
+  for (std::size_t v = 0; v < count; ++v)
+    if (intensity[v] == 60.0f) region[v] = 0;
+  TextureSpectrumOptions deep;
+  deep.erode_voxels = 3;
+  const std::vector<TextureSpectrum> slab = measure_texture_spectra(g, intensity, region, 2, deep);
+  EXPECT_EQ(slab[0].voxels, 2u * 32u * 32u);
+  EXPECT_NEAR(slab[0].mean, 70.0, 1e-9);
+
+  // A slab three voxels thick keeps its middle third after one erosion: measured there, unless a
+  // larger share is asked to stay.
+  std::vector<int> three(count);
+  for (int k = 0; k < 32; ++k)
+    for (int j = 0; j < 32; ++j)
+      for (int i = 0; i < 32; ++i)
+        three[voxel_index(g.dims, i, j, k)] = i >= 14 && i <= 16 ? 0 : 1;
+  EXPECT_EQ(measure_texture_spectra(g, intensity, three, 2)[0].voxels, 32u * 32u);
+  TextureSpectrumOptions half;
+  half.min_eroded_share = 0.5;
+  EXPECT_EQ(measure_texture_spectra(g, intensity, three, 2, half)[0].voxels, 3u * 32u * 32u);
+}
+
 } // namespace
 } // namespace phantasm
