@@ -165,6 +165,87 @@ std::vector<MappedOrgan> parse_mapping(CheckedMap& map) {
   return organs;
 }
 
+/// Expands the mapping's name patterns (`*`, `?`: the table's names they match, in the table's
+/// order) and maps each name to its organ.
+/// @return false, with the problem reported, for a pattern matching nothing or a name two organs list
+bool resolve_names(CheckedMap& map, const std::filesystem::path& table_file,
+                   const std::map<std::int32_t, std::string>& table, std::vector<MappedOrgan>& organs,
+                   std::map<std::string, std::size_t>& organ_of_name) {
+  // Patterns (`*`, `?`) stand for the table's names they match, in the table's order.
+  for (std::size_t o = 0; o < organs.size(); ++o) {
+    std::vector<std::string> names;
+    for (const std::string& name : organs[o].names) {
+      if (!is_pattern(name)) {
+        names.push_back(name);
+        continue;
+      }
+      const std::size_t before = names.size();
+      for (const auto& [label, entry] : table)
+        if (matches(name, entry)) names.push_back(entry);
+      if (names.size() == before) {
+        map.context().problem(organs[o].at, map.child_path("mapping") + "[" + std::to_string(o) + "].labels",
+                              "expected a name of " + table_file.string() + " matching the pattern '" + name +
+                                  "' (organ " + organs[o].name + "), found none");
+        return false;
+      }
+    }
+    organs[o].names = names;
+  }
+  for (std::size_t o = 0; o < organs.size(); ++o) {
+    for (const std::string& name : organs[o].names) {
+      const auto [first, added] = organ_of_name.emplace(name, o);
+      if (!added && first->second != o) { // twice in one organ (two patterns, say) is no conflict
+        map.context().problem(organs[o].at, map.child_path("mapping") + "[" + std::to_string(o) + "].labels",
+                              "expected each name in one organ, found '" + name + "' in organ " +
+                                  organs[o].name + " and in organ " + organs[first->second].name);
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
+/// Appends the mapped organs with voxels (their labels in `labels`) to `anatomy.organs`, each
+/// inside its nearest container with voxels.
+void append_mapped_organs(CheckedMap& map, const std::vector<MappedOrgan>& organs,
+                          const std::vector<std::vector<std::string>>& labels,
+                          const std::filesystem::path& file, double smoothing_mm, AnatomySettings& anatomy) {
+  // Organs with voxels, each inside its nearest container with voxels.
+  std::map<std::string, std::size_t> index_of;
+  for (std::size_t o = 0; o < organs.size(); ++o)
+    index_of.emplace(organs[o].name, o);
+  for (std::size_t o = 0; o < organs.size(); ++o) {
+    if (labels[o].empty()) continue;
+    OrganSettings organ;
+    organ.name = organs[o].name;
+    organ.tissue = organs[o].tissue;
+    organ.material = organs[o].material;
+    organ.solid = organs[o].solid;
+    std::string inside = organs[o].inside;
+    for (std::size_t depth = 0; depth <= organs.size() && !inside.empty(); ++depth) {
+      const auto container = index_of.find(inside);
+      if (container == index_of.end()) {
+        organ.inside = inside; // an organ of the scene's organs list; the consistency check names it
+        break;
+      }
+      if (!labels[container->second].empty()) {
+        organ.inside = inside;
+        break;
+      }
+      inside = organs[container->second].inside;
+    }
+    organ.shape.kind = ShapeKind::label_volume;
+    organ.shape.file = file;
+    organ.shape.labels = labels[o];
+    organ.shape.label = std::stoi(labels[o].front());
+    organ.shape.smoothing_mm = smoothing_mm;
+    // Messages about the organ (its shape read later, say) point at the entry that made it.
+    map.context().remember(organs[o].at.IsDefined() ? organs[o].at : map.node(),
+                           "anatomy.organs[" + std::to_string(anatomy.organs.size()) + "]");
+    anatomy.organs.push_back(organ);
+  }
+}
+
 } // namespace
 
 std::map<std::int32_t, std::string> read_label_table(const std::filesystem::path& file) {
@@ -267,38 +348,8 @@ void parse_segmentation(CheckedMap& map, const std::filesystem::path& scene_fold
     map.context().problem(map.get("table"), map.child_path("table"), error.what());
     return;
   }
-  // Patterns (`*`, `?`) stand for the table's names they match, in the table's order.
-  for (std::size_t o = 0; o < organs.size(); ++o) {
-    std::vector<std::string> names;
-    for (const std::string& name : organs[o].names) {
-      if (!is_pattern(name)) {
-        names.push_back(name);
-        continue;
-      }
-      const std::size_t before = names.size();
-      for (const auto& [label, entry] : table)
-        if (matches(name, entry)) names.push_back(entry);
-      if (names.size() == before) {
-        map.context().problem(organs[o].at, map.child_path("mapping") + "[" + std::to_string(o) + "].labels",
-                              "expected a name of " + files[1].string() + " matching the pattern '" + name +
-                                  "' (organ " + organs[o].name + "), found none");
-        return;
-      }
-    }
-    organs[o].names = names;
-  }
   std::map<std::string, std::size_t> organ_of_name;
-  for (std::size_t o = 0; o < organs.size(); ++o) {
-    for (const std::string& name : organs[o].names) {
-      const auto [first, added] = organ_of_name.emplace(name, o);
-      if (!added && first->second != o) { // twice in one organ (two patterns, say) is no conflict
-        map.context().problem(organs[o].at, map.child_path("mapping") + "[" + std::to_string(o) + "].labels",
-                              "expected each name in one organ, found '" + name + "' in organ " +
-                                  organs[o].name + " and in organ " + organs[first->second].name);
-        return;
-      }
-    }
-  }
+  if (!resolve_names(map, files[1], table, organs, organ_of_name)) return;
   try {
     ImageGrid grid;
     for (const std::int32_t label : read_nifti_labels(files[0], &grid))
@@ -334,40 +385,7 @@ void parse_segmentation(CheckedMap& map, const std::filesystem::path& scene_fold
     labels[organ->second].push_back(std::to_string(label));
   }
 
-  // Organs with voxels, each inside its nearest container with voxels.
-  std::map<std::string, std::size_t> index_of;
-  for (std::size_t o = 0; o < organs.size(); ++o)
-    index_of.emplace(organs[o].name, o);
-  for (std::size_t o = 0; o < organs.size(); ++o) {
-    if (labels[o].empty()) continue;
-    OrganSettings organ;
-    organ.name = organs[o].name;
-    organ.tissue = organs[o].tissue;
-    organ.material = organs[o].material;
-    organ.solid = organs[o].solid;
-    std::string inside = organs[o].inside;
-    for (std::size_t depth = 0; depth <= organs.size() && !inside.empty(); ++depth) {
-      const auto container = index_of.find(inside);
-      if (container == index_of.end()) {
-        organ.inside = inside; // an organ of the scene's organs list; the consistency check names it
-        break;
-      }
-      if (!labels[container->second].empty()) {
-        organ.inside = inside;
-        break;
-      }
-      inside = organs[container->second].inside;
-    }
-    organ.shape.kind = ShapeKind::label_volume;
-    organ.shape.file = files[0];
-    organ.shape.labels = labels[o];
-    organ.shape.label = std::stoi(labels[o].front());
-    organ.shape.smoothing_mm = smoothing_mm;
-    // Messages about the organ (its shape read later, say) point at the entry that made it.
-    map.context().remember(organs[o].at.IsDefined() ? organs[o].at : map.node(),
-                           "anatomy.organs[" + std::to_string(anatomy.organs.size()) + "]");
-    anatomy.organs.push_back(organ);
-  }
+  append_mapped_organs(map, organs, labels, files[0], smoothing_mm, anatomy);
 }
 
 } // namespace phantasm::scene_detail
