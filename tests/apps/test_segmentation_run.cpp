@@ -5,6 +5,8 @@
 // is a dataset whose organs are the labels' grey and white matter, deformed, with exact fields;
 // the derived Colin 27 labels renumbered as an aseg become the freesurfer mapping's organs.
 
+#include "evaluation/registration_metrics.hpp"
+#include "geometry/ras_lps.hpp"
 #include "io/dataset_layout.hpp"
 #include "io/nifti_file.hpp"
 #include "tests/support/aseg_fixture.hpp"
@@ -146,31 +148,10 @@ double dice(const std::vector<bool>& a, const std::vector<bool>& b) {
   return 2.0 * static_cast<double>(both) / static_cast<double>(in_a + in_b);
 }
 
-/// A displacement field (LPS mm components, as written) at a RAS point, trilinear, in RAS mm.
-Eigen::Vector3d field_at(const NiftiVolume& field, const Eigen::Vector3d& ras_mm) {
-  const ImageGrid& grid = field.grid;
-  const auto count = static_cast<std::size_t>(grid.voxel_count());
-  const Eigen::Vector3d index = grid.index_from_world(ras_mm);
-  Eigen::Vector3i low;
-  Eigen::Vector3d t;
-  for (int a = 0; a < 3; ++a) {
-    const double x = std::clamp(index[a], 0.0, static_cast<double>(grid.dims[a] - 1));
-    low[a] = std::min(static_cast<int>(std::floor(x)), grid.dims[a] - 2);
-    t[a] = x - low[a];
-  }
-  Eigen::Vector3d u = Eigen::Vector3d::Zero();
-  for (int corner = 0; corner < 8; ++corner) {
-    double weight = 1.0;
-    int c[3];
-    for (int a = 0; a < 3; ++a) {
-      const int bit = (corner >> a) & 1;
-      c[a] = low[a] + bit;
-      weight *= bit ? t[a] : 1.0 - t[a];
-    }
-    const std::size_t v = voxel_index(grid.dims, c[0], c[1], c[2]);
-    u += weight * Eigen::Vector3d(field.values[v], field.values[count + v], field.values[2 * count + v]);
-  }
-  return Eigen::Vector3d(-u.x(), -u.y(), u.z());
+/// A displacement field (LPS mm components, as written) at a RAS point, trilinear
+/// (evaluation/registration_metrics.hpp), in RAS mm.
+Eigen::Vector3d field_at(const DisplacementField& field, const Eigen::Vector3d& ras_mm) {
+  return ras_from_lps(field.at(ras_mm));
 }
 
 } // namespace
@@ -239,8 +220,10 @@ TEST(SegmentationRun, TheMacaqueBrainIsADatasetOfItsGreyAndWhiteMatterDeformed) 
     changed += reference[v] != deformed[v];
   std::printf("voxels whose label changed: %zu\n", changed);
   EXPECT_GT(changed, 50u);
-  const NiftiVolume to_def = read_nifti_vectors(layout.transform(def, ref)); // on the reference grid
-  const NiftiVolume to_ref = read_nifti_vectors(layout.transform(ref, def)); // on the deformed grid
+  const DisplacementField to_def =
+      read_displacement_field(layout.transform(def, ref)); // on the reference grid
+  const DisplacementField to_ref =
+      read_displacement_field(layout.transform(ref, def)); // on the deformed grid
   const std::vector<std::int32_t> exact = read_nifti_labels(layout.transform_mask(def, ref), nullptr);
   double largest = 0.0, worst = 0.0;
   std::size_t checked = 0, over = 0;
