@@ -1,5 +1,7 @@
 #include "atlas/colin27_head.hpp"
 
+#include "atlas/extracranial_tissues.hpp"
+#include "atlas/voxel_masks.hpp"
 #include "core/error.hpp"
 #include "io/nifti_file.hpp"
 
@@ -13,17 +15,9 @@
 namespace phantasm {
 namespace {
 
-using Mask = std::vector<std::uint8_t>;
+using namespace voxel_masks;
 
 constexpr const char* debian_package = "mricron-data";
-
-/// Index arithmetic on one grid.
-struct Volume {
-  int nx = 0, ny = 0, nz = 0;
-  explicit Volume(const ImageGrid& grid) : nx(grid.dims.x()), ny(grid.dims.y()), nz(grid.dims.z()) {}
-  std::int64_t size() const { return std::int64_t(nx) * ny * nz; }
-  std::int64_t at(int i, int j, int k) const { return i + std::int64_t(nx) * (j + std::int64_t(ny) * k); }
-};
 
 std::filesystem::path require_template(const std::filesystem::path& folder, const std::string& name) {
   const std::filesystem::path path = folder / name;
@@ -33,295 +27,6 @@ std::filesystem::path require_template(const std::filesystem::path& folder, cons
                      ", or scripts/install-deps.sh), or pass the folder holding it");
   }
   return path;
-}
-
-/// Nearest-neighbour resampling of a source volume onto a target grid through both affines
-/// (world RAS mm): the atlases do not share one voxel order, so indices are never compared.
-std::vector<double> resample_nearest(const NiftiVolume& source, const ImageGrid& target) {
-  const Eigen::Matrix4d source_from_target = source.grid.world_from_voxel.inverse() * target.world_from_voxel;
-  const Volume dst(target);
-  const Eigen::Vector3i sdims = source.grid.dims;
-  std::vector<double> out(static_cast<std::size_t>(dst.size()), 0.0);
-  for (int k = 0; k < dst.nz; ++k) {
-    for (int j = 0; j < dst.ny; ++j) {
-      for (int i = 0; i < dst.nx; ++i) {
-        const Eigen::Vector4d s = source_from_target * Eigen::Vector4d(i, j, k, 1.0);
-        const long si = std::lround(s.x()), sj = std::lround(s.y()), sk = std::lround(s.z());
-        if (si < 0 || sj < 0 || sk < 0 || si >= sdims.x() || sj >= sdims.y() || sk >= sdims.z()) continue;
-        out[static_cast<std::size_t>(dst.at(i, j, k))] =
-            source.values[static_cast<std::size_t>(si + sdims.x() * (sj + std::int64_t(sdims.y()) * sk))];
-      }
-    }
-  }
-  return out;
-}
-
-/// One-dimensional squared distance transform of sampled function f (Felzenszwalb and
-/// Huttenlocher 2012, Theory of Computing 8:415), samples spacing apart.
-void distance_transform_1d(const std::vector<double>& f, std::vector<double>& d, int n, double spacing,
-                           std::vector<int>& v, std::vector<double>& z) {
-  constexpr double inf = std::numeric_limits<double>::infinity();
-  int k = -1;
-  for (int q = 0; q < n; ++q) {
-    if (f[q] == inf) continue;
-    const double xq = q * spacing;
-    while (k >= 0) {
-      const double xv = v[k] * spacing;
-      const double s = ((f[q] + xq * xq) - (f[v[k]] + xv * xv)) / (2.0 * (xq - xv));
-      if (s <= z[k]) {
-        --k;
-        continue;
-      }
-      break;
-    }
-    ++k;
-    v[k] = q;
-    z[k] = k == 0 ? -inf
-                  : ((f[q] + xq * xq) - (f[v[k - 1]] + std::pow(v[k - 1] * spacing, 2))) /
-                        (2.0 * (xq - v[k - 1] * spacing));
-    z[k + 1] = inf;
-  }
-  if (k < 0) {
-    std::fill(d.begin(), d.begin() + n, inf);
-    return;
-  }
-  int j = 0;
-  for (int q = 0; q < n; ++q) {
-    while (z[j + 1] < q * spacing)
-      ++j;
-    const double dx = (q - v[j]) * spacing;
-    d[q] = dx * dx + f[v[j]];
-  }
-}
-
-/// Exact Euclidean distance (mm) from every voxel to the nearest voxel of the mask (0 inside).
-std::vector<float> distance_to(const Mask& mask, const ImageGrid& grid) {
-  const Volume vol(grid);
-  constexpr double inf = std::numeric_limits<double>::infinity();
-  std::vector<double> dist(mask.size());
-  for (std::size_t n = 0; n < mask.size(); ++n)
-    dist[n] = mask[n] ? 0.0 : inf;
-  const int longest = std::max({vol.nx, vol.ny, vol.nz});
-  std::vector<double> f(longest), d(longest), z(longest + 1);
-  std::vector<int> v(longest);
-  const std::array<int, 3> n{vol.nx, vol.ny, vol.nz};
-  const std::array<std::int64_t, 3> stride{1, vol.nx, std::int64_t(vol.nx) * vol.ny};
-  for (int axis = 0; axis < 3; ++axis) {
-    const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-    for (int p2 = 0; p2 < n[a2]; ++p2) {
-      for (int p1 = 0; p1 < n[a1]; ++p1) {
-        const std::int64_t base = p1 * stride[a1] + p2 * stride[a2];
-        for (int q = 0; q < n[axis]; ++q)
-          f[q] = dist[static_cast<std::size_t>(base + q * stride[axis])];
-        distance_transform_1d(f, d, n[axis], grid.spacing_mm[axis], v, z);
-        for (int q = 0; q < n[axis]; ++q)
-          dist[static_cast<std::size_t>(base + q * stride[axis])] = d[q];
-      }
-    }
-  }
-  std::vector<float> out(mask.size());
-  for (std::size_t m = 0; m < mask.size(); ++m)
-    out[m] = static_cast<float>(std::sqrt(dist[m]));
-  return out;
-}
-
-/// 6-connected components of a mask, numbered 1, 2, ... in scan order (deterministic).
-std::vector<std::int32_t> connected_components(const Mask& mask, const ImageGrid& grid, std::int32_t* count) {
-  const Volume vol(grid);
-  std::vector<std::int32_t> component(mask.size(), 0);
-  std::vector<std::int64_t> stack;
-  std::int32_t next = 0;
-  for (std::int64_t seed = 0; seed < vol.size(); ++seed) {
-    if (!mask[seed] || component[seed]) continue;
-    component[seed] = ++next;
-    stack.assign(1, seed);
-    while (!stack.empty()) {
-      const std::int64_t n = stack.back();
-      stack.pop_back();
-      const int i = static_cast<int>(n % vol.nx), j = static_cast<int>((n / vol.nx) % vol.ny),
-                k = static_cast<int>(n / (std::int64_t(vol.nx) * vol.ny));
-      const std::array<std::array<int, 3>, 6> steps{
-          {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}}};
-      for (const auto& s : steps) {
-        const int a = i + s[0], b = j + s[1], c = k + s[2];
-        if (a < 0 || b < 0 || c < 0 || a >= vol.nx || b >= vol.ny || c >= vol.nz) continue;
-        const std::int64_t m = vol.at(a, b, c);
-        if (mask[m] && !component[m]) {
-          component[m] = next;
-          stack.push_back(m);
-        }
-      }
-    }
-  }
-  *count = next;
-  return component;
-}
-
-/// The mask with its holes filled: voxels not reachable from the volume's border through
-/// voxels outside the mask.
-Mask fill_holes(const Mask& mask, const ImageGrid& grid) {
-  const Volume vol(grid);
-  Mask outside(mask.size());
-  for (std::size_t n = 0; n < mask.size(); ++n)
-    outside[n] = !mask[n];
-  std::int32_t count = 0;
-  const std::vector<std::int32_t> component = connected_components(outside, grid, &count);
-  std::vector<std::uint8_t> touches_border(static_cast<std::size_t>(count) + 1, 0);
-  for (int k = 0; k < vol.nz; ++k)
-    for (int j = 0; j < vol.ny; ++j)
-      for (int i = 0; i < vol.nx; ++i)
-        if (i == 0 || j == 0 || k == 0 || i == vol.nx - 1 || j == vol.ny - 1 || k == vol.nz - 1)
-          touches_border[component[vol.at(i, j, k)]] = 1;
-  Mask filled(mask.size());
-  for (std::size_t n = 0; n < mask.size(); ++n)
-    filled[n] = mask[n] || !touches_border[component[n]];
-  return filled;
-}
-
-/// The mask with its holes filled in every axial (k) slice: 4-connected background reachable
-/// from the slice's border stays background. Where the head is cut open at the neck, the dark
-/// bone layer connects to the outside in 3-D, yet each axial slice through the skull shows a
-/// closed ring of scalp.
-Mask fill_holes_axial(const Mask& mask, const ImageGrid& grid) {
-  const Volume vol(grid);
-  Mask filled = mask;
-  std::vector<std::uint8_t> reached(static_cast<std::size_t>(vol.nx) * vol.ny);
-  std::vector<std::int64_t> stack;
-  for (int k = 0; k < vol.nz; ++k) {
-    std::fill(reached.begin(), reached.end(), 0);
-    stack.clear();
-    auto push = [&](int i, int j) {
-      const std::size_t p = static_cast<std::size_t>(i + std::int64_t(vol.nx) * j);
-      if (!reached[p] && !mask[vol.at(i, j, k)]) {
-        reached[p] = 1;
-        stack.push_back(static_cast<std::int64_t>(p));
-      }
-    };
-    for (int i = 0; i < vol.nx; ++i) {
-      push(i, 0);
-      push(i, vol.ny - 1);
-    }
-    for (int j = 0; j < vol.ny; ++j) {
-      push(0, j);
-      push(vol.nx - 1, j);
-    }
-    while (!stack.empty()) {
-      const std::int64_t p = stack.back();
-      stack.pop_back();
-      const int i = static_cast<int>(p % vol.nx), j = static_cast<int>(p / vol.nx);
-      if (i > 0) push(i - 1, j);
-      if (i < vol.nx - 1) push(i + 1, j);
-      if (j > 0) push(i, j - 1);
-      if (j < vol.ny - 1) push(i, j + 1);
-    }
-    for (int j = 0; j < vol.ny; ++j)
-      for (int i = 0; i < vol.nx; ++i)
-        if (!reached[static_cast<std::size_t>(i + std::int64_t(vol.nx) * j)]) filled[vol.at(i, j, k)] = 1;
-  }
-  return filled;
-}
-
-/// The largest 6-connected component of a mask (the first in scan order on a tie).
-Mask largest_component(const Mask& mask, const ImageGrid& grid) {
-  std::int32_t count = 0;
-  const std::vector<std::int32_t> component = connected_components(mask, grid, &count);
-  std::vector<std::int64_t> size(static_cast<std::size_t>(count) + 1, 0);
-  for (const std::int32_t c : component)
-    ++size[c];
-  std::int32_t best = 0;
-  for (std::int32_t c = 1; c <= count; ++c)
-    if (size[c] > size[best] || best == 0) best = c;
-  Mask out(mask.size());
-  for (std::size_t n = 0; n < mask.size(); ++n)
-    out[n] = count > 0 && component[n] == best;
-  return out;
-}
-
-/// Otsu's threshold of a 256-bin histogram: the bin that maximises the between-class variance;
-/// values at or below it form the lower class.
-int otsu_threshold(const std::array<std::int64_t, 256>& histogram) {
-  double total = 0.0, sum = 0.0;
-  for (int b = 0; b < 256; ++b) {
-    total += static_cast<double>(histogram[b]);
-    sum += b * static_cast<double>(histogram[b]);
-  }
-  double weight_low = 0.0, sum_low = 0.0, best = -1.0;
-  int threshold = 0;
-  for (int b = 0; b < 255; ++b) {
-    weight_low += static_cast<double>(histogram[b]);
-    sum_low += b * static_cast<double>(histogram[b]);
-    const double weight_high = total - weight_low;
-    if (weight_low <= 0.0 || weight_high <= 0.0) continue;
-    const double mean_low = sum_low / weight_low, mean_high = (sum - sum_low) / weight_high;
-    const double between = weight_low * weight_high * (mean_low - mean_high) * (mean_low - mean_high);
-    if (between > best) {
-      best = between;
-      threshold = b;
-    }
-  }
-  return threshold;
-}
-
-/// Deterministic k-means (Lloyd) of a 256-bin histogram into three classes, started from the
-/// 1/6, 3/6 and 5/6 quantiles. Returns the two thresholds between the classes (values below
-/// thresholds[0] are class 0, below thresholds[1] class 1, the rest class 2).
-std::array<double, 2> three_class_thresholds(const std::array<std::int64_t, 256>& histogram) {
-  double total = 0.0;
-  for (const std::int64_t h : histogram)
-    total += static_cast<double>(h);
-  std::array<double, 3> mean{};
-  double cumulative = 0.0;
-  int c = 0;
-  for (int b = 0; b < 256 && c < 3; ++b) {
-    cumulative += static_cast<double>(histogram[b]);
-    while (c < 3 && cumulative >= total * (2 * c + 1) / 6.0)
-      mean[c++] = b;
-  }
-  std::array<double, 2> cut{};
-  for (int iteration = 0; iteration < 100; ++iteration) {
-    cut = {0.5 * (mean[0] + mean[1]), 0.5 * (mean[1] + mean[2])};
-    std::array<double, 3> weight{}, sum{};
-    for (int b = 0; b < 256; ++b) {
-      const int cls = b < cut[0] ? 0 : (b < cut[1] ? 1 : 2);
-      weight[cls] += static_cast<double>(histogram[b]);
-      sum[cls] += b * static_cast<double>(histogram[b]);
-    }
-    std::array<double, 3> updated = mean;
-    for (int k = 0; k < 3; ++k)
-      if (weight[k] > 0.0) updated[k] = sum[k] / weight[k];
-    if (updated == mean) break;
-    mean = updated;
-  }
-  return {0.5 * (mean[0] + mean[1]), 0.5 * (mean[1] + mean[2])};
-}
-
-/// One pass of a 3x3x3 majority filter over the classes 1..3 inside the mask: each voxel
-/// takes the class most frequent among its in-mask neighbours (itself included), keeping its
-/// own class on a tie. Reads the previous pass only, so the order of the scan does not matter.
-std::vector<std::int8_t> majority_filter(const std::vector<std::int8_t>& cls, const Mask& mask,
-                                         const ImageGrid& grid) {
-  const Volume vol(grid);
-  std::vector<std::int8_t> out = cls;
-  for (int k = 1; k < vol.nz - 1; ++k) {
-    for (int j = 1; j < vol.ny - 1; ++j) {
-      for (int i = 1; i < vol.nx - 1; ++i) {
-        const std::int64_t n = vol.at(i, j, k);
-        if (!mask[n]) continue;
-        std::array<int, 4> votes{};
-        for (int c = -1; c <= 1; ++c)
-          for (int b = -1; b <= 1; ++b)
-            for (int a = -1; a <= 1; ++a) {
-              const std::int64_t m = vol.at(i + a, j + b, k + c);
-              if (mask[m]) ++votes[cls[m]];
-            }
-        int best = cls[n];
-        for (int v = 1; v <= 3; ++v)
-          if (votes[v] > votes[best]) best = v;
-        out[n] = static_cast<std::int8_t>(best);
-      }
-    }
-  }
-  return out;
 }
 
 /// AAL index ranges (aal.nii.txt: "index name code").
@@ -554,31 +259,6 @@ void label_brain(const ImageGrid& grid, const Volume& vol, const Mask& brain, co
       }
 }
 
-/// The mask eroded (erode) or dilated by one voxel through its six faces; the volume's border
-/// counts as outside.
-Mask step_mask(const Mask& mask, const ImageGrid& grid, bool erode) {
-  const Volume vol(grid);
-  Mask out = mask;
-  for (int k = 0; k < vol.nz; ++k)
-    for (int j = 0; j < vol.ny; ++j)
-      for (int i = 0; i < vol.nx; ++i) {
-        const std::int64_t n = vol.at(i, j, k);
-        if (erode == !mask[n]) continue; // erosion changes inside voxels only, dilation outside ones
-        const bool border =
-            i == 0 || j == 0 || k == 0 || i == vol.nx - 1 || j == vol.ny - 1 || k == vol.nz - 1;
-        if (border) { // outside the volume is outside the mask: erode there, never dilate
-          out[n] = 0;
-          continue;
-        }
-        bool any_other = false;
-        for (const std::int64_t m : {n - 1, n + 1, n - vol.nx, n + vol.nx, n - std::int64_t(vol.nx) * vol.ny,
-                                     n + std::int64_t(vol.nx) * vol.ny})
-          any_other = any_other || mask[m] != mask[n];
-        if (any_other) out[n] = erode ? 0 : 1;
-      }
-  return out;
-}
-
 /// The eyes and the orbital fat behind them (see the comments inside); labels them in place.
 void label_eyes(const ImageGrid& grid, const std::vector<int>& intensity, double white_matter_mean,
                 const Colin27Options& options, std::vector<std::int32_t>& labels) {
@@ -637,98 +317,6 @@ void label_eyes(const ImageGrid& grid, const std::vector<int>& intensity, double
   }
 }
 
-/// Divides the tissue outside the skull (labelled scalp) into skin, subcutaneous fat and muscle,
-/// takes the eyes and the orbital fat out of them and the skull (label_eyes), and divides the
-/// skull into cortical bone and marrow (see the comments inside).
-void label_extracranial_tissues(const ImageGrid& grid, const std::vector<int>& intensity,
-                                const std::vector<float>& from_outside, double white_matter_mean,
-                                double bone_level, const Colin27Options& options,
-                                std::vector<std::int32_t>& labels) {
-  const Volume vol(grid);
-  const std::size_t count = labels.size();
-  // Skin: the head's outer layer. Under it, fat is what is brighter than the brain's white matter
-  // (fat's short T1 makes it the brightest tissue of a T1w head), muscle the rest; one majority
-  // pass as inside the brain drops single voxels of either.
-  const double fat_level = options.fat_intensity_fraction * white_matter_mean;
-  Mask soft(count);
-  std::vector<std::int8_t> cls(count, 0);
-  for (std::size_t n = 0; n < count; ++n) {
-    if (labels[n] != colin27_scalp || from_outside[n] <= options.skin_thickness_mm) continue;
-    soft[n] = 1;
-    cls[n] = intensity[n] >= fat_level ? 2 : 1;
-  }
-  for (int pass = 0; pass < options.majority_filter_passes; ++pass)
-    cls = majority_filter(cls, soft, grid);
-  for (std::size_t n = 0; n < count; ++n)
-    if (soft[n]) labels[n] = cls[n] == 2 ? colin27_subcutaneous_fat : colin27_muscle;
-  // The eyes and the orbital fat come out of the skull, fat and muscle before the marrow, which
-  // stays enclosed by the bone left.
-  label_eyes(grid, intensity, white_matter_mean, options, labels);
-  // Marrow (diploe): skull voxels brighter than marrow_intensity_fraction times white matter
-  // whose six neighbours are all skull, so that the cortical tables stay bone on both sides.
-  const double marrow_level = std::max(bone_level, options.marrow_intensity_fraction * white_matter_mean);
-  std::vector<std::int64_t> marrow;
-  for (int k = 1; k < vol.nz - 1; ++k)
-    for (int j = 1; j < vol.ny - 1; ++j)
-      for (int i = 1; i < vol.nx - 1; ++i) {
-        const std::int64_t n = vol.at(i, j, k);
-        if (labels[n] != colin27_skull || intensity[n] < marrow_level) continue;
-        bool enclosed = true;
-        for (const std::int64_t m : {n - 1, n + 1, n - vol.nx, n + vol.nx, n - std::int64_t(vol.nx) * vol.ny,
-                                     n + std::int64_t(vol.nx) * vol.ny})
-          enclosed = enclosed && labels[m] == colin27_skull;
-        if (enclosed) marrow.push_back(n);
-      }
-  for (const std::int64_t n : marrow)
-    labels[n] = colin27_bone_marrow;
-}
-
-/// Labels the voxels outside the brain: outer CSF, skull and scalp, then the tissues inside
-/// scalp and skull (see the comments inside).
-void label_outside_brain(const ImageGrid& grid, const Mask& brain, const std::vector<int>& intensity,
-                         double white_matter_mean, const Colin27Options& options,
-                         std::vector<std::int32_t>& labels) {
-  const std::size_t count = labels.size();
-  // Outside the brain. Head: T1 above Otsu's threshold of the whole volume, its largest
-  // piece, holes filled (dark bone and sinuses are inside the head).
-  std::array<std::int64_t, 256> histogram{};
-  for (std::size_t n = 0; n < count; ++n)
-    ++histogram[intensity[n]];
-  const int head_threshold = otsu_threshold(histogram);
-  Mask head_mask(count);
-  for (std::size_t n = 0; n < count; ++n)
-    head_mask[n] = intensity[n] > head_threshold || brain[n];
-  head_mask = fill_holes_axial(fill_holes(largest_component(head_mask, grid), grid), grid);
-
-  // Outer CSF: the brain mask dilated by the CSF thickness. Skull: from there, at least the
-  // minimum thickness, and further out every dark (bone) voxel. Scalp: the outer layer of the
-  // head and every other non-bone voxel outside the skull.
-  const std::vector<float> from_brain = distance_to(brain, grid);
-  Mask not_head(count);
-  for (std::size_t n = 0; n < count; ++n)
-    not_head[n] = !head_mask[n];
-  const std::vector<float> from_outside = distance_to(not_head, grid);
-  const double bone_level = options.bone_intensity_fraction * head_threshold;
-  for (std::size_t n = 0; n < count; ++n) {
-    if (brain[n]) continue;
-    const double d = from_brain[n];
-    if (d <= options.outer_csf_thickness_mm) {
-      labels[n] = colin27_csf;
-      continue;
-    }
-    if (!head_mask[n]) continue;
-    const bool in_scalp = from_outside[n] <= options.scalp_thickness_mm;
-    const bool in_min_skull = d <= options.outer_csf_thickness_mm + options.skull_min_thickness_mm;
-    if (in_min_skull && !in_scalp)
-      labels[n] = colin27_skull;
-    else if (!in_scalp && intensity[n] < bone_level)
-      labels[n] = colin27_skull;
-    else
-      labels[n] = colin27_scalp;
-  }
-  label_extracranial_tissues(grid, intensity, from_outside, white_matter_mean, bone_level, options, labels);
-}
-
 } // namespace
 
 std::filesystem::path default_colin27_templates_dir() {
@@ -755,9 +343,7 @@ HeadLabels derive_colin27_head(const std::filesystem::path& templates_dir, const
   std::vector<int> aal(count);
   for (std::size_t n = 0; n < count; ++n)
     aal[n] = static_cast<int>(std::lround(aal_values[n]));
-  std::vector<int> intensity(count);
-  for (std::size_t n = 0; n < count; ++n)
-    intensity[n] = std::clamp(static_cast<int>(std::lround(t1.values[n])), 0, 255);
+  const std::vector<int> intensity = t1_levels(t1.values);
 
   // Brain: the brain-extracted template's support, holes filled (dark ventricles stay inside).
   Mask brain(count);
@@ -789,17 +375,18 @@ HeadLabels derive_colin27_head(const std::filesystem::path& templates_dir, const
       [&](std::int64_t n) { return is_ventricle[csf_component[n]] != 0; }, head.labels);
   std::vector<std::int32_t>& labels = head.labels;
 
-  // The brain's white-matter class: the reference level of the tissues outside it.
-  double white_matter_sum = 0.0;
-  std::int64_t white_matter_voxels = 0;
+  // Outside the brain: the tissues the T1 shows (atlas/extracranial_tissues.hpp), the brain's
+  // white-matter class their reference level, and the eyes taken out of them before the marrow.
+  Mask white_matter(count);
   for (std::size_t n = 0; n < count; ++n)
-    if (cls[n] == 3) {
-      white_matter_sum += intensity[n];
-      ++white_matter_voxels;
-    }
-  const double white_matter_mean =
-      white_matter_voxels > 0 ? white_matter_sum / double(white_matter_voxels) : 255.0;
-  label_outside_brain(grid, brain, intensity, white_matter_mean, options, labels);
+    white_matter[n] = cls[n] == 3;
+  const ExtracranialTissues outside =
+      derive_extracranial_tissues(grid, intensity, brain, white_matter, options,
+                                  [&](double white_matter_mean, std::vector<std::int32_t>& extracranial) {
+                                    label_eyes(grid, intensity, white_matter_mean, options, extracranial);
+                                  });
+  for (std::size_t n = 0; n < count; ++n)
+    if (outside.labels[n] != colin27_background) labels[n] = outside.labels[n];
 
   head.table = {{colin27_background, "background", ""},
                 {colin27_scalp, "scalp", "skin"}, // the skin alone (the tissues under it below)
