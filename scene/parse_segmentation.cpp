@@ -3,11 +3,13 @@
 #include "core/error.hpp"
 #include "core/path_kind.hpp"
 #include "io/nifti_file.hpp"
+#include "io/segmentation.hpp"
 #include "scene/declared_keys.hpp"
 
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 namespace phantasm::scene_detail {
 namespace {
@@ -206,10 +208,11 @@ bool resolve_names(CheckedMap& map, const std::filesystem::path& table_file,
 }
 
 /// Appends the mapped organs with voxels (their labels in `labels`) to `anatomy.organs`, each
-/// inside its nearest container with voxels.
+/// inside its nearest container with voxels; `atlas` names their volume when it is not the file.
 void append_mapped_organs(CheckedMap& map, const std::vector<MappedOrgan>& organs,
                           const std::vector<std::vector<std::string>>& labels,
-                          const std::filesystem::path& file, double smoothing_mm, AnatomySettings& anatomy) {
+                          const std::filesystem::path& file, double smoothing_mm, const std::string& atlas,
+                          AnatomySettings& anatomy) {
   // Organs with voxels, each inside its nearest container with voxels.
   std::map<std::string, std::size_t> index_of;
   for (std::size_t o = 0; o < organs.size(); ++o)
@@ -236,8 +239,10 @@ void append_mapped_organs(CheckedMap& map, const std::vector<MappedOrgan>& organ
     }
     organ.shape.kind = ShapeKind::label_volume;
     organ.shape.file = file;
+    organ.shape.atlas = atlas;
     organ.shape.labels = labels[o];
-    organ.shape.label = std::stoi(labels[o].front());
+    const std::string& front = labels[o].front();
+    organ.shape.label = front.find_first_not_of("0123456789") == std::string::npos ? std::stoi(front) : 0;
     organ.shape.smoothing_mm = smoothing_mm;
     // Messages about the organ (its shape read later, say) point at the entry that made it.
     map.context().remember(organs[o].at.IsDefined() ? organs[o].at : map.node(),
@@ -335,6 +340,18 @@ void parse_segmentation(CheckedMap& map, const std::filesystem::path& scene_fold
       found = false;
     }
   }
+  // The T1 of the same subject, for the head's tissues outside the brain.
+  std::filesystem::path t1_file;
+  if (std::string text; map.string("t1", text)) {
+    t1_file = std::filesystem::path(text).is_absolute() ? std::filesystem::path(text) : scene_folder / text;
+    if (const std::string kind = path_kind(t1_file); kind != "a regular file") {
+      map.context().problem(map.get("t1"), map.child_path("t1"),
+                            "expected an existing T1 image (NIfTI) of the segmentation's subject, found " +
+                                (kind == "no such file" ? std::string("no file") : kind) + " at '" +
+                                t1_file.string() + "'");
+      found = false;
+    }
+  }
   double smoothing_mm = 1.0;
   map.number("smoothing_mm", smoothing_mm, declared_rule<ShapeSettings>("smoothing_mm"));
   std::vector<MappedOrgan> organs = parse_mapping(map);
@@ -350,13 +367,23 @@ void parse_segmentation(CheckedMap& map, const std::filesystem::path& scene_fold
   }
   std::map<std::string, std::size_t> organ_of_name;
   if (!resolve_names(map, files[1], table, organs, organ_of_name)) return;
+  ImageGrid grid;
+  std::vector<std::int32_t> volume;
   try {
-    ImageGrid grid;
-    for (const std::int32_t label : read_nifti_labels(files[0], &grid))
+    volume = read_nifti_labels(files[0], &grid);
+    for (const std::int32_t label : volume)
       if (label != 0) present.insert(label);
   } catch (const InputError& error) {
     map.context().problem(map.get("file"), map.child_path("file"), error.what());
     return;
+  }
+  if (!t1_file.empty()) {
+    try {
+      check_t1_covers_labels(files[0], grid, volume, t1_file, read_nifti(t1_file).grid);
+    } catch (const InputError& error) {
+      map.context().problem(map.get("t1"), map.child_path("t1"), error.what());
+      return;
+    }
   }
 
   if (present.empty()) {
@@ -385,7 +412,39 @@ void parse_segmentation(CheckedMap& map, const std::filesystem::path& scene_fold
     labels[organ->second].push_back(std::to_string(label));
   }
 
-  append_mapped_organs(map, organs, labels, files[0], smoothing_mm, anatomy);
+  if (t1_file.empty()) {
+    append_mapped_organs(map, organs, labels, files[0], smoothing_mm, {}, anatomy);
+    return;
+  }
+  // With a T1 the organs take their labels from the segmentation's head (the volume's labels with
+  // the tissues outside the brain derived from the T1, atlas/atlas_labels.hpp), named as an atlas.
+  // The scalp (the whole head) and the skull come first; the mapping's outermost organ takes the
+  // outer CSF and lies in the skull with the mapping's other outermost organs.
+  const std::string atlas = segmentation_atlas_name(files[0], t1_file);
+  const std::size_t first = anatomy.organs.size();
+  for (const auto& [name, tissue, inside, names] :
+       {std::tuple<const char*, const char*, const char*, std::vector<std::string>>{
+            "scalp", "skin", "", {"scalp", "subcutaneous_fat", "muscle"}},
+        {"skull", "bone_cortical", "scalp", {"skull", "bone_marrow"}}}) {
+    OrganSettings organ;
+    organ.name = name;
+    organ.tissue = tissue;
+    organ.inside = inside;
+    organ.solid = false;
+    organ.shape.kind = ShapeKind::label_volume;
+    organ.shape.atlas = atlas;
+    organ.shape.labels = names;
+    organ.shape.smoothing_mm = smoothing_mm;
+    map.context().remember(map.get("t1"), "anatomy.organs[" + std::to_string(anatomy.organs.size()) + "]");
+    anatomy.organs.push_back(organ);
+  }
+  std::size_t outermost = 0;
+  while (outermost + 1 < organs.size() && !organs[outermost].inside.empty())
+    ++outermost;
+  labels[outermost].push_back("outer_csf");
+  append_mapped_organs(map, organs, labels, files[0], smoothing_mm, atlas, anatomy);
+  for (std::size_t o = first + 2; o < anatomy.organs.size(); ++o)
+    if (anatomy.organs[o].inside.empty()) anatomy.organs[o].inside = "skull";
 }
 
 } // namespace phantasm::scene_detail
