@@ -571,3 +571,32 @@ TEST(SegmentationRun, WithAT1TheHeadHasAScalpAndASkullAndItsFatIsBrighterThanMus
   std::printf("T1w means: fat %.1f, muscle %.1f\n", fat, muscle);
   EXPECT_GT(fat, 1.5 * muscle);
 }
+
+// A missing T1, or one whose grid does not cover the labels (the aseg fixture's CSF reaches
+// +-41 mm; this T1's 20 voxels of 2 mm span +-19 mm), stops the run at segmentation.t1 before
+// anything is written.
+TEST(SegmentationRun, AMissingT1OrOneThatDoesNotCoverTheLabelsExitsWithTwoAndWritesNothing) {
+  const fs::path folder = write_aseg_fixture("segmentation-run-bad-t1");
+  ImageGrid grid;
+  grid.dims = Eigen::Vector3i::Constant(20);
+  grid.world_from_voxel.topLeftCorner<3, 3>() *= 2.0;
+  grid.world_from_voxel.topRightCorner<3, 1>() = Eigen::Vector3d::Constant(-19.0);
+  write_nifti(folder / "small_t1.nii.gz", grid, std::vector<float>(8000, 100.0f));
+  for (const std::string t1 : {"gone_t1.nii.gz", "small_t1.nii.gz"}) {
+    std::string scene = k_scene;
+    const std::string mapping = "mapping: freesurfer}";
+    scene.replace(scene.find(mapping), mapping.size(), "mapping: freesurfer, t1: " + t1 + "}");
+    write_text_file(folder / "scene.yaml", scene);
+    const fs::path out = folder / "out";
+    const CommandResult run =
+        run_command({PHANTASM_EXECUTABLE, "run", (folder / "scene.yaml").string(), "-o", out.string()});
+    EXPECT_EQ(run.exit_code, 2) << t1;
+    EXPECT_NE(run.err.find("anatomy.segmentation.t1: "), std::string::npos) << run.err;
+    EXPECT_NE(run.err.find((folder / t1).string()), std::string::npos) << run.err;
+    if (t1 == "small_t1.nii.gz")
+      EXPECT_NE(run.err.find("covers the labelled voxels of " + (folder / "aseg.nii.gz").string()),
+                std::string::npos)
+          << run.err;
+    EXPECT_FALSE(fs::exists(out)) << t1;
+  }
+}

@@ -424,3 +424,75 @@ TEST(Segmentation, TheMacaqueSceneMakesABrainHoldingItsWhiteMatterFromEveryLabel
   for (const std::string& label : organs[1].shape.labels)
     EXPECT_NE(table.at(std::stoi(label)).find("_white_"), std::string::npos) << label;
 }
+
+namespace {
+
+/// A T1 image on a 2 mm grid of `voxels`^3 voxels centred on the origin (the aseg fixture's grid
+/// at 48): a bright head of radius 46 mm around the brain.
+void write_t1(const fs::path& path, int voxels) {
+  ImageGrid grid;
+  grid.dims = Eigen::Vector3i::Constant(voxels);
+  grid.world_from_voxel.topLeftCorner<3, 3>() *= 2.0;
+  grid.world_from_voxel.topRightCorner<3, 1>() = Eigen::Vector3d::Constant(-(voxels - 1.0));
+  std::vector<float> values(static_cast<std::size_t>(grid.voxel_count()), 0.0f);
+  std::size_t n = 0;
+  for (int k = 0; k < grid.dims.z(); ++k)
+    for (int j = 0; j < grid.dims.y(); ++j)
+      for (int i = 0; i < grid.dims.x(); ++i, ++n)
+        values[n] = grid.world_from_index(Eigen::Vector3d(i, j, k)).norm() < 46.0 ? 120.0f : 0.0f;
+  write_nifti(path, grid, values);
+}
+
+} // namespace
+
+// With a T1 the segmentation's organs come from its head (an atlas named after both files): the
+// scalp and the skull first, the mapping's outermost organ (csf) in the skull with the outer CSF.
+TEST(Segmentation, AT1AddsTheScalpAndTheSkullAroundTheMappingsOrgans) {
+  const fs::path folder = write_aseg_fixture("segmentation-t1");
+  write_t1(folder / "t1.nii.gz", 48);
+  const SceneLoadResult result = load(
+      folder,
+      scene_text("{file: aseg.nii.gz, table: FreeSurferColorLUT.txt, mapping: freesurfer, t1: t1.nii.gz}"));
+  ASSERT_TRUE(result.scene) << format_diagnostics(result.problems);
+  std::vector<std::string> expected = {"scalp < : skin [scalp subcutaneous_fat muscle]",
+                                       "skull < scalp: bone_cortical [skull bone_marrow]",
+                                       "csf < skull: csf solid [24 outer_csf]"};
+  expected.insert(expected.end(), k_expected_organs.begin() + 1, k_expected_organs.end());
+  EXPECT_EQ(organ_lines(*result.scene), expected);
+  for (const OrganSettings& organ : result.scene->anatomy.organs)
+    EXPECT_EQ(organ.shape.atlas,
+              "segmentation:" + (folder / "aseg.nii.gz").string() + "|t1:" + (folder / "t1.nii.gz").string())
+        << organ.name;
+}
+
+TEST(Segmentation, AMissingT1OrOneThatDoesNotCoverTheLabelsIsRefusedAtItsKey) {
+  const fs::path folder = write_aseg_fixture("segmentation-t1-bad");
+  std::string problems = refusal(
+      folder,
+      scene_text("{file: aseg.nii.gz, table: FreeSurferColorLUT.txt, mapping: freesurfer, t1: gone.nii}"));
+  EXPECT_NE(problems.find("scene.yaml:8:"), std::string::npos) << problems;
+  EXPECT_NE(problems.find("anatomy.segmentation.t1: expected an existing T1 image (NIfTI) of the "
+                          "segmentation's subject, found no file at '" +
+                          (folder / "gone.nii").string() + "'"),
+            std::string::npos)
+      << problems;
+  // 30^3 voxels of 2 mm: x -29..29 mm, where the aseg's CSF reaches +-41 mm.
+  write_t1(folder / "small.nii.gz", 30);
+  problems = refusal(
+      folder,
+      scene_text(
+          "{file: aseg.nii.gz, table: FreeSurferColorLUT.txt, mapping: freesurfer, t1: small.nii.gz}"));
+  EXPECT_NE(problems.find("scene.yaml:8:"), std::string::npos) << problems;
+  EXPECT_NE(problems.find("anatomy.segmentation.t1: " + (folder / "small.nii.gz").string() +
+                          ": expected a T1 whose grid covers the labelled voxels of " +
+                          (folder / "aseg.nii.gz").string()),
+            std::string::npos)
+      << problems;
+  // A file that is no NIfTI is named too.
+  write_text_file(folder / "text.nii", "not an image");
+  problems = refusal(
+      folder,
+      scene_text("{file: aseg.nii.gz, table: FreeSurferColorLUT.txt, mapping: freesurfer, t1: text.nii}"));
+  EXPECT_NE(problems.find("anatomy.segmentation.t1: "), std::string::npos) << problems;
+  EXPECT_NE(problems.find("text.nii"), std::string::npos) << problems;
+}
