@@ -420,6 +420,14 @@ void parse_segmentation(CheckedMap& map, const std::filesystem::path& scene_fold
   // the tissues outside the brain derived from the T1, atlas/atlas_labels.hpp), named as an atlas.
   // The scalp (the whole head) and the skull come first; the mapping's outermost organ takes the
   // outer CSF and lies in the skull with the mapping's other outermost organs.
+  for (std::size_t o = 0; o < organs.size(); ++o) {
+    if (organs[o].name != "scalp" && organs[o].name != "skull") continue;
+    map.context().problem(organs[o].at.IsDefined() ? organs[o].at : map.get("mapping"),
+                          map.child_path("mapping") + "[" + std::to_string(o) + "].organ",
+                          "expected an organ name other than scalp and skull, which t1 adds, found '" +
+                              organs[o].name + "'");
+    return;
+  }
   const std::string atlas = segmentation_atlas_name(files[0], t1_file);
   const std::size_t first = anatomy.organs.size();
   for (const auto& [name, tissue, inside, names] :

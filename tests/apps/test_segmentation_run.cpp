@@ -6,6 +6,7 @@
 // the derived Colin 27 labels renumbered as an aseg become the freesurfer mapping's organs.
 
 #include "atlas/atlas_labels.hpp"
+#include "atlas/extracranial_tissues.hpp"
 #include "evaluation/registration_metrics.hpp"
 #include "geometry/ras_lps.hpp"
 #include "io/dataset_layout.hpp"
@@ -599,4 +600,20 @@ TEST(SegmentationRun, AMissingT1OrOneThatDoesNotCoverTheLabelsExitsWithTwoAndWri
           << run.err;
     EXPECT_FALSE(fs::exists(out)) << t1;
   }
+}
+
+// The T1's levels: an 8-bit scan keeps its values (the Colin head's ch2.nii.gz); any other scan is
+// scaled so that the 99.5th percentile of its positive values is 255, so that a 12-bit or float
+// T1 meets the same thresholds.
+TEST(SegmentationRun, AT1OutsideEightBitsIsScaledToItsLevels) {
+  EXPECT_EQ(t1_levels({0.0, 12.4, 12.6, 254.0, 255.0}), (std::vector<int>{0, 12, 13, 254, 255}));
+  std::vector<double> wide(1000);
+  for (std::size_t n = 0; n < wide.size(); ++n)
+    wide[n] = 4.0 * static_cast<double>(n); // 0 .. 3996: the 99.5th percentile of the positive values is 3976
+  const std::vector<int> levels = t1_levels(wide);
+  EXPECT_EQ(levels[0], 0);
+  EXPECT_EQ(levels[500], 128); // 2000 * 255 / 3976 = 128.3
+  EXPECT_EQ(levels[994], 255);
+  EXPECT_EQ(levels[999], 255); // above the percentile: clamped
+  EXPECT_EQ(t1_levels({-50.0, 300.0, 600.0})[0], 0);
 }

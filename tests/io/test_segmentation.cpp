@@ -488,6 +488,15 @@ TEST(Segmentation, AMissingT1OrOneThatDoesNotCoverTheLabelsIsRefusedAtItsKey) {
                           (folder / "aseg.nii.gz").string()),
             std::string::npos)
       << problems;
+  // The organs t1 adds keep their names.
+  write_t1(folder / "t1.nii.gz", 48);
+  problems = refusal(folder, scene_text("{file: aseg.nii.gz, table: FreeSurferColorLUT.txt, t1: t1.nii.gz, "
+                                        "mapping: [{organ: skull, tissue: csf, labels: ['*']}]}"));
+  EXPECT_NE(
+      problems.find("anatomy.segmentation.mapping[0].organ: expected an organ name other than scalp and "
+                    "skull, which t1 adds, found 'skull'"),
+      std::string::npos)
+      << problems;
   // A file that is no NIfTI is named too.
   write_text_file(folder / "text.nii", "not an image");
   problems = refusal(
