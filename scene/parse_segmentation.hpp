@@ -19,6 +19,10 @@ std::map<std::int32_t, std::string> read_label_table(const std::filesystem::path
 /// Parses `anatomy.segmentation` and appends its organs with voxels to `anatomy.organs` in the mapping's
 /// order, each inside its nearest container with voxels. A mapping's name with `*` or `?` is a
 /// shell-style pattern standing for the table's names it matches (one matching none is an error).
+/// With `t1` (a T1 of the same subject that must cover the labelled voxels) the organs are first
+/// `scalp` and `skull`, then the mapping's (its outermost with the outer CSF, in the skull), all
+/// of the segmentation's head: an atlas derived at run time (io/segmentation.hpp,
+/// atlas/atlas_labels.hpp).
 void parse_segmentation(CheckedMap& map, const std::filesystem::path& scene_folder, AnatomySettings& anatomy);
 
 } // namespace phantasm::scene_detail
