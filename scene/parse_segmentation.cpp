@@ -320,6 +320,81 @@ std::map<std::int32_t, std::string> read_label_table(const std::filesystem::path
   return table;
 }
 
+namespace {
+
+/// Each organ's labels (as text) from the volume's labels with voxels: every one named in the table
+/// and mapped to an organ, or a problem at `table` or `mapping` and false.
+bool labels_by_organ(CheckedMap& map, const std::filesystem::path (&files)[2],
+                     const std::map<std::int32_t, std::string>& table, const std::set<std::int32_t>& present,
+                     const std::map<std::string, std::size_t>& organ_of_name, std::size_t organ_count,
+                     std::vector<std::vector<std::string>>& labels) {
+  labels.assign(organ_count, {});
+  for (const std::int32_t label : present) {
+    const auto named = table.find(label);
+    if (named == table.end()) {
+      map.context().problem(map.get("table"), map.child_path("table"),
+                            files[0].string() + ": label " + std::to_string(label) +
+                                " has voxels but no line in " + files[1].string() +
+                                ": expected every label of the volume in its table");
+      return false;
+    }
+    const auto organ = organ_of_name.find(named->second);
+    if (organ == organ_of_name.end()) {
+      map.context().problem(map.get("mapping"), map.child_path("mapping"),
+                            files[0].string() + ": label " + std::to_string(label) + " ('" + named->second +
+                                "') has voxels but no organ in the mapping: expected an organ listing '" +
+                                named->second + "' among its labels");
+      return false;
+    }
+    labels[organ->second].push_back(std::to_string(label));
+  }
+  return true;
+}
+
+/// With a T1 the organs take their labels from the segmentation's head (the volume's labels with
+/// the tissues outside the brain derived from the T1, atlas/atlas_labels.hpp), named as an atlas.
+/// The scalp (the whole head) and the skull come first; the mapping's outermost organ takes the
+/// outer CSF and lies in the skull with the mapping's other outermost organs.
+void append_head_organs(CheckedMap& map, const std::vector<MappedOrgan>& organs,
+                        std::vector<std::vector<std::string>>& labels, const std::filesystem::path& volume,
+                        const std::filesystem::path& t1_file, double smoothing_mm, AnatomySettings& anatomy) {
+  for (std::size_t o = 0; o < organs.size(); ++o) {
+    if (organs[o].name != "scalp" && organs[o].name != "skull") continue;
+    map.context().problem(organs[o].at.IsDefined() ? organs[o].at : map.get("mapping"),
+                          map.child_path("mapping") + "[" + std::to_string(o) + "].organ",
+                          "expected an organ name other than scalp and skull, which t1 adds, found '" +
+                              organs[o].name + "'");
+    return;
+  }
+  const std::string atlas = segmentation_atlas_name(volume, t1_file);
+  const std::size_t first = anatomy.organs.size();
+  for (const auto& [name, tissue, inside, names] :
+       {std::tuple<const char*, const char*, const char*, std::vector<std::string>>{
+            "scalp", "skin", "", {"scalp", "subcutaneous_fat", "muscle"}},
+        {"skull", "bone_cortical", "scalp", {"skull", "bone_marrow"}}}) {
+    OrganSettings organ;
+    organ.name = name;
+    organ.tissue = tissue;
+    organ.inside = inside;
+    organ.solid = false;
+    organ.shape.kind = ShapeKind::label_volume;
+    organ.shape.atlas = atlas;
+    organ.shape.labels = names;
+    organ.shape.smoothing_mm = smoothing_mm;
+    map.context().remember(map.get("t1"), "anatomy.organs[" + std::to_string(anatomy.organs.size()) + "]");
+    anatomy.organs.push_back(organ);
+  }
+  std::size_t outermost = 0;
+  while (outermost + 1 < organs.size() && !organs[outermost].inside.empty())
+    ++outermost;
+  labels[outermost].push_back("outer_csf");
+  append_mapped_organs(map, organs, labels, volume, smoothing_mm, atlas, anatomy);
+  for (std::size_t o = first + 2; o < anatomy.organs.size(); ++o)
+    if (anatomy.organs[o].inside.empty()) anatomy.organs[o].inside = "skull";
+}
+
+} // namespace
+
 void parse_segmentation(CheckedMap& map, const std::filesystem::path& scene_folder,
                         AnatomySettings& anatomy) {
   std::filesystem::path files[2];
@@ -391,68 +466,14 @@ void parse_segmentation(CheckedMap& map, const std::filesystem::path& scene_fold
                           files[0].string() + ": expected labels (voxels other than 0), found none");
     return;
   }
-  std::vector<std::vector<std::string>> labels(organs.size());
-  for (const std::int32_t label : present) {
-    const auto named = table.find(label);
-    if (named == table.end()) {
-      map.context().problem(map.get("table"), map.child_path("table"),
-                            files[0].string() + ": label " + std::to_string(label) +
-                                " has voxels but no line in " + files[1].string() +
-                                ": expected every label of the volume in its table");
-      return;
-    }
-    const auto organ = organ_of_name.find(named->second);
-    if (organ == organ_of_name.end()) {
-      map.context().problem(map.get("mapping"), map.child_path("mapping"),
-                            files[0].string() + ": label " + std::to_string(label) + " ('" + named->second +
-                                "') has voxels but no organ in the mapping: expected an organ listing '" +
-                                named->second + "' among its labels");
-      return;
-    }
-    labels[organ->second].push_back(std::to_string(label));
-  }
+  std::vector<std::vector<std::string>> labels;
+  if (!labels_by_organ(map, files, table, present, organ_of_name, organs.size(), labels)) return;
 
   if (t1_file.empty()) {
     append_mapped_organs(map, organs, labels, files[0], smoothing_mm, {}, anatomy);
     return;
   }
-  // With a T1 the organs take their labels from the segmentation's head (the volume's labels with
-  // the tissues outside the brain derived from the T1, atlas/atlas_labels.hpp), named as an atlas.
-  // The scalp (the whole head) and the skull come first; the mapping's outermost organ takes the
-  // outer CSF and lies in the skull with the mapping's other outermost organs.
-  for (std::size_t o = 0; o < organs.size(); ++o) {
-    if (organs[o].name != "scalp" && organs[o].name != "skull") continue;
-    map.context().problem(organs[o].at.IsDefined() ? organs[o].at : map.get("mapping"),
-                          map.child_path("mapping") + "[" + std::to_string(o) + "].organ",
-                          "expected an organ name other than scalp and skull, which t1 adds, found '" +
-                              organs[o].name + "'");
-    return;
-  }
-  const std::string atlas = segmentation_atlas_name(files[0], t1_file);
-  const std::size_t first = anatomy.organs.size();
-  for (const auto& [name, tissue, inside, names] :
-       {std::tuple<const char*, const char*, const char*, std::vector<std::string>>{
-            "scalp", "skin", "", {"scalp", "subcutaneous_fat", "muscle"}},
-        {"skull", "bone_cortical", "scalp", {"skull", "bone_marrow"}}}) {
-    OrganSettings organ;
-    organ.name = name;
-    organ.tissue = tissue;
-    organ.inside = inside;
-    organ.solid = false;
-    organ.shape.kind = ShapeKind::label_volume;
-    organ.shape.atlas = atlas;
-    organ.shape.labels = names;
-    organ.shape.smoothing_mm = smoothing_mm;
-    map.context().remember(map.get("t1"), "anatomy.organs[" + std::to_string(anatomy.organs.size()) + "]");
-    anatomy.organs.push_back(organ);
-  }
-  std::size_t outermost = 0;
-  while (outermost + 1 < organs.size() && !organs[outermost].inside.empty())
-    ++outermost;
-  labels[outermost].push_back("outer_csf");
-  append_mapped_organs(map, organs, labels, files[0], smoothing_mm, atlas, anatomy);
-  for (std::size_t o = first + 2; o < anatomy.organs.size(); ++o)
-    if (anatomy.organs[o].inside.empty()) anatomy.organs[o].inside = "skull";
+  append_head_organs(map, organs, labels, files[0], t1_file, smoothing_mm, anatomy);
 }
 
 } // namespace phantasm::scene_detail
