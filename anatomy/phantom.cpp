@@ -14,6 +14,9 @@
 
 #include <algorithm>
 #include <cstring>
+#include <functional>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <random>
 #include <sstream>
@@ -162,6 +165,32 @@ std::unique_ptr<ImplicitShape> target_shape(const ShapeSettings& shape, const Sh
 
 namespace {
 
+/// A target shape made on its first use. A phantom read from the anatomy cache carries its
+/// organs' targets, but most runs that read it never ask them anything (only meshing a body
+/// does, and the body mesh cache holds the meshes): a label volume's target smooths the organ's
+/// labels over their whole box, seconds of every run of a Colin head for nothing.
+/// Thread-safe: the first call from any thread makes it, the others wait for it.
+class DeferredShape final : public ImplicitShape {
+public:
+  explicit DeferredShape(std::function<std::unique_ptr<ImplicitShape>()> make) : m_make(std::move(make)) {}
+  double value(const Eigen::Vector3d& x) const override { return shape().value(x); }
+  Eigen::Vector3d gradient(const Eigen::Vector3d& x) const override { return shape().gradient(x); }
+  Eigen::Vector3d center() const override { return shape().center(); }
+  double bounding_radius() const override { return shape().bounding_radius(); }
+  double volume() const override { return shape().volume(); }
+  bool star_shaped() const override { return shape().star_shaped(); }
+  bool smoothed_indicator() const override { return shape().smoothed_indicator(); }
+
+private:
+  const ImplicitShape& shape() const {
+    std::call_once(m_once, [this] { m_shape = m_make(); });
+    return *m_shape;
+  }
+  std::function<std::unique_ptr<ImplicitShape>()> m_make;
+  mutable std::once_flag m_once;
+  mutable std::unique_ptr<ImplicitShape> m_shape;
+};
+
 /// The organs' target shapes with seeded variation (a jitter that would break nesting or touch
 /// a sibling is dropped), and the shape settings they were made from.
 struct VariedTargets {
@@ -169,8 +198,10 @@ struct VariedTargets {
   std::vector<std::shared_ptr<const ImplicitShape>> targets;
 };
 
+/// With `deferred`, the targets of shapes read from files are made on their first use
+/// (DeferredShape): for a phantom decoded from the cache, whose geometry is already built.
 VariedTargets varied_targets(const AnatomySettings& anatomy, const std::map<std::string, ShapeData>& files,
-                             Reporter& reporter) {
+                             Reporter& reporter, bool deferred) {
   const auto& settings = anatomy.organs;
   Variation variation = draw_variation(anatomy);
   // Shapes read from files vary by one smooth warp of space shared by all of them (nesting kept).
@@ -189,6 +220,13 @@ VariedTargets varied_targets(const AnatomySettings& anatomy, const std::map<std:
     const auto found = warped.find(settings[o].name);
     const ShapeData* file = found == warped.end() ? nullptr : &found->second;
     ShapeSettings shape = varied(settings[o].shape, variation.global, variation.per_organ[o]);
+    if (deferred && file != nullptr && !analytic(shape.kind)) {
+      // Files' shapes vary by the warp alone (no jitter, no nesting checks below).
+      targets.push_back(std::make_shared<DeferredShape>(
+          [shape, data = *file, name = settings[o].name] { return target_shape(shape, &data, name); }));
+      shapes.push_back(shape);
+      continue;
+    }
     std::shared_ptr<const ImplicitShape> target = target_shape(shape, file, settings[o].name);
     if (target && analytic(shape.kind) && variation.per_organ[o] != Eigen::Vector3d::Ones()) {
       bool keeps_nesting = true;
@@ -284,7 +322,7 @@ constexpr std::uint32_t k_geometry_format = 4;
 Phantom build_phantom(const AnatomySettings& anatomy, const std::map<std::string, ShapeData>& files,
                       Reporter& reporter) {
   const auto& settings = anatomy.organs;
-  const VariedTargets varied = varied_targets(anatomy, files, reporter);
+  const VariedTargets varied = varied_targets(anatomy, files, reporter, false);
   Phantom phantom;
   phantom.tet_size_mm = anatomy.tet_size_mm;
   phantom.tet_facet_distance_mm = anatomy.tet_facet_distance_mm;
@@ -437,7 +475,7 @@ Phantom phantom_from_geometry(const AnatomySettings& anatomy, const std::map<std
   }
   if (!in.done()) throw DamagedGeometry("organ geometry: bytes after the last organ");
 
-  const VariedTargets varied = varied_targets(anatomy, files, reporter);
+  const VariedTargets varied = varied_targets(anatomy, files, reporter, true);
   Phantom phantom;
   phantom.tet_size_mm = anatomy.tet_size_mm;
   phantom.tet_facet_distance_mm = anatomy.tet_facet_distance_mm;

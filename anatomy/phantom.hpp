@@ -33,7 +33,8 @@ using DamagedGeometry = DamagedBytes;
 
 /// The geometry of a built phantom's organs (patch surfaces with their bumps, sheets, tet
 /// meshes, fit reports) as bytes, everything but the target shapes, which phantom_from_geometry
-/// makes again from the settings (cheap next to fitting and meshing). For the anatomy cache.
+/// makes again from the settings (a file's shape on its first use: most runs that read the cache
+/// never ask it anything). For the anatomy cache.
 /// @param phantom as build_phantom returned it (every surface at rest)
 std::string encode_organ_geometry(const Phantom& phantom);
 

@@ -12,6 +12,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <thread>
+#include <vector>
 
 using namespace phantasm;
 using phantasm::testing::fresh_folder;
@@ -78,6 +80,53 @@ TEST(ShapeFiles, MeshAndLabelVolumeOrgansBecomePatchSurfacesOfTheirVolume) {
   ASSERT_TRUE(phantom.find("right")->solid);
   for (Eigen::Index t = 0; t < phantom.find("right")->solid->tets.rows(); ++t)
     ASSERT_GT(tet_volume(*phantom.find("right")->solid, t), 0.0);
+}
+
+// The phantom read back from its geometry (the anatomy cache) makes its file shapes' targets on
+// their first use: they answer every question as the built phantom's targets do, bit for bit,
+// from any thread.
+TEST(ShapeFiles, ADecodedPhantomsFileTargetsAnswerAsTheBuiltOnes) {
+  const fs::path folder = fresh_folder("shape-files-decoded");
+  TriangleMesh ball = unit_icosphere(3);
+  ball.vertices *= 20.0;
+  write_vtp(folder / "ball.vtp", ball);
+  write_two_balls(folder / "labels.nii.gz");
+  const Scene scene = scene_in(
+      folder, R"(    - {name: ball, tissue: white_matter, solid: false, shape: {type: mesh, file: ball.vtp}}
+    - {name: left, tissue: gray_matter, solid: false, shape: {type: label_volume, file: labels.nii.gz, label: 1}}
+)");
+  const std::map<std::string, ShapeData> files = read_shape_files(scene.anatomy);
+  Reporter quiet = Reporter::silent();
+  const Phantom built = build_phantom(scene.anatomy, files, quiet);
+  const Phantom read = phantom_from_geometry(scene.anatomy, files, encode_organ_geometry(built), quiet);
+  ASSERT_EQ(read.organs.size(), 2u);
+  for (std::size_t o = 0; o < 2; ++o) {
+    const ImplicitShape& a = *built.organs[o].target;
+    const ImplicitShape& b = *read.organs[o].target;
+    SCOPED_TRACE(built.organs[o].name);
+    // Asked first from several threads at once: one of them makes it, the others wait for it.
+    std::vector<double> first(8);
+    std::vector<std::thread> threads;
+    for (int n = 0; n < 8; ++n)
+      threads.emplace_back(
+          [&, n] { first[static_cast<std::size_t>(n)] = b.value(Eigen::Vector3d(2.5 * n, 1.0, -3.0)); });
+    for (std::thread& thread : threads)
+      thread.join();
+    for (int n = 0; n < 8; ++n)
+      EXPECT_EQ(first[static_cast<std::size_t>(n)], a.value(Eigen::Vector3d(2.5 * n, 1.0, -3.0)));
+    EXPECT_EQ(b.volume(), a.volume());
+    EXPECT_EQ(b.center(), a.center());
+    EXPECT_EQ(b.bounding_radius(), a.bounding_radius());
+    EXPECT_EQ(b.star_shaped(), a.star_shaped());
+    EXPECT_EQ(b.smoothed_indicator(), a.smoothed_indicator());
+    for (double x = -30.0; x <= 30.0; x += 7.3)
+      for (double y = -24.0; y <= 24.0; y += 6.1)
+        for (double z = -24.0; z <= 24.0; z += 5.9) {
+          const Eigen::Vector3d p(x, y, z);
+          ASSERT_EQ(b.value(p), a.value(p)) << p.transpose();
+          ASSERT_EQ(b.gradient(p), a.gradient(p)) << p.transpose();
+        }
+  }
 }
 
 TEST(ShapeFiles, ALabelMissingFromItsVolumeIsReportedAtItsSceneField) {
