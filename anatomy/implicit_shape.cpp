@@ -48,6 +48,9 @@ public:
       : m_center(center_mm), m_radii(radii_mm), m_rotation(rotation) {}
   Eigen::Vector3d center() const override { return m_center; }
   double bounding_radius() const override { return m_radii.maxCoeff(); }
+  /// The solid lies in its frame's box of half sizes m_radii (an ellipsoid, a superquadric of any
+  /// exponents, a box): the world box holding that box, rotated.
+  Eigen::Vector3d half_extents() const override { return m_rotation.cwiseAbs() * m_radii; }
 
 protected:
   Eigen::Vector3d local(const Eigen::Vector3d& x) const { return m_rotation.transpose() * (x - m_center); }

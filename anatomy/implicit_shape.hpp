@@ -22,6 +22,9 @@ public:
   /// Half the extent along each principal axis, mm (an upper bound of the distance from the
   /// centre to the surface).
   virtual double bounding_radius() const = 0;
+  /// Half the extent along x, y and z of an axis-aligned box about center() that holds the
+  /// solid, mm; a cube of bounding_radius() unless the shape knows a tighter box.
+  virtual Eigen::Vector3d half_extents() const { return Eigen::Vector3d::Constant(bounding_radius()); }
   /// Enclosed volume in mm^3, exact where a closed form exists.
   virtual double volume() const = 0;
   /// True when every ray from center() crosses the surface once (ellipsoids, superquadrics,

@@ -343,9 +343,12 @@ PatchFitReport measure_fit(const PatchSurface& surface, const ImplicitShape& tar
 TargetBoundary::TargetBoundary(const ImplicitShape& target, double spacing_mm) {
   const double radius = target.bounding_radius();
   m_spacing = spacing_mm > 0.0 ? spacing_mm : std::max(std::min(1.0, radius / 32.0), radius / 200.0);
-  const double half = 1.05 * radius + m_spacing;
-  const int n = static_cast<int>(std::ceil(2.0 * half / m_spacing)) + 1;
-  const Eigen::Vector3d low = target.center() - Eigen::Vector3d::Constant(half);
+  // The lattice covers the target's box (its half extents, a cube of its bounding radius for most
+  // shapes): an elongated superquadric's box holds a quarter of its bounding cube's points, and
+  // the lattice's values, a pow() or more each, are most of the measure's time.
+  const Eigen::Vector3d half = 1.05 * target.half_extents() + Eigen::Vector3d::Constant(m_spacing);
+  const Eigen::Vector3i n = ((2.0 * half / m_spacing).array().ceil().cast<int>() + 1).matrix();
+  const Eigen::Vector3d low = target.center() - half;
   const auto at = [&](int i, int j, int k) -> Eigen::Vector3d {
     return low + m_spacing * Eigen::Vector3d(i, j, k);
   };
@@ -375,29 +378,30 @@ TargetBoundary::TargetBoundary(const ImplicitShape& target, double spacing_mm) {
     return x;
   };
   // Layer by layer (two in memory), each layer's values in parallel over its rows.
-  std::vector<double> below(static_cast<std::size_t>(n) * n), layer(below.size());
+  const int nx = n.x(), ny = n.y();
+  const auto row = [nx](int i, int j) {
+    return static_cast<std::size_t>(j) * static_cast<std::size_t>(nx) + i;
+  };
+  std::vector<double> below(static_cast<std::size_t>(nx) * ny), layer(below.size());
   const auto fill = [&](std::vector<double>& values, int k) {
 #pragma omp parallel for schedule(static)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i)
-        values[static_cast<std::size_t>(j) * n + i] = target.value(at(i, j, k));
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i)
+        values[row(i, j)] = target.value(at(i, j, k));
   };
   const auto inside = [](double f) { return f > 0.0; };
-  for (int k = 0; k < n; ++k) {
+  for (int k = 0; k < n.z(); ++k) {
     throw_if_cancelled();
     fill(layer, k);
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        const double f = layer[static_cast<std::size_t>(j) * n + i];
-        if (i + 1 < n && inside(f) != inside(layer[static_cast<std::size_t>(j) * n + i + 1]))
-          m_points.push_back(
-              crossing(at(i, j, k), at(i + 1, j, k), f, layer[static_cast<std::size_t>(j) * n + i + 1]));
-        if (j + 1 < n && inside(f) != inside(layer[static_cast<std::size_t>(j + 1) * n + i]))
-          m_points.push_back(
-              crossing(at(i, j, k), at(i, j + 1, k), f, layer[static_cast<std::size_t>(j + 1) * n + i]));
-        if (k > 0 && inside(f) != inside(below[static_cast<std::size_t>(j) * n + i]))
-          m_points.push_back(
-              crossing(at(i, j, k), at(i, j, k - 1), f, below[static_cast<std::size_t>(j) * n + i]));
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const double f = layer[row(i, j)];
+        if (i + 1 < nx && inside(f) != inside(layer[row(i + 1, j)]))
+          m_points.push_back(crossing(at(i, j, k), at(i + 1, j, k), f, layer[row(i + 1, j)]));
+        if (j + 1 < ny && inside(f) != inside(layer[row(i, j + 1)]))
+          m_points.push_back(crossing(at(i, j, k), at(i, j + 1, k), f, layer[row(i, j + 1)]));
+        if (k > 0 && inside(f) != inside(below[row(i, j)]))
+          m_points.push_back(crossing(at(i, j, k), at(i, j, k - 1), f, below[row(i, j)]));
       }
     std::swap(below, layer);
   }
@@ -411,7 +415,7 @@ TargetBoundary::TargetBoundary(const ImplicitShape& target, double spacing_mm) {
   // A hash grid of cells of two spacings over the lattice's box.
   m_cell = 2.0 * m_spacing;
   m_origin = low;
-  m_cells = Eigen::Vector3i::Constant(static_cast<int>(std::ceil(2.0 * half / m_cell)) + 1);
+  m_cells = ((2.0 * half / m_cell).array().ceil().cast<int>() + 1).matrix();
   const auto cell_of = [&](const Eigen::Vector3d& x) -> Eigen::Vector3i {
     const Eigen::Vector3i c = ((x - m_origin) / m_cell).array().floor().cast<int>().matrix();
     return c.cwiseMax(Eigen::Vector3i::Zero()).cwiseMin(m_cells - Eigen::Vector3i::Ones());

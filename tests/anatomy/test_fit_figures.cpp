@@ -145,6 +145,30 @@ TEST(FitFigures, DistanceToTheSourceAgreesWithTheLabelsDistanceMapsWithinAVoxel)
   EXPECT_GT(off.source_mean_mm, 3.0 * own.source_mean_mm);
 }
 
+// The lattice covers a framed shape's own box, rotated: a long box-like superquadric turned 45
+// degrees about z reaches 35.4 mm along x and y, far beyond its unrotated radii in y, and its
+// surface is found everywhere: the distances beyond its ends and beside its sides are the
+// closed-form ones.
+TEST(FitFigures, TargetBoundaryCoversARotatedElongatedSuperquadric) {
+  const double c = std::sqrt(0.5);
+  Eigen::Matrix3d turn;
+  turn << c, -c, 0, c, c, 0, 0, 0, 1;
+  const Eigen::Vector3d center(3.0, -1.0, 2.0);
+  // Exponents 0.1: nearly the box of half sizes 40 x 10 x 10 (its edges rounded by a few %).
+  const auto bar = make_superquadric(center, Eigen::Vector3d(40.0, 10.0, 10.0), 0.1, 0.1, turn);
+  EXPECT_NEAR(bar->half_extents().x(), 50.0 * c, 1e-12);
+  EXPECT_NEAR(bar->half_extents().y(), 50.0 * c, 1e-12);
+  EXPECT_NEAR(bar->half_extents().z(), 10.0, 1e-12);
+  const TargetBoundary boundary(*bar);
+  // 2 mm beyond each end's face along the bar's axis, 3 mm beside its sides, 2 mm above its top.
+  const Eigen::Vector3d axis = turn.col(0), across = turn.col(1);
+  EXPECT_NEAR(boundary.distance(center + 42.0 * axis), 2.0, 0.25);
+  EXPECT_NEAR(boundary.distance(center - 42.0 * axis), 2.0, 0.25);
+  EXPECT_NEAR(boundary.distance(center + 13.0 * across), 3.0, 0.25);
+  EXPECT_NEAR(boundary.distance(center - 25.0 * axis - 13.0 * across), 3.0, 0.25);
+  EXPECT_NEAR(boundary.distance(center + 30.0 * axis + 12.0 * Eigen::Vector3d::UnitZ()), 2.0, 0.25);
+}
+
 // The boundary points lie on the target's zero level, and the distance of a point on a sphere's
 // normal line is its distance to the sphere, near and far.
 TEST(FitFigures, TargetBoundaryMeasuresASphereExactly) {
