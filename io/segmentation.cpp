@@ -54,7 +54,8 @@ void check_t1_covers_labels(const std::filesystem::path& labels_file, const Imag
       throw InputError(t1_file.string() + ": expected a T1 whose grid covers the labelled voxels of " +
                        labels_file.string() + " (the same subject in the same world space), found a " +
                        "labelled voxel at " + world_text(world) + " mm outside the T1's grid (at its voxel " +
-                       world_text(at) + ", the grid being " + world_text(t1_grid.dims.cast<double>()) + " voxels)");
+                       world_text(at) + ", the grid being " + world_text(t1_grid.dims.cast<double>()) +
+                       " voxels)");
     }
   }
 }
