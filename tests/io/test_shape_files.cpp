@@ -51,14 +51,21 @@ Scene scene_in(const fs::path& folder, const std::string& organs) {
   return result.scene ? *result.scene : Scene{};
 }
 
+/// Writes folder/ball.vtp (a 20 mm sphere of 1280 triangles: a dense target for 80 patches) and
+/// folder/labels.nii.gz (write_two_balls); returns the sphere.
+TriangleMesh write_ball_and_labels(const fs::path& folder) {
+  TriangleMesh ball = unit_icosphere(3);
+  ball.vertices *= 20.0;
+  write_vtp(folder / "ball.vtp", ball);
+  write_two_balls(folder / "labels.nii.gz");
+  return ball;
+}
+
 } // namespace
 
 TEST(ShapeFiles, MeshAndLabelVolumeOrgansBecomePatchSurfacesOfTheirVolume) {
   const fs::path folder = fresh_folder("shape-files");
-  TriangleMesh ball = unit_icosphere(3); // 1280 triangles: a dense target for 80 patches
-  ball.vertices *= 20.0;
-  write_vtp(folder / "ball.vtp", ball);
-  write_two_balls(folder / "labels.nii.gz");
+  const TriangleMesh ball = write_ball_and_labels(folder);
   const Scene scene = scene_in(
       folder, R"(    - {name: ball, tissue: white_matter, solid: false, shape: {type: mesh, file: ball.vtp}}
     - {name: left, tissue: gray_matter, solid: false, shape: {type: label_volume, file: labels.nii.gz, label: 1}}
@@ -87,10 +94,7 @@ TEST(ShapeFiles, MeshAndLabelVolumeOrgansBecomePatchSurfacesOfTheirVolume) {
 // from any thread.
 TEST(ShapeFiles, ADecodedPhantomsFileTargetsAnswerAsTheBuiltOnes) {
   const fs::path folder = fresh_folder("shape-files-decoded");
-  TriangleMesh ball = unit_icosphere(3);
-  ball.vertices *= 20.0;
-  write_vtp(folder / "ball.vtp", ball);
-  write_two_balls(folder / "labels.nii.gz");
+  write_ball_and_labels(folder);
   const Scene scene = scene_in(
       folder, R"(    - {name: ball, tissue: white_matter, solid: false, shape: {type: mesh, file: ball.vtp}}
     - {name: left, tissue: gray_matter, solid: false, shape: {type: label_volume, file: labels.nii.gz, label: 1}}
