@@ -4,15 +4,21 @@
 #include "core/path_kind.hpp"
 #include "evaluation/field_conventions.hpp"
 #include "geometry/ras_lps.hpp"
+#include "geometry/tet_location.hpp"
 #include "io/atomic_file.hpp"
 #include "io/dataset_layout.hpp"
 #include "io/dataset_tables.hpp"
+#include "io/json_file.hpp"
+#include "io/mesh_file.hpp"
 #include "io/nifti_file.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <map>
+#include <optional>
 #include <random>
 #include <regex>
 #include <set>
@@ -21,9 +27,9 @@
 namespace phantasm {
 namespace {
 
-/// True when X (voxel coordinates) lies on the grid and every voxel of its trilinear cell is
-/// exact.
-bool exact_cell(const ImageGrid& grid, const std::vector<std::uint8_t>& exact, const Eigen::Vector3d& index) {
+/// True when X (voxel coordinates) lies on the grid and `holds` every voxel of its trilinear cell.
+template <typename Holds>
+bool whole_cell(const ImageGrid& grid, const Eigen::Vector3d& index, const Holds& holds) {
   int low[3];
   for (int a = 0; a < 3; ++a) {
     if (!(index[a] >= 0.0 && index[a] <= grid.dims[a] - 1)) return false;
@@ -33,9 +39,67 @@ bool exact_cell(const ImageGrid& grid, const std::vector<std::uint8_t>& exact, c
     int c[3];
     for (int a = 0; a < 3; ++a)
       c[a] = std::min(low[a] + ((corner >> a) & 1), grid.dims[a] - 1);
-    if (!exact[voxel_index(grid.dims, c[0], c[1], c[2])]) return false;
+    if (!holds(voxel_index(grid.dims, c[0], c[1], c[2]))) return false;
   }
   return true;
+}
+
+/// How far a voxel's field may be from a body's map there and still be that map (the field is
+/// stored in single precision: a few micrometres at most; still tissue inside a body's tets keeps
+/// the head's growth instead).
+constexpr double k_body_map_tolerance_mm = 1e-3;
+
+/// The template tet of a body holding X and X carried by the subject's solved vertices.
+std::optional<Eigen::Vector3d> through_bodies(const SolvedBodies& bodies,
+                                              const std::vector<TetMeshLocator>& locators,
+                                              const Eigen::Vector3d& x) {
+  for (std::size_t b = 0; b < locators.size(); ++b) {
+    if (const std::optional<TetLocation> at = locators[b].find(x)) {
+      Eigen::Vector3d y = Eigen::Vector3d::Zero();
+      for (int c = 0; c < 4; ++c)
+        y += at->weights[c] * bodies.deformed_mm[b].row(bodies.tets[b](at->tet, c)).transpose();
+      return y;
+    }
+  }
+  return std::nullopt;
+}
+
+/// Per voxel of the field's grid: 1 where the field is exact and is a body's map (the voxel lies
+/// in a body's rest tets and the field there is within k_body_map_tolerance_mm of the solved
+/// vertices at its weights).
+std::vector<std::uint8_t> body_map_voxels(const DisplacementField& field,
+                                          const std::vector<std::uint8_t>& exact, const SolvedBodies& bodies,
+                                          const std::vector<TetMeshLocator>& locators) {
+  const ImageGrid& grid = field.grid;
+  std::vector<std::uint8_t> marks(exact.size(), 0);
+  for (const TetMeshLocator& locator : locators) {
+    // The voxels of the body's box: its corners' indices (any affine of the grid).
+    Eigen::Vector3d low = Eigen::Vector3d::Constant(1e300), high = -low;
+    for (int corner = 0; corner < 8; ++corner) {
+      Eigen::Vector3d p;
+      for (int a = 0; a < 3; ++a)
+        p[a] = ((corner >> a) & 1) ? locator.high()[a] : locator.low()[a];
+      const Eigen::Vector3d index = grid.index_from_world(p);
+      low = low.cwiseMin(index);
+      high = high.cwiseMax(index);
+    }
+    int lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::max(0, static_cast<int>(std::floor(low[a])));
+      hi[a] = std::min(grid.dims[a] - 1, static_cast<int>(std::ceil(high[a])));
+    }
+#pragma omp parallel for schedule(dynamic, 1)
+    for (int k = lo[2]; k <= hi[2]; ++k)
+      for (int j = lo[1]; j <= hi[1]; ++j)
+        for (int i = lo[0]; i <= hi[0]; ++i) {
+          const std::size_t v = voxel_index(grid.dims, i, j, k);
+          if (!exact[v] || marks[v]) continue;
+          const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
+          const std::optional<Eigen::Vector3d> y = through_bodies(bodies, locators, x);
+          if (y && (*y - x - ras_from_lps(field.lps_mm[v])).norm() <= k_body_map_tolerance_mm) marks[v] = 1;
+        }
+  }
+  return marks;
 }
 
 std::vector<std::uint8_t> read_mask(const std::filesystem::path& path, ImageGrid* grid) {
@@ -61,7 +125,17 @@ struct SubjectFiles {
   std::filesystem::path from_template, from_template_mask; ///< from-def_to-ref: template grid -> def
   std::filesystem::path to_template, to_template_mask;     ///< from-ref_to-def: def grid -> template
   std::filesystem::path landmarks, reference_labels;
+  /// Each solved body's tet mesh in the reference and the deformed state.
+  std::vector<std::pair<std::filesystem::path, std::filesystem::path>> bodies;
 };
+
+std::string read_text(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (!in) throw InputError(path.string() + ": expected a readable file, found one that cannot be read");
+  return std::move(text).str();
+}
 
 SubjectFiles subject_files(const std::filesystem::path& dataset, const std::string& subject) {
   const DatasetLayout layout(dataset, subject);
@@ -70,14 +144,61 @@ SubjectFiles subject_files(const std::filesystem::path& dataset, const std::stri
                      layout.transform(PhantomState::reference, PhantomState::deformed),
                      layout.transform_mask(PhantomState::reference, PhantomState::deformed),
                      layout.landmarks(PhantomState::deformed),
-                     layout.dseg(PhantomState::reference)};
-  for (const auto* path : {&files.from_template, &files.from_template_mask, &files.to_template,
-                           &files.to_template_mask, &files.landmarks, &files.reference_labels}) {
+                     layout.dseg(PhantomState::reference),
+                     {}};
+  // The solved bodies, as provenance.json lists them.
+  const nlohmann::json provenance = parse_json_text(read_text(layout.provenance()), layout.provenance(),
+                                                    "the JSON phantasm writes in provenance.json");
+  if (provenance.contains("bodies") && provenance["bodies"].is_array()) {
+    for (const nlohmann::json& body : provenance["bodies"]) {
+      if (!body.contains("organ") || !body["organ"].is_string())
+        throw InputError(layout.provenance().string() +
+                         ": expected each of bodies to name its organ (a string), found " + body.dump());
+      const std::string organ = body["organ"].get<std::string>();
+      files.bodies.emplace_back(layout.tet_mesh(PhantomState::reference, organ),
+                                layout.tet_mesh(PhantomState::deformed, organ));
+    }
+  }
+  std::vector<const std::filesystem::path*> paths = {&files.from_template, &files.from_template_mask,
+                                                     &files.to_template,   &files.to_template_mask,
+                                                     &files.landmarks,     &files.reference_labels};
+  for (const auto& [rest, solved] : files.bodies)
+    paths.insert(paths.end(), {&rest, &solved});
+  for (const auto* path : paths) {
     if (path_kind(*path) != "a regular file")
       throw InputError(path->string() + ": expected sub-" + subject +
                        "'s file (a dataset of phantasm batch), found " + path_kind(*path));
   }
   return files;
+}
+
+/// A subject's solved bodies from its tet meshes, each checked against the template's (the
+/// first subject's): the same tets at the same rest positions.
+/// @throws InputError naming the file that does not fit
+SolvedBodies read_solved_bodies(const SubjectFiles& files, const SolvedBodies* template_bodies,
+                                const std::string& subject, const std::string& first) {
+  SolvedBodies bodies;
+  if (template_bodies && template_bodies->tets.size() != files.bodies.size())
+    throw InputError(files.reference_labels.string() + ": expected the " +
+                     std::to_string(template_bodies->tets.size()) + " solved bodies of sub-" + first +
+                     " (one template), found " + std::to_string(files.bodies.size()) + " in sub-" + subject +
+                     "'s provenance.json");
+  for (std::size_t b = 0; b < files.bodies.size(); ++b) {
+    const TetMesh rest = read_vtu(files.bodies[b].first);
+    const TetMesh solved = read_vtu(files.bodies[b].second);
+    if (solved.tets != rest.tets || solved.vertices.rows() != rest.vertices.rows())
+      throw InputError(files.bodies[b].second.string() + ": expected the tets of " +
+                       files.bodies[b].first.string() + " (the same body solved), found others");
+    if (template_bodies &&
+        (rest.tets != template_bodies->tets[b] || rest.vertices != template_bodies->rest_mm[b]))
+      throw InputError(files.bodies[b].first.string() + ": expected the rest tet mesh of sub-" + first +
+                       " (subjects of one template), found another: sub-" + subject + " and sub-" + first +
+                       " cannot be paired through one template");
+    bodies.tets.push_back(rest.tets);
+    bodies.rest_mm.push_back(rest.vertices);
+    bodies.deformed_mm.push_back(solved.vertices);
+  }
+  return bodies;
 }
 
 /// The pair's landmarks: each name both subjects have, with its place in i and in j.
@@ -104,26 +225,67 @@ std::string pair_name(const SubjectPair& pair) {
 ComposedField compose_through_template(const DisplacementField& moving_from_template,
                                        const std::vector<std::uint8_t>& moving_exact,
                                        const DisplacementField& template_from_fixed,
-                                       const std::vector<std::uint8_t>& fixed_exact) {
+                                       const std::vector<std::uint8_t>& fixed_exact,
+                                       const SolvedBodies* moving_bodies) {
   if (moving_exact.size() != moving_from_template.lps_mm.size() ||
       fixed_exact.size() != template_from_fixed.lps_mm.size())
     throw InputError("compose_through_template: expected a mask of each field's voxel count, found another");
+  const SolvedBodies none;
+  const SolvedBodies& bodies = moving_bodies ? *moving_bodies : none;
+  std::vector<TetMeshLocator> locators;
+  for (std::size_t b = 0; b < bodies.tets.size(); ++b) {
+    if (b >= bodies.rest_mm.size() || b >= bodies.deformed_mm.size() ||
+        bodies.rest_mm[b].rows() != bodies.deformed_mm[b].rows())
+      throw InputError("compose_through_template: expected the rest and solved vertices of each body, found "
+                       "other counts");
+    locators.emplace_back(bodies.rest_mm[b], bodies.tets[b]);
+  }
+  const std::vector<std::uint8_t> body_map =
+      locators.empty() ? std::vector<std::uint8_t>()
+                       : body_map_voxels(moving_from_template, moving_exact, bodies, locators);
   const ImageGrid& grid = template_from_fixed.grid;
+  const ImageGrid& template_grid = moving_from_template.grid;
   ComposedField out{DisplacementField{grid, std::vector<Eigen::Vector3d>(fixed_exact.size())},
                     std::vector<std::uint8_t>(fixed_exact.size(), 0)};
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(dynamic, 1)
   for (int k = 0; k < grid.dims.z(); ++k)
     for (int j = 0; j < grid.dims.y(); ++j)
       for (int i = 0; i < grid.dims.x(); ++i) {
         const std::size_t v = voxel_index(grid.dims, i, j, k);
         const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
         const Eigen::Vector3d in_template = x + ras_from_lps(template_from_fixed.lps_mm[v]);
-        const Eigen::Vector3d in_moving = moving_from_template.moved(in_template);
+        const Eigen::Vector3d index = template_grid.index_from_world(in_template);
+        const std::optional<Eigen::Vector3d> solved = through_bodies(bodies, locators, in_template);
+        const Eigen::Vector3d in_moving = solved ? *solved : moving_from_template.moved(in_template);
         out.field.lps_mm[v] = lps_from_ras(in_moving - x);
-        out.exact[v] = fixed_exact[v] && exact_cell(moving_from_template.grid, moving_exact,
-                                                    moving_from_template.grid.index_from_world(in_template));
+        if (!fixed_exact[v]) continue;
+        if (solved)
+          out.exact[v] = whole_cell(template_grid, index, [&](std::size_t c) { return body_map[c] != 0; });
+        else
+          out.exact[v] = whole_cell(template_grid, index, [&](std::size_t c) {
+            return moving_exact[c] && (body_map.empty() || !body_map[c]);
+          });
       }
   return out;
+}
+
+std::size_t narrow_to_round_trip(ComposedField& forward, const DisplacementField& backward) {
+  const ImageGrid& grid = forward.field.grid;
+  const double tolerance = pair_round_trip_tolerance_voxels * grid.spacing_mm.minCoeff();
+  std::size_t dropped = 0;
+#pragma omp parallel for schedule(static) reduction(+ : dropped)
+  for (int k = 0; k < grid.dims.z(); ++k)
+    for (int j = 0; j < grid.dims.y(); ++j)
+      for (int i = 0; i < grid.dims.x(); ++i) {
+        const std::size_t v = voxel_index(grid.dims, i, j, k);
+        if (!forward.exact[v]) continue;
+        const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
+        if ((backward.moved(x + ras_from_lps(forward.field.lps_mm[v])) - x).norm() > tolerance) {
+          forward.exact[v] = 0;
+          ++dropped;
+        }
+      }
+  return dropped;
 }
 
 std::vector<SubjectPair> parse_pair_list(const std::string& text) {
@@ -202,6 +364,7 @@ nlohmann::json write_subject_pairs(const PairRequest& request) {
   for (const SubjectPair& pair : pairs)
     used.insert({pair.first, pair.second});
   std::map<std::string, SubjectFiles> files;
+  std::map<std::string, SolvedBodies> bodies;
   ImageGrid grid;
   std::vector<std::int32_t> template_labels;
   std::string first;
@@ -222,6 +385,8 @@ nlohmann::json write_subject_pairs(const PairRequest& request) {
                        " (subjects of one template: the same anatomy, seed and grid), found others: sub-" +
                        subject + " and sub-" + first + " cannot be paired through one template");
     }
+    bodies[subject] =
+        read_solved_bodies(files[subject], subject == first ? nullptr : &bodies.at(first), subject, first);
     for (const auto* mask : {&files[subject].from_template_mask, &files[subject].to_template_mask}) {
       ImageGrid mask_grid;
       read_nifti_labels(*mask, &mask_grid);
@@ -234,33 +399,44 @@ nlohmann::json write_subject_pairs(const PairRequest& request) {
   std::filesystem::create_directories(request.out);
   nlohmann::json written = nlohmann::json::array();
   std::string table = "moving\tfixed\tfield\tmask\tlandmarks\texact_fraction\n";
+  const auto compose = [&](const std::string& moving, const std::string& fixed) {
+    ImageGrid ignored;
+    return compose_through_template(read_field(files.at(moving).from_template, FieldConvention::itk, grid),
+                                    read_mask(files.at(moving).from_template_mask, &ignored),
+                                    read_field(files.at(fixed).to_template, FieldConvention::itk, grid),
+                                    read_mask(files.at(fixed).to_template_mask, &ignored),
+                                    &bodies.at(moving));
+  };
   for (const SubjectPair& unordered : pairs) {
-    for (const SubjectPair& pair : {unordered, SubjectPair{unordered.second, unordered.first}}) {
-      const SubjectFiles& moving = files.at(pair.first);
-      const SubjectFiles& fixed = files.at(pair.second);
-      ImageGrid ignored;
-      const ComposedField composed =
-          compose_through_template(read_field(moving.from_template, FieldConvention::itk, grid),
-                                   read_mask(moving.from_template_mask, &ignored),
-                                   read_field(fixed.to_template, FieldConvention::itk, grid),
-                                   read_mask(fixed.to_template_mask, &ignored));
+    // Both directions, then each mask narrowed to the round trip through the other's field.
+    std::array<ComposedField, 2> composed = {compose(unordered.first, unordered.second),
+                                             compose(unordered.second, unordered.first)};
+    const std::array<std::size_t, 2> dropped = {narrow_to_round_trip(composed[0], composed[1].field),
+                                                narrow_to_round_trip(composed[1], composed[0].field)};
+    for (int direction = 0; direction < 2; ++direction) {
+      const SubjectPair pair = direction == 0 ? unordered : SubjectPair{unordered.second, unordered.first};
+      const ComposedField& field = composed[static_cast<std::size_t>(direction)];
       const std::string name = pair_name(pair);
       const std::filesystem::path folder = request.out / name;
       std::filesystem::create_directories(folder);
-      write_field(folder / (name + "_mode-image_xfm.nii.gz"), composed.field, FieldConvention::itk);
+      write_field(folder / (name + "_mode-image_xfm.nii.gz"), field.field, FieldConvention::itk);
       write_nifti_labels(folder / (name + "_desc-exact_mask.nii.gz"), grid,
-                         std::vector<std::int32_t>(composed.exact.begin(), composed.exact.end()));
-      write_file_atomically(folder / "landmarks.csv", landmark_table(moving.landmarks, fixed.landmarks));
+                         std::vector<std::int32_t>(field.exact.begin(), field.exact.end()));
+      write_file_atomically(folder / "landmarks.csv",
+                            landmark_table(files.at(pair.first).landmarks, files.at(pair.second).landmarks));
       std::size_t exact = 0;
-      for (const std::uint8_t e : composed.exact)
+      for (const std::uint8_t e : field.exact)
         exact += e;
-      const double fraction = static_cast<double>(exact) / static_cast<double>(composed.exact.size());
+      const double fraction = static_cast<double>(exact) / static_cast<double>(field.exact.size());
       char cell[32];
       std::snprintf(cell, sizeof cell, "%.6f", fraction);
       table += pair.first + "\t" + pair.second + "\t" + name + "/" + name + "_mode-image_xfm.nii.gz\t" +
                name + "/" + name + "_desc-exact_mask.nii.gz\t" + name + "/landmarks.csv\t" + cell + "\n";
-      written.push_back(
-          {{"moving", pair.first}, {"fixed", pair.second}, {"folder", name}, {"exact_fraction", fraction}});
+      written.push_back({{"moving", pair.first},
+                         {"fixed", pair.second},
+                         {"folder", name},
+                         {"exact_fraction", fraction},
+                         {"left_out_by_round_trip", dropped[static_cast<std::size_t>(direction)]}});
     }
   }
   write_file_atomically(request.out / "pairs.tsv", table);

@@ -5,6 +5,7 @@
 
 #include "evaluation/registration_metrics.hpp"
 
+#include <Eigen/Core>
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
@@ -25,20 +26,51 @@ struct ComposedField {
   std::vector<std::uint8_t> exact; ///< field.grid.voxel_count(), i fastest
 };
 
-/// The field from subject i (moving) to subject j (fixed), composed through the template:
-/// at a point x of j's deformed state, X = x + v(x) in the template (j's from-ref_to-def field,
-/// on j's deformed grid) and X + w(X) in i's deformed state (i's from-def_to-ref field, on the
-/// template's grid, trilinear), so the result is u(x) = X + w(X) - x. Exact where j's field is
-/// exact at x and i's at all 8 voxels around X (X on the grid).
+/// A subject's solved bodies (a simulated organ and those nested in it, solved as one tet mesh):
+/// the template's tet meshes, which every subject of the template shares, and where the subject's
+/// solve took their vertices. Barycentric in a rest tet, carried to the same weights of the solved
+/// vertices, is the subject's exact map from the template (the map its fields sample).
+struct SolvedBodies {
+  std::vector<Eigen::MatrixX4i> tets;
+  std::vector<Eigen::MatrixX3d> rest_mm, deformed_mm; ///< RAS mm, per body
+};
+
+/// The field from subject i (moving) to subject j (fixed), composed through the template: at a
+/// point x of j's deformed state, X = x + v(x) in the template (j's from-ref_to-def field, on j's
+/// deformed grid, read at its voxels: no interpolation) and then i's map at X, so the result is
+/// u(x) = X + w(X) - x.
+///
+/// Without i's solved bodies, i's map at X is its from-def_to-ref field w, trilinear, exact where
+/// j's field is exact at x and i's at all 8 voxels around X. With them, where X lies in a body's
+/// rest tets, i's map is the body's exact one (the solved vertices at X's barycentric weights), exact
+/// when the 8 voxels around X are voxels where i's field is exact and is that body map (within
+/// 1e-3 mm: not still tissue); outside the bodies, the trilinear field, exact when the 8 voxels are
+/// exact and none of them is such a voxel (the field there is the head's affine growth or zero,
+/// which trilinear interpolation keeps). A cell across a body's boundary, where the map's gradient
+/// jumps, is thus never exact: the exact mask holds the composed map itself, to rounding.
 /// @param moving_from_template i's from-def_to-ref field (ITK: on the template grid)
 /// @param moving_exact its exact mask
 /// @param template_from_fixed j's from-ref_to-def field (on j's deformed grid)
 /// @param fixed_exact its exact mask
-/// @throws InputError when a mask does not match its field's voxel count
+/// @param moving_bodies i's solved bodies, or null
+/// @throws InputError when a mask does not match its field's voxel count, or the bodies' arrays
+///   do not match each other
 ComposedField compose_through_template(const DisplacementField& moving_from_template,
                                        const std::vector<std::uint8_t>& moving_exact,
                                        const DisplacementField& template_from_fixed,
-                                       const std::vector<std::uint8_t>& fixed_exact);
+                                       const std::vector<std::uint8_t>& fixed_exact,
+                                       const SolvedBodies* moving_bodies = nullptr);
+
+/// How far i -> j then j -> i (trilinear, as a tool composes the two files) may miss the identity
+/// at a voxel of i -> j's exact mask, in voxels: the tolerance of one subject's two fields.
+inline constexpr double pair_round_trip_tolerance_voxels = 0.1;
+
+/// Leaves out of `forward`'s exact mask each voxel x whose round trip, forward's point carried
+/// back by `backward` (trilinear), misses x by more than pair_round_trip_tolerance_voxels of the
+/// grid's smallest spacing (a cell of `backward` across a kink of its map): the masks of a pair's
+/// two fields then invert each other within that tolerance, as one subject's two fields do.
+/// @return the voxels left out
+std::size_t narrow_to_round_trip(ComposedField& forward, const DisplacementField& backward);
 
 /// Which pairs `phantasm pair` writes.
 struct PairRequest {
@@ -63,9 +95,12 @@ std::vector<SubjectPair> parse_pair_list(const std::string& text);
 /// Writes, for each chosen pair and both its directions, OUT/from-<i>_to-<j>/ with the composed
 /// field (from-<i>_to-<j>_mode-image_xfm.nii.gz: ITK convention, on j's grid), its exact mask
 /// (_desc-exact_mask.nii.gz) and the corresponding landmarks of both subjects (landmarks.csv:
-/// name, organ, x, y, z in i and in j, RAS mm), and OUT/pairs.tsv listing them. Every subject's
-/// files are checked before anything is written: its fields and masks present, one grid for
-/// all, and one template (the same reference labels).
+/// name, organ, x, y, z in i and in j, RAS mm), and OUT/pairs.tsv listing them. The composition
+/// goes through each moving subject's solved bodies (its tet meshes in both states, which the
+/// dataset holds in every output profile) and each mask is narrowed to its pair's round trip.
+/// Every subject's files are checked before anything is written: its fields, masks and solved
+/// tet meshes present, one grid for all, and one template (the same reference labels and rest
+/// tet meshes).
 /// @return the pairs written with their exact fractions
 /// @throws InputError naming the subject, file or option that does not fit; nothing is written
 nlohmann::json write_subject_pairs(const PairRequest& request);

@@ -727,6 +727,24 @@ DatasetPlan plan_dataset(const Scene& scene, const Simulation& simulation, const
       plan_organ_meshes(scene, *deformed, PhantomState::deformed, layout, plan, bodies, surfaces, &phantom);
   } else {
     reporter.skipped("anatomy", "organ meshes (outputs.meshes is false)");
+    // The solved bodies' tet meshes in both states are the exact map the fields sample, which
+    // `phantasm pair` composes between subjects (evaluation/subject_pairs.hpp): written whenever
+    // the fields are, as the full profile writes them.
+    if (deformation && deformed && scene.outputs.displacement_fields && !deformation->bodies.empty()) {
+      reporter.modelled("anatomy",
+                        "the solved bodies' tet meshes all the same, in both states: the exact map "
+                        "the fields sample, which phantasm pair composes between subjects");
+      for (const DeformedBody& body : deformation->bodies) {
+        plan.file(layout.tet_mesh(PhantomState::reference, body.organ),
+                  [&phantom, &body](const std::filesystem::path& path) {
+                    write_body_tet_mesh(path, phantom, body, false);
+                  });
+        plan.file(layout.tet_mesh(PhantomState::deformed, body.organ),
+                  [&phantom, &body](const std::filesystem::path& path) {
+                    write_body_tet_mesh(path, phantom, body, true);
+                  });
+      }
+    }
   }
   plan_volumes(scene, simulation.volumes, layout, plan);
   plan_images(simulation.volumes.grid, scene, simulation.images, simulation.volumes, layout, plan);

@@ -525,7 +525,9 @@ const std::vector<SettingField<OutputSettings>>& declared_settings<OutputSetting
         .field("landmarks", &O::landmarks, "", "", "landmarks")
         .field("dense_landmarks", &O::dense_landmarks, "points per organ", range(0, 9999),
                "seeded material points per closed organ beside the landmarks, exact in both states (0: none)")
-        .field("meshes", &O::meshes, "", "", "organ meshes")
+        .field("meshes", &O::meshes, "", "",
+               "organ meshes (the solved bodies' tet meshes are written with the displacement fields all the "
+               "same)")
         .field("vdb", &O::vdb, "", "", "OpenVDB level sets")
         .field("previews", &O::previews, "", "", "preview images")
         .shaping(cached_reference_images)

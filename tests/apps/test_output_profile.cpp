@@ -1,7 +1,8 @@
 // The outputs' profile (outputs.profile, docs/batch.md "Output profiles"): benchmark leaves out
-// the organ meshes, previews, tissue fractions and parameter maps, and writes every file it
-// keeps with the same bytes as the full profile.
+// the organ meshes (but the solved bodies' tet meshes), previews, tissue fractions and parameter
+// maps, and writes every file it keeps with the same bytes as the full profile.
 
+#include "io/dataset_layout.hpp"
 #include "scene/scene.hpp"
 #include "tests/apps/cli_fixtures.hpp"
 #include "tests/support/subprocess.hpp"
@@ -9,6 +10,8 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 
 using namespace phantasm;
@@ -34,8 +37,25 @@ OutputSettings parsed_outputs(const std::string& keys) {
   return loaded.scene ? loaded.scene->outputs : OutputSettings{};
 }
 
+/// The file names' ends of the solved bodies' tet meshes, as the provenance.json files of a
+/// dataset's subjects list the bodies: every profile writes them (phantasm pair composes through
+/// them).
+std::set<std::string> body_tet_meshes(const fs::path& dataset) {
+  std::set<std::string> ends;
+  for (const auto& entry : fs::recursive_directory_iterator(dataset)) {
+    if (entry.path().filename() != "provenance.json") continue;
+    const nlohmann::json provenance = nlohmann::json::parse(read_file(entry.path()));
+    for (const auto& body : provenance.at("bodies"))
+      ends.insert("_organ-" + bids_entity_value(body.at("organ").get<std::string>()) + "_tetmesh.vtu");
+  }
+  return ends;
+}
+
 /// What the benchmark profile leaves out: a file of a kind a registration benchmark never reads.
-bool dropped_kind(const std::string& relative) {
+bool dropped_kind(const std::string& relative, const std::set<std::string>& bodies) {
+  for (const std::string& end : bodies)
+    if (relative.size() > end.size() && relative.compare(relative.size() - end.size(), end.size(), end) == 0)
+      return false;
   for (const char* part : {"/meshes/", "/previews/", "_probseg.", "map.nii.gz", "map.json", ".vdb"})
     if (relative.find(part) != std::string::npos) return true;
   return false;
@@ -48,13 +68,17 @@ bool describes_the_run(const std::string& relative) {
          fs::path(relative).extension() == ".html";
 }
 
-std::map<std::string, std::string> run_dataset(const std::string& keys, const std::string& name) {
+/// Runs small-head.yaml with `keys` in its outputs into a fresh folder: the files written, and in
+/// `bodies` (when given) the ends of the solved bodies' tet meshes' names.
+std::map<std::string, std::string> run_dataset(const std::string& keys, const std::string& name,
+                                               std::set<std::string>* bodies = nullptr) {
   const fs::path folder = fresh_folder(name);
   const fs::path scene = folder / "scene.yaml";
   write_text_file(scene, with_outputs(keys));
   const CommandResult result =
       run_command({k_phantasm, "run", scene.string(), "-o", (folder / "out").string(), "-q"});
   EXPECT_EQ(result.exit_code, 0) << result.err;
+  if (bodies && result.exit_code == 0) *bodies = body_tet_meshes(folder / "out");
   return result.exit_code == 0 ? folder_contents(folder / "out") : std::map<std::string, std::string>{};
 }
 
@@ -82,12 +106,14 @@ TEST(OutputProfile, BenchmarkTurnsTheUnreadOutputsOffUnlessAskedFor) {
 // (which the full one holds), and each file it holds has the full dataset's bytes but those that
 // describe the run.
 TEST(OutputProfile, BenchmarkKeepsImagesLabelsFieldsAndLandmarksByteForByte) {
-  const std::map<std::string, std::string> full = run_dataset("  profile: full\n", "profile-full");
+  std::set<std::string> bodies;
+  const std::map<std::string, std::string> full = run_dataset("  profile: full\n", "profile-full", &bodies);
   const std::map<std::string, std::string> light = run_dataset("  profile: benchmark\n", "profile-benchmark");
   std::map<std::string, int> kinds; // kept files per kind of the full dataset, all found below
   std::size_t dropped = 0;
+  EXPECT_FALSE(bodies.empty()) << "the small head has a solved body";
   for (const auto& [relative, bytes] : full) {
-    if (dropped_kind(relative)) {
+    if (dropped_kind(relative, bodies)) {
       ++dropped;
       EXPECT_EQ(light.count(relative), 0u) << relative << " is written by the benchmark profile";
       continue;
@@ -95,12 +121,13 @@ TEST(OutputProfile, BenchmarkKeepsImagesLabelsFieldsAndLandmarksByteForByte) {
     ASSERT_EQ(light.count(relative), 1u) << relative << " is missing from the benchmark profile";
     if (describes_the_run(relative)) continue;
     EXPECT_TRUE(light.at(relative) == bytes) << relative << " differs between the profiles";
-    for (const char* kind :
-         {"_T1w.nii.gz", "_dseg.nii.gz", "_xfm.nii.gz", "_mask.nii.gz", "_jacobian.nii.gz", "_landmarks.csv"})
+    for (const char* kind : {"_T1w.nii.gz", "_dseg.nii.gz", "_xfm.nii.gz", "_mask.nii.gz", "_jacobian.nii.gz",
+                             "_landmarks.csv", "_tetmesh.vtu"})
       if (relative.find(kind) != std::string::npos) ++kinds[kind];
   }
   EXPECT_GT(dropped, 20u) << "the full profile writes meshes, previews, fractions and maps";
-  EXPECT_EQ(kinds.size(), 6u) << "images, labels, fields, masks, Jacobians and landmarks are compared";
+  EXPECT_EQ(kinds.size(), 7u)
+      << "images, labels, fields, masks, Jacobians, landmarks and the bodies' tet meshes are compared";
   for (const auto& [relative, bytes] : light)
     EXPECT_EQ(full.count(relative), 1u) << relative << " is written by the benchmark profile only";
 }
