@@ -12,7 +12,7 @@
 
 #include "pipeline/cost_estimate.hpp"
 #include "tests/apps/cli_fixtures.hpp"
-#include "tests/support/coarse_scenes.hpp"
+#include "tests/support/coarse_runs.hpp"
 #include "tests/support/measured_run.hpp"
 #include "tests/support/subprocess.hpp"
 
@@ -68,17 +68,24 @@ std::string test_name(const ::testing::TestParamInfo<std::string>& info) {
 void check_estimate(const std::string& param) {
   const std::string kind = param.substr(0, param.find('/'));
   const std::string stem = param.substr(param.find('/') + 1);
-  const fs::path folder = fresh_folder("cost-" + stem);
-  fs::path scene;
+  fs::path scene, out;
+  MeasuredRun measured;
   if (kind == "test") {
+    const fs::path folder = fresh_folder("cost-" + stem);
     scene = k_source_dir / "tests" / "data" / "scenes" / (stem + ".yaml");
+    out = folder / "out";
+    measured = measure_run(scene, out);
   } else {
-    scene = coarse_copy(k_source_dir / "data-synthetic" / (stem + ".yaml"), folder);
+    // The run the shipped scenes test checks too (tests/support/coarse_runs.hpp).
+    const CoarseRun run = shared_coarse_run(k_source_dir / "data-synthetic" / (stem + ".yaml"));
+    scene = run.scene;
+    out = run.out;
+    measured = run.measured;
   }
+  ASSERT_FALSE(::testing::Test::HasFailure());
   const SceneLoadResult loaded = load_scene(scene);
   ASSERT_TRUE(loaded.scene) << format_diagnostics(loaded.problems);
   const CostEstimate estimate = estimate_cost(*loaded.scene);
-  const MeasuredRun measured = measure_run(scene, folder / "out");
   const double memory_ratio = estimate.peak_memory_bytes / measured.peak_bytes;
   const double time_ratio = estimate.cpu_seconds / measured.cpu_seconds;
   std::printf("%s: peak %.0f MB estimated / %.0f MB measured = %.2f; processor time %.2f s / %.2f s = %.2f "
@@ -95,12 +102,11 @@ void check_estimate(const std::string& param) {
   // on a quiet machine (docs/performance.md, Cost estimate), as every timing is.
   EXPECT_GT(time_ratio, 0.0);
   // provenance.json holds the same estimate.
-  const auto provenance =
-      nlohmann::json::parse(read_file(folder / "out" / "derivatives" / "phantasm" /
-                                      ("sub-" + loaded.scene->outputs.subject) / "provenance.json"));
+  const auto provenance = nlohmann::json::parse(read_file(
+      out / "derivatives" / "phantasm" / ("sub-" + loaded.scene->outputs.subject) / "provenance.json"));
   EXPECT_EQ(provenance.at("estimate").at("peak_memory_bytes").get<double>(),
             std::round(estimate.peak_memory_bytes));
-  fs::remove_all(folder);
+  if (kind == "test") fs::remove_all(out.parent_path());
 }
 
 } // namespace

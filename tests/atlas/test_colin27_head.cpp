@@ -1,5 +1,6 @@
 #include "atlas/colin27_head.hpp"
 #include "io/nifti_file.hpp"
+#include "tests/support/shared_output.hpp"
 #include "tests/support/subprocess.hpp"
 
 #include <gtest/gtest.h>
@@ -10,6 +11,8 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <sstream>
+#include <string>
 
 namespace phantasm {
 namespace {
@@ -29,14 +32,62 @@ bool templates_missing() {
   return true;
 }
 
-/// One derivation shared by the tests (it takes a few seconds).
+/// The derived head as bytes: the grid, the labels, then the table one entry a line.
+void write_head(const std::filesystem::path& file, const HeadLabels& head) {
+  std::ofstream out(file, std::ios::binary);
+  const std::uint64_t count = head.labels.size();
+  out.write(reinterpret_cast<const char*>(head.grid.dims.data()), sizeof(int) * 3);
+  out.write(reinterpret_cast<const char*>(head.grid.spacing_mm.data()), sizeof(double) * 3);
+  out.write(reinterpret_cast<const char*>(head.grid.world_from_voxel.data()), sizeof(double) * 16);
+  out.write(reinterpret_cast<const char*>(&count), sizeof(count));
+  out.write(reinterpret_cast<const char*>(head.labels.data()),
+            static_cast<std::streamsize>(sizeof(std::int32_t) * count));
+  for (const HeadLabelInfo& info : head.table)
+    out << info.label << '\t' << info.name << '\t' << info.tissue << '\n';
+}
+
+HeadLabels read_head(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  HeadLabels head;
+  std::uint64_t count = 0;
+  in.read(reinterpret_cast<char*>(head.grid.dims.data()), sizeof(int) * 3);
+  in.read(reinterpret_cast<char*>(head.grid.spacing_mm.data()), sizeof(double) * 3);
+  in.read(reinterpret_cast<char*>(head.grid.world_from_voxel.data()), sizeof(double) * 16);
+  in.read(reinterpret_cast<char*>(&count), sizeof(count));
+  head.labels.resize(count);
+  in.read(reinterpret_cast<char*>(head.labels.data()),
+          static_cast<std::streamsize>(sizeof(std::int32_t) * count));
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream fields(line);
+    HeadLabelInfo info;
+    std::string label;
+    std::getline(fields, label, '\t');
+    std::getline(fields, info.name, '\t');
+    std::getline(fields, info.tissue);
+    info.label = std::stoi(label);
+    head.table.push_back(info);
+  }
+  return head;
+}
+
+/// One derivation shared by the tests (it takes about 5 s): made by the first test to need it, in
+/// any process, for this test program's bytes and the templates' (tests/support/shared_output.hpp),
+/// and read by the others.
 const HeadLabels& derived() {
   static const std::unique_ptr<HeadLabels> head = [] {
-    const auto start = std::chrono::steady_clock::now();
-    auto h = std::make_unique<HeadLabels>(derive_colin27_head(templates));
-    std::cout << "derive_colin27_head: "
-              << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() << " s\n";
-    return h;
+    const std::filesystem::path folder = testing::shared_output(
+        "colin27-head",
+        {"/proc/self/exe", templates / "ch2.nii.gz", templates / "ch2bet.nii.gz", templates / "aal.nii.gz"},
+        [](const std::filesystem::path& into) {
+          const auto start = std::chrono::steady_clock::now();
+          write_head(into / "head.bin", derive_colin27_head(templates));
+          std::cout << "derive_colin27_head: "
+                    << std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()
+                    << " s\n";
+          return true;
+        });
+    return std::make_unique<HeadLabels>(read_head(folder / "head.bin"));
   }();
   return *head;
 }
@@ -340,10 +391,21 @@ TEST(Colin27Head, DeepNucleiMatchAal) {
   }
 }
 
+// A second derivation gives what the shared one (derived(), often made in another process and
+// read back from its file) holds: the same labels, grid and table.
 TEST(Colin27Head, IsDeterministic) {
   SKIP_WITHOUT_TEMPLATES();
   const HeadLabels again = derive_colin27_head(templates);
   EXPECT_TRUE(again.labels == derived().labels);
+  EXPECT_EQ(again.grid.dims, derived().grid.dims);
+  EXPECT_EQ(again.grid.spacing_mm, derived().grid.spacing_mm);
+  EXPECT_EQ(again.grid.world_from_voxel, derived().grid.world_from_voxel);
+  ASSERT_EQ(again.table.size(), derived().table.size());
+  for (std::size_t n = 0; n < again.table.size(); ++n) {
+    EXPECT_EQ(again.table[n].label, derived().table[n].label) << n;
+    EXPECT_EQ(again.table[n].name, derived().table[n].name) << n;
+    EXPECT_EQ(again.table[n].tissue, derived().table[n].tissue) << n;
+  }
 }
 
 TEST(Colin27Head, AMissingTemplateIsNamed) {

@@ -17,6 +17,7 @@ struct MeasuredRun {
   double peak_bytes = 0.0;
   double cpu_seconds = 0.0; ///< user + system, all threads
   double wall_seconds = 0.0;
+  std::string err; ///< what the run wrote to stderr, /usr/bin/time's line last
 };
 
 /// Runs `phantasm run SCENE -o OUT -q` under /usr/bin/time, expects exit code 0 and reads what
@@ -29,6 +30,7 @@ inline MeasuredRun measure_run(const std::filesystem::path& scene, const std::fi
                                             scene.string(), "-o", out.string(), "-q"});
   EXPECT_EQ(result.exit_code, 0) << result.err;
   MeasuredRun measured;
+  measured.err = result.err;
   const std::size_t at = result.err.rfind("phantasm-time ");
   if (at == std::string::npos) {
     ADD_FAILURE() << "no /usr/bin/time line in: " << result.err;
