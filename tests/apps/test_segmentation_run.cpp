@@ -13,6 +13,7 @@
 #include "io/nifti_file.hpp"
 #include "tests/support/aseg_fixture.hpp"
 #include "tests/support/files.hpp"
+#include "tests/support/shared_output.hpp"
 #include "tests/support/subprocess.hpp"
 
 #include <gtest/gtest.h>
@@ -25,6 +26,7 @@
 #include <regex>
 #include <sstream>
 #include <tuple>
+#include <vector>
 
 using namespace phantasm;
 using namespace phantasm::testing;
@@ -43,6 +45,21 @@ anatomy:
 sequences:
   - {name: T1w, type: spin_echo, TR_ms: 500, TE_ms: 10}
 )";
+
+/// The derived Colin 27 labels (colin.nii.gz, colin.tsv) as `phantasm atlas colin27` writes them,
+/// for the three tests that renumber them as an aseg: written once for this build of the program
+/// (tests/support/shared_output.hpp) instead of once per test (about 5 s each).
+fs::path colin_atlas_folder() {
+  const fs::path templates = "/usr/share/mricron/templates";
+  const std::vector<fs::path> inputs = {templates / "ch2.nii.gz", templates / "ch2bet.nii.gz",
+                                        templates / "aal.nii.gz"};
+  return shared_output("segmentation-colin27-atlas", inputs, [](const fs::path& into) {
+    const CommandResult atlas =
+        run_command({PHANTASM_EXECUTABLE, "atlas", "colin27", "-o", (into / "colin.nii.gz").string(), "-q"});
+    EXPECT_EQ(atlas.exit_code, 0) << atlas.err;
+    return atlas.exit_code == 0;
+  });
+}
 
 } // namespace
 
@@ -314,10 +331,9 @@ TEST(SegmentationRun, TheMacaqueBrainIsADatasetOfItsGreyAndWhiteMatterDeformed) 
 TEST(SegmentationRun, TheColinLabelsRenumberedAsAnAsegBecomeTheOrgansOfTheFreeSurferMapping) {
   if (!fs::exists("/usr/share/mricron/templates/ch2.nii.gz")) GTEST_SKIP() << "mricron-data is not installed";
   const fs::path folder = fresh_folder("segmentation-run-colin-aseg");
-  const CommandResult atlas =
-      run_command({PHANTASM_EXECUTABLE, "atlas", "colin27", "-o", (folder / "colin.nii.gz").string(), "-q"});
-  ASSERT_EQ(atlas.exit_code, 0) << atlas.err;
-  write_colin_as_aseg(folder / "colin.nii.gz", folder / "colin.tsv", folder / "aseg.nii.gz", 2);
+  const fs::path atlas = colin_atlas_folder();
+  ASSERT_FALSE(::testing::Test::HasFailure());
+  write_colin_as_aseg(atlas / "colin.nii.gz", atlas / "colin.tsv", folder / "aseg.nii.gz", 2);
   write_text_file(folder / "FreeSurferColorLUT.txt", k_colin_lut);
   // The 2 mm voxel centres of the aseg: x -90..90, y -125..91, z -71..109.
   write_text_file(folder / "scene.yaml", R"(phantasm: 1
@@ -384,14 +400,12 @@ namespace {
 
 const fs::path k_ch2 = "/usr/share/mricron/templates/ch2.nii.gz";
 
-/// A folder holding the derived Colin 27 labels (colin.nii.gz, colin.tsv, `phantasm atlas
-/// colin27`), the same renumbered as an aseg on a 2 mm grid (aseg.nii.gz) and its lookup table.
+/// A folder holding the derived Colin 27 labels renumbered as an aseg on a 2 mm grid (aseg.nii.gz,
+/// from colin_atlas_folder()) and its lookup table.
 fs::path write_colin_aseg_folder(const std::string& name) {
   const fs::path folder = fresh_folder(name);
-  const CommandResult atlas =
-      run_command({PHANTASM_EXECUTABLE, "atlas", "colin27", "-o", (folder / "colin.nii.gz").string(), "-q"});
-  EXPECT_EQ(atlas.exit_code, 0) << atlas.err;
-  write_colin_as_aseg(folder / "colin.nii.gz", folder / "colin.tsv", folder / "aseg.nii.gz", 2);
+  const fs::path atlas = colin_atlas_folder();
+  write_colin_as_aseg(atlas / "colin.nii.gz", atlas / "colin.tsv", folder / "aseg.nii.gz", 2);
   write_text_file(folder / "FreeSurferColorLUT.txt", k_colin_lut);
   return folder;
 }
