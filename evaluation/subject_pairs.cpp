@@ -12,11 +12,14 @@
 #include "io/mesh_file.hpp"
 #include "io/nifti_file.hpp"
 
+#include <Eigen/QR>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <optional>
 #include <random>
@@ -220,6 +223,69 @@ std::string pair_name(const SubjectPair& pair) {
   return "from-" + pair.first + "_to-" + pair.second;
 }
 
+/// How far the body's map and the map outside it may differ at a template point, in voxels, for
+/// the point to be exact in a cell that holds voxels of both (a body's boundary against still
+/// tissue, whose tets reach a little past the tissue's surface): there the voxels cannot tell
+/// which of the two the point follows, and either is then within this of the other.
+constexpr double k_material_ambiguity_voxels = 0.01;
+
+/// The affine map the field is outside the bodies' map (the head's growth, or the identity),
+/// fitted to the exact voxels that are not the body map (a lattice of about 50 000 of the grid's
+/// voxels) and checked on them: nothing when they do not follow one affine map within
+/// k_body_map_tolerance_mm.
+std::optional<Eigen::Matrix<double, 3, 4>> outside_affine(const DisplacementField& field,
+                                                          const std::vector<std::uint8_t>& exact,
+                                                          const std::vector<std::uint8_t>& body_map) {
+  const ImageGrid& grid = field.grid;
+  std::vector<Eigen::Vector3d> from, to;
+  const int step = std::max(1, static_cast<int>(std::cbrt(static_cast<double>(grid.voxel_count()) / 5e4)));
+  for (int k = 0; k < grid.dims.z(); k += step)
+    for (int j = 0; j < grid.dims.y(); j += step)
+      for (int i = 0; i < grid.dims.x(); i += step) {
+        const std::size_t v = voxel_index(grid.dims, i, j, k);
+        if (!exact[v] || body_map[v]) continue;
+        from.push_back(grid.world_from_index(Eigen::Vector3d(i, j, k)));
+        to.push_back(from.back() + ras_from_lps(field.lps_mm[v]));
+      }
+  if (from.size() < 16) return std::nullopt;
+  // Least squares in coordinates about the points' mean, for conditioning.
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& p : from)
+    mean += p / static_cast<double>(from.size());
+  Eigen::MatrixXd a(from.size(), 4), b(from.size(), 3);
+  for (std::size_t n = 0; n < from.size(); ++n) {
+    a.row(static_cast<Eigen::Index>(n)) << (from[n] - mean).transpose(), 1.0;
+    b.row(static_cast<Eigen::Index>(n)) = to[n].transpose();
+  }
+  const Eigen::MatrixXd solution = a.colPivHouseholderQr().solve(b); // 4 x 3
+  Eigen::Matrix<double, 3, 4> affine;
+  affine.leftCols<3>() = solution.topRows<3>().transpose();
+  affine.col(3) = solution.row(3).transpose() - affine.leftCols<3>() * mean;
+  for (std::size_t n = 0; n < from.size(); ++n)
+    if ((affine.leftCols<3>() * from[n] + affine.col(3) - to[n]).norm() > k_body_map_tolerance_mm)
+      return std::nullopt;
+  return affine;
+}
+
+/// A body's map at x, extrapolated from the tet x is least outside of when no tet holds it
+/// (continuous across the faceted boundary); nothing without bodies.
+std::optional<Eigen::Vector3d> near_bodies(const SolvedBodies& bodies,
+                                           const std::vector<TetMeshLocator>& locators,
+                                           const Eigen::Vector3d& x) {
+  std::optional<Eigen::Vector3d> best;
+  double best_weight = -std::numeric_limits<double>::infinity();
+  for (std::size_t b = 0; b < locators.size(); ++b) {
+    const TetLocation at = locators[b].nearest(x);
+    if (at.tet < 0 || !(at.weights.minCoeff() > best_weight)) continue;
+    best_weight = at.weights.minCoeff();
+    Eigen::Vector3d y = Eigen::Vector3d::Zero();
+    for (int c = 0; c < 4; ++c)
+      y += at.weights[c] * bodies.deformed_mm[b].row(bodies.tets[b](at.tet, c)).transpose();
+    best = y;
+  }
+  return best;
+}
+
 } // namespace
 
 ComposedField compose_through_template(const DisplacementField& moving_from_template,
@@ -243,8 +309,11 @@ ComposedField compose_through_template(const DisplacementField& moving_from_temp
   const std::vector<std::uint8_t> body_map =
       locators.empty() ? std::vector<std::uint8_t>()
                        : body_map_voxels(moving_from_template, moving_exact, bodies, locators);
+  const std::optional<Eigen::Matrix<double, 3, 4>> outside =
+      locators.empty() ? std::nullopt : outside_affine(moving_from_template, moving_exact, body_map);
   const ImageGrid& grid = template_from_fixed.grid;
   const ImageGrid& template_grid = moving_from_template.grid;
+  const double ambiguity = k_material_ambiguity_voxels * template_grid.spacing_mm.minCoeff();
   ComposedField out{DisplacementField{grid, std::vector<Eigen::Vector3d>(fixed_exact.size())},
                     std::vector<std::uint8_t>(fixed_exact.size(), 0)};
 #pragma omp parallel for schedule(dynamic, 1)
@@ -256,15 +325,30 @@ ComposedField compose_through_template(const DisplacementField& moving_from_temp
         const Eigen::Vector3d in_template = x + ras_from_lps(template_from_fixed.lps_mm[v]);
         const Eigen::Vector3d index = template_grid.index_from_world(in_template);
         const std::optional<Eigen::Vector3d> solved = through_bodies(bodies, locators, in_template);
-        const Eigen::Vector3d in_moving = solved ? *solved : moving_from_template.moved(in_template);
+        Eigen::Vector3d in_moving = solved ? *solved : moving_from_template.moved(in_template);
+        bool exact = false;
+        if (fixed_exact[v]) {
+          if (solved)
+            exact = whole_cell(template_grid, index, [&](std::size_t c) { return body_map[c] != 0; });
+          else
+            exact = whole_cell(template_grid, index, [&](std::size_t c) {
+              return moving_exact[c] && (body_map.empty() || !body_map[c]);
+            });
+          // A cell holding voxels of both maps, every one exact: exact where the two maps agree at
+          // the point (the body's extrapolated from its nearest tet outside it).
+          if (!exact && outside &&
+              whole_cell(template_grid, index, [&](std::size_t c) { return moving_exact[c] != 0; })) {
+            const Eigen::Vector3d affine = outside->leftCols<3>() * in_template + outside->col(3);
+            const std::optional<Eigen::Vector3d> body =
+                solved ? solved : near_bodies(bodies, locators, in_template);
+            if (body && (*body - affine).norm() <= ambiguity) {
+              exact = true;
+              if (!solved) in_moving = affine;
+            }
+          }
+        }
         out.field.lps_mm[v] = lps_from_ras(in_moving - x);
-        if (!fixed_exact[v]) continue;
-        if (solved)
-          out.exact[v] = whole_cell(template_grid, index, [&](std::size_t c) { return body_map[c] != 0; });
-        else
-          out.exact[v] = whole_cell(template_grid, index, [&](std::size_t c) {
-            return moving_exact[c] && (body_map.empty() || !body_map[c]);
-          });
+        out.exact[v] = exact ? 1 : 0;
       }
   return out;
 }

@@ -46,8 +46,11 @@ struct SolvedBodies {
 /// when the 8 voxels around X are voxels where i's field is exact and is that body map (within
 /// 1e-3 mm: not still tissue); outside the bodies, the trilinear field, exact when the 8 voxels are
 /// exact and none of them is such a voxel (the field there is the head's affine growth or zero,
-/// which trilinear interpolation keeps). A cell across a body's boundary, where the map's gradient
-/// jumps, is thus never exact: the exact mask holds the composed map itself, to rounding.
+/// which trilinear interpolation keeps). A cell holding voxels of both, all exact, is exact where
+/// the body's map (extrapolated from its nearest tet outside it) and the affine map outside (fitted
+/// to i's exact voxels that are not the body map) agree at X within 0.01 voxel; the value is then
+/// the body's map in the body and the affine map outside. The exact mask thus holds the composed
+/// map itself, to rounding or to that hundredth of a voxel where X's cell straddles the two.
 /// @param moving_from_template i's from-def_to-ref field (ITK: on the template grid)
 /// @param moving_exact its exact mask
 /// @param template_from_fixed j's from-ref_to-def field (on j's deformed grid)
