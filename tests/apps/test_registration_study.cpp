@@ -2,7 +2,7 @@
 // optimizations: registration brings the landmarks closer than no registration does.
 
 #include "tests/apps/cli_fixtures.hpp"
-#include "tests/support/coarse_scenes.hpp"
+#include "tests/support/coarse_runs.hpp"
 #include "tests/support/subprocess.hpp"
 
 #include <cmath>
@@ -41,10 +41,15 @@ TEST(RegistrationStudy, TheMainJobsT1wPairRegistersInScannerUnits) {
   const fs::path folder = fresh_folder("study-colin");
   const fs::path scene = fresh_folder("study-colin-scene") / "colin-head.yaml";
   write_text_file(scene, coarse_colin_head_text());
-  const CommandResult study = run_command(
-      {PHANTASM_PYTHON, (k_source_dir / "scripts" / "registration_study.py").string(), "-o", folder.string(),
-       "--scene", scene.string(), "--voxel-size", "2", "--magnitudes", "7.21110255", "--iterations", "150",
-       "--phantasm", k_phantasm, "--cache", shared_coarse_colin_cache().string()});
+  // The anatomy the Colin head's measured coarse run built (tests/support/coarse_runs.hpp), from a
+  // copy of its cache: the study's runs add entries of their own.
+  const fs::path cache = scene.parent_path() / "cache";
+  fs::copy(shared_coarse_colin_run().cache, cache, fs::copy_options::recursive);
+  ASSERT_FALSE(::testing::Test::HasFailure());
+  const CommandResult study =
+      run_command({PHANTASM_PYTHON, (k_source_dir / "scripts" / "registration_study.py").string(), "-o",
+                   folder.string(), "--scene", scene.string(), "--voxel-size", "2", "--magnitudes",
+                   "7.21110255", "--iterations", "150", "--phantasm", k_phantasm, "--cache", cache.string()});
   ASSERT_EQ(study.exit_code, 0) << study.out << study.err;
   const nlohmann::json result = nlohmann::json::parse(read_file(folder / "study.json"));
   ASSERT_EQ(result["rows"].size(), 1u);

@@ -8,7 +8,7 @@
 #include "evaluation/field_conventions.hpp"
 #include "io/nifti_file.hpp"
 #include "tests/apps/cli_fixtures.hpp"
-#include "tests/support/coarse_scenes.hpp"
+#include "tests/support/coarse_runs.hpp"
 #include "tests/support/shared_output.hpp"
 #include "tests/support/subprocess.hpp"
 
@@ -17,7 +17,6 @@
 
 #include <iomanip>
 #include <iostream>
-#include <regex>
 #include <sstream>
 
 using namespace phantasm::testing;
@@ -33,18 +32,20 @@ struct Made {
   fs::path dataset, task, truth;
 };
 
-/// A dataset of `scene` and its task, made once per scene for the tests of this file; `cache`, when
-/// given, is the run's anatomy cache.
-Made made_task(const fs::path& scene, const fs::path& root, const fs::path& cache = {}) {
-  Made m{root / "out", root / "task", root / "task-truth"};
-  std::vector<std::string> argv = {k_phantasm, "run", scene.string(), "-o", m.dataset.string(), "-q"};
-  if (!cache.empty()) argv.insert(argv.end(), {"--cache", cache.string()});
-  const CommandResult run = run_command(argv);
-  EXPECT_EQ(run.exit_code, 0) << run.err;
-  const CommandResult task =
-      run_command({k_phantasm, "task", m.dataset.string(), "-o", m.task.string(), "-q"});
+/// The task of `dataset` (root/task, with its truth in root/task-truth).
+Made task_of(const fs::path& dataset, const fs::path& root) {
+  const Made m{dataset, root / "task", root / "task-truth"};
+  const CommandResult task = run_command({k_phantasm, "task", dataset.string(), "-o", m.task.string(), "-q"});
   EXPECT_EQ(task.exit_code, 0) << task.err;
   return m;
+}
+
+/// A dataset of `scene` (root/out) and its task.
+Made made_task(const fs::path& scene, const fs::path& root) {
+  const CommandResult run =
+      run_command({k_phantasm, "run", scene.string(), "-o", (root / "out").string(), "-q"});
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  return task_of(root / "out", root);
 }
 
 /// The small head's dataset and task, which four tests of this file read: made once per build of
@@ -61,16 +62,10 @@ const Made& small_task() {
 }
 
 /// The main job's pair made coarse (tests/support/coarse_scenes.hpp: 4 mm voxels, 320-triangle
-/// surfaces, one T1w sequence, no meshes), without previews or parameter maps.
+/// surfaces, one T1w sequence, no meshes): the dataset of the Colin head's measured coarse run
+/// (tests/support/coarse_runs.hpp, which its own test checks) and its task.
 const Made& colin_task() {
-  static const Made made = [] {
-    const fs::path root = fresh_folder("baselines-colin");
-    const std::string outputs = "outputs:\n  previews: false\n  parameter_maps: false\n";
-    const std::string text = std::regex_replace(coarse_colin_head_text(), std::regex("outputs:\n"), outputs);
-    EXPECT_NE(text.find(outputs), std::string::npos);
-    write_text_file(root / "colin-coarse.yaml", text);
-    return made_task(root / "colin-coarse.yaml", root, shared_coarse_colin_cache());
-  }();
+  static const Made made = task_of(shared_coarse_colin_run().out, fresh_folder("baselines-colin"));
   return made;
 }
 

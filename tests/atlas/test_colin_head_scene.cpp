@@ -7,9 +7,8 @@
 #include "io/nifti_file.hpp"
 #include "pipeline/cost_estimate.hpp"
 #include "scene/scene.hpp"
-#include "tests/support/coarse_scenes.hpp"
+#include "tests/support/coarse_runs.hpp"
 #include "tests/support/files.hpp"
-#include "tests/support/measured_run.hpp"
 #include "tests/support/subprocess.hpp"
 
 #include <gtest/gtest.h>
@@ -37,14 +36,14 @@ const std::string k_phantasm = PHANTASM_EXECUTABLE;
 
 TEST(ColinHeadScene, CoarseRunLabelsEveryOrganShiftsTheBrainAndMeetsItsCostEstimate) {
   if (!fs::is_directory(default_colin27_templates_dir())) GTEST_SKIP() << "mricron-data is not installed";
-  const fs::path folder = fresh_folder("colin-head-scene");
-  const fs::path scene = folder / "colin-coarse.yaml";
-  write_text_file(scene, testing::coarse_colin_head_text());
-  const SceneLoadResult loaded = load_scene(scene);
+  // The measured run the task baselines and the registration study read too
+  // (tests/support/coarse_runs.hpp); it built the anatomy.
+  const testing::CoarseRun run = testing::shared_coarse_colin_run();
+  ASSERT_FALSE(::testing::Test::HasFailure());
+  const SceneLoadResult loaded = load_scene(run.scene);
   ASSERT_TRUE(loaded.scene) << format_diagnostics(loaded.problems);
   const CostEstimate estimate = estimate_cost(*loaded.scene);
-  const testing::MeasuredRun measured = testing::measure_run(scene, folder / "out");
-  ASSERT_FALSE(::testing::Test::HasFailure());
+  const testing::MeasuredRun& measured = run.measured;
   // Peak memory within a factor of two of the estimate; processor time printed (it grows with the
   // machine's load; see tests/apps/test_cost_estimate.cpp).
   const double memory_ratio = estimate.peak_memory_bytes / measured.peak_bytes;
@@ -56,7 +55,7 @@ TEST(ColinHeadScene, CoarseRunLabelsEveryOrganShiftsTheBrainAndMeetsItsCostEstim
   EXPECT_GT(memory_ratio, 0.5);
   EXPECT_LT(memory_ratio, 2.0);
 
-  const fs::path derivatives = folder / "out" / "derivatives" / "phantasm";
+  const fs::path derivatives = run.out / "derivatives" / "phantasm";
   const std::map<std::string, int> table = dseg_table(derivatives / "dseg.tsv");
   ImageGrid grid;
   const std::vector<std::int32_t> ref =
@@ -94,7 +93,7 @@ TEST(ColinHeadScene, CoarseRunLabelsEveryOrganShiftsTheBrainAndMeetsItsCostEstim
     EXPECT_GT(body.at("smallest_det_F").get<double>(), 0.0) << body.dump();
   }
   std::size_t volumes = 0;
-  for (const auto& entry : fs::recursive_directory_iterator(folder / "out")) {
+  for (const auto& entry : fs::recursive_directory_iterator(run.out)) {
     const std::string name = entry.path().filename().string();
     if (!entry.is_regular_file() || name.size() < 7 || name.substr(name.size() - 7) != ".nii.gz" ||
         name.find("_xfm") != std::string::npos)

@@ -113,20 +113,4 @@ inline std::string coarse_colin_head_text() {
   return text;
 }
 
-/// An anatomy cache for the tests that run the coarse Colin head (coarse_colin_head_text) but do
-/// not test the building of its anatomy: the first of them builds the anatomy (the cache locks an
-/// entry while one process builds it), the others read it. In the temporary folder, named after
-/// the phantasm executable's size and modification time: a rebuilt program gets a cache of its own
-/// and never reads entries of an earlier build.
-inline std::filesystem::path shared_coarse_colin_cache() {
-  const std::filesystem::path program(PHANTASM_EXECUTABLE);
-  const auto modified = std::filesystem::last_write_time(program).time_since_epoch().count();
-  const std::filesystem::path folder =
-      std::filesystem::temp_directory_path() /
-      ("phantasm-test-coarse-colin-cache-" + std::to_string(std::filesystem::file_size(program)) + "-" +
-       std::to_string(modified));
-  std::filesystem::create_directories(folder);
-  return folder;
-}
-
 } // namespace phantasm::testing

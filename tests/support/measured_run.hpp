@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace phantasm::testing {
 
@@ -20,14 +21,25 @@ struct MeasuredRun {
   std::string err; ///< what the run wrote to stderr, /usr/bin/time's line last
 };
 
-/// Runs `phantasm run SCENE -o OUT -q` under /usr/bin/time, expects exit code 0 and reads what
-/// /usr/bin/time measured.
-inline MeasuredRun measure_run(const std::filesystem::path& scene, const std::filesystem::path& out) {
+/// Runs `phantasm run SCENE -o OUT -q [EXTRA...]` under /usr/bin/time, expects exit code 0 and
+/// reads what /usr/bin/time measured.
+inline MeasuredRun measure_run(const std::filesystem::path& scene, const std::filesystem::path& out,
+                               const std::vector<std::string>& extra = {}) {
   // OpenMP threads wait passively: spinning threads on a shared machine add processor time
   // that does no work (a run of two-balls.yaml measured 10.1 s instead of 4.8 s that way).
-  const CommandResult result = run_command({"/usr/bin/env", "OMP_WAIT_POLICY=passive", "/usr/bin/time", "-f",
-                                            "phantasm-time %M %U %S %e", PHANTASM_EXECUTABLE, "run",
-                                            scene.string(), "-o", out.string(), "-q"});
+  std::vector<std::string> argv = {"/usr/bin/env",
+                                   "OMP_WAIT_POLICY=passive",
+                                   "/usr/bin/time",
+                                   "-f",
+                                   "phantasm-time %M %U %S %e",
+                                   PHANTASM_EXECUTABLE,
+                                   "run",
+                                   scene.string(),
+                                   "-o",
+                                   out.string(),
+                                   "-q"};
+  argv.insert(argv.end(), extra.begin(), extra.end());
+  const CommandResult result = run_command(argv);
   EXPECT_EQ(result.exit_code, 0) << result.err;
   MeasuredRun measured;
   measured.err = result.err;
