@@ -15,7 +15,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
@@ -66,11 +65,8 @@ void require_same_grid(const ImageGrid& expected, const ImageGrid& found, const 
 /// exact. A dataset written before the record has none: its mask is read as it is.
 void require_written_mask(const NiftiVolume& mask, const std::filesystem::path& path) {
   const std::filesystem::path sidecar = sidecar_path(path);
-  std::ifstream in(sidecar, std::ios::binary);
-  if (!in || path_kind(sidecar) != "a regular file") return;
-  std::ostringstream text;
-  text << in.rdbuf();
-  const nlohmann::json record = parse_json_text(text.str(), sidecar, "the JSON sidecar phantasm writes");
+  if (path_kind(sidecar) != "a regular file") return;
+  const nlohmann::json record = read_json_file(sidecar, "the JSON sidecar phantasm writes");
   if (!record.is_object() || !record.contains("ValuesSha256")) return;
   if (!record["ValuesSha256"].is_string())
     throw InputError(sidecar.string() + ": ValuesSha256: expected 64 hex digits, found " +

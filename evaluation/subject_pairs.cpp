@@ -18,7 +18,6 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <limits>
 #include <map>
 #include <optional>
@@ -132,14 +131,6 @@ struct SubjectFiles {
   std::vector<std::pair<std::filesystem::path, std::filesystem::path>> bodies;
 };
 
-std::string read_text(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (!in) throw InputError(path.string() + ": expected a readable file, found one that cannot be read");
-  return std::move(text).str();
-}
-
 SubjectFiles subject_files(const std::filesystem::path& dataset, const std::string& subject) {
   const DatasetLayout layout(dataset, subject);
   SubjectFiles files{layout.transform(PhantomState::deformed, PhantomState::reference),
@@ -150,8 +141,8 @@ SubjectFiles subject_files(const std::filesystem::path& dataset, const std::stri
                      layout.dseg(PhantomState::reference),
                      {}};
   // The solved bodies, as provenance.json lists them.
-  const nlohmann::json provenance = parse_json_text(read_text(layout.provenance()), layout.provenance(),
-                                                    "the JSON phantasm writes in provenance.json");
+  const nlohmann::json provenance =
+      read_json_file(layout.provenance(), "the JSON phantasm writes in provenance.json");
   if (provenance.contains("bodies") && provenance["bodies"].is_array()) {
     for (const nlohmann::json& body : provenance["bodies"]) {
       if (!body.contains("organ") || !body["organ"].is_string())

@@ -5,6 +5,8 @@
 #include "io/atomic_file.hpp"
 
 #include <algorithm>
+#include <fstream>
+#include <sstream>
 
 namespace phantasm {
 
@@ -60,6 +62,15 @@ nlohmann::json parse_json_text(const std::string& text, const std::filesystem::p
     throw InputError(file.string() + ":" + std::to_string(line) + ":" + std::to_string(column) +
                      ": expected " + std::string(expected) + ", found " + found);
   }
+}
+
+nlohmann::json read_json_file(const std::filesystem::path& path, std::string_view expected) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in)
+    throw InputError(path.string() + ": expected " + std::string(expected) + ", found no readable file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_json_text(text.str(), path, expected);
 }
 
 } // namespace phantasm

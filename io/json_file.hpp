@@ -29,4 +29,8 @@ void write_json_file(const std::filesystem::path& path, const nlohmann::json& va
 nlohmann::json parse_json_text(const std::string& text, const std::filesystem::path& file,
                                std::string_view expected);
 
+/// Reads a JSON file and parses it as parse_json_text does.
+/// @throws InputError naming the file when it cannot be read, or as parse_json_text
+nlohmann::json read_json_file(const std::filesystem::path& path, std::string_view expected);
+
 } // namespace phantasm

@@ -39,10 +39,11 @@ void add_pair_command(CLI::App& app, std::function<int()>& action) {
       const nlohmann::json written = write_subject_pairs(request);
       if (!options->quiet) {
         for (const auto& pair : written["pairs"]) {
-          std::printf("  sub-%s -> sub-%s  %s  (exact in %.1f %% of the grid)\n",
+          std::printf("  sub-%s -> sub-%s  %s  (exact in %.1f %% of the grid; %zu voxels left out by the "
+                      "round trip)\n",
                       pair["moving"].get<std::string>().c_str(), pair["fixed"].get<std::string>().c_str(),
-                      pair["folder"].get<std::string>().c_str(),
-                      100.0 * pair["exact_fraction"].get<double>());
+                      pair["folder"].get<std::string>().c_str(), 100.0 * pair["exact_fraction"].get<double>(),
+                      pair["left_out_by_round_trip"].get<std::size_t>());
         }
         std::cout << written["pairs"].size() << " fields written into " << options->out << "\n";
       }

@@ -47,16 +47,22 @@ ImageGrid small_grid() {
   return grid;
 }
 
-/// The field of the affine point map x -> a x + b on `grid` (trilinear interpolation is exact on it).
-DisplacementField affine_field(const ImageGrid& grid, const Eigen::Matrix3d& a, const Eigen::Vector3d& b) {
+/// The field of the point map x -> map(x) sampled at the voxels of `grid`.
+template <typename Map>
+DisplacementField sampled_field(const ImageGrid& grid, const Map& map) {
   DisplacementField field{grid, std::vector<Eigen::Vector3d>(static_cast<std::size_t>(grid.voxel_count()))};
   for (int k = 0; k < grid.dims.z(); ++k)
     for (int j = 0; j < grid.dims.y(); ++j)
       for (int i = 0; i < grid.dims.x(); ++i) {
         const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
-        field.lps_mm[voxel_index(grid.dims, i, j, k)] = lps_from_ras(a * x + b - x);
+        field.lps_mm[voxel_index(grid.dims, i, j, k)] = lps_from_ras(map(x) - x);
       }
   return field;
+}
+
+/// The field of the affine point map x -> a x + b on `grid` (trilinear interpolation is exact on it).
+DisplacementField affine_field(const ImageGrid& grid, const Eigen::Matrix3d& a, const Eigen::Vector3d& b) {
+  return sampled_field(grid, [&](const Eigen::Vector3d& x) { return Eigen::Vector3d(a * x + b); });
 }
 
 /// A batch of the three-subject population and its pairs (all), which the tests of this file read
@@ -211,13 +217,7 @@ TEST(SubjectPairs, ABodysMapIsComposedThroughItsTetsAndCellsAcrossItsBoundaryOnl
   };
   // The moving subject's field samples the map; one voxel in the body holds still tissue.
   const std::size_t n = static_cast<std::size_t>(grid.voxel_count());
-  DisplacementField moving{grid, std::vector<Eigen::Vector3d>(n)};
-  for (int k = 0; k < grid.dims.z(); ++k)
-    for (int j = 0; j < grid.dims.y(); ++j)
-      for (int i = 0; i < grid.dims.x(); ++i) {
-        const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
-        moving.lps_mm[voxel_index(grid.dims, i, j, k)] = lps_from_ras(map(x) - x);
-      }
+  DisplacementField moving = sampled_field(grid, map);
   const Eigen::Vector3i still(9, 6, 5); // x = 3, y = -1, z = -1 mm
   moving.lps_mm[voxel_index(grid.dims, still.x(), still.y(), still.z())] = Eigen::Vector3d::Zero();
   // The fixed subject: the template shifted off the grid's voxels.
@@ -269,17 +269,12 @@ TEST(SubjectPairs, ABodysMapIsComposedThroughItsTetsAndCellsAcrossItsBoundaryOnl
   // touching the still voxel is exact too (every template point on the grid), the body's map
   // inside and the still space's outside.
   bodies.deformed_mm[0] = rest;
-  for (int n = 0; n < 12; ++n)
-    if (n % 3 == 1) bodies.deformed_mm[0](n, 0) += 0.01;
+  for (int vertex = 0; vertex < 12; ++vertex)
+    if (vertex % 3 == 1) bodies.deformed_mm[0](vertex, 0) += 0.01;
   const auto small_map = [&](const Eigen::Vector3d& p) {
     return inside(p) ? Eigen::Vector3d(p.x() + 0.01 * (1.0 - std::abs(p.x()) / 8.0), p.y(), p.z()) : p;
   };
-  for (int k = 0; k < grid.dims.z(); ++k)
-    for (int j = 0; j < grid.dims.y(); ++j)
-      for (int i = 0; i < grid.dims.x(); ++i) {
-        const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
-        moving.lps_mm[voxel_index(grid.dims, i, j, k)] = lps_from_ras(small_map(x) - x);
-      }
+  moving = sampled_field(grid, small_map);
   moving.lps_mm[voxel_index(grid.dims, still.x(), still.y(), still.z())] = Eigen::Vector3d::Zero();
   const ComposedField slight = compose_through_template(moving, all, fixed, all, &bodies);
   std::size_t mixed_exact = 0;
@@ -442,6 +437,14 @@ TEST(SubjectPairs, PopulationPairsMatchTheDirectCompositionAndInvertEachOther) {
     EXPECT_GT(rows, 3);
   }
   EXPECT_GT(largest_move, voxel) << "subjects must differ by more than a voxel for the test to tell";
+
+  // Without -q, each field's line gives its exact fraction and what the round trip left out, as
+  // pairs.tsv holds the fraction.
+  const CommandResult printed = run_command(
+      {k_phantasm, "pair", p.dataset.string(), "-o", (p.root / "printed").string(), "--pairs", "01:02"});
+  EXPECT_EQ(printed.exit_code, 0) << printed.err;
+  EXPECT_NE(printed.out.find("sub-01 -> sub-02  from-01_to-02  (exact in "), std::string::npos) << printed.out;
+  EXPECT_NE(printed.out.find("voxels left out by the round trip)"), std::string::npos) << printed.out;
 
   // Bad input: exit 2, the message names the subject, nothing written.
   const CommandResult unknown = run_command(
