@@ -85,6 +85,9 @@ struct TextureSettings {
   /// random: given, one field with random_sd and correlation_mm; scan, a field per tissue with the
   /// standard deviation and correlation length measured on the scan (voxelize/texture_spectrum.hpp)
   RandomSpectrum spectrum = RandomSpectrum::given;
+  /// a sequence of the scene, or empty: each textured tissue's T1 gain is then set so that this
+  /// sequence's signal changes by d for a deviation d (to first order), instead of T1_gain
+  std::string match;
 };
 
 const char* to_string(TextureSource source);

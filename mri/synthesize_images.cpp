@@ -265,12 +265,8 @@ std::optional<KspaceSampling> kspace_sampling(const AcquisitionSettings& a, cons
 
 using TissueParameterTable = std::map<std::string, TissueParameters>;
 
-/// A tissue's relaxation for the signal equations. The scene's validation made sure every value a
-/// sequence needs is there; others may be empty.
 Relaxation relaxation_of(const TissueParameterTable& parameters, const std::string& tissue) {
-  const TissueParameters& p = parameters.at(tissue);
-  return Relaxation{p.PD.value_or(0.0), p.T1_ms.value_or(1.0), p.T2_ms.value_or(0.0),
-                    p.T2star_ms.value_or(p.T2_ms.value_or(0.0))};
+  return relaxation_of(parameters.at(tissue));
 }
 
 /// Refuses reference images of other settings or another grid.

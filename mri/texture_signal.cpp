@@ -45,6 +45,30 @@ double TexturedSignal::signal(std::size_t tissue, float t1_factor, float pd_fact
          ((1.0 - w) * table[static_cast<std::size_t>(low)] + w * table[static_cast<std::size_t>(low) + 1]);
 }
 
+std::optional<MatchedT1Gain> matched_T1_gain(const SequenceSettings& sequence, const Relaxation& tissue,
+                                             double PD_gain, double max_gain) {
+  constexpr double h = 1e-4;
+  Relaxation longer = tissue, shorter = tissue;
+  longer.T1_ms *= std::exp(h);
+  shorter.T1_ms *= std::exp(-h);
+  const double at = std::abs(sequence_signal(sequence, tissue));
+  const double up = std::abs(sequence_signal(sequence, longer)),
+               down = std::abs(sequence_signal(sequence, shorter));
+  if (!(at > 0.0) || !(up > 0.0) || !(down > 0.0) || !std::isfinite(up) || !std::isfinite(down))
+    return std::nullopt;
+  MatchedT1Gain matched;
+  matched.sensitivity = -(std::log(up) - std::log(down)) / (2.0 * h);
+  const double wanted = 1.0 - PD_gain;
+  if (wanted != 0.0 && std::abs(wanted) >= max_gain * std::abs(matched.sensitivity)) {
+    matched.clamped = true;
+    const double sign = (wanted < 0.0) != (matched.sensitivity < 0.0) ? -1.0 : 1.0;
+    matched.gain = sign * max_gain;
+  } else {
+    matched.gain = wanted / matched.sensitivity;
+  }
+  return matched;
+}
+
 void apply_texture(ParameterMaps& maps, const TissueVolumes& volumes, const std::vector<std::string>& tissues,
                    const std::map<std::string, TissueParameters>& parameters, const TextureMaps& texture) {
   std::vector<std::optional<double>> T1(tissues.size()), PD(tissues.size());

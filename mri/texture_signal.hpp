@@ -9,6 +9,7 @@
 #include "voxelize/voxelized_phantom.hpp"
 
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,22 @@ private:
   const TextureMaps* m_maps;
   std::vector<std::vector<double>> m_table; ///< per tissue; empty: not textured
 };
+
+/// A T1 gain matched to a sequence (texture.match): with T1 x exp(-gain d) and PD x
+/// exp(PD_gain d), the sequence's signal (its magnitude, as images take it) changes by the
+/// relative amount d, to first order, so that a texture d measured on a scan of that contrast
+/// gives the image the scan's variation.
+struct MatchedT1Gain {
+  double gain = 0.0;
+  double sensitivity = 0.0; ///< s = -d ln|S| / d ln T1 at the tissue's relaxation
+  bool clamped = false;     ///< |(1 - PD_gain) / s| exceeded the largest gain: the gain is that
+};
+
+/// gain = (1 - PD_gain) / s, s by a central difference in ln T1 (step 1e-4), within +-max_gain
+/// (the sign of the ratio kept: negative where a longer T1 brightens, as near an inversion's
+/// null). Empty when the tissue has no signal in the sequence.
+std::optional<MatchedT1Gain> matched_T1_gain(const SequenceSettings& sequence, const Relaxation& tissue,
+                                             double PD_gain, double max_gain = 5.0);
 
 /// Multiplies, per voxel, each textured tissue's T1 and PD by the texture's factors and mixes the
 /// maps again as parameter_maps() does (PD summed, T1 averaged over the tissues that have one).

@@ -48,4 +48,9 @@ std::map<std::string, TissueParameters> resolve_tissue_parameters(const MriSetti
   return resolved;
 }
 
+Relaxation relaxation_of(const TissueParameters& p) {
+  return Relaxation{p.PD.value_or(0.0), p.T1_ms.value_or(1.0), p.T2_ms.value_or(0.0),
+                    p.T2star_ms.value_or(p.T2_ms.value_or(0.0))};
+}
+
 } // namespace phantasm

@@ -4,6 +4,7 @@
 
 #include "core/organ_table.hpp"
 #include "mri/mri_settings.hpp"
+#include "mri/sequence_type.hpp"
 
 #include <map>
 #include <optional>
@@ -26,5 +27,9 @@ struct TissueParameters {
 /// @param organs the organ table (its tissues)
 std::map<std::string, TissueParameters> resolve_tissue_parameters(const MriSettings& settings,
                                                                   const OrganTable& organs);
+
+/// A tissue's relaxation for the signal equations. The scene's validation made sure every value a
+/// sequence needs is there; the others, empty, read PD 0, T1 1 ms, T2 0 and T2* as T2.
+Relaxation relaxation_of(const TissueParameters& parameters);
 
 } // namespace phantasm

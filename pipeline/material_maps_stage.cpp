@@ -6,6 +6,8 @@
 #include "core/settings_declaration.hpp"
 #include "io/nifti_file.hpp"
 #include "io/shape_files.hpp"
+#include "mri/texture_signal.hpp"
+#include "mri/tissue_parameters.hpp"
 #include "voxelize/material_maps.hpp"
 #include "voxelize/texture_spectrum.hpp"
 
@@ -132,13 +134,52 @@ std::string three_digits(double value) {
   return text;
 }
 
+/// Per tissue of the phantom, the T1 gain matched to the sequence texture.match names (the
+/// others, untextured, keep T1_gain); `text` says how, for the description.
+std::vector<double> matched_gains(const Scene& scene, const std::vector<std::string>& tissues,
+                                  const std::vector<bool>& textured, StageReport& report, std::string& text) {
+  const TextureSettings& t = scene.mri.texture;
+  const auto sequence = std::find_if(scene.mri.sequences.begin(), scene.mri.sequences.end(),
+                                     [&](const SequenceSettings& s) { return s.name == t.match; });
+  if (sequence == scene.mri.sequences.end()) // the scene's checks made sure
+    throw SettingError("texture.match", "expected one of the scene's sequences, found '" + t.match + "'");
+  const auto parameters = resolve_tissue_parameters(scene.mri, scene.organs);
+  std::vector<double> gains(tissues.size(), t.T1_gain);
+  std::string figures;
+  for (std::size_t k = 0; k < tissues.size(); ++k) {
+    const auto found = parameters.find(tissues[k]);
+    if (!textured[k] || found == parameters.end()) continue;
+    const std::optional<MatchedT1Gain> matched =
+        matched_T1_gain(*sequence, relaxation_of(found->second), t.PD_gain);
+    figures += (figures.empty() ? "" : ", ") + tissues[k] + " ";
+    if (!matched) {
+      figures += three_digits(t.T1_gain) + " (no signal in " + t.match + ": T1_gain)";
+      continue;
+    }
+    gains[k] = matched->gain;
+    figures += three_digits(matched->gain) + (matched->clamped ? " (clamped)" : "");
+    report.accuracy["texture " + tissues[k] + " T1 gain"] = matched->gain;
+    if (matched->clamped)
+      report.warnings.push_back("texture.match: " + tissues[k] + "'s " + t.match +
+                                " signal hardly follows T1 (d ln S / d ln T1 = " +
+                                three_digits(-matched->sensitivity) + "), so its T1 gain is held at " +
+                                three_digits(matched->gain) + " and its texture is fainter than the scan's");
+  }
+  text = "T1 x exp(-g d), g per tissue so that " + t.match + "'s signal changes by d to first order (" +
+         figures + ")";
+  return gains;
+}
+
 void attach_texture(const Scene& scene, VoxelizedPhantom& v, StageReport& report) {
   const TextureSettings& t = scene.mri.texture;
   const std::vector<bool> textured = textured_tissues(t, v.tissues);
-  const TextureGains gains{t.T1_gain, t.PD_gain, t.max_deviation};
+  TextureGains gains{t.T1_gain, t.PD_gain, t.max_deviation};
   std::string names;
   for (std::size_t k = 0; k < textured.size(); ++k)
     if (textured[k]) names += (names.empty() ? "" : ", ") + v.tissues[k];
+  std::string gain_text = "T1 x exp(-" + format_number(t.T1_gain) + " d)";
+  if (!t.match.empty())
+    gains.T1_gain_by_tissue = matched_gains(scene, v.tissues, textured, report, gain_text);
   std::string description;
   const std::filesystem::path path =
       t.scan.empty() ? default_colin27_templates_dir() / "ch2.nii.gz" : std::filesystem::path(t.scan);
@@ -188,8 +229,8 @@ void attach_texture(const Scene& scene, VoxelizedPhantom& v, StageReport& report
                   "): d Gaussian, standard deviation " + format_number(t.random_sd) +
                   ", smoothed by a Gaussian of " + format_number(t.correlation_mm) + " mm";
   }
-  description += "; T1 x exp(-" + format_number(t.T1_gain) + " d), PD x exp(" + format_number(t.PD_gain) +
-                 " d), d within +-" + format_number(t.max_deviation) + "; tissues " + names +
+  description += "; " + gain_text + ", PD x exp(" + format_number(t.PD_gain) + " d), d within +-" +
+                 format_number(t.max_deviation) + "; tissues " + names +
                  "; the deformed state's factors are the reference's at each voxel's reference position "
                  "(the exact map, from-ref_to-def), trilinear";
   v.reference_texture->description = description;
@@ -220,6 +261,9 @@ std::string material_maps_key_text(const Scene& scene) {
           exact_text(t.PD_gain) + " " + exact_text(t.max_deviation) + " " + exact_text(t.random_sd) + " " +
           exact_text(t.correlation_mm) + " spectrum " +
           (t.spectrum == RandomSpectrum::scan ? "scan" : "given") + " seed " + std::to_string(scene.seed);
+  // The matched gains also read the sequence and the tissues' parameters, which the reference
+  // images' key holds (pipeline/reference_images_cache.cpp), as it holds everything they read.
+  if (!t.match.empty()) text += " match " + t.match;
   for (const std::string& tissue : t.tissues)
     text += " " + tissue;
   return text + "\n";

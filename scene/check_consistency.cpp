@@ -386,6 +386,20 @@ public:
       problem("texture.scan",
               "expected a scan only with source: scan or spectrum: scan, found one with source: " +
                   std::string(to_string(texture.source)));
+    if (!texture.match.empty()) {
+      std::string sequences;
+      bool found = false;
+      for (const SequenceSettings& sequence : m_scene.mri.sequences) {
+        sequences += (sequences.empty() ? "" : ", ") + sequence.name;
+        found = found || sequence.name == texture.match;
+      }
+      if (texture.source == TextureSource::none)
+        problem("texture.match",
+                "expected match only with a texture (source: scan or random), found source: none");
+      else if (!found)
+        problem("texture.match", "expected the name of one of the scene's sequences (" + sequences +
+                                     "), found '" + texture.match + "'");
+    }
   }
 
 private:

@@ -471,7 +471,10 @@ const std::vector<SettingField<TextureSettings>>& declared_settings<TextureSetti
                "source: random, standard deviation of the smoothing Gaussian")
         .choice("spectrum", &T::spectrum, {{"given", RandomSpectrum::given}, {"scan", RandomSpectrum::scan}},
                 "source: random, the figures: given (random_sd, correlation_mm) or measured per tissue on "
-                "the scan");
+                "the scan")
+        .field("match", &T::match, "", "a sequence of the scene",
+               "each textured tissue's T1 gain set so that this sequence's signal changes by d (to first "
+               "order), instead of T1_gain (empty: T1_gain for every tissue)");
     return d.fields();
   }();
   return fields;
@@ -804,8 +807,10 @@ std::vector<const void*> settings_members(const TissueRegionSettings& s) {
 }
 
 std::vector<const void*> settings_members(const TextureSettings& s) {
-  const auto& [source, tissues, scan, T1_gain, PD_gain, max_deviation, random_sd, correlation, spectrum] = s;
-  return {&source, &tissues, &scan, &T1_gain, &PD_gain, &max_deviation, &random_sd, &correlation, &spectrum};
+  const auto& [source, tissues, scan, T1_gain, PD_gain, max_deviation, random_sd, correlation, spectrum,
+               match] = s;
+  return {&source,        &tissues,   &scan,        &T1_gain,  &PD_gain,
+          &max_deviation, &random_sd, &correlation, &spectrum, &match};
 }
 
 std::vector<const void*> settings_members(const MriSettings& s) {

@@ -198,7 +198,7 @@ TextureMaps texture_of(const TissueVolumes& volumes, const std::vector<bool>& te
     const int tissue = volumes.label_tissues[static_cast<std::size_t>(volumes.labels[v])];
     if (tissue < 0 || !textured[static_cast<std::size_t>(tissue)] || !std::isfinite(deviation[v])) continue;
     const double d = std::clamp(static_cast<double>(deviation[v]), -gains.max_deviation, gains.max_deviation);
-    maps.T1_factor[v] = static_cast<float>(std::exp(-gains.T1_gain * d));
+    maps.T1_factor[v] = static_cast<float>(std::exp(-gains.T1_gain_of(tissue) * d));
     maps.PD_factor[v] = static_cast<float>(std::exp(gains.PD_gain * d));
   }
   return maps;

@@ -72,6 +72,14 @@ struct TextureGains {
   double T1_gain = 1.0;
   double PD_gain = 0.25;
   double max_deviation = 0.3;
+  /// per tissue of the volumes, its own T1 gain (a voxel takes its label tissue's); empty: T1_gain
+  std::vector<double> T1_gain_by_tissue = {};
+
+  double T1_gain_of(int tissue) const {
+    return static_cast<std::size_t>(tissue) < T1_gain_by_tissue.size()
+               ? T1_gain_by_tissue[static_cast<std::size_t>(tissue)]
+               : T1_gain;
+  }
 };
 
 /// A texture from a scan: within each textured tissue (the tissue a voxel's label fills it with),

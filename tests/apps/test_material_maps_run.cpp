@@ -61,8 +61,9 @@ TEST(MaterialMapsRun, TextureMovesWithTheTissue) {
   const fs::path root = fresh_folder("texture-moves");
   for (const std::string& texture :
        {std::string("texture: {source: random, correlation_mm: 4, random_sd: 0.08}"),
-        // the scan named relative to the scene's folder, as organs' files are
-        "texture: {source: scan, tissues: [gray_matter, white_matter], scan: " +
+        // the scan named relative to the scene's folder, as organs' files are; the T1 gains
+        // matched to the T1w's contrast
+        "texture: {source: scan, tissues: [gray_matter, white_matter], match: T1w, scan: " +
             smooth_scan(root / "scan.nii.gz", 70.0).filename().string() + "}",
         // a field per tissue with the spectrum measured on the scan
         std::string(
@@ -81,6 +82,12 @@ TEST(MaterialMapsRun, TextureMovesWithTheTissue) {
     EXPECT_EQ(nlohmann::json::parse(read_file(anat / "sub-01_ses-def_T2map.json")).at("Texture"), "none");
     const std::string provenance = read_file(out / "derivatives" / "phantasm" / "sub-01" / "provenance.json");
     EXPECT_NE(provenance.find("\"texture\""), std::string::npos);
+    if (texture.find("match: T1w") != std::string::npos) { // each tissue's matched gain recorded
+      EXPECT_NE(sidecar.at("Texture").get<std::string>().find("so that T1w's signal changes by d"),
+                std::string::npos)
+          << sidecar.dump();
+      EXPECT_NE(provenance.find("texture white_matter T1 gain"), std::string::npos);
+    }
     if (texture.find("spectrum: scan") != std::string::npos) { // the measured figures recorded
       EXPECT_NE(sidecar.at("Texture").get<std::string>().find("white_matter sd "), std::string::npos)
           << sidecar.dump();
@@ -91,7 +98,8 @@ TEST(MaterialMapsRun, TextureMovesWithTheTissue) {
 // Bad settings: a texture scan that does not cover the anatomy (named, with the tissue), a
 // region's tissue without the values a sequence needs at the field strength, a region of an organ
 // that is not an atlas's, a textured tissue the phantom lacks, spectrum: scan without a random
-// source, a spectrum's scan that does not cover the anatomy: exit 2, nothing written.
+// source, a spectrum's scan that does not cover the anatomy, a match naming no sequence or without a
+// texture: exit 2, nothing written.
 TEST(MaterialMapsRun, BadTextureAndRegionSettingsAreNamedAndNothingIsWritten) {
   const fs::path root = fresh_folder("texture-bad");
   const fs::path small_scan = smooth_scan(root / "small.nii.gz", 20.0);
@@ -104,6 +112,8 @@ TEST(MaterialMapsRun, BadTextureAndRegionSettingsAreNamedAndNothingIsWritten) {
       {"texture: {source: scan, spectrum: scan}", {"texture.spectrum", "source: random"}},
       {"texture: {source: random, spectrum: scan, scan: " + small_scan.string() + "}",
        {small_scan.string(), "covers the anatomy", "texture.scan"}},
+      {"texture: {source: random, match: T2star}", {"texture.match", "T1w, T2w", "'T2star'"}},
+      {"texture: {match: T1w}", {"texture.match", "source: none"}},
   };
   for (const auto& [extra, expected] : cases) {
     SCOPED_TRACE(extra);

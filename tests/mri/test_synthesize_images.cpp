@@ -525,3 +525,85 @@ TEST(TexturedSignal, FollowsTheSignalEquationOverEveryFactorASceneAllows) {
     EXPECT_NEAR(got, expected, 2e-3 * std::abs(expected) + 1e-9) << "log T1 factor " << log_factor;
   }
 }
+
+namespace {
+
+/// The magnitude signal with T1 x exp(-gain d) and PD x exp(PD_gain d).
+double textured_magnitude(const SequenceSettings& sequence, Relaxation r, double gain, double PD_gain,
+                          double d) {
+  r.T1_ms *= std::exp(-gain * d);
+  r.PD *= std::exp(PD_gain * d);
+  return std::abs(sequence_signal(sequence, r));
+}
+
+} // namespace
+
+// texture.match: the matched T1 gain makes the sequence's signal change by d for a deviation d
+// (its slope in d is 1 at d = 0), whichever way T1 moves the signal; where the signal hardly
+// follows T1 the gain is held at the largest and says so; a tissue without signal has none.
+TEST(TexturedSignal, MatchedT1GainGivesTheSignalTheDeviation) {
+  SequenceSettings mprage;
+  mprage.kind = SequenceKind::mprage;
+  mprage.TR_ms = 2300.0;
+  mprage.TI_ms = 900.0;
+  mprage.TE_ms = 2.98;
+  mprage.flip_deg = 9.0;
+  mprage.echo_spacing_ms = 7.1;
+  mprage.turbo_factor = 176;
+  SequenceSettings spin_echo;
+  spin_echo.kind = SequenceKind::spin_echo;
+  spin_echo.TR_ms = 4000.0;
+  spin_echo.TE_ms = 100.0;
+  SequenceSettings flair;
+  flair.kind = SequenceKind::inversion_recovery;
+  flair.readout = Readout::spin_echo;
+  flair.TR_ms = 9000.0;
+  flair.TI_ms = 2500.0;
+  flair.TE_ms = 120.0;
+  const Relaxation white{0.7, 810.0, 80.0, 53.2}, grey{0.83, 1350.0, 110.0, 66.0},
+      csf{1.0, 4300.0, 2000.0, 100.0};
+  const double PD_gain = 0.25, delta = 1e-3;
+  int matched_count = 0;
+  for (const SequenceSettings* sequence : {&mprage, &spin_echo, &flair}) {
+    for (const Relaxation& tissue : {white, grey, csf}) {
+      const std::optional<MatchedT1Gain> m = matched_T1_gain(*sequence, tissue, PD_gain);
+      ASSERT_TRUE(m.has_value());
+      const double at = textured_magnitude(*sequence, tissue, m->gain, PD_gain, 0.0);
+      const double slope = (textured_magnitude(*sequence, tissue, m->gain, PD_gain, delta) -
+                            textured_magnitude(*sequence, tissue, m->gain, PD_gain, -delta)) /
+                           (2.0 * delta * at);
+      if (m->clamped) {
+        EXPECT_EQ(std::abs(m->gain), 5.0);
+        EXPECT_LT(std::abs(slope), 1.0); // fainter than asked, never the wrong way
+        EXPECT_GT(slope, 0.0);
+      } else {
+        EXPECT_NEAR(slope, 1.0, 1e-4)
+            << "T1 " << tissue.T1_ms << " kind " << static_cast<int>(sequence->kind);
+        ++matched_count;
+      }
+    }
+  }
+  EXPECT_GE(matched_count, 6);
+  // MPRAGE: a shorter T1 brightens, and more so than d alone asks: gains below 1 and positive.
+  const double g_white = matched_T1_gain(mprage, white, PD_gain)->gain;
+  EXPECT_GT(g_white, 0.0);
+  EXPECT_LT(g_white, 1.0);
+  // CSF read before its null (inversion recovery, TI 1500 ms): still inverted, so a longer T1
+  // brightens the magnitude, and the gain is negative.
+  SequenceSettings early = flair;
+  early.TI_ms = 1500.0;
+  const MatchedT1Gain inverted = *matched_T1_gain(early, csf, PD_gain);
+  EXPECT_LT(inverted.gain, 0.0);
+  EXPECT_FALSE(inverted.clamped);
+  EXPECT_NEAR((textured_magnitude(early, csf, inverted.gain, PD_gain, delta) -
+               textured_magnitude(early, csf, inverted.gain, PD_gain, -delta)) /
+                  (2.0 * delta * textured_magnitude(early, csf, inverted.gain, PD_gain, 0.0)),
+              1.0, 1e-4);
+  // A long-TR spin echo hardly reads white matter's T1: the gain is held at the largest.
+  const std::optional<MatchedT1Gain> held = matched_T1_gain(spin_echo, white, PD_gain);
+  ASSERT_TRUE(held.has_value());
+  EXPECT_TRUE(held->clamped);
+  EXPECT_EQ(held->gain, 5.0);
+  const Relaxation none{0.0, 1000.0, 80.0, 50.0};
+  EXPECT_FALSE(matched_T1_gain(mprage, none, PD_gain).has_value());
+}

@@ -155,6 +155,23 @@ TEST(MaterialMaps, ScanTextureFollowsTheWithinTissueDeviation) {
   EXPECT_EQ(maps.PD_factor[5], 1.0f);
 }
 
+// Per-tissue T1 gains (texture.match): each voxel's T1 factor takes its label tissue's gain, the
+// PD factor the common PD gain.
+TEST(MaterialMaps, EachTissueTakesItsOwnT1Gain) {
+  std::vector<std::int32_t> labels = {1, 1, 2, 2};
+  std::vector<std::vector<float>> fractions = {{1, 1, 0, 0}, {0, 0, 1, 1}, {0, 0, 0, 0}};
+  const TissueVolumes volumes = compact_tissue_volumes(labels, {-1, 0, 1}, fractions);
+  const std::vector<float> intensity = {90, 110, 80, 120}; // both tissues' means 100
+  TextureGains gains{1.0, 0.25, 0.3};
+  gains.T1_gain_by_tissue = {0.5, -2.0};
+  const TextureMaps maps = texture_from_intensity(volumes, {true, true}, intensity, gains);
+  EXPECT_NEAR(maps.T1_factor[0], std::exp(-0.5 * -0.1), 1e-6);
+  EXPECT_NEAR(maps.T1_factor[1], std::exp(-0.5 * 0.1), 1e-6);
+  EXPECT_NEAR(maps.T1_factor[2], std::exp(2.0 * -0.2), 1e-6);
+  EXPECT_NEAR(maps.T1_factor[3], std::exp(2.0 * 0.2), 1e-6);
+  EXPECT_NEAR(maps.PD_factor[3], std::exp(0.25 * 0.2), 1e-6);
+}
+
 // A random texture repeats with its seed, changes with another, and has the asked-for spread
 // over the textured voxels.
 TEST(MaterialMaps, RandomTextureIsSeededWithTheAskedSpread) {
