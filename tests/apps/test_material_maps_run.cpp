@@ -106,8 +106,8 @@ TEST(MaterialMapsRun, BadTextureAndRegionSettingsAreNamedAndNothingIsWritten) {
   const std::vector<std::pair<std::string, std::vector<std::string>>> cases = {
       {"texture: {source: scan, scan: " + small_scan.string() + "}",
        {small_scan.string(), "covers the anatomy", "texture.scan"}},
-      {"tissue_regions:\n  - {organ: white_matter, label: caudate, tissue: globus_pallidus}\n",
-       {"tissue_regions[0].organ", "label volume of an atlas", "globus_pallidus", "T1_ms"}},
+      {"tissue_regions:\n  - {organ: white_matter, label: caudate, tissue: pons}\n",
+       {"tissue_regions[0].organ", "label volume of an atlas", "pons", "T1_ms"}},
       {"texture: {source: random, tissues: [bone_marrow]}", {"texture.tissues[0]", "bone_marrow"}},
       {"texture: {source: scan, spectrum: scan}", {"texture.spectrum", "source: random"}},
       {"texture: {source: random, spectrum: scan, scan: " + small_scan.string() + "}",

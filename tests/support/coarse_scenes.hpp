@@ -85,7 +85,8 @@ inline std::filesystem::path coarse_copy(const std::filesystem::path& scene,
 
 /// data-synthetic/colin-head.yaml made coarse: 4 mm voxels, 320-triangle base meshes, a body of
 /// 7 mm tets (about 41 000, none under 10 degrees after the sliver repairs), surfaces tessellated
-/// within 1 mm, the first sequence only, images sampled directly, no organ meshes. (The
+/// within 1 mm, the first sequence only, images sampled directly, texture in the brain's tissues
+/// only, no organ meshes. (The
 /// 320-triangle surfaces' patches bend far to follow the folds: their meshes came to 170 MB per
 /// state and a quarter of the run's processor time; the main job and the smaller scenes' tests
 /// write meshes.)
@@ -104,6 +105,11 @@ inline std::string coarse_colin_head_text() {
       {R"(  acquired_voxel_mm: [0-9.]+\n)", ""},
       {R"(  - \{name: T2w[^\n]*\n)", ""},
       {R"(  - \{name: FLAIR[^\n]*\n)", ""},
+      // The brain's tissues only: the 320-triangle skull overshoots the template's grid at the
+      // skull base (a bone voxel at z = -74 mm, the scan's last at -72), which a texture scan
+      // must cover.
+      {R"(texture: \{source: scan, match: T1w\})",
+       "texture: {source: scan, match: T1w, tissues: [gray_matter, white_matter, csf]}"},
       {"outputs:\n", "outputs:\n  meshes: false\n"}};
   for (const auto& [from, to] : edits) {
     const std::string before = text;
