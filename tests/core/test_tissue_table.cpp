@@ -52,7 +52,7 @@ TEST(TissueTable, MissingValuesStayEmpty) {
 
 // The deep nuclei's T2* at 3 T: iron shortens it, so the pallidum (most iron) lies below the
 // putamen, the putamen below the caudate, and no nucleus above the cortex; each value names its
-// source, and what no source gave stays empty.
+// source, and what no source gave stays empty. Their T1 (pallidum, thalamus) lies below the cortex's.
 TEST(TissueTable, DeepNucleiT2starAtThreeTeslaFollowIronAndNameTheirSources) {
   const TissueTable& table = TissueTable::builtin();
   const TissueRecord* pallidum = table.find("globus_pallidus", 3.0);
@@ -71,8 +71,16 @@ TEST(TissueTable, DeepNucleiT2starAtThreeTeslaFollowIronAndNameTheirSources) {
   EXPECT_LE(*thalamus->T2star_ms, *cortex->T2star_ms);
   EXPECT_NE(pallidum->T2star_source.find("Gelman"), std::string::npos);
   EXPECT_NE(thalamus->T2star_source.find("B0_sim-mapping"), std::string::npos);
-  EXPECT_FALSE(thalamus->T1_ms || thalamus->T2_ms || thalamus->PD);
-  EXPECT_FALSE(pallidum->T1_ms || pallidum->PD);
+  EXPECT_FALSE(thalamus->T2_ms || thalamus->PD);
+  EXPECT_FALSE(pallidum->PD);
+  // Their T1 at 3 T from one study's R1 (Gelman et al. 2001): the pallidum (iron) shortest, the
+  // thalamus (fibre-rich) between it and the cortex.
+  for (const TissueRecord* r : {pallidum, thalamus}) {
+    ASSERT_TRUE(r->T1_ms.has_value()) << r->tissue;
+    EXPECT_NE(r->T1_source.find("Gelman et al. 2001"), std::string::npos) << r->tissue;
+  }
+  EXPECT_LT(*pallidum->T1_ms, *thalamus->T1_ms);
+  EXPECT_LT(*thalamus->T1_ms, *cortex->T1_ms);
   for (const char* name : {"cerebellar_cortex", "cerebellar_white_matter", "pons"}) {
     for (double field : {1.5, 3.0}) {
       const TissueRecord* r = table.find(name, field);
