@@ -111,6 +111,7 @@ public:
           if (in_set(labels[index])) m_inside[local_index(Eigen::Vector3i(i, j, k))] = 1.0f;
         }
     if (smoothing_mm > 0.0) smooth(smoothing_mm);
+    measure_max_difference();
     m_center = sum / static_cast<double>(count);
     const double voxel_volume = std::abs(grid.world_from_voxel.topLeftCorner<3, 3>().determinant());
     m_volume = static_cast<double>(count) * voxel_volume;
@@ -144,6 +145,36 @@ public:
   double value(const Eigen::Vector3d& x) const override {
     const Eigen::Vector3d ijk = m_voxel_from_world * (x - m_origin) - m_low.cast<double>();
     const Eigen::Vector3d base = ijk.array().floor();
+    const Eigen::Vector3i at = base.cast<int>();
+    if ((at.array() < 0).any() || (at.array() + 1 >= m_dims.array()).any()) return value_near_edge(ijk, base);
+    // The cell lies in the box: its eight values, weighted as value_near_edge weights them (the
+    // same products in the same order, so the same bits), without a bounds test per corner.
+    const Eigen::Vector3d t = ijk - base;
+    const float* cell = m_inside.data() + local_index(at);
+    const std::ptrdiff_t dy = m_dims.x(), dz = std::ptrdiff_t{m_dims.x()} * m_dims.y();
+    const double wx[2] = {1.0 - t.x(), t.x()}, wy[2] = {1.0 - t.y(), t.y()}, wz[2] = {1.0 - t.z(), t.z()};
+    double total = 0.0;
+    for (int corner = 0; corner < 8; ++corner) {
+      const int ox = corner & 1, oy = (corner >> 1) & 1, oz = (corner >> 2) & 1;
+      total += wx[ox] * wy[oy] * wz[oz] * cell[ox + oy * dy + oz * dz];
+    }
+    return total - 0.5;
+  }
+  Eigen::Vector3d gradient(const Eigen::Vector3d& x) const override {
+    return numeric_gradient(*this, x, m_step);
+  }
+  Eigen::Vector3d center() const override { return m_center; }
+  double slope_bound(const Eigen::Vector3d& direction) const override {
+    // Along each voxel axis the interpolant's slope is a weighted mean of differences of
+    // neighbouring values, so at most their largest difference along that axis.
+    return (m_voxel_from_world * direction).cwiseAbs().dot(m_max_difference);
+  }
+  double bounding_radius() const override { return m_radius; }
+  double volume() const override { return m_volume; }
+
+private:
+  /// value() at a point whose cell reaches past the kept box: corners outside it count as 0.
+  double value_near_edge(const Eigen::Vector3d& ijk, const Eigen::Vector3d& base) const {
     double total = 0.0;
     for (int corner = 0; corner < 8; ++corner) {
       double weight = 1.0;
@@ -159,14 +190,26 @@ public:
     }
     return total - 0.5;
   }
-  Eigen::Vector3d gradient(const Eigen::Vector3d& x) const override {
-    return numeric_gradient(*this, x, m_step);
-  }
-  Eigen::Vector3d center() const override { return m_center; }
-  double bounding_radius() const override { return m_radius; }
-  double volume() const override { return m_volume; }
 
-private:
+  /// The largest difference of neighbouring values along each voxel axis, the values outside the
+  /// box counting as 0 (slope_bound).
+  void measure_max_difference() {
+    m_max_difference.setZero();
+    for (int k = 0; k < m_dims.z(); ++k)
+      for (int j = 0; j < m_dims.y(); ++j)
+        for (int i = 0; i < m_dims.x(); ++i) {
+          const Eigen::Vector3i at(i, j, k);
+          const double v = m_inside[local_index(at)];
+          for (int a = 0; a < 3; ++a) {
+            Eigen::Vector3i next = at;
+            ++next[a];
+            const double w = next[a] < m_dims[a] ? m_inside[local_index(next)] : 0.0;
+            m_max_difference[a] = std::max(m_max_difference[a], std::abs(w - v));
+            if (at[a] == 0) m_max_difference[a] = std::max(m_max_difference[a], std::abs(v));
+          }
+        }
+  }
+
   /// Separable Gaussian blur of the indicator (standard deviation sigma_mm, kernel cut at 3
   /// sigma, renormalized at the box's faces): its 1/2-level drops voxel steps and one-voxel
   /// bridges, which the surface mesher would otherwise chase.
@@ -229,9 +272,10 @@ private:
   ImageGrid m_grid;
   Eigen::Matrix3d m_voxel_from_world = Eigen::Matrix3d::Identity();
   Eigen::Vector3d m_origin{0, 0, 0};
-  Eigen::Vector3i m_low{0, 0, 0};  ///< the kept box's first voxel in the volume
-  Eigen::Vector3i m_dims{0, 0, 0}; ///< the kept box's size in voxels
-  std::vector<float> m_inside;     ///< the indicator of the labels (smoothed when asked)
+  Eigen::Vector3i m_low{0, 0, 0};            ///< the kept box's first voxel in the volume
+  Eigen::Vector3i m_dims{0, 0, 0};           ///< the kept box's size in voxels
+  std::vector<float> m_inside;               ///< the indicator of the labels (smoothed when asked)
+  Eigen::Vector3d m_max_difference{0, 0, 0}; ///< measure_max_difference
   Eigen::Vector3d m_center;
   double m_radius = 0.0, m_volume = 0.0, m_step = 0.05;
   bool m_star_shaped = false;

@@ -3,8 +3,13 @@
 #include <Eigen/Geometry>
 
 #include <cmath>
+#include <limits>
 
 namespace phantasm {
+
+double ImplicitShape::slope_bound(const Eigen::Vector3d& /*direction*/) const {
+  return std::numeric_limits<double>::infinity();
+}
 
 Eigen::Vector3d ImplicitShape::ray_from_center(const Eigen::Vector3d& direction) const {
   const Eigen::Vector3d c = center();

@@ -33,6 +33,10 @@ public:
   /// True when value(x) is a smoothed indicator of the solid minus 1/2 (a label volume's shape):
   /// such values may be compared across shapes (NestedShapes::innermost).
   virtual bool smoothed_indicator() const { return false; }
+  /// An upper bound of |d value(x + t n) / dt| for every x and t along the unit direction n, or
+  /// infinity when the shape knows none. Root searches along a line use it to skip samples whose
+  /// sign an earlier sample already settles (same samples' signs, fewer evaluations).
+  virtual double slope_bound(const Eigen::Vector3d& direction) const;
 
   /// The surface point on the ray center() + t d (d unit, t > 0), by bisection, to 1e-12 mm.
   Eigen::Vector3d ray_from_center(const Eigen::Vector3d& direction) const;

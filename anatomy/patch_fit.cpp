@@ -76,30 +76,49 @@ std::vector<PatchBump> basis_bumps(const Eigen::Vector3d& x0, const Eigen::Vecto
 }
 
 /// Height of the target above base point b along unit normal n, within +-limit (NaN if none):
-/// a sign change bracketed by stepping outward from b, then regula falsi (Illinois variant).
+/// a sign change bracketed by stepping outward from b, up and down in turn, then regula falsi
+/// (Illinois variant). A sample whose value exceeds the target's slope bound times the distance to
+/// the next samples on its side settles their sign, so they are not evaluated: the bracket found,
+/// and its values, are those of evaluating every step.
 double target_height(const ImplicitShape& target, const Eigen::Vector3d& b, const Eigen::Vector3d& n,
                      double limit) {
   auto f = [&](double h) { return target.value(b + h * n); };
   const double f0 = f(0.0);
   if (f0 == 0.0) return 0.0;
   constexpr int steps = 32;
+  // The bound of the value's change over one step, with a margin for the values' rounding.
+  const double change_per_step = target.slope_bound(n) * (limit / steps) * (1.0 + 1e-6);
+  struct Side {
+    double sign;           // +1 stepping up, -1 down
+    int step = 0;          // the last step evaluated
+    double h = 0.0, value; // its height and value
+    int settled = 0;       // steps up to this one have that value's sign
+  };
+  const auto settle = [&](Side& side) {
+    const double room = (std::abs(side.value) - 1e-12) / change_per_step;
+    side.settled = side.step + (room > 0.0 ? static_cast<int>(std::min(room, double(steps))) : 0);
+  };
+  Side up{1.0, 0, 0.0, f0}, down{-1.0, 0, 0.0, f0};
+  settle(up);
+  settle(down);
   double lo = 0.0, f_lo = f0, hi = 0.0, f_hi = 0.0;
+  // Step s on one side: true with lo, hi bracketing a sign change between steps s - 1 and s.
+  const auto advance = [&](Side& side, int s) {
+    if (s <= side.settled) return false;
+    const double h = side.sign * (limit * s / steps), fh = f(h);
+    if ((fh > 0.0) != (side.value > 0.0)) {
+      lo = side.step == s - 1 ? side.h : side.sign * (limit * (s - 1) / steps);
+      f_lo = side.step == s - 1 ? side.value : f(lo);
+      hi = h, f_hi = fh;
+      return true;
+    }
+    side.step = s, side.h = h, side.value = fh;
+    settle(side);
+    return false;
+  };
   bool bracketed = false;
-  double previous_up = 0.0, f_previous_up = f0, previous_down = 0.0, f_previous_down = f0;
-  for (int s = 1; s <= steps && !bracketed; ++s) {
-    const double up = limit * s / steps, f_up = f(up);
-    if ((f_up > 0.0) != (f_previous_up > 0.0)) {
-      lo = previous_up, f_lo = f_previous_up, hi = up, f_hi = f_up, bracketed = true;
-      break;
-    }
-    previous_up = up, f_previous_up = f_up;
-    const double down = -up, f_down = f(down);
-    if ((f_down > 0.0) != (f_previous_down > 0.0)) {
-      lo = previous_down, f_lo = f_previous_down, hi = down, f_hi = f_down, bracketed = true;
-      break;
-    }
-    previous_down = down, f_previous_down = f_down;
-  }
+  for (int s = 1; s <= steps && !bracketed; ++s)
+    bracketed = advance(up, s) || advance(down, s);
   if (!bracketed) return std::nan("");
   int side = 0;
   for (int i = 0; i < 100 && std::abs(hi - lo) > 1e-12 * limit; ++i) {

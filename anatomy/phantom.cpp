@@ -180,6 +180,9 @@ public:
   double volume() const override { return shape().volume(); }
   bool star_shaped() const override { return shape().star_shaped(); }
   bool smoothed_indicator() const override { return shape().smoothed_indicator(); }
+  double slope_bound(const Eigen::Vector3d& direction) const override {
+    return shape().slope_bound(direction);
+  }
 
 private:
   const ImplicitShape& shape() const {

@@ -1,15 +1,22 @@
 // A label volume's implicit shape (anatomy/file_shapes.cpp): its value is the Gaussian-smoothed
 // indicator of the labels, less 1/2, trilinear between voxel centres. Checked against the direct
-// three-dimensional sum of the kernel over the labels, computed here independently.
+// three-dimensional sum of the kernel over the labels, computed here independently; its slope
+// bound against the slopes met along lines, and the fit that uses the bound against the fit
+// without it.
 
+#include "anatomy/patch_fit.hpp"
 #include "anatomy/phantom.hpp"
 
 #include "tests/support/centred_grid.hpp"
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
+#include <array>
 #include <cmath>
 #include <cstdint>
+#include <random>
 #include <vector>
 
 using namespace phantasm;
@@ -71,4 +78,117 @@ TEST(LabelShape, SmoothedValueAtEveryVoxelCentreIsTheNormalizedGaussianSumOfTheL
       }
   EXPECT_GT(checked, 15000);
   EXPECT_GT(between, 2000); // the check reaches the smoothed band, not only the flat 0s and 1s
+}
+
+namespace {
+
+/// A torus of label 3 (major radius 10 mm, tube 4 mm) on a grid of 1.2 x 0.8 x 1 mm voxels turned
+/// by 30 degrees about z and shifted: anisotropic, oblique voxels, and a shape no ray from its
+/// centre samples (not star-shaped), so the fit extracts its surface and steps along normals.
+std::unique_ptr<ImplicitShape> oblique_torus(double smoothing_mm) {
+  ImageGrid grid;
+  grid.dims = Eigen::Vector3i(36, 52, 24);
+  grid.spacing_mm = Eigen::Vector3d(1.2, 0.8, 1.0);
+  const double angle = 30.0 * 3.14159265358979 / 180.0;
+  Eigen::Matrix3d rotation;
+  rotation << std::cos(angle), -std::sin(angle), 0, std::sin(angle), std::cos(angle), 0, 0, 0, 1;
+  grid.world_from_voxel.setIdentity();
+  grid.world_from_voxel.topLeftCorner<3, 3>() = rotation * grid.spacing_mm.asDiagonal();
+  const Eigen::Vector3d centre_index = (grid.dims.cast<double>() - Eigen::Vector3d::Ones()) / 2.0;
+  grid.world_from_voxel.topRightCorner<3, 1>() =
+      Eigen::Vector3d(3.0, -2.0, 1.0) - grid.world_from_voxel.topLeftCorner<3, 3>() * centre_index;
+  std::vector<std::int32_t> labels(static_cast<std::size_t>(grid.voxel_count()), 0);
+  std::size_t n = 0;
+  for (int k = 0; k < grid.dims.z(); ++k)
+    for (int j = 0; j < grid.dims.y(); ++j)
+      for (int i = 0; i < grid.dims.x(); ++i, ++n) {
+        const Eigen::Vector3d x =
+            grid.world_from_index(Eigen::Vector3d(i, j, k)) - Eigen::Vector3d(3.0, -2.0, 1.0);
+        const double ring = std::hypot(x.x(), x.y()) - 10.0;
+        if (std::hypot(ring, x.z()) <= 4.0) labels[n] = 3;
+      }
+  return make_label_shape(grid, labels, {3}, smoothing_mm, "torus");
+}
+
+/// Forwards everything but the slope bound, which it leaves at the default (none).
+class WithoutSlopeBound final : public ImplicitShape {
+public:
+  explicit WithoutSlopeBound(const ImplicitShape& shape) : m_shape(shape) {}
+  double value(const Eigen::Vector3d& x) const override { return m_shape.value(x); }
+  Eigen::Vector3d gradient(const Eigen::Vector3d& x) const override { return m_shape.gradient(x); }
+  Eigen::Vector3d center() const override { return m_shape.center(); }
+  double bounding_radius() const override { return m_shape.bounding_radius(); }
+  Eigen::Vector3d half_extents() const override { return m_shape.half_extents(); }
+  double volume() const override { return m_shape.volume(); }
+  bool star_shaped() const override { return m_shape.star_shaped(); }
+  bool smoothed_indicator() const override { return m_shape.smoothed_indicator(); }
+
+private:
+  const ImplicitShape& m_shape;
+};
+
+} // namespace
+
+// The slope bound (ImplicitShape::slope_bound) holds between any two points of a line, at the
+// kept box's edge too, and is tight: along each voxel axis the largest slope met is the bound.
+TEST(LabelShape, SlopeBoundHoldsAlongEveryLineAndIsReachedAlongTheVoxelAxes) {
+  for (const double smoothing : {0.0, 0.5, 1.5}) {
+    const auto shape = oblique_torus(smoothing);
+    std::mt19937 random(7);
+    std::uniform_real_distribution<double> coordinate(-25.0, 25.0), unit(-1.0, 1.0), length(0.001, 3.0);
+    for (int trial = 0; trial < 20000; ++trial) {
+      const Eigen::Vector3d x = Eigen::Vector3d(coordinate(random), coordinate(random), coordinate(random));
+      Eigen::Vector3d n(unit(random), unit(random), unit(random));
+      if (n.norm() < 1e-3) continue;
+      n.normalize();
+      const double d = length(random), bound = shape->slope_bound(n);
+      ASSERT_TRUE(std::isfinite(bound));
+      ASSERT_LE(std::abs(shape->value(x + d * n) - shape->value(x)), bound * d + 1e-12)
+          << "smoothing " << smoothing << " at " << x.transpose() << " along " << n.transpose();
+    }
+    // Along voxel axis a (a world direction), steps of a hundredth of a voxel: the steepest met is
+    // the bound, to within the interpolation between centres.
+    for (int a = 0; a < 3; ++a) {
+      const Eigen::Vector3d n =
+          Eigen::Matrix3d(Eigen::AngleAxisd(3.14159265358979 / 6.0, Eigen::Vector3d::UnitZ()))
+              .col(a); // the grid's axis a in world space
+      const double step = 0.01 * std::array<double, 3>{1.2, 0.8, 1.0}[static_cast<std::size_t>(a)];
+      double steepest = 0.0;
+      for (int line = 0; line < 400; ++line) {
+        const Eigen::Vector3d start(coordinate(random), coordinate(random), 0.5 * coordinate(random));
+        for (int s = -3000; s < 3000; ++s) {
+          const Eigen::Vector3d x = start + s * step * n;
+          steepest = std::max(steepest, std::abs(shape->value(x + step * n) - shape->value(x)) / step);
+        }
+      }
+      EXPECT_GT(steepest, 0.8 * shape->slope_bound(n)) << "smoothing " << smoothing << ", axis " << a;
+    }
+  }
+}
+
+// Skipping the samples the slope bound settles changes nothing: the fit of the same shape with
+// and without the bound has the same base vertices and bump amplitudes, bit for bit.
+TEST(LabelShape, AFitThatSkipsSettledSamplesIsTheFitThatEvaluatesEveryOne) {
+  const auto shape = oblique_torus(0.5);
+  ASSERT_FALSE(shape->star_shaped());
+  const WithoutSlopeBound plain(*shape);
+  PatchFitOptions options;
+  options.base_triangles = 320;
+  const PatchSurface with =
+      fit_patch_surface(*shape, Eigen::Vector3d::Ones(), Eigen::Matrix3d::Identity(), options, "torus");
+  const PatchSurface without =
+      fit_patch_surface(plain, Eigen::Vector3d::Ones(), Eigen::Matrix3d::Identity(), options, "torus");
+  ASSERT_EQ(with.patch_count(), without.patch_count());
+  EXPECT_GT(with.patch_count(), 200);
+  ASSERT_TRUE(with.base_mesh().vertices == without.base_mesh().vertices);
+  int bumps = 0;
+  for (Eigen::Index t = 0; t < with.patch_count(); ++t) {
+    ASSERT_EQ(with.bumps(t).size(), without.bumps(t).size()) << "patch " << t;
+    for (std::size_t b = 0; b < with.bumps(t).size(); ++b) {
+      ASSERT_EQ(with.bumps(t)[b].amplitude_mm, without.bumps(t)[b].amplitude_mm)
+          << "patch " << t << " bump " << b;
+      bumps += with.bumps(t)[b].amplitude_mm != 0.0;
+    }
+  }
+  EXPECT_GT(bumps, 1000); // the fit moved the surface: the comparison is of fitted heights
 }
