@@ -8,6 +8,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <stdexcept>
 #include <thread>
 
@@ -110,6 +111,27 @@ bool BackgroundProcess::has_open(const std::string& path) const {
     if (std::filesystem::read_symlink(entry.path(), link_error) == wanted) return true;
   }
   return false;
+}
+
+namespace {
+
+/// A /proc file of NUL-separated strings.
+std::vector<std::string> proc_strings(int pid, const std::string& name) {
+  std::ifstream file("/proc/" + std::to_string(pid) + "/" + name, std::ios::binary);
+  std::vector<std::string> strings;
+  for (std::string item; std::getline(file, item, '\0');)
+    strings.push_back(item);
+  return strings;
+}
+
+} // namespace
+
+std::vector<std::string> BackgroundProcess::environment() const {
+  return proc_strings(m_pid, "environ");
+}
+
+std::vector<std::string> BackgroundProcess::arguments() const {
+  return proc_strings(m_pid, "cmdline");
 }
 
 int BackgroundProcess::wait() {

@@ -33,6 +33,10 @@ public:
   bool ended();
   /// Whether the program has `path` open now (a file it reads or writes; Linux's /proc).
   bool has_open(const std::string& path) const;
+  /// The program's environment now ("NAME=value" each, Linux's /proc): after an exec, the new one.
+  std::vector<std::string> environment() const;
+  /// The program's arguments now, its name first (Linux's /proc).
+  std::vector<std::string> arguments() const;
 
 private:
   int m_pid = -1;
