@@ -1,5 +1,6 @@
 #include "core/error.hpp"
 #include "io/dataset_layout.hpp"
+#include "tests/support/files.hpp"
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>
@@ -70,8 +71,8 @@ TEST(DatasetLayout, SidecarsReplaceTheWholeImageExtension) {
 }
 
 TEST(OutputFolder, IsCreatedWhenMissingAndRefusedWhenItHoldsFilesUnlessForced) {
-  const fs::path folder = fs::temp_directory_path() / ("phantasm-test-output-" + std::to_string(::getpid()));
-  fs::remove_all(folder);
+  const fs::path folder = phantasm::testing::fresh_folder("output");
+  fs::remove_all(folder); // missing: created
   prepare_output_folder(folder, false);
   EXPECT_TRUE(fs::is_directory(folder));
   prepare_output_folder(folder, false); // empty: fine

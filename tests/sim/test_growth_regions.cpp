@@ -9,6 +9,7 @@
 #include "pipeline/run_pipeline.hpp"
 #include "sim/growth_regions.hpp"
 #include "tests/support/deformed_bodies.hpp"
+#include "tests/support/files.hpp"
 #include "tests/support/subprocess.hpp"
 
 #include <Eigen/LU>
@@ -122,10 +123,7 @@ TEST(GrowthRegions, AnUnknownOrTwicePrescribedRegionIsRefusedAtItsKey) {
 // The command refuses a misnamed region with the scene line, exit code 2 and nothing written,
 // before the anatomy is built.
 TEST(GrowthRegions, TheCommandRefusesAMisnamedRegionWithNothingWritten) {
-  const fs::path folder =
-      fs::temp_directory_path() / ("phantasm-growth-region-" + std::to_string(::getpid()));
-  fs::remove_all(folder);
-  fs::create_directories(folder);
+  const fs::path folder = phantasm::testing::fresh_folder("growth-region");
   std::string text = read_text(std::string(PHANTASM_SOURCE_DIR) + "/" + k_scene);
   const std::size_t at = text.find("region: Hippocampus_L");
   ASSERT_NE(at, std::string::npos);
