@@ -165,22 +165,35 @@ void mark_triangle_candidates(const SignedDistanceMesh& mesh, int t, double abov
   }
   // A degenerate face (zero normal) keeps its whole box.
   const bool flat = n.squaredNorm() > 0.5;
-  for (int k = lo[2]; k <= hi[2]; ++k) {
-    for (int j = lo[1]; j <= hi[1]; ++j) {
-      const Eigen::Vector3d row = voxel_size_mm * Eigen::Vector3d(0, j, k);
-      // The voxels of this row within the slab -below <= n . (x - v0) <= above: an interval of i.
-      int first = lo[0], last = hi[0];
-      if (flat && std::abs(n.x()) > 1e-12) {
-        const double offset = n.dot(row - v[0]);
-        const double a = (-below - offset) / (n.x() * voxel_size_mm);
-        const double b = (above - offset) / (n.x() * voxel_size_mm);
-        first = std::max(first, static_cast<int>(std::floor(std::min(a, b))));
-        last = std::min(last, static_cast<int>(std::ceil(std::max(a, b))));
+  // The box is walked in lines along the axis where the normal is largest (at least 1/sqrt(3)
+  // of it), which the slab cuts to a short interval. Lines along a fixed axis once met faces
+  // nearly parallel to it: a flat cap whose normal's x was 1e-10 put the interval's ends beyond
+  // any int, their conversion (undefined) gave INT_MIN on x86, no voxel of the face was marked,
+  // and the flood fill leaked through the hole in the shell.
+  int along = 0;
+  if (flat) n.cwiseAbs().maxCoeff(&along);
+  const int second = (along + 1) % 3, third = (along + 2) % 3;
+  openvdb::Coord ijk;
+  for (int c = lo[third]; c <= hi[third]; ++c) {
+    for (int b = lo[second]; b <= hi[second]; ++b) {
+      Eigen::Vector3d line = Eigen::Vector3d::Zero();
+      line[second] = voxel_size_mm * b;
+      line[third] = voxel_size_mm * c;
+      // The voxels of this line within the slab -below <= n . (x - v0) <= above: an interval.
+      int first = lo[along], last = hi[along];
+      if (flat) {
+        const double offset = n.dot(line - v[0]);
+        const double from = (-below - offset) / (n[along] * voxel_size_mm);
+        const double to = (above - offset) / (n[along] * voxel_size_mm);
+        first = std::max(first, static_cast<int>(std::floor(std::min(from, to))));
+        last = std::min(last, static_cast<int>(std::ceil(std::max(from, to))));
       }
-      for (int i = first; i <= last; ++i) {
-        const openvdb::Coord ijk(i, j, k);
+      ijk[second] = b;
+      ijk[third] = c;
+      for (int a = first; a <= last; ++a) {
+        ijk[along] = a;
         if (accessor.isValueOn(ijk)) continue;
-        const Eigen::Vector3d x = voxel_size_mm * Eigen::Vector3d(i, j, k);
+        const Eigen::Vector3d x = voxel_size_mm * Eigen::Vector3d(ijk.x(), ijk.y(), ijk.z());
         if (flat && (n.dot(x - v[0]) > above || n.dot(x - v[0]) < -below)) continue;
         const TriangleClosestPoint on_base = closest_point_on_triangle(x, v[0], v[1], v[2]);
         if ((x - on_base.point).squaredNorm() > reach * reach) continue;

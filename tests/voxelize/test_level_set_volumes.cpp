@@ -426,6 +426,54 @@ TEST(PatchLevelSet, BandValuesAreTheDistanceToTheSurface) {
   EXPECT_LT(worst, 0.2 * h);
 }
 
+/// A cube of side 2 a centred on the origin, outward triangles, turned by `angle` about `axis`.
+TriangleMesh turned_cube(double a, const Eigen::Vector3d& axis, double angle) {
+  TriangleMesh cube;
+  cube.vertices.resize(8, 3);
+  for (int v = 0; v < 8; ++v)
+    cube.vertices.row(v) = Eigen::Vector3d(v & 1 ? a : -a, v & 2 ? a : -a, v & 4 ? a : -a).transpose();
+  cube.faces.resize(12, 3);
+  cube.faces << 0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4, 2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1,
+      3, 5, 3, 7, 5;
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(angle, axis.normalized()).toRotationMatrix();
+  cube.vertices = cube.vertices * turn.transpose();
+  return cube;
+}
+
+// The band's candidates must enclose the surface on every face, whatever its direction. A face
+// whose normal is all but perpendicular to the x axis (x component 1e-10, as a flat cap fitted to
+// labels cut by the grid can have) once marked no candidate at all: an integer conversion of a
+// number far beyond int's range left a hole in the shell, and the flood fill carried the outside's
+// sign through it, so the cube's inside read as outside (the Colin head's neck lost thousands of
+// voxels so, up to 32 mm deep). Every voxel farther than half a voxel from the faces must take the
+// sign of its side.
+TEST(PatchLevelSet, EveryFaceEnclosesTheInsideWhateverItsDirection) {
+  const double a = 10.0, h = 1.0;
+  const std::vector<Eigen::Vector3d> axes{Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ(),
+                                          Eigen::Vector3d(1, 1, 0)};
+  for (const Eigen::Vector3d& axis : axes) {
+    for (const double angle : {0.0, 1e-12, 1e-10, 1e-8, 1e-5, 0.3}) {
+      const TriangleMesh cube = turned_cube(a, axis, angle);
+      const PatchSurface surface(cube, "cube");
+      const LevelSet level_set(surface, h);
+      const LevelSet::Probe probe(level_set);
+      const Eigen::Matrix3d back = Eigen::AngleAxisd(-angle, axis.normalized()).toRotationMatrix();
+      int wrong = 0, checked = 0;
+      for (int k = -16; k <= 16; ++k)
+        for (int j = -16; j <= 16; ++j)
+          for (int i = -16; i <= 16; ++i) {
+            const Eigen::Vector3d x(i + 0.25, j + 0.25, k + 0.25);
+            const double inside_by = a - (back * x).cwiseAbs().maxCoeff(); // > 0 inside
+            if (std::abs(inside_by) < 0.5 * h) continue;
+            ++checked;
+            if ((probe(x) < 0.0) != (inside_by > 0.0)) ++wrong;
+          }
+      EXPECT_EQ(wrong, 0) << "axis " << axis.transpose() << ", angle " << angle << ": " << wrong << " of "
+                          << checked << " voxels on the wrong side";
+    }
+  }
+}
+
 // The tissue fractions read each organ at a block's voxel centres, and at a voxel's samples,
 // as lattices where the grid's axes are the world's; they must be the bytes of probing every
 // point one by one (probe_every_sample), on such grids and on oblique ones (point by point),
