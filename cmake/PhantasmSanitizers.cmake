@@ -6,8 +6,8 @@
 # object-size, vptr and pointer-overflow: with g++ they instrument every pointer access and more
 # than double the compile time of template-heavy files (patch_fit.cpp 12 s -> 31 s), while a null
 # dereference and an access outside an object still end the run under ASan (SEGV, heap- or
-# stack-buffer-overflow). The fuzz build (clang, below) keeps the whole of -fsanitize=undefined
-# on the parsers and readers that take hostile input.
+# stack-buffer-overflow). The fuzz targets (fuzz/CMakeLists.txt) are programs of this tree and
+# run with the same checks.
 # clang's "bounds" adds local-bounds, which ends the program on an illegal instruction with no
 # message or stack where ASan would report the overflow with its file and line: clang gets
 # array-bounds, the check g++'s "bounds" makes.
@@ -28,15 +28,4 @@ if(PHANTASM_SANITIZE)
   set(_phantasm_san -fsanitize=address,${_phantasm_ubsan} -fno-omit-frame-pointer -fno-sanitize-recover=all)
   add_compile_options(${_phantasm_san})
   add_link_options(${_phantasm_san})
-endif()
-
-# libFuzzer targets (fuzz/): every file of the build gets the fuzzer's coverage instrumentation
-# and ASan + UBSan; the targets link the fuzzer's main (fuzz/CMakeLists.txt). clang only.
-if(PHANTASM_FUZZ)
-  if(NOT CMAKE_CXX_COMPILER_ID MATCHES "Clang")
-    message(FATAL_ERROR "PHANTASM_FUZZ needs clang (libFuzzer); found ${CMAKE_CXX_COMPILER_ID}")
-  endif()
-  set(PHANTASM_FUZZ_SANITIZERS -fsanitize=address,undefined -fno-sanitize-recover=undefined)
-  add_compile_options(-fsanitize=fuzzer-no-link ${PHANTASM_FUZZ_SANITIZERS} -fno-omit-frame-pointer)
-  add_link_options(${PHANTASM_FUZZ_SANITIZERS})
 endif()

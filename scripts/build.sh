@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Configures and builds one build tree. Usage: scripts/build.sh release|asan|fuzz [TARGET...]
+# Configures and builds one build tree. Usage: scripts/build.sh release|asan [TARGET...]
 # With targets (e.g. `scripts/build.sh release phantasm`) only those and what they link are built;
 # the tree is configured the same way, so a later build without targets (scripts/test.sh) builds
 # the rest in it and keeps what was built.
@@ -7,9 +7,8 @@
 # -O1 with line tables only (-g1): enough for the sanitizers' stack traces, and the build is
 # shorter than with full debug information; compiled by clang 14, which takes less processor time
 # than g++ for the same sanitizers (docs/performance.md, Build and tests). A tree configured
-# earlier keeps its compiler: remove build/asan to rebuild it with clang. fuzz: the libFuzzer
-# targets of fuzz/ with clang (ASan + UBSan, -O1 -g1, assertions on) and only the libraries they
-# link (scripts/fuzz.sh).
+# earlier keeps its compiler: remove build/asan to rebuild it with clang. The asan tree also holds
+# the libFuzzer targets of fuzz/, built only when named (scripts/fuzz.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -20,10 +19,7 @@ case "$kind" in
   asan) flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG"
               -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14
               -DPHANTASM_SANITIZE=ON -DPHANTASM_BUILD_BENCHMARKS=OFF) ;;
-  fuzz) flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1"
-              -DCMAKE_C_COMPILER=clang-14 -DCMAKE_CXX_COMPILER=clang++-14 -DPHANTASM_FUZZ=ON
-              -DPHANTASM_BUILD_TESTS=OFF -DPHANTASM_BUILD_BENCHMARKS=OFF) ;;
-  *) echo "usage: $0 release|asan|fuzz [TARGET...]" >&2; exit 2 ;;
+  *) echo "usage: $0 release|asan [TARGET...]" >&2; exit 2 ;;
 esac
 
 build_dir="build/$kind"

@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
-# Builds the libFuzzer targets (scripts/build.sh fuzz: clang, ASan + UBSan) and runs each for a
+# Builds the libFuzzer targets in the sanitizer tree (scripts/build.sh asan: clang, ASan + UBSan;
+# fuzz/CMakeLists.txt) and runs each for a
 # bounded time on seeds from the repository: the scene target on tests/data/scenes,
 # tests/data/bad-scenes and data-synthetic; the sweep target on tests/data/sweeps and the shipped
 # sweep; the NIfTI and mesh targets on small files fuzz_seeds writes. Prints the inputs each target
 # executed and exits non-zero on any finding (a crash, a sanitizer report, an exception other than
 # InputError, a hang over the timeout, memory beyond the limit); libFuzzer then leaves the input as
-# build/fuzz/findings/<target>/crash-... (rerun it: build/fuzz/fuzz/<target> FILE).
+# build/asan/fuzzing/findings/<target>/crash-... (rerun it: build/asan/fuzz/fuzz_<target> FILE).
 # Usage: scripts/fuzz.sh [SECONDS_PER_TARGET] [TARGET...]   (default 20 s, every target)
-# Inputs that reached new code are kept in build/fuzz/corpus/<target> for the next run.
+# Inputs that reached new code are kept in build/asan/fuzzing/corpus/<target> for the next run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -16,8 +17,15 @@ shift || true
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(scene sweep nifti mesh)
 
-bash scripts/build.sh fuzz
-build=build/fuzz
+# The sanitizer tree holds the targets only when clang compiles it (a tree keeps the compiler it
+# was configured with: scripts/build.sh).
+if [ -f build/asan/CMakeCache.txt ] && ! grep -q '^CMAKE_CXX_COMPILER:[A-Z]*=.*clang' build/asan/CMakeCache.txt; then
+  echo "build/asan was configured with a compiler other than clang and has no fuzz targets: remove it" >&2
+  exit 2
+fi
+bash scripts/build.sh asan fuzz_scene fuzz_sweep fuzz_nifti fuzz_mesh fuzz_seeds
+bin=build/asan/fuzz
+build=build/asan/fuzzing
 seeds=$build/seeds
 rm -rf "$seeds"
 mkdir -p "$seeds"/{scene,sweep}
@@ -27,7 +35,7 @@ for f in data-synthetic/*.yaml; do
 done
 cp tests/data/sweeps/*.yaml "$seeds/sweep/"
 # VTK keeps a few objects alive until exit; the seed writer is no fuzz target.
-ASAN_OPTIONS=detect_leaks=0 "$build/fuzz/fuzz_seeds" "$seeds/nifti" "$seeds/mesh"
+ASAN_OPTIONS=detect_leaks=0 "$bin/fuzz_seeds" "$seeds/nifti" "$seeds/mesh"
 
 # Most input of a target is bounded by its own checks; -max_len keeps a mutated input near the
 # seeds' size (the largest seed is a few kB), where the fuzzer explores faster.
@@ -44,7 +52,7 @@ run_target() {
   local target=$1 corpus=$build/corpus/$1 findings=$build/findings/$1 log=$build/fuzz-$1.log
   mkdir -p "$corpus" "$findings"
   set +e
-  "$build/fuzz/fuzz_$target" -max_total_time="$seconds" -timeout=5 -rss_limit_mb=2048 -max_len=16384 \
+  "$bin/fuzz_$target" -max_total_time="$seconds" -timeout=5 -rss_limit_mb=2048 -max_len=16384 \
     -print_final_stats=1 -artifact_prefix="$findings/" "$corpus" "$seeds/$target" >"$log" 2>&1
   echo $? >"$build/fuzz-$target.code"
 }

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds, and runs the whole test suite optimized, then the fuzz targets
-# for 20 s each (scripts/fuzz.sh: clang, libFuzzer), then the tests
-# labelled "fast" again with AddressSanitizer + UndefinedBehaviorSanitizer. The fast tests cover
+# Installs what is missing, builds, and runs the whole test suite optimized, then builds the
+# sanitizer tree, runs the fuzz targets in it for 20 s each (scripts/fuzz.sh: clang, libFuzzer)
+# and the tests labelled "fast" again with AddressSanitizer + UndefinedBehaviorSanitizer. The fast tests cover
 # the libraries on small inputs; the slow and heavy tests
 # (whole runs of the command, larger models, sweeps) would take most of the CI budget under the
 # sanitizers (see tests/CMakeLists.txt). Arguments go to both ctest runs (e.g. -R Sphere).
@@ -35,11 +35,15 @@ echo "== Release build and tests"
 time bash scripts/build.sh release
 time env GLIBC_TUNABLES="$tunables" ctest --test-dir build/release --output-on-failure --parallel "$jobs" "$@"
 
+echo "== ASan + UBSan build"
+time bash scripts/build.sh asan
+
+# The fuzz targets are part of the sanitizer tree (fuzz/CMakeLists.txt): only their own sources are
+# compiled here.
 echo "== Fuzzing: scene and sweep parsers, NIfTI and mesh readers (clang, libFuzzer, ASan + UBSan)"
 time bash scripts/fuzz.sh 20
 
-echo "== ASan + UBSan build and tests"
-time bash scripts/build.sh asan
+echo "== ASan + UBSan tests"
 # The tree is compiled by clang (scripts/build.sh): its sanitizers print a report's stack with
 # file and line through llvm-symbolizer (the llvm-14 package; scripts/install-deps.sh).
 export ASAN_SYMBOLIZER_PATH=/usr/lib/llvm-14/bin/llvm-symbolizer
