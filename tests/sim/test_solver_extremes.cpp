@@ -15,6 +15,19 @@ using namespace phantasm::bench;
 
 namespace {
 
+/// The cantilever of a material, a time step (0: quasi-static) and end loads (bench/solver_extremes.hpp),
+/// with the scene's default volume term and 4 cells across.
+ExtremeCase extreme_case(double youngs_modulus_Pa, double poisson_ratio, double time_step_s, double push_mm,
+                         double twist_deg = 0.0) {
+  ExtremeCase c;
+  c.youngs_modulus_Pa = youngs_modulus_Pa;
+  c.poisson_ratio = poisson_ratio;
+  c.time_step_s = time_step_s;
+  c.push_mm = push_mm;
+  c.twist_deg = twist_deg;
+  return c;
+}
+
 /// Runs the solvers on a case and checks the property; returns the verdicts. Position-based
 /// solvers are cut at `position_based_iterations` sweeps (a sweep costs far more than a
 /// local/global iteration here; the property holds at any limit).
@@ -48,43 +61,44 @@ std::vector<Verdict> expect_converged_or_warned(const ExtremeCase& c,
 } // namespace
 
 TEST(SolverExtremes, StiffCantileverConvergesToNewtonsField) {
-  const auto v =
-      expect_converged_or_warned({1e9, 0.3, 0.0, 0.0}, {ExtremeSolver::local_global, ExtremeSolver::newton});
+  const auto v = expect_converged_or_warned(extreme_case(1e9, 0.3, 0.0, 0.0),
+                                            {ExtremeSolver::local_global, ExtremeSolver::newton});
   EXPECT_EQ(v[1], Verdict::converged_and_right);
 }
 
 TEST(SolverExtremes, SoftCantileverThatInvertsIsWarned) {
-  const auto v =
-      expect_converged_or_warned({1e3, 0.3, 0.0, 0.0}, {ExtremeSolver::local_global, ExtremeSolver::newton});
+  const auto v = expect_converged_or_warned(extreme_case(1e3, 0.3, 0.0, 0.0),
+                                            {ExtremeSolver::local_global, ExtremeSolver::newton});
   EXPECT_EQ(v[0], Verdict::warned);
   EXPECT_EQ(v[1], Verdict::warned);
 }
 
 TEST(SolverExtremes, NearlyIncompressibleCantileverConvergesOrWarns) {
-  const auto v = expect_converged_or_warned({1e5, 0.4999, 0.0, 0.0},
+  const auto v = expect_converged_or_warned(extreme_case(1e5, 0.4999, 0.0, 0.0),
                                             {ExtremeSolver::local_global, ExtremeSolver::newton});
   EXPECT_EQ(v[1], Verdict::converged_and_right);
 }
 
 TEST(SolverExtremes, TinyTimeStepEverySolver) {
-  expect_converged_or_warned({1e5, 0.3, 1e-6, 0.0},
+  expect_converged_or_warned(extreme_case(1e5, 0.3, 1e-6, 0.0),
                              {ExtremeSolver::local_global, ExtremeSolver::jacobi_chebyshev,
                               ExtremeSolver::newton, ExtremeSolver::xpbd, ExtremeSolver::gauss_seidel_pbd});
 }
 
 TEST(SolverExtremes, ModerateTimeStepEverySolver) {
-  expect_converged_or_warned({1e5, 0.3, 1e-2, 0.0},
+  expect_converged_or_warned(extreme_case(1e5, 0.3, 1e-2, 0.0),
                              {ExtremeSolver::local_global, ExtremeSolver::jacobi_chebyshev,
                               ExtremeSolver::newton, ExtremeSolver::xpbd, ExtremeSolver::gauss_seidel_pbd});
 }
 
 TEST(SolverExtremes, LongTimeStepConvergesToNewtonsField) {
-  expect_converged_or_warned({1e5, 0.3, 10.0, 0.0},
+  expect_converged_or_warned(extreme_case(1e5, 0.3, 10.0, 0.0),
                              {ExtremeSolver::local_global, ExtremeSolver::jacobi_chebyshev});
 }
 
 TEST(SolverExtremes, EndPushedTowardsTheHeldEndConvergesOrWarns) {
-  expect_converged_or_warned({1e5, 0.3, 0.0, 90.0}, {ExtremeSolver::local_global, ExtremeSolver::newton});
+  expect_converged_or_warned(extreme_case(1e5, 0.3, 0.0, 90.0),
+                             {ExtremeSolver::local_global, ExtremeSolver::newton});
 }
 
 // Displacement loads on a slender body (#44): the springs set the force scale, the bar's soft
@@ -93,19 +107,19 @@ TEST(SolverExtremes, EndPushedTowardsTheHeldEndConvergesOrWarns) {
 // result within a thousandth of the largest displacement) makes "converged" mean converged.
 
 TEST(SolverExtremes, TwistedCantileverMatchesNewtonOrWarns) {
-  const auto v = expect_converged_or_warned({1e5, 0.3, 0.0, 0.0, 90.0},
+  const auto v = expect_converged_or_warned(extreme_case(1e5, 0.3, 0.0, 0.0, 90.0),
                                             {ExtremeSolver::local_global, ExtremeSolver::newton});
   EXPECT_EQ(v[0], Verdict::converged_and_right);
   EXPECT_EQ(v[1], Verdict::converged_and_right);
 }
 
 TEST(SolverExtremes, NearlyIncompressibleTwistedCantileverMatchesNewtonOrWarns) {
-  expect_converged_or_warned({1e5, 0.499, 0.0, 0.0, 90.0}, {ExtremeSolver::local_global});
+  expect_converged_or_warned(extreme_case(1e5, 0.499, 0.0, 0.0, 90.0), {ExtremeSolver::local_global});
 }
 
 TEST(SolverExtremes, ResidualTestAloneStopsTheTwistedCantileverShortOfNewton) {
   // Why the distance test exists: without it the same solve stops far from the equilibrium.
-  const ExtremeCase c{1e5, 0.3, 0.0, 0.0, 90.0};
+  const ExtremeCase c = extreme_case(1e5, 0.3, 0.0, 0.0, 90.0);
   const ExtremeCantilever k = extreme_cantilever(c);
   StopCriteria residual_only = k.stop;
   residual_only.relative_distance = 0.0;
@@ -124,7 +138,7 @@ TEST(SolverExtremes, PushedCantileverConvergesOrWarns) {
   // Pushed 60 mm towards its held end the bar folds (tets invert: warned). The residual test
   // alone stopped local/global after 8 iterations at 0.88 J, more than four times the energy of
   // the equilibria Newton finds, and called it converged.
-  const ExtremeCase c{1e5, 0.3, 0.0, 60.0};
+  const ExtremeCase c = extreme_case(1e5, 0.3, 0.0, 60.0);
   const ExtremeCantilever k = extreme_cantilever(c);
   StopCriteria residual_only = k.stop;
   residual_only.relative_distance = 0.0;
@@ -142,7 +156,8 @@ TEST(SolverExtremes, StraightPushedBarLeavesTheUnstableEquilibrium) {
   // finds the direction that lowers the energy, leaves, lands where Newton does, and says so.
   // Per tet: with the bulk term on groups of tets (the default) local/global's path already
   // leaves the straight bar by itself, and the escape is what this test checks.
-  const ExtremeCase c{1e5, 0.3, 0.0, 20.0, 0.0, VolumeFormulation::tet};
+  ExtremeCase c = extreme_case(1e5, 0.3, 0.0, 20.0);
+  c.volume = VolumeFormulation::tet;
   ExtremeCantilever k = extreme_cantilever(c);
   k.model.external_forces_N.setZero();
   auto lateral_mm = [&](const Eigen::MatrixX3d& p) {
