@@ -63,6 +63,19 @@ struct ExtremeCase {
   int cells_across = 4;                    ///< the bar's cells across (5 times as many along it)
 };
 
+/// The case of a material, a time step (0: quasi-static) and end loads, with the scene's default
+/// volume term and 4 cells across.
+inline ExtremeCase extreme_case(double youngs_modulus_Pa, double poisson_ratio, double time_step_s,
+                                double push_mm, double twist_deg = 0.0) {
+  ExtremeCase c;
+  c.youngs_modulus_Pa = youngs_modulus_Pa;
+  c.poisson_ratio = poisson_ratio;
+  c.time_step_s = time_step_s;
+  c.push_mm = push_mm;
+  c.twist_deg = twist_deg;
+  return c;
+}
+
 /// The cantilever of a case as the deformation stage would build it.
 struct ExtremeCantilever {
   ElasticModel model;

@@ -15,19 +15,6 @@ using namespace phantasm::bench;
 
 namespace {
 
-/// The cantilever of a material, a time step (0: quasi-static) and end loads (bench/solver_extremes.hpp),
-/// with the scene's default volume term and 4 cells across.
-ExtremeCase extreme_case(double youngs_modulus_Pa, double poisson_ratio, double time_step_s, double push_mm,
-                         double twist_deg = 0.0) {
-  ExtremeCase c;
-  c.youngs_modulus_Pa = youngs_modulus_Pa;
-  c.poisson_ratio = poisson_ratio;
-  c.time_step_s = time_step_s;
-  c.push_mm = push_mm;
-  c.twist_deg = twist_deg;
-  return c;
-}
-
 /// Runs the solvers on a case and checks the property; returns the verdicts. Position-based
 /// solvers are cut at `position_based_iterations` sweeps (a sweep costs far more than a
 /// local/global iteration here; the property holds at any limit).
