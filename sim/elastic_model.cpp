@@ -146,9 +146,9 @@ Eigen::Matrix3d tet_stress(const ElasticModel& model, const TetElement& e, const
   Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
   const SignedSvd svd = signed_svd(F, rotation);
   const SingularValueEnergy strain =
-      singular_value_energy(TetConstraintKind::strain, model.strain_range, e.strain_weight, svd.sigma);
+      singular_value_energy(TetConstraintKind::strain, model.strain_range, e.strain_weight, svd.sigma, false);
   const SingularValueEnergy volume =
-      singular_value_energy(TetConstraintKind::volume, model.volume_range, e.volume_weight, svd.sigma);
+      singular_value_energy(TetConstraintKind::volume, model.volume_range, e.volume_weight, svd.sigma, false);
   *energy = strain.value + volume.value;
   return svd.U * (strain.gradient + volume.gradient).asDiagonal() * svd.V.transpose();
 }
@@ -159,9 +159,43 @@ Eigen::Matrix3d group_stress(const ElasticModel& model, const TetGroup& g, const
   Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
   const SignedSvd svd = signed_svd(F, rotation);
   const SingularValueEnergy volume =
-      singular_value_energy(TetConstraintKind::volume, model.volume_range, g.weight, svd.sigma);
+      singular_value_energy(TetConstraintKind::volume, model.volume_range, g.weight, svd.sigma, false);
   *energy = volume.value;
   return svd.U * volume.gradient.asDiagonal() * svd.V.transpose();
+}
+
+/// Every tet's and tet group's stress and energy at p. Each element's own SVD and projections
+/// (most of an energy or gradient evaluation) in parallel, each into its slot: the callers sum
+/// and scatter them in element order, so their results do not depend on the number of threads.
+struct ElementStresses {
+  std::vector<Eigen::Matrix3d> tets, groups;
+  std::vector<double> tet_energies, group_energies;
+};
+
+ElementStresses element_stresses(const ElasticModel& model, const Eigen::MatrixX3d& p) {
+  ElementStresses s;
+  const auto tets = static_cast<std::ptrdiff_t>(model.tets.size());
+  const auto groups = static_cast<std::ptrdiff_t>(model.tet_groups.size());
+  s.tets.resize(model.tets.size());
+  s.tet_energies.resize(model.tets.size());
+  s.groups.resize(model.tet_groups.size());
+  s.group_energies.resize(model.tet_groups.size());
+#pragma omp parallel if (tets + groups > 1024)
+  {
+#pragma omp for schedule(static) nowait
+    for (std::ptrdiff_t t = 0; t < tets; ++t) {
+      const auto i = static_cast<std::size_t>(t);
+      const TetElement& e = model.tets[i];
+      s.tets[i] = tet_stress(model, e, deformation_gradient(e, p), &s.tet_energies[i]);
+    }
+#pragma omp for schedule(static)
+    for (std::ptrdiff_t c = 0; c < groups; ++c) {
+      const auto i = static_cast<std::size_t>(c);
+      const TetGroup& g = model.tet_groups[i];
+      s.groups[i] = group_stress(model, g, group_deformation_gradient(g, p), &s.group_energies[i]);
+    }
+  }
+  return s;
 }
 
 } // namespace
@@ -173,16 +207,11 @@ double model_energy(const ElasticModel& model, const StepInertia& inertia, const
               (model.masses_kg.asDiagonal() * (p - inertia.target_m).rowwise().squaredNorm()).sum();
   }
   if (model.external_forces_N.rows() == p.rows()) energy -= model.external_forces_N.cwiseProduct(p).sum();
-  for (const TetElement& e : model.tets) {
-    double tet = 0.0;
-    tet_stress(model, e, deformation_gradient(e, p), &tet);
+  const ElementStresses stresses = element_stresses(model, p);
+  for (double tet : stresses.tet_energies)
     energy += tet;
-  }
-  for (const TetGroup& g : model.tet_groups) {
-    double group = 0.0;
-    group_stress(model, g, group_deformation_gradient(g, p), &group);
+  for (double group : stresses.group_energies)
     energy += group;
-  }
   for (const SurfaceElement& e : model.surfaces) {
     const SurfaceMatrix F = surface_deformation(e, p);
     energy += 0.5 * e.weight * (F - project_surface(e, F)).squaredNorm(); // unused columns are 0
@@ -208,17 +237,17 @@ Eigen::MatrixX3d model_gradient(const ElasticModel& model, const StepInertia& in
   Eigen::MatrixX3d g = Eigen::MatrixX3d::Zero(p.rows(), 3);
   if (inertia.weight > 0.0) g += inertia.weight * (model.masses_kg.asDiagonal() * (p - inertia.target_m));
   if (model.external_forces_N.rows() == p.rows()) g -= model.external_forces_N;
-  for (const TetElement& e : model.tets) {
-    double unused = 0.0;
-    const Eigen::Matrix3d P = tet_stress(model, e, deformation_gradient(e, p), &unused);
+  const ElementStresses stresses = element_stresses(model, p);
+  for (std::size_t t = 0; t < model.tets.size(); ++t) {
+    const TetElement& e = model.tets[t];
     // dE/dX = P Q^T: column k is the force on vertex k.
-    const Eigen::Matrix<double, 3, 4> forces = P * e.Q.transpose();
+    const Eigen::Matrix<double, 3, 4> forces = stresses.tets[t] * e.Q.transpose();
     for (int k = 0; k < 4; ++k)
       g.row(e.vertices[static_cast<std::size_t>(k)]) += forces.col(k).transpose();
   }
-  for (const TetGroup& group : model.tet_groups) {
-    double unused = 0.0;
-    const Eigen::Matrix3d P = group_stress(model, group, group_deformation_gradient(group, p), &unused);
+  for (std::size_t i = 0; i < model.tet_groups.size(); ++i) {
+    const TetGroup& group = model.tet_groups[i];
+    const Eigen::Matrix3d& P = stresses.groups[i];
     for (std::size_t k = 0; k < group.vertices.size(); ++k) // dE/dX = P G^T
       g.row(group.vertices[k]) += (P * group.G.row(static_cast<Eigen::Index>(k)).transpose()).transpose();
   }

@@ -111,7 +111,7 @@ Eigen::Vector2d project_area(const Eigen::Vector2d& sigma, const SingularValueRa
 }
 
 SingularValueEnergy singular_value_energy(TetConstraintKind kind, const SingularValueRange& range,
-                                          double weight, const Eigen::Vector3d& sigma) {
+                                          double weight, const Eigen::Vector3d& sigma, bool with_hessian) {
   auto project = [&](const Eigen::Vector3d& x) {
     return kind == TetConstraintKind::strain ? project_strain(x, range) : project_volume(x, range);
   };
@@ -119,6 +119,7 @@ SingularValueEnergy singular_value_energy(TetConstraintKind kind, const Singular
   const Eigen::Vector3d d = sigma - project(sigma);
   e.value = 0.5 * weight * d.squaredNorm();
   e.gradient = weight * d;
+  if (!with_hessian) return e;
   if (kind == TetConstraintKind::strain) {
     for (int k = 0; k < 3; ++k)
       e.hessian(k, k) = (sigma[k] < range.min || sigma[k] > range.max) ? weight : 0.0;

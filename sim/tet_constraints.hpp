@@ -39,8 +39,12 @@ struct SingularValueEnergy {
   Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
 };
 
+/// @param with_hessian false: the value and gradient only, the Hessian left zero (the volume
+///        set's Hessian takes six more projections, by central differences: most of the cost of an
+///        energy or gradient evaluation, which never reads it)
 SingularValueEnergy singular_value_energy(TetConstraintKind kind, const SingularValueRange& range,
-                                          double weight, const Eigen::Vector3d& sigma);
+                                          double weight, const Eigen::Vector3d& sigma,
+                                          bool with_hessian = true);
 
 /// The 9x9 Hessian of an isotropic energy with respect to vec(F) (column-major), made positive
 /// semi-definite by clamping its eigenvalues at 0: the closed-form eigensystem of isotropic
