@@ -19,6 +19,22 @@ double box_distance_squared(const Eigen::Vector3d& x, const Eigen::Vector3d& lo,
   return (lo - x).cwiseMax(x - hi).cwiseMax(0.0).squaredNorm();
 }
 
+/// Squared distance between the boxes [lo_a, hi_a] and [lo_b, hi_b] (0 where they overlap). For
+/// a point x inside box a it is at most box_distance_squared(x, lo_b, hi_b), in floating point too
+/// (rounding is monotone).
+double box_box_distance_squared(const Eigen::Vector3d& lo_a, const Eigen::Vector3d& hi_a,
+                                const Eigen::Vector3d& lo_b, const Eigen::Vector3d& hi_b) {
+  return (lo_a - hi_b).cwiseMax(lo_b - hi_a).cwiseMax(0.0).squaredNorm();
+}
+
+/// 1e-9 of the scale of the coordinates (the query's and the mesh's): the rounding of a plane's
+/// or a closest point's distance is about 1e-16 of it.
+double rounding_margin(const Eigen::Vector3d& x, const Eigen::Vector3d& mesh_min,
+                       const Eigen::Vector3d& mesh_max) {
+  return 1e-9 * (1.0 + x.cwiseAbs().maxCoeff() +
+                 std::max(mesh_min.cwiseAbs().maxCoeff(), mesh_max.cwiseAbs().maxCoeff()));
+}
+
 std::vector<std::array<int, 3>> triangle_list(const Eigen::MatrixX3i& faces) {
   std::vector<std::array<int, 3>> triangles(static_cast<std::size_t>(faces.rows()));
   for (Eigen::Index t = 0; t < faces.rows(); ++t)
@@ -206,14 +222,29 @@ MeshClosestPoint SignedDistanceMesh::scan(const Eigen::Vector3d& x) const {
   return best;
 }
 
+void SignedDistanceMesh::visit(const Eigen::Vector3d& x, const TreeTriangle& tt, double margin,
+                               MeshClosestPoint& best) const {
+  if (box_distance_squared(x, tt.lo, tt.hi) > best.distance_squared) return;
+  // The plane's distance bounds the triangle's from below. A triangle is passed over only when
+  // its plane lies farther than the best by a margin far above the rounding of both (`margin`):
+  // ties and near ties, at any distance (a point on the surface has many), still go through the
+  // closest point's own arithmetic.
+  const double plane = std::abs(tt.normal.dot(x - tt.corners[0])) - margin;
+  if (plane > 0.0 && plane * plane > best.distance_squared) return;
+  const auto& v = tt.corners;
+  const TriangleClosestPoint c = closest_point_on_triangle(x, v[0], v[1], v[2]);
+  const double d = (c.point - x).squaredNorm();
+  // Equal distances (a shared edge or vertex) keep the lower triangle index: the answer is
+  // scan()'s whatever the visiting order.
+  if (d < best.distance_squared || (d == best.distance_squared && tt.triangle < best.triangle))
+    best = {tt.triangle, c, d};
+}
+
 MeshClosestPoint SignedDistanceMesh::search_tree(const Eigen::Vector3d& x, MeshClosestPoint best) const {
   // Branch and bound, nearer child first: a box farther than the best so far cannot hold a
   // closer point (one exactly as far may hold a tie of lower index, which wins as in scan()).
   // The cost grows with log #F, not with the distance to the surface.
-  // 1e-9 of the scale of the coordinates (the query's and the mesh's): the rounding of a plane's
-  // or a closest point's distance is about 1e-16 of it.
-  const double margin = 1e-9 * (1.0 + x.cwiseAbs().maxCoeff() +
-                                std::max(m_min.cwiseAbs().maxCoeff(), m_max.cwiseAbs().maxCoeff()));
+  const double margin = rounding_margin(x, m_min, m_max);
   std::array<int, 128> stack{};
   int size = 0;
   stack[static_cast<std::size_t>(size++)] = 0;
@@ -222,22 +253,7 @@ MeshClosestPoint SignedDistanceMesh::search_tree(const Eigen::Vector3d& x, MeshC
     if (box_distance_squared(x, node.lo, node.hi) > best.distance_squared) continue;
     if (node.first_child < 0) {
       for (int i = node.begin; i < node.end; ++i) {
-        const TreeTriangle& tt = m_tree_triangles[static_cast<std::size_t>(i)];
-        const auto t = static_cast<std::size_t>(tt.triangle);
-        if (box_distance_squared(x, tt.lo, tt.hi) > best.distance_squared) continue;
-        // The plane's distance bounds the triangle's from below. A triangle is passed over only
-        // when its plane lies farther than the best by a margin far above the rounding of both
-        // (`margin`): ties and near ties, at any distance (a point on the surface has many),
-        // still go through the closest point's own arithmetic.
-        const double plane = std::abs(tt.normal.dot(x - tt.corners[0])) - margin;
-        if (plane > 0.0 && plane * plane > best.distance_squared) continue;
-        const auto& v = tt.corners;
-        const TriangleClosestPoint c = closest_point_on_triangle(x, v[0], v[1], v[2]);
-        const double d = (c.point - x).squaredNorm();
-        // Equal distances (a shared edge or vertex) keep the lower triangle index: the answer
-        // is scan()'s whatever the visiting order.
-        if (d < best.distance_squared || (d == best.distance_squared && static_cast<int>(t) < best.triangle))
-          best = {static_cast<int>(t), c, d};
+        visit(x, m_tree_triangles[static_cast<std::size_t>(i)], margin, best);
       }
       continue;
     }
@@ -249,6 +265,61 @@ MeshClosestPoint SignedDistanceMesh::search_tree(const Eigen::Vector3d& x, MeshC
     // Pushed far child first, so the near one is searched first.
     stack[static_cast<std::size_t>(size++)] = da <= db ? b : a;
     stack[static_cast<std::size_t>(size++)] = da <= db ? a : b;
+  }
+  return best;
+}
+
+void SignedDistanceMesh::near_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                                  NearTriangles& near) const {
+  near.entries.clear();
+  if (m_nodes.empty()) return;
+  const MeshClosestPoint centre = search_tree(0.5 * (lo + hi), MeshClosestPoint{});
+  const auto& v = m_corners[static_cast<std::size_t>(centre.triangle)];
+  double reach_squared = 0.0;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Eigen::Vector3d x((corner & 1) ? hi.x() : lo.x(), (corner & 2) ? hi.y() : lo.y(),
+                            (corner & 4) ? hi.z() : lo.z());
+    reach_squared =
+        std::max(reach_squared, (closest_point_on_triangle(x, v[0], v[1], v[2]).point - x).squaredNorm());
+  }
+  // Widened far beyond the rounding of the distances (a triangle more costs a box test).
+  const double reach =
+      std::sqrt(reach_squared) + rounding_margin(hi.cwiseAbs().cwiseMax(lo.cwiseAbs()), m_min, m_max);
+  reach_squared = reach * reach;
+  std::array<int, 128> stack{};
+  int size = 0;
+  stack[static_cast<std::size_t>(size++)] = 0;
+  while (size > 0) {
+    const SearchNode& node = m_nodes[static_cast<std::size_t>(stack[static_cast<std::size_t>(--size)])];
+    if (box_box_distance_squared(lo, hi, node.lo, node.hi) > reach_squared) continue;
+    if (node.first_child < 0) {
+      for (int i = node.begin; i < node.end; ++i) {
+        const TreeTriangle& tt = m_tree_triangles[static_cast<std::size_t>(i)];
+        const double d = box_box_distance_squared(lo, hi, tt.lo, tt.hi);
+        if (d <= reach_squared) near.entries.push_back({d, i});
+      }
+      continue;
+    }
+    stack[static_cast<std::size_t>(size++)] = node.first_child + 1;
+    stack[static_cast<std::size_t>(size++)] = node.first_child;
+  }
+  std::sort(near.entries.begin(), near.entries.end(),
+            [&](const NearTriangles::Entry& a, const NearTriangles::Entry& b) {
+              return a.block_distance_squared < b.block_distance_squared ||
+                     (a.block_distance_squared == b.block_distance_squared &&
+                      m_tree_triangles[static_cast<std::size_t>(a.position)].triangle <
+                          m_tree_triangles[static_cast<std::size_t>(b.position)].triangle);
+            });
+}
+
+MeshClosestPoint SignedDistanceMesh::closest(const Eigen::Vector3d& x, const NearTriangles& near) const {
+  // search_tree()'s tests on the same triangles (visit()).
+  const double margin = rounding_margin(x, m_min, m_max);
+  MeshClosestPoint best;
+  for (const NearTriangles::Entry& e : near.entries) {
+    // The rest lie at least as far from x as from the block that holds it.
+    if (e.block_distance_squared > best.distance_squared) break;
+    visit(x, m_tree_triangles[static_cast<std::size_t>(e.position)], margin, best);
   }
   return best;
 }

@@ -54,6 +54,28 @@ public:
   /// closest(x)'s, ties included. A hint of -1 is no guess.
   MeshClosestPoint closest(const Eigen::Vector3d& x, int hint) const;
 
+  /// The triangles a block of query points needs (near_box()), for closest(x, near) at each
+  /// point of the block: a buffer to reuse between blocks.
+  struct NearTriangles {
+    struct Entry {
+      double block_distance_squared; ///< between the triangle's bounding box and the block, mm^2
+      int position;                  ///< in the search tree's order
+    };
+    std::vector<Entry> entries;
+  };
+
+  /// Gathers into `near` the triangles that may hold the closest point of some point of the box
+  /// [lo, hi] (after build_search_tree()): those whose bounding boxes lie within the box's reach,
+  /// the largest distance from a corner of the box to the triangle closest to its centre (the
+  /// distance to a triangle is convex, so no point of the box lies farther from it), in order of
+  /// their boxes' distance to the block (ties by triangle index).
+  void near_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, NearTriangles& near) const;
+  /// closest(x)'s answer, ties included, for x in the box `near` was gathered for: its triangles
+  /// in order, up to the first whose box lies farther from the block than the best so far.
+  /// Voxels of one block share most of their search this way (a closest() each opens the tree
+  /// from its root).
+  MeshClosestPoint closest(const Eigen::Vector3d& x, const NearTriangles& near) const;
+
   /// The pseudonormal of the feature a closest point lies on (not unit length except on a face;
   /// zero for a degenerate face).
   Eigen::Vector3d pseudonormal(const MeshClosestPoint& c) const;
@@ -113,6 +135,8 @@ private:
     int triangle;
   };
   std::vector<TreeTriangle> m_tree_triangles;
+  /// Makes tt the best when it holds a closer point of x (or one as close, of lower index).
+  void visit(const Eigen::Vector3d& x, const TreeTriangle& tt, double margin, MeshClosestPoint& best) const;
 };
 
 } // namespace phantasm

@@ -262,3 +262,49 @@ TEST(MeshSignedDistance, AHintedSearchGivesTheSameAnswerTiesIncluded) {
     previous = expected.triangle;
   }
 }
+
+TEST(MeshSignedDistance, ABlockSearchGivesEachPointTheTreesAnswerTiesIncluded) {
+  // Blocks of points as the level sets search them (a box of voxels, then each voxel among the
+  // triangles near_box() gathered): on the surface, across it, inside and far outside, and
+  // blocks holding vertices and edge midpoints, where triangles tie and the lowest index wins.
+  const Mesh sphere = icosphere(4, 20.0);
+  const SignedDistanceMesh tree = distance_mesh(sphere, true);
+  std::mt19937 random(5);
+  std::uniform_real_distribution<double> radius(0.0, 40.0), size(0.0, 6.0), unit(0.0, 1.0);
+  SignedDistanceMesh::NearTriangles near;
+  std::size_t gathered = 0;
+  int blocks = 0;
+  const auto check_block = [&](const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                               const std::vector<Eigen::Vector3d>& extra) {
+    tree.near_box(lo, hi, near);
+    gathered += near.entries.size();
+    ++blocks;
+    std::vector<Eigen::Vector3d> points = extra;
+    for (int i = 0; i < 20; ++i)
+      points.push_back(lo +
+                       (hi - lo).cwiseProduct(Eigen::Vector3d(unit(random), unit(random), unit(random))));
+    for (int corner = 0; corner < 8; ++corner)
+      points.emplace_back((corner & 1) ? hi.x() : lo.x(), (corner & 2) ? hi.y() : lo.y(),
+                          (corner & 4) ? hi.z() : lo.z());
+    for (const Eigen::Vector3d& x : points) {
+      const MeshClosestPoint expected = tree.closest(x), found = tree.closest(x, near);
+      ASSERT_EQ(found.triangle, expected.triangle) << x.transpose();
+      EXPECT_EQ(found.distance_squared, expected.distance_squared) << x.transpose();
+      EXPECT_EQ(found.on_triangle.point, expected.on_triangle.point) << x.transpose();
+      EXPECT_EQ(found.on_triangle.feature, expected.on_triangle.feature) << x.transpose();
+    }
+  };
+  for (int b = 0; b < 200; ++b) {
+    const Eigen::Vector3d lo = radius(random) * random_direction(random);
+    check_block(lo, lo + Eigen::Vector3d(size(random), size(random), size(random)), {});
+  }
+  for (Eigen::Index f = 0; f < sphere.faces.rows(); f += 41) {
+    const Eigen::Vector3d a = sphere.vertices.row(sphere.faces(f, 0)).transpose(),
+                          b = sphere.vertices.row(sphere.faces(f, 1)).transpose();
+    const Eigen::Vector3d middle = 0.5 * (a + b);
+    check_block(a.cwiseMin(middle) - Eigen::Vector3d::Constant(1.0),
+                a.cwiseMax(middle) + Eigen::Vector3d::Constant(1.0), {a, middle, 1.01 * a, 0.99 * middle});
+  }
+  // The point of blocks: each gathers a small part of the mesh.
+  EXPECT_LT(static_cast<double>(gathered) / blocks, 0.25 * static_cast<double>(sphere.faces.rows()));
+}
