@@ -313,6 +313,8 @@ void SignedDistanceMesh::near_box(const Eigen::Vector3d& lo, const Eigen::Vector
 }
 
 MeshClosestPoint SignedDistanceMesh::closest(const Eigen::Vector3d& x, const NearTriangles& near) const {
+  // Nothing gathered (no search tree): the answer of closest(x) itself.
+  if (near.entries.empty()) return closest(x);
   // search_tree()'s tests on the same triangles (visit()).
   const double margin = rounding_margin(x, m_min, m_max);
   MeshClosestPoint best;

@@ -68,7 +68,8 @@ public:
   /// [lo, hi] (after build_search_tree()): those whose bounding boxes lie within the box's reach,
   /// the largest distance from a corner of the box to the triangle closest to its centre (the
   /// distance to a triangle is convex, so no point of the box lies farther from it), in order of
-  /// their boxes' distance to the block (ties by triangle index).
+  /// their boxes' distance to the block (ties by triangle index). Without a search tree, none
+  /// (closest(x, near) then searches as closest(x)).
   void near_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, NearTriangles& near) const;
   /// closest(x)'s answer, ties included, for x in the box `near` was gathered for: its triangles
   /// in order, up to the first whose box lies farther from the block than the best so far.

@@ -305,6 +305,14 @@ TEST(MeshSignedDistance, ABlockSearchGivesEachPointTheTreesAnswerTiesIncluded) {
     check_block(a.cwiseMin(middle) - Eigen::Vector3d::Constant(1.0),
                 a.cwiseMax(middle) + Eigen::Vector3d::Constant(1.0), {a, middle, 1.01 * a, 0.99 * middle});
   }
+  // Without a search tree nothing is gathered, and each point is searched as closest(x) does.
+  const SignedDistanceMesh scanned = distance_mesh(sphere, false);
+  scanned.near_box(Eigen::Vector3d::Constant(-1.0), Eigen::Vector3d::Constant(1.0), near);
+  EXPECT_TRUE(near.entries.empty());
+  for (const Eigen::Vector3d& x : {Eigen::Vector3d(0.5, -0.5, 0.0), Eigen::Vector3d(19.0, 1.0, 0.5)}) {
+    EXPECT_EQ(scanned.closest(x, near).triangle, tree.closest(x).triangle) << x.transpose();
+    EXPECT_EQ(scanned.closest(x, near).distance_squared, tree.closest(x).distance_squared) << x.transpose();
+  }
   // The point of blocks: each gathers a small part of the mesh.
   EXPECT_LT(static_cast<double>(gathered) / blocks, 0.25 * static_cast<double>(sphere.faces.rows()));
 }
