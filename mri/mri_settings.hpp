@@ -63,7 +63,13 @@ struct TissueRegionSettings {
   std::string organ;  ///< an organ whose shape is a label volume of an atlas
   std::string label;  ///< a label name of that atlas
   std::string tissue; ///< a tissue of the built-in table or of the scene's tissues section
+  std::string name;   ///< its dseg name; empty: the label's (region_name)
 };
+
+/// A region's dseg name: its own name, or its atlas label's.
+inline const std::string& region_name(const TissueRegionSettings& region) {
+  return region.name.empty() ? region.label : region.name;
+}
 
 /// Where a texture's deviations come from.
 enum class TextureSource { none, scan, random };

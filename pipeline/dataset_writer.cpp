@@ -139,7 +139,7 @@ std::string dseg_table(const Scene& scene) {
   // Tissue regions within organs (tissue_regions), after the gap's index.
   index = first_region_label(scene);
   for (const TissueRegionSettings& region : scene.mri.regions)
-    row(index++, region.label, region.tissue);
+    row(index++, region_name(region), region.tissue);
   return text.str();
 }
 

@@ -52,7 +52,8 @@ void attach_regions(const Scene& scene, const std::map<std::string, AtlasLabelVo
                              r.label + "'");
     }
     TissueRegion region;
-    region.name = r.label;
+    region.name = region_name(r);
+    region.atlas_label = r.label;
     region.organ_label = scene.organs.index_of(r.organ) + 1;
     region.region_value = label->second;
     region.label = first_region_label(scene) + static_cast<std::int32_t>(i);
@@ -68,17 +69,20 @@ void attach_regions(const Scene& scene, const std::map<std::string, AtlasLabelVo
     const std::vector<std::size_t> counts = apply_tissue_regions(v.reference, reference, list);
     std::vector<std::size_t> deformed_counts;
     if (v.deformed && v.motion)
-      deformed_counts =
-          apply_tissue_regions(*v.deformed, carry_labels(v.grid, reference, v.motion->def_to_ref), list);
+      deformed_counts = apply_tissue_regions(
+          *v.deformed,
+          carry_labels(v.grid, held_region_values(v.reference.labels, reference, list), v.motion->def_to_ref),
+          list);
     for (std::size_t k = 0; k < list.size(); ++k) {
       std::string line = "tissue region " + list[k].name + " (dseg " + std::to_string(list[k].label) + ", " +
                          v.tissues[static_cast<std::size_t>(list[k].tissue)] +
                          "): " + std::to_string(counts[k]) + " reference voxels of organ " +
                          scene.organs[static_cast<std::size_t>(list[k].organ_label - 1)].name + " that " +
-                         volume.source + " labels " + list[k].name;
+                         volume.source + " labels " + list[k].atlas_label;
       if (!deformed_counts.empty())
         line += ", " + std::to_string(deformed_counts[k]) +
-                " deformed voxels whose reference position (the exact map, from-ref_to-def) it labels so";
+                " deformed voxels of that organ whose reference position (the exact map, from-ref_to-def) "
+                "lies in the region";
       report.modelled.push_back(line);
       report.accuracy["tissue region " + list[k].name + " reference voxels"] = static_cast<double>(counts[k]);
     }

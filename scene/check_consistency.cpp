@@ -360,11 +360,12 @@ public:
                 "expected a tissue of the built-in table or of the scene's tissues section, found '" +
                     region.tissue + "'");
       }
-      if (!names.insert(region.label).second) {
-        problem(indexed("tissue_regions", i, "label"),
-                "expected a label that names no organ and no other region (it names the region's dseg "
-                "label), found '" +
-                    region.label + "' again");
+      if (!names.insert(region_name(region)).second) {
+        const bool named = !region.name.empty();
+        problem(indexed("tissue_regions", i, named ? "name" : "label"),
+                std::string(named ? "expected a name" : "expected a label (or a name of the region's own)") +
+                    " that names no organ and no other region (it names the region's dseg label), found '" +
+                    region_name(region) + "' again");
       }
       phantom_tissues.push_back(region.tissue);
     }

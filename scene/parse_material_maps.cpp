@@ -11,7 +11,7 @@ void parse_tissue_regions(YamlContext& context, const YAML::Node& node,
                           std::vector<TissueRegionSettings>& regions) {
   if (!node.IsSequence()) {
     context.problem(node, "tissue_regions",
-                    "expected a list of regions {organ, label, tissue}, found " + describe(node));
+                    "expected a list of regions {organ, label, tissue[, name]}, found " + describe(node));
     return;
   }
   for (std::size_t i = 0; i < node.size(); ++i) {
@@ -22,6 +22,8 @@ void parse_tissue_regions(YamlContext& context, const YAML::Node& node,
     if (read_declared_keys(entry, region, {"label"}).count("label"))
       check_name(context, entry.get("label"), entry.child_path("label"), region.label);
     read_declared_keys(entry, region, {"tissue"});
+    if (read_declared_keys(entry, region, {"name"}).count("name"))
+      check_name(context, entry.get("name"), entry.child_path("name"), region.name);
     regions.push_back(region);
   }
 }

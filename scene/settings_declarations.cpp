@@ -441,10 +441,13 @@ const std::vector<SettingField<TissueRegionSettings>>& declared_settings<TissueR
                "the organ the region lies in")
         .required()
         .field("label", &TissueRegionSettings::label, "", "a label of that atlas",
-               "the atlas label that selects the region's voxels (and names its dseg label)")
+               "the atlas label that selects the region's voxels (and names its dseg label unless name does)")
         .required()
         .field("tissue", &TissueRegionSettings::tissue, "", "a tissue", "the region's tissue")
-        .required();
+        .required()
+        .field(
+            "name", &TissueRegionSettings::name, "", "a name",
+            "the region's dseg name, when its label names an organ or another region (default: the label)");
     return d.fields();
   }();
   return fields;
@@ -802,8 +805,8 @@ std::vector<const void*> settings_members(const AcquisitionSettings& s) {
 }
 
 std::vector<const void*> settings_members(const TissueRegionSettings& s) {
-  const auto& [organ, label, tissue] = s;
-  return {&organ, &label, &tissue};
+  const auto& [organ, label, tissue, name] = s;
+  return {&organ, &label, &tissue, &name};
 }
 
 std::vector<const void*> settings_members(const TextureSettings& s) {

@@ -15,8 +15,11 @@ Compares a phantasm dataset's reference-state labels (derivatives/phantasm/sub-X
 The two label sets are mapped through their names: a run label named like a derived label stands
 for it; an organ of the run's scene (derivatives/phantasm/sub-XX/scene.yaml) stands for the
 derived labels of its `label_volume` shape, less those its tissue regions take as labels of their
-own; --map NAME=LABEL+LABEL overrides either. The derived labels are resampled onto the run's grid
-(nearest, through both affines: the same world space, RAS mm).
+own; a tissue region with a name of its own (`name:`) stands for its atlas label. Run labels that
+stand for the same derived labels make one structure, named after the first (the skull organ and
+the region of the scalp's voxels the atlas labels skull: the skull). --map NAME=LABEL+LABEL
+overrides either. The derived labels are resampled onto the run's grid (nearest, through both
+affines: the same world space, RAS mm).
 
 Usage: scripts/structure_fidelity.py DATASET LABELS.nii.gz [--subject 01] [--far-mm 3]
                                      [--map NAME=LABEL+LABEL ...] [--json FILE]
@@ -62,9 +65,11 @@ def scene_mapping(scene_file):
     with open(scene_file) as f:
         scene = yaml.safe_load(f) or {}
     taken = {}
+    mapping = {}
     for region in scene.get("tissue_regions") or []:
         taken.setdefault(region.get("organ"), set()).add(region.get("label"))
-    mapping = {}
+        if region.get("name"):
+            mapping[region["name"]] = [region.get("label")]
     for organ in (scene.get("anatomy") or {}).get("organs") or []:
         shape = organ.get("shape") or {}
         if shape.get("type") != "label_volume":
@@ -141,9 +146,11 @@ def where_far(far, run_labels, run_names, affine, voxel_ml):
 
 
 def structures(run_names, derived_names, mapping):
-    """(run label value, name, derived label values) for every run label the mapping names."""
+    """(run label values, name, derived label values) for every set of derived labels that run labels
+    the mapping names stand for: those run labels united, named after the first."""
     by_name = {name: value for value, name in derived_names.items()}
     rows = []
+    row_of = {}
     for value, name in sorted(run_names.items()):
         if value == 0:
             continue  # the background is no structure
@@ -154,7 +161,13 @@ def structures(run_names, derived_names, mapping):
         if missing:
             raise BadInput(f"structure '{name}': derived label(s) {', '.join(missing)} not in the derived "
                            f"label table (expected one of {', '.join(sorted(by_name))})")
-        rows.append((value, name, [by_name[x] for x in labels]))
+        derived = [by_name[x] for x in labels]
+        key = tuple(sorted(derived))
+        if key in row_of:
+            rows[row_of[key]][0].append(value)
+            continue
+        row_of[key] = len(rows)
+        rows.append(([value], name, derived))
     if not rows:
         raise BadInput("no run label maps onto a derived label: expected names shared by dseg.tsv and the "
                        "derived table, organs of the run's scene.yaml, or --map NAME=LABEL+LABEL")
@@ -199,9 +212,11 @@ def measure(args):
     voxel_ml = float(numpy.prod(spacing)) / 1000.0
     report = {"dataset": os.path.abspath(args.dataset), "labels": os.path.abspath(args.labels),
               "far_mm": args.far_mm, "structures": []}
-    for value, name, derived_values in rows:
-        result, far, run_far = compare(run_labels == value, numpy.isin(derived_labels, derived_values), spacing, args.far_mm)
-        result.update(name=name, derived=[derived_names[v] for v in derived_values])
+    for values, name, derived_values in rows:
+        result, far, run_far = compare(numpy.isin(run_labels, values), numpy.isin(derived_labels, derived_values),
+                                       spacing, args.far_mm)
+        result.update(name=name, derived=[derived_names[v] for v in derived_values],
+                      run=[run_names[v] for v in values])
         result["derived_far"] = where_far(far, run_labels, run_names, run_image.affine, voxel_ml)
         result["run_far"] = where_far(run_far, derived_labels, derived_names, run_image.affine, voxel_ml)
         report["structures"].append(result)

@@ -184,6 +184,22 @@ std::vector<std::size_t> apply_tissue_regions(TissueVolumes& volumes,
   return relabelled;
 }
 
+std::vector<std::int32_t> held_region_values(const std::vector<std::int32_t>& reference_labels,
+                                             const std::vector<std::int32_t>& region_volume,
+                                             const std::vector<TissueRegion>& regions) {
+  if (region_volume.size() != reference_labels.size())
+    throw std::invalid_argument("held_region_values: a region volume of another grid");
+  std::map<std::int32_t, std::int32_t> value_of_label;
+  for (const TissueRegion& region : regions)
+    value_of_label[region.label] = region.region_value;
+  std::vector<std::int32_t> held(region_volume.size(), k_no_region);
+  for (std::size_t v = 0; v < held.size(); ++v) {
+    const auto found = value_of_label.find(reference_labels[v]);
+    if (found != value_of_label.end() && region_volume[v] == found->second) held[v] = found->second;
+  }
+  return held;
+}
+
 namespace {
 
 /// The texture of deviations `deviation` (one per voxel; used only where a textured tissue fills

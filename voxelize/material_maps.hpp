@@ -9,6 +9,7 @@
 #include "voxelize/voxelized_phantom.hpp"
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -51,6 +52,7 @@ struct TissueRegion {
   std::int32_t region_value = 0; ///< the value of the region volume that selects it
   std::int32_t label = 0;        ///< its dseg label
   int tissue = 0;                ///< index into the phantom's tissue list
+  std::string atlas_label;       ///< the name of the atlas label that selects it (for the log)
 };
 
 /// Adds tissue columns to a state's stored fractions so that it holds `tissue_count` tissues (the
@@ -65,6 +67,19 @@ void widen_tissues(TissueVolumes& volumes, int tissue_count);
 std::vector<std::size_t> apply_tissue_regions(TissueVolumes& volumes,
                                               const std::vector<std::int32_t>& region_volume,
                                               const std::vector<TissueRegion>& regions);
+
+/// The region volume the deformed state carries: `region_volume`'s value where the reference
+/// state's voxel took one of `regions` (apply_tissue_regions() run on `reference_labels`), and
+/// k_no_region elsewhere. Carried by the exact map, a deformed voxel of a region's organ takes the
+/// region where its reference position lies in the region, not wherever the atlas labels it so: a
+/// region whose label also lies outside the organ (the cerebrum's voxels the atlas labels csf)
+/// does not grow along the organ's moved surface where the nearest reference voxel is the outer one.
+std::vector<std::int32_t> held_region_values(const std::vector<std::int32_t>& reference_labels,
+                                             const std::vector<std::int32_t>& region_volume,
+                                             const std::vector<TissueRegion>& regions);
+
+/// The value of held_region_values() outside every region: no region's.
+constexpr std::int32_t k_no_region = std::numeric_limits<std::int32_t>::min();
 
 /// How a texture turns a relative deviation d of a tissue's intensity into factors of its T1 and
 /// PD: T1 x exp(-T1_gain d), PD x exp(PD_gain d), d clamped to +-max_deviation.

@@ -97,9 +97,9 @@ TEST(MaterialMapsRun, TextureMovesWithTheTissue) {
 
 // Bad settings: a texture scan that does not cover the anatomy (named, with the tissue), a
 // region's tissue without the values a sequence needs at the field strength, a region of an organ
-// that is not an atlas's, a textured tissue the phantom lacks, spectrum: scan without a random
-// source, a spectrum's scan that does not cover the anatomy, a match naming no sequence or without a
-// texture: exit 2, nothing written.
+// that is not an atlas's, a region named like an organ, a textured tissue the phantom lacks, spectrum: scan
+// without a random source, a spectrum's scan that does not cover the anatomy, a match naming no sequence or
+// without a texture: exit 2, nothing written.
 TEST(MaterialMapsRun, BadTextureAndRegionSettingsAreNamedAndNothingIsWritten) {
   const fs::path root = fresh_folder("texture-bad");
   const fs::path small_scan = smooth_scan(root / "small.nii.gz", 20.0);
@@ -108,6 +108,9 @@ TEST(MaterialMapsRun, BadTextureAndRegionSettingsAreNamedAndNothingIsWritten) {
        {small_scan.string(), "covers the anatomy", "texture.scan"}},
       {"tissue_regions:\n  - {organ: white_matter, label: caudate, tissue: pons}\n",
        {"tissue_regions[0].organ", "label volume of an atlas", "pons", "T1_ms"}},
+      // a region's dseg name that an organ has
+      {"tissue_regions:\n  - {organ: white_matter, label: csf, tissue: csf, name: grey_matter}\n",
+       {"tissue_regions[0].name", "names no organ and no other region", "'grey_matter' again"}},
       {"texture: {source: random, tissues: [bone_marrow]}", {"texture.tissues[0]", "bone_marrow"}},
       {"texture: {source: scan, spectrum: scan}", {"texture.spectrum", "source: random"}},
       {"texture: {source: random, spectrum: scan, scan: " + small_scan.string() + "}",

@@ -179,13 +179,15 @@ TEST(SettingsDeclarations, ProvenanceSectionsAreWrittenFromTheDeclarations) {
   EXPECT_TRUE(settings.at("acquisition").at("acquired_voxel_mm").is_null());
   EXPECT_EQ(settings.at("acquisition").at("image_datatype"), "float32");
   Scene listed;
-  listed.mri.regions = {{"scalp", "subcutaneous_fat", "fat_subcutaneous"}};
+  listed.mri.regions = {{"scalp", "subcutaneous_fat", "fat_subcutaneous", ""},
+                        {"grey_matter", "csf", "csf", "sulcal_csf"}};
   listed.mri.tissues.push_back(TissueOverride{"gel", 1000.0, std::nullopt, std::nullopt, 1.0});
   listed.deformation.materials.push_back(MaterialSettings{"gel", 3000.0, 0.45, 1000.0});
   listed.deformation.collisions.push_back(CollisionSettings{{"a", "b"}});
   const nlohmann::json lists = scene_settings_json(listed);
   EXPECT_EQ(lists.at("tissue_regions").dump(),
-            R"([{"label":"subcutaneous_fat","organ":"scalp","tissue":"fat_subcutaneous"}])");
+            R"([{"label":"subcutaneous_fat","name":"","organ":"scalp","tissue":"fat_subcutaneous"},)"
+            R"({"label":"csf","name":"sulcal_csf","organ":"grey_matter","tissue":"csf"}])");
   EXPECT_EQ(lists.at("tissues").dump(), R"({"gel":{"PD":1.0,"T1_ms":1000.0,"T2_ms":null,"T2star_ms":null}})");
   EXPECT_EQ(lists.at("materials").dump(),
             R"({"gel":{"density_kg_m3":1000.0,"poisson_ratio":0.45,"youngs_modulus_Pa":3000.0}})");

@@ -8,6 +8,9 @@
   one 20 x 20 layer (0.8 ml) of each plate more than 3 mm from the other.
 * An organ of the run's scene.yaml standing for two derived labels, less the one its tissue
   region takes as a label of its own: Dice 1 and HD95 0 for both when the voxels agree.
+* A tissue region with a name of its own standing for its atlas label: the run labels standing for
+  the same derived labels make one structure (the plate split between an organ and a region of
+  another organ matches the derived plate whole).
 * HD95 of random blobs against an independent measure (nearest surface points by a k-d tree).
 * Bad input: exit 2, a message naming what is wrong, nothing written.
 """
@@ -116,6 +119,31 @@ class StructureFidelity(unittest.TestCase):
             self.assertAlmostEqual(rows[name]["dice"], 1.0, places=12)
             self.assertEqual(rows[name]["hd95_mm"], 0.0)
             self.assertEqual(rows[name]["derived_far_ml"], 0.0)
+
+    def test_run_labels_of_the_same_derived_labels_make_one_structure(self):
+        with tempfile.TemporaryDirectory() as folder:
+            dataset, labels = make_inputs(folder)
+            derivatives = os.path.join(dataset, "derivatives", "phantasm")
+            dseg = os.path.join(derivatives, "sub-01", "ses-ref", "anat", "sub-01_ses-ref_dseg.nii.gz")
+            run = numpy.asanyarray(nibabel.load(dseg).dataobj).copy()
+            run[run == 1] = 0
+            run[6:10, 5:25, 5:25] = 1  # the plate organ holds 4 of the derived plate's 6 layers
+            run[10:12, 5:25, 5:25] = 8  # a region of the brain organ the other 2
+            nibabel.save(nibabel.Nifti1Image(run, affine(RUN_ORIGIN)), dseg)
+            write_table(os.path.join(derivatives, "dseg.tsv"), "index",
+                        {1: "plate", 5: "brain", 6: "nuclei", 8: "plate_piece"})
+            with open(os.path.join(derivatives, "sub-01", "scene.yaml"), "a") as f:
+                f.write("  - {organ: brain, label: plate, tissue: bone, name: plate_piece}\n")
+            report_file = os.path.join(folder, "report.json")
+            result = run_script(dataset, labels, "--json", report_file)
+            self.assertEqual(result.returncode, 0, result.stderr)
+            with open(report_file) as f:
+                rows = {row["name"]: row for row in json.load(f)["structures"]}
+        self.assertEqual(sorted(rows), ["brain", "nuclei", "plate"])
+        self.assertEqual(rows["plate"]["run"], ["plate", "plate_piece"])
+        self.assertAlmostEqual(rows["plate"]["dice"], 1.0, places=12)
+        self.assertEqual(rows["plate"]["hd95_mm"], 0.0)
+        self.assertAlmostEqual(rows["plate"]["run_ml"], 2400 * 2 / 1000.0, places=9)
 
     def test_misplaced_volume_counts_what_lies_beyond_the_distance(self):
         run = numpy.zeros((20, 30, 30), bool)

@@ -119,7 +119,7 @@ TEST(MaterialMaps, RegionsRelabelTheirOrgansVoxelsAndMoveTheirFractions) {
   EXPECT_FLOAT_EQ(volumes.fraction(2, 2), 0.0f);
   // Region value 7 within organ 1 becomes label 5 of tissue 2; value 7 in organ 2 stays.
   const std::vector<std::int32_t> region_volume = {7, 7, 7, 7, 0, 7};
-  const std::vector<TissueRegion> regions = {{"marrow", 1, 7, 5, 2}};
+  const std::vector<TissueRegion> regions = {{"marrow", 1, 7, 5, 2, "bone_marrow"}};
   const std::vector<std::size_t> counts = apply_tissue_regions(volumes, region_volume, regions);
   EXPECT_EQ(counts[0], 2u);
   EXPECT_EQ(volumes.labels, (std::vector<std::int32_t>{0, 5, 5, 2, 1, 2}));
@@ -136,6 +136,45 @@ TEST(MaterialMaps, RegionsRelabelTheirOrgansVoxelsAndMoveTheirFractions) {
       sum += volumes.fraction(t, v);
     EXPECT_FLOAT_EQ(sum, 1.0f) << v;
   }
+}
+
+// The deformed state carries a region where the reference state held it, not wherever the atlas
+// labels the region's label: a deformed voxel of the organ whose reference position lies in
+// another organ, on a voxel the atlas labels like the region, keeps the organ's label. Along x:
+// organ 1 holds region 5 (atlas value 7) at x = 2, 3; the atlas also labels 7 at x = 5, 6, in
+// organ 2. The deformed state's organ 1 spans x = 1..5, its points at x + 1 in the reference.
+TEST(MaterialMaps, ADeformedRegionIsWhereTheReferenceHeldIt) {
+  const ImageGrid g = cube_grid(8, 1.0);
+  const auto count = static_cast<std::size_t>(g.voxel_count());
+  const std::vector<std::int32_t> reference_along_x = {0, 1, 5, 5, 1, 2, 2, 0};
+  const std::vector<std::int32_t> atlas_along_x = {0, 0, 7, 7, 0, 7, 7, 0};
+  const std::vector<std::int32_t> deformed_along_x = {0, 1, 1, 1, 1, 1, 2, 0};
+  std::vector<std::int32_t> reference(count), atlas(count), deformed(count);
+  for (std::size_t v = 0; v < count; ++v) {
+    reference[v] = reference_along_x[v % 8];
+    atlas[v] = atlas_along_x[v % 8];
+    deformed[v] = deformed_along_x[v % 8];
+  }
+  const std::vector<TissueRegion> regions = {{"marrow", 1, 7, 5, 2, "bone_marrow"}};
+  const std::vector<std::int32_t> held = held_region_values(reference, atlas, regions);
+  for (std::size_t v = 0; v < count; ++v)
+    ASSERT_EQ(held[v], reference[v] == 5 ? 7 : k_no_region) << v;
+  std::vector<float> u(3 * count, 0.0f);
+  std::fill(u.begin(), u.begin() + static_cast<std::ptrdiff_t>(count), 1.0f); // x + 1 mm
+  std::vector<std::vector<float>> fractions(3, std::vector<float>(count, 0.0f));
+  for (std::size_t v = 0; v < count; ++v)
+    fractions[deformed[v] == 0 ? 2 : static_cast<std::size_t>(deformed[v] - 1)][v] = 1.0f;
+  TissueVolumes volumes = compact_tissue_volumes(deformed, {-1, 0, 1}, fractions);
+  widen_tissues(volumes, 3);
+  TissueVolumes by_atlas = volumes;
+  apply_tissue_regions(volumes, carry_labels(g, held, u), regions);
+  apply_tissue_regions(by_atlas, carry_labels(g, atlas, u), regions);
+  const std::vector<std::int32_t> expected = {0, 5, 5, 1, 1, 1, 2, 0};
+  for (std::size_t v = 0; v < count; ++v)
+    ASSERT_EQ(volumes.labels[v], expected[v % 8]) << v;
+  // Carrying the atlas's labels instead would grow the region where organ 1 moved into organ 2.
+  EXPECT_EQ(by_atlas.labels[4], 5);
+  EXPECT_EQ(by_atlas.labels[5], 5);
 }
 
 // A scan texture gives each textured voxel factors exp(-g1 d) and exp(g2 d) of its deviation d
