@@ -3,7 +3,9 @@ tests/apps/test_material_maps_run.cpp; usable by hand on any dataset made with a
 Argument: the dataset folder. On the deformed grid, every voxel inside the exact mask of the
 from-ref_to-def field (a deformed point x lies at x + u(x) in the reference state) whose reference
 position lies inside one tissue (its 3x3x3 reference neighbourhood has one label, as has its own
-deformed neighbourhood: no partial voxel on either side) compares
+deformed neighbourhood) and holds no partial voxel on either side (the untextured T2 map is
+constant over both neighbourhoods: a voxel whose largest fraction is the label's may still hold a
+little of another tissue, and its fraction-weighted parameters are no texture's) compares
   * the deformed T1 and PD maps with the reference maps warped through the field (trilinear),
   * and, to show that the comparison tells, with the reference maps at the same voxel (no warp).
 Checks: within a tissue the reference maps vary (texture is there); among the voxels that moved
@@ -48,7 +50,13 @@ one_label = (ndimage.maximum_filter(labels_ref, size=3) == ndimage.minimum_filte
 nearest = np.clip(np.rint(reference_ijk).astype(int), 0, np.array(shape)[:, None] - 1)
 labels_def = np.asanyarray(image(sub + "/ses-def/anat/sub-01_ses-def_dseg.nii.gz").dataobj).astype(int)
 one_label_def = ndimage.maximum_filter(labels_def, size=3) == ndimage.minimum_filter(labels_def, size=3)
-inside = one_label[nearest[0], nearest[1], nearest[2]] & one_label_def.reshape(-1) & exact.reshape(-1)
+# No partial voxel: T2 (which no texture varies) constant over both neighbourhoods.
+T2_ref = volume(sub + "/ses-ref/anat/sub-01_ses-ref_T2map.nii.gz")
+T2_def = volume(sub + "/ses-def/anat/sub-01_ses-def_T2map.nii.gz")
+pure_ref = ndimage.maximum_filter(T2_ref, size=3) == ndimage.minimum_filter(T2_ref, size=3)
+pure_def = (ndimage.maximum_filter(T2_def, size=3) == ndimage.minimum_filter(T2_def, size=3)).reshape(-1)
+inside = (one_label[nearest[0], nearest[1], nearest[2]] & one_label_def.reshape(-1) & exact.reshape(-1)
+          & pure_ref[nearest[0], nearest[1], nearest[2]] & pure_def)
 for name in ("T1map", "PDmap"):
     ref = volume(sub + f"/ses-ref/anat/sub-01_ses-ref_{name}.nii.gz")
     deformed = volume(sub + f"/ses-def/anat/sub-01_ses-def_{name}.nii.gz").reshape(-1)
