@@ -155,8 +155,8 @@ def structures(run_names, derived_names, mapping):
         if value == 0:
             continue  # the background is no structure
         labels = mapping.get(name, [name] if name in by_name else None)
-        if labels is None:
-            continue
+        if not labels:
+            continue  # no derived label, or an organ whose every label a tissue region takes
         missing = [x for x in labels if x not in by_name]
         if missing:
             raise BadInput(f"structure '{name}': derived label(s) {', '.join(missing)} not in the derived "

@@ -141,6 +141,10 @@ class StructureFidelity(unittest.TestCase):
                 rows = {row["name"]: row for row in json.load(f)["structures"]}
         self.assertEqual(sorted(rows), ["brain", "nuclei", "plate"])
         self.assertEqual(rows["plate"]["run"], ["plate", "plate_piece"])
+        # An organ whose every label its regions take stands for nothing.
+        self.assertEqual(structure_fidelity.structures({1: "plate", 2: "piece"}, {1: "plate"},
+                                                       {"plate": [], "piece": ["plate"]}),
+                         [([2], "piece", [1])])
         self.assertAlmostEqual(rows["plate"]["dice"], 1.0, places=12)
         self.assertEqual(rows["plate"]["hd95_mm"], 0.0)
         self.assertAlmostEqual(rows["plate"]["run_ml"], 2400 * 2 / 1000.0, places=9)
