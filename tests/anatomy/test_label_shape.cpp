@@ -192,3 +192,68 @@ TEST(LabelShape, AFitThatSkipsSettledSamplesIsTheFitThatEvaluatesEveryOne) {
   }
   EXPECT_GT(bumps, 1000); // the fit moved the surface: the comparison is of fitted heights
 }
+
+namespace {
+
+/// Trilinear interpolation, computed here, of the shape's values at the eight voxel centres
+/// around x (the values at voxel centres are the smoothed labels: the first test).
+double trilinear_of_centres(const ImplicitShape& shape, const ImageGrid& grid, const Eigen::Vector3d& x) {
+  const Eigen::Matrix3d voxel_from_world = grid.world_from_voxel.topLeftCorner<3, 3>().inverse();
+  const Eigen::Vector3d ijk = voxel_from_world * (x - grid.world_from_voxel.topRightCorner<3, 1>());
+  const Eigen::Vector3d base = ijk.array().floor(), t = ijk - base;
+  double total = 0.0;
+  for (int corner = 0; corner < 8; ++corner) {
+    double weight = 1.0;
+    Eigen::Vector3d at;
+    for (int a = 0; a < 3; ++a) {
+      const int offset = (corner >> a) & 1;
+      at[a] = base[a] + offset;
+      weight *= offset ? t[a] : 1.0 - t[a];
+    }
+    total += weight * shape.value(grid.world_from_index(at));
+  }
+  return total;
+}
+
+} // namespace
+
+// value() between voxel centres is the trilinear interpolant of its values at the centres, in
+// the kept box's cells and in those that reach past its faces (where the values outside count as
+// 0, so -1/2), on a grid whose axes are the world's (x flipped, as an RAS atlas stored LAS) and on
+// an oblique one: the axis-aligned shortcut and the bounds test are those of the general formula.
+TEST(LabelShape, ValueBetweenVoxelCentresIsTheTrilinearInterpolantInsideAndPastTheKeptBox) {
+  for (const bool oblique : {false, true}) {
+    SCOPED_TRACE(oblique ? "oblique grid" : "axis-aligned grid");
+    ImageGrid grid;
+    grid.dims = Eigen::Vector3i(30, 26, 22);
+    grid.spacing_mm = Eigen::Vector3d(1.0, 0.9, 1.2);
+    Eigen::Matrix3d axes = Eigen::Vector3d(-1.0, 1.0, 1.0).asDiagonal();
+    if (oblique) axes = Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+    grid.world_from_voxel.setIdentity();
+    grid.world_from_voxel.topLeftCorner<3, 3>() = axes * grid.spacing_mm.asDiagonal();
+    grid.world_from_voxel.topRightCorner<3, 1>() = Eigen::Vector3d(14.0, -11.5, -12.0);
+    // A box of label 1 that the grid's own faces cut on one side (the kept box reaches the grid's
+    // edge there) and that leaves room on the others.
+    std::vector<std::int32_t> labels(static_cast<std::size_t>(grid.voxel_count()), 0);
+    for (int k = 0; k < 12; ++k)
+      for (int j = 6; j < 20; ++j)
+        for (int i = 8; i < 22; ++i)
+          labels[static_cast<std::size_t>((k * grid.dims.y() + j) * grid.dims.x() + i)] = 1;
+    const auto shape = make_label_shape(grid, labels, {1}, 0.8, "box");
+    std::mt19937 random(7);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    int inside = 0, outside = 0;
+    for (int n = 0; n < 20000; ++n) {
+      Eigen::Vector3d ijk;
+      for (int a = 0; a < 3; ++a)
+        ijk[a] = -2.0 + (grid.dims[a] + 3.5) * unit(random); // from 2 voxels before to 1.5 past the grid
+      const Eigen::Vector3d x = grid.world_from_index(ijk);
+      const double value = shape->value(x);
+      ASSERT_NEAR(value, trilinear_of_centres(*shape, grid, x), 1e-12)
+          << "at voxel coordinates " << ijk.transpose();
+      (std::abs(value + 0.5) > 1e-9 ? inside : outside) += 1;
+    }
+    EXPECT_GT(inside, 2000); // the check reaches the smoothed box, not only the -1/2 around it
+    EXPECT_GT(outside, 2000);
+  }
+}
