@@ -96,15 +96,27 @@ std::string format_duration(double seconds) {
   return text;
 }
 
+/// This thread's details go nowhere (QuietProgressDetails).
+thread_local bool t_quiet_details = false;
+
 } // namespace
 
+QuietProgressDetails::QuietProgressDetails() : m_was_quiet(t_quiet_details) {
+  t_quiet_details = true;
+}
+
+QuietProgressDetails::~QuietProgressDetails() {
+  t_quiet_details = m_was_quiet;
+}
+
 void progress_detail(std::string detail) {
+  if (t_quiet_details) return;
   g_last_detail_ns.store(now_ns(), std::memory_order_relaxed);
   if (ProgressBar* bar = g_innermost.load()) bar->set_detail(std::move(detail));
 }
 
 bool progress_detail_due() noexcept {
-  if (g_innermost.load(std::memory_order_relaxed) == nullptr) return false;
+  if (t_quiet_details || g_innermost.load(std::memory_order_relaxed) == nullptr) return false;
   return now_ns() - g_last_detail_ns.load(std::memory_order_relaxed) >= 200'000'000;
 }
 
@@ -113,6 +125,17 @@ ProgressBar::ProgressBar(Reporter& reporter, std::string label, std::size_t tota
       m_start(std::chrono::steady_clock::now()), m_last_draw(m_start),
       m_uncaught_exceptions(std::uncaught_exceptions()) {
   m_outer = g_innermost.exchange(this);
+  start_ticker();
+}
+
+ProgressBar::ProgressBar(Reporter& reporter, std::string label, std::size_t total, Unlisted)
+    : m_reporter(reporter), m_label(std::move(label)), m_total(total == 0 ? 1 : total),
+      m_start(std::chrono::steady_clock::now()), m_last_draw(m_start),
+      m_uncaught_exceptions(std::uncaught_exceptions()), m_listed(false) {
+  start_ticker();
+}
+
+void ProgressBar::start_ticker() {
   if (m_reporter.m_style == ProgressStyle::none) return;
   m_ticker = std::thread([this] {
     std::unique_lock<std::mutex> lock(m_mutex);
@@ -142,7 +165,7 @@ ProgressBar::~ProgressBar() {
   } else {
     finish();
   }
-  g_innermost.store(m_outer);
+  if (m_listed) g_innermost.store(m_outer);
 }
 
 void ProgressBar::stop_ticker() {

@@ -40,6 +40,10 @@ using ProgressCallback =
 class ProgressBar {
 public:
   ProgressBar(Reporter& reporter, std::string label, std::size_t total);
+  /// A bar that progress_detail() does not reach: for work run on a thread of its own beside a
+  /// stage whose bar is on screen (bars of one thread nest; bars of two threads would not).
+  struct Unlisted {};
+  ProgressBar(Reporter& reporter, std::string label, std::size_t total, Unlisted);
   ~ProgressBar();
   ProgressBar(const ProgressBar&) = delete;
   ProgressBar& operator=(const ProgressBar&) = delete;
@@ -57,6 +61,7 @@ private:
   void draw(std::size_t done, bool final, bool tick = false);
   /// Tells the reporter's progress callback, if any (throttled unless final).
   void notify(std::size_t done, bool final);
+  void start_ticker();
   void stop_ticker();
 
   Reporter& m_reporter;
@@ -71,6 +76,7 @@ private:
   bool m_stop_ticker = false;
   int m_uncaught_exceptions = 0;
   ProgressBar* m_outer = nullptr; ///< the bar that was innermost before this one
+  bool m_listed = true;           ///< progress_detail() may reach it (not Unlisted)
   std::mutex m_mutex;
   std::condition_variable m_wake;
   std::thread m_ticker;
@@ -84,6 +90,20 @@ void progress_detail(std::string detail);
 /// True when a bar lives and its detail was last set 200 ms ago or more: loops call it before
 /// formatting a detail, so that a tight loop does not format strings nobody will see.
 bool progress_detail_due() noexcept;
+
+/// While one lives, progress_detail() called on its thread does nothing and progress_detail_due()
+/// is false there: work run beside a stage (on a thread of its own, its parallel loops on that
+/// thread alone) does not write its details onto that stage's bar.
+class QuietProgressDetails {
+public:
+  QuietProgressDetails();
+  ~QuietProgressDetails();
+  QuietProgressDetails(const QuietProgressDetails&) = delete;
+  QuietProgressDetails& operator=(const QuietProgressDetails&) = delete;
+
+private:
+  bool m_was_quiet;
+};
 
 /// The record of what each stage modelled and what it skipped, shown on stderr (unless quiet)
 /// and kept for the run's log file.

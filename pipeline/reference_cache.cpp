@@ -150,11 +150,17 @@ VoxelizedPhantom voxelize_phantom_cached(const std::string& anatomy_key, const V
                                          const OrganTable& organs, const ImageGrid& grid,
                                          const Phantom& reference, const Phantom* deformed,
                                          const PhantomDeformation* deformation, const fs::path& folder,
-                                         StageReport& report, Reporter& reporter) {
+                                         StageReport& report, Reporter& reporter,
+                                         ReferenceVoxelization* built) {
   const std::string key =
       folder.empty() ? std::string() : reference_cache_key(anatomy_key, settings, organs, grid);
-  if (key.empty())
-    return voxelize_phantom(settings, organs, grid, reference, deformed, deformation, report, reporter);
+  if (key.empty()) {
+    if (!built)
+      return voxelize_phantom(settings, organs, grid, reference, deformed, deformation, report, reporter);
+    std::optional<ReferenceVoxelization> given(std::move(*built));
+    return voxelize_phantom(settings, organs, grid, reference, deformed, deformation, report, reporter,
+                            &given);
+  }
   std::error_code error;
   fs::create_directories(folder, error);
   if (error)
@@ -179,8 +185,19 @@ VoxelizedPhantom voxelize_phantom_cached(const std::string& anatomy_key, const V
     }
   }
   const bool read = state.has_value();
+  // A state built beforehand is handed over (voxelize_phantom takes it as read), and what the
+  // entry stores besides the volumes is kept for it.
+  std::optional<ReferenceVoxelization> to_store;
+  if (!read && built) {
+    to_store.emplace();
+    to_store->organs = built->organs;
+    to_store->level_sets = built->level_sets;
+    to_store->height_ranges = built->height_ranges;
+    state = std::move(*built);
+  }
   VoxelizedPhantom volumes =
       voxelize_phantom(settings, organs, grid, reference, deformed, deformation, report, reporter, &state);
+  if (to_store) state = std::move(to_store);
   if (read) {
     reporter.note("[voxelize] reference state read from the reference cache: " + entry.string() +
                   " (voxelized by an earlier run with the same anatomy, grid and settings)");
@@ -190,6 +207,14 @@ VoxelizedPhantom voxelize_phantom_cached(const std::string& anatomy_key, const V
   }
   record_reference_entry(key, report);
   return volumes;
+}
+
+bool reference_state_stored(const std::string& anatomy_key, const VoxelizationSettings& settings,
+                            const OrganTable& organs, const ImageGrid& grid, const fs::path& folder) {
+  if (folder.empty()) return false;
+  std::error_code error;
+  return fs::exists(
+      folder / ("reference-" + reference_cache_key(anatomy_key, settings, organs, grid) + ".bin"), error);
 }
 
 } // namespace phantasm

@@ -61,11 +61,20 @@ ReferenceVoxelization decode_reference_state(std::string_view bytes, std::size_t
 /// goes to the report (the same whether the state was built or read); which it was, to the screen.
 /// @param anatomy_key the reference phantom's anatomy_cache_key(); empty: no cache
 /// @param folder the cache folder (made when missing); empty: no cache, voxelize_phantom() alone
+/// @param built null, or the reference state voxelize_reference_state() built for these inputs
+///        (while the deformation was solved): taken (moved from) instead of building the state
+///        when the cache does not hold it
 VoxelizedPhantom voxelize_phantom_cached(const std::string& anatomy_key, const VoxelizationSettings& settings,
                                          const OrganTable& organs, const ImageGrid& grid,
                                          const Phantom& reference, const Phantom* deformed,
                                          const PhantomDeformation* deformation,
                                          const std::filesystem::path& folder, StageReport& report,
-                                         Reporter& reporter);
+                                         Reporter& reporter, ReferenceVoxelization* built = nullptr);
+
+/// True when the cache folder holds a reference state entry under these inputs' key (read or
+/// damaged, voxelize_phantom_cached tells): a run need not build the state beforehand.
+bool reference_state_stored(const std::string& anatomy_key, const VoxelizationSettings& settings,
+                            const OrganTable& organs, const ImageGrid& grid,
+                            const std::filesystem::path& folder);
 
 } // namespace phantasm

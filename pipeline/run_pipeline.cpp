@@ -21,12 +21,15 @@
 #include "report/subject_report.hpp"
 #include "sim/deform_phantom.hpp"
 #include "sim/sim_plan.hpp"
+#include "voxelize/voxelize_phantom.hpp"
 #include "voxelize/voxelize_plan.hpp"
 
 #include <chrono>
 #include <ctime>
 #include <filesystem>
+#include <future>
 #include <map>
+#include <omp.h>
 #include <string>
 
 namespace phantasm {
@@ -164,6 +167,18 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
   clock.lap("anatomy");
   if (until == SimulationStage::anatomy) return;
 
+  // The reference state needs the anatomy alone: built on a thread of its own while the
+  // deformation is solved (its body mesh and most of its solve use one core), unless the cache
+  // holds it. One thread, so that its parallel loops stay off the solver's cores' second one too.
+  std::future<ReferenceVoxelization> reference_state;
+  if (scene.deformation.mode != DeformationMode::none && until >= SimulationStage::voxelization &&
+      !reference_state_stored(anatomy_key, scene.voxelization, scene.organs, scene.grid.grid(), cache)) {
+    reference_state = std::async(std::launch::async, [&scene, &result] {
+      const QuietProgressDetails quiet;
+      omp_set_num_threads(1);
+      return voxelize_reference_state(scene.voxelization, scene.organs, scene.grid.grid(), result.phantom);
+    });
+  }
   StageReport& sim = result.stages[1];
   if (scene.deformation.mode != DeformationMode::none) {
     const StageLines lines(sim);
@@ -183,12 +198,14 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
   }
   StageReport& voxelize = result.stages[2];
   const StageLines voxelize_lines(voxelize);
+  std::optional<ReferenceVoxelization> built;
+  if (reference_state.valid()) built = reference_state.get();
   // The reference state is the same for every subject of this anatomy, grid and voxelization:
   // kept beside the anatomy, so that it is voxelized once.
-  result.volumes =
-      voxelize_phantom_cached(anatomy_key, scene.voxelization, scene.organs, scene.grid.grid(),
-                              result.phantom, result.deformed ? &*result.deformed : nullptr,
-                              result.deformation ? &*result.deformation : nullptr, cache, voxelize, reporter);
+  result.volumes = voxelize_phantom_cached(anatomy_key, scene.voxelization, scene.organs, scene.grid.grid(),
+                                           result.phantom, result.deformed ? &*result.deformed : nullptr,
+                                           result.deformation ? &*result.deformation : nullptr, cache,
+                                           voxelize, reporter, built ? &*built : nullptr);
   // Tissue regions and texture, after the cached reference state (which holds neither): the
   // reference state's files then have a key of their own.
   attach_material_maps(scene, atlases, result.volumes, voxelize);

@@ -319,6 +319,28 @@ void add_motion(const Phantom& reference, const PhantomDeformation& deformation,
 
 } // namespace
 
+ReferenceVoxelization voxelize_reference_state(const VoxelizationSettings& settings, const OrganTable& organs,
+                                               const ImageGrid& grid, const Phantom& reference) {
+  // As voxelize_phantom and voxelize_reference build it: the tissues in organ order, the level
+  // sets at the grid's smallest voxel size, the fractions.
+  std::vector<std::string> tissues;
+  for (const Organ& organ : reference.organs)
+    if (std::find(tissues.begin(), tissues.end(), organ.tissue) == tissues.end())
+      tissues.push_back(organ.tissue);
+  Reporter silent = Reporter::silent();
+  ProgressBar progress(silent, "voxelize", reference.organs.size(), ProgressBar::Unlisted{});
+  ReferenceVoxelization state;
+  state.height_ranges.resize(reference.organs.size());
+  const StateLevelSets sets = level_sets_of(settings, organs, grid, reference, tissues,
+                                            grid.spacing_mm.minCoeff(), state.height_ranges, progress);
+  for (const VoxelizedOrgan& organ : sets.organs)
+    state.organs.push_back(organ.label - 1);
+  state.level_sets = sets.level_sets;
+  state.volumes =
+      voxelize_tissues(grid, sets.organs, static_cast<int>(tissues.size()), settings.supersampling);
+  return state;
+}
+
 VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const OrganTable& organs,
                                   const ImageGrid& grid, const Phantom& reference, const Phantom* deformed,
                                   const PhantomDeformation* deformation, StageReport& report,

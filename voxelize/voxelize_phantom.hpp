@@ -34,6 +34,13 @@ struct ReferenceVoxelization {
   TissueVolumes volumes;           ///< labels and fractions
 };
 
+/// The reference state alone, as voxelize_phantom builds it: what a voxelize_phantom given it
+/// (reference_state) takes instead of building it, for the same result bit for bit. It needs the
+/// reference phantom only, so it can be built while the deformation is solved. Reports nothing
+/// (voxelize_phantom reports the state it is given as one it built); polls for cancellation.
+ReferenceVoxelization voxelize_reference_state(const VoxelizationSettings& settings, const OrganTable& organs,
+                                               const ImageGrid& grid, const Phantom& reference);
+
 /// Voxelizes the reference phantom (and the deformed one with the motion fields when given) on
 /// the grid: each closed organ in the field of view becomes a level set of its patch surface
 /// (from the patches directly, or tessellated within settings.tessellation_tolerance_mm when
