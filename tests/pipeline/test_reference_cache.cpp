@@ -43,7 +43,8 @@ void expect_same_volumes(const TissueVolumes& a, const TissueVolumes& b) {
 } // namespace
 
 // The state a deformed small head's voxelization built, stored and read back, gives the same
-// volumes, fields and landmarks bit for bit; the volumes' own encoding too.
+// volumes, fields and landmarks bit for bit; the volumes' own encoding too; the state built alone
+// (voxelize_reference_state) is the same bytes.
 TEST(ReferenceCache, DecodedStateVoxelizesTheSameBytes) {
   Scene scene = scene_of(k_small_head);
   scene.voxelization.keep_level_sets = true;
@@ -61,6 +62,12 @@ TEST(ReferenceCache, DecodedStateVoxelizesTheSameBytes) {
   ASSERT_FALSE(built_state->level_sets.empty());
   EXPECT_TRUE(built_state->volumes.labels.empty()); // they are the result's reference
   const std::string bytes = encode_reference_state(*built_state, built.reference);
+
+  // The state built alone beforehand (a run builds it while the deformation is solved) is the
+  // same state: the same bytes.
+  const ReferenceVoxelization beforehand =
+      voxelize_reference_state(scene.voxelization, scene.organs, scene.grid.grid(), sim.phantom);
+  EXPECT_TRUE(encode_reference_state(beforehand, beforehand.volumes) == bytes);
 
   const auto voxels = static_cast<std::size_t>(scene.grid.grid().voxel_count());
   const std::size_t organs = sim.phantom.organs.size();
