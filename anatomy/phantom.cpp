@@ -219,10 +219,29 @@ VariedTargets varied_targets(const AnatomySettings& anatomy, const std::map<std:
   VariedTargets out;
   auto& shapes = out.shapes;
   auto& targets = out.targets;
-  for (std::size_t o = 0; o < settings.size(); ++o) {
+  const auto file_of = [&](std::size_t o) -> const ShapeData* {
     const auto found = warped.find(settings[o].name);
-    const ShapeData* file = found == warped.end() ? nullptr : &found->second;
+    return found == warped.end() ? nullptr : &found->second;
+  };
+  // The targets of shapes read from files (a label volume's smooths the organ's labels over their
+  // box, a second or so each on a Colin head) side by side: they take no jitter check below.
+  std::vector<std::shared_ptr<const ImplicitShape>> from_files(settings.size());
+  if (!deferred) {
+    run_tasks_in_parallel(
+        settings.size(), static_cast<std::size_t>(std::max(1, omp_get_max_threads())), [&](std::size_t o) {
+          const ShapeSettings shape = varied(settings[o].shape, variation.global, variation.per_organ[o]);
+          if (file_of(o) != nullptr && !analytic(shape.kind))
+            from_files[o] = target_shape(shape, file_of(o), settings[o].name);
+        });
+  }
+  for (std::size_t o = 0; o < settings.size(); ++o) {
+    const ShapeData* file = file_of(o);
     ShapeSettings shape = varied(settings[o].shape, variation.global, variation.per_organ[o]);
+    if (from_files[o]) {
+      shapes.push_back(shape);
+      targets.push_back(from_files[o]);
+      continue;
+    }
     if (deferred && file != nullptr && !analytic(shape.kind)) {
       // Files' shapes vary by the warp alone (no jitter, no nesting checks below).
       targets.push_back(std::make_shared<DeferredShape>(

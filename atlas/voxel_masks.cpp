@@ -78,20 +78,25 @@ std::vector<float> distance_to(const Mask& mask, const ImageGrid& grid) {
   for (std::size_t n = 0; n < mask.size(); ++n)
     dist[n] = mask[n] ? 0.0 : inf;
   const int longest = std::max({vol.nx, vol.ny, vol.nz});
-  std::vector<double> f(longest), d(longest), z(longest + 1);
-  std::vector<int> v(longest);
   const std::array<int, 3> n{vol.nx, vol.ny, vol.nz};
   const std::array<std::int64_t, 3> stride{1, vol.nx, std::int64_t(vol.nx) * vol.ny};
   for (int axis = 0; axis < 3; ++axis) {
     const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-    for (int p2 = 0; p2 < n[a2]; ++p2) {
-      for (int p1 = 0; p1 < n[a1]; ++p1) {
-        const std::int64_t base = p1 * stride[a1] + p2 * stride[a2];
-        for (int q = 0; q < n[axis]; ++q)
-          f[q] = dist[static_cast<std::size_t>(base + q * stride[axis])];
-        distance_transform_1d(f, d, n[axis], grid.spacing_mm[axis], v, z);
-        for (int q = 0; q < n[axis]; ++q)
-          dist[static_cast<std::size_t>(base + q * stride[axis])] = d[q];
+    // Each line along the axis on its own: in parallel over planes, the same values.
+#pragma omp parallel
+    {
+      std::vector<double> f(longest), d(longest), z(longest + 1);
+      std::vector<int> v(longest);
+#pragma omp for schedule(static)
+      for (int p2 = 0; p2 < n[a2]; ++p2) {
+        for (int p1 = 0; p1 < n[a1]; ++p1) {
+          const std::int64_t base = p1 * stride[a1] + p2 * stride[a2];
+          for (int q = 0; q < n[axis]; ++q)
+            f[q] = dist[static_cast<std::size_t>(base + q * stride[axis])];
+          distance_transform_1d(f, d, n[axis], grid.spacing_mm[axis], v, z);
+          for (int q = 0; q < n[axis]; ++q)
+            dist[static_cast<std::size_t>(base + q * stride[axis])] = d[q];
+        }
       }
     }
   }
