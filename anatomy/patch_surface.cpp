@@ -171,16 +171,56 @@ PatchSurface::PatchSurface(TriangleMesh base, const std::string& what)
 }
 
 void PatchSurface::set_bumps(Eigen::Index t, std::vector<PatchBump> bumps) {
+  std::vector<Perturbation> perturbations = checked_perturbations(t, bumps);
+  m_lattices[static_cast<std::size_t>(t)] = BumpLattice(bumps);
+  m_bumps[static_cast<std::size_t>(t)] = std::move(bumps);
+  m_perturbations[static_cast<std::size_t>(t)] = std::move(perturbations);
+  m_height_ranges.reset();
+}
+
+void PatchSurface::set_all_bumps(std::vector<std::vector<PatchBump>> bumps) {
+  if (static_cast<Eigen::Index>(bumps.size()) != patch_count())
+    throw std::invalid_argument("set_all_bumps: " + std::to_string(bumps.size()) + " lists of bumps for " +
+                                std::to_string(patch_count()) + " patches");
+  const auto count = static_cast<std::ptrdiff_t>(bumps.size());
+  std::vector<std::vector<Perturbation>> perturbations(bumps.size());
+  std::vector<BumpLattice> lattices(bumps.size());
+  // No exception may leave an OpenMP region: each patch's message is kept, the first thrown.
+  std::vector<std::string> errors(bumps.size());
+#pragma omp parallel for schedule(dynamic, 256)
+  for (std::ptrdiff_t t = 0; t < count; ++t) {
+    const auto k = static_cast<std::size_t>(t);
+    if (bumps[k].empty()) continue; // as a new surface's patch
+    try {
+      perturbations[k] = checked_perturbations(t, bumps[k]);
+      lattices[k] = BumpLattice(bumps[k]);
+    } catch (const InputError& error) {
+      errors[k] = error.what();
+    }
+  }
+  for (const std::string& error : errors)
+    if (!error.empty()) throw InputError(error);
+  m_lattices = std::move(lattices);
+  m_bumps = std::move(bumps);
+  m_perturbations = std::move(perturbations);
+  m_height_ranges.reset();
+}
+
+std::vector<PatchSurface::Perturbation>
+PatchSurface::checked_perturbations(Eigen::Index t, const std::vector<PatchBump>& bumps) const {
   std::vector<Perturbation> perturbations;
+  perturbations.reserve(bumps.size());
   for (std::size_t i = 0; i < bumps.size(); ++i) {
     const PatchBump& b = bumps[i];
-    const std::string where = m_what + ": triangle " + std::to_string(t) + ", bump " + std::to_string(i);
+    const auto where = [&] {
+      return m_what + ": triangle " + std::to_string(t) + ", bump " + std::to_string(i);
+    };
     const Eigen::Matrix2d S = 0.5 * (b.shape_uv + b.shape_uv.transpose());
     if (!std::isfinite(b.amplitude_mm) || !(S(0, 0) > 0.0) || !(S.determinant() > 0.0) || !S.allFinite()) {
-      throw InputError(where + ": expected a positive definite shape and a finite amplitude");
+      throw InputError(where() + ": expected a positive definite shape and a finite amplitude");
     }
     if (!b.center_uv.allFinite()) {
-      throw InputError(where + ": expected a finite centre, found (" + std::to_string(b.center_uv.x()) +
+      throw InputError(where() + ": expected a finite centre, found (" + std::to_string(b.center_uv.x()) +
                        ", " + std::to_string(b.center_uv.y()) + ")");
     }
     // The ellipse {d^T S d <= 1} around c lies inside u >= 0, v >= 0, u + v <= 1 when each
@@ -190,14 +230,11 @@ void PatchSurface::set_bumps(Eigen::Index t, std::vector<PatchBump> bumps) {
     const double slack = 1e-12;
     if (c.x() - std::sqrt(inverse(0, 0)) < -slack || c.y() - std::sqrt(inverse(1, 1)) < -slack ||
         1.0 - c.sum() - std::sqrt(inverse.sum()) < -slack) {
-      throw InputError(where + ": expected its ellipse inside the triangle, found it crossing an edge");
+      throw InputError(where() + ": expected its ellipse inside the triangle, found it crossing an edge");
     }
     perturbations.push_back({b.quadric(), b.amplitude_mm});
   }
-  m_lattices[static_cast<std::size_t>(t)] = BumpLattice(bumps);
-  m_bumps[static_cast<std::size_t>(t)] = std::move(bumps);
-  m_perturbations[static_cast<std::size_t>(t)] = std::move(perturbations);
-  m_height_ranges.reset();
+  return perturbations;
 }
 
 void PatchSurface::hold_height_ranges() {

@@ -108,6 +108,11 @@ public:
   /// Replaces the bumps of one patch (and forgets the height bounds held, height_ranges()).
   /// @throws InputError when a bump's ellipse leaves the triangle or its shape is not positive definite
   void set_bumps(Eigen::Index triangle, std::vector<PatchBump> bumps);
+  /// Replaces the bumps of every patch (one list per base triangle, in order), as set_bumps of
+  /// each would, in parallel over patches (a surface read back holds 10^5 of them).
+  /// @throws InputError as set_bumps, for the first patch in order that has a bad bump (and
+  ///         then sets none)
+  void set_all_bumps(std::vector<std::vector<PatchBump>> bumps);
 
   /// Every patch's height bounds (patch_height_ranges) when held: computed by
   /// hold_height_ranges() or given by set_height_ranges() (an anatomy read back), null otherwise.
@@ -184,6 +189,11 @@ private:
     Quadric quadric;
     double amplitude_mm;
   };
+
+  /// The quadrics and amplitudes of a patch's bumps.
+  /// @throws InputError naming the patch and bump when a bump is not valid (set_bumps)
+  std::vector<Perturbation> checked_perturbations(Eigen::Index triangle,
+                                                  const std::vector<PatchBump>& bumps) const;
 
   /// The subdivision level a patch needs; `grid`, when given, receives that level's points
   /// (patch_grid_points), or nothing when the finest level is still not enough.

@@ -450,8 +450,9 @@ Phantom phantom_from_geometry(const AnatomySettings& anatomy, const std::map<std
       in.matrix(base.vertices);
       in.matrix(base.faces);
       PatchSurface surface(std::move(base), "organ " + organ.name);
-      for (Eigen::Index t = 0; t < surface.patch_count(); ++t) {
-        std::vector<PatchBump> bumps(in.value<std::uint32_t>());
+      std::vector<std::vector<PatchBump>> patches(static_cast<std::size_t>(surface.patch_count()));
+      for (std::vector<PatchBump>& bumps : patches) {
+        bumps.resize(in.value<std::uint32_t>());
         for (PatchBump& bump : bumps) {
           for (int i = 0; i < 2; ++i)
             bump.center_uv[i] = in.value<double>();
@@ -459,8 +460,8 @@ Phantom phantom_from_geometry(const AnatomySettings& anatomy, const std::map<std
             bump.shape_uv.data()[i] = in.value<double>();
           bump.amplitude_mm = in.value<double>();
         }
-        if (!bumps.empty()) surface.set_bumps(t, std::move(bumps));
       }
+      surface.set_all_bumps(std::move(patches));
       std::vector<HeightRange> ranges(static_cast<std::size_t>(surface.patch_count()));
       for (HeightRange& range : ranges) {
         range.lowest = in.value<double>();

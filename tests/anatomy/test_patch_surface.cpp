@@ -202,6 +202,46 @@ TEST(PatchSurface, BumpsThatLeaveTheirTriangleAreRejected) {
   EXPECT_THROW(surface.set_bumps(0, {endless}), InputError);
 }
 
+// Every patch's bumps set at once (in parallel) make the surface set_bumps makes patch by patch:
+// the same heights bit for bit; a bad bump names its patch (the first of several, in order) and
+// leaves the surface as it was.
+TEST(PatchSurface, AllBumpsSetAtOnceAreEachPatchsSetAlone) {
+  const PatchSurface one_by_one = bumpy_sphere();
+  PatchSurface at_once(sphere_mesh(1, 30.0), "bumpy sphere");
+  std::vector<std::vector<PatchBump>> bumps(static_cast<std::size_t>(at_once.patch_count()));
+  for (Eigen::Index t = 0; t < at_once.patch_count(); ++t)
+    bumps[static_cast<std::size_t>(t)] = one_by_one.bumps(t);
+  bumps[3].clear(); // a patch without bumps, as set_bumps never called there
+  PatchSurface reference = one_by_one;
+  reference.set_bumps(3, {});
+  at_once.set_all_bumps(bumps);
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (Eigen::Index t = 0; t < at_once.patch_count(); ++t) {
+    ASSERT_EQ(at_once.bumps(t).size(), reference.bumps(t).size());
+    for (int k = 0; k < 20; ++k) {
+      const double u = unit(random), v = (1.0 - u) * unit(random);
+      EXPECT_EQ(at_once.height(t, u, v), reference.height(t, u, v)) << "patch " << t;
+      EXPECT_EQ(at_once.bump_lattice(t).at(u, v).size(), reference.bump_lattice(t).at(u, v).size());
+    }
+  }
+  // Bad bumps on patches 9 and 5: patch 5 is named, and nothing changed.
+  std::vector<std::vector<PatchBump>> bad = bumps;
+  for (const std::size_t t : {9u, 5u}) {
+    bad[t] = bumps[t];
+    bad[t][0].center_uv = Eigen::Vector2d(-0.5, 0.5);
+  }
+  try {
+    at_once.set_all_bumps(bad);
+    ADD_FAILURE() << "a bump outside its triangle was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("triangle 5, bump 0"), std::string::npos) << e.what();
+  }
+  for (Eigen::Index t = 0; t < at_once.patch_count(); ++t)
+    EXPECT_EQ(at_once.height(t, 0.3, 0.3), reference.height(t, 0.3, 0.3)) << "patch " << t;
+  EXPECT_THROW(at_once.set_all_bumps(std::vector<std::vector<PatchBump>>(3)), std::invalid_argument);
+}
+
 // The height bounds a surface holds are patch_height_ranges' bit for bit; changing a patch's
 // bumps forgets them (no stale bounds reach a level set); bounds given back are checked.
 TEST(PatchSurface, HeldHeightBoundsAreComputedOnesAndForgottenWhenBumpsChange) {
