@@ -151,9 +151,19 @@ VoxelizedPhantom voxelize_phantom_cached(const std::string& anatomy_key, const V
                                          const Phantom& reference, const Phantom* deformed,
                                          const PhantomDeformation* deformation, const fs::path& folder,
                                          StageReport& report, Reporter& reporter,
-                                         ReferenceVoxelization* built) {
+                                         ReferenceVoxelization* built, bool built_read_from_cache) {
   const std::string key =
       folder.empty() ? std::string() : reference_cache_key(anatomy_key, settings, organs, grid);
+  if (!key.empty() && built && built_read_from_cache) {
+    std::optional<ReferenceVoxelization> state(std::move(*built));
+    VoxelizedPhantom volumes =
+        voxelize_phantom(settings, organs, grid, reference, deformed, deformation, report, reporter, &state);
+    reporter.note("[voxelize] reference state read from the reference cache: " +
+                  (folder / ("reference-" + key + ".bin")).string() +
+                  " (voxelized by an earlier run with the same anatomy, grid and settings)");
+    record_reference_entry(key, report);
+    return volumes;
+  }
   if (key.empty()) {
     if (!built)
       return voxelize_phantom(settings, organs, grid, reference, deformed, deformation, report, reporter);
@@ -207,6 +217,26 @@ VoxelizedPhantom voxelize_phantom_cached(const std::string& anatomy_key, const V
   }
   record_reference_entry(key, report);
   return volumes;
+}
+
+std::optional<ReferenceVoxelization>
+read_stored_reference_state(const std::string& anatomy_key, const VoxelizationSettings& settings,
+                            const OrganTable& organs, const ImageGrid& grid, std::size_t phantom_organs,
+                            const fs::path& folder) {
+  if (folder.empty()) return std::nullopt;
+  const std::string key = reference_cache_key(anatomy_key, settings, organs, grid);
+  const fs::path entry = folder / ("reference-" + key + ".bin");
+  std::error_code error;
+  if (!fs::exists(entry, error)) return std::nullopt;
+  const std::string header = std::string(k_reference_magic) + key + "\n";
+  try {
+    const std::string bytes = read_cache_entry(entry);
+    if (bytes.compare(0, header.size(), header) != 0) return std::nullopt;
+    return decode_reference_state(decompress_bytes(std::string_view(bytes).substr(header.size())),
+                                  static_cast<std::size_t>(grid.voxel_count()), phantom_organs);
+  } catch (const DamagedBytes&) {
+    return std::nullopt;
+  }
 }
 
 bool reference_state_stored(const std::string& anatomy_key, const VoxelizationSettings& settings,

@@ -15,6 +15,7 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -64,17 +65,29 @@ ReferenceVoxelization decode_reference_state(std::string_view bytes, std::size_t
 /// @param built null, or the reference state voxelize_reference_state() built for these inputs
 ///        (while the deformation was solved): taken (moved from) instead of building the state
 ///        when the cache does not hold it
+/// @param built_read_from_cache `built` is the entry of these inputs, read by
+///        read_stored_reference_state(): taken as the read entry, without reading it again
 VoxelizedPhantom voxelize_phantom_cached(const std::string& anatomy_key, const VoxelizationSettings& settings,
                                          const OrganTable& organs, const ImageGrid& grid,
                                          const Phantom& reference, const Phantom* deformed,
                                          const PhantomDeformation* deformation,
                                          const std::filesystem::path& folder, StageReport& report,
-                                         Reporter& reporter, ReferenceVoxelization* built = nullptr);
+                                         Reporter& reporter, ReferenceVoxelization* built = nullptr,
+                                         bool built_read_from_cache = false);
 
 /// True when the cache folder holds a reference state entry under these inputs' key (read or
 /// damaged, voxelize_phantom_cached tells): a run need not build the state beforehand.
 bool reference_state_stored(const std::string& anatomy_key, const VoxelizationSettings& settings,
                             const OrganTable& organs, const ImageGrid& grid,
+                            const std::filesystem::path& folder);
+
+/// The reference state stored under these inputs' key, read and decoded (entries are written
+/// whole, so no lock is needed to read one); none when there is no such entry or it is damaged
+/// (voxelize_phantom_cached then reads it again and says so). For a run that reads the entry while
+/// the deformation is solved.
+std::optional<ReferenceVoxelization>
+read_stored_reference_state(const std::string& anatomy_key, const VoxelizationSettings& settings,
+                            const OrganTable& organs, const ImageGrid& grid, std::size_t phantom_organs,
                             const std::filesystem::path& folder);
 
 } // namespace phantasm

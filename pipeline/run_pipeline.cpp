@@ -31,6 +31,7 @@
 #include <map>
 #include <omp.h>
 #include <string>
+#include <tuple>
 
 namespace phantasm {
 namespace {
@@ -167,16 +168,24 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
   clock.lap("anatomy");
   if (until == SimulationStage::anatomy) return;
 
-  // The reference state needs the anatomy alone: built on a thread of its own while the
-  // deformation is solved (its body mesh and most of its solve use one core), unless the cache
-  // holds it. One thread, so that its parallel loops stay off the solver's cores' second one too.
-  std::future<ReferenceVoxelization> reference_state;
-  if (scene.deformation.mode != DeformationMode::none && until >= SimulationStage::voxelization &&
-      !reference_state_stored(anatomy_key, scene.voxelization, scene.organs, scene.grid.grid(), cache)) {
-    reference_state = std::async(std::launch::async, [&scene, &result] {
+  // The reference state needs the anatomy alone: built (or read from the cache) on a thread of
+  // its own while the deformation is solved (its body mesh and most of its solve use one core).
+  // One thread, so that its parallel loops stay off the solver's second core.
+  std::future<std::pair<std::optional<ReferenceVoxelization>, bool>> reference_state;
+  if (scene.deformation.mode != DeformationMode::none && until >= SimulationStage::voxelization) {
+    const bool stored =
+        reference_state_stored(anatomy_key, scene.voxelization, scene.organs, scene.grid.grid(), cache);
+    reference_state = std::async(std::launch::async, [&scene, &result, &anatomy_key, &cache, stored] {
       const QuietProgressDetails quiet;
       omp_set_num_threads(1);
-      return voxelize_reference_state(scene.voxelization, scene.organs, scene.grid.grid(), result.phantom);
+      if (stored) // read, or left to the voxelization stage when damaged (it says so)
+        return std::make_pair(read_stored_reference_state(anatomy_key, scene.voxelization, scene.organs,
+                                                          scene.grid.grid(), result.phantom.organs.size(),
+                                                          cache),
+                              true);
+      return std::make_pair(std::optional<ReferenceVoxelization>(voxelize_reference_state(
+                                scene.voxelization, scene.organs, scene.grid.grid(), result.phantom)),
+                            false);
     });
   }
   StageReport& sim = result.stages[1];
@@ -199,13 +208,14 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
   StageReport& voxelize = result.stages[2];
   const StageLines voxelize_lines(voxelize);
   std::optional<ReferenceVoxelization> built;
-  if (reference_state.valid()) built = reference_state.get();
+  bool built_read = false;
+  if (reference_state.valid()) std::tie(built, built_read) = reference_state.get();
   // The reference state is the same for every subject of this anatomy, grid and voxelization:
   // kept beside the anatomy, so that it is voxelized once.
   result.volumes = voxelize_phantom_cached(anatomy_key, scene.voxelization, scene.organs, scene.grid.grid(),
                                            result.phantom, result.deformed ? &*result.deformed : nullptr,
                                            result.deformation ? &*result.deformation : nullptr, cache,
-                                           voxelize, reporter, built ? &*built : nullptr);
+                                           voxelize, reporter, built ? &*built : nullptr, built_read);
   // Tissue regions and texture, after the cached reference state (which holds neither): the
   // reference state's files then have a key of their own.
   attach_material_maps(scene, atlases, result.volumes, voxelize);

@@ -5,6 +5,7 @@
 
 #include "core/byte_codec.hpp"
 #include "io/byte_compression.hpp"
+#include "io/shape_files.hpp"
 #include "pipeline/anatomy_cache.hpp"
 #include "pipeline/reference_cache.hpp"
 #include "pipeline/run_pipeline.hpp"
@@ -234,8 +235,21 @@ TEST(ReferenceCache, RunsWithTheCacheColdWarmAndWithoutWriteTheSameFiles) {
   }
   EXPECT_TRUE(contains(warm_summary.stages[2].modelled, "kept in the reference cache as entry"));
 
+  // Read without the stage (as a run reads it while the deformation is solved): the stored state.
   const std::string stored = read_file(entries[0]);
+  const std::size_t stored_header = stored.find('\n', stored.find('\n') + 1) + 1;
+  const std::string state_bytes = decompress_bytes(std::string_view(stored).substr(stored_header));
+  const std::string anatomy_key =
+      anatomy_cache_key(scene.anatomy, read_shape_files(scene.anatomy, {}, scene.grid.grid()));
+  const auto read_alone = [&] {
+    return read_stored_reference_state(anatomy_key, scene.voxelization, scene.organs, scene.grid.grid(),
+                                       scene.organs.size(), cache);
+  };
+  const std::optional<ReferenceVoxelization> alone = read_alone();
+  ASSERT_TRUE(alone.has_value());
+  EXPECT_TRUE(encode_reference_state(*alone, alone->volumes) == state_bytes);
   write_text_file(entries[0], stored.substr(0, stored.size() - 100));
+  EXPECT_FALSE(read_alone().has_value()); // damaged: left to the stage, which says so
   const auto [damaged_summary, damaged] = run("damaged", cache);
   EXPECT_TRUE(contains(damaged_summary.stages[2].modelled, "a damaged reference cache entry"));
   EXPECT_TRUE(
