@@ -45,10 +45,12 @@ TEST(PopulationSweep, EachSubjectsMeasuredVolumeChangesMatchItsDraws) {
     for (const char* organ : {"left", "right"}) {
       EXPECT_NEAR(measured.at(organ), drawn[s].at(organ), 0.01)
           << "sub-" << sweep.subjects[s].id << " " << organ;
-      for (std::size_t other = 0; other < drawn.size(); ++other)
-        if (other != s)
+      for (std::size_t other = 0; other < drawn.size(); ++other) {
+        if (other != s) {
           EXPECT_GT(std::abs(drawn[other].at(organ) - drawn[s].at(organ)), 0.02)
               << "the fixture's draws must tell subjects apart";
+        }
+      }
     }
   }
 }
