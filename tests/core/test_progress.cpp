@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <future>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -126,4 +127,39 @@ TEST(Progress, AdvancingFromSeveralThreadsCountsEveryStep) {
       t.join();
   }
   EXPECT_NE(stream.str().find("work 100% (4000/4000)"), std::string::npos);
+}
+
+// Work run beside a stage on a thread of its own (the reference state while the deformation is
+// solved): its unlisted bar does not take the stage's details while it lives, and its own details
+// do not reach the stage's bar.
+TEST(Progress, AnUnlistedBarAndQuietDetailsOnAnotherThreadLeaveTheStagesBarAlone) {
+  std::ostringstream stream;
+  Reporter reporter(stream, ProgressStyle::bar);
+  Reporter silent = Reporter::silent();
+  {
+    ProgressBar stage(reporter, "deform", 2);
+    std::promise<void> started, go_on;
+    std::thread beside([&] {
+      const QuietProgressDetails quiet;
+      ProgressBar own(silent, "voxelize", 2, ProgressBar::Unlisted{});
+      EXPECT_FALSE(progress_detail_due());
+      started.set_value();
+      go_on.get_future().wait();
+      progress_detail("tissue fractions, slab 3/24"); // goes nowhere
+      own.advance(2);
+    });
+    started.get_future().wait();
+    // The other thread's bar lives: the stage's bar still takes this thread's details.
+    progress_detail("iteration 4");
+    stage.advance();
+    std::this_thread::sleep_for(std::chrono::milliseconds(1300)); // the ticker redraws it
+    EXPECT_NE(stream.str().find("iteration 4"), std::string::npos) << stream.str();
+    go_on.set_value();
+    beside.join();
+    std::this_thread::sleep_for(std::chrono::milliseconds(1300)); // and again
+  }
+  const std::string text = stream.str();
+  EXPECT_EQ(text.find("slab 3/24"), std::string::npos) << text;
+  EXPECT_EQ(text.find("voxelize"), std::string::npos) << text;
+  EXPECT_FALSE(progress_detail_due()); // no listed bar lives any more
 }
