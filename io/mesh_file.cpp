@@ -2,6 +2,7 @@
 // PLY files are parsed here (VTK's readers of them crash on faces that name missing vertices).
 
 #include "io/mesh_file.hpp"
+#include "io/vtk_ready.hpp"
 
 #include "core/abandonable_work.hpp"
 #include "core/error.hpp"
@@ -615,6 +616,7 @@ void write_xml(Writer& writer, const std::filesystem::path& path) {
 } // namespace
 
 TriangleMesh read_triangle_mesh(const std::filesystem::path& path) {
+  make_vtk_ready();
   const std::string extension = lower_extension(path);
   const char* what = "a triangle mesh (.stl, .obj, .ply or .vtp)";
   vtkSmartPointer<vtkPolyData> data;
@@ -700,6 +702,7 @@ TriangleMesh read_triangle_mesh(const std::filesystem::path& path) {
 
 void write_vtp(const std::filesystem::path& path, const TriangleMesh& mesh,
                const std::vector<PointArray>& arrays) {
+  make_vtk_ready();
   vtkNew<vtkPolyData> data;
   data->SetPoints(make_points(mesh.vertices));
   vtkNew<vtkCellArray> polys;
@@ -717,6 +720,7 @@ void write_vtp(const std::filesystem::path& path, const TriangleMesh& mesh,
 
 void write_vtu(const std::filesystem::path& path, const TetMesh& mesh, const std::vector<PointArray>& arrays,
                const std::vector<CellArray>& cell_arrays) {
+  make_vtk_ready();
   vtkNew<vtkUnstructuredGrid> grid;
   grid->SetPoints(make_points(mesh.vertices));
   grid->Allocate(mesh.tets.rows());
@@ -733,6 +737,7 @@ void write_vtu(const std::filesystem::path& path, const TetMesh& mesh, const std
 }
 
 TetMesh read_vtu(const std::filesystem::path& path) {
+  make_vtk_ready();
   check_readable(path, "a tetrahedral mesh (.vtu)");
   check_vtk_xml_sizes(path);
   // Through phantasm's own reading of VTK XML (as .vtp files), not vtkXMLUnstructuredGridReader,

@@ -1,4 +1,5 @@
 #include "io/preview_png.hpp"
+#include "io/vtk_ready.hpp"
 
 #include "io/atomic_file.hpp"
 
@@ -17,6 +18,7 @@ namespace phantasm {
 
 void write_preview_png(const std::filesystem::path& path, const ImageGrid& grid,
                        const std::vector<float>& values) {
+  make_vtk_ready();
   const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
   if (values.size() != static_cast<std::size_t>(grid.voxel_count()))
     throw std::invalid_argument(path.string() + ": preview of a volume whose size does not match its grid");
@@ -47,6 +49,7 @@ void write_preview_png(const std::filesystem::path& path, const ImageGrid& grid,
 }
 
 std::string encode_png(int width, int height, int components, const std::vector<unsigned char>& pixels) {
+  make_vtk_ready();
   if (width <= 0 || height <= 0 || components < 1 || components > 4 ||
       pixels.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height) *
                            static_cast<std::size_t>(components))

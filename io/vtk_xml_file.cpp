@@ -3,6 +3,7 @@
 // decompressors without VTK's readers (io/vtk_xml_file.hpp).
 
 #include "io/vtk_xml_file.hpp"
+#include "io/vtk_ready.hpp"
 
 #include "core/error.hpp"
 #include "core/format.hpp"
@@ -346,6 +347,7 @@ vtkSmartPointer<vtkDataCompressor> compressor(const std::filesystem::path& path,
 } // namespace
 
 void check_vtk_xml_sizes(const std::filesystem::path& path) {
+  make_vtk_ready();
   ParsedFile parsed;
   parse(path, parsed);
   if (parsed.root != nullptr) check_element(path, parsed.file, *parsed.root, parsed.layout);
@@ -525,11 +527,13 @@ PieceCells read_piece_cells(const std::filesystem::path& path, const CellLayout&
 } // namespace
 
 VtpPolygons read_vtp_polygons(const std::filesystem::path& path) {
+  make_vtk_ready();
   PieceCells read = read_piece_cells(path, {"PolyData", "NumberOfPolys", "Polys", "polygon", false, false});
   return {std::move(read.points), std::move(read.cells)};
 }
 
 VtuCells read_vtu_cells(const std::filesystem::path& path, bool with_cell_arrays) {
+  make_vtk_ready();
   PieceCells read =
       read_piece_cells(path, {"UnstructuredGrid", "NumberOfCells", "Cells", "cell", true, with_cell_arrays});
   return {std::move(read.points), std::move(read.cells), std::move(read.types), std::move(read.cell_arrays)};
