@@ -1,6 +1,7 @@
 #include "report/subject_record.hpp"
 
 #include "core/error.hpp"
+#include "core/parallel_tasks.hpp"
 #include "io/dataset_layout.hpp"
 #include "io/dataset_tables.hpp"
 #include "io/json_file.hpp"
@@ -9,7 +10,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <exception>
 #include <fstream>
+#include <functional>
 #include <set>
 #include <sstream>
 
@@ -65,17 +68,52 @@ void require_grid(SubjectRecord& record, const ImageGrid& grid, const std::files
   }
 }
 
-std::vector<double> read_volume(SubjectRecord& record, const std::filesystem::path& file) {
-  NiftiVolume volume = read_nifti(file);
-  require_grid(record, volume.grid, file);
-  return std::move(volume.values);
+/// A volume read by read_side_by_side: its grid is checked against the subject's afterwards.
+template <typename Values>
+struct ReadVolume {
+  ImageGrid grid;
+  Values values;
+};
+
+/// Reads the files side by side, one thread each (a compressed volume's decompression is one
+/// stream, and the report's pictures wait for them), then checks their grids against the
+/// subject's in the order given, so that a failure names the file a reading in turn would.
+template <typename Values>
+std::vector<Values>
+read_side_by_side(SubjectRecord& record, const std::vector<std::filesystem::path>& files,
+                  const std::function<ReadVolume<Values>(const std::filesystem::path&)>& read) {
+  std::vector<ReadVolume<Values>> volumes(files.size());
+  std::vector<std::exception_ptr> failures(files.size());
+  run_tasks_in_parallel(files.size(), files.size(), [&](std::size_t i) {
+    try {
+      volumes[i] = read(files[i]);
+    } catch (...) {
+      failures[i] = std::current_exception();
+    }
+  });
+  std::vector<Values> values;
+  for (std::size_t i = 0; i < files.size(); ++i) {
+    if (failures[i]) std::rethrow_exception(failures[i]);
+    require_grid(record, volumes[i].grid, files[i]);
+    values.push_back(std::move(volumes[i].values));
+  }
+  return values;
 }
 
-std::vector<std::int32_t> read_labels(SubjectRecord& record, const std::filesystem::path& file) {
-  ImageGrid grid;
-  std::vector<std::int32_t> labels = read_nifti_labels(file, &grid);
-  require_grid(record, grid, file);
-  return labels;
+ReadVolume<std::vector<double>> read_values(const std::filesystem::path& file) {
+  NiftiVolume volume = read_nifti(file);
+  return {volume.grid, std::move(volume.values)};
+}
+
+ReadVolume<std::vector<double>> read_vectors(const std::filesystem::path& file) {
+  NiftiVolume volume = read_nifti_vectors(file, 3);
+  return {volume.grid, std::move(volume.values)};
+}
+
+ReadVolume<std::vector<std::int32_t>> read_labels(const std::filesystem::path& file) {
+  ReadVolume<std::vector<std::int32_t>> volume;
+  volume.values = read_nifti_labels(file, &volume.grid);
+  return volume;
 }
 
 void read_label_table(SubjectRecord& record, const std::filesystem::path& file) {
@@ -117,29 +155,38 @@ void read_pictures(SubjectRecord& record, const DatasetLayout& layout, const std
   // A run in which nothing deforms writes the reference state only.
   record.reference_only = !is_listed(layout.dseg(PhantomState::deformed));
   for (const std::string& suffix : suffixes) {
-    // The volume before the montage: the first volume read sets record.dims, which the montage is
-    // made for (as one call's arguments their order would be unspecified: clang builds the montage
-    // first, of 0 x 0 x 0 voxels).
-    const std::vector<double> values =
-        read_volume(record, layout.anat_image(PhantomState::reference, suffix));
-    const std::string reference = grey_slices_png(montage_for(), values);
-    const std::filesystem::path deformed = layout.anat_image(PhantomState::deformed, suffix);
+    // The volumes before the montage: the first volume read sets record.dims, which the montage is
+    // made for.
+    std::vector<std::filesystem::path> files{layout.anat_image(PhantomState::reference, suffix)};
+    if (const std::filesystem::path deformed = layout.anat_image(PhantomState::deformed, suffix);
+        is_listed(deformed))
+      files.push_back(deformed);
+    const std::vector<std::vector<double>> values =
+        read_side_by_side<std::vector<double>>(record, files, read_values);
+    const std::string reference = grey_slices_png(montage_for(), values[0]);
     record.images.push_back(
-        {suffix, reference,
-         is_listed(deformed) ? grey_slices_png(montage_for(), read_volume(record, deformed)) : reference});
+        {suffix, reference, values.size() > 1 ? grey_slices_png(montage_for(), values[1]) : reference});
   }
   // Labels: contours over the images, the organs' volumes; the pictures themselves when there
   // are no images.
   std::array<std::vector<std::int32_t>, 2> labels;
-  for (const PhantomState state : {PhantomState::reference, PhantomState::deformed}) {
-    const std::filesystem::path file = layout.dseg(state);
-    if (!is_listed(file)) continue;
-    std::vector<std::int32_t>& l = labels[state == PhantomState::reference ? 0 : 1];
-    l = read_labels(record, file);
+  std::vector<std::filesystem::path> label_files;
+  std::vector<int> label_states;
+  for (const PhantomState state : {PhantomState::reference, PhantomState::deformed})
+    if (const std::filesystem::path file = layout.dseg(state); is_listed(file)) {
+      label_files.push_back(file);
+      label_states.push_back(state == PhantomState::reference ? 0 : 1);
+    }
+  std::vector<std::vector<std::int32_t>> read =
+      read_side_by_side<std::vector<std::int32_t>>(record, label_files, read_labels);
+  for (std::size_t n = 0; n < read.size(); ++n) {
+    const int state = label_states[n];
+    std::vector<std::int32_t>& l = labels[static_cast<std::size_t>(state)];
+    l = std::move(read[n]);
     for (const std::int32_t label : l)
       if (const auto found = record.labels.find(label); found != record.labels.end())
-        ++found->second.voxels[state == PhantomState::reference ? 0 : 1];
-    (state == PhantomState::reference ? record.reference_contours_png : record.deformed_contours_png) =
+        ++found->second.voxels[state];
+    (state == 0 ? record.reference_contours_png : record.deformed_contours_png) =
         contour_slices_png(montage_for(), l);
   }
   if (suffixes.empty() && !labels[0].empty()) {
@@ -152,25 +199,33 @@ void read_pictures(SubjectRecord& record, const DatasetLayout& layout, const std
          labels[1].empty() ? reference : grey_slices_png(montage_for(), as_values(labels[1]))});
   }
   if (record.deformed_contours_png.empty()) record.deformed_contours_png = record.reference_contours_png;
-  // The motion of each reference point: |u| of from-def_to-ref and its Jacobian determinant.
-  if (const std::filesystem::path file = layout.transform(PhantomState::deformed, PhantomState::reference);
-      is_listed(file)) {
-    const NiftiVolume field = read_nifti_vectors(file, 3);
-    require_grid(record, field.grid, file);
-    const std::size_t n = static_cast<std::size_t>(field.grid.voxel_count());
+  // The motion of each reference point: |u| of from-def_to-ref and its Jacobian determinant,
+  // read side by side.
+  const std::filesystem::path field_file = layout.transform(PhantomState::deformed, PhantomState::reference);
+  const std::filesystem::path jacobian_file =
+      layout.jacobian(PhantomState::deformed, PhantomState::reference);
+  std::vector<std::filesystem::path> motion_files;
+  for (const std::filesystem::path& file : {field_file, jacobian_file})
+    if (is_listed(file)) motion_files.push_back(file);
+  std::vector<std::vector<double>> motion =
+      read_side_by_side<std::vector<double>>(record, motion_files, [&](const std::filesystem::path& file) {
+        return file == field_file ? read_vectors(file) : read_values(file);
+      });
+  if (is_listed(field_file)) {
+    const std::vector<double>& field = motion.front();
+    const std::size_t n = field.size() / 3;
     std::vector<double> magnitude(n);
     for (std::size_t v = 0; v < n; ++v) {
-      magnitude[v] = std::sqrt(field.values[v] * field.values[v] + field.values[n + v] * field.values[n + v] +
-                               field.values[2 * n + v] * field.values[2 * n + v]);
+      magnitude[v] =
+          std::sqrt(field[v] * field[v] + field[n + v] * field[n + v] + field[2 * n + v] * field[2 * n + v]);
       if (std::isfinite(magnitude[v]))
         record.largest_displacement_mm = std::max(record.largest_displacement_mm, magnitude[v]);
     }
     ColourScale scale{ColourScale::Kind::magnitude, 0.0, std::max(record.largest_displacement_mm, 1e-3)};
     record.displacement = Overlay{colour_slices_png(montage_for(), magnitude, scale), scale};
   }
-  if (const std::filesystem::path file = layout.jacobian(PhantomState::deformed, PhantomState::reference);
-      is_listed(file)) {
-    const std::vector<double> jacobian = read_volume(record, file);
+  if (is_listed(jacobian_file)) {
+    const std::vector<double>& jacobian = motion.back();
     record.smallest_jacobian = jacobian.empty() ? 1.0 : jacobian.front();
     for (const double j : jacobian) {
       if (!std::isfinite(j)) continue;

@@ -1,5 +1,6 @@
 // The subject report: its text and picture helpers on known inputs, and the report of a small run
 // read back by `phantasm report` and opened in headless Chromium (check_report_in_browser.py).
+#include "io/nifti_file.hpp"
 #include "report/html_text.hpp"
 #include "report/slice_pictures.hpp"
 #include "tests/apps/cli_fixtures.hpp"
@@ -9,6 +10,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 using namespace phantasm;
 using namespace phantasm::testing;
@@ -201,6 +203,38 @@ TEST(ReportCommand, AMissingOrDamagedFileIsNamedAndNoReportIsWritten) {
   EXPECT_EQ(table.exit_code, 2);
   EXPECT_NE(table.err.find(landmarks.string() + ":2: expected three numbers, found"), std::string::npos)
       << table.err;
+  EXPECT_FALSE(fs::exists(report_of(copy)));
+}
+
+// The report reads each image's two states side by side; what it names when files are bad is
+// still the first bad file in the order of the subject's files, and a volume on another grid is
+// named against the subject's grid.
+TEST(ReportCommand, TheFirstBadFileInTheSubjectsOrderIsNamed) {
+  const fs::path copy = copy_of_warned_run("report-first-bad");
+  fs::remove(report_of(copy));
+  const fs::path reference = copy / "sub-01" / "ses-ref" / "anat" / "sub-01_ses-ref_T2w.nii.gz";
+  const fs::path deformed = copy / "sub-01" / "ses-def" / "anat" / "sub-01_ses-def_T2w.nii.gz";
+  const std::string reference_bytes = read_file(reference);
+  const std::string deformed_bytes = read_file(deformed);
+  write_text_file(reference, reference_bytes.substr(0, reference_bytes.size() / 2));
+  write_text_file(deformed, deformed_bytes.substr(0, deformed_bytes.size() / 3));
+  for (int attempt = 0; attempt < 3; ++attempt) { // the same file named however the threads run
+    const CommandResult both = run_command({k_phantasm, "report", copy.string()});
+    EXPECT_EQ(both.exit_code, 2);
+    EXPECT_NE(both.err.find(reference.string()), std::string::npos) << both.err;
+    EXPECT_EQ(both.err.find(deformed.string()), std::string::npos) << both.err;
+  }
+  EXPECT_FALSE(fs::exists(report_of(copy)));
+
+  write_text_file(reference, reference_bytes);
+  ImageGrid other;
+  other.dims = {4, 5, 6};
+  write_nifti(deformed, other, std::vector<float>(120, 1.0f));
+  const CommandResult grid = run_command({k_phantasm, "report", copy.string()});
+  EXPECT_EQ(grid.exit_code, 2);
+  EXPECT_NE(grid.err.find(deformed.string() + ": expected a volume of "), std::string::npos) << grid.err;
+  EXPECT_NE(grid.err.find("voxels like the subject's other volumes, found 4 x 5 x 6"), std::string::npos)
+      << grid.err;
   EXPECT_FALSE(fs::exists(report_of(copy)));
 }
 
