@@ -121,12 +121,13 @@ std::map<std::string, ShapeData> warped_shapes(const std::map<std::string, Shape
         const std::vector<std::int32_t>& source = *data.labels;
         std::vector<std::int32_t> labels(source.size(), 0);
         const Eigen::Vector3i dims = grid.dims;
+        const IndexFromWorld index_from_world(grid);
 #pragma omp parallel for schedule(static)
         for (int k = 0; k < dims.z(); ++k) {
           for (int j = 0; j < dims.y(); ++j) {
             for (int i = 0; i < dims.x(); ++i) {
               const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
-              const Eigen::Vector3d from = grid.index_from_world(x + warp.displacement(x));
+              const Eigen::Vector3d from = index_from_world(x + warp.displacement(x));
               const Eigen::Vector3i n(static_cast<int>(std::lround(from.x())),
                                       static_cast<int>(std::lround(from.y())),
                                       static_cast<int>(std::lround(from.z())));

@@ -12,9 +12,12 @@ Eigen::Vector3d ImageGrid::world_from_index(const Eigen::Vector3d& ijk) const {
 }
 
 Eigen::Vector3d ImageGrid::index_from_world(const Eigen::Vector3d& ras_mm) const {
-  const Eigen::Matrix3d linear = world_from_voxel.topLeftCorner<3, 3>();
-  return linear.inverse() * (ras_mm - world_from_voxel.topRightCorner<3, 1>());
+  return IndexFromWorld(*this)(ras_mm);
 }
+
+IndexFromWorld::IndexFromWorld(const ImageGrid& grid)
+    : m_inverse(Eigen::Matrix3d(grid.world_from_voxel.topLeftCorner<3, 3>()).inverse()),
+      m_origin(grid.world_from_voxel.topRightCorner<3, 1>()) {}
 
 std::int64_t ImageGrid::voxel_count() const {
   return std::int64_t{dims.x()} * std::int64_t{dims.y()} * std::int64_t{dims.z()};

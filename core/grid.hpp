@@ -26,6 +26,19 @@ struct ImageGrid {
   std::int64_t voxel_count() const;
 };
 
+/// ImageGrid::index_from_world with the grid's inverse made once, for loops over many points:
+/// the same arithmetic, so the same values, without a 3 x 3 inverse per point.
+class IndexFromWorld {
+public:
+  explicit IndexFromWorld(const ImageGrid& grid);
+  /// Continuous voxel index of a world position (RAS mm).
+  Eigen::Vector3d operator()(const Eigen::Vector3d& ras_mm) const { return m_inverse * (ras_mm - m_origin); }
+
+private:
+  Eigen::Matrix3d m_inverse;
+  Eigen::Vector3d m_origin;
+};
+
 /// Linear index of voxel (i, j, k) in an array stored with i fastest, then j, then k (NIfTI's
 /// order, the layout of every volume here): i + dims.x (j + dims.y k).
 /// @param dims voxels along i, j, k

@@ -41,9 +41,11 @@ void require_field(const ImageGrid& grid, std::size_t values, const std::vector<
 
 } // namespace
 
-std::int32_t label_at(const ImageGrid& source, const std::vector<std::int32_t>& labels,
-                      const Eigen::Vector3d& world_mm, std::int32_t outside) {
-  const Eigen::Vector3d ijk = source.index_from_world(world_mm);
+namespace {
+
+/// label_at at a continuous voxel index of `source`.
+std::int32_t label_at_index(const ImageGrid& source, const std::vector<std::int32_t>& labels,
+                            const Eigen::Vector3d& ijk, std::int32_t outside = 0) {
   int at[3];
   for (int a = 0; a < 3; ++a) {
     if (!std::isfinite(ijk[a])) return outside;
@@ -54,9 +56,9 @@ std::int32_t label_at(const ImageGrid& source, const std::vector<std::int32_t>& 
   return labels[index_of(source.dims, at[0], at[1], at[2])];
 }
 
-float value_at(const ImageGrid& source, const std::vector<float>& values, const Eigen::Vector3d& world_mm,
-               float outside) {
-  const Eigen::Vector3d ijk = source.index_from_world(world_mm);
+/// value_at at a continuous voxel index of `source`.
+float value_at_index(const ImageGrid& source, const std::vector<float>& values, const Eigen::Vector3d& ijk,
+                     float outside) {
   int low[3];
   double weight[3];
   for (int a = 0; a < 3; ++a) {
@@ -80,19 +82,36 @@ float value_at(const ImageGrid& source, const std::vector<float>& values, const 
   return static_cast<float>(sum);
 }
 
+} // namespace
+
+std::int32_t label_at(const ImageGrid& source, const std::vector<std::int32_t>& labels,
+                      const Eigen::Vector3d& world_mm, std::int32_t outside) {
+  return label_at_index(source, labels, source.index_from_world(world_mm), outside);
+}
+
+float value_at(const ImageGrid& source, const std::vector<float>& values, const Eigen::Vector3d& world_mm,
+               float outside) {
+  return value_at_index(source, values, source.index_from_world(world_mm), outside);
+}
+
+// The loops below map each point through the source's inverse made once (IndexFromWorld).
+
 std::vector<std::int32_t> resample_labels(const ImageGrid& target, const ImageGrid& source,
                                           const std::vector<std::int32_t>& labels) {
   std::vector<std::int32_t> out(static_cast<std::size_t>(target.voxel_count()));
-  for_each_centre(target,
-                  [&](std::size_t v, const Eigen::Vector3d& x) { out[v] = label_at(source, labels, x); });
+  const IndexFromWorld index(source);
+  for_each_centre(target, [&](std::size_t v, const Eigen::Vector3d& x) {
+    out[v] = label_at_index(source, labels, index(x));
+  });
   return out;
 }
 
 std::vector<float> resample_values(const ImageGrid& target, const ImageGrid& source,
                                    const std::vector<float>& values, float outside) {
   std::vector<float> out(static_cast<std::size_t>(target.voxel_count()));
+  const IndexFromWorld index(source);
   for_each_centre(target, [&](std::size_t v, const Eigen::Vector3d& x) {
-    out[v] = value_at(source, values, x, outside);
+    out[v] = value_at_index(source, values, index(x), outside);
   });
   return out;
 }
@@ -102,8 +121,9 @@ std::vector<std::int32_t> carry_labels(const ImageGrid& grid, const std::vector<
   require_field(grid, reference.size(), def_to_ref);
   const std::size_t count = reference.size();
   std::vector<std::int32_t> out(count);
+  const IndexFromWorld index(grid);
   for_each_centre(grid, [&](std::size_t v, const Eigen::Vector3d& x) {
-    out[v] = label_at(grid, reference, displaced(x, def_to_ref, v, count));
+    out[v] = label_at_index(grid, reference, index(displaced(x, def_to_ref, v, count)));
   });
   return out;
 }
@@ -113,8 +133,9 @@ std::vector<float> carry_values(const ImageGrid& grid, const std::vector<float>&
   require_field(grid, reference.size(), def_to_ref);
   const std::size_t count = reference.size();
   std::vector<float> out(count);
+  const IndexFromWorld index(grid);
   for_each_centre(grid, [&](std::size_t v, const Eigen::Vector3d& x) {
-    out[v] = value_at(grid, reference, displaced(x, def_to_ref, v, count), outside);
+    out[v] = value_at_index(grid, reference, index(displaced(x, def_to_ref, v, count)), outside);
   });
   return out;
 }

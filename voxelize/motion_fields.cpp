@@ -230,6 +230,7 @@ void DeformationMap::rasterize(const ImageGrid& grid, bool deformed, std::vector
                                std::vector<std::uint8_t>& inside) const {
   const auto count = static_cast<std::size_t>(grid.voxel_count());
   const auto& locators = deformed ? m_deformed : m_rest;
+  const IndexFromWorld index_from_world(grid);
   for (std::size_t b = 0; b < m_bodies.size(); ++b) {
     const DeformedBody& body = m_bodies[b];
     const Eigen::MatrixX3d& from = deformed ? body.deformed_mm : body.rest_mm;
@@ -237,7 +238,7 @@ void DeformationMap::rasterize(const ImageGrid& grid, bool deformed, std::vector
     for (Eigen::Index t = 0; t < body.tets.rows(); ++t) {
       Eigen::Vector3d low = Eigen::Vector3d::Constant(1e300), high = -low;
       for (int k = 0; k < 4; ++k) {
-        const Eigen::Vector3d index = grid.index_from_world(from.row(body.tets(t, k)).transpose());
+        const Eigen::Vector3d index = index_from_world(from.row(body.tets(t, k)).transpose());
         low = low.cwiseMin(index);
         high = high.cwiseMax(index);
       }
@@ -271,10 +272,10 @@ namespace {
 
 /// A field (component-major) at a world point by trilinear interpolation of the voxel values
 /// (clamped at the border): what a user of the ground truth does to compose the fields.
-Eigen::Vector3d sample_field(const ImageGrid& grid, const std::vector<float>& field,
-                             const Eigen::Vector3d& x) {
+Eigen::Vector3d sample_field(const ImageGrid& grid, const IndexFromWorld& index_from_world,
+                             const std::vector<float>& field, const Eigen::Vector3d& x) {
   const auto count = static_cast<std::size_t>(grid.voxel_count());
-  const Eigen::Vector3d index = grid.index_from_world(x);
+  const Eigen::Vector3d index = index_from_world(x);
   int lo[3];
   double w[3];
   for (int a = 0; a < 3; ++a) {
@@ -305,6 +306,7 @@ Eigen::Vector3d sample_field(const ImageGrid& grid, const std::vector<float>& fi
 void check_compositions(const ImageGrid& grid, MotionFields& f) {
   const auto count = static_cast<std::size_t>(grid.voxel_count());
   const double tolerance = composition_tolerance_voxels * grid.spacing_mm.minCoeff();
+  const IndexFromWorld index(grid);
   const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
   long inconsistent = 0;
   double worst = 0.0;
@@ -327,7 +329,7 @@ void check_compositions(const ImageGrid& grid, MotionFields& f) {
         if (to_def.isZero(0.0) && to_ref.isZero(0.0)) continue;
         const Eigen::Vector3d x = grid.world_from_index(Eigen::Vector3d(i, j, k));
         if (f.ref_to_def_exact[v]) {
-          const double miss = (sample_field(grid, f.def_to_ref, x + to_def) + to_def).norm();
+          const double miss = (sample_field(grid, index, f.def_to_ref, x + to_def) + to_def).norm();
           if (miss > tolerance) {
             f.ref_to_def_exact[v] = 0;
             ++inconsistent;
@@ -336,7 +338,7 @@ void check_compositions(const ImageGrid& grid, MotionFields& f) {
           }
         }
         if (f.def_to_ref_exact[v]) {
-          const double miss = (sample_field(grid, f.ref_to_def, x + to_ref) + to_ref).norm();
+          const double miss = (sample_field(grid, index, f.ref_to_def, x + to_ref) + to_ref).norm();
           if (miss > tolerance) {
             f.def_to_ref_exact[v] = 0;
             ++inconsistent;
