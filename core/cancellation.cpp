@@ -10,6 +10,7 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <exception>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -81,8 +82,30 @@ void request_cancellation(int signal_number) noexcept {
   g_cancel_requested.store(true, std::memory_order_relaxed);
 }
 
+namespace {
+// The flag of the innermost StopThisThreadWhen on this thread; null outside one.
+thread_local const std::atomic<bool>* t_stop_this_thread = nullptr;
+} // namespace
+
 bool cancellation_requested() noexcept {
-  return g_cancel_requested.load(std::memory_order_relaxed);
+  return g_cancel_requested.load(std::memory_order_relaxed) ||
+         (t_stop_this_thread != nullptr && t_stop_this_thread->load(std::memory_order_relaxed));
+}
+
+StopThisThreadWhen::StopThisThreadWhen(const std::atomic<bool>& stop) noexcept
+    : m_previous(t_stop_this_thread) {
+  t_stop_this_thread = &stop;
+}
+
+StopThisThreadWhen::~StopThisThreadWhen() {
+  t_stop_this_thread = m_previous;
+}
+
+StopOnFailure::StopOnFailure(std::atomic<bool>& stop) noexcept
+    : m_stop(stop), m_exceptions(std::uncaught_exceptions()) {}
+
+StopOnFailure::~StopOnFailure() {
+  if (std::uncaught_exceptions() > m_exceptions) m_stop.store(true, std::memory_order_relaxed);
 }
 
 int cancellation_signal() noexcept {

@@ -12,9 +12,40 @@ namespace phantasm {
 ///        kept and decides the exit code (128 + signal).
 void request_cancellation(int signal_number = 0) noexcept;
 
-/// True once request_cancellation() was called. A relaxed atomic load: cheap enough for inner
-/// loops (a poll per patch, per voxel slab, per solver iteration).
+/// True once request_cancellation() was called, or on a thread inside a StopThisThreadWhen whose
+/// flag is set. Relaxed atomic loads: cheap enough for inner loops (a poll per patch, per voxel
+/// slab, per solver iteration).
 bool cancellation_requested() noexcept;
+
+/// For its life, makes cancellation_requested() true on the thread that made it (and
+/// throw_if_cancelled() throw there) once `stop` is set; other threads are not affected. A
+/// helper thread whose result is no longer wanted (the work it runs beside has failed) then ends
+/// at its next poll instead of making the caller's error wait for it. Nests: the one made last
+/// on a thread is the one asked.
+class StopThisThreadWhen {
+public:
+  explicit StopThisThreadWhen(const std::atomic<bool>& stop) noexcept;
+  ~StopThisThreadWhen();
+  StopThisThreadWhen(const StopThisThreadWhen&) = delete;
+  StopThisThreadWhen& operator=(const StopThisThreadWhen&) = delete;
+
+private:
+  const std::atomic<bool>* m_previous;
+};
+
+/// Sets `stop` when it is destroyed by an exception's unwinding (not on a normal exit): made
+/// after the helper thread's future, it releases the helper before the future waits for it.
+class StopOnFailure {
+public:
+  explicit StopOnFailure(std::atomic<bool>& stop) noexcept;
+  ~StopOnFailure();
+  StopOnFailure(const StopOnFailure&) = delete;
+  StopOnFailure& operator=(const StopOnFailure&) = delete;
+
+private:
+  std::atomic<bool>& m_stop;
+  int m_exceptions;
+};
 
 /// The signal that asked for cancellation, 0 when none was given (or none was requested).
 int cancellation_signal() noexcept;

@@ -4,6 +4,7 @@
 #include "anatomy/phantom.hpp"
 #include "atlas/atlas_labels.hpp"
 #include "core/abandonable_work.hpp"
+#include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/sha256.hpp"
 #include "io/dataset_layout.hpp"
@@ -24,6 +25,7 @@
 #include "voxelize/voxelize_phantom.hpp"
 #include "voxelize/voxelize_plan.hpp"
 
+#include <atomic>
 #include <chrono>
 #include <ctime>
 #include <filesystem>
@@ -171,22 +173,29 @@ void run_stages(const Scene& scene, Reporter& reporter, SimulationStage until,
   // The reference state needs the anatomy alone: built (or read from the cache) on a thread of
   // its own while the deformation is solved (its body mesh and most of its solve use one core).
   // One thread, so that its parallel loops stay off the solver's second core.
+  // If the deformation fails, the reference state is not wanted: its thread stops at its next
+  // poll (declared in this order, the flag outlives the future, which waits for the thread after
+  // the guard has set the flag).
+  std::atomic<bool> reference_state_unwanted{false};
   std::future<std::pair<std::optional<ReferenceVoxelization>, bool>> reference_state;
+  const StopOnFailure stop_reference_state(reference_state_unwanted);
   if (scene.deformation.mode != DeformationMode::none && until >= SimulationStage::voxelization) {
     const bool stored =
         reference_state_stored(anatomy_key, scene.voxelization, scene.organs, scene.grid.grid(), cache);
-    reference_state = std::async(std::launch::async, [&scene, &result, &anatomy_key, &cache, stored] {
-      const QuietProgressDetails quiet;
-      omp_set_num_threads(1);
-      if (stored) // read, or left to the voxelization stage when damaged (it says so)
-        return std::make_pair(read_stored_reference_state(anatomy_key, scene.voxelization, scene.organs,
-                                                          scene.grid.grid(), result.phantom.organs.size(),
-                                                          cache),
-                              true);
-      return std::make_pair(std::optional<ReferenceVoxelization>(voxelize_reference_state(
-                                scene.voxelization, scene.organs, scene.grid.grid(), result.phantom)),
-                            false);
-    });
+    reference_state = std::async(
+        std::launch::async, [&scene, &result, &anatomy_key, &cache, stored, &reference_state_unwanted] {
+          const QuietProgressDetails quiet;
+          const StopThisThreadWhen unwanted(reference_state_unwanted);
+          omp_set_num_threads(1);
+          if (stored) // read, or left to the voxelization stage when damaged (it says so)
+            return std::make_pair(read_stored_reference_state(anatomy_key, scene.voxelization, scene.organs,
+                                                              scene.grid.grid(), result.phantom.organs.size(),
+                                                              cache),
+                                  true);
+          return std::make_pair(std::optional<ReferenceVoxelization>(voxelize_reference_state(
+                                    scene.voxelization, scene.organs, scene.grid.grid(), result.phantom)),
+                                false);
+        });
   }
   StageReport& sim = result.stages[1];
   if (scene.deformation.mode != DeformationMode::none) {
