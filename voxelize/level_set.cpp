@@ -247,13 +247,19 @@ std::vector<float> candidate_distances(const SignedDistanceMesh& mesh,
       // On an edge or corner of the base the bumps vanish (their ellipses lie inside the
       // triangle), so this corrects only points above a patch's interior: the side from the
       // height of the surface above the closest base point, the distance from the patch's
-      // closest point near the band's middle.
+      // closest point.
       const Eigen::Vector2d uv = closest.on_triangle.barycentric.tail<2>();
       Eigen::Vector2d d_uv;
       const double h = p.height(uv, &d_uv);
       const double along_normal = d - h;
-      const double distance =
-          std::abs(along_normal) < band ? p.distance(x, uv, h, d_uv) : std::abs(along_normal);
+      // The patch may come within the band of x wherever its heights reach: x's height above
+      // the base plane within the band of [-below, above]. A point a band width or more above the
+      // surface point below it can still lie beside a bump's flank, nearer than the band (the
+      // distance along the normal would be up to a voxel too large there on steep bumps). Farther, every
+      // point of the patch is at least the band away and the value is the band's either way.
+      const double z = p.normal.dot(x - p.origin);
+      const double distance = z > -p.below_mm - band && z < p.above_mm + band ? p.distance(x, uv, h, d_uv)
+                                                                              : std::abs(along_normal);
       d = along_normal < 0.0 ? -distance : distance;
     }
     values[i] = static_cast<float>(std::clamp(d, -band, band));
