@@ -255,7 +255,7 @@ std::vector<float> candidate_distances(const SignedDistanceMesh& mesh,
       // The patch may come within the band of x wherever its heights reach: x's height above
       // the base plane within the band of [-below, above]. A point a band width or more above the
       // surface point below it can still lie beside a bump's flank, nearer than the band (the
-      // distance along the normal would be up to a voxel too large there on steep bumps). Farther, every
+      // distance along the normal would be more than a voxel too large there on steep bumps). Farther, every
       // point of the patch is at least the band away and the value is the band's either way.
       const double z = p.normal.dot(x - p.origin);
       const double distance = z > -p.below_mm - band && z < p.above_mm + band ? p.distance(x, uv, h, d_uv)

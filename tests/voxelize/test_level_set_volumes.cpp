@@ -388,33 +388,37 @@ TEST(PatchLevelSet, ManyBumpsPerPatchAreAllOnTheSurface) {
   EXPECT_LT(worst, 0.3 * h);
 }
 
-/// The signed distance to a tessellation of `surface` within 0.005 mm: the reference for the
-/// distances a level set stores in its band.
-SignedDistanceMesh fine_signed_distance(const PatchSurface& surface) {
-  const TriangleMesh fine = surface.tessellate(0.005);
-  SignedDistanceMesh exact(fine.faces);
-  exact.update(fine.vertices);
-  exact.build_search_tree();
-  return exact;
-}
+/// The many-bumps surface's level set at 0.25 mm voxels beside the signed distance to a
+/// tessellation of the surface within 0.005 mm: the reference for the values stored in the band.
+struct ManyBumpsBand {
+  static SignedDistanceMesh fine_signed_distance(const PatchSurface& surface) {
+    const TriangleMesh fine = surface.tessellate(0.005);
+    SignedDistanceMesh exact(fine.faces);
+    exact.update(fine.vertices);
+    exact.build_search_tree();
+    return exact;
+  }
+  std::vector<std::vector<Eigen::Vector2d>> centres;
+  const PatchSurface surface = many_bumps_surface(&centres);
+  const double h = 0.25;
+  const LevelSet level_set{surface, h};
+  const SignedDistanceMesh exact = fine_signed_distance(surface);
+  const openvdb::FloatGrid& grid = *static_cast<const openvdb::FloatGrid*>(level_set.grid());
+};
 
 // The values the level set stores in its band are the signed distance to the patch surface, not
 // only their sign: against the distance to a tessellation within 0.005 mm, at every stored voxel
 // of the many-bumps surface within 2 voxels of it (narrow, elongated bumps 0.3 to 0.6 mm high
 // on 1.5 to 2.5 mm wide supports, the hardest case for the closest-point search on a patch).
 TEST(PatchLevelSet, BandValuesAreTheDistanceToTheSurface) {
-  std::vector<std::vector<Eigen::Vector2d>> centres;
-  const PatchSurface surface = many_bumps_surface(&centres);
-  const double h = 0.25;
-  const LevelSet level_set(surface, h);
-  const SignedDistanceMesh exact = fine_signed_distance(surface);
-  const auto& grid = *static_cast<const openvdb::FloatGrid*>(level_set.grid());
+  const ManyBumpsBand band;
+  const double h = band.h;
   std::vector<double> errors;
-  for (auto it = grid.cbeginValueOn(); it; ++it) {
+  for (auto it = band.grid.cbeginValueOn(); it; ++it) {
     if (std::abs(*it) > 2.0 * h) continue;
     const openvdb::Coord c = it.getCoord();
     const Eigen::Vector3d x = h * Eigen::Vector3d(c.x(), c.y(), c.z());
-    errors.push_back(std::abs(static_cast<double>(*it) - exact.signed_distance(x)));
+    errors.push_back(std::abs(static_cast<double>(*it) - band.exact.signed_distance(x)));
   }
   ASSERT_GT(errors.size(), 10000u);
   std::sort(errors.begin(), errors.end());
@@ -444,13 +448,10 @@ TEST(PatchLevelSet, BandValuesAreTheDistanceToTheSurface) {
 // base, about 800 label voxels of a population subject then changed with the band's width, 16
 // with the distance measured to the patch).
 TEST(PatchLevelSet, EveryVoxelNearTheSurfaceHoldsItsDistance) {
-  std::vector<std::vector<Eigen::Vector2d>> centres;
-  const PatchSurface surface = many_bumps_surface(&centres);
-  const double h = 0.25;
-  const LevelSet level_set(surface, h);
-  const SignedDistanceMesh exact = fine_signed_distance(surface);
-  const auto& grid = *static_cast<const openvdb::FloatGrid*>(level_set.grid());
-  const auto accessor = grid.getConstAccessor();
+  const ManyBumpsBand band;
+  const double h = band.h;
+  const PatchSurface& surface = band.surface;
+  const auto accessor = band.grid.getConstAccessor();
   std::mt19937 random(11);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   std::vector<openvdb::Coord> voxels;
@@ -472,7 +473,7 @@ TEST(PatchLevelSet, EveryVoxelNearTheSurfaceHoldsItsDistance) {
   std::size_t near = 0, wrong = 0;
   double worst = 0.0;
   for (const openvdb::Coord& c : voxels) {
-    const double d = exact.signed_distance(h * Eigen::Vector3d(c.x(), c.y(), c.z()));
+    const double d = band.exact.signed_distance(h * Eigen::Vector3d(c.x(), c.y(), c.z()));
     if (std::abs(d) > 2.0 * h) continue;
     ++near;
     const double error = std::abs(static_cast<double>(accessor.getValue(c)) - d);
