@@ -1,14 +1,19 @@
 // Cost of one local/global iteration (local step, global step, total) on the twisting bar
-// (1421 vertices, 5040 tets) and on a ~10k-vertex / ~43k-tet solid, on 1 and 2 threads, and
-// of one Newton iteration on the bar.
+// (1421 vertices, 5040 tets) and on a ~10k-vertex / ~43k-tet solid, on 1 and 2 threads, of one
+// Newton iteration on the bar, and of the global matrix's factorization, simplicial or
+// supernodal, on both.
 
 #include "sim/local_global.hpp"
 #include "sim/newton.hpp"
+#include "sim/sparse_cholesky.hpp"
 #include "sim/twisting_bar.hpp"
 
 #include <benchmark/benchmark.h>
 
+#include <chrono>
+
 #include <memory>
+#include <vector>
 
 namespace {
 
@@ -17,6 +22,10 @@ phantasm::TwistingBarSettings solid(int size) {
   if (size == 1) { // 13 x 13 x 61 = 10309 vertices, 5 x 12 x 12 x 60 = 43200 tets
     settings.size_mm = {60, 60, 300};
     settings.cells = {12, 12, 60};
+  }
+  if (size == 2) { // a cube of 22^3 = 10648 vertices, 5 x 21^3 = 46305 tets: as compact as a head's body
+    settings.size_mm = {100, 100, 100};
+    settings.cells = {21, 21, 21};
   }
   return settings;
 }
@@ -67,6 +76,49 @@ void newton_iteration_bar(benchmark::State& state) {
   }
 }
 BENCHMARK(newton_iteration_bar)->Unit(benchmark::kMillisecond);
+
+/// The factorization of a matrix with the global matrix's pattern (one row per vertex, an entry
+/// per tet edge: the tet graph's Laplacian plus the identity) and one three-column solve with
+/// the factor. range(0): 0 = bar, 1 = 10k solid, 2 = 10k cube; range(1): 0 simplicial, 1 supernodal (then
+/// converted to the simplicial LDL^T the solves read). The time is the factorization's; the
+/// solve's is a counter.
+void sparse_cholesky_factor(benchmark::State& state) {
+  const phantasm::TwistingBarStep step = phantasm::twisting_bar_step(solid(static_cast<int>(state.range(0))));
+  const auto n = static_cast<int>(step.model.vertex_count());
+  std::vector<Eigen::Triplet<double>> entries;
+  for (int v = 0; v < n; ++v)
+    entries.emplace_back(v, v, 1.0);
+  for (const phantasm::TetElement& tet : step.model.tets) {
+    for (int a = 0; a < 4; ++a) {
+      for (int b = 0; b < 4; ++b) {
+        const int i = tet.vertices[static_cast<std::size_t>(a)],
+                  j = tet.vertices[static_cast<std::size_t>(b)];
+        if (i >= j) entries.emplace_back(i, j, i == j ? 1.0 : -1.0 / 6.0);
+      }
+    }
+  }
+  Eigen::SparseMatrix<double> lower(n, n);
+  lower.setFromTriplets(entries.begin(), entries.end());
+  const auto kind = state.range(1) == 0 ? phantasm::SparseCholesky::Factorization::simplicial
+                                        : phantasm::SparseCholesky::Factorization::supernodal;
+  const Eigen::MatrixX3d b = Eigen::MatrixX3d::Ones(n, 3);
+  Eigen::MatrixX3d x;
+  double solve_seconds = 0.0;
+  for (auto _ : state) {
+    phantasm::SparseCholesky factor(lower, kind);
+    state.PauseTiming();
+    const auto start = std::chrono::steady_clock::now();
+    factor.solve(b, x);
+    solve_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    state.ResumeTiming();
+  }
+  state.counters["rows"] = n;
+  state.counters["solve_ms"] = 1e3 * solve_seconds / static_cast<double>(state.iterations());
+}
+BENCHMARK(sparse_cholesky_factor)
+    ->ArgsProduct({{0, 1, 2}, {0, 1}})
+    ->ArgNames({"solid", "supernodal"})
+    ->Unit(benchmark::kMillisecond);
 
 } // namespace
 

@@ -1,6 +1,9 @@
 #include "sim/sparse_cholesky.hpp"
 
 #include <cholmod.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include <algorithm>
 #include <cmath>
@@ -109,7 +112,8 @@ struct SparseCholesky::Impl {
   }
 };
 
-SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& lower) : m(std::make_unique<Impl>()) {
+SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& lower, Factorization factorization)
+    : m(std::make_unique<Impl>()) {
   Eigen::SparseMatrix<double> A = lower;
   A.makeCompressed();
   cholmod_sparse view{};
@@ -125,11 +129,32 @@ SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& lower) : m(std
   view.dtype = CHOLMOD_DOUBLE;
   view.sorted = 1;
   view.packed = 1;
-  m->common.supernodal = CHOLMOD_SIMPLICIAL;
-  m->common.final_ll = 0; // LDL^T: what cholmod_updown works on
+  const bool supernodal = factorization == Factorization::supernodal ||
+                          (factorization == Factorization::automatic && A.rows() >= k_supernodal_rows);
+  m->common.print = 0; // a matrix that is not positive definite is reported by the exception below
+  m->common.supernodal = supernodal ? CHOLMOD_SUPERNODAL : CHOLMOD_SIMPLICIAL;
+  m->common.final_ll = 0;                    // LDL^T: what cholmod_updown works on
+  m->common.final_asis = supernodal ? 0 : 1; // a supernodal factor converted to simplicial LDL^T
+  m->common.final_super = 0;
+  m->common.final_pack = 1;
+  m->common.final_monotonic = 1;
   m->factor = cholmod_analyze(&view, &m->common);
   if (m->factor == nullptr) throw std::runtime_error("sparse Cholesky: the analysis failed");
-  cholmod_factorize(&view, m->factor, &m->common);
+  {
+#ifdef _OPENMP
+    const int threads = omp_get_max_threads();
+    if (supernodal) omp_set_num_threads(1);
+#endif
+    cholmod_factorize(&view, m->factor, &m->common);
+#ifdef _OPENMP
+    if (supernodal) omp_set_num_threads(threads);
+#endif
+  }
+  // The supernodes are relaxed (they merge columns whose patterns nearly match, storing zeros to
+  // make dense blocks): converted to simplicial those zeros stay in L and every solve reads them.
+  // Dropped here, the solves read L's own pattern again.
+  if (supernodal && m->common.status == CHOLMOD_OK)
+    cholmod_resymbol(&view, nullptr, 0, 1, m->factor, &m->common);
   m->check_positive_definite("the matrix");
   m->position.assign(static_cast<std::size_t>(A.rows()), 0);
   const auto* permutation = static_cast<const int*>(m->factor->Perm);

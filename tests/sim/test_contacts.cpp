@@ -234,6 +234,65 @@ TEST(SparseCholesky, ColumnUpdatesThatFillInAndTheTwoThreadSolveAreExact) {
   EXPECT_EQ(factor.rank_changes(), 2);
 }
 
+namespace {
+
+/// The lower triangle of the 3-D grid Laplacian (7-point) plus a small diagonal, n^3 rows: a
+/// compact body's pattern, whose factor fills in as a tet mesh's does.
+Eigen::SparseMatrix<double> grid_laplacian(int n) {
+  std::vector<Eigen::Triplet<double>> entries;
+  const auto row = [n](int i, int j, int k) { return (k * n + j) * n + i; };
+  for (int k = 0; k < n; ++k) {
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        entries.emplace_back(row(i, j, k), row(i, j, k), 6.01);
+        if (i > 0) entries.emplace_back(row(i, j, k), row(i - 1, j, k), -1.0);
+        if (j > 0) entries.emplace_back(row(i, j, k), row(i, j - 1, k), -1.0);
+        if (k > 0) entries.emplace_back(row(i, j, k), row(i, j, k - 1), -1.0);
+      }
+    }
+  }
+  Eigen::SparseMatrix<double> A(n * n * n, n * n * n);
+  A.setFromTriplets(entries.begin(), entries.end());
+  return A;
+}
+
+} // namespace
+
+TEST(SparseCholesky, TheSupernodalFactorSolvesAndUpdatesAsTheSimplicialOne) {
+  // 18^3 = 5832 rows: above k_supernodal_rows, so `automatic` factors supernodally.
+  const Eigen::SparseMatrix<double> A = grid_laplacian(18);
+  ASSERT_GE(A.rows(), SparseCholesky::k_supernodal_rows);
+  const Eigen::MatrixX3d b = Eigen::MatrixX3d::Random(A.rows(), 3);
+  SparseCholesky simplicial(A, SparseCholesky::Factorization::simplicial);
+  SparseCholesky supernodal(A);
+  Eigen::MatrixX3d x, reference;
+  simplicial.solve(b, reference);
+  supernodal.solve(b, x);
+  EXPECT_LT((x - reference).norm(), 1e-12 * reference.norm());
+  // The residual of the supernodal factor's solve is as small as the simplicial one's.
+  const Eigen::SparseMatrix<double> full = Eigen::SparseMatrix<double>(A.selfadjointView<Eigen::Lower>());
+  EXPECT_LT((full * x - b).norm(), 1e-12 * b.norm());
+  // Rank changes work on the converted factor: a contact's column and the diagonal, then back.
+  const SparseCholesky::Column c = {{10, 3.0}, {3000, -1.2}, {5800, -1.8}};
+  supernodal.update_columns({c}, {});
+  supernodal.update_diagonal({{100, 40.0}});
+  simplicial.update_columns({c}, {});
+  simplicial.update_diagonal({{100, 40.0}});
+  simplicial.solve(b, reference);
+  supernodal.solve(b, x);
+  EXPECT_LT((x - reference).norm(), 1e-12 * reference.norm());
+  supernodal.update_columns({}, {c});
+  supernodal.update_diagonal({{100, -40.0}});
+  SparseCholesky original(A, SparseCholesky::Factorization::simplicial);
+  original.solve(b, reference);
+  supernodal.solve(b, x);
+  EXPECT_LT((x - reference).norm(), 1e-12 * reference.norm());
+  // An indefinite matrix is refused the same way.
+  Eigen::SparseMatrix<double> indefinite = A;
+  indefinite.coeffRef(5, 5) = -10.0;
+  EXPECT_THROW(SparseCholesky(indefinite, SparseCholesky::Factorization::supernodal), std::runtime_error);
+}
+
 // A cantilever sagging onto a table (a half-space) below its free half: local/global with
 // contacts that come during the solve reaches Newton's minimizer of the same energy, nothing
 // sinks into the table deeper than the penalty's own tolerance, and the table carries the part
