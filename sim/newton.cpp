@@ -2,6 +2,7 @@
 
 #include "core/cancellation.hpp"
 #include "core/progress.hpp"
+#include "sim/single_threaded_blas.hpp"
 #include "sim/vertex_star_volumes.hpp"
 
 #include <Eigen/CholmodSupport>
@@ -228,29 +229,6 @@ struct FreeRows {
 
 /// Free coordinates from which the supernodal factor is used.
 constexpr Eigen::Index k_supernodal_rows = 20000;
-
-/// OpenMP's thread count of the calling thread set to one while it lives: CHOLMOD's supernodal
-/// factor calls BLAS, whose OpenMP build takes the thread count from there. On one thread the
-/// factor is the same bits on any machine, and a busy second core (a test or a second subject
-/// beside the solve) cannot stall it: the Colin head's 27 000-row Hessian factored in 2-3 s on
-/// one thread and in 17 s on two with the other core loaded.
-class SingleThreadedBlas {
-public:
-#ifdef _OPENMP
-  SingleThreadedBlas() : threads_(omp_get_max_threads()) {
-    omp_set_num_threads(1);
-  }
-  ~SingleThreadedBlas() {
-    omp_set_num_threads(threads_);
-  }
-
-private:
-  int threads_;
-#endif
-public:
-  SingleThreadedBlas(const SingleThreadedBlas&) = delete;
-  SingleThreadedBlas& operator=(const SingleThreadedBlas&) = delete;
-};
 
 /// CHOLMOD's LL^T factor of the projected Hessian. Simplicial below k_supernodal_rows: the
 /// supernodal factor's many small BLAS calls cost more than they save at the sizes Newton is the

@@ -1,9 +1,8 @@
 #include "sim/sparse_cholesky.hpp"
 
+#include "sim/single_threaded_blas.hpp"
+
 #include <cholmod.h>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 #include <algorithm>
 #include <cmath>
@@ -140,15 +139,11 @@ SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& lower, Factori
   m->common.final_monotonic = 1;
   m->factor = cholmod_analyze(&view, &m->common);
   if (m->factor == nullptr) throw std::runtime_error("sparse Cholesky: the analysis failed");
-  {
-#ifdef _OPENMP
-    const int threads = omp_get_max_threads();
-    if (supernodal) omp_set_num_threads(1);
-#endif
+  if (supernodal) {
+    const SingleThreadedBlas one_thread;
     cholmod_factorize(&view, m->factor, &m->common);
-#ifdef _OPENMP
-    if (supernodal) omp_set_num_threads(threads);
-#endif
+  } else {
+    cholmod_factorize(&view, m->factor, &m->common);
   }
   // The supernodes are relaxed (they merge columns whose patterns nearly match, storing zeros to
   // make dense blocks): converted to simplicial those zeros stay in L and every solve reads them.
