@@ -1,13 +1,15 @@
 // Cost of one local/global iteration (local step, global step, total) on the twisting bar
-// (1421 vertices, 5040 tets) and on a ~10k-vertex / ~43k-tet solid, on 1 and 2 threads, of one
-// Newton iteration on the bar, and of the global matrix's factorization, simplicial or
-// supernodal, on both.
+// (1421 vertices, 5040 tets) and on a ~10k-vertex / ~43k-tet solid, on 1 and 2 threads; of one
+// Newton iteration on the bar, and of a Newton Hessian's factorization on cubes; of the global
+// matrix's factorization, simplicial or supernodal, on both.
 
 #include "sim/local_global.hpp"
 #include "sim/newton.hpp"
+#include "sim/single_threaded_blas.hpp"
 #include "sim/sparse_cholesky.hpp"
 #include "sim/twisting_bar.hpp"
 
+#include <Eigen/CholmodSupport>
 #include <benchmark/benchmark.h>
 
 #include <chrono>
@@ -118,6 +120,53 @@ void sparse_cholesky_factor(benchmark::State& state) {
 BENCHMARK(sparse_cholesky_factor)
     ->ArgsProduct({{0, 1, 2}, {0, 1}})
     ->ArgNames({"solid", "supernodal"})
+    ->Unit(benchmark::kMillisecond);
+
+/// The Newton check's factorization (sim/newton.cpp, HessianFactor): CHOLMOD's LL^T of a matrix
+/// with the projected Hessian's pattern (a 3 x 3 block per pair of vertices that share a tet: the
+/// tet graph's Laplacian plus the identity, times an SPD 3 x 3 block) on a cube of range(0)^3
+/// cells (5 tets each), simplicial (range(1) = 0) or supernodal with BLAS on one thread (1).
+/// The symbolic analysis is made once, as Newton keeps it while the pattern stays; the time is
+/// the numeric factorization's. Where the two cross sets `k_supernodal_rows` there.
+void newton_hessian_factor(benchmark::State& state) {
+  phantasm::TwistingBarSettings settings;
+  const auto cells = static_cast<int>(state.range(0));
+  settings.size_mm = {100, 100, 100};
+  settings.cells = {cells, cells, cells};
+  const phantasm::TwistingBarStep step = phantasm::twisting_bar_step(settings);
+  const auto n = static_cast<int>(step.model.vertex_count());
+  Eigen::Matrix3d block;
+  block << 1.0, 0.2, 0.1, 0.2, 1.0, 0.2, 0.1, 0.2, 1.0;
+  std::vector<Eigen::Triplet<double>> entries;
+  const auto add = [&](int i, int j, double weight) {
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c)
+        if (3 * i + r >= 3 * j + c) entries.emplace_back(3 * i + r, 3 * j + c, weight * block(r, c));
+  };
+  for (int v = 0; v < n; ++v)
+    add(v, v, 1.0);
+  for (const phantasm::TetElement& tet : step.model.tets)
+    for (int a = 0; a < 4; ++a)
+      for (int b = 0; b < 4; ++b) {
+        const int i = tet.vertices[static_cast<std::size_t>(a)],
+                  j = tet.vertices[static_cast<std::size_t>(b)];
+        if (i >= j) add(i, j, i == j ? 1.0 : -1.0 / 6.0);
+      }
+  Eigen::SparseMatrix<double> lower(3 * n, 3 * n);
+  lower.setFromTriplets(entries.begin(), entries.end());
+  const phantasm::SingleThreadedBlas one_thread;
+  Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> factor;
+  factor.setMode(state.range(1) == 0 ? Eigen::CholmodSimplicialLLt : Eigen::CholmodSupernodalLLt);
+  factor.analyzePattern(lower);
+  for (auto _ : state) {
+    factor.factorize(lower);
+    if (factor.info() != Eigen::Success) state.SkipWithError("not positive definite");
+  }
+  state.counters["rows"] = 3 * n;
+}
+BENCHMARK(newton_hessian_factor)
+    ->ArgsProduct({{8, 10, 12, 14, 16}, {0, 1}})
+    ->ArgNames({"cells", "supernodal"})
     ->Unit(benchmark::kMillisecond);
 
 } // namespace

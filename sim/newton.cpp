@@ -228,15 +228,16 @@ struct FreeRows {
 };
 
 /// Free coordinates from which the supernodal factor is used.
-constexpr Eigen::Index k_supernodal_rows = 20000;
+constexpr Eigen::Index k_supernodal_rows = 5000;
 
 /// CHOLMOD's LL^T factor of the projected Hessian. Simplicial below k_supernodal_rows: the
-/// supernodal factor's many small BLAS calls cost more than they save at the sizes Newton is the
-/// reference for (the bar: 35 vs 57 ms per iteration, bench_sim); above, its dense blocks win by
-/// far (the Colin head's body, 27 000 rows, 1.1e7 entries in the factor: 9.4 s of processor time
-/// simplicial, 1.5 s supernodal on one thread). The symbolic analysis (fill-reducing ordering,
-/// elimination tree) is kept while the Hessian's pattern stays the same, as it does between
-/// iterations unless contacts come or go.
+/// supernodal factor's many small BLAS calls cost more than they save on small bodies (the bar,
+/// 3969 rows: 16 against 34 ms a factorization); above, its dense blocks win, more the larger
+/// and more compact the body (bench_sim's newton_hessian_factor on cubes: 6591 rows 107 against
+/// 51 ms, 14 739 rows 387 against 123 ms; the coarse Colin head of the tests, 17 130 rows, 2.3-2.9
+/// s against 0.25 s; its full body, 27 000 rows, 9.4 against 1.5 s), BLAS on one thread. The
+/// symbolic analysis (fill-reducing ordering, elimination tree) is kept while the Hessian's
+/// pattern stays the same, as it does between iterations unless contacts come or go.
 class HessianFactor {
 public:
   explicit HessianFactor(const FreeRows& free) {
