@@ -3,13 +3,12 @@
 // Newton iteration on the bar, and of a Newton Hessian's factorization on cubes; of the global
 // matrix's factorization, simplicial or supernodal, on both.
 
+#include "sim/hessian_factor.hpp"
 #include "sim/local_global.hpp"
 #include "sim/newton.hpp"
-#include "sim/single_threaded_blas.hpp"
 #include "sim/sparse_cholesky.hpp"
 #include "sim/twisting_bar.hpp"
 
-#include <Eigen/CholmodSupport>
 #include <benchmark/benchmark.h>
 
 #include <chrono>
@@ -122,12 +121,12 @@ BENCHMARK(sparse_cholesky_factor)
     ->ArgNames({"solid", "supernodal"})
     ->Unit(benchmark::kMillisecond);
 
-/// The Newton check's factorization (sim/newton.cpp, HessianFactor): CHOLMOD's LL^T of a matrix
-/// with the projected Hessian's pattern (a 3 x 3 block per pair of vertices that share a tet: the
-/// tet graph's Laplacian plus the identity, times an SPD 3 x 3 block) on a cube of range(0)^3
-/// cells (5 tets each), simplicial (range(1) = 0) or supernodal with BLAS on one thread (1).
-/// The symbolic analysis is made once, as Newton keeps it while the pattern stays; the time is
-/// the numeric factorization's. Where the two cross sets `k_supernodal_rows` there.
+/// The Newton check's factorization (sim/hessian_factor.hpp): the LL^T of a matrix with the
+/// projected Hessian's pattern (a 3 x 3 block per pair of vertices that share a tet: the tet
+/// graph's Laplacian plus the identity, times an SPD 3 x 3 block) on a cube of range(0)^3 cells
+/// (5 tets each), simplicial (range(1) = 0) or supernodal (1). The symbolic analysis is made by
+/// the first factorization and kept, as Newton keeps it while the pattern stays; the time is the
+/// numeric factorization's. Where the two cross sets HessianFactor::k_supernodal_rows.
 void newton_hessian_factor(benchmark::State& state) {
   phantasm::TwistingBarSettings settings;
   const auto cells = static_cast<int>(state.range(0));
@@ -154,13 +153,12 @@ void newton_hessian_factor(benchmark::State& state) {
       }
   Eigen::SparseMatrix<double> lower(3 * n, 3 * n);
   lower.setFromTriplets(entries.begin(), entries.end());
-  const phantasm::SingleThreadedBlas one_thread;
-  Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> factor;
-  factor.setMode(state.range(1) == 0 ? Eigen::CholmodSimplicialLLt : Eigen::CholmodSupernodalLLt);
-  factor.analyzePattern(lower);
+  phantasm::HessianFactor factor(lower.rows(), state.range(1) == 0
+                                                   ? phantasm::HessianFactor::Factorization::simplicial
+                                                   : phantasm::HessianFactor::Factorization::supernodal);
+  if (!factor.factorize(lower, 0.0)) state.SkipWithError("not positive definite"); // the analysis
   for (auto _ : state) {
-    factor.factorize(lower);
-    if (factor.info() != Eigen::Success) state.SkipWithError("not positive definite");
+    if (!factor.factorize(lower, 0.0)) state.SkipWithError("not positive definite");
   }
   state.counters["rows"] = 3 * n;
 }

@@ -2,10 +2,9 @@
 
 #include "core/cancellation.hpp"
 #include "core/progress.hpp"
-#include "sim/single_threaded_blas.hpp"
+#include "sim/hessian_factor.hpp"
 #include "sim/vertex_star_volumes.hpp"
 
-#include <Eigen/CholmodSupport>
 #include <Eigen/Eigenvalues>
 #include <Eigen/Sparse>
 
@@ -227,51 +226,6 @@ struct FreeRows {
   }
 };
 
-/// Free coordinates from which the supernodal factor is used.
-constexpr Eigen::Index k_supernodal_rows = 5000;
-
-/// CHOLMOD's LL^T factor of the projected Hessian. Simplicial below k_supernodal_rows: the
-/// supernodal factor's many small BLAS calls cost more than they save on small bodies (the bar,
-/// 3969 rows: 16 against 34 ms a factorization); above, its dense blocks win, more the larger
-/// and more compact the body (bench_sim's newton_hessian_factor on cubes: 6591 rows 107 against
-/// 51 ms, 14 739 rows 387 against 123 ms; the coarse Colin head of the tests, 17 130 rows, 2.3-2.9
-/// s against 0.25 s; its full body, 27 000 rows, 9.4 against 1.5 s), BLAS on one thread. The
-/// symbolic analysis (fill-reducing ordering, elimination tree) is kept while the Hessian's
-/// pattern stays the same, as it does between iterations unless contacts come or go.
-class HessianFactor {
-public:
-  explicit HessianFactor(const FreeRows& free) {
-    cholmod_.setMode(3 * free.count() >= k_supernodal_rows ? Eigen::CholmodSupernodalLLt
-                                                           : Eigen::CholmodSimplicialLLt);
-  }
-  /// Factors H + shift I; false when it is not positive definite.
-  bool factorize(const Eigen::SparseMatrix<double>& H, double shift) {
-    const SingleThreadedBlas one_thread;
-    if (!same_pattern(H)) {
-      cholmod_.analyzePattern(H);
-      outer_.assign(H.outerIndexPtr(), H.outerIndexPtr() + H.outerSize() + 1);
-      inner_.assign(H.innerIndexPtr(), H.innerIndexPtr() + H.nonZeros());
-    }
-    cholmod_.setShift(shift);
-    cholmod_.factorize(H);
-    return cholmod_.info() == Eigen::Success;
-  }
-  Eigen::VectorXd solve(const Eigen::VectorXd& b) const {
-    const SingleThreadedBlas one_thread;
-    return cholmod_.solve(b);
-  }
-
-private:
-  bool same_pattern(const Eigen::SparseMatrix<double>& H) const {
-    return H.isCompressed() && outer_.size() == static_cast<std::size_t>(H.outerSize() + 1) &&
-           inner_.size() == static_cast<std::size_t>(H.nonZeros()) &&
-           std::equal(outer_.begin(), outer_.end(), H.outerIndexPtr()) &&
-           std::equal(inner_.begin(), inner_.end(), H.innerIndexPtr());
-  }
-  Eigen::CholmodDecomposition<Eigen::SparseMatrix<double>, Eigen::Lower> cholmod_;
-  std::vector<int> outer_, inner_; // the analysed pattern
-};
-
 /// The largest row of a flattened direction (m).
 double largest_step(const Eigen::VectorXd& direction) {
   double largest = 0.0;
@@ -478,7 +432,7 @@ SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, 
   report.initial_energy_J = energy;
   record.add(0, p, energy);
   report.stopped_by = "max_iterations";
-  HessianFactor factor(free);
+  HessianFactor factor(3 * free.count());
   std::vector<Eigen::Triplet<double>> entries;
   Eigen::SparseMatrix<double> H;
   Eigen::MatrixX3d gradient = model_gradient(model, inertia, p);
@@ -556,7 +510,7 @@ SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, 
 
 double newton_step_length(const ElasticModel& model, const StepInertia& inertia, const Eigen::MatrixX3d& p) {
   const FreeRows free(model);
-  HessianFactor factor(free);
+  HessianFactor factor(3 * free.count());
   std::vector<Eigen::Triplet<double>> entries;
   Eigen::SparseMatrix<double> H;
   const Eigen::VectorXd g = free.gather(model_gradient(model, inertia, p));
