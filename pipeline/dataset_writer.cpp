@@ -191,6 +191,7 @@ std::string derivatives_bidsignore() {
          "/sub-*/log.txt\n"
          "/sub-*/scene.yaml\n"
          "/sub-*/timing.json\n"
+         "/sub-*/page-summary.json\n"
          "/sub-*.html\n"
          "/index.html\n"
          "/cache/\n";

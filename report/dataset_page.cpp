@@ -1,6 +1,7 @@
 #include "report/dataset_page.hpp"
 
 #include "core/error.hpp"
+#include "core/sha256.hpp"
 #include "io/atomic_file.hpp"
 #include "io/dataset_layout.hpp"
 #include "io/dataset_tables.hpp"
@@ -15,6 +16,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -105,6 +107,20 @@ void provenance_figures(const nlohmann::json& provenance, const std::vector<Stag
   }
 }
 
+/// The figure of each organ's volume change from its dseg voxels in both states: every named
+/// label but the background and the gap a moved organ leaves, in index order.
+void volume_change_figures(const std::map<std::int32_t, std::string>& names,
+                           const std::map<std::int32_t, std::array<std::int64_t, 2>>& voxels,
+                           DatasetSubjectRow& row) {
+  for (const auto& [index, name] : names) {
+    const auto found = voxels.find(index);
+    if (index <= 0 || name == "gap" || found == voxels.end() || found->second[0] <= 0) continue;
+    row.figures.push_back({"volume change of each organ (%)", name,
+                           100.0 * static_cast<double>(found->second[1] - found->second[0]) /
+                               static_cast<double>(found->second[0])});
+  }
+}
+
 /// Each organ's volume change (dseg voxels of both states) and the thumbnail (middle slices of
 /// the first reference image, or of the reference labels when the run made no image).
 void volume_figures_and_thumbnail(const DatasetLayout& layout, const std::set<std::string>& listed,
@@ -139,12 +155,36 @@ void volume_figures_and_thumbnail(const DatasetLayout& layout, const std::set<st
     ++voxels[l][0];
   for (const std::int32_t l : deformed)
     ++voxels[l][1];
-  // Each named organ but the background and the gap a moved organ leaves.
-  for (const auto& [index, name] : names)
-    if (index > 0 && name != "gap" && voxels[index][0] > 0)
-      row.figures.push_back({"volume change of each organ (%)", name,
-                             100.0 * static_cast<double>(voxels[index][1] - voxels[index][0]) /
-                                 static_cast<double>(voxels[index][0])});
+  volume_change_figures(names, voxels, row);
+}
+
+/// The thumbnail and volume figures from the subject's page summary, when it was made with this
+/// provenance.json; false (row unchanged) when there is none, it is stale or does not parse: a
+/// kept copy, which the volumes can always make again.
+bool figures_from_page_summary(const std::filesystem::path& dataset, const std::string& subject,
+                               const std::string& provenance_text, DatasetSubjectRow& row) {
+  const std::filesystem::path file = page_summary_path(dataset, subject);
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(file, error)) return false;
+  try {
+    const nlohmann::json summary = nlohmann::json::parse(read_dataset_text(file, "the page summary"));
+    if (summary.at("provenance_sha256").get<std::string>() != sha256_hex(provenance_text)) return false;
+    const std::optional<std::string> png = base64_decode(summary.at("thumbnail_png").get<std::string>());
+    if (!png) return false;
+    std::map<std::int32_t, std::string> names;
+    std::map<std::int32_t, std::array<std::int64_t, 2>> voxels;
+    for (const nlohmann::json& label : summary.at("labels")) {
+      const auto index = label.at("index").get<std::int32_t>();
+      names[index] = label.at("name").get<std::string>();
+      voxels[index] = {label.at("reference_voxels").get<std::int64_t>(),
+                       label.at("deformed_voxels").get<std::int64_t>()};
+    }
+    row.thumbnail_png = *png;
+    volume_change_figures(names, voxels, row);
+    return true;
+  } catch (const std::exception&) {
+    return false;
+  }
 }
 
 DatasetSubjectRow read_written_subject(const std::filesystem::path& dataset, const std::string& subject) {
@@ -152,9 +192,10 @@ DatasetSubjectRow read_written_subject(const std::filesystem::path& dataset, con
   DatasetSubjectRow row;
   row.subject = subject;
   row.status = DatasetSubjectRow::Status::written;
+  const std::string provenance_text =
+      read_dataset_text(layout.provenance(), "the provenance.json phantasm writes");
   const nlohmann::json provenance =
-      parse_json_text(read_dataset_text(layout.provenance(), "the provenance.json phantasm writes"),
-                      layout.provenance(), "the provenance.json phantasm writes");
+      parse_json_text(provenance_text, layout.provenance(), "the provenance.json phantasm writes");
   std::set<std::string> listed;
   try {
     for (const nlohmann::json& warning : provenance.value("warnings", nlohmann::json::array()))
@@ -168,7 +209,8 @@ DatasetSubjectRow read_written_subject(const std::filesystem::path& dataset, con
         "other values");
   }
   provenance_figures(provenance, read_stage_timings(dataset, subject), row);
-  volume_figures_and_thumbnail(layout, listed, row);
+  if (!figures_from_page_summary(dataset, subject, provenance_text, row))
+    volume_figures_and_thumbnail(layout, listed, row);
   return row;
 }
 
@@ -176,6 +218,29 @@ DatasetSubjectRow read_written_subject(const std::filesystem::path& dataset, con
 
 std::filesystem::path dataset_page_path(const std::filesystem::path& dataset) {
   return DatasetLayout(dataset, "").derivatives() / "index.html";
+}
+
+std::filesystem::path page_summary_path(const std::filesystem::path& dataset, const std::string& subject) {
+  return DatasetLayout(dataset, subject).provenance().parent_path() / "page-summary.json";
+}
+
+std::string page_summary_text(const std::filesystem::path& dataset, const SubjectRecord& record) {
+  const DatasetLayout layout(dataset, record.subject);
+  // The labels' voxels count in both states only when the run wrote both (the page's figures).
+  nlohmann::json labels = nlohmann::json::array();
+  if (!record.reference_only)
+    for (const auto& [index, label] : record.labels)
+      labels.push_back({{"index", index},
+                        {"name", label.name},
+                        {"reference_voxels", label.voxels[0]},
+                        {"deformed_voxels", label.voxels[1]}});
+  const nlohmann::json summary = {
+      {"provenance_sha256",
+       sha256_hex(read_dataset_text(layout.provenance(), "the provenance.json phantasm writes"))},
+      {"thumbnail_png",
+       base64_encode(record.images.empty() ? std::string() : record.images.front().reference_png)},
+      {"labels", labels}};
+  return json_text(summary) + "\n";
 }
 
 DatasetPage read_dataset_page(const std::filesystem::path& dataset) {

@@ -44,6 +44,22 @@ struct DatasetPage {
 /// derivatives/phantasm/index.html
 std::filesystem::path dataset_page_path(const std::filesystem::path& dataset);
 
+struct SubjectRecord; // report/subject_record.hpp
+
+/// derivatives/phantasm/sub-<id>/page-summary.json: what the dataset page shows of a written
+/// subject that only its volumes give (its thumbnail, each label's voxels in both states),
+/// written with the subject's report from the record the report is made of, so that the page
+/// reads one small file per subject instead of decompressing three volumes (half a second a
+/// subject on the Colin head; every shard of a batch writes the page of all subjects so far). It
+/// holds the SHA-256 of the provenance.json it was made with: a page reads it only while that
+/// file is unchanged, and reads the volumes otherwise (the same row either way).
+std::filesystem::path page_summary_path(const std::filesystem::path& dataset, const std::string& subject);
+
+/// The page summary of a written subject (the text of page_summary_path) from `record`
+/// (read_subject_record of the same dataset).
+/// @throws InputError naming provenance.json when it cannot be read
+std::string page_summary_text(const std::filesystem::path& dataset, const SubjectRecord& record);
+
 /// Reads every subject of a dataset: those participants.tsv names and those with a folder or a
 /// report in derivatives/phantasm, in participants.tsv's order, then by label.
 /// @throws InputError when `dataset` is not a dataset phantasm wrote, or a complete subject's

@@ -65,6 +65,35 @@ std::string base64_encode(std::string_view bytes) {
   return out;
 }
 
+std::optional<std::string> base64_decode(std::string_view text) {
+  if (text.size() % 4 != 0) return std::nullopt;
+  const auto value = [](char c) -> int {
+    if (c >= 'A' && c <= 'Z') return c - 'A';
+    if (c >= 'a' && c <= 'z') return c - 'a' + 26;
+    if (c >= '0' && c <= '9') return c - '0' + 52;
+    if (c == '+') return 62;
+    if (c == '/') return 63;
+    return -1;
+  };
+  std::string out;
+  out.reserve(text.size() / 4 * 3);
+  for (std::size_t i = 0; i < text.size(); i += 4) {
+    const bool last = i + 4 == text.size();
+    // Padding: only in the last group, as its last one or two characters.
+    const int padding = last ? (text[i + 3] == '=') + (text[i + 2] == '=' && text[i + 3] == '=') : 0;
+    unsigned v = 0;
+    for (int k = 0; k < 4; ++k) {
+      const int d = k < 4 - padding ? value(text[i + static_cast<std::size_t>(k)]) : 0;
+      if (d < 0) return std::nullopt;
+      v = v << 6 | static_cast<unsigned>(d);
+    }
+    out += static_cast<char>(v >> 16 & 255);
+    if (padding < 2) out += static_cast<char>(v >> 8 & 255);
+    if (padding < 1) out += static_cast<char>(v & 255);
+  }
+  return out;
+}
+
 std::string png_data_url(std::string_view png_bytes) {
   return "data:image/png;base64," + base64_encode(png_bytes);
 }

@@ -2,6 +2,7 @@
 // base64 for the embedded pictures, and numbers as people read them.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -17,6 +18,11 @@ std::string html_unescape(std::string_view html);
 
 /// RFC 4648 base64 of `bytes` (with padding), as data: URLs want it.
 std::string base64_encode(std::string_view bytes);
+
+/// The bytes of RFC 4648 base64 text (with padding, as base64_encode writes it); nullopt for
+/// text that is not (a length not a multiple of 4, a character outside the alphabet, padding
+/// before the end).
+std::optional<std::string> base64_decode(std::string_view text);
 
 /// A data: URL of PNG bytes, for an <img> embedded in the page.
 std::string png_data_url(std::string_view png_bytes);

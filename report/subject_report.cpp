@@ -4,6 +4,7 @@
 #include "core/version.hpp"
 #include "io/atomic_file.hpp"
 #include "io/dataset_layout.hpp"
+#include "report/dataset_page.hpp"
 #include "report/html_text.hpp"
 #include "report/report_figures.hpp"
 #include "report/report_section.hpp"
@@ -75,8 +76,11 @@ std::string failed_subject_report_html(const std::string& subject, const std::st
 void write_subject_report(const std::filesystem::path& dataset, const std::string& subject,
                           const std::vector<StageTiming>& timings) {
   if (!timings.empty()) write_timings(dataset, subject, timings);
-  const std::string html = subject_report_html(read_subject_record(dataset, subject));
+  const SubjectRecord record = read_subject_record(dataset, subject);
+  const std::string html = subject_report_html(record);
+  const std::string summary = page_summary_text(dataset, record);
   write_file_atomically(subject_report_path(dataset, subject), html);
+  write_file_atomically(page_summary_path(dataset, subject), summary);
 }
 
 void write_failed_subject_report(const std::filesystem::path& dataset, const std::string& subject,
@@ -110,13 +114,14 @@ DatasetReportSummary write_dataset_reports(const std::filesystem::path& dataset,
   if (subjects.empty())
     throw InputError(any.derivatives().string() + ": expected subject folders sub-<id>, found none");
   // Every page is made before any is written: a damaged subject leaves the dataset as it was.
-  std::vector<std::pair<std::filesystem::path, std::string>> pages;
+  std::vector<std::pair<std::filesystem::path, std::string>> pages, page_summaries;
   DatasetReportSummary summary;
   for (const std::string& s : subjects) {
     const DatasetLayout layout(dataset, s);
     if (std::filesystem::exists(layout.provenance(), error)) {
-      pages.emplace_back(subject_report_path(dataset, s),
-                         subject_report_html(read_subject_record(dataset, s)));
+      const SubjectRecord record = read_subject_record(dataset, s);
+      pages.emplace_back(subject_report_path(dataset, s), subject_report_html(record));
+      page_summaries.emplace_back(page_summary_path(dataset, s), page_summary_text(dataset, record));
       continue;
     }
     summary.failed.push_back(s);
@@ -139,6 +144,8 @@ DatasetReportSummary write_dataset_reports(const std::filesystem::path& dataset,
     write_file_atomically(path, html);
     summary.written.push_back(path);
   }
+  for (const auto& [path, text] : page_summaries)
+    write_file_atomically(path, text);
   return summary;
 }
 

@@ -61,11 +61,12 @@ bool dropped_kind(const std::string& relative, const std::set<std::string>& bodi
   return false;
 }
 
-/// What says how the run was made (its settings, log and report): these name the profile.
+/// What says how the run was made (its settings, log and report, and the dataset page's summary,
+/// which names the provenance.json): these name the profile.
 bool describes_the_run(const std::string& relative) {
   const std::string name = fs::path(relative).filename().string();
   return name == "provenance.json" || name == "log.txt" || name == "scene.yaml" ||
-         fs::path(relative).extension() == ".html";
+         name == "page-summary.json" || fs::path(relative).extension() == ".html";
 }
 
 /// Runs small-head.yaml with `keys` in its outputs into a fresh folder: the files written, and in

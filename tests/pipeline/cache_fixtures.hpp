@@ -64,9 +64,17 @@ inline std::vector<std::filesystem::path> cache_entries(const std::filesystem::p
   return entries;
 }
 
-/// Whether a dataset file is the run's record (log, provenance), not its data.
+/// Whether a dataset file is the dataset page's summary of a subject, which names the
+/// provenance.json it was made with (report/dataset_page.hpp).
+inline bool is_page_summary(const std::string& path) {
+  return path.find("page-summary.json") != std::string::npos;
+}
+
+/// Whether a dataset file is the run's record (log, provenance and the page summary that names
+/// it), not its data.
 inline bool is_record(const std::string& path) {
-  return path.find("log.txt") != std::string::npos || path.find("provenance.json") != std::string::npos;
+  return path.find("log.txt") != std::string::npos || path.find("provenance.json") != std::string::npos ||
+         is_page_summary(path);
 }
 
 /// A cache key is a SHA-256 (64 hex digits), the same for the same inputs, and different for

@@ -227,6 +227,7 @@ TEST(ReferenceCache, RunsWithTheCacheColdWarmAndWithoutWriteTheSameFiles) {
     ASSERT_TRUE(cold.count(path) && warm.count(path));
     EXPECT_TRUE(cold.at(path) == warm.at(path));
     if (is_record(path)) {
+      if (is_page_summary(path)) continue;
       EXPECT_EQ(bytes.find("kept in the reference cache as entry"), std::string::npos);
       EXPECT_NE(cold.at(path).find("kept in the reference cache as entry"), std::string::npos);
       continue;

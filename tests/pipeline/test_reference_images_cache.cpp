@@ -260,6 +260,7 @@ TEST(ReferenceImagesCache, RunsWithTheCacheColdWarmAndWithoutWriteTheSameFiles) 
     ASSERT_TRUE(cold.count(path) && warm.count(path));
     EXPECT_TRUE(cold.at(path) == warm.at(path));
     if (is_record(path)) {
+      if (is_page_summary(path)) continue;
       EXPECT_EQ(bytes.find(line), std::string::npos);
       EXPECT_NE(cold.at(path).find(line), std::string::npos);
       continue;

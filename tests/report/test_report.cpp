@@ -35,6 +35,11 @@ TEST(HtmlText, Base64MatchesTheRfc4648Vectors) {
   for (const auto& [text, encoded] : vectors)
     EXPECT_EQ(base64_encode(text), encoded) << text;
   EXPECT_EQ(base64_encode(std::string("\xff\x00\x80", 3)), "/wCA");
+  for (const auto& [text, encoded] : vectors)
+    EXPECT_EQ(base64_decode(encoded), std::optional<std::string>(text)) << encoded;
+  EXPECT_EQ(base64_decode("/wCA"), std::optional<std::string>(std::string("\xff\x00\x80", 3)));
+  for (const char* bad : {"Zg=", "Zg", "Z===", "Zm=v", "Zm9v\n", "Zm!v", "=Zm9"})
+    EXPECT_EQ(base64_decode(bad), std::nullopt) << bad;
 }
 
 TEST(SlicePictures, PanelsShowTheMiddleSlicesWithRightAnteriorAndSuperiorUpOrRight) {

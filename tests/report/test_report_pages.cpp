@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <regex>
@@ -373,6 +374,54 @@ TEST(ReportInBrowser, TheDatasetAndBenchmarkPagesOfASmallSweepShowEveryRowAndPlo
   browser = run_command({"/usr/bin/python3", checker, (root / "compare.html").string(), "--kind", "benchmark",
                          "--min-plots", "18"});
   EXPECT_EQ(browser.exit_code, 0) << browser.out << browser.err;
+}
+
+// The dataset page reads a subject's thumbnail and volume changes from the summary its run kept
+// (page-summary.json) while provenance.json is the one it was made with, and from the volumes
+// otherwise: the same page either way.
+TEST(DatasetPage, ASubjectsKeptSummaryGivesTheRowItsVolumesGive) {
+  const fs::path root = fresh_folder("dataset-page-summary");
+  const fs::path out = root / "out";
+  const CommandResult run =
+      run_command({k_phantasm, "run", k_small_scene.string(), "-o", out.string(), "-q"});
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const fs::path summary = page_summary_path(out, "01");
+  ASSERT_TRUE(fs::exists(summary));
+  const std::string kept = read_file(summary);
+  const DatasetPage from_summary = read_dataset_page(out);
+  ASSERT_EQ(from_summary.rows.size(), 1u);
+  const DatasetSubjectRow& row = from_summary.rows[0];
+  EXPECT_EQ(row.thumbnail_png.substr(0, 4), "\x89PNG");
+  EXPECT_TRUE(std::any_of(row.figures.begin(), row.figures.end(), [](const SubjectFigure& f) {
+    return f.plot == "volume change of each organ (%)";
+  }));
+  fs::remove(summary);
+  const DatasetPage from_volumes = read_dataset_page(out);
+  EXPECT_EQ(dataset_page_html(from_summary), dataset_page_html(from_volumes));
+  ASSERT_EQ(from_volumes.rows.size(), 1u);
+  EXPECT_EQ(from_volumes.rows[0].thumbnail_png, row.thumbnail_png);
+  ASSERT_EQ(from_volumes.rows[0].figures.size(), row.figures.size());
+  for (std::size_t i = 0; i < row.figures.size(); ++i) {
+    EXPECT_EQ(from_volumes.rows[0].figures[i].series, row.figures[i].series);
+    EXPECT_EQ(from_volumes.rows[0].figures[i].value, row.figures[i].value) << row.figures[i].series;
+  }
+
+  // Read while it matches provenance.json (a thumbnail put in its place shows), not after.
+  nlohmann::json changed = nlohmann::json::parse(kept);
+  changed["thumbnail_png"] = base64_encode("another picture");
+  write_text_file(summary, changed.dump());
+  EXPECT_EQ(read_dataset_page(out).rows[0].thumbnail_png, "another picture");
+  const fs::path provenance = out / "derivatives" / "phantasm" / "sub-01" / "provenance.json";
+  const std::string provenance_text = read_file(provenance);
+  write_text_file(provenance, provenance_text + "\n");
+  EXPECT_EQ(read_dataset_page(out).rows[0].thumbnail_png, row.thumbnail_png);
+  write_text_file(provenance, provenance_text);
+  write_text_file(summary, "{\"provenance_sha256\": "); // damaged: the volumes answer
+  EXPECT_EQ(dataset_page_html(read_dataset_page(out)), dataset_page_html(from_volumes));
+  // phantasm report keeps it again, the run's bytes.
+  const CommandResult report = run_command({k_phantasm, "report", out.string(), "-q"});
+  ASSERT_EQ(report.exit_code, 0) << report.err;
+  EXPECT_EQ(read_file(summary), kept);
 }
 
 // A single run: its dataset gets the page too, one row and no plot.
