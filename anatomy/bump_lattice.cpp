@@ -33,10 +33,15 @@ double least_form_over_box(const Eigen::Matrix2d& S, const Eigen::Vector2d& c, c
 
 BumpLattice::BumpLattice(const std::vector<PatchBump>& bumps) {
   constexpr std::size_t k_lists = static_cast<std::size_t>(k_cells) * k_cells + 1;
-  std::vector<std::vector<std::uint32_t>> cells(k_lists);
+  static_assert(k_lists - 1 <= 64, "a bump's cells are the bits of one 64-bit word");
   const auto cell_of = [](double x) {
     return static_cast<int>(std::clamp(std::floor(x * k_cells), 0.0, k_cells - 1.0));
   };
+  // Each bump's cells as the bits of a word, and each list's length: the lists are then laid out
+  // once, in two arrays, instead of growing a list per cell (65 allocations a patch, millions on
+  // the Colin head, where reading the anatomy from the cache builds a lattice per patch).
+  std::vector<std::uint64_t> cells_of(bumps.size(), 0);
+  std::uint32_t lengths[k_lists] = {};
   for (std::size_t n = 0; n < bumps.size(); ++n) {
     const PatchBump& bump = bumps[n];
     const Eigen::Matrix2d S = 0.5 * (bump.shape_uv + bump.shape_uv.transpose());
@@ -61,15 +66,25 @@ BumpLattice::BumpLattice(const std::vector<PatchBump>& bumps) {
         const Eigen::Vector2d low(double(i) / k_cells, double(j) / k_cells);
         const Eigen::Vector2d high(double(i + 1) / k_cells, double(j + 1) / k_cells);
         if (cull && least_form_over_box(S, c, low, high) > 1.0 + 1e-6) continue;
-        cells[static_cast<std::size_t>(j * k_cells + i)].push_back(static_cast<std::uint32_t>(n));
+        const int cell = j * k_cells + i;
+        cells_of[n] |= std::uint64_t{1} << cell;
+        ++lengths[cell];
       }
     }
-    cells.back().push_back(static_cast<std::uint32_t>(n));
+    ++lengths[k_lists - 1];
   }
-  m_first.assign(1, 0);
-  for (const auto& list : cells) {
-    m_bumps.insert(m_bumps.end(), list.begin(), list.end());
-    m_first.push_back(static_cast<std::uint32_t>(m_bumps.size()));
+  m_first.resize(k_lists + 1);
+  m_first[0] = 0;
+  for (std::size_t c = 0; c < k_lists; ++c)
+    m_first[c + 1] = m_first[c] + lengths[c];
+  m_bumps.resize(m_first[k_lists]);
+  // Bumps in ascending order into each of their cells' lists, then into the list of every bump.
+  std::uint32_t next[k_lists];
+  std::copy(m_first.begin(), m_first.end() - 1, next);
+  for (std::size_t n = 0; n < bumps.size(); ++n) {
+    for (std::uint64_t bits = cells_of[n]; bits != 0; bits &= bits - 1) // lowest cell first
+      m_bumps[next[__builtin_ctzll(bits)]++] = static_cast<std::uint32_t>(n);
+    m_bumps[next[k_lists - 1]++] = static_cast<std::uint32_t>(n);
   }
 }
 
