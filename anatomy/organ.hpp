@@ -36,7 +36,7 @@ struct Organ {
   std::optional<TetMesh> solid;                ///< solid organs
   /// For each patch base vertex, the tet-mesh vertex it is (solid organs).
   Eigen::VectorXi tet_vertex_of_surface_vertex;
-  PatchFitReport fit; ///< how well the surface matches the target
+  SourceFit fit; ///< how well the surface matches the source it was fitted to
 };
 
 /// The anatomy of a scene.

@@ -290,10 +290,57 @@ PatchSurface fit_patch_surface(const ImplicitShape& target, const Eigen::Vector3
   return surface;
 }
 
+namespace {
+
+/// A distance of each exact surface point on every patch's grid of `level` (2^level segments per
+/// edge), patch by patch. In parallel over patches, each into its own slots: the same numbers in
+/// the same order.
+template <class Distance>
+std::vector<double> surface_point_distances(const PatchSurface& surface, int level,
+                                            const Distance& distance) {
+  const Eigen::Index patches = surface.patch_count();
+  const std::size_t segments = std::size_t{1} << level;
+  const std::size_t per_patch = (segments + 1) * (segments + 2) / 2;
+  std::vector<double> out(static_cast<std::size_t>(patches) * per_patch);
+#pragma omp parallel for schedule(dynamic, 16)
+  for (Eigen::Index t = 0; t < patches; ++t) {
+    if (cancellation_requested()) continue; // no exception may leave an OpenMP region
+    const std::vector<Eigen::Vector3d> points = surface.patch_grid_points(t, level);
+    for (std::size_t k = 0; k < per_patch; ++k)
+      out[static_cast<std::size_t>(t) * per_patch + k] = distance(points[k]);
+  }
+  throw_if_cancelled();
+  return out;
+}
+
+} // namespace
+
+SourceFit measure_source_fit(const PatchSurface& surface, const ImplicitShape& target,
+                             int surface_sample_level) {
+  SourceFit fit;
+  fit.base_triangles = static_cast<int>(surface.patch_count());
+  const TargetBoundary boundary(target);
+  std::vector<double> to_source =
+      surface_point_distances(surface, std::clamp(surface_sample_level, 0, 8),
+                              [&](const Eigen::Vector3d& x) { return boundary.distance(x); });
+  if (!to_source.empty()) {
+    double sum = 0.0;
+    for (double v : to_source)
+      sum += v;
+    fit.source_mean_mm = sum / static_cast<double>(to_source.size());
+    const auto p95 = to_source.begin() + static_cast<std::ptrdiff_t>(0.95 * double(to_source.size() - 1));
+    std::nth_element(to_source.begin(), p95, to_source.end());
+    fit.source_p95_mm = *p95;
+    fit.source_max_mm = *std::max_element(p95, to_source.end());
+  }
+  fit.volume_error = (surface.volume() - target.volume()) / target.volume();
+  return fit;
+}
+
 PatchFitReport measure_fit(const PatchSurface& surface, const ImplicitShape& target, double tessellation_mm,
                            int target_sample_level, int surface_sample_level) {
   PatchFitReport report;
-  report.base_triangles = static_cast<int>(surface.patch_count());
+  static_cast<SourceFit&>(report) = measure_source_fit(surface, target, surface_sample_level);
   // The target as a dense mesh with vertices on it: an icosphere of target_sample_level cast
   // onto it from its centre, or, when rays from the centre may cross it more than once, its
   // extracted surface of as many triangles.
@@ -310,52 +357,17 @@ PatchFitReport measure_fit(const PatchSurface& surface, const ImplicitShape& tar
     for (Eigen::Index v = 0; v < target_mesh.vertex_count(); ++v)
       samples.push_back(target_mesh.vertex(v));
   }
-  // Surface to target: exact surface points on every patch's grid of surface_sample_level
-  // (level 4: 1/16 of an edge). In parallel over patches, each into its own slots: the same
-  // numbers in the same order.
+  // Surface to target: the same surface points as the source figures; target to surface:
+  // distances to a tessellation within tessellation_mm.
   const MeshDistance to_target_mesh(target_mesh);
-  const Eigen::Index patches = surface.patch_count();
-  const std::size_t segments = std::size_t{1} << std::clamp(surface_sample_level, 0, 8);
-  const std::size_t per_patch = (segments + 1) * (segments + 2) / 2;
-  std::vector<double> to_target(static_cast<std::size_t>(patches) * per_patch);
-#pragma omp parallel for schedule(dynamic, 16)
-  for (Eigen::Index t = 0; t < patches; ++t) {
-    if (cancellation_requested()) continue; // no exception may leave an OpenMP region
-    const std::vector<Eigen::Vector3d> points =
-        surface.patch_grid_points(t, std::clamp(surface_sample_level, 0, 8));
-    for (std::size_t k = 0; k < per_patch; ++k)
-      to_target[static_cast<std::size_t>(t) * per_patch + k] = to_target_mesh.distance(points[k]);
-  }
-  throw_if_cancelled();
-  // Target to surface: distances to a tessellation within tessellation_mm.
+  const std::vector<double> to_target =
+      surface_point_distances(surface, std::clamp(surface_sample_level, 0, 8),
+                              [&](const Eigen::Vector3d& x) { return to_target_mesh.distance(x); });
   const TriangleMesh tessellation = surface.tessellate(tessellation_mm);
   throw_if_cancelled(); // a cancelled tessellation is empty
   const SurfaceDistance d = symmetric_distance(tessellation, samples, to_target);
   report.hausdorff_mm = d.hausdorff_mm;
   report.mean_distance_mm = d.mean_mm;
-  // The same surface points against the target itself.
-  const TargetBoundary boundary(target);
-  std::vector<double> to_source(to_target.size());
-#pragma omp parallel for schedule(dynamic, 16)
-  for (Eigen::Index t = 0; t < patches; ++t) {
-    if (cancellation_requested()) continue;
-    const std::vector<Eigen::Vector3d> points =
-        surface.patch_grid_points(t, std::clamp(surface_sample_level, 0, 8));
-    for (std::size_t k = 0; k < per_patch; ++k)
-      to_source[static_cast<std::size_t>(t) * per_patch + k] = boundary.distance(points[k]);
-  }
-  throw_if_cancelled();
-  if (!to_source.empty()) {
-    double sum = 0.0;
-    for (double v : to_source)
-      sum += v;
-    report.source_mean_mm = sum / static_cast<double>(to_source.size());
-    const auto p95 = to_source.begin() + static_cast<std::ptrdiff_t>(0.95 * double(to_source.size() - 1));
-    std::nth_element(to_source.begin(), p95, to_source.end());
-    report.source_p95_mm = *p95;
-    report.source_max_mm = *std::max_element(p95, to_source.end());
-  }
-  report.volume_error = (surface.volume() - target.volume()) / target.volume();
   return report;
 }
 

@@ -88,7 +88,7 @@ bool disjoint(const ImplicitShape& a, const ImplicitShape& b) {
   return true;
 }
 
-/// How densely the fit report samples each patch surface (measure_fit): about every millimetre,
+/// How densely the fit report samples each patch surface (measure_source_fit): about every millimetre,
 /// however small the patches.
 constexpr double k_fit_sample_spacing_mm = 1.0;
 
@@ -296,8 +296,8 @@ void build_organ_geometry(Organ& organ, const AnatomySettings& anatomy, std::siz
   } else if (s.solid) {
     build_solid(organ, anatomy, o);
     progress.set_detail(s.name + ": measuring the fit");
-    organ.fit = measure_fit(*organ.surface, *organ.target, 5e-3 * organ.target->bounding_radius(), 4,
-                            surface_sample_level_for_spacing(*organ.surface, k_fit_sample_spacing_mm));
+    organ.fit = measure_source_fit(*organ.surface, *organ.target,
+                                   surface_sample_level_for_spacing(*organ.surface, k_fit_sample_spacing_mm));
   } else {
     PatchFitOptions options;
     options.base_triangles = base_triangles(anatomy, o);
@@ -306,8 +306,8 @@ void build_organ_geometry(Organ& organ, const AnatomySettings& anatomy, std::siz
     organ.surface.emplace(fit_patch_surface(*organ.target, hint, rotation_from_degrees(shape.rotation_deg),
                                             options, "organ " + s.name));
     progress.set_detail(s.name + ": measuring the fit");
-    organ.fit = measure_fit(*organ.surface, *organ.target, 5e-3 * organ.target->bounding_radius(), 4,
-                            surface_sample_level_for_spacing(*organ.surface, k_fit_sample_spacing_mm));
+    organ.fit = measure_source_fit(*organ.surface, *organ.target,
+                                   surface_sample_level_for_spacing(*organ.surface, k_fit_sample_spacing_mm));
   }
   // The patches' height bounds, which every level set of the organ needs, once with the anatomy
   // (and stored with it: encode_organ_geometry).
@@ -337,7 +337,7 @@ std::string organ_line(const Organ& organ) {
 
 // The geometry encoding (encode_organ_geometry): native-endian raw values, each array preceded by
 // its dimensions. Bumped whenever the layout or what an organ holds changes.
-constexpr std::uint32_t k_geometry_format = 4;
+constexpr std::uint32_t k_geometry_format = 5;
 
 } // namespace
 
@@ -419,8 +419,6 @@ std::string encode_organ_geometry(const Phantom& phantom) {
     // Field by field: the struct's padding bytes are undefined.
     out.value(organ.fit.base_triangles);
     out.value(organ.fit.vertex_offset_factor);
-    out.value(organ.fit.hausdorff_mm);
-    out.value(organ.fit.mean_distance_mm);
     out.value(organ.fit.volume_error);
     out.value(organ.fit.source_mean_mm);
     out.value(organ.fit.source_p95_mm);
@@ -489,8 +487,6 @@ Phantom phantom_from_geometry(const AnatomySettings& anatomy, const std::map<std
     in.matrix(organ.tet_vertex_of_surface_vertex);
     organ.fit.base_triangles = in.value<int>();
     organ.fit.vertex_offset_factor = in.value<double>();
-    organ.fit.hausdorff_mm = in.value<double>();
-    organ.fit.mean_distance_mm = in.value<double>();
     organ.fit.volume_error = in.value<double>();
     organ.fit.source_mean_mm = in.value<double>();
     organ.fit.source_p95_mm = in.value<double>();

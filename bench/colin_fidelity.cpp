@@ -2,7 +2,7 @@
 // builds the reference phantom from the derived labels, voxelizes it on the scene's grid and
 // compares the voxelized labels with the source labels resampled to that grid (nearest voxel
 // centre): Dice per organ and per tissue, volumes (from the partial-volume fractions and from the
-// labels), and each organ's fit distances (mean and Hausdorff, anatomy/patch_fit.hpp). Times the
+// labels), and each organ's fit to its source (mean and largest distance, anatomy/patch_fit.hpp). Times the
 // atlas derivation, the anatomy, each organ's level set (one at a time, on one thread's worth of
 // work each) and the reference voxelization; peak memory at the end.
 // Usage: colin_fidelity [SCENE [VOXEL_MM]]
@@ -125,7 +125,7 @@ int main(int argc, char** argv) {
 
   // Per organ: its voxels (the label map) against its own source labels.
   std::printf("\n%-18s %8s %10s %10s %8s %9s %9s\n", "organ", "Dice", "labels ml", "source ml", "error",
-              "fit mean", "fit Haus");
+              "fit mean", "fit max");
   for (std::size_t o = 0; o < phantom.organs.size(); ++o) {
     const Organ& organ = phantom.organs[o];
     const OrganSettings& settings = scene.anatomy.organs[o];
@@ -143,7 +143,7 @@ int main(int argc, char** argv) {
     std::printf("%-18s %8.4f %10.1f %10.1f %7.2f%% %8.2f %9.2f\n", organ.name.c_str(), dice(both, a, b),
                 static_cast<double>(a) * voxel_ml, static_cast<double>(b) * voxel_ml,
                 100.0 * (static_cast<double>(a) / static_cast<double>(std::max<std::int64_t>(b, 1)) - 1.0),
-                organ.fit.mean_distance_mm, organ.fit.hausdorff_mm);
+                organ.fit.source_mean_mm, organ.fit.source_max_mm);
   }
 
   // Per tissue: the tissue of each voxel's organ against the tissue of its source label; volumes

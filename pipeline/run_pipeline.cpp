@@ -125,8 +125,6 @@ Phantom build_anatomy(const Scene& scene, const std::filesystem::path& cache, St
     report.accuracy[organ.name + " fit to source mean mm"] = organ.fit.source_mean_mm;
     report.accuracy[organ.name + " fit to source p95 mm"] = organ.fit.source_p95_mm;
     report.accuracy[organ.name + " fit to source max mm"] = organ.fit.source_max_mm;
-    report.accuracy[organ.name + " fit Hausdorff mm"] = organ.fit.hausdorff_mm;
-    report.accuracy[organ.name + " fit mean distance mm"] = organ.fit.mean_distance_mm;
     report.accuracy[organ.name + " fit relative volume error"] = organ.fit.volume_error;
   }
   report.status = "done";

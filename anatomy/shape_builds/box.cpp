@@ -19,7 +19,7 @@ const ShapeBuild& box_shape_build() {
         TriangleMesh base = boundary_surface(tets, &organ.tet_vertex_of_surface_vertex);
         organ.surface.emplace(base, "organ " + settings.name);
         if (settings.solid) organ.solid = std::move(tets);
-        organ.fit = measure_fit(*organ.surface, *organ.target, 1e-3 * organ.target->bounding_radius(), 4);
+        organ.fit = measure_source_fit(*organ.surface, *organ.target);
       }};
   return build;
 }

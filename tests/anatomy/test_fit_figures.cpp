@@ -93,7 +93,7 @@ Figures figures_of(std::vector<double> d) {
   return f;
 }
 
-/// The surface's sample points as measure_fit takes them (level 2 of every patch).
+/// The surface's sample points as measure_source_fit takes them (every patch's grid of `level`).
 std::vector<Eigen::Vector3d> sample_points(const PatchSurface& surface, int level) {
   std::vector<Eigen::Vector3d> points;
   for (Eigen::Index t = 0; t < surface.patch_count(); ++t)
@@ -120,11 +120,11 @@ TEST(FitFigures, DistanceToTheSourceAgreesWithTheLabelsDistanceMapsWithinAVoxel)
 
   const std::vector<std::int32_t> shifted = bored_ball(grid, Eigen::Vector3d(3.0, 0.0, 0.0));
   const auto shifted_target = make_label_shape(grid, shifted, {1}, 1.0, "shifted bored ball");
-  std::vector<PatchFitReport> reports;
+  std::vector<SourceFit> reports;
   for (const auto& [source, source_labels] :
        {std::pair{target.get(), &labels}, std::pair{shifted_target.get(), &shifted}}) {
-    reports.push_back(measure_fit(surface, *source, 0.5, 3, level));
-    const PatchFitReport& report = reports.back();
+    reports.push_back(measure_source_fit(surface, *source, level));
+    const SourceFit& report = reports.back();
     const LabelBoundaryDistance independent(grid, *source_labels);
     std::vector<double> d;
     for (const Eigen::Vector3d& p : sample_points(surface, level))
@@ -139,7 +139,7 @@ TEST(FitFigures, DistanceToTheSourceAgreesWithTheLabelsDistanceMapsWithinAVoxel)
     EXPECT_LE(report.source_p95_mm, report.source_max_mm);
   }
   // The fit itself is close to its source; the shifted source is about 3 mm away at its far side.
-  const PatchFitReport &own = reports[0], &off = reports[1];
+  const SourceFit &own = reports[0], &off = reports[1];
   EXPECT_LT(own.source_mean_mm, 0.5);
   EXPECT_GT(off.source_max_mm, 2.0);
   EXPECT_GT(off.source_mean_mm, 3.0 * own.source_mean_mm);

@@ -127,12 +127,12 @@ TEST(SurfaceBaseMesh, ATorusFromALabelVolumeBecomesAnOrganOfGenusOne) {
   Reporter quiet = Reporter::silent();
   const Phantom phantom = build_phantom(loaded.scene->anatomy, files, quiet);
   const Organ& organ = *phantom.find("ring");
-  std::printf("ring: %ld patches, fit Hausdorff %.3f mm, volume %.1f ml (torus %.1f ml)\n",
-              static_cast<long>(organ.surface->patch_count()), organ.fit.hausdorff_mm,
+  std::printf("ring: %ld patches, fit to the source: max %.3f mm, volume %.1f ml (torus %.1f ml)\n",
+              static_cast<long>(organ.surface->patch_count()), organ.fit.source_max_mm,
               organ.surface->volume() / 1000.0, 2 * k_pi * k_pi * 30 * 10 * 10 / 1000.0);
   EXPECT_EQ(euler_characteristic(organ.surface->base_mesh()), 0);
   // The volume is the label's voxels'; they sample the torus within a few per cent.
   EXPECT_NEAR(organ.surface->volume() / organ.target->volume(), 1.0, 1e-6);
   EXPECT_NEAR(organ.surface->volume() / (2 * k_pi * k_pi * 30 * 10 * 10), 1.0, 0.05);
-  EXPECT_LT(organ.fit.hausdorff_mm, 3.0);
+  EXPECT_LT(organ.fit.source_max_mm, 3.0);
 }

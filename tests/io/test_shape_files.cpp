@@ -81,7 +81,7 @@ TEST(ShapeFiles, MeshAndLabelVolumeOrgansBecomePatchSurfacesOfTheirVolume) {
   // The mesh organ follows its dense mesh; the label organs the balls the voxels sample (the
   // 1/2-level of trilinear interpolated indicators lies within about half a voxel of the sphere).
   EXPECT_NEAR(phantom.find("ball")->surface->volume() / enclosed_volume(ball), 1.0, 1e-3);
-  EXPECT_LT(phantom.find("ball")->fit.hausdorff_mm, 1.0);
+  EXPECT_LT(phantom.find("ball")->fit.source_max_mm, 1.0);
   EXPECT_NEAR(phantom.find("left")->surface->volume() / (4.0 / 3.0 * k_pi * 12 * 12 * 12), 1.0, 0.05);
   EXPECT_NEAR(phantom.find("right")->surface->volume() / (4.0 / 3.0 * k_pi * 9 * 9 * 9), 1.0, 0.07);
   ASSERT_TRUE(phantom.find("right")->solid);

@@ -74,7 +74,8 @@ TEST(AnatomyCache, DecodedGeometryIsTheBuiltPhantomBitForBit) {
       }
       ASSERT_EQ(a.sheet.has_value(), b.sheet.has_value());
       EXPECT_EQ(a.tet_vertex_of_surface_vertex, b.tet_vertex_of_surface_vertex);
-      EXPECT_EQ(a.fit.hausdorff_mm, b.fit.hausdorff_mm);
+      EXPECT_EQ(a.fit.source_max_mm, b.fit.source_max_mm);
+      EXPECT_EQ(a.fit.source_mean_mm, b.fit.source_mean_mm);
     }
     // Bytes cut short or of other organs are refused, not misread.
     EXPECT_THROW(phantom_from_geometry(scene.anatomy, files, bytes.substr(0, bytes.size() / 2), read_log),
