@@ -24,10 +24,10 @@ inline constexpr double k_base_bytes = 75e6;
 /// 1 kB a cell, freed after), the solver's matrix factor and constraint data.
 inline constexpr double k_bytes_per_tet = 600.0;
 /// Fitting one organ (organs are fitted side by side, one per thread, so the largest fits that
-/// run at once set the peak): this times 320 / its base size (a coarse base deviates more from
-/// its target, and measuring the fit refines more: a ball of 80 base triangles peaks at 263 MB,
-/// of 320 at 94 MB) ...
-inline constexpr double k_fit_bytes_at_320 = 30e6;
+/// run at once set the peak): this times 320 / its base size (a coarse base's patches take more
+/// samples each: the test scenes' balls of 80 base triangles peak at 105-120 MB with the
+/// process's own 75 MB) ...
+inline constexpr double k_fit_bytes_at_320 = 8e6;
 /// ... plus this per patch (the samples and normal equations of the fit; the Colin head's
 /// anatomy, grey and white matter of 20 000 base triangles fitted at once, peaks at 1.16 GB with
 /// its labels, at about 1 mm sample spacing of the fit report).
@@ -65,7 +65,7 @@ inline constexpr double k_base_seconds = 0.15;
 /// Fitting one organ: this times 320 / its base size, plus k_seconds_per_patch per patch (the
 /// head's 7 organs of 320 triangles take 2.7 s, the abdomen's 7 of 320 and 3 of 1280 5.5 s,
 /// README, Performance).
-inline constexpr double k_fit_seconds_at_320 = 0.2;
+inline constexpr double k_fit_seconds_at_320 = 0.05;
 inline constexpr double k_seconds_per_patch = 0.7e-3;
 /// Per organ whose shape is read from a file or an atlas, per mm^3 of the field of view:
 /// deriving, smoothing and searching its label volume (the coarse Colin head: 12 s an organ).

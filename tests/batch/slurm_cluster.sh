@@ -40,10 +40,12 @@ $(diff <(echo "$documented") <(echo "$shipped"))"
 # Short path: munge's socket path must fit a sockaddr_un (108 bytes).
 tmp=$(mktemp -d /tmp/phantasm-slurm.XXXXXX)
 pids=()
+holder= # the process group that holds a cache entry's lock in step 2
 
 cleanup() {
   local status=$?
   set +e
+  [ -n "$holder" ] && kill -- -"$holder" 2>/dev/null
   trap '' PIPE # a reader of this output that has gone away must not stop the cleanup
   if [ -e "$tmp/slurm.conf" ] && kill -0 "${pids[1]:-0}" 2>/dev/null; then
     # Every job of this cluster (it is ours alone); the node daemon kills their processes, so
@@ -214,17 +216,34 @@ job=$(submit "$tmp/cluster") || fail "sbatch exited with $?"
 wait_for_array
 same_as_local "$tmp/cluster"
 
-# 2. Task 2 cancelled while it makes sub-02, the array submitted again.
+# 2. Task 2 cancelled while it makes sub-02, the array submitted again. A small head takes about
+# a second, less than it takes to see the task start: sub-02 is held inside its subject by this
+# test, which holds the lock of sub-02's anatomy cache entry (the entry the local batch named in
+# its log; each subject's seed makes its own anatomy) until the task is cancelled. Tasks 1 and 3
+# need other entries and run on.
 out=$tmp/resumed
+entry=$(sed -n 's/.*organ geometry kept in the anatomy cache as entry \([0-9a-f]*\).*/\1/p' \
+  "$tmp/local/derivatives/phantasm/sub-02/log.txt")
+[ -n "$entry" ] || fail "the local batch's sub-02 log names no anatomy cache entry"
+lock_name=$(cd "$tmp/local/derivatives/phantasm/cache" && ls anatomy-"$entry"*.lock)
+mkdir -p "$out/derivatives/phantasm/cache"
+# In a session of its own (flock and its sleep share the lock): killed as a group, here or by
+# the cleanup.
+setsid /usr/bin/flock -x "$out/derivatives/phantasm/cache/$lock_name" sleep 900 </dev/null >/dev/null 2>&1 &
+holder=$!
 job=$(submit "$out")
 task2_log=$tmp/jobs/phantasm-sweep-${job}_2.log
-# Working: running, and its batch has started the subject (its first line says so; a small
-# head takes about 6 s).
+# Working: running, and its batch has started the subject (its first line says so).
 task2_working() { [ "$(task_state 2)" = RUNNING ] && grep -q '1 to run' "$task2_log" 2>/dev/null; }
 wait_until "task 2 of job $job to start its subject" 600 task2_working
 sleep 1
 [ ! -e "$out/derivatives/phantasm/sub-02/provenance.json" ] || fail "sub-02 was complete before task 2 was cancelled"
 /usr/bin/scancel "${job}_2"
+task2_cancelled() { [ "$(task_state 2)" = CANCELLED ]; }
+wait_until "task 2 of job $job to be cancelled" 60 task2_cancelled
+kill -- -"$holder" 2>/dev/null || true
+wait "$holder" 2>/dev/null || true
+holder=
 wait_until "job $job to end" 900 array_ended
 [ "$(task_state 2)" = CANCELLED ] || fail "task 2 ended $(task_state 2), expected CANCELLED"
 for task in 1 3; do
