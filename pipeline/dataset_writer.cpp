@@ -384,6 +384,11 @@ nlohmann::json solves_json(const std::vector<SolveReport>& solves) {
                             {"initial_energy_J", s.initial_energy_J},
                             {"final_energy_J", s.final_energy_J}};
     if (!s.residuals_N.empty()) solve["residuals_N"] = s.residuals_N; // the report's convergence plot
+    if (s.stability_steps > 0) { // the stability check at the equilibrium (sim/solve_report.hpp)
+      solve["stability_ratio"] = s.stability_ratio;
+      solve["stability_steps"] = s.stability_steps;
+      solve["stability_settled"] = s.stability_settled;
+    }
     if (s.rank_updates > 0 || s.contacts > 0) {
       solve["vertices_in_contact"] = s.contacts;
       solve["contact_changes"] = s.contact_changes;

@@ -90,6 +90,20 @@ void report_solves(const FrameSolver& s, const ElasticModel& model, const Eigen:
                       : "quasi-static") +
       ": last solve " + std::to_string(last.iterations) + " iterations, stopped by " + last.stopped_by +
       ", residual " + format_number(last.residual_N) + " N");
+  // The equilibrium's stability as the check saw it: a ratio near 1 is far from buckling, one
+  // near 0 close to it.
+  if (last.stability_steps > 0) {
+    const std::string ratio = format_number(last.stability_ratio);
+    const std::string steps = std::to_string(last.stability_steps) + " Lanczos steps";
+    report.modelled.push_back(
+        "stability of the equilibrium the last solve stopped at: " +
+        (!last.stability_settled ? "not shown, the smallest curvature ratio had not settled after " + steps +
+                                       " (" + ratio + " so far)"
+         : last.stability_ratio > 0.0
+             ? "stable, the energy's smallest curvature is " + ratio + " of the solver's (" + steps + ")"
+             : "a saddle, curvature ratio " + ratio + " (" + steps + "), left for a lower equilibrium"));
+    report.accuracy["solver smallest curvature ratio"] = last.stability_ratio;
+  }
   report.accuracy["solver residual N"] = last.residual_N;
   report.accuracy["solver relative residual"] = last.relative_residual;
   report.accuracy["solver iterations"] = last.iterations;

@@ -282,10 +282,15 @@ constexpr int k_stability_iterations = 30;
 /// own quotient is below -0.001. The residual alone does not say stable: a random probe is nearly
 /// an eigenvector of a pencil whose values are mostly 1 (on a buckling bar its residual was 1e-3
 /// after one step, with the negative value found at the next).
+/// The smallest Ritz value, the steps and whether it settled (stable, a saddle, or an invariant
+/// subspace) go into `report` (stability_ratio, stability_steps, stability_settled).
 std::optional<Eigen::VectorXd> descent_direction(const ElasticModel& model, const StepInertia& inertia,
                                                  const Eigen::MatrixX3d& p, const FreeRows& free,
                                                  const Eigen::SparseMatrix<double>& H, HessianFactor& factor,
-                                                 double length_m) {
+                                                 double length_m, SolveReport& report) {
+  report.stability_ratio = std::numeric_limits<double>::quiet_NaN();
+  report.stability_steps = 0;
+  report.stability_settled = false;
   if (free.count() == 0 || !(length_m > 0.0)) return std::nullopt;
   const auto H_times = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
     return H.selfadjointView<Eigen::Lower>() * v;
@@ -335,18 +340,27 @@ std::optional<Eigen::VectorXd> descent_direction(const ElasticModel& model, cons
     if (ritz.info() != Eigen::Success) return std::nullopt;
     const double theta = ritz.eigenvalues()[0];
     const double residual = next * std::abs(ritz.eigenvectors()(n - 1, 0));
+    report.stability_ratio = theta;
+    report.stability_steps = step + 1;
     if (theta < -1e-3) {
       Eigen::VectorXd y = Eigen::VectorXd::Zero(q.size());
       for (Eigen::Index i = 0; i < n; ++i)
         y += ritz.eigenvectors()(i, 0) * basis[static_cast<std::size_t>(i)];
       y *= length_m / largest_step(y);
       const double curvature = y.dot(true_times(y)), bound = y.dot(H_times(y));
-      if (std::isfinite(curvature) && bound > 0.0 && curvature < -1e-3 * bound) return y;
+      if (std::isfinite(curvature) && bound > 0.0 && curvature < -1e-3 * bound) {
+        report.stability_settled = true;
+        return y;
+      }
     } else if (theta > 1e-2 && residual <= 0.1 * theta && previous - theta <= 1e-3 * theta) {
+      report.stability_settled = true;
       return std::nullopt; // settled well above 0: stable
     }
     previous = theta;
-    if (!(next > 1e-10)) return std::nullopt; // an invariant subspace: its values are the pencil's
+    if (!(next > 1e-10)) { // an invariant subspace: its values are the pencil's
+      report.stability_settled = true;
+      return std::nullopt;
+    }
     beta.push_back(next);
     q = w / next;
   }
@@ -404,10 +418,14 @@ private:
 std::optional<std::pair<Eigen::MatrixX3d, double>>
 leave_saddle(const ElasticModel& model, const StepInertia& inertia, const Eigen::MatrixX3d& p,
              const FreeRows& free, const Eigen::SparseMatrix<double>& H, HessianFactor& factor, double energy,
-             const SolveReport& report) {
+             SolveReport& report) {
+  // Past the escapes no check runs: the report says none did (not the last saddle's).
+  report.stability_ratio = std::numeric_limits<double>::quiet_NaN();
+  report.stability_steps = 0;
+  report.stability_settled = false;
   const std::optional<Eigen::VectorXd> down =
       report.saddles_left < k_saddle_escapes
-          ? descent_direction(model, inertia, p, free, H, factor, 0.1 * report.largest_displacement_m)
+          ? descent_direction(model, inertia, p, free, H, factor, 0.1 * report.largest_displacement_m, report)
           : std::nullopt;
   Eigen::MatrixX3d lower;
   double lower_energy = energy;
@@ -585,6 +603,9 @@ void finish_solve(const ElasticModel& model, const StepInertia& inertia, Eigen::
     report.iterations += newton.iterations;
     report.saddles_left = newton.saddles_left;
     report.saddle_energies_J = newton.saddle_energies_J;
+    report.stability_ratio = newton.stability_ratio;
+    report.stability_steps = newton.stability_steps;
+    report.stability_settled = newton.stability_settled;
     if (newton.iterations > 0) {
       report.stopped_by = "newton " + newton.stopped_by;
       report.final_energy_J = newton.final_energy_J;

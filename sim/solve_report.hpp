@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -86,6 +87,14 @@ struct SolveReport {
   /// its axis buckles) the solve reached and left before it stopped, and their energies (J).
   int saddles_left = 0;
   std::vector<double> saddle_energies_J;
+  /// The stability check at the equilibrium the solve stopped at (its distance test's Newton
+  /// finish, sim/newton.cpp): the smallest curvature ratio v.H_true v / v.H v the Lanczos steps
+  /// found (the energy's curvature over the solver's, which is at most 1; below 0 at a saddle;
+  /// NaN when no check ran), the steps taken, and whether the value settled (false: the step
+  /// limit came first, and stability is not shown).
+  double stability_ratio = std::numeric_limits<double>::quiet_NaN();
+  int stability_steps = 0;
+  bool stability_settled = false;
   /// The residual (largest free gradient row, N) at each local/global iterate, as the stop test saw
   /// it (Newton steps that finish the solve not included): the report's convergence plot (empty for
   /// the other solvers).

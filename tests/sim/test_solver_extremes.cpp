@@ -203,3 +203,37 @@ TEST(SolverExtremes, BarPushedJustPastBucklingLeavesTheStraightEquilibrium) {
   EXPECT_GT(bar.lateral_mm(row.p), 2.0);
   EXPECT_NEAR(row.report.final_energy_J, oracle.report.final_energy_J, 1e-4 * oracle.report.final_energy_J);
 }
+
+TEST(SolverExtremes, StabilityCheckReportsTheCurvatureRatioFallingTowardBuckling) {
+  // Pushed 4 and then 11 mm, short of buckling (about 13.2 mm): both straight equilibria are
+  // stable, and the check says so with a ratio of the energy's smallest curvature to the solver's
+  // in (0, 1] that falls as the push nears buckling (the axial load softens the bending mode).
+  // Past it (20 mm) the solve leaves the straight saddle, and the buckled bar it stops at is
+  // checked again and stable.
+  std::vector<double> ratios;
+  for (const double push_mm : {4.0, 11.0}) {
+    const PushedBar bar(push_mm);
+    const ExtremeRow row = run_extreme(bar.c, ExtremeSolver::local_global, bar.k, bar.k.stop);
+    SCOPED_TRACE("push " + std::to_string(push_mm) + " mm: ratio " +
+                 std::to_string(row.report.stability_ratio) + " after " +
+                 std::to_string(row.report.stability_steps) + " steps");
+    EXPECT_TRUE(row.report.converged);
+    EXPECT_EQ(row.report.saddles_left, 0);
+    EXPECT_GT(row.report.stability_steps, 0);
+    EXPECT_TRUE(row.report.stability_settled);
+    EXPECT_GT(row.report.stability_ratio, 0.0);
+    EXPECT_LE(row.report.stability_ratio, 1.0 + 1e-6);
+    std::printf("push %.0f mm: smallest curvature ratio %.4f after %d steps\n", push_mm,
+                row.report.stability_ratio, row.report.stability_steps);
+    ratios.push_back(row.report.stability_ratio);
+  }
+  ASSERT_EQ(ratios.size(), 2u);
+  EXPECT_LT(ratios[1], 0.9 * ratios[0]);
+  const PushedBar past(20.0);
+  const ExtremeRow buckled = run_extreme(past.c, ExtremeSolver::local_global, past.k, past.k.stop);
+  std::printf("push 20 mm: %d saddles left, then ratio %.4f after %d steps\n", buckled.report.saddles_left,
+              buckled.report.stability_ratio, buckled.report.stability_steps);
+  EXPECT_GE(buckled.report.saddles_left, 1);
+  EXPECT_TRUE(buckled.report.stability_settled);
+  EXPECT_GT(buckled.report.stability_ratio, 0.0);
+}
