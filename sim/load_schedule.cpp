@@ -95,13 +95,18 @@ void report_solves(const FrameSolver& s, const ElasticModel& model, const Eigen:
   if (last.stability_steps > 0) {
     const std::string ratio = format_number(last.stability_ratio);
     const std::string steps = std::to_string(last.stability_steps) + " Lanczos steps";
-    report.modelled.push_back(
-        "stability of the equilibrium the last solve stopped at: " +
-        (!last.stability_settled ? "not shown, the smallest curvature ratio had not settled after " + steps +
-                                       " (" + ratio + " so far)"
-         : last.stability_ratio > 0.0
-             ? "stable, the energy's smallest curvature is " + ratio + " of the solver's (" + steps + ")"
-             : "a saddle, curvature ratio " + ratio + " (" + steps + "), left for a lower equilibrium"));
+    const std::string line = "stability of the equilibrium the last solve stopped at: ";
+    if (!last.stability_settled) {
+      report.modelled.push_back(line + "not shown, the smallest curvature ratio had not settled after " +
+                                steps + " (" + ratio + " so far)");
+    } else if (last.stability_ratio > 0.0) {
+      report.modelled.push_back(line + "stable, the energy's smallest curvature is " + ratio +
+                                " of the solver's (" + steps + ")");
+    } else { // a saddle the solve left is checked again where it stops: this one it could not leave
+      report.warnings.push_back(line + "a saddle (curvature ratio " + ratio + ", " + steps +
+                                ") that no step along its direction of negative curvature lowered: the "
+                                "body may buckle from the result");
+    }
     report.accuracy["solver smallest curvature ratio"] = last.stability_ratio;
   }
   report.accuracy["solver residual N"] = last.residual_N;

@@ -539,6 +539,10 @@ SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, 
       }
       report.saddle_energies_J.push_back(energy);
       ++report.saddles_left;
+      // The check's figures were the saddle's: the point the solve stops at is checked anew.
+      report.stability_ratio = std::numeric_limits<double>::quiet_NaN();
+      report.stability_steps = 0;
+      report.stability_settled = false;
       p = lower->first;
       energy = lower->second;
       gradient = model_gradient(model, inertia, p);
