@@ -62,9 +62,9 @@ inline constexpr double k_crossed_voxels_per_area = 1.5;
 // --- Processor time, s ----------------------------------------------------------------------
 /// Start, scene parsing, the writer's fixed files.
 inline constexpr double k_base_seconds = 0.15;
-/// Fitting one organ: this times 320 / its base size, plus k_seconds_per_patch per patch (the
-/// head's 7 organs of 320 triangles take 2.7 s, the abdomen's 7 of 320 and 3 of 1280 5.5 s,
-/// README, Performance).
+/// Fitting one organ: this times 320 / its base size, plus k_seconds_per_patch per patch (set
+/// with test_cost_estimate once a run measured the fit against its source only: every scene's
+/// processor time within 0.6-1.3 of its estimate).
 inline constexpr double k_fit_seconds_at_320 = 0.05;
 inline constexpr double k_seconds_per_patch = 0.7e-3;
 /// Per organ whose shape is read from a file or an atlas, per mm^3 of the field of view:

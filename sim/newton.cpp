@@ -283,14 +283,12 @@ constexpr int k_stability_iterations = 30;
 /// an eigenvector of a pencil whose values are mostly 1 (on a buckling bar its residual was 1e-3
 /// after one step, with the negative value found at the next).
 /// The smallest Ritz value, the steps and whether it settled (stable, a saddle, or an invariant
-/// subspace) go into `report` (stability_ratio, stability_steps, stability_settled).
+/// subspace) go into `report` (stability_ratio, stability_steps, stability_settled), which the
+/// caller (leave_saddle) has cleared.
 std::optional<Eigen::VectorXd> descent_direction(const ElasticModel& model, const StepInertia& inertia,
                                                  const Eigen::MatrixX3d& p, const FreeRows& free,
                                                  const Eigen::SparseMatrix<double>& H, HessianFactor& factor,
                                                  double length_m, SolveReport& report) {
-  report.stability_ratio = std::numeric_limits<double>::quiet_NaN();
-  report.stability_steps = 0;
-  report.stability_settled = false;
   if (free.count() == 0 || !(length_m > 0.0)) return std::nullopt;
   const auto H_times = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
     return H.selfadjointView<Eigen::Lower>() * v;
