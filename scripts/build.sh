@@ -4,7 +4,8 @@
 # the tree is configured the same way, so a later build without targets (scripts/test.sh) builds
 # the rest in it and keeps what was built.
 # release: optimized (-O3), tests and benchmarks; asan: AddressSanitizer + UBSan, tests only, at
-# -O1 with line tables only (-g1): enough for the sanitizers' stack traces, and the build is
+# -O1 (most tests' own code at -O0, tests/CMakeLists.txt) with line tables only (-g1): enough for
+# the sanitizers' stack traces, and the build is
 # shorter than with full debug information; compiled by clang 14, which takes less processor time
 # than g++ for the same sanitizers (docs/performance.md, Build and tests). A tree configured
 # earlier keeps its compiler: remove build/asan to rebuild it with clang. The asan tree also holds

@@ -234,14 +234,11 @@ double largest_step(const Eigen::VectorXd& direction) {
   return largest;
 }
 
-/// The Newton direction -H^-1 g at p (H the PSD-projected Hessian, into `H`, shifted until it
-/// factors where it is singular).
+/// The Newton direction -H^-1 g for an assembled H, factored into `factor` (shifted until it
+/// factors where H is singular).
 /// @throws std::runtime_error when no shift makes it factor
-Eigen::VectorXd newton_direction(const ElasticModel& model, const StepInertia& inertia,
-                                 const Eigen::MatrixX3d& p, const FreeRows& free, const Eigen::VectorXd& g,
-                                 HessianFactor& factor, std::vector<Eigen::Triplet<double>>& entries,
-                                 Eigen::SparseMatrix<double>& H) {
-  H = assemble_hessian(model, inertia, p, free.index, free.count(), entries);
+Eigen::VectorXd factored_direction(const Eigen::SparseMatrix<double>& H, const Eigen::VectorXd& g,
+                                   HessianFactor& factor) {
   // A PSD Hessian can be singular (a quasi-static model held only in part): shift until it factors.
   double shift = 0.0;
   for (int attempt = 0; attempt < 30; ++attempt) {
@@ -252,6 +249,58 @@ Eigen::VectorXd newton_direction(const ElasticModel& model, const StepInertia& i
     shift = shift == 0.0 ? 1e-8 * H.diagonal().cwiseAbs().maxCoeff() : 10.0 * shift;
   }
   throw std::runtime_error("newton: the Hessian could not be factored");
+}
+
+/// The Newton direction -H^-1 g at p (H the PSD-projected Hessian, into `H`, shifted until it
+/// factors where it is singular).
+/// @throws std::runtime_error when no shift makes it factor
+Eigen::VectorXd newton_direction(const ElasticModel& model, const StepInertia& inertia,
+                                 const Eigen::MatrixX3d& p, const FreeRows& free, const Eigen::VectorXd& g,
+                                 HessianFactor& factor, std::vector<Eigen::Triplet<double>>& entries,
+                                 Eigen::SparseMatrix<double>& H) {
+  H = assemble_hessian(model, inertia, p, free.index, free.count(), entries);
+  return factored_direction(H, g, factor);
+}
+
+/// Conjugate-gradient steps of the direction from the previous iterate's factor.
+constexpr int k_preconditioned_steps = 20;
+
+/// The Newton direction -H^-1 g by conjugate gradients preconditioned by `factor`, the factor of
+/// the previous iterate's Hessian, or none when they do not reach a residual of 1e-10 |g| within
+/// k_preconditioned_steps (H not positive definite along a search direction, or too far from
+/// the factored matrix). Near an equilibrium a Newton step moves the vertices by a small fraction
+/// of their displacement and the Hessian changes as little: the preconditioned matrix is nearly
+/// the identity and a few steps, each a solve with the factor and a product with H, replace a
+/// factorization (a population subject's body, 26 328 rows: a factorization took 1.0 s; the
+/// stage's time with and without is in docs/performance.md, Deformation).
+std::optional<Eigen::VectorXd> preconditioned_direction(const Eigen::SparseMatrix<double>& H,
+                                                        const HessianFactor& factor,
+                                                        const Eigen::VectorXd& g) {
+  const auto H_times = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
+    return H.selfadjointView<Eigen::Lower>() * v;
+  };
+  const double tolerance = 1e-10 * g.norm();
+  Eigen::VectorXd x = -factor.solve(g);
+  Eigen::VectorXd r = -g - H_times(x);
+  Eigen::VectorXd z = factor.solve(r);
+  Eigen::VectorXd d = z;
+  double rz = r.dot(z);
+  for (int step = 0; step < k_preconditioned_steps; ++step) {
+    if (!x.allFinite() || !std::isfinite(rz)) return std::nullopt;
+    if (r.norm() <= tolerance) return x;
+    const Eigen::VectorXd Hd = H_times(d);
+    const double curvature = d.dot(Hd);
+    if (!(curvature > 0.0)) return std::nullopt;
+    const double a = rz / curvature;
+    x += a * d;
+    r -= a * Hd;
+    z = factor.solve(r);
+    const double next = r.dot(z);
+    d = z + (next / rz) * d;
+    rz = next;
+  }
+  if (x.allFinite() && r.norm() <= tolerance) return x;
+  return std::nullopt;
 }
 
 /// p with its free rows moved by t x the flattened d.
@@ -502,8 +551,9 @@ SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, 
   record.add(0, p, energy);
   report.stopped_by = "max_iterations";
   HessianFactor factor(3 * free.count());
+  bool factored = false; // factor holds the factor of H
   std::vector<Eigen::Triplet<double>> entries;
-  Eigen::SparseMatrix<double> H;
+  Eigen::SparseMatrix<double> H, H_here;
   Eigen::MatrixX3d gradient = model_gradient(model, inertia, p);
   const ResidualTest test(stop, free_gradient_norm(model, gradient));
   const bool distance_test = stop.relative_distance > 0.0 && stop.gradient_norm_N <= 0.0;
@@ -522,10 +572,27 @@ SolveReport newton_solve(const ElasticModel& model, const StepInertia& inertia, 
       break;
     }
     const Eigen::VectorXd g = free.gather(gradient);
-    const Eigen::VectorXd direction = newton_direction(model, inertia, p, free, g, factor, entries, H);
-    // The distance test: the step itself measures how far the equilibrium is.
-    report.equilibrium_distance_m = largest_step(direction);
     report.largest_displacement_m = largest_displacement(model, free, p);
+    // The distance test: the step itself measures how far the equilibrium is. Where the residual
+    // passes, the step from the last factor (preconditioned_direction) measures it first: when it
+    // passes, the solve stops without a factorization, and the stability check below works with
+    // the last factor and its matrix (H, the Hessian where the last step started), a pencil as
+    // valid as the current Hessian's. Otherwise the Hessian here is factored and the step is the
+    // one a factorization gives.
+    std::optional<Eigen::VectorXd> measured;
+    if (residual_passes && factored) {
+      H_here = assemble_hessian(model, inertia, p, free.index, free.count(), entries);
+      measured = preconditioned_direction(H_here, factor, g);
+      if (measured && !distance_passes(stop, largest_step(*measured), report.largest_displacement_m))
+        measured.reset();
+      if (!measured) H.swap(H_here);
+    }
+    const Eigen::VectorXd direction = measured ? *measured
+                                      : residual_passes && factored
+                                          ? factored_direction(H, g, factor)
+                                          : newton_direction(model, inertia, p, free, g, factor, entries, H);
+    factored = true;
+    report.equilibrium_distance_m = largest_step(direction);
     distance_known = true;
     if (residual_passes &&
         distance_passes(stop, report.equilibrium_distance_m, report.largest_displacement_m)) {

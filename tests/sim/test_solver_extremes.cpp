@@ -100,6 +100,21 @@ TEST(SolverExtremes, TwistedCantileverMatchesNewtonOrWarns) {
   EXPECT_EQ(v[1], Verdict::converged_and_right);
 }
 
+// Newton's last step, which only measures the distance to the equilibrium, comes from the
+// previous iterate's factor by preconditioned conjugate gradients (sim/newton.cpp): the distance
+// it reports is the one a factorization at the stopping point gives.
+TEST(SolverExtremes, NewtonsReportedDistanceIsTheFactoredStepAtTheStoppingPoint) {
+  const ExtremeCantilever k = extreme_cantilever(extreme_case(1e5, 0.3, 0.0, 0.0, 90.0));
+  Eigen::MatrixX3d p = k.model.rest_positions_m;
+  const SolveReport report = newton_solve(k.model, k.inertia, p, k.stop);
+  ASSERT_TRUE(report.converged) << report.stopped_by;
+  ASSERT_GT(report.iterations, 1); // a step was taken, then the stopping point checked
+  const double factored = newton_step_length(k.model, k.inertia, p);
+  EXPECT_GT(factored, 0.0);
+  EXPECT_NEAR(report.equilibrium_distance_m, factored, 1e-6 * factored);
+  EXPECT_LE(report.equilibrium_distance_m, k.stop.relative_distance * report.largest_displacement_m);
+}
+
 TEST(SolverExtremes, NearlyIncompressibleTwistedCantileverMatchesNewtonOrWarns) {
   expect_converged_or_warned(extreme_case(1e5, 0.499, 0.0, 0.0, 90.0), {ExtremeSolver::local_global});
 }
