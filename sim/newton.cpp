@@ -317,7 +317,11 @@ constexpr int k_stability_iterations = 30;
 /// Whether the equilibrium p is unstable (a saddle of E: a buckled bar held straight), and if so a
 /// direction that lowers E (flattened, free rows). The projected Hessian H (factored in `factor`)
 /// is the true one plus what the projection clamped (PSD), so the pencil's Rayleigh quotient
-/// v.H_true v / v.H v is at most 1, and p is a saddle where its smallest value is negative. Lanczos
+/// v.H_true v / v.H v is at most 1, and p is a saddle where its smallest value is negative. When
+/// newton_solve stops without factoring at p (preconditioned_direction), H is the projected
+/// Hessian where the last step started: positive definite all the same, so the sign of the
+/// smallest value still tells a saddle, and the bound of 1 holds up to the last step's change of
+/// the Hessian (the ratio moved in its fourth digit on a population subject). Lanczos
 /// on H^-1 H_true, self-adjoint in the H inner product, finds that value: on the first subject of
 /// the Colin population the power iteration on I - H^-1 H_true that this replaces was at 0.824 and
 /// still falling when it gave up after 30 steps (each two gradients); Lanczos has the value,
