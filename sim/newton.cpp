@@ -327,7 +327,7 @@ constexpr int k_stability_iterations = 30;
 /// still falling when it gave up after 30 steps (each two gradients); Lanczos has the value,
 /// 0.8218, to a thousandth after 15 steps and stops (the test below) after 13; on the fifth, 11
 /// steps where the power iteration settled after 18; on the main job's head 9 where it took 14.
-/// H_true v by central differences of the gradient, the probe scaled to `length_m`; the basis is
+/// H_true v by forward differences of the gradient, the probe scaled to `length_m`; the basis is
 /// orthogonalized in full (the differences are not exactly symmetric). Stable when the smallest
 /// Ritz value is above 0.01, changed by at most a thousandth of itself over the last step (the
 /// power iteration's test), and its residual bound (beta |last component of its vector|, within
@@ -346,13 +346,15 @@ std::optional<Eigen::VectorXd> descent_direction(const ElasticModel& model, cons
   const auto H_times = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
     return H.selfadjointView<Eigen::Lower>() * v;
   };
-  // H_true v, for v scaled to the probe's length (a thousandth of it as the difference step).
+  // H_true v, for v scaled to the probe's length: a forward difference of the gradient from p's
+  // own, a millionth of the probe as the step (one gradient a product where a central difference
+  // of a thousandth took two; both within about 1e-6 of the product, the truncation error of the
+  // one O(step), of the other O(step^2)).
+  const Eigen::VectorXd g_here = free.gather(model_gradient(model, inertia, p));
   const auto true_times = [&](const Eigen::VectorXd& v) -> Eigen::VectorXd {
     const double scale = length_m / largest_step(v);
-    const double eps = 1e-3 * scale;
-    return (free.gather(model_gradient(model, inertia, moved(p, free, v, eps))) -
-            free.gather(model_gradient(model, inertia, moved(p, free, v, -eps)))) /
-           (2.0 * eps);
+    const double eps = 1e-6 * scale;
+    return (free.gather(model_gradient(model, inertia, moved(p, free, v, eps))) - g_here) / eps;
   };
   std::mt19937 random(44);
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
