@@ -80,9 +80,11 @@ std::string anatomy_cache_key(const AnatomySettings& anatomy, const std::map<std
 }
 
 Phantom build_phantom_cached(const AnatomySettings& anatomy, const std::map<std::string, ShapeData>& files,
-                             const fs::path& folder, StageReport& report, Reporter& reporter) {
+                             const fs::path& folder, StageReport& report, Reporter& reporter,
+                             std::string* key_out) {
   if (folder.empty()) return build_phantom(anatomy, files, reporter);
   const std::string key = anatomy_cache_key(anatomy, files);
+  if (key_out) *key_out = key;
   if (key.empty()) {
     const std::string line =
         "anatomy cache: not used (this build of phantasm has no build id to tell its entries apart)";

@@ -25,7 +25,10 @@ std::string anatomy_cache_key(const AnatomySettings& anatomy, const std::map<std
 /// the key's lock file (cancellable) and read what the first stored. A damaged entry is built
 /// again, with a warning. What was reused or stored is written to the report and the log.
 /// @param folder the cache folder (made when missing); empty: no cache, build_phantom() alone
+/// @param key_out receives the entry's key (anatomy_cache_key) when there is a folder, so a caller
+///        that needs it too does not hash the settings and files again (tens of MB of labels)
 Phantom build_phantom_cached(const AnatomySettings& anatomy, const std::map<std::string, ShapeData>& files,
-                             const std::filesystem::path& folder, StageReport& report, Reporter& reporter);
+                             const std::filesystem::path& folder, StageReport& report, Reporter& reporter,
+                             std::string* key_out = nullptr);
 
 } // namespace phantasm

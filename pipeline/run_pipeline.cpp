@@ -118,8 +118,7 @@ Phantom build_anatomy(const Scene& scene, const std::filesystem::path& cache, St
                       std::map<std::string, AtlasLabelVolume>& atlases) {
   const std::map<std::string, ShapeData> files =
       read_shape_files(scene.anatomy, atlas_loader(report, reporter, &atlases, cache), scene.grid.grid());
-  if (!cache.empty()) anatomy_key = anatomy_cache_key(scene.anatomy, files);
-  Phantom phantom = build_phantom_cached(scene.anatomy, files, cache, report, reporter);
+  Phantom phantom = build_phantom_cached(scene.anatomy, files, cache, report, reporter, &anatomy_key);
   for (const Organ& organ : phantom.organs) {
     if (!organ.surface) continue;
     report.accuracy[organ.name + " fit to source mean mm"] = organ.fit.source_mean_mm;
