@@ -4,6 +4,7 @@
 // through the CLI.
 
 #include "atlas/colin27_head.hpp"
+#include "core/sha256.hpp"
 #include "io/nifti_file.hpp"
 #include "pipeline/cost_estimate.hpp"
 #include "scene/scene.hpp"
@@ -119,6 +120,42 @@ TEST(ColinHeadScene, CoarseRunLabelsEveryOrganShiftsTheBrainAndMeetsItsCostEstim
               quality[2].str().c_str());
   EXPECT_EQ(quality[2].str(), "0");
   EXPECT_GE(std::stod(quality[1].str()), 10.0);
+}
+
+// The outputs that speed work must not change: the coarse Colin head's label maps of both states
+// and its exact map from the reference state to the deformed one, as values (not their compressed
+// bytes), against the digests this program wrote when they were recorded. A change that moves a
+// label or a field value fails here; one that means to (a new fit, a new model) records the new
+// digests it prints, and its commit says why the outputs changed. The program is built for the
+// baseline instruction set, its one run-time choice (the AVX2 lanes of the tet projection) gives
+// the SSE2 lanes' bits, so every x86-64 machine with the project's Debian packages writes these.
+TEST(ColinHeadScene, CoarseRunWritesTheLabelsAndTheFieldItWroteWhenRecorded) {
+  if (!fs::is_directory(default_colin27_templates_dir())) GTEST_SKIP() << "mricron-data is not installed";
+  const testing::CoarseRun run = testing::shared_coarse_colin_run();
+  ASSERT_FALSE(::testing::Test::HasFailure());
+  const fs::path subject = run.out / "derivatives" / "phantasm" / "sub-01";
+  const auto labels_digest = [](const fs::path& path) {
+    ImageGrid grid;
+    const std::vector<std::int32_t> labels = read_nifti_labels(path, &grid);
+    return sha256_hex(
+        std::string_view(reinterpret_cast<const char*>(labels.data()), labels.size() * sizeof(std::int32_t)));
+  };
+  const auto values_digest = [](const fs::path& path) {
+    const std::vector<double> values = read_nifti_vectors(path, 3).values;
+    return sha256_hex(
+        std::string_view(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(double)));
+  };
+  const std::string ref = labels_digest(subject / "ses-ref" / "anat" / "sub-01_ses-ref_dseg.nii.gz");
+  const std::string def = labels_digest(subject / "ses-def" / "anat" / "sub-01_ses-def_dseg.nii.gz");
+  const std::string field = values_digest(subject / "xfm" / "sub-01_from-ref_to-def_mode-image_xfm.nii.gz");
+  std::printf("reference labels %s\ndeformed labels %s\nfield from-ref_to-def %s\n", ref.c_str(), def.c_str(),
+              field.c_str());
+  EXPECT_EQ(ref, "961e4cdf19b6c486320197986ba5905727aab6deb9a8f617d7bbe55435d19833")
+      << "the reference state's labels changed";
+  EXPECT_EQ(def, "b304ebd59b65245509200697c29110fab1922a159bd8cad52d1ad393b108ab32")
+      << "the deformed state's labels changed";
+  EXPECT_EQ(field, "9b18800acb4458d626114cd583d0239121d1e1e8e0e1496061ef806f6220d05d")
+      << "the field from the reference state to the deformed one changed";
 }
 
 // The intracranial body (csf and the organs nested in it, one conforming tet mesh meshed from the
