@@ -5,13 +5,73 @@
 #include <cholmod.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <exception>
+#include <mutex>
 #include <stdexcept>
 #include <string>
 
 namespace phantasm {
+namespace {
+
+/// The last symbolic analysis (fill-reducing ordering, elimination tree, supernodes) with the
+/// pattern and kind it was made for. A solve that recalibrates a load (growth: five solves of one
+/// body) factors matrices of one pattern again and again; the analysis, over a tenth of a second
+/// on a head's body (METIS), is then copied instead of made again. The copy is the analysis
+/// itself, so the factor is the same, bit for bit.
+class LastAnalysis {
+public:
+  LastAnalysis() { cholmod_start(&m_common); }
+  ~LastAnalysis() {
+    cholmod_free_factor(&m_symbolic, &m_common);
+    cholmod_finish(&m_common);
+  }
+  LastAnalysis(const LastAnalysis&) = delete;
+  LastAnalysis& operator=(const LastAnalysis&) = delete;
+
+  /// A copy of the analysis of A's pattern made with `common`, or null when the last one is of
+  /// another pattern or kind.
+  cholmod_factor* copy(const Eigen::SparseMatrix<double>& A, bool supernodal, cholmod_common& common) {
+    const std::lock_guard<std::mutex> lock(m_mutex);
+    if (m_symbolic == nullptr || supernodal != m_supernodal || !same_pattern(A)) return nullptr;
+    return cholmod_copy_factor(m_symbolic, &common);
+  }
+
+  /// Keeps a copy of `symbolic`, the analysis of A's pattern.
+  void keep(const Eigen::SparseMatrix<double>& A, bool supernodal, cholmod_factor* symbolic) {
+    const std::lock_guard<std::mutex> lock(m_mutex);
+    cholmod_free_factor(&m_symbolic, &m_common);
+    m_symbolic = cholmod_copy_factor(symbolic, &m_common);
+    m_supernodal = supernodal;
+    m_outer.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1);
+    m_inner.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
+  }
+
+private:
+  bool same_pattern(const Eigen::SparseMatrix<double>& A) const {
+    return m_outer.size() == static_cast<std::size_t>(A.outerSize() + 1) &&
+           m_inner.size() == static_cast<std::size_t>(A.nonZeros()) &&
+           std::equal(m_outer.begin(), m_outer.end(), A.outerIndexPtr()) &&
+           std::equal(m_inner.begin(), m_inner.end(), A.innerIndexPtr());
+  }
+
+  std::mutex m_mutex;
+  cholmod_common m_common{};
+  cholmod_factor* m_symbolic = nullptr;
+  bool m_supernodal = false;
+  std::vector<int> m_outer, m_inner;
+};
+
+std::atomic<long> g_analyses{0};
+
+LastAnalysis& last_analysis() {
+  static LastAnalysis analysis;
+  return analysis;
+}
+
+} // namespace
 
 /// cholmod_solve2's reusable workspaces of one solve, with the common block it runs with.
 struct SolveWorkspace {
@@ -137,8 +197,14 @@ SparseCholesky::SparseCholesky(const Eigen::SparseMatrix<double>& lower, Factori
   m->common.final_super = 0;
   m->common.final_pack = 1;
   m->common.final_monotonic = 1;
-  m->factor = cholmod_analyze(&view, &m->common);
-  if (m->factor == nullptr) throw std::runtime_error("sparse Cholesky: the analysis failed");
+  // The analysis depends on the pattern and the settings above alone (the values are not read).
+  m->factor = last_analysis().copy(A, supernodal, m->common);
+  if (m->factor == nullptr) {
+    m->factor = cholmod_analyze(&view, &m->common);
+    if (m->factor == nullptr) throw std::runtime_error("sparse Cholesky: the analysis failed");
+    ++g_analyses;
+    last_analysis().keep(A, supernodal, m->factor);
+  }
   if (supernodal) {
     const SingleThreadedBlas one_thread;
     cholmod_factorize(&view, m->factor, &m->common);
@@ -201,6 +267,10 @@ void SparseCholesky::update_diagonal(const std::vector<std::pair<int, double>>& 
 void SparseCholesky::update_columns(const std::vector<Column>& add, const std::vector<Column>& remove) {
   m->apply(add, +1); // updates first: the matrix stays positive definite in between
   m->apply(remove, -1);
+}
+
+long SparseCholesky::analyses() {
+  return g_analyses.load();
 }
 
 long SparseCholesky::rank_changes() const {

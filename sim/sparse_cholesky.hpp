@@ -32,7 +32,8 @@ public:
   /// Rows from which `automatic` factors supernodally.
   static constexpr long k_supernodal_rows = 5000;
 
-  /// Factors A, given by its lower triangle (fill-reducing ordering by CHOLMOD).
+  /// Factors A, given by its lower triangle (fill-reducing ordering by CHOLMOD, or the last
+  /// analysis when it was of A's pattern: analyses()).
   /// @throws std::runtime_error when A is not positive definite
   explicit SparseCholesky(const Eigen::SparseMatrix<double>& lower,
                           Factorization factorization = Factorization::automatic);
@@ -67,6 +68,12 @@ public:
 
   /// Rank-one changes applied so far.
   long rank_changes() const;
+
+  /// Analyses (fill-reducing ordering and symbolic factor) made by this process. A factor of the
+  /// pattern and kind (simplicial or supernodal) of the last analysis copies it instead: the
+  /// same analysis, so the same factor bit for bit (a growth load's recalibrating solves factor
+  /// one body's matrix five times).
+  static long analyses();
 
 private:
   struct Impl;

@@ -293,6 +293,42 @@ TEST(SparseCholesky, TheSupernodalFactorSolvesAndUpdatesAsTheSimplicialOne) {
   EXPECT_THROW(SparseCholesky(indefinite, SparseCholesky::Factorization::supernodal), std::runtime_error);
 }
 
+TEST(SparseCholesky, AFactorOfTheLastAnalysedPatternIsTheFactorOfANewAnalysis) {
+  // Simplicial (1-D, 300 rows) and supernodal (3-D grid, 5832 rows) analyses.
+  for (const Eigen::SparseMatrix<double>& A : {laplacian(300), grid_laplacian(18)}) {
+    Eigen::SparseMatrix<double> other_values = A; // the same pattern, other values
+    for (Eigen::Index k = 0; k < other_values.outerSize(); ++k)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(other_values, k); it; ++it)
+        it.valueRef() *= it.row() == it.col() ? 1.5 + 1e-3 * static_cast<double>(k % 7) : 0.9;
+    const Eigen::MatrixX3d b = Eigen::MatrixX3d::Random(A.rows(), 3);
+    const long before = SparseCholesky::analyses();
+    SparseCholesky first(A);
+    EXPECT_EQ(SparseCholesky::analyses(), before + 1);
+    Eigen::MatrixX3d copied, fresh;
+    {
+      SparseCholesky again(other_values); // the last analysis, copied
+      EXPECT_EQ(SparseCholesky::analyses(), before + 1);
+      again.solve(b, copied);
+    }
+    // Another pattern (one entry more) is analysed, and then so is the first one again.
+    Eigen::SparseMatrix<double> wider = A;
+    wider.coeffRef(A.rows() - 1, 0) = -1e-3;
+    wider.makeCompressed();
+    SparseCholesky other(wider);
+    EXPECT_EQ(SparseCholesky::analyses(), before + 2);
+    SparseCholesky analysed(other_values);
+    EXPECT_EQ(SparseCholesky::analyses(), before + 3);
+    analysed.solve(b, fresh);
+    // The same factor: the same bits.
+    EXPECT_EQ(
+        std::memcmp(copied.data(), fresh.data(), sizeof(double) * static_cast<std::size_t>(copied.size())),
+        0);
+    const Eigen::SparseMatrix<double> full =
+        Eigen::SparseMatrix<double>(other_values.selfadjointView<Eigen::Lower>());
+    EXPECT_LT((full * copied - b).norm(), 1e-10 * b.norm());
+  }
+}
+
 // A cantilever sagging onto a table (a half-space) below its free half: local/global with
 // contacts that come during the solve reaches Newton's minimizer of the same energy, nothing
 // sinks into the table deeper than the penalty's own tolerance, and the table carries the part
