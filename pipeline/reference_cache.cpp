@@ -21,7 +21,7 @@ namespace fs = std::filesystem;
 
 // The file's first line; the key follows on the second, the compressed state after it. The
 // format number is also part of the key.
-constexpr const char* k_reference_magic = "phantasm reference cache 2\n";
+constexpr const char* k_reference_magic = "phantasm reference cache 3\n";
 
 /// The grid, the declared voxelization settings that shape the reference state
 /// (scene/settings_declarations.cpp) and the organ table, one per line.
@@ -110,6 +110,16 @@ std::string encode_reference_state(const ReferenceVoxelization& state, const Tis
     if (ranges) out.array(*ranges);
   }
   out.text(encode_tissue_volumes(volumes));
+  out.value(static_cast<std::uint8_t>(state.deepest_candidates.has_value()));
+  if (state.deepest_candidates) {
+    out.value(static_cast<std::uint64_t>(state.deepest_candidates->size()));
+    for (const std::vector<Eigen::Vector3d>& own : *state.deepest_candidates) {
+      Eigen::MatrixX3d rows(static_cast<Eigen::Index>(own.size()), 3);
+      for (std::size_t k = 0; k < own.size(); ++k)
+        rows.row(static_cast<Eigen::Index>(k)) = own[k].transpose();
+      out.matrix(rows);
+    }
+  }
   return out.take();
 }
 
@@ -142,6 +152,20 @@ ReferenceVoxelization decode_reference_state(std::string_view bytes, std::size_t
   }
   state.volumes = decode_tissue_volumes(in.view());
   if (state.volumes.labels.size() != voxels) in.damaged("volumes of another voxel count than the grid");
+  const auto has_candidates = in.value<std::uint8_t>();
+  if (has_candidates > 1) in.damaged("a flag that is neither 0 nor 1");
+  if (has_candidates) {
+    if (in.value<std::uint64_t>() != phantom_organs)
+      in.damaged("deepest-point candidates of another number of organs than the phantom's");
+    DeepestCandidates& candidates = state.deepest_candidates.emplace(phantom_organs);
+    for (std::vector<Eigen::Vector3d>& own : candidates) {
+      Eigen::MatrixX3d rows;
+      in.matrix(rows);
+      if (!rows.allFinite()) in.damaged("a deepest-point candidate that is not finite");
+      for (Eigen::Index k = 0; k < rows.rows(); ++k)
+        own.push_back(rows.row(k).transpose());
+    }
+  }
   if (!in.done()) in.damaged("bytes after the state");
   return state;
 }
@@ -203,6 +227,7 @@ VoxelizedPhantom voxelize_phantom_cached(const std::string& anatomy_key, const V
     to_store->organs = built->organs;
     to_store->level_sets = built->level_sets;
     to_store->height_ranges = built->height_ranges;
+    to_store->deepest_candidates = built->deepest_candidates;
     state = std::move(*built);
   }
   VoxelizedPhantom volumes =

@@ -16,6 +16,7 @@
 #include <memory>
 #include <numeric>
 #include <optional>
+#include <stdexcept>
 
 namespace phantasm {
 namespace {
@@ -417,22 +418,22 @@ bool nested_in(const Phantom& phantom, std::size_t n, std::size_t o) {
   return false;
 }
 
-/// The deepest point of an organ's own material from the reference labels (organ_landmarks):
-/// the centre of the voxel of its label farthest from every other voxel (the exact distance
-/// transform of the label, over the label's box and one voxel around it, all of which lies
-/// outside the label: a voxel beyond that ring is never nearer than the ring's voxel it projects
-/// to) whose centre lies in the organ's own material by the patches; with a map, the deepest
-/// whose surroundings the map moves exactly with the organ (candidates from different
-/// neighbourhoods, as the tessellation path), else the deepest. None when the labels cannot tell
-/// (see organ_landmarks); then the tessellations do.
-std::optional<Eigen::Vector3d> deepest_labelled_point(const Phantom& phantom, std::size_t o,
-                                                      const ReferenceLabels& labels,
-                                                      const LabelExtents& extents, const DeformationMap* map,
-                                                      bool moved) {
+/// The candidates for the deepest point of an organ's own material from the reference labels
+/// (organ_landmarks), handed to `take` in turn until it returns true: the centres of the voxels of
+/// its label in order of their distance from every other voxel (the exact distance transform of
+/// the label, over the label's box and one voxel around it, all of which lies outside the label:
+/// a voxel beyond that ring is never nearer than the ring's voxel it projects to), deepest first,
+/// that lie in the organ's own material by the patches; after the first, only those a step from
+/// each one taken after it (candidates from different neighbourhoods, as the tessellation path),
+/// up to 64 of them. None when the labels cannot tell (see organ_landmarks); then the
+/// tessellations do.
+void labelled_candidates(const Phantom& phantom, std::size_t o, const ReferenceLabels& labels,
+                         const LabelExtents& extents,
+                         const std::function<bool(const Eigen::Vector3d&)>& take) {
   const auto label = static_cast<std::size_t>(o) + 1;
-  if (extents.box[label].isEmpty()) return std::nullopt;
+  if (extents.box[label].isEmpty()) return;
   for (std::size_t n = 0; n < phantom.organs.size(); ++n)
-    if ((n == o || nested_in(phantom, n, o)) && extents.on_border[n + 1]) return std::nullopt;
+    if ((n == o || nested_in(phantom, n, o)) && extents.on_border[n + 1]) return;
   const ImageGrid& grid = *labels.grid;
   std::size_t bumps = 0;
   for (Eigen::Index t = 0; t < phantom.organs[o].surface->patch_count(); ++t)
@@ -440,7 +441,7 @@ std::optional<Eigen::Vector3d> deepest_labelled_point(const Phantom& phantom, st
   const Eigen::Vector3d box_voxels = (extents.box[label].sizes().array() + 3).cast<double>();
   const bool cheaper = labels.voxels_per_bump == std::numeric_limits<double>::infinity() ||
                        box_voxels.prod() < labels.voxels_per_bump * static_cast<double>(bumps);
-  if (!cheaper) return std::nullopt;
+  if (!cheaper) return;
   // The label's box and one voxel around it (inside the grid: no voxel of the label is on its border).
   const Eigen::Vector3i first = extents.box[label].min().array() - 1,
                         last = extents.box[label].max().array() + 1;
@@ -481,29 +482,39 @@ std::optional<Eigen::Vector3d> deepest_labelled_point(const Phantom& phantom, st
   };
   const Eigen::MatrixX3d& rest = phantom.organs[o].surface->rest_positions();
   const double step = (rest.colwise().maxCoeff() - rest.colwise().minCoeff()).maxCoeff() / 40.0;
-  std::optional<Eigen::Vector3d> deepest;
+  bool first_taken = false;
   std::vector<Eigen::Vector3d> tried;
   for (std::size_t n = 0; n < order.size(); ++n) {
     if (tried.size() >= 64) break;
     sort_through(n);
     const Eigen::Vector3d x = centre(order[n]);
-    if (deepest) {
+    if (first_taken) {
       bool near = false;
       for (const Eigen::Vector3d& t : tried)
         near |= (t - x).norm() < step;
       if (near) continue;
     }
     if (!material.contains(x)) continue;
-    if (!deepest) {
-      deepest = x;
-      if (!map || exact_around(*map, x, moved)) return x;
-      continue;
-    }
-    // Try the next candidates, each from a different neighbourhood.
-    tried.push_back(x);
-    if (exact_around(*map, x, moved)) return x;
+    if (first_taken) tried.push_back(x);
+    first_taken = true;
+    if (take(x)) return;
   }
-  return deepest;
+}
+
+/// The deepest point among an organ's candidates (labelled_candidates, in their order): the
+/// first, the deepest, without a map or where the map moves its surroundings exactly with the
+/// organ; else the first later one whose surroundings it moves so; else the first. None when there
+/// are no candidates.
+template <class Walk>
+std::optional<Eigen::Vector3d> pick_deepest(const Walk& walk, const DeformationMap* map, bool moved) {
+  std::optional<Eigen::Vector3d> deepest, exact;
+  walk([&](const Eigen::Vector3d& x) {
+    const bool first = !deepest;
+    if (first) deepest = x;
+    if ((first && !map) || exact_around(*map, x, moved)) exact = x;
+    return exact.has_value();
+  });
+  return exact ? exact : deepest;
 }
 
 } // namespace
@@ -511,14 +522,16 @@ std::optional<Eigen::Vector3d> deepest_labelled_point(const Phantom& phantom, st
 std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDeformation* deformation,
                                       const DeformationMap* map, double depth_tolerance_mm,
                                       std::vector<std::string>* warnings,
-                                      const std::function<void()>& organ_done,
-                                      const ReferenceLabels& labels) {
+                                      const std::function<void()>& organ_done, const ReferenceLabels& labels,
+                                      const DeepestCandidates* candidates) {
   static const char* const k_directions[6] = {"left",     "right",    "posterior",
                                               "anterior", "inferior", "superior"};
   std::vector<Landmark> out;
   OrganDistances distances(reference, depth_tolerance_mm);
+  if (candidates && candidates->size() != reference.organs.size())
+    throw std::logic_error("organ_landmarks: deepest-point candidates of another number of organs");
   std::optional<LabelExtents> extents;
-  if (labels.grid && labels.labels &&
+  if (!candidates && labels.grid && labels.labels &&
       labels.labels->size() == static_cast<std::size_t>(labels.grid->voxel_count()) &&
       orthogonal_axes(*labels.grid))
     extents.emplace(*labels.grid, *labels.labels, reference.organs.size());
@@ -534,7 +547,19 @@ std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDef
     const bool moved_organ = deformation && (deformation->organs[o].moved_by == "solver" ||
                                              deformation->organs[o].moved_by.rfind("embedded", 0) == 0);
     std::optional<Eigen::Vector3d> deepest;
-    if (extents) deepest = deepest_labelled_point(reference, o, labels, *extents, map, moved_organ);
+    if (candidates) {
+      const std::vector<Eigen::Vector3d>& own = (*candidates)[o];
+      deepest = pick_deepest(
+          [&own](const auto& take) {
+            for (const Eigen::Vector3d& x : own)
+              if (take(x)) return;
+          },
+          map, moved_organ);
+    } else if (extents) {
+      deepest =
+          pick_deepest([&](const auto& take) { labelled_candidates(reference, o, labels, *extents, take); },
+                       map, moved_organ);
+    }
     if (!deepest) deepest = deepest_point(reference, o, distances, map, moved_organ);
     distances.done(o);
     if (deepest) {
@@ -557,6 +582,23 @@ std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDef
                      moved.row(best).transpose()});
     }
     if (organ_done) organ_done();
+  }
+  return out;
+}
+
+DeepestCandidates deepest_candidates(const Phantom& reference, const ReferenceLabels& labels) {
+  DeepestCandidates out(reference.organs.size());
+  if (!labels.grid || !labels.labels ||
+      labels.labels->size() != static_cast<std::size_t>(labels.grid->voxel_count()) ||
+      !orthogonal_axes(*labels.grid))
+    return out;
+  const LabelExtents extents(*labels.grid, *labels.labels, reference.organs.size());
+  for (std::size_t o = 0; o < reference.organs.size(); ++o) {
+    if (!reference.organs[o].surface) continue;
+    labelled_candidates(reference, o, labels, extents, [&](const Eigen::Vector3d& x) {
+      out[o].push_back(x);
+      return false;
+    });
   }
   return out;
 }

@@ -30,6 +30,19 @@ struct ReferenceLabels {
   double voxels_per_bump = 200.0;
 };
 
+/// Each organ's candidates for its deepest point from the reference labels, by organ index, in
+/// the order organ_landmarks tries them: the deepest voxel centre in the organ's own material,
+/// then up to 64 more, each a step (a fortieth of the organ's extent) from those after the first.
+/// Empty for an organ the labels cannot tell (see organ_landmarks; its depth then comes from the
+/// tessellations) and for one without a surface. They depend on the reference phantom and its
+/// labels alone, so the reference state keeps them (pipeline/reference_cache.hpp) and each
+/// deformation of it picks from them: organ_landmarks given them returns what it returns from the
+/// labels, bit for bit, without the distance transforms.
+using DeepestCandidates = std::vector<std::vector<Eigen::Vector3d>>;
+
+/// The candidates of every organ (DeepestCandidates) from `labels`.
+DeepestCandidates deepest_candidates(const Phantom& reference, const ReferenceLabels& labels);
+
 /// Seven landmarks per closed organ, each a material point of that organ: the deepest point of
 /// its own material ("<organ>_deepest": inside it and outside the organs nested in it, farthest
 /// from both; with a map, the deepest around which the map is exact for the organ's motion) and
@@ -59,11 +72,14 @@ struct ReferenceLabels {
 /// @param warnings receives a line per landmark left out (nullptr: none kept)
 /// @param organ_done called after each organ with a surface (a progress step; empty: none)
 /// @param labels the reference labels (none: every depth from the tessellations)
+/// @param candidates deepest_candidates() of these labels, when known: then the labels are not
+///        read again (the same landmarks)
 std::vector<Landmark> organ_landmarks(const Phantom& reference, const PhantomDeformation* deformation,
                                       const DeformationMap* map, double depth_tolerance_mm,
                                       std::vector<std::string>* warnings = nullptr,
                                       const std::function<void()>& organ_done = {},
-                                      const ReferenceLabels& labels = {});
+                                      const ReferenceLabels& labels = {},
+                                      const DeepestCandidates* candidates = nullptr);
 
 /// Whether points lie in an organ's own material: inside its surface and outside the organs
 /// nested in it, each side decided from the patches as the voxelizer decides it (the closest base

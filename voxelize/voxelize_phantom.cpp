@@ -270,8 +270,9 @@ void voxelize_deformed(const VoxelizationSettings& settings, const OrganTable& o
 /// The reference state's landmarks carried by the deformation, and the displacement fields both
 /// ways with their Jacobians and exact masks, reported (and their folds warned of).
 void add_motion(const Phantom& reference, const PhantomDeformation& deformation, double landmark_tolerance_mm,
-                int dense_per_organ, const std::function<void()>& landmark_done, VoxelizedPhantom& out,
-                StageReport& report, ProgressBar& progress) {
+                int dense_per_organ, const std::function<void()>& landmark_done,
+                const DeepestCandidates* candidates, VoxelizedPhantom& out, StageReport& report,
+                ProgressBar& progress) {
   // Tissue outside the solved bodies does not move: the extension only smooths the step at a
   // moved boundary, over two voxels [choice].
   const double extension = 2.0 * out.grid.spacing_mm.maxCoeff();
@@ -281,7 +282,7 @@ void add_motion(const Phantom& reference, const PhantomDeformation& deformation,
   // then do not add to the fields' memory (34 bytes per voxel of the grid), the peak.
   progress.set_detail("landmarks");
   out.landmarks = organ_landmarks(reference, &deformation, &map, landmark_tolerance_mm, &report.warnings,
-                                  landmark_done, {&out.grid, &out.reference.labels});
+                                  landmark_done, {&out.grid, &out.reference.labels}, candidates);
   out.dense_landmarks =
       dense_landmarks(reference, &deformation, &map, dense_per_organ, reference.seed, &report.modelled);
   progress.set_detail("displacement fields");
@@ -338,6 +339,7 @@ ReferenceVoxelization voxelize_reference_state(const VoxelizationSettings& setti
   state.level_sets = sets.level_sets;
   state.volumes =
       voxelize_tissues(grid, sets.organs, static_cast<int>(tissues.size()), settings.supersampling);
+  state.deepest_candidates = deepest_candidates(reference, {&grid, &state.volumes.labels});
   return state;
 }
 
@@ -374,8 +376,17 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
   // The reference level sets outlive the deformed state's voxelization: they are its gaps' shapes.
   progress.set_detail("reference level sets");
   OrganHeightRanges height_ranges(reference.organs.size());
+  // The deepest points' candidates come with a given reference state, and go with one built here.
+  const bool given = reference_state && reference_state->has_value();
+  std::optional<DeepestCandidates> candidates;
+  if (given) candidates = std::move((*reference_state)->deepest_candidates);
   const StateLevelSets sets = voxelize_reference(settings, organs, grid, reference, reference_state,
                                                  height_ranges, out, report, progress);
+  if (reference_state && !given) {
+    candidates = deepest_candidates(reference, {&out.grid, &out.reference.labels});
+    (*reference_state)->deepest_candidates = candidates;
+  }
+  const DeepestCandidates* known_candidates = candidates ? &*candidates : nullptr;
   if (deformed)
     voxelize_deformed(settings, organs, grid, *deformed, deformation, reference, sets, height_ranges,
                       gap_tissue, out, report, progress);
@@ -384,11 +395,11 @@ VoxelizedPhantom voxelize_phantom(const VoxelizationSettings& settings, const Or
                             "^3 samples in the " + std::to_string(out.reference.supersampled_voxels) +
                             " voxels within half a voxel diagonal of a surface");
   if (deformation)
-    add_motion(reference, *deformation, landmark_tolerance_mm, settings.dense_landmarks, landmark_done, out,
-               report, progress);
+    add_motion(reference, *deformation, landmark_tolerance_mm, settings.dense_landmarks, landmark_done,
+               known_candidates, out, report, progress);
   if (!deformation) {
     out.landmarks = organ_landmarks(reference, nullptr, nullptr, landmark_tolerance_mm, &report.warnings,
-                                    landmark_done, {&out.grid, &out.reference.labels});
+                                    landmark_done, {&out.grid, &out.reference.labels}, known_candidates);
     out.dense_landmarks = dense_landmarks(reference, nullptr, nullptr, settings.dense_landmarks,
                                           reference.seed, &report.modelled);
   }

@@ -8,6 +8,7 @@
 #include "core/progress.hpp"
 #include "core/stage_report.hpp"
 #include "sim/phantom_deformation.hpp"
+#include "voxelize/landmarks.hpp"
 #include "voxelize/level_set.hpp"
 #include "voxelize/voxelize_settings.hpp"
 #include "voxelize/voxelized_phantom.hpp"
@@ -32,6 +33,9 @@ struct ReferenceVoxelization {
   std::vector<std::shared_ptr<const LevelSet>> level_sets;
   OrganHeightRanges height_ranges; ///< the deformed state's level sets reuse them
   TissueVolumes volumes;           ///< labels and fractions
+  /// The organs' deepest-point candidates from these labels (voxelize/landmarks.hpp): each
+  /// deformation's landmarks pick from them. None: the landmarks read the labels themselves.
+  std::optional<DeepestCandidates> deepest_candidates;
 };
 
 /// The reference state alone, as voxelize_phantom builds it: what a voxelize_phantom given it

@@ -12,6 +12,8 @@
 #include "scene/scene.hpp"
 #include "tests/pipeline/cache_fixtures.hpp"
 #include "tests/support/files.hpp"
+#include "voxelize/landmarks.hpp"
+#include "voxelize/motion_fields.hpp"
 #include "voxelize/voxelize_phantom.hpp"
 
 #include <gtest/gtest.h>
@@ -102,6 +104,28 @@ TEST(ReferenceCache, DecodedStateVoxelizesTheSameBytes) {
       EXPECT_EQ((*read_state->height_ranges[o])[t].lowest, (*built_state->height_ranges[o])[t].lowest);
       EXPECT_EQ((*read_state->height_ranges[o])[t].highest, (*built_state->height_ranges[o])[t].highest);
     }
+  }
+
+  // The deepest points' candidates go with the state; the landmarks picked from them are those
+  // the labels give when read again (voxelize_phantom's map and tolerance).
+  ASSERT_TRUE(built_state->deepest_candidates.has_value());
+  ASSERT_TRUE(read_state->deepest_candidates.has_value());
+  ASSERT_EQ(read_state->deepest_candidates->size(), organs);
+  std::size_t candidates = 0;
+  for (std::size_t o = 0; o < organs; ++o) {
+    EXPECT_TRUE((*read_state->deepest_candidates)[o] == (*built_state->deepest_candidates)[o]);
+    candidates += (*read_state->deepest_candidates)[o].size();
+  }
+  EXPECT_GT(candidates, organs); // more than one an organ: the ones a map may need after the first
+  const ImageGrid grid = scene.grid.grid();
+  const DeformationMap map(sim.deformation->bodies, 2.0 * grid.spacing_mm.maxCoeff(), sim.deformation->head);
+  const std::vector<Landmark> from_labels =
+      organ_landmarks(sim.phantom, &*sim.deformation, &map, std::clamp(grid.spacing_mm.minCoeff(), 0.5, 2.0),
+                      nullptr, {}, {&grid, &built.reference.labels});
+  ASSERT_EQ(from_labels.size(), built.landmarks.size());
+  for (std::size_t l = 0; l < built.landmarks.size(); ++l) {
+    EXPECT_EQ(from_labels[l].reference_mm, built.landmarks[l].reference_mm) << from_labels[l].name;
+    EXPECT_EQ(from_labels[l].deformed_mm, built.landmarks[l].deformed_mm) << from_labels[l].name;
   }
 
   const VoxelizedPhantom read = voxelize(&read_state, read_report);

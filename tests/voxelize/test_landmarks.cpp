@@ -391,6 +391,55 @@ MovedCore moved_core() {
 
 } // namespace
 
+// The deepest points' candidates from the labels, given back to organ_landmarks, give the
+// landmarks the labels give: the first candidate where the map moves its surroundings exactly
+// with the organ (the moved core's first; the shell stays while the core's tets move it, so none
+// of its candidates is exact for it and it keeps its first), else the first. A first candidate
+// the map does not reach gives way to the next; with none exact, the first stays.
+TEST(OrganLandmarks, FromGivenCandidatesTheDeepestIsTheFirstTheMapMovesExactlyElseTheFirst) {
+  MovedCore c = moved_core();
+  // The surfaces' moved vertices (the extreme points read them): the shell's where they were,
+  // the core's by the affine motion of its tets.
+  c.deformation.organs[0].surface_mm = c.phantom.organs[0].surface->rest_positions();
+  c.deformation.organs[1].surface_mm =
+      ((c.phantom.organs[1].surface->rest_positions() * c.A.transpose()).rowwise() + c.b.transpose()).eval();
+  const DeformationMap map(c.deformation.bodies, 4.0);
+  const LabelledSpheres labelled = labelled_spheres(-25, 25, 6.5, 17.0);
+  const ReferenceLabels labels{&labelled.grid, &labelled.labels, k_always};
+  const DeepestCandidates candidates = deepest_candidates(c.phantom, labels);
+  ASSERT_EQ(candidates.size(), 2u);
+  EXPECT_EQ(candidates[0].size(), 65u); // the shell's deepest and 64 more, a step apart
+  ASSERT_GT(candidates[1].size(), 1u);
+  const std::vector<Landmark> from_labels =
+      organ_landmarks(c.phantom, &c.deformation, &map, 0.5, nullptr, {}, labels);
+  const std::vector<Landmark> given =
+      organ_landmarks(c.phantom, &c.deformation, &map, 0.5, nullptr, {}, labels, &candidates);
+  EXPECT_EQ(landmarks_csv(given, false), landmarks_csv(from_labels, false));
+  EXPECT_EQ(landmarks_csv(given, true), landmarks_csv(from_labels, true));
+  ASSERT_EQ(given.size(), 14u);
+  ASSERT_EQ(given[0].name, "shell_deepest");
+  EXPECT_EQ(given[0].reference_mm, candidates[0][0]);
+  ASSERT_EQ(given[7].name, "core_deepest");
+  EXPECT_EQ(given[7].reference_mm, candidates[1][0]);
+  // Without a map the labels give the first candidates too.
+  EXPECT_EQ(landmarks_csv(organ_landmarks(c.phantom, nullptr, nullptr, 0.5, nullptr, {}, labels, &candidates),
+                          false),
+            landmarks_csv(organ_landmarks(c.phantom, nullptr, nullptr, 0.5, nullptr, {}, labels), false));
+
+  // Just past the moved body's face: the map extends the motion there, not exact.
+  const Eigen::Vector3d far(0.0, 0.0, 31.0);
+  DeepestCandidates unreached = candidates;
+  unreached[1].insert(unreached[1].begin(), far);
+  EXPECT_EQ(
+      organ_landmarks(c.phantom, &c.deformation, &map, 0.5, nullptr, {}, labels, &unreached)[7].reference_mm,
+      candidates[1][0]);
+  DeepestCandidates none_exact = candidates;
+  none_exact[1] = {far, far + Eigen::Vector3d(0.0, 5.0, 0.0)};
+  EXPECT_EQ(
+      organ_landmarks(c.phantom, &c.deformation, &map, 0.5, nullptr, {}, labels, &none_exact)[7].reference_mm,
+      far);
+}
+
 // Dense landmarks: as many as asked per organ, each in its organ's own material (the shell's
 // outside the core: signed distances to tessellations, not the patches' test the points were
 // picked with), spread over it, the moved core's carried exactly by the map (the affine motion
