@@ -152,6 +152,19 @@ TEST(ReferenceCache, DecodedStateVoxelizesTheSameBytes) {
   EXPECT_THROW(decode_tissue_volumes(volume_bytes.substr(0, volume_bytes.size() - 1)), DamagedBytes);
   EXPECT_THROW(decode_reference_state(bytes.substr(0, bytes.size() / 2), voxels, organs), DamagedBytes);
   EXPECT_THROW(decode_reference_state(bytes.substr(0, 100), voxels, organs), DamagedBytes);
+  // The deepest-point candidates come last: an entry cut inside them, or whose flag for them is
+  // neither 0 nor 1, is refused too.
+  EXPECT_THROW(decode_reference_state(bytes.substr(0, bytes.size() - 1), voxels, organs), DamagedBytes);
+  std::string bad_flag = bytes;
+  const std::size_t flag_at = bytes.size() - [&] {
+    std::size_t tail = sizeof(std::uint64_t); // the organ count
+    for (const auto& own : *built_state->deepest_candidates)
+      tail += 2 * sizeof(std::int64_t) + own.size() * 3 * sizeof(double);
+    return tail + 1;
+  }();
+  ASSERT_EQ(bad_flag[flag_at], '\1');
+  bad_flag[flag_at] = '\2';
+  EXPECT_THROW(decode_reference_state(bad_flag, voxels, organs), DamagedBytes);
   // A whole state that does not fit the run (another grid, another phantom) is refused too: it is
   // voxelized again instead of reaching voxelize_phantom, which would stop the run.
   EXPECT_THROW(decode_reference_state(bytes, voxels + 1, organs), DamagedBytes);
