@@ -9,19 +9,27 @@
 #include "pipeline/cost_estimate.hpp"
 #include "pipeline/run_pipeline.hpp"
 
+#include <malloc.h>
 #include <nlohmann/json.hpp>
 #include <omp.h>
+#include <poll.h>
 #include <sys/prctl.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
+#include <deque>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <new>
 #include <thread>
@@ -29,16 +37,10 @@
 namespace phantasm {
 namespace {
 
-/// The child's whole life: run one subject, exit with phantasm's exit codes.
-[[noreturn]] void run_subject_and_exit(const Sweep& sweep, const SweepSubject& subject,
-                                       const std::filesystem::path& output, int threads, pid_t parent,
-                                       bool strict, const std::filesystem::path& anatomy_cache) {
-  ::prctl(PR_SET_PDEATHSIG, SIGKILL); // a batch killed outright takes its subjects with it
-  if (::getppid() != parent) ::_exit(1);
-  // SIGINT from the terminal reaches the subject and the batch, which then sends SIGTERM: a
-  // subject counts every signal as a request to stop, so it always cleans up before it exits.
-  install_cancellation_handlers(false);
-  omp_set_num_threads(threads);
+/// One subject in this process: phantasm's exit code for it (0 made, 1 failed, 2 bad input,
+/// 128 + signal cancelled); its error is printed.
+int run_subject(const Sweep& sweep, const SweepSubject& subject, const std::filesystem::path& output,
+                bool strict, const std::filesystem::path& anatomy_cache) {
   int code = 0;
   try {
     const SceneLoadResult loaded = parse_scene(subject.scene_text, sweep.base_scene);
@@ -74,12 +76,62 @@ namespace {
     std::cerr << "sub-" << subject.id << ": error: " << error.what() << '\n';
     code = 1;
   }
+  if (code == 0 && cancellation_requested())
+    code = 128 + (cancellation_signal() > 0 ? cancellation_signal() : SIGINT);
   std::cerr.flush();
-  ::_exit(code);
+  return code;
 }
 
-struct Running {
-  std::size_t subject;
+/// What a worker is asked (a subject's index, or k_stop) and what it answers.
+constexpr std::uint64_t k_stop = ~std::uint64_t{0};
+struct Answer {
+  std::uint64_t subject;
+  std::int32_t code;
+};
+
+/// A worker's whole life: subjects sent on `channel` one at a time, each answered with its exit
+/// code, until k_stop, the end of the channel, or a signal. One process makes the subjects of its
+/// job slot one after the other, so the memory it freed is reused without the kernel clearing it
+/// again, and the subjects' freed memory stays with the process (mallopt below) rather than going
+/// back to the kernel between subjects. A subject's failure is answered and the next one runs; a
+/// crash ends the worker, and the batch counts its subject as failed and starts another.
+[[noreturn]] void work_and_exit(const Sweep& sweep, const std::filesystem::path& output, int threads,
+                                pid_t parent, bool strict, const std::filesystem::path& anatomy_cache,
+                                int channel) {
+  ::prctl(PR_SET_PDEATHSIG, SIGKILL); // a batch killed outright takes its subjects with it
+  if (::getppid() != parent) ::_exit(1);
+  // SIGINT from the terminal reaches the subject and the batch, which then sends SIGTERM: a
+  // subject counts every signal as a request to stop, so it always cleans up before it exits.
+  install_cancellation_handlers(false);
+  omp_set_num_threads(threads);
+  ::mallopt(M_TRIM_THRESHOLD, std::numeric_limits<int>::max());
+  ::mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  while (true) {
+    pollfd wait{channel, POLLIN, 0};
+    const int ready = ::poll(&wait, 1, 100);
+    if (cancellation_requested()) ::_exit(128 + (cancellation_signal() > 0 ? cancellation_signal() : SIGINT));
+    if (ready <= 0) continue;
+    std::uint64_t index = k_stop;
+    if (::recv(channel, &index, sizeof index, MSG_WAITALL) != static_cast<ssize_t>(sizeof index) ||
+        index == k_stop || index >= sweep.subjects.size())
+      ::_exit(0);
+    const int code = run_subject(sweep, sweep.subjects[index], output, strict, anatomy_cache);
+    if (code >= 128) ::_exit(code);
+    Answer answer;
+    std::memset(&answer, 0, sizeof answer); // no padding byte left unwritten
+    answer.subject = index;
+    answer.code = code;
+    if (::send(channel, &answer, sizeof answer, MSG_NOSIGNAL) != static_cast<ssize_t>(sizeof answer))
+      ::_exit(1);
+  }
+}
+
+/// The batch's side of one worker process.
+struct Worker {
+  pid_t pid = -1;
+  int channel = -1;        ///< the batch's end of the worker's socket
+  std::size_t subject = 0; ///< the subject it makes, when busy
+  bool busy = false;
   std::chrono::steady_clock::time_point start;
   bool signalled = false; ///< asked to stop once (a second signal would end it before it cleans up)
 };
@@ -205,43 +257,45 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
         << " at a time with " << threads << " threads each\n";
   }
   const CacheCounts cache_before = cache_counts(options.anatomy_cache);
-  std::map<pid_t, Running> running;
-  std::size_t next = 0;
+  std::deque<std::size_t> queue(pending.begin(), pending.end());
+  std::vector<Worker> workers;
   double subject_seconds = 0.0; // summed over the subjects made, for the time left
   const pid_t parent = ::getpid();
-  while (true) {
-    while (!cancellation_requested() && static_cast<int>(running.size()) < options.jobs &&
-           next < pending.size()) {
-      const std::size_t s = pending[next++];
-      log.flush();
-      std::cerr.flush();
-      const pid_t child = ::fork();
-      if (child < 0) throw std::runtime_error("cannot start a process for subject " + sweep.subjects[s].id);
-      if (child == 0)
-        run_subject_and_exit(sweep, sweep.subjects[s], options.output, threads, parent, options.strict,
-                             options.anatomy_cache);
-      running[child] = {s, std::chrono::steady_clock::now()};
+  const auto start_worker = [&] {
+    int ends[2];
+    if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, ends) != 0)
+      throw std::runtime_error(std::string("cannot start a process for the subjects: ") +
+                               std::strerror(errno));
+    log.flush();
+    std::cerr.flush();
+    const pid_t child = ::fork();
+    if (child < 0) {
+      ::close(ends[0]);
+      ::close(ends[1]);
+      throw std::runtime_error(std::string("cannot start a process for the subjects: ") +
+                               std::strerror(errno));
     }
-    if (running.empty()) break;
-    if (cancellation_requested()) {
-      for (auto& [pid, job] : running) {
-        if (!job.signalled) ::kill(pid, SIGTERM);
-        job.signalled = true;
-      }
+    if (child == 0) {
+      // The other workers' channels stay theirs: a copy here would hide their end from them.
+      for (const Worker& other : workers)
+        if (other.channel >= 0) ::close(other.channel);
+      ::close(ends[0]);
+      work_and_exit(sweep, options.output, threads, parent, options.strict, options.anatomy_cache, ends[1]);
     }
-    int status = 0;
-    const pid_t done = ::waitpid(-1, &status, WNOHANG);
-    if (done <= 0) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-      continue;
-    }
-    const auto found = running.find(done);
-    if (found == running.end()) continue;
-    const SweepSubject& subject = sweep.subjects[found->second.subject];
+    ::close(ends[1]);
+    Worker worker;
+    worker.pid = child;
+    worker.channel = ends[0];
+    workers.push_back(worker);
+  };
+  const auto close_channel = [](Worker& worker) {
+    if (worker.channel >= 0) ::close(worker.channel);
+    worker.channel = -1;
+  };
+  const auto finished = [&](const Worker& worker, bool ok, const std::string& how) {
+    const SweepSubject& subject = sweep.subjects[worker.subject];
     const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - found->second.start).count();
-    running.erase(found);
-    const bool ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - worker.start).count();
     if (ok) {
       ++summary.ran;
       subject_seconds += seconds;
@@ -253,10 +307,83 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
       summary.interrupted = true;
     } else {
       summary.failed.push_back(subject.id);
-      log << "[batch] sub-" << subject.id << " failed ("
-          << (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status))
-                                : "signal " + std::to_string(WTERMSIG(status)))
-          << "; " << batch_status(summary, pending.size(), subject_seconds, options.jobs) << ")\n";
+      log << "[batch] sub-" << subject.id << " failed (" << how << "; "
+          << batch_status(summary, pending.size(), subject_seconds, options.jobs) << ")\n";
+    }
+  };
+  while (true) {
+    const bool stopping = cancellation_requested();
+    if (!stopping) {
+      // One worker per job slot, started when there is a subject for it.
+      std::size_t alive = 0, idle = 0;
+      for (const Worker& worker : workers) {
+        alive += worker.channel >= 0;
+        idle += worker.channel >= 0 && !worker.busy;
+      }
+      for (; alive < static_cast<std::size_t>(options.jobs) && idle < queue.size(); ++alive, ++idle)
+        start_worker();
+      for (Worker& worker : workers) {
+        if (worker.channel < 0 || worker.busy || queue.empty()) continue;
+        const std::uint64_t index = queue.front();
+        if (::send(worker.channel, &index, sizeof index, MSG_NOSIGNAL) !=
+            static_cast<ssize_t>(sizeof index)) {
+          close_channel(worker); // it ended while idle: reaped below, its subject goes to another
+          continue;
+        }
+        queue.pop_front();
+        worker.subject = index;
+        worker.busy = true;
+        worker.start = std::chrono::steady_clock::now();
+      }
+    }
+    // Idle workers with nothing left to make (or a batch asked to stop) end; busy ones are asked
+    // to stop once when the batch is.
+    for (Worker& worker : workers) {
+      if (worker.busy) {
+        if (stopping && !worker.signalled) ::kill(worker.pid, SIGTERM);
+        worker.signalled = worker.signalled || stopping;
+      } else if (worker.channel >= 0 && (stopping || queue.empty())) {
+        const std::uint64_t stop = k_stop;
+        [[maybe_unused]] const ssize_t sent = ::send(worker.channel, &stop, sizeof stop, MSG_NOSIGNAL);
+        close_channel(worker);
+      }
+    }
+    if (workers.empty()) break;
+    std::vector<pollfd> waits;
+    for (const Worker& worker : workers)
+      if (worker.busy && worker.channel >= 0) waits.push_back({worker.channel, POLLIN, 0});
+    if (waits.empty()) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    } else if (::poll(waits.data(), waits.size(), 20) > 0) {
+      for (const pollfd& wait : waits) {
+        if (wait.revents == 0) continue;
+        Worker& worker = *std::find_if(workers.begin(), workers.end(),
+                                       [&](const Worker& w) { return w.channel == wait.fd; });
+        Answer answer{};
+        if (::recv(worker.channel, &answer, sizeof answer, MSG_WAITALL) ==
+                static_cast<ssize_t>(sizeof answer) &&
+            answer.subject == worker.subject) {
+          worker.busy = false;
+          finished(worker, answer.code == 0, "exit " + std::to_string(answer.code));
+        } else {
+          close_channel(worker); // it ended while making its subject: its exit status says how
+        }
+      }
+    }
+    // Workers that ended: a busy one's subject failed (a crash, the kernel's out-of-memory killer)
+    // or was interrupted.
+    int status = 0;
+    for (pid_t done; (done = ::waitpid(-1, &status, WNOHANG)) > 0;) {
+      const auto found =
+          std::find_if(workers.begin(), workers.end(), [&](const Worker& w) { return w.pid == done; });
+      if (found == workers.end()) continue;
+      if (found->busy) {
+        finished(*found, false,
+                 WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status))
+                                   : "signal " + std::to_string(WTERMSIG(status)));
+      }
+      close_channel(*found);
+      workers.erase(found);
     }
   }
   for (std::size_t s = 0; s < sweep.subjects.size(); ++s) {

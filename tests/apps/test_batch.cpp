@@ -11,6 +11,7 @@
 #include <chrono>
 #include <csignal>
 #include <random>
+#include <set>
 #include <thread>
 
 using namespace phantasm::testing;
@@ -368,4 +369,50 @@ TEST(BatchCommand, ASignalBetweenTwoSubjectsOrWhileAShardWritesItsTableDamagesNo
   }
   for (const auto& [path, bytes] : finished)
     EXPECT_FALSE(is_temporary_name(path)) << "temporary file left: " << path;
+}
+
+// A job slot keeps one process for its subjects, one after the other; a process that dies while it
+// makes a subject (the kernel's out-of-memory killer, a crash) fails that subject alone: the batch
+// starts another process for the rest, and the next batch makes the failed one, with the bytes of
+// an uninterrupted batch.
+TEST(BatchCommand, AJobSlotKeepsItsProcessAndOneThatDiesFailsItsSubjectAlone) {
+  const auto& a = reference();
+  const fs::path folder = fresh_folder("batch-worker-killed");
+  const fs::path out = folder / "out";
+  const std::string err_path = (folder / "batch.err").string();
+  std::set<int> workers;
+  int killed = -1;
+  {
+    BackgroundProcess batch({k_phantasm, "batch", k_sweep.string(), "-o", out.string(), "-j", "1"}, err_path);
+    const auto complete = [&] {
+      std::size_t n = 0;
+      std::error_code error;
+      for (auto it = fs::recursive_directory_iterator(out / "derivatives", error);
+           !error && it != fs::recursive_directory_iterator(); it.increment(error))
+        n += it->path().filename() == "provenance.json";
+      return n;
+    };
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::minutes(5);
+    while (!batch.ended() && std::chrono::steady_clock::now() < give_up) {
+      for (const int pid : batch.children())
+        workers.insert(pid);
+      // The first subject is complete: its process, the only one so far, makes the second now.
+      if (killed < 0 && complete() == 1 && workers.size() == 1) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));
+        killed = *workers.begin();
+        ::kill(killed, SIGKILL);
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    EXPECT_EQ(batch.wait(), 1);
+  }
+  ASSERT_GT(killed, 0);
+  // One process for the first two subjects, one more for the last two: not one per subject.
+  EXPECT_EQ(workers.size(), 2u);
+  const std::string err = read_file(err_path);
+  EXPECT_NE(err.find(" failed (signal 9; "), std::string::npos) << err;
+  EXPECT_NE(err.find("3 subjects made, 0 already complete, 1 failed"), std::string::npos) << err;
+  const CommandResult rest = run_command({k_phantasm, "batch", k_sweep.string(), "-o", out.string(), "-q"});
+  ASSERT_EQ(rest.exit_code, 0) << rest.err;
+  EXPECT_EQ(folder_contents(out), a.files);
 }

@@ -134,6 +134,14 @@ std::vector<std::string> BackgroundProcess::arguments() const {
   return proc_strings(m_pid, "cmdline");
 }
 
+std::vector<int> BackgroundProcess::children() const {
+  std::ifstream in("/proc/" + std::to_string(m_pid) + "/task/" + std::to_string(m_pid) + "/children");
+  std::vector<int> pids;
+  for (int pid = 0; in >> pid;)
+    pids.push_back(pid);
+  return pids;
+}
+
 int BackgroundProcess::wait() {
   if (!m_waited) {
     ::waitpid(m_pid, &m_status, 0);

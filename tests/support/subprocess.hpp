@@ -37,6 +37,8 @@ public:
   std::vector<std::string> environment() const;
   /// The program's arguments now, its name first (Linux's /proc).
   std::vector<std::string> arguments() const;
+  /// The process ids of the program's children now (Linux's /proc).
+  std::vector<int> children() const;
 
 private:
   int m_pid = -1;
