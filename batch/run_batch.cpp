@@ -28,6 +28,7 @@
 #include <cstring>
 #include <deque>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <limits>
 #include <map>
@@ -134,6 +135,148 @@ struct Worker {
   bool busy = false;
   std::chrono::steady_clock::time_point start;
   bool signalled = false; ///< asked to stop once (a second signal would end it before it cleans up)
+};
+
+/// The batch's job processes: one per job slot, started when there is a subject for it, each
+/// sent one subject at a time (work_and_exit).
+class JobSlots {
+public:
+  /// Called as each subject ends: its index, seconds, whether it was made, and how it ended.
+  using Finished = std::function<void(std::size_t, double, bool, const std::string&)>;
+
+  JobSlots(const Sweep& sweep, const BatchOptions& options, int threads, std::ostream& log)
+      : m_sweep(sweep), m_options(options), m_threads(threads), m_log(log), m_parent(::getpid()) {}
+  ~JobSlots() {
+    for (Worker& worker : m_workers)
+      close_channel(worker);
+  }
+  JobSlots(const JobSlots&) = delete;
+  JobSlots& operator=(const JobSlots&) = delete;
+
+  /// Sends the queue's first subjects to idle processes, starting processes up to --jobs.
+  void hand_out(std::deque<std::size_t>& queue) {
+    std::size_t alive = 0, idle = 0;
+    for (const Worker& worker : m_workers) {
+      alive += worker.channel >= 0;
+      idle += worker.channel >= 0 && !worker.busy;
+    }
+    for (; alive < static_cast<std::size_t>(m_options.jobs) && idle < queue.size(); ++alive, ++idle)
+      start();
+    for (Worker& worker : m_workers) {
+      if (worker.channel < 0 || worker.busy || queue.empty()) continue;
+      const std::uint64_t index = queue.front();
+      if (::send(worker.channel, &index, sizeof index, MSG_NOSIGNAL) != static_cast<ssize_t>(sizeof index)) {
+        close_channel(worker); // it ended while idle: reaped by wait(), its subject goes to another
+        continue;
+      }
+      queue.pop_front();
+      worker.subject = index;
+      worker.busy = true;
+      worker.start = std::chrono::steady_clock::now();
+    }
+  }
+
+  /// Ends the idle processes when `idle_end` (nothing left, or the batch stops); when `stopping`,
+  /// asks each busy one to stop, once (a second signal would end it before it cleans up).
+  void end_idle(bool idle_end, bool stopping) {
+    for (Worker& worker : m_workers) {
+      if (worker.busy) {
+        if (stopping && !worker.signalled) ::kill(worker.pid, SIGTERM);
+        worker.signalled = worker.signalled || stopping;
+      } else if (worker.channel >= 0 && idle_end) {
+        const std::uint64_t stop = k_stop;
+        [[maybe_unused]] const ssize_t sent = ::send(worker.channel, &stop, sizeof stop, MSG_NOSIGNAL);
+        close_channel(worker);
+      }
+    }
+  }
+
+  bool empty() const { return m_workers.empty(); }
+
+  /// Waits up to 20 ms for the busy processes' answers, then reaps the processes that ended: a
+  /// busy one's subject failed (a crash, the kernel's out-of-memory killer) or was interrupted.
+  void wait(const Finished& finished) {
+    std::vector<pollfd> waits;
+    for (const Worker& worker : m_workers)
+      if (worker.busy && worker.channel >= 0) waits.push_back({worker.channel, POLLIN, 0});
+    if (waits.empty()) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    } else if (::poll(waits.data(), waits.size(), 20) > 0) {
+      for (const pollfd& wait : waits) {
+        if (wait.revents == 0) continue;
+        Worker& worker = *std::find_if(m_workers.begin(), m_workers.end(),
+                                       [&](const Worker& w) { return w.channel == wait.fd; });
+        Answer answer{};
+        if (::recv(worker.channel, &answer, sizeof answer, MSG_WAITALL) ==
+                static_cast<ssize_t>(sizeof answer) &&
+            answer.subject == worker.subject) {
+          worker.busy = false;
+          finished(worker.subject, seconds_since(worker.start), answer.code == 0,
+                   "exit " + std::to_string(answer.code));
+        } else {
+          close_channel(worker); // it ended while making its subject: its exit status says how
+        }
+      }
+    }
+    int status = 0;
+    for (pid_t done; (done = ::waitpid(-1, &status, WNOHANG)) > 0;) {
+      const auto found =
+          std::find_if(m_workers.begin(), m_workers.end(), [&](const Worker& w) { return w.pid == done; });
+      if (found == m_workers.end()) continue;
+      if (found->busy) {
+        finished(found->subject, seconds_since(found->start), false,
+                 WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status))
+                                   : "signal " + std::to_string(WTERMSIG(status)));
+      }
+      close_channel(*found);
+      m_workers.erase(found);
+    }
+  }
+
+private:
+  static void close_channel(Worker& worker) {
+    if (worker.channel >= 0) ::close(worker.channel);
+    worker.channel = -1;
+  }
+  static double seconds_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+
+  void start() {
+    int ends[2];
+    if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, ends) != 0)
+      throw std::runtime_error(std::string("cannot start a process for the subjects: ") +
+                               std::strerror(errno));
+    m_log.flush();
+    std::cerr.flush();
+    const pid_t child = ::fork();
+    if (child < 0) {
+      ::close(ends[0]);
+      ::close(ends[1]);
+      throw std::runtime_error(std::string("cannot start a process for the subjects: ") +
+                               std::strerror(errno));
+    }
+    if (child == 0) {
+      // The other workers' channels stay theirs: a copy here would hide their end from them.
+      for (const Worker& other : m_workers)
+        if (other.channel >= 0) ::close(other.channel);
+      ::close(ends[0]);
+      work_and_exit(m_sweep, m_options.output, m_threads, m_parent, m_options.strict, m_options.anatomy_cache,
+                    ends[1]);
+    }
+    ::close(ends[1]);
+    Worker worker;
+    worker.pid = child;
+    worker.channel = ends[0];
+    m_workers.push_back(worker);
+  }
+
+  const Sweep& m_sweep;
+  const BatchOptions& m_options;
+  int m_threads;
+  std::ostream& m_log;
+  pid_t m_parent;
+  std::vector<Worker> m_workers;
 };
 
 /// "3 done, 1 failed, 6 left, about 2 min 10 s left": the subjects left times the mean time of
@@ -258,44 +401,9 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
   }
   const CacheCounts cache_before = cache_counts(options.anatomy_cache);
   std::deque<std::size_t> queue(pending.begin(), pending.end());
-  std::vector<Worker> workers;
   double subject_seconds = 0.0; // summed over the subjects made, for the time left
-  const pid_t parent = ::getpid();
-  const auto start_worker = [&] {
-    int ends[2];
-    if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, ends) != 0)
-      throw std::runtime_error(std::string("cannot start a process for the subjects: ") +
-                               std::strerror(errno));
-    log.flush();
-    std::cerr.flush();
-    const pid_t child = ::fork();
-    if (child < 0) {
-      ::close(ends[0]);
-      ::close(ends[1]);
-      throw std::runtime_error(std::string("cannot start a process for the subjects: ") +
-                               std::strerror(errno));
-    }
-    if (child == 0) {
-      // The other workers' channels stay theirs: a copy here would hide their end from them.
-      for (const Worker& other : workers)
-        if (other.channel >= 0) ::close(other.channel);
-      ::close(ends[0]);
-      work_and_exit(sweep, options.output, threads, parent, options.strict, options.anatomy_cache, ends[1]);
-    }
-    ::close(ends[1]);
-    Worker worker;
-    worker.pid = child;
-    worker.channel = ends[0];
-    workers.push_back(worker);
-  };
-  const auto close_channel = [](Worker& worker) {
-    if (worker.channel >= 0) ::close(worker.channel);
-    worker.channel = -1;
-  };
-  const auto finished = [&](const Worker& worker, bool ok, const std::string& how) {
-    const SweepSubject& subject = sweep.subjects[worker.subject];
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - worker.start).count();
+  const auto finished = [&](std::size_t s, double seconds, bool ok, const std::string& how) {
+    const SweepSubject& subject = sweep.subjects[s];
     if (ok) {
       ++summary.ran;
       subject_seconds += seconds;
@@ -311,80 +419,13 @@ BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ost
           << batch_status(summary, pending.size(), subject_seconds, options.jobs) << ")\n";
     }
   };
+  JobSlots slots(sweep, options, threads, log);
   while (true) {
     const bool stopping = cancellation_requested();
-    if (!stopping) {
-      // One worker per job slot, started when there is a subject for it.
-      std::size_t alive = 0, idle = 0;
-      for (const Worker& worker : workers) {
-        alive += worker.channel >= 0;
-        idle += worker.channel >= 0 && !worker.busy;
-      }
-      for (; alive < static_cast<std::size_t>(options.jobs) && idle < queue.size(); ++alive, ++idle)
-        start_worker();
-      for (Worker& worker : workers) {
-        if (worker.channel < 0 || worker.busy || queue.empty()) continue;
-        const std::uint64_t index = queue.front();
-        if (::send(worker.channel, &index, sizeof index, MSG_NOSIGNAL) !=
-            static_cast<ssize_t>(sizeof index)) {
-          close_channel(worker); // it ended while idle: reaped below, its subject goes to another
-          continue;
-        }
-        queue.pop_front();
-        worker.subject = index;
-        worker.busy = true;
-        worker.start = std::chrono::steady_clock::now();
-      }
-    }
-    // Idle workers with nothing left to make (or a batch asked to stop) end; busy ones are asked
-    // to stop once when the batch is.
-    for (Worker& worker : workers) {
-      if (worker.busy) {
-        if (stopping && !worker.signalled) ::kill(worker.pid, SIGTERM);
-        worker.signalled = worker.signalled || stopping;
-      } else if (worker.channel >= 0 && (stopping || queue.empty())) {
-        const std::uint64_t stop = k_stop;
-        [[maybe_unused]] const ssize_t sent = ::send(worker.channel, &stop, sizeof stop, MSG_NOSIGNAL);
-        close_channel(worker);
-      }
-    }
-    if (workers.empty()) break;
-    std::vector<pollfd> waits;
-    for (const Worker& worker : workers)
-      if (worker.busy && worker.channel >= 0) waits.push_back({worker.channel, POLLIN, 0});
-    if (waits.empty()) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    } else if (::poll(waits.data(), waits.size(), 20) > 0) {
-      for (const pollfd& wait : waits) {
-        if (wait.revents == 0) continue;
-        Worker& worker = *std::find_if(workers.begin(), workers.end(),
-                                       [&](const Worker& w) { return w.channel == wait.fd; });
-        Answer answer{};
-        if (::recv(worker.channel, &answer, sizeof answer, MSG_WAITALL) ==
-                static_cast<ssize_t>(sizeof answer) &&
-            answer.subject == worker.subject) {
-          worker.busy = false;
-          finished(worker, answer.code == 0, "exit " + std::to_string(answer.code));
-        } else {
-          close_channel(worker); // it ended while making its subject: its exit status says how
-        }
-      }
-    }
-    // Workers that ended: a busy one's subject failed (a crash, the kernel's out-of-memory killer)
-    // or was interrupted.
-    int status = 0;
-    for (pid_t done; (done = ::waitpid(-1, &status, WNOHANG)) > 0;) {
-      const auto found =
-          std::find_if(workers.begin(), workers.end(), [&](const Worker& w) { return w.pid == done; });
-      if (found == workers.end()) continue;
-      if (found->busy) {
-        finished(*found, false,
-                 WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status))
-                                   : "signal " + std::to_string(WTERMSIG(status)));
-      }
-      close_channel(*found);
-      workers.erase(found);
-    }
+    if (!stopping) slots.hand_out(queue);
+    slots.end_idle(stopping || queue.empty(), stopping);
+    if (slots.empty()) break;
+    slots.wait(finished);
   }
   for (std::size_t s = 0; s < sweep.subjects.size(); ++s) {
     if (options.shard.holds(s) && subject_is_complete(options.output, sweep.subjects[s]) &&
