@@ -42,10 +42,11 @@ bool subject_converged(const std::filesystem::path& output, const SweepSubject& 
 /// one child process per job slot (fork; the children die with the batch), each with hardware
 /// threads / jobs OpenMP threads (OMP_NUM_THREADS when set) and making its subjects one after
 /// the other. A subject that fails is reported and its process goes on; a process that dies
-/// while making a subject fails that subject, and another process takes the rest. Outputs do not depend on jobs, shard or thread count, so shards
-/// on several machines fill one dataset. A batch killed at any moment and started again skips the complete
-/// subjects and remakes the others (files are written atomically; a subject's temporary files from a killed
-/// process are removed). SIGINT/SIGTERM stop the children and return with `interrupted`.
+/// while making a subject fails that subject, and another process takes the rest. Outputs do not depend on
+/// jobs, shard or thread count, so shards on several machines fill one dataset. A batch killed at any moment
+/// and started again skips the complete subjects and remakes the others (files are written atomically; a
+/// subject's temporary files from a killed process are removed). SIGINT/SIGTERM stop the children and return
+/// with `interrupted`.
 BatchSummary run_batch(const Sweep& sweep, const BatchOptions& options, std::ostream& log);
 
 } // namespace phantasm
