@@ -96,7 +96,10 @@ inline std::string coarse_colin_head_text() {
       read_file(std::filesystem::path(PHANTASM_SOURCE_DIR) / "data-synthetic" / "colin-head.yaml");
   const std::vector<std::pair<std::string, std::string>> edits = {
       {"voxel_size_mm: 1.0", "voxel_size_mm: 4.0"},
-      {R"(field_of_view_mm: \[189, 217, 185\])", "field_of_view_mm: [188, 216, 184]"},
+      // The coarse grid of 4 mm as before the main job's grid grew to FFT-friendly sizes (its
+      // images are sampled directly here, so the sizes do not matter).
+      {R"(field_of_view_mm: \[189, 220, 192\])", "field_of_view_mm: [188, 216, 184]"},
+      {R"(center_mm: \[0, -13.5, 16.5\])", "center_mm: [0, -14, 16]"},
       {R"(base_mesh_triangles: \d+)", "base_mesh_triangles: 320"},
       {R"(tet_size_mm: [0-9.]+)", "tet_size_mm: 7"},
       {"supersampling: 4", "supersampling: 1"},
