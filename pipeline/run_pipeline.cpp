@@ -134,7 +134,8 @@ Phantom build_anatomy(const Scene& scene, const std::filesystem::path& cache, St
 
 std::vector<StageReport> plan_stages(const Scene& scene) {
   return {plan_anatomy(scene.anatomy, scene.organs), plan_sim(scene.deformation, scene.organs),
-          plan_voxelize(scene.voxelization, scene.organs, scene.grid), plan_mri(scene.mri, scene.organs)};
+          plan_voxelize(scene.voxelization, scene.organs, scene.grid),
+          plan_mri(scene.mri, scene.organs, scene.grid)};
 }
 
 namespace {

@@ -26,5 +26,45 @@ TEST(TissueParameters, SceneValuesWinAndTheTableFillsTheRest) {
 }
 
 TEST(MriPlan, NoSequencesMeansNoImages) {
-  EXPECT_EQ(plan_mri(MriSettings{}, OrganTable{}).status, "skipped");
+  EXPECT_EQ(plan_mri(MriSettings{}, OrganTable{}, GridSettings{}).status, "skipped");
+}
+
+TEST(MriPlan, LargestPrimeFactors) {
+  EXPECT_EQ(largest_prime_factor(1), 1);
+  EXPECT_EQ(largest_prime_factor(2), 2);
+  EXPECT_EQ(largest_prime_factor(197), 197);
+  EXPECT_EQ(largest_prime_factor(203), 29);
+  EXPECT_EQ(largest_prime_factor(240), 5);
+  EXPECT_EQ(largest_prime_factor(189), 7);
+  EXPECT_EQ(largest_prime_factor(1024), 2);
+  EXPECT_EQ(largest_prime_factor(2 * 3 * 101), 101);
+}
+
+// A k-space acquisition on a grid with a slow transform size names the next fast sizes in the
+// run's log; on fast sizes, or without k-space, nothing is said.
+TEST(MriPlan, AKspaceGridOfSlowTransformSizesIsNamedWithFasterOnes) {
+  MriSettings mri;
+  mri.sequences.push_back(SequenceSettings{"T1w", SequenceKind::spin_echo, 500.0, 10.0});
+  mri.acquisition.kspace = true;
+  const auto kspace_line = [&](const GridSettings& grid) {
+    for (const std::string& line : plan_mri(mri, OrganTable{}, grid).modelled)
+      if (line.rfind("k-space truncation", 0) == 0) return line;
+    return std::string();
+  };
+  GridSettings grid;
+  grid.field_of_view_mm = {203, 237, 197};
+  const std::string slow = kspace_line(grid);
+  EXPECT_NE(slow.find("the grid's 203 x 237 x 197 voxels have prime factors above 13"), std::string::npos)
+      << slow;
+  EXPECT_NE(slow.find("208 x 240 x 198 would not"), std::string::npos) << slow;
+  grid.field_of_view_mm = {189, 217, 192}; // 217 = 7 x 31
+  EXPECT_NE(kspace_line(grid).find("189 x 220 x 192 would not"), std::string::npos) << kspace_line(grid);
+  grid.field_of_view_mm = {208, 240, 200}; // 13 along x: fast
+  const std::string fast = kspace_line(grid);
+  EXPECT_FALSE(fast.empty());
+  EXPECT_EQ(fast.find("prime"), std::string::npos) << fast;
+  mri.acquisition.kspace = false;
+  grid.field_of_view_mm = {203, 237, 197};
+  for (const std::string& line : plan_mri(mri, OrganTable{}, grid).modelled)
+    EXPECT_EQ(line.find("prime"), std::string::npos) << line;
 }
