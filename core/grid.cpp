@@ -2,6 +2,7 @@
 
 #include <Eigen/LU>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 
@@ -76,6 +77,17 @@ ImageGrid GridSettings::grid() const {
   const auto direction = direction_from_axis_code(orientation);
   return make_centered_grid(field_of_view_mm, voxel_size_mm, center_mm,
                             direction ? *direction : Eigen::Matrix3d::Identity());
+}
+
+int largest_prime_factor(int n) {
+  int largest = 1;
+  for (long long p = 2; p * p <= n; ++p) {
+    while (n % p == 0) {
+      largest = static_cast<int>(p);
+      n /= static_cast<int>(p);
+    }
+  }
+  return n > 1 ? std::max(largest, n) : largest;
 }
 
 } // namespace phantasm

@@ -4,7 +4,6 @@
 #include "mri/sequence_type.hpp"
 #include "mri/tissue_parameters.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <utility>
@@ -41,17 +40,6 @@ std::string transform_size_note(const GridSettings& settings) {
 }
 
 } // namespace
-
-int largest_prime_factor(int n) {
-  int largest = 1;
-  for (int p = 2; p * p <= n; ++p) {
-    while (n % p == 0) {
-      largest = p;
-      n /= p;
-    }
-  }
-  return n > 1 ? std::max(largest, n) : largest;
-}
 
 StageReport plan_mri(const MriSettings& settings, const OrganTable& organs, const GridSettings& grid) {
   StageReport report;

@@ -12,10 +12,8 @@ namespace phantasm {
 /// What the MR stage will make: one image per sequence and state, the tissue values used for the
 /// organs' tissues, and the acquisition effects the settings ask for (k-space, bias, coils, noise).
 /// With k-space on a grid whose size along an axis has a prime factor above 13, it says so and
-/// names the next sizes without one: FFTW transforms those several times faster per voxel.
+/// names the next sizes without one (largest_prime_factor, core/grid.hpp): FFTW transforms those
+/// several times faster per voxel.
 StageReport plan_mri(const MriSettings& settings, const OrganTable& organs, const GridSettings& grid);
-
-/// The largest prime factor of n (1 for n <= 1).
-int largest_prime_factor(int n);
 
 } // namespace phantasm

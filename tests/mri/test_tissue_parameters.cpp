@@ -38,6 +38,7 @@ TEST(MriPlan, LargestPrimeFactors) {
   EXPECT_EQ(largest_prime_factor(189), 7);
   EXPECT_EQ(largest_prime_factor(1024), 2);
   EXPECT_EQ(largest_prime_factor(2 * 3 * 101), 101);
+  EXPECT_EQ(largest_prime_factor(2147483647), 2147483647); // the largest int, a prime
 }
 
 // A k-space acquisition on a grid with a slow transform size names the next fast sizes in the

@@ -4,7 +4,6 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -534,15 +533,6 @@ TEST(ShapeSourceParsing, EveryRequiredKeyLeftOutIsReportedAtItsPath) {
 // split, and about four times per voxel on 203 x 237 x 197), with the voxel centres on the
 // template's (whole millimetres, the labels' own voxel centres), holding the template's head.
 TEST(ShippedScenes, TheColinGridsHaveFastTransformSizesOnTheTemplatesVoxelCentres) {
-  const auto largest_prime_factor = [](int n) {
-    int largest = 1;
-    for (int p = 2; p * p <= n; ++p)
-      while (n % p == 0) {
-        largest = p;
-        n /= p;
-      }
-    return n > 1 ? std::max(largest, n) : largest;
-  };
   for (const std::string name : {"colin-head", "colin-atrophy"}) {
     const SceneLoadResult result =
         load_scene(std::filesystem::path(PHANTASM_SOURCE_DIR) / "data-synthetic" / (name + ".yaml"));
