@@ -65,12 +65,12 @@ std::optional<Eigen::Matrix3d> direction_from_axis_code(const std::string& code)
 ImageGrid make_centered_grid(const Eigen::Vector3d& field_of_view_mm, const Eigen::Vector3d& voxel_size_mm,
                              const Eigen::Vector3d& center_mm, const Eigen::Matrix3d& direction);
 
-/// The imaging grid of a scene (docs/scene-format.md, section grid): where voxelize samples the
-/// phantom and mri makes its images.
 /// The largest prime factor of a grid size n (1 for n <= 1): a transform along an axis is fast
 /// when it is small (FFTW has fast algorithms for the primes up to 13).
 int largest_prime_factor(int n);
 
+/// The imaging grid of a scene (docs/scene-format.md, section grid): where voxelize samples the
+/// phantom and mri makes its images.
 struct GridSettings {
   Eigen::Vector3d field_of_view_mm{256, 256, 256}; ///< extent along i, j, k in mm
   Eigen::Vector3d voxel_size_mm{1, 1, 1};          ///< voxel size along i, j, k in mm

@@ -67,3 +67,15 @@ TEST(VoxelIndex, IRunsFastestThenJThenK) {
       for (int i = 0; i < dims.x(); ++i)
         EXPECT_EQ(voxel_index(dims, i, j, k), expected++);
 }
+
+TEST(Grid, LargestPrimeFactors) {
+  EXPECT_EQ(largest_prime_factor(1), 1);
+  EXPECT_EQ(largest_prime_factor(2), 2);
+  EXPECT_EQ(largest_prime_factor(197), 197);
+  EXPECT_EQ(largest_prime_factor(203), 29);
+  EXPECT_EQ(largest_prime_factor(240), 5);
+  EXPECT_EQ(largest_prime_factor(189), 7);
+  EXPECT_EQ(largest_prime_factor(1024), 2);
+  EXPECT_EQ(largest_prime_factor(2 * 3 * 101), 101);
+  EXPECT_EQ(largest_prime_factor(2147483647), 2147483647); // the largest int, a prime
+}

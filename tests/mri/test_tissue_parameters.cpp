@@ -29,18 +29,6 @@ TEST(MriPlan, NoSequencesMeansNoImages) {
   EXPECT_EQ(plan_mri(MriSettings{}, OrganTable{}, GridSettings{}).status, "skipped");
 }
 
-TEST(MriPlan, LargestPrimeFactors) {
-  EXPECT_EQ(largest_prime_factor(1), 1);
-  EXPECT_EQ(largest_prime_factor(2), 2);
-  EXPECT_EQ(largest_prime_factor(197), 197);
-  EXPECT_EQ(largest_prime_factor(203), 29);
-  EXPECT_EQ(largest_prime_factor(240), 5);
-  EXPECT_EQ(largest_prime_factor(189), 7);
-  EXPECT_EQ(largest_prime_factor(1024), 2);
-  EXPECT_EQ(largest_prime_factor(2 * 3 * 101), 101);
-  EXPECT_EQ(largest_prime_factor(2147483647), 2147483647); // the largest int, a prime
-}
-
 // A k-space acquisition on a grid with a slow transform size names the next fast sizes in the
 // run's log; on fast sizes, or without k-space, nothing is said.
 TEST(MriPlan, AKspaceGridOfSlowTransformSizesIsNamedWithFasterOnes) {
