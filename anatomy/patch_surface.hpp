@@ -53,10 +53,24 @@ struct PatchBump {
     if (q <= 0.0) return;
     height += amplitude_mm * q * q * q;
     gradient += -6.0 * amplitude_mm * q * q * Sd;
-    if (hessian) *hessian += amplitude_mm * q * (24.0 * Sd * Sd.transpose() - 6.0 * q * shape_uv);
+    if (hessian) add_hessian_term(q, Sd, *hessian);
+  }
+  /// Adds the bump's Hessian at (u, v) alone (add_height's, the same bits): for a caller that
+  /// needs it at some of the points whose heights it sums.
+  void add_hessian(const Eigen::Vector2d& uv, Eigen::Matrix2d& hessian) const {
+    const Eigen::Vector2d d = uv - center_uv;
+    const Eigen::Vector2d Sd = shape_uv * d;
+    const double q = 1.0 - d.dot(Sd);
+    if (q <= 0.0) return;
+    add_hessian_term(q, Sd, hessian);
   }
   /// The ellipse's area in (u, v) coordinates: pi / sqrt(det S).
   double uv_area() const;
+
+private:
+  void add_hessian_term(double q, const Eigen::Vector2d& Sd, Eigen::Matrix2d& hessian) const {
+    hessian += amplitude_mm * q * (24.0 * Sd * Sd.transpose() - 6.0 * q * shape_uv);
+  }
 };
 
 /// Bounds of a patch's height h(u, v) = sum_i a_i Q_i(u, v)^3 [Q_i > 0] over its base triangle

@@ -94,8 +94,10 @@ struct Answer {
 /// code, until k_stop, the end of the channel, or a signal. One process makes the subjects of its
 /// job slot one after the other, so the memory it freed is reused without the kernel clearing it
 /// again, and the subjects' freed memory stays with the process (mallopt below) rather than going
-/// back to the kernel between subjects. A subject's failure is answered and the next one runs; a
-/// crash ends the worker, and the batch counts its subject as failed and starts another.
+/// back to the kernel between subjects: large blocks too (the images' transforms, the grids), which
+/// malloc would otherwise map afresh for each subject and the kernel clear page by page. A
+/// subject's failure is answered and the next one runs; a crash ends the worker, and the batch
+/// counts its subject as failed and starts another.
 [[noreturn]] void work_and_exit(const Sweep& sweep, const std::filesystem::path& output, int threads,
                                 pid_t parent, bool strict, const std::filesystem::path& anatomy_cache,
                                 int channel) {
@@ -107,6 +109,7 @@ struct Answer {
   omp_set_num_threads(threads);
   ::mallopt(M_TRIM_THRESHOLD, std::numeric_limits<int>::max());
   ::mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  ::mallopt(M_MMAP_MAX, 0);
   while (true) {
     pollfd wait{channel, POLLIN, 0};
     const int ready = ::poll(&wait, 1, 100);

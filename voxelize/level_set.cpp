@@ -60,6 +60,14 @@ struct PatchHeights {
     return h;
   }
 
+  /// The height's second derivatives at (u, v): height()'s, the same terms in the same order.
+  Eigen::Matrix2d height_hessian(const Eigen::Vector2d& uv) const {
+    Eigen::Matrix2d dd_uv = Eigen::Matrix2d::Zero();
+    for (const std::uint32_t n : lattice.at(uv.x(), uv.y()))
+      bumps[n].add_hessian(uv, dd_uv);
+    return dd_uv;
+  }
+
   Eigen::Vector3d point(const Eigen::Vector2d& uv, double h) const {
     return origin + uv.x() * edge1 + uv.y() * edge2 + h * normal;
   }
@@ -76,12 +84,15 @@ struct PatchHeights {
   /// surface: 0.18 mm off), the Gauss-Newton steps first find the near one.
   /// @param h, d_uv the height and its derivatives at uv (height()): the caller has them
   double distance(const Eigen::Vector3d& x, Eigen::Vector2d uv, double h, Eigen::Vector2d d_uv) const {
-    // The first two steps are Gauss-Newton, which needs no second derivatives: those at uv
-    // are never read (each accepted step brings its point's own).
+    // The first two steps are Gauss-Newton, which needs no second derivatives. The later ones
+    // need them at the point they start from (the last step's, since a step not taken ends the
+    // search): summed there, not at every point a line search tries (many are not taken), nor
+    // at the last point, where the search stops. The same sums, so the same bits.
     Eigen::Matrix2d dd_uv = Eigen::Matrix2d::Zero();
     Eigen::Vector3d r = x - point(uv, h);
     double best = r.squaredNorm();
     for (int iteration = 0; iteration < 8; ++iteration) {
+      if (iteration >= 2) dd_uv = height_hessian(uv);
       Eigen::Matrix<double, 3, 2> J;
       J.col(0) = edge1 + d_uv.x() * normal;
       J.col(1) = edge2 + d_uv.y() * normal;
@@ -96,8 +107,7 @@ struct PatchHeights {
         next = next.cwiseMax(0.0);
         if (next.sum() > 1.0) next /= next.sum();
         Eigen::Vector2d next_d_uv;
-        Eigen::Matrix2d next_dd_uv;
-        const double next_h = height(next, &next_d_uv, &next_dd_uv);
+        const double next_h = height(next, &next_d_uv);
         const Eigen::Vector3d next_r = x - point(next, next_h);
         if (next_r.squaredNorm() < best) {
           accepted = true;
@@ -105,7 +115,6 @@ struct PatchHeights {
           best = next_r.squaredNorm();
           uv = next;
           d_uv = next_d_uv;
-          dd_uv = next_dd_uv;
           r = next_r;
         }
       }

@@ -423,9 +423,9 @@ double sum_of_amplitudes(const std::vector<PatchBump>& bumps, double sign) {
 
 } // namespace
 
-// A bump's height, gradient and Hessian (PatchBump::add_height, the level sets' closest-point
-// search) against central differences at random points inside the support of random round and
-// elongated bumps, and nothing added outside it.
+// A bump's height, gradient and Hessian (PatchBump::add_height and add_hessian, the level sets'
+// closest-point search) against central differences at random points inside the support of
+// random round and elongated bumps, and nothing added outside it.
 TEST(PatchBump, HeightGradientAndHessianMatchCentralFiniteDifferences) {
   std::mt19937 random(23);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -455,6 +455,10 @@ TEST(PatchBump, HeightGradientAndHessianMatchCentralFiniteDifferences) {
     Eigen::Vector2d g = Eigen::Vector2d::Ones();
     Eigen::Matrix2d H = Eigen::Matrix2d::Identity();
     b.add_height(uv, h, g, &H);
+    // The Hessian alone (the level sets' Newton steps ask for it apart): the same bits.
+    Eigen::Matrix2d H_alone = Eigen::Matrix2d::Identity();
+    b.add_hessian(uv, H_alone);
+    EXPECT_EQ(H_alone, H) << "trial " << trial;
     const double q = b.shape_value(uv);
     if (q <= 0.0) {
       EXPECT_EQ(h, 1.0);
