@@ -9,6 +9,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <numeric>
 #include <string>
 
 namespace phantasm {
@@ -143,7 +144,21 @@ struct Supersampling {
         for (int a = 0; a < n; ++a)
           offsets.emplace_back((a + 0.5) / n - 0.5, (b + 0.5) / n - 0.5, (c + 0.5) / n - 0.5);
     weight = 1.0 / (n * n * n);
+    int exponent = 0;
+    exact_sums = std::frexp(weight, &exponent) == 0.5;
   }
+
+  /// 0 plus `count` weights, added one at a time.
+  double sum_of_weights(int count) const {
+    if (exact_sums) return count * weight;
+    double sum = 0.0;
+    for (int s = 0; s < count; ++s)
+      sum += weight;
+    return sum;
+  }
+
+  /// The weight is a power of two (n is): every sum of weights up to 1 is then exact.
+  bool exact_sums = false;
 };
 
 /// A slab's partial voxels (TissueVolumes::partial_voxels) and their fractions, as found.
@@ -175,6 +190,28 @@ public:
         m_axes(s.grid.world_from_voxel.topLeftCorner<3, 3>()) {
     for (const VoxelizedOrgan& organ : s.organs)
       m_probes.emplace_back(*organ.level_set);
+    // deepest()'s order: the deeper organ first, of two as deep the later one.
+    m_priority.resize(m_organ_count);
+    std::iota(m_priority.begin(), m_priority.end(), std::size_t{0});
+    std::sort(m_priority.begin(), m_priority.end(), [&](std::size_t a, std::size_t b) {
+      const int da = s.organs[a].depth, db = s.organs[b].depth;
+      return da != db ? da > db : a > b;
+    });
+    m_sides.resize(m_organ_count);
+    m_sample_owner.resize(s.sampling.samples);
+    m_owner_count.resize(m_organ_count + 1);
+    // A whole voxel's label, fractions and wholeness follow from its owner alone: each owner's
+    // (none first), by write_voxel's own sums.
+    m_whole.resize(m_organ_count + 1);
+    for (std::size_t w = 0; w <= m_organ_count; ++w) {
+      std::fill(m_organ_share.begin(), m_organ_share.end(), 0.0);
+      double background = 0.0;
+      (w == 0 ? background : m_organ_share[w - 1]) = 1.0;
+      Whole& whole = m_whole[w];
+      whole.label = label_and_row(background);
+      whole.row = m_row;
+      whole.whole = m_s.out.whole(whole.label, m_row.data());
+    }
   }
 
   /// The voxels of block (ib, jb, kb): each label into the volumes, each partial voxel into `found`.
@@ -191,8 +228,13 @@ public:
       for (int j = j0; j < j0 + by; ++j)
         for (int i = i0; i < i0 + bx; ++i, ++v) {
           const std::size_t index = voxel_index(dims, i, j, k);
-          const double background = voxel_shares(block, v, sampled);
-          write_voxel(index, background, found);
+          const int owner = centre_owner(block, v);
+          if (owner != k_sampled) {
+            write_whole(index, m_whole[static_cast<std::size_t>(owner + 1)], found);
+            continue;
+          }
+          ++sampled;
+          write_voxel(index, sampled_shares(v), found);
         }
   }
 
@@ -264,10 +306,10 @@ private:
     return best;
   }
 
-  /// Voxel v of the block: each organ's share of it into m_organ_share; returns the background's.
-  /// A voxel whose centre is farther than half a diagonal from every surface is whole; the
-  /// others are sampled (counted in `sampled`).
-  double voxel_shares(std::size_t block, std::size_t v, std::size_t& sampled) {
+  /// Voxel v of the block: each organ's value at its centre into m_centre_distance. Returns the
+  /// deepest organ holding the centre (-1 for none) when the centre is farther than half a
+  /// diagonal from every surface (the voxel is whole), k_sampled otherwise.
+  int centre_owner(std::size_t block, std::size_t v) {
     bool decided = true;
     for (std::size_t o = 0; o < m_organ_count; ++o) {
       const std::size_t at = block * m_organ_count + o;
@@ -276,24 +318,46 @@ private:
           static_cast<double>(m_varies[o] ? m_centre_values[o * k_block_voxels + v] : m_s.blocks.value[at]);
       if (std::abs(m_centre_distance[o]) < m_half_diagonal) decided = false;
     }
-    std::fill(m_organ_share.begin(), m_organ_share.end(), 0.0);
-    double background = 0.0;
-    if (decided) {
-      const int owner = deepest([&](std::size_t o) { return m_centre_distance[o] < 0.0; });
-      (owner < 0 ? background : m_organ_share[static_cast<std::size_t>(owner)]) = 1.0;
-      return background;
-    }
-    ++sampled;
-    sample_voxel(m_centres[v]);
-    const std::size_t samples = m_s.sampling.samples;
-    for (std::size_t s = 0; s < samples; ++s) {
-      const int owner = deepest([&](std::size_t o) { return m_sample_inside[o * samples + s] != 0; });
-      (owner < 0 ? background : m_organ_share[static_cast<std::size_t>(owner)]) += m_s.sampling.weight;
-    }
-    return background;
+    if (!decided) return k_sampled;
+    return deepest([&](std::size_t o) { return m_centre_distance[o] < 0.0; });
   }
 
-  /// Per organ, whether each sample of the voxel centred at `centre` lies inside it.
+  /// Voxel v of the block, not whole (centre_owner): each organ's share of its samples into
+  /// m_organ_share; returns the background's. Each sample goes to the deepest organ holding it
+  /// (deepest()), found by taking the organs deepest first: the first that holds a sample owns it.
+  double sampled_shares(std::size_t v) {
+    sample_voxel(m_centres[v]);
+    const std::size_t samples = m_s.sampling.samples;
+    constexpr int unset = -2;
+    std::fill(m_sample_owner.begin(), m_sample_owner.end(), unset);
+    std::size_t left = samples;
+    for (const std::size_t o : m_priority) {
+      if (left == 0) break;
+      if (m_sides[o] == Side::outside) continue;
+      if (m_sides[o] == Side::inside) {
+        for (int& owner : m_sample_owner)
+          if (owner == unset) owner = static_cast<int>(o);
+        break;
+      }
+      const std::uint8_t* in = &m_sample_inside[o * samples];
+      for (std::size_t s = 0; s < samples; ++s)
+        if (m_sample_owner[s] == unset && in[s] != 0) {
+          m_sample_owner[s] = static_cast<int>(o);
+          --left;
+        }
+    }
+    // Each share is its samples' weights added one by one: counted first, then added (the same
+    // bits as adding them sample by sample).
+    std::fill(m_owner_count.begin(), m_owner_count.end(), 0);
+    for (const int owner : m_sample_owner)
+      ++m_owner_count[owner == unset ? 0 : static_cast<std::size_t>(owner) + 1];
+    for (std::size_t o = 0; o < m_organ_count; ++o)
+      m_organ_share[o] = m_s.sampling.sum_of_weights(m_owner_count[o + 1]);
+    return m_s.sampling.sum_of_weights(m_owner_count[0]);
+  }
+
+  /// Per organ, whether each sample of the voxel centred at `centre` lies inside it: the side of
+  /// them all into m_sides, or Side::varies and each sample's into m_sample_inside.
   void sample_voxel(const Eigen::Vector3d& centre) {
     const Supersampling& sampling = m_s.sampling;
     const int n = sampling.n;
@@ -302,10 +366,11 @@ private:
     const bool samples_form_lattice = form_lattice(m_points.data(), n, n, n);
     for (std::size_t o = 0; o < m_organ_count; ++o) {
       std::uint8_t* in = &m_sample_inside[o * sampling.samples];
+      m_sides[o] = Side::varies;
       if (std::abs(m_centre_distance[o]) >= m_half_diagonal || !m_varies[o]) {
         // An organ far from the centre, or with one value over the block, is on the centre's
         // side at every sample.
-        std::fill(in, in + sampling.samples, static_cast<std::uint8_t>(m_centre_distance[o] < 0.0 ? 1 : 0));
+        m_sides[o] = m_centre_distance[o] < 0.0 ? Side::inside : Side::outside;
       } else if (samples_form_lattice) {
         m_probes[o].lattice_inside(m_lattice[0].data(), n, m_lattice[1].data(), n, m_lattice[2].data(), n,
                                    in);
@@ -316,9 +381,9 @@ private:
     }
   }
 
-  /// The voxel's label (the organ of the largest share) and, when it is not whole, its fractions:
+  /// The label (the organ of the largest share in m_organ_share) and, into m_row, the fractions:
   /// every tissue's, then the background's.
-  void write_voxel(std::size_t index, double background, SlabFound& found) {
+  int label_and_row(double background) {
     int label = 0;
     double largest = background;
     double empty = background; // outside every organ, or in a gap filled with air
@@ -335,12 +400,34 @@ private:
       }
     }
     m_row[m_stride - 1] = static_cast<float>(empty);
+    return label;
+  }
+
+  /// The voxel's label and, when it is not whole, its fractions.
+  void write_voxel(std::size_t index, double background, SlabFound& found) {
+    const int label = label_and_row(background);
     m_s.out.labels[index] = label;
     if (!m_s.out.whole(label, m_row.data())) {
       found.voxels.push_back(index);
       found.fractions.insert(found.fractions.end(), m_row.begin(), m_row.end());
     }
   }
+
+  /// A voxel that one owner holds whole (centre_owner): what write_voxel writes for it.
+  struct Whole {
+    int label = 0;
+    std::vector<float> row;
+    bool whole = true;
+  };
+  void write_whole(std::size_t index, const Whole& w, SlabFound& found) const {
+    m_s.out.labels[index] = w.label;
+    if (!w.whole) {
+      found.voxels.push_back(index);
+      found.fractions.insert(found.fractions.end(), w.row.begin(), w.row.end());
+    }
+  }
+
+  static constexpr int k_sampled = -2; ///< centre_owner: the voxel is sampled
 
   const TissueSampling& m_s;
   std::size_t m_organ_count, m_stride;
@@ -357,6 +444,12 @@ private:
   std::vector<double> m_lattice[3];
   double m_half_diagonal;
   Eigen::Matrix3d m_axes;
+  std::vector<Whole> m_whole;          ///< per owner (none first): a whole voxel's label and fractions
+  std::vector<std::size_t> m_priority; ///< the organs in deepest()'s order
+  enum class Side : std::uint8_t { outside, inside, varies };
+  std::vector<Side> m_sides;       ///< per organ, a sampled voxel's samples' side (sample_voxel)
+  std::vector<int> m_sample_owner; ///< per sample, the organ that holds it (sampled_shares)
+  std::vector<int> m_owner_count;  ///< per owner (none first), its samples (sampled_shares)
 };
 
 /// The other state's partial voxels in slab kb's copied blocks, into `found`.
