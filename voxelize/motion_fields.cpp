@@ -276,25 +276,27 @@ Eigen::Vector3d sample_field(const ImageGrid& grid, const IndexFromWorld& index_
                              const std::vector<float>& field, const Eigen::Vector3d& x) {
   const auto count = static_cast<std::size_t>(grid.voxel_count());
   const Eigen::Vector3d index = index_from_world(x);
-  int lo[3];
-  double w[3];
+  // Per axis, the two corners' offsets in the arrays and weights (the upper corner clamped at
+  // the border).
+  std::size_t offset[3][2];
+  double factor[3][2];
+  std::size_t stride = 1;
   for (int a = 0; a < 3; ++a) {
     const double c = std::clamp(index[a], 0.0, static_cast<double>(grid.dims[a] - 1));
-    lo[a] = std::min(static_cast<int>(std::floor(c)), std::max(0, grid.dims[a] - 2));
-    w[a] = grid.dims[a] > 1 ? c - lo[a] : 0.0;
+    const int lo = std::min(static_cast<int>(std::floor(c)), std::max(0, grid.dims[a] - 2));
+    const double w = grid.dims[a] > 1 ? c - lo : 0.0;
+    offset[a][0] = static_cast<std::size_t>(lo) * stride;
+    offset[a][1] = static_cast<std::size_t>(std::min(lo + 1, grid.dims[a] - 1)) * stride;
+    factor[a][0] = 1.0 - w;
+    factor[a][1] = w;
+    stride *= static_cast<std::size_t>(grid.dims[a]);
   }
   Eigen::Vector3d u = Eigen::Vector3d::Zero();
   for (int corner = 0; corner < 8; ++corner) {
-    double weight = 1.0;
-    std::size_t v = 0, stride = 1;
-    for (int a = 0; a < 3; ++a) {
-      const int bit = (corner >> a) & 1;
-      const int i = std::min(lo[a] + bit, grid.dims[a] - 1);
-      weight *= bit ? w[a] : 1.0 - w[a];
-      v += static_cast<std::size_t>(i) * stride;
-      stride *= static_cast<std::size_t>(grid.dims[a]);
-    }
+    const int b0 = corner & 1, b1 = (corner >> 1) & 1, b2 = (corner >> 2) & 1;
+    const double weight = factor[0][b0] * factor[1][b1] * factor[2][b2];
     if (weight == 0.0) continue;
+    const std::size_t v = offset[0][b0] + offset[1][b1] + offset[2][b2];
     for (int c = 0; c < 3; ++c)
       u[c] += weight * field[static_cast<std::size_t>(c) * count + v];
   }
@@ -369,43 +371,47 @@ double jacobian_determinants(const ImageGrid& grid, const std::vector<float>& u,
                              std::vector<float>& jacobian, double still_jacobian) {
   const auto count = static_cast<std::size_t>(grid.voxel_count());
   const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
-  auto at = [&](int i, int j, int k) { return voxel_index(grid.dims, i, j, k); };
   const Eigen::Matrix3d index_from_world = grid.world_from_voxel.topLeftCorner<3, 3>().inverse();
+  // A neighbour along axis a is the voxel `stride[a]` apart in the arrays.
+  const std::size_t stride[3] = {1, static_cast<std::size_t>(nx),
+                                 static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny)};
+  const int size[3] = {nx, ny, nz};
+  const float* const component[3] = {u.data(), u.data() + count, u.data() + 2 * count};
   double min_jacobian = std::min(1.0, still_jacobian);
 #pragma omp parallel for schedule(static) reduction(min : min_jacobian)
   for (int k = 0; k < nz; ++k) {
     if (cancellation_requested()) continue; // no exception may leave an OpenMP region
     for (int j = 0; j < ny; ++j) {
+      const std::size_t row = voxel_index(grid.dims, 0, j, k);
       for (int i = 0; i < nx; ++i) {
-        if (still.at(at(i, j, k), deformed)) {
-          jacobian[at(i, j, k)] = static_cast<float>(still_jacobian); // its motion: the head's growth
+        const std::size_t v = row + static_cast<std::size_t>(i);
+        if (still.at(v, deformed)) {
+          jacobian[v] = static_cast<float>(still_jacobian); // its motion: the head's growth
           continue;
         }
         const int index[3] = {i, j, k};
-        const int size[3] = {nx, ny, nz};
+        const bool in_mask = exact[v] != 0;
+        // Not across into still tissue (the motion jumps there), nor out of the exact mask.
+        const auto leave_out = [&](std::size_t w) { return still.at(w, deformed) || (in_mask && !exact[w]); };
         Eigen::Matrix3d d_index; // column a: du / d(index a)
         for (int a = 0; a < 3; ++a) {
-          int lo[3] = {i, j, k}, hi[3] = {i, j, k};
-          lo[a] = std::max(0, index[a] - 1);
-          hi[a] = std::min(size[a] - 1, index[a] + 1);
-          // Not across into still tissue (the motion jumps there), nor out of the exact mask.
-          const bool in_mask = exact[at(i, j, k)] != 0;
-          auto leave_out = [&](const int(&n)[3]) {
-            const std::size_t w = at(n[0], n[1], n[2]);
-            return still.at(w, deformed) || (in_mask && !exact[w]);
-          };
-          if (leave_out(lo)) lo[a] = index[a];
-          if (leave_out(hi)) hi[a] = index[a];
-          const double span = hi[a] - lo[a];
-          for (int c = 0; c < 3; ++c) {
-            const auto base = static_cast<std::size_t>(c) * count;
-            d_index(c, a) =
-                span > 0 ? (u[base + at(hi[0], hi[1], hi[2])] - u[base + at(lo[0], lo[1], lo[2])]) / span
-                         : 0.0;
+          // The neighbours on each side (the voxel itself at the border or where left out).
+          std::size_t lo = v, hi = v;
+          int span = 0;
+          if (index[a] > 0 && !leave_out(v - stride[a])) {
+            lo = v - stride[a];
+            ++span;
           }
+          if (index[a] < size[a] - 1 && !leave_out(v + stride[a])) {
+            hi = v + stride[a];
+            ++span;
+          }
+          for (int c = 0; c < 3; ++c)
+            d_index(c, a) =
+                span > 0 ? (component[c][hi] - component[c][lo]) / static_cast<double>(span) : 0.0;
         }
         const double det = (Eigen::Matrix3d::Identity() + d_index * index_from_world).determinant();
-        jacobian[at(i, j, k)] = static_cast<float>(det);
+        jacobian[v] = static_cast<float>(det);
         min_jacobian = std::min(min_jacobian, det);
       }
     }
