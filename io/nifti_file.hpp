@@ -4,6 +4,7 @@
 
 #include "core/grid.hpp"
 
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -79,8 +80,18 @@ NiftiVolume read_nifti_vectors_4d(const std::filesystem::path& path, int compone
 /// @throws InputError as read_nifti, and naming the first voxel that is not a whole number
 std::vector<std::int32_t> read_nifti_labels(const std::filesystem::path& path, ImageGrid* grid);
 
-/// Pauses this many milliseconds before every piece (1 MiB) of voxels the read functions read.
-/// Only for tests that interrupt a command while it reads; 0 (the default) turns it off.
+/// Pauses this many milliseconds before every piece (1 MiB) of voxels the read functions read
+/// (a gzipped file then goes through zlib's stream, in those pieces, rather than being inflated
+/// a gzip member at a time). Only for tests that interrupt a command while it reads; 0 (the
+/// default) turns it off.
 void set_read_delay_for_testing(int milliseconds_per_piece);
+
+/// Whether gzipped voxels are inflated a gzip member at a time by libdeflate (true, the
+/// default) or read through zlib's stream in pieces: for tests and benchmarks that compare them.
+void set_whole_member_reads_for_testing(bool enabled);
+
+/// How many gzipped files this process has read by inflating their members whole (libdeflate),
+/// for tests that check a file took that way.
+std::size_t whole_member_reads_for_testing();
 
 } // namespace phantasm

@@ -35,6 +35,14 @@ ImageGrid oblique_grid() {
   return grid;
 }
 
+/// Runs a Python script (Debian's interpreter, numpy and nibabel) written to folder/name with
+/// `argument`; what it prints (its last line "ok" when its checks held) and its errors.
+phantasm::testing::CommandResult run_script(const fs::path& folder, const std::string& name,
+                                            const std::string& script, const std::string& argument) {
+  phantasm::testing::write_text_file(folder / name, script);
+  return phantasm::testing::run_command({PHANTASM_PYTHON, (folder / name).string(), argument});
+}
+
 } // namespace
 
 TEST(NiftiFile, FloatImageRoundTripKeepsValuesAndAffine) {
@@ -234,9 +242,7 @@ for c in range(3):
     assert (f[..., 0, c].reshape(-1, order='F') == expected).all(), c
 print('ok')
 )";
-  phantasm::testing::write_text_file(folder / "check.py", script);
-  const auto result =
-      phantasm::testing::run_command({PHANTASM_PYTHON, (folder / "check.py").string(), path.string()});
+  const auto result = run_script(folder, "check.py", script, path.string());
   EXPECT_EQ(result.out, "ok\n") << result.err;
 }
 
@@ -279,9 +285,7 @@ for name, dtype, order in [('be_f4.nii.gz', 'f4', '>'), ('be_f8.nii', 'f8', '>')
     nib.save(nib.Nifti1Image(values.astype(order + dtype), np.eye(4), header), folder + '/' + name)
 print('ok')
 )";
-  phantasm::testing::write_text_file(folder / "write.py", script);
-  const auto written =
-      phantasm::testing::run_command({PHANTASM_PYTHON, (folder / "write.py").string(), folder.string()});
+  const auto written = run_script(folder, "write.py", script, folder.string());
   ASSERT_EQ(written.out, "ok\n") << written.err;
   for (const std::string name : {"be_f4.nii.gz", "be_f8.nii", "be_i2.nii.gz", "le_f4.nii"}) {
     SCOPED_TRACE(name);
@@ -323,4 +327,103 @@ TEST(NiftiFile, ACancellationStopsAReadBetweenTwoPieces) {
   // Stopped at the first poll after the request: one or two pauses, not four.
   EXPECT_LT(seconds, 1.2);
   EXPECT_EQ(read_nifti(folder / "large.nii.gz").values[123456], 456.0);
+}
+
+// Gzipped voxels are inflated member by member with libdeflate (our writer's members of 16 MiB
+// of input, nibabel's and gzip's one member, either byte order): the same values as zlib's
+// stream gives them, and a damaged member leaves the file to zlib, which names the damage.
+TEST(NiftiFile, WholeMembersAndZlibsStreamReadTheSameValues) {
+  const fs::path folder = fresh_folder("nifti-members");
+  ImageGrid grid;
+  grid.dims = {128, 128, 100}; // 6.25 MiB of float32 a component: two members of ours
+  const std::size_t voxels = static_cast<std::size_t>(grid.voxel_count());
+  std::vector<float> field(3 * voxels);
+  for (std::size_t n = 0; n < field.size(); ++n)
+    field[n] = static_cast<float>(std::sin(0.001 * static_cast<double>(n)) * 40.0);
+  write_nifti(folder / "ours.nii.gz", grid, field, {NiftiIntent::displacement, 3, "field"});
+  const std::string script = R"(
+import sys, numpy as np, nibabel as nib
+folder = sys.argv[1]
+i, j, k = np.indices((90, 70, 60))
+for name, order in [('big.nii.gz', '>'), ('little.nii.gz', '<')]:
+    header = nib.Nifti1Header(endianness=order)
+    header.set_data_dtype(np.dtype(order + 'i2'))
+    nib.save(nib.Nifti1Image((i + 97 * j - 11 * k).astype(order + 'i2'), np.eye(4), header), folder + '/' + name)
+print('ok')
+)";
+  const auto written = run_script(folder, "write.py", script, folder.string());
+  ASSERT_EQ(written.out, "ok\n") << written.err;
+  // gzip's own member, of a file written uncompressed.
+  write_nifti(folder / "plain.nii", grid, std::vector<float>(field.begin(), field.begin() + voxels));
+  const auto gzipped = phantasm::testing::run_command({"/bin/gzip", "-k", (folder / "plain.nii").string()});
+  ASSERT_TRUE(fs::exists(folder / "plain.nii.gz")) << gzipped.err;
+
+  for (const std::string name : {"ours.nii.gz", "big.nii.gz", "little.nii.gz", "plain.nii.gz"}) {
+    SCOPED_TRACE(name);
+    const auto read = [&] {
+      return name == "ours.nii.gz" ? read_nifti_vectors(folder / name) : read_nifti(folder / name);
+    };
+    const std::size_t before = whole_member_reads_for_testing();
+    const NiftiVolume whole = read();
+    EXPECT_EQ(whole_member_reads_for_testing(), before + 1); // not left to zlib
+    set_whole_member_reads_for_testing(false);
+    const NiftiVolume streamed = read();
+    set_whole_member_reads_for_testing(true);
+    EXPECT_EQ(whole_member_reads_for_testing(), before + 1);
+    ASSERT_EQ(whole.values.size(), streamed.values.size());
+    EXPECT_TRUE(whole.values == streamed.values);
+    EXPECT_EQ(whole.grid.world_from_voxel, streamed.grid.world_from_voxel);
+  }
+  // A damaged second member: left to zlib, which names it.
+  std::string bytes = phantasm::testing::read_file(folder / "ours.nii.gz");
+  bytes[bytes.size() - 1000] = static_cast<char>(bytes[bytes.size() - 1000] ^ 0x55);
+  phantasm::testing::write_text_file(folder / "damaged.nii.gz", bytes);
+  const std::size_t before = whole_member_reads_for_testing();
+  const std::string message = input_error_message([&] { read_nifti_vectors(folder / "damaged.nii.gz"); });
+  EXPECT_EQ(whole_member_reads_for_testing(), before);
+  EXPECT_NE(message.find("damaged compressed data"), std::string::npos) << message;
+}
+
+// Integer labels of up to 32 bits are taken as they are; scaled ones, and -2^31 (beyond int32's
+// magnitude), go through the whole-number check.
+TEST(NiftiFile, IntegerLabelsOfEveryWidthAndScaling) {
+  const fs::path folder = fresh_folder("nifti-label-types");
+  const std::string script = R"(
+import sys, numpy as np, nibabel as nib
+folder = sys.argv[1]
+i, j, k = np.indices((6, 5, 4))
+values = i + 7 * j - 20 * k  # -60 .. 33
+for name, dtype in [('u1', 'u1'), ('i1', 'i1'), ('i2', 'i2'), ('u2', 'u2'), ('i4', 'i4'), ('u4', 'u4'), ('f4', 'f4')]:
+    v = values - values.min() if dtype[0] == 'u' else values
+    nib.save(nib.Nifti1Image(v.astype(dtype), np.eye(4)), folder + '/' + name + '.nii.gz')
+scaled = nib.Nifti1Image(values.astype('i2'), np.eye(4))
+scaled.header.set_slope_inter(2.0, 1.0)
+nib.save(scaled, folder + '/scaled.nii.gz')
+lowest = values.astype('i4')
+lowest[1, 2, 3] = -2**31
+nib.save(nib.Nifti1Image(lowest, np.eye(4)), folder + '/lowest.nii.gz')
+print('ok')
+)";
+  const auto written = run_script(folder, "write.py", script, folder.string());
+  ASSERT_EQ(written.out, "ok\n") << written.err;
+  const auto expected = [](int i, int j, int k, bool shifted) {
+    return i + 7 * j - 20 * k + (shifted ? 60 : 0);
+  };
+  for (const std::string name : {"u1", "i1", "i2", "u2", "i4", "u4", "f4", "scaled"}) {
+    SCOPED_TRACE(name);
+    const std::vector<std::int32_t> labels = read_nifti_labels(folder / (name + ".nii.gz"), nullptr);
+    ASSERT_EQ(labels.size(), 120u);
+    std::size_t wrong = 0;
+    for (int k = 0, n = 0; k < 4; ++k)
+      for (int j = 0; j < 5; ++j)
+        for (int i = 0; i < 6; ++i, ++n) {
+          const int value = expected(i, j, k, name[0] == 'u');
+          wrong += labels[static_cast<std::size_t>(n)] != (name == "scaled" ? 2 * value + 1 : value);
+        }
+    EXPECT_EQ(wrong, 0u);
+  }
+  EXPECT_NE(input_error_message([&] {
+              read_nifti_labels(folder / "lowest.nii.gz", nullptr);
+            }).find("expected whole-number labels, found -2147483648.000000 at voxel (1, 2, 3)"),
+            std::string::npos);
 }
