@@ -455,6 +455,25 @@ std::vector<unsigned char> read_voxel_data(const std::filesystem::path& path, co
   return bytes;
 }
 
+/// Calls `convert` with a value of the type a real scalar NIfTI datatype names; false (and no
+/// call) for any other datatype.
+template <typename Convert>
+bool with_value_type(int datatype, Convert&& convert) {
+  switch (datatype) {
+  case DT_UINT8: convert(std::uint8_t{}); return true;
+  case DT_INT8: convert(std::int8_t{}); return true;
+  case DT_INT16: convert(std::int16_t{}); return true;
+  case DT_UINT16: convert(std::uint16_t{}); return true;
+  case DT_INT32: convert(std::int32_t{}); return true;
+  case DT_UINT32: convert(std::uint32_t{}); return true;
+  case DT_INT64: convert(std::int64_t{}); return true;
+  case DT_UINT64: convert(std::uint64_t{}); return true;
+  case DT_FLOAT32: convert(float{}); return true;
+  case DT_FLOAT64: convert(double{}); return true;
+  default: return false;
+  }
+}
+
 /// A NIfTI file's grid and datatype (`values` left empty), its voxels' bytes in this machine's
 /// order, and its scaling.
 struct RawVolume {
@@ -544,40 +563,12 @@ RawVolume read_raw_volume(const std::filesystem::path& path, int components, boo
 
   raw.slope = image->scl_slope != 0.0 ? image->scl_slope : 1.0;
   raw.intercept = image->scl_slope != 0.0 ? image->scl_inter : 0.0;
-  switch (image->datatype) {
-  case DT_UINT8:
-  case DT_INT8:
-  case DT_INT16:
-  case DT_UINT16:
-  case DT_INT32:
-  case DT_UINT32:
-  case DT_INT64:
-  case DT_UINT64:
-  case DT_FLOAT32:
-  case DT_FLOAT64: break;
-  default:
+  if (!with_value_type(image->datatype, [](auto) {})) {
     throw_file_error(path, "expected a real scalar datatype, found NIfTI datatype " +
                                std::to_string(image->datatype) + " (" +
                                nifti_datatype_string(image->datatype) + ")");
   }
   return raw;
-}
-
-/// Calls `convert` with a value of the type the datatype names (one read_raw_volume accepts).
-template <typename Convert>
-void with_value_type(int datatype, Convert&& convert) {
-  switch (datatype) {
-  case DT_UINT8: convert(std::uint8_t{}); break;
-  case DT_INT8: convert(std::int8_t{}); break;
-  case DT_INT16: convert(std::int16_t{}); break;
-  case DT_UINT16: convert(std::uint16_t{}); break;
-  case DT_INT32: convert(std::int32_t{}); break;
-  case DT_UINT32: convert(std::uint32_t{}); break;
-  case DT_INT64: convert(std::int64_t{}); break;
-  case DT_UINT64: convert(std::uint64_t{}); break;
-  case DT_FLOAT32: convert(float{}); break;
-  default: convert(double{}); break;
-  }
 }
 
 NiftiVolume read_volume(const std::filesystem::path& path, int components, bool fourth_dimension = false) {
