@@ -385,7 +385,7 @@ print('ok')
 }
 
 // Integer labels of up to 32 bits are taken as they are; scaled ones, and -2^31 (beyond int32's
-// magnitude), go through the whole-number check.
+// magnitude), go through the whole-number check; a datatype that is not a real scalar is named.
 TEST(NiftiFile, IntegerLabelsOfEveryWidthAndScaling) {
   const fs::path folder = fresh_folder("nifti-label-types");
   const std::string script = R"(
@@ -402,6 +402,7 @@ nib.save(scaled, folder + '/scaled.nii.gz')
 lowest = values.astype('i4')
 lowest[1, 2, 3] = -2**31
 nib.save(nib.Nifti1Image(lowest, np.eye(4)), folder + '/lowest.nii.gz')
+nib.save(nib.Nifti1Image(values.astype('c8'), np.eye(4)), folder + '/complex.nii.gz')
 print('ok')
 )";
   const auto written = run_script(folder, "write.py", script, folder.string());
@@ -426,4 +427,16 @@ print('ok')
               read_nifti_labels(folder / "lowest.nii.gz", nullptr);
             }).find("expected whole-number labels, found -2147483648.000000 at voxel (1, 2, 3)"),
             std::string::npos);
+  // Not a real scalar type: named, labels or not.
+  for (const bool labels : {false, true}) {
+    const std::string message = input_error_message([&] {
+      if (labels) {
+        read_nifti_labels(folder / "complex.nii.gz", nullptr);
+      } else {
+        read_nifti(folder / "complex.nii.gz");
+      }
+    });
+    EXPECT_NE(message.find("expected a real scalar datatype, found NIfTI datatype 32"), std::string::npos)
+        << message;
+  }
 }
