@@ -22,6 +22,7 @@ packages=(
   mrtrix3 python3-dipy
   slurm-wlm munge
   zlib1g-dev libdeflate-dev libpng-dev
+  libtcmalloc-minimal4
   mricron-data
   chromium
 )

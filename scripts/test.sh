@@ -19,12 +19,12 @@ TIMEFORMAT="   (%0R s wall, %0U s user + %0S s system processor time)"
 # the test beside them. Waiting passively changes no result; the coarse shipped scenes' tests
 # (ctest -R ShippedScene --parallel 2) took 87-90 s of processor time instead of 128-144 s.
 export OMP_WAIT_POLICY=passive
-# glibc's malloc asks the kernel for transparent huge pages, as the phantasm command does for itself
-# (docs/performance.md, Memory pages): the test programs that call the libraries directly allocate
-# volumes of tens of megabytes too, and mapping them 4 KiB at a time cost the fast tests a twelfth
-# of their wall time and the Colin head's body test a fifth. A tunable set by the user is kept. A
-# compile gained nothing measurable and the sanitizers bring their own allocator: only the Release
-# tests get it.
+# glibc's malloc asks the kernel for transparent huge pages in the test programs that call the
+# libraries directly (the phantasm command allocates through tcmalloc instead; docs/performance.md,
+# Memory allocator): they allocate volumes of tens of megabytes too, and mapping them 4 KiB at a
+# time cost the fast tests a twelfth of their wall time and the Colin head's body test a fifth. A
+# tunable set by the user is kept. A compile gained nothing measurable and the sanitizers bring
+# their own allocator: only the Release tests get it.
 tunables=${GLIBC_TUNABLES:-}
 case ":$tunables:" in
   *:glibc.malloc.hugetlb=*) ;;

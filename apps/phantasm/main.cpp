@@ -1,5 +1,4 @@
 #include "apps/phantasm/commands.hpp"
-#include "apps/phantasm/huge_pages.hpp"
 #include "core/cancellation.hpp"
 #include "core/error.hpp"
 #include "core/version.hpp"
@@ -61,7 +60,6 @@ MemoryLimit memory_limit(const std::string& max_memory) {
 
 int main(int argc, char** argv) {
   using namespace phantasm::cli;
-  restart_with_huge_pages(argv);
   phantasm::install_cancellation_handlers(true);
 
   CLI::App app{"phantasm: deformable anatomical MRI phantoms with exact ground truth", "phantasm"};

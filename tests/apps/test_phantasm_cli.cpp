@@ -1,4 +1,3 @@
-#include "apps/phantasm/huge_pages.hpp"
 #include "io/vtk_xml_file.hpp"
 #include "tests/apps/cli_fixtures.hpp"
 #include "tests/support/subprocess.hpp"
@@ -8,15 +7,11 @@
 #include <openvdb/io/File.h>
 #include <openvdb/openvdb.h>
 
-#include <signal.h>
-
 #include <algorithm>
-#include <chrono>
 #include <map>
 #include <regex>
 #include <sstream>
 #include <string>
-#include <thread>
 #include <utility>
 #include <vector>
 
@@ -633,49 +628,31 @@ TEST(RunCommand, InvertedTetsAreAWarningNamingTheOrgan) {
   EXPECT_FALSE(fs::exists(root / "strict" / "derivatives" / "phantasm" / "sub-01"));
 }
 
-namespace {
-
-/// The GLIBC_TUNABLES and arguments of `phantasm run` (the small head) started through
-/// /usr/bin/env with `env_arguments` (which execs it, the same process) once it has written its
-/// first progress line, past its restart; the run is then stopped.
-std::pair<std::string, std::vector<std::string>>
-tunables_of_run(const fs::path& root, const std::vector<std::string>& env_arguments) {
-  std::vector<std::string> argv = {"/usr/bin/env"};
-  argv.insert(argv.end(), env_arguments.begin(), env_arguments.end());
-  const std::vector<std::string> command = {
-      k_phantasm, "run", k_small_scene.string(), "-o", (root / "out").string(), "--force"};
-  argv.insert(argv.end(), command.begin(), command.end());
-  const fs::path err = root / "stderr.txt";
-  BackgroundProcess run(argv, err.string());
-  for (int wait = 0; wait < 2000 && !run.ended() && fs::file_size(err) == 0; ++wait)
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  std::string tunables = "(not set)";
-  for (const std::string& variable : run.environment())
-    if (variable.rfind("GLIBC_TUNABLES=", 0) == 0) tunables = variable.substr(15);
-  const std::vector<std::string> arguments = run.arguments();
-  EXPECT_FALSE(run.ended()) << "the run ended before its environment was read";
-  run.send_signal(SIGTERM);
-  run.wait();
-  EXPECT_EQ(arguments, command) << "the restarted command has the arguments it was given";
-  return {tunables, arguments};
-}
-
-} // namespace
-
-// The command restarts itself with glibc's malloc asking for transparent huge pages
-// (apps/phantasm/huge_pages.hpp): the tunable is added to those the user set, and a user's own
-// choice of it is kept. (glibc cuts the process's own copy of GLIBC_TUNABLES, which /proc shows,
-// at the first colon when it reads it: a list of tunables is checked on the function that makes it.)
-TEST(Cli, TheCommandRunsWithMallocOnHugePagesUnlessTheUserChoseOtherwise) {
-  using phantasm::cli::tunables_with_huge_pages;
-  EXPECT_EQ(tunables_with_huge_pages(nullptr), "glibc.malloc.hugetlb=1");
-  EXPECT_EQ(tunables_with_huge_pages(""), "glibc.malloc.hugetlb=1");
-  EXPECT_EQ(tunables_with_huge_pages("glibc.malloc.perturb=0"),
-            "glibc.malloc.perturb=0:glibc.malloc.hugetlb=1");
-  EXPECT_EQ(tunables_with_huge_pages("glibc.malloc.hugetlb=0"), std::nullopt);
-  EXPECT_EQ(tunables_with_huge_pages("glibc.malloc.perturb=0:glibc.malloc.hugetlb=0"), std::nullopt);
-  const fs::path root = fresh_folder("huge-pages");
-  EXPECT_EQ(tunables_of_run(root, {"-u", "GLIBC_TUNABLES"}).first, "glibc.malloc.hugetlb=1");
-  EXPECT_EQ(tunables_of_run(root, {"GLIBC_TUNABLES="}).first, "glibc.malloc.hugetlb=1");
-  EXPECT_EQ(tunables_of_run(root, {"GLIBC_TUNABLES=glibc.malloc.hugetlb=0"}).first, "glibc.malloc.hugetlb=0");
+// The command's malloc is tcmalloc's (apps/phantasm/CMakeLists.txt; docs/performance.md, Memory
+// allocator), as the dynamic loader binds it: the command's own calls and those of the C++ library
+// (operator new) go to libtcmalloc_minimal, none to glibc's. The sanitizer tree's command keeps the
+// sanitizers' allocator, which tcmalloc would displace.
+TEST(Cli, TheCommandAllocatesThroughTcmalloc) {
+  const CommandResult result = run_command({"/usr/bin/env", "LD_DEBUG=bindings", k_phantasm, "--version"});
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  std::vector<std::string> malloc_bindings;
+  std::istringstream lines(result.err);
+  for (std::string line; std::getline(lines, line);)
+    if (line.find("symbol `malloc'") != std::string::npos) malloc_bindings.push_back(line);
+  const auto binds_to = [&](const std::string& library) {
+    return std::count_if(malloc_bindings.begin(), malloc_bindings.end(), [&](const std::string& line) {
+      const std::size_t to = line.find(" to ");
+      return to != std::string::npos && line.find(library, to) != std::string::npos;
+    });
+  };
+  std::string all;
+  for (const std::string& line : malloc_bindings)
+    all += line + "\n";
+  if (std::string(PHANTASM_COMMAND_ALLOCATOR) == "tcmalloc") {
+    EXPECT_GE(binds_to("libtcmalloc_minimal.so"), 2) << all;
+    EXPECT_EQ(binds_to("libc.so"), 0) << all;
+  } else {
+    EXPECT_EQ(std::string(PHANTASM_COMMAND_ALLOCATOR), "sanitizer");
+    EXPECT_EQ(binds_to("libtcmalloc"), 0) << all;
+  }
 }
