@@ -1,5 +1,6 @@
 #include "atlas/voxel_masks.hpp"
 
+#include "core/cancellation.hpp"
 #include "io/nifti_file.hpp"
 
 #include <Eigen/LU>
@@ -106,33 +107,64 @@ std::vector<float> distance_to(const Mask& mask, const ImageGrid& grid) {
   return out;
 }
 
-/// 6-connected components of a mask, numbered 1, 2, ... in scan order (deterministic).
+/// 6-connected components of a mask, numbered 1, 2, ... in scan order (deterministic): a
+/// component's number is the rank of its first voxel in scan order among the components' first
+/// voxels. Two passes over the voxels in scan order: each mask voxel takes a provisional label,
+/// joined in a union-find with those of its neighbours before it (-x, -y, -z); the second pass
+/// numbers each set as its first voxel comes. A flood fill from each unlabelled voxel in scan
+/// order numbers them the same, with a division per voxel to find its neighbours and a jump in
+/// memory per step.
 std::vector<std::int32_t> connected_components(const Mask& mask, const ImageGrid& grid, std::int32_t* count) {
   const Volume vol(grid);
   std::vector<std::int32_t> component(mask.size(), 0);
-  std::vector<std::int64_t> stack;
-  std::int32_t next = 0;
-  for (std::int64_t seed = 0; seed < vol.size(); ++seed) {
-    if (!mask[seed] || component[seed]) continue;
-    component[seed] = ++next;
-    stack.assign(1, seed);
-    while (!stack.empty()) {
-      const std::int64_t n = stack.back();
-      stack.pop_back();
-      const int i = static_cast<int>(n % vol.nx), j = static_cast<int>((n / vol.nx) % vol.ny),
-                k = static_cast<int>(n / (std::int64_t(vol.nx) * vol.ny));
-      const std::array<std::array<int, 3>, 6> steps{
-          {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}}};
-      for (const auto& s : steps) {
-        const int a = i + s[0], b = j + s[1], c = k + s[2];
-        if (a < 0 || b < 0 || c < 0 || a >= vol.nx || b >= vol.ny || c >= vol.nz) continue;
-        const std::int64_t m = vol.at(a, b, c);
-        if (mask[m] && !component[m]) {
-          component[m] = next;
-          stack.push_back(m);
+  // parent[l] <= l: provisional label l's parent; 0 is unused.
+  std::vector<std::int32_t> parent(1, 0);
+  const auto root = [&parent](std::int32_t l) {
+    while (parent[static_cast<std::size_t>(l)] != l) {
+      const std::int32_t up = parent[static_cast<std::size_t>(parent[static_cast<std::size_t>(l)])];
+      parent[static_cast<std::size_t>(l)] = up; // path halving
+      l = up;
+    }
+    return l;
+  };
+  const auto join = [&](std::int32_t a, std::int32_t b) {
+    a = root(a);
+    b = root(b);
+    if (a < b) parent[static_cast<std::size_t>(b)] = a;
+    if (b < a) parent[static_cast<std::size_t>(a)] = b;
+    return std::min(a, b);
+  };
+  const std::int64_t sx = 1, sy = vol.nx, sz = std::int64_t(vol.nx) * vol.ny;
+  for (int k = 0; k < vol.nz; ++k) {
+    throw_if_cancelled();
+    for (int j = 0; j < vol.ny; ++j) {
+      const std::int64_t row = vol.at(0, j, k);
+      for (int i = 0; i < vol.nx; ++i) {
+        const std::int64_t v = row + i;
+        if (!mask[static_cast<std::size_t>(v)]) continue;
+        std::int32_t label = 0;
+        for (const std::int64_t w : {i > 0 ? v - sx : -1, j > 0 ? v - sy : -1, k > 0 ? v - sz : -1}) {
+          if (w < 0) continue;
+          const std::int32_t l = component[static_cast<std::size_t>(w)];
+          if (l == 0) continue;
+          label = label == 0 ? root(l) : join(label, l);
         }
+        if (label == 0) {
+          label = static_cast<std::int32_t>(parent.size());
+          parent.push_back(label);
+        }
+        component[static_cast<std::size_t>(v)] = label;
       }
     }
+  }
+  // Roots numbered in the order their first voxels come.
+  std::vector<std::int32_t> number(parent.size(), 0);
+  std::int32_t next = 0;
+  for (std::int32_t& c : component) {
+    if (c == 0) continue;
+    const std::int32_t r = root(c);
+    if (number[static_cast<std::size_t>(r)] == 0) number[static_cast<std::size_t>(r)] = ++next;
+    c = number[static_cast<std::size_t>(r)];
   }
   *count = next;
   return component;
