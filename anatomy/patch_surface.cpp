@@ -128,6 +128,8 @@ HeightRange patch_height_range(const std::vector<PatchBump>& bumps) {
 
 std::vector<HeightRange> patch_height_ranges(const PatchSurface& surface) {
   std::vector<HeightRange> ranges(static_cast<std::size_t>(surface.patch_count()));
+  // Each patch its own: in parallel (an organ of 50 000 patches takes about two seconds).
+#pragma omp parallel for schedule(dynamic, 256)
   for (Eigen::Index t = 0; t < surface.patch_count(); ++t)
     ranges[static_cast<std::size_t>(t)] = patch_height_range(surface.bumps(t));
   return ranges;

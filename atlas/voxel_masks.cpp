@@ -19,6 +19,8 @@ std::vector<double> resample_nearest(const ImageGrid& source, const std::vector<
   const Volume dst(target);
   const Eigen::Vector3i sdims = source.dims;
   std::vector<double> out(static_cast<std::size_t>(dst.size()), 0.0);
+  // Each voxel its own: in parallel over slices.
+#pragma omp parallel for schedule(static)
   for (int k = 0; k < dst.nz; ++k) {
     for (int j = 0; j < dst.ny; ++j) {
       for (int i = 0; i < dst.nx; ++i) {
@@ -315,6 +317,8 @@ std::vector<std::int8_t> majority_filter(const std::vector<std::int8_t>& cls, co
                                          const ImageGrid& grid) {
   const Volume vol(grid);
   std::vector<std::int8_t> out = cls;
+  // Each voxel from the input alone: in parallel over slices.
+#pragma omp parallel for schedule(static)
   for (int k = 1; k < vol.nz - 1; ++k) {
     for (int j = 1; j < vol.ny - 1; ++j) {
       for (int i = 1; i < vol.nx - 1; ++i) {
