@@ -182,15 +182,34 @@ std::vector<std::size_t> apply_tissue_regions(TissueVolumes& volumes,
     const auto organ = static_cast<std::size_t>(regions[r].organ_label);
     organ_tissue[r] = organ < volumes.label_tissues.size() ? volumes.label_tissues[organ] : -1;
   }
+  // The regions of each organ label (a few each): a voxel's label picks its list, its region
+  // value the entry; the map itself only for an organ label below 0.
+  std::vector<std::vector<std::pair<std::int32_t, std::size_t>>> of_organ;
+  for (const auto& [key, r] : by_organ_and_value) {
+    if (key.first < 0) continue;
+    if (of_organ.size() <= static_cast<std::size_t>(key.first))
+      of_organ.resize(static_cast<std::size_t>(key.first) + 1);
+    of_organ[static_cast<std::size_t>(key.first)].emplace_back(key.second, r);
+  }
+  const auto region_of = [&](std::int32_t label, std::int32_t value) -> std::ptrdiff_t {
+    if (label < 0) {
+      const auto found = by_organ_and_value.find({label, value});
+      return found == by_organ_and_value.end() ? -1 : static_cast<std::ptrdiff_t>(found->second);
+    }
+    if (static_cast<std::size_t>(label) >= of_organ.size()) return -1;
+    for (const auto& [region_value, r] : of_organ[static_cast<std::size_t>(label)])
+      if (region_value == value) return static_cast<std::ptrdiff_t>(r);
+    return -1;
+  };
   std::vector<std::size_t> relabelled(regions.size(), 0);
   const std::size_t stride = volumes.fractions_per_voxel();
   auto partial = volumes.partial_voxels.begin();
   for (std::size_t v = 0; v < volumes.labels.size(); ++v) {
     while (partial != volumes.partial_voxels.end() && *partial < v)
       ++partial;
-    const auto found = by_organ_and_value.find({volumes.labels[v], region_volume[v]});
-    if (found == by_organ_and_value.end()) continue;
-    const std::size_t r = found->second;
+    const std::ptrdiff_t found = region_of(volumes.labels[v], region_volume[v]);
+    if (found < 0) continue;
+    const auto r = static_cast<std::size_t>(found);
     volumes.labels[v] = regions[r].label;
     ++relabelled[r];
     if (partial == volumes.partial_voxels.end() || *partial != v || organ_tissue[r] < 0) continue;
