@@ -113,27 +113,6 @@ bool BackgroundProcess::has_open(const std::string& path) const {
   return false;
 }
 
-namespace {
-
-/// A /proc file of NUL-separated strings.
-std::vector<std::string> proc_strings(int pid, const std::string& name) {
-  std::ifstream file("/proc/" + std::to_string(pid) + "/" + name, std::ios::binary);
-  std::vector<std::string> strings;
-  for (std::string item; std::getline(file, item, '\0');)
-    strings.push_back(item);
-  return strings;
-}
-
-} // namespace
-
-std::vector<std::string> BackgroundProcess::environment() const {
-  return proc_strings(m_pid, "environ");
-}
-
-std::vector<std::string> BackgroundProcess::arguments() const {
-  return proc_strings(m_pid, "cmdline");
-}
-
 std::vector<int> BackgroundProcess::children() const {
   std::ifstream in("/proc/" + std::to_string(m_pid) + "/task/" + std::to_string(m_pid) + "/children");
   std::vector<int> pids;

@@ -33,10 +33,6 @@ public:
   bool ended();
   /// Whether the program has `path` open now (a file it reads or writes; Linux's /proc).
   bool has_open(const std::string& path) const;
-  /// The program's environment now ("NAME=value" each, Linux's /proc): after an exec, the new one.
-  std::vector<std::string> environment() const;
-  /// The program's arguments now, its name first (Linux's /proc).
-  std::vector<std::string> arguments() const;
   /// The process ids of the program's children now (Linux's /proc).
   std::vector<int> children() const;
 
