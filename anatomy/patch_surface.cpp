@@ -316,25 +316,39 @@ double PatchSurface::height(Eigen::Index t, double u, double v) const {
   if (perturbations.empty()) return 0.0;
   // frame()'s length scale, without its inverse (the tessellation asks for millions of heights).
   const double L = m_rest_triangles[static_cast<std::size_t>(t)].length_scale;
-  // g(h) = F(b + h n) = -h + sum a Q(u, v, h / L)^3; the bracket holds every root of bounded bumps.
+  // g(h) = F(b + h n) = -h + sum a Q(u, v)^3 over the bumps with Q > 0. A bump's quadric has no
+  // w terms (PatchBump::quadric), so its Q at (u, v, h / L) is its Q at (u, v, 0) (up to the sign
+  // of a zero, which counts as outside either way) and g's slope is -1: each term is computed
+  // once, and g at any h sums the same terms, in the same order, after -h.
   const BumpLattice::Bumps near = m_lattices[static_cast<std::size_t>(t)].at(u, v);
-  auto g = [&](double h, double* slope) {
-    const Eigen::Vector3d uvw(u, v, h / L);
-    double value = -h, derivative = -1.0;
-    for (const std::uint32_t n : near) {
-      const Perturbation& p = perturbations[n];
-      const double q = p.quadric.value(uvw);
-      if (q <= 0.0) continue;
-      value += p.amplitude_mm * q * q * q;
-      derivative += 3.0 * p.amplitude_mm * q * q * p.quadric.gradient(uvw).z() / L;
-    }
-    if (slope) *slope = derivative;
+  constexpr std::size_t k_held = 64;
+  std::array<double, k_held> held;
+  std::vector<double> more;
+  std::size_t count = 0;
+  const Eigen::Vector3d uv0(u, v, 0.0);
+  for (const std::uint32_t n : near) {
+    const Perturbation& p = perturbations[n];
+    const double q = p.quadric.value(uv0);
+    if (q <= 0.0) continue;
+    const double term = p.amplitude_mm * q * q * q;
+    if (count < k_held)
+      held[count] = term;
+    else
+      more.push_back(term);
+    ++count;
+  }
+  const auto g = [&](double h) {
+    double value = -h;
+    for (std::size_t k = 0; k < count; ++k)
+      value += k < k_held ? held[k] : more[k - k_held];
     return value;
   };
-  double h = g(0.0, nullptr); // exact when the quadrics do not depend on w
-  double slope = 0.0;
-  double residual = g(h, &slope);
+  double h = g(0.0); // exact: the terms do not depend on h
+  double residual = g(h);
   if (std::abs(residual) <= 1e-14 * (L + std::abs(h))) return h;
+  // Newton's steps on g (slope -1) within the bracket that holds every root of bounded bumps,
+  // for the sums whose rounding leaves a residual.
+  constexpr double slope = -1.0;
   double bound = L;
   for (const auto& p : perturbations)
     bound += std::abs(p.amplitude_mm) * 8.0;
@@ -342,10 +356,10 @@ double PatchSurface::height(Eigen::Index t, double u, double v) const {
   for (int i = 0; i < 100; ++i) {
     (residual > 0.0 ? lo : hi) = h;
     double next = h - residual / slope;
-    if (!(slope < 0.0) || !(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
     if (std::abs(next - h) <= 1e-14 * (L + std::abs(h))) return next;
     h = next;
-    residual = g(h, &slope);
+    residual = g(h);
   }
   return h;
 }

@@ -83,6 +83,21 @@ TEST(PatchSurface, GeneralQuadricsWithHeightTermsAreSolvedByNewton) {
   EXPECT_TRUE(matches_finite_differences(q.gradient(p), numeric, 1e-8, 1.0));
 }
 
+// PatchSurface::height computes each bump's term once and solves g(h) = -h + sum of the terms:
+// right only while a bump's quadric has no w terms (its Q the same at every height, g's slope -1).
+TEST(PatchSurface, BumpQuadricsHaveNoHeightTerms) {
+  const PatchSurface surface = bumpy_sphere();
+  std::size_t checked = 0;
+  for (Eigen::Index t = 0; t < surface.patch_count(); ++t)
+    for (const PatchBump& bump : surface.bumps(t)) {
+      const Quadric q = bump.quadric();
+      for (const std::size_t w_term : {3, 7, 8, 9})
+        ASSERT_EQ(q.c[w_term], 0.0) << "triangle " << t << ", coefficient " << w_term;
+      ++checked;
+    }
+  EXPECT_GT(checked, 0u);
+}
+
 TEST(PatchSurface, NeighbouringPatchTessellationsShareTheirBoundary) {
   const PatchSurface surface = bumpy_sphere();
   const TriangleMesh tessellation = surface.tessellate(0.05);
