@@ -250,11 +250,26 @@ void fit_bumps(PatchSurface& surface, const ImplicitShape& target, const PatchFi
     // twentieth of the products of the dense A^T A, every sum in sample order.
     Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(k, k);
     Eigen::VectorXd rhs = Eigen::VectorXd::Zero(k);
+    // A sample outside a bump's support box (widened by a thousandth) has Q < -0.002 however
+    // it is rounded: its Q is not computed.
+    std::vector<Eigen::Vector4d> boxes(static_cast<std::size_t>(k)); // u low, u high, v low, v high
+    for (Eigen::Index c = 0; c < k; ++c) {
+      const PatchBump& b = bumps[static_cast<std::size_t>(c)];
+      const Eigen::Matrix2d S = 0.5 * (b.shape_uv + b.shape_uv.transpose());
+      const double det = S.determinant();
+      const Eigen::Vector2d half =
+          1.001 * Eigen::Vector2d(std::sqrt(S(1, 1) / det), std::sqrt(S(0, 0) / det));
+      boxes[static_cast<std::size_t>(c)] << b.center_uv.x() - half.x(), b.center_uv.x() + half.x(),
+          b.center_uv.y() - half.y(), b.center_uv.y() + half.y();
+    }
     std::vector<std::pair<Eigen::Index, double>> row;
     for (Eigen::Index r = 0; r < m; ++r) {
       row.clear();
+      const Eigen::Vector2d& at = uv[static_cast<std::size_t>(r)];
       for (Eigen::Index c = 0; c < k; ++c) {
-        const double q = bumps[static_cast<std::size_t>(c)].shape_value(uv[static_cast<std::size_t>(r)]);
+        const Eigen::Vector4d& box = boxes[static_cast<std::size_t>(c)];
+        if (at.x() < box[0] || at.x() > box[1] || at.y() < box[2] || at.y() > box[3]) continue;
+        const double q = bumps[static_cast<std::size_t>(c)].shape_value(at);
         if (q > 0.0) row.emplace_back(c, q * q * q);
       }
       const double height = heights[static_cast<std::size_t>(r)];

@@ -34,11 +34,6 @@ PatchBump PatchBump::disc(const Eigen::Vector2d& center_uv, double radius_mm,
   return bump;
 }
 
-double PatchBump::shape_value(const Eigen::Vector2d& uv) const {
-  const Eigen::Vector2d d = uv - center_uv;
-  return 1.0 - d.dot(shape_uv * d);
-}
-
 Quadric PatchBump::quadric() const {
   const double s11 = shape_uv(0, 0), s12 = 0.5 * (shape_uv(0, 1) + shape_uv(1, 0)), s22 = shape_uv(1, 1);
   const double cu = center_uv.x(), cv = center_uv.y();

@@ -36,8 +36,11 @@ struct PatchBump {
   /// A round bump of `radius_mm` in a triangle whose rest edge dot products are `rest_metric`.
   static PatchBump disc(const Eigen::Vector2d& center_uv, double radius_mm,
                         const Eigen::Matrix2d& rest_metric);
-  /// Q at (u, v).
-  double shape_value(const Eigen::Vector2d& uv) const;
+  /// Q at (u, v). Inline: the patch fit asks it of every basis bump at every sample.
+  double shape_value(const Eigen::Vector2d& uv) const {
+    const Eigen::Vector2d d = uv - center_uv;
+    return 1.0 - d.dot(shape_uv * d);
+  }
   /// Q expanded into a quadric in (u, v, w) (no w terms; S taken as symmetric): the form the
   /// patch function F sums (PatchSurface::value, gradient and height).
   Quadric quadric() const;
