@@ -98,6 +98,25 @@ TEST(PatchSurface, BumpQuadricsHaveNoHeightTerms) {
   EXPECT_GT(checked, 0u);
 }
 
+// More bumps at one point than height() keeps on its stack (64): the rest go to its overflow
+// list, and the height is still -0 + the terms summed in the bumps' order.
+TEST(PatchSurface, HeightSumsEveryTermWhenManyBumpsOverlap) {
+  PatchSurface surface(sphere_mesh(1, 30.0), "stacked bumps");
+  const TriangleMesh& base = surface.base_mesh();
+  std::vector<PatchBump> bumps;
+  for (int b = 0; b < 100; ++b)
+    bumps.push_back(disc_in_triangle(base, 0, {1.0 / 3.0, 1.0 / 3.0}, 0.5 + 0.004 * b, 0.01 * (1 + b % 7)));
+  surface.set_bumps(0, bumps);
+  const Eigen::Vector2d at(0.3, 0.35);
+  double h = -0.0;
+  for (const PatchBump& bump : bumps) {
+    const double q = bump.quadric().value(Eigen::Vector3d(at.x(), at.y(), 0.0));
+    if (q > 0.0) h += bump.amplitude_mm * q * q * q;
+  }
+  EXPECT_GT(h, 0.65); // every bump reaches the point: 100 terms of 0.01-0.07 x Q^3
+  EXPECT_EQ(surface.height(0, at.x(), at.y()), h);
+}
+
 TEST(PatchSurface, NeighbouringPatchTessellationsShareTheirBoundary) {
   const PatchSurface surface = bumpy_sphere();
   const TriangleMesh tessellation = surface.tessellate(0.05);
