@@ -187,6 +187,18 @@ public:
   }
   double bounding_radius() const override { return m_radius; }
   double volume() const override { return m_volume; }
+  Eigen::AlignedBox3d solid_box() const override {
+    // A point's cell has a corner in the kept box only within a voxel of it; elsewhere the value
+    // is 0 - 1/2. The box's corners a voxel out, in world coordinates.
+    Eigen::AlignedBox3d box;
+    for (int corner = 0; corner < 8; ++corner) {
+      Eigen::Vector3d at;
+      for (int a = 0; a < 3; ++a)
+        at[a] = ((corner >> a) & 1) ? m_low[a] + m_dims[a] : m_low[a] - 1;
+      box.extend(m_grid.world_from_index(at));
+    }
+    return box;
+  }
 
 private:
   /// value() at a point whose cell reaches past the kept box: corners outside it count as 0.

@@ -3,7 +3,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
+#include <limits>
 #include <memory>
 
 namespace phantasm {
@@ -25,6 +27,13 @@ public:
   /// Half the extent along x, y and z of an axis-aligned box about center() that holds the
   /// solid, mm; a cube of bounding_radius() unless the shape knows a tighter box.
   virtual Eigen::Vector3d half_extents() const { return Eigen::Vector3d::Constant(bounding_radius()); }
+  /// An axis-aligned box outside which value(x) <= 0 everywhere: lattices over half_extents()'s
+  /// box (TargetBoundary) need not evaluate their points past it. The whole space unless the
+  /// shape knows one (a label volume's: the voxels it keeps).
+  virtual Eigen::AlignedBox3d solid_box() const {
+    const double inf = std::numeric_limits<double>::infinity();
+    return {Eigen::Vector3d::Constant(-inf), Eigen::Vector3d::Constant(inf)};
+  }
   /// Enclosed volume in mm^3, exact where a closed form exists.
   virtual double volume() const = 0;
   /// True when every ray from center() crosses the surface once (ellipsoids, superquadrics,

@@ -434,6 +434,17 @@ TargetBoundary::TargetBoundary(const ImplicitShape& target, double spacing_mm) {
     }
     return x;
   };
+  // The lattice's points past the target's solid box, and the first beyond it, are all outside
+  // (value <= 0): no edge among them crosses the surface, so only the range from the last point
+  // before the box to the first after it is evaluated (the same crossings in the same order).
+  const Eigen::AlignedBox3d solid = target.solid_box();
+  Eigen::Vector3i first = Eigen::Vector3i::Zero(), last = n - Eigen::Vector3i::Ones();
+  for (int a = 0; a < 3; ++a) {
+    const double from = std::floor((solid.min()[a] - low[a]) / m_spacing) - 1.0;
+    const double to = std::ceil((solid.max()[a] - low[a]) / m_spacing) + 1.0;
+    if (from > first[a]) first[a] = from < last[a] ? static_cast<int>(from) : last[a];
+    if (to < last[a]) last[a] = to > first[a] ? static_cast<int>(to) : first[a];
+  }
   // Layer by layer (two in memory), each layer's values in parallel over its rows.
   const int nx = n.x(), ny = n.y();
   const auto row = [nx](int i, int j) {
@@ -442,22 +453,22 @@ TargetBoundary::TargetBoundary(const ImplicitShape& target, double spacing_mm) {
   std::vector<double> below(static_cast<std::size_t>(nx) * ny), layer(below.size());
   const auto fill = [&](std::vector<double>& values, int k) {
 #pragma omp parallel for schedule(static)
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i)
+    for (int j = first.y(); j <= last.y(); ++j)
+      for (int i = first.x(); i <= last.x(); ++i)
         values[row(i, j)] = target.value(at(i, j, k));
   };
   const auto inside = [](double f) { return f > 0.0; };
-  for (int k = 0; k < n.z(); ++k) {
+  for (int k = first.z(); k <= last.z(); ++k) {
     throw_if_cancelled();
     fill(layer, k);
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i) {
+    for (int j = first.y(); j <= last.y(); ++j)
+      for (int i = first.x(); i <= last.x(); ++i) {
         const double f = layer[row(i, j)];
-        if (i + 1 < nx && inside(f) != inside(layer[row(i + 1, j)]))
+        if (i + 1 <= last.x() && inside(f) != inside(layer[row(i + 1, j)]))
           m_points.push_back(crossing(at(i, j, k), at(i + 1, j, k), f, layer[row(i + 1, j)]));
-        if (j + 1 < ny && inside(f) != inside(layer[row(i, j + 1)]))
+        if (j + 1 <= last.y() && inside(f) != inside(layer[row(i, j + 1)]))
           m_points.push_back(crossing(at(i, j, k), at(i, j + 1, k), f, layer[row(i, j + 1)]));
-        if (k > 0 && inside(f) != inside(below[row(i, j)]))
+        if (k > first.z() && inside(f) != inside(below[row(i, j)]))
           m_points.push_back(crossing(at(i, j, k), at(i, j, k - 1), f, below[row(i, j)]));
       }
     std::swap(below, layer);

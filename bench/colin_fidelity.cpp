@@ -11,12 +11,11 @@
 
 #include "anatomy/phantom.hpp"
 #include "atlas/atlas_labels.hpp"
+#include "bench/process_clock.hpp"
 #include "io/shape_files.hpp"
 #include "scene/scene.hpp"
 #include "voxelize/level_set.hpp"
 #include "voxelize/voxelize_phantom.hpp"
-
-#include <sys/resource.h>
 
 #include <algorithm>
 #include <chrono>
@@ -29,16 +28,8 @@
 
 namespace {
 
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-double cpu_seconds() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
-         1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-}
+using phantasm::bench::cpu_seconds;
+using phantasm::bench::seconds_since;
 
 double dice(std::int64_t both, std::int64_t a, std::int64_t b) {
   return a + b == 0 ? 1.0 : 2.0 * static_cast<double>(both) / static_cast<double>(a + b);

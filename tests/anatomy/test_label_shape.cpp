@@ -110,7 +110,8 @@ std::unique_ptr<ImplicitShape> oblique_torus(double smoothing_mm) {
   return make_label_shape(grid, labels, {3}, smoothing_mm, "torus");
 }
 
-/// Forwards everything but the slope bound, which it leaves at the default (none).
+/// Forwards everything but the slope bound and the solid box, which it leaves at the defaults
+/// (none, the whole space).
 class WithoutSlopeBound final : public ImplicitShape {
 public:
   explicit WithoutSlopeBound(const ImplicitShape& shape) : m_shape(shape) {}
@@ -255,5 +256,68 @@ TEST(LabelShape, ValueBetweenVoxelCentresIsTheTrilinearInterpolantInsideAndPastT
     }
     EXPECT_GT(inside, 2000); // the check reaches the smoothed box, not only the -1/2 around it
     EXPECT_GT(outside, 2000);
+  }
+}
+
+// Outside the solid box the value is -1/2 (the box holds every point whose cell reaches the kept
+// voxels), on an oblique grid and an axis-aligned one; the box is the ball's, not the volume's.
+TEST(LabelShape, ValueIsMinusOneHalfOutsideTheSolidBox) {
+  for (const bool oblique : {false, true}) {
+    SCOPED_TRACE(oblique ? "oblique grid" : "axis-aligned grid");
+    ImageGrid grid;
+    grid.dims = Eigen::Vector3i(40, 34, 30);
+    grid.spacing_mm = Eigen::Vector3d(1.0, 0.9, 1.2);
+    grid.world_from_voxel.setIdentity();
+    Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
+    if (oblique)
+      axes = Eigen::AngleAxisd(0.4, Eigen::Vector3d(1.0, 2.0, 0.5).normalized()).toRotationMatrix();
+    grid.world_from_voxel.topLeftCorner<3, 3>() = axes * grid.spacing_mm.asDiagonal();
+    std::vector<std::int32_t> labels(static_cast<std::size_t>(grid.voxel_count()), 0);
+    std::size_t index = 0;
+    for (int k = 0; k < grid.dims.z(); ++k)
+      for (int j = 0; j < grid.dims.y(); ++j)
+        for (int i = 0; i < grid.dims.x(); ++i, ++index)
+          if (std::hypot(i - 22.0, j - 15.0, 1.3 * (k - 14.0)) < 6.0) labels[index] = 2;
+    const auto shape = make_label_shape(grid, labels, {2}, 0.8, "ball");
+    const Eigen::AlignedBox3d box = shape->solid_box();
+    ASSERT_TRUE(box.sizes().allFinite());
+    Eigen::AlignedBox3d volume_box; // the whole volume's
+    for (int corner = 0; corner < 8; ++corner)
+      volume_box.extend(grid.world_from_index(Eigen::Vector3d((corner & 1) ? grid.dims.x() : -1,
+                                                              (corner & 2) ? grid.dims.y() : -1,
+                                                              (corner & 4) ? grid.dims.z() : -1)));
+    EXPECT_LT(box.volume(), 0.3 * volume_box.volume()); // the ball's, with its kernel's reach
+    std::mt19937 random(5);
+    std::uniform_real_distribution<double> coordinate(-30.0, 70.0);
+    int outside = 0, not_outside = 0;
+    for (int trial = 0; trial < 200000; ++trial) {
+      const Eigen::Vector3d x(coordinate(random), coordinate(random), coordinate(random));
+      const double v = shape->value(x);
+      if (!box.contains(x)) {
+        ASSERT_EQ(v, -0.5) << x.transpose();
+        ++outside;
+      } else {
+        not_outside += v != -0.5;
+      }
+    }
+    EXPECT_GT(outside, 1000);
+    EXPECT_GT(not_outside, 10);
+  }
+}
+
+// TargetBoundary evaluates its lattice within the solid box only: the crossings it finds, and so
+// every distance, are those of the whole lattice (the shape wrapped without its box).
+TEST(LabelShape, TargetBoundaryWithinTheSolidBoxIsTheWholeLattices) {
+  const auto shape = oblique_torus(0.5);
+  const WithoutSlopeBound whole(*shape); // no solid box either: the whole space
+  ASSERT_FALSE(whole.solid_box().sizes().allFinite());
+  const TargetBoundary within(*shape), everywhere(whole);
+  ASSERT_GT(within.point_count(), 1000u);
+  ASSERT_EQ(within.point_count(), everywhere.point_count());
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> coordinate(-25.0, 25.0);
+  for (int trial = 0; trial < 5000; ++trial) {
+    const Eigen::Vector3d x(coordinate(random), coordinate(random), coordinate(random));
+    ASSERT_EQ(within.distance(x), everywhere.distance(x)) << x.transpose();
   }
 }
