@@ -223,6 +223,13 @@ Eigen::MatrixX3d straddle_vertices(const TriangleMesh& base, const ImplicitShape
 void fit_bumps(PatchSurface& surface, const ImplicitShape& target, const PatchFitOptions& options) {
   const TriangleMesh& base = surface.base_mesh();
   const int n = 1 << options.sample_level;
+  // Work space of each patch's samples, kept from one patch to the next.
+  std::vector<Eigen::Vector2d> uv;
+  std::vector<double> heights;
+  std::vector<int> sample_of, bump_count;
+  std::vector<Eigen::Index> bumps_at;
+  std::vector<std::pair<Eigen::Index, double>> row;
+  std::vector<char> in_column(static_cast<std::size_t>(n)), in_row(static_cast<std::size_t>(n));
   for (Eigen::Index t = 0; t < surface.patch_count(); ++t) {
     throw_if_cancelled();
     const PatchFrame frame = surface.frame(t);
@@ -230,14 +237,18 @@ void fit_bumps(PatchSurface& surface, const ImplicitShape& target, const PatchFi
     const Eigen::Vector3d x1 = surface.rest_positions().row(base.faces(t, 1)).transpose();
     const Eigen::Vector3d x2 = surface.rest_positions().row(base.faces(t, 2)).transpose();
     std::vector<PatchBump> bumps = basis_bumps(x0, x1, x2, options.bump_levels);
-    std::vector<Eigen::Vector2d> uv;
-    std::vector<double> heights;
+    // The samples on the grid's interior points (i, j) / n, those whose search found the target;
+    // `sample_of` numbers them by grid point (-1: none there).
+    uv.clear();
+    heights.clear();
+    sample_of.assign(static_cast<std::size_t>(n * n), -1);
     for (int j = 1; j < n; ++j) {
       for (int i = 1; i + j < n; ++i) {
         const double u = double(i) / n, v = double(j) / n;
         const double h = target_height(target, frame.origin + u * frame.edge1 + v * frame.edge2, frame.normal,
                                        frame.length_scale);
         if (std::isnan(h)) continue;
+        sample_of[static_cast<std::size_t>(j * n + i)] = static_cast<int>(uv.size());
         uv.emplace_back(u, v);
         heights.push_back(h);
       }
@@ -248,27 +259,42 @@ void fit_bumps(PatchSurface& surface, const ImplicitShape& target, const PatchFi
     // in the support of a few bumps only (the level-2 incircles cover a sixteenth of the patch
     // each), so the normal equations A^T A a = A^T b are summed over each sample's bumps: a
     // twentieth of the products of the dense A^T A, every sum in sample order.
-    Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(k, k);
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(k);
     // A sample outside a bump's support box (widened by a thousandth) has Q < -0.002 however
-    // it is rounded: its Q is not computed.
-    std::vector<Eigen::Vector4d> boxes(static_cast<std::size_t>(k)); // u low, u high, v low, v high
+    // it is rounded: its Q is not computed. Each bump lists the samples in its box (the grid's
+    // rows and columns the box holds, by the same comparisons of the same coordinates), so each
+    // sample meets its few bumps in bump order instead of testing every bump's box.
+    // Sample r's bumps: bumps_at[r * k ...], bump_count[r] of them.
+    bumps_at.resize(static_cast<std::size_t>(m * k));
+    bump_count.assign(static_cast<std::size_t>(m), 0);
     for (Eigen::Index c = 0; c < k; ++c) {
       const PatchBump& b = bumps[static_cast<std::size_t>(c)];
       const Eigen::Matrix2d S = 0.5 * (b.shape_uv + b.shape_uv.transpose());
       const double det = S.determinant();
       const Eigen::Vector2d half =
           1.001 * Eigen::Vector2d(std::sqrt(S(1, 1) / det), std::sqrt(S(0, 0) / det));
-      boxes[static_cast<std::size_t>(c)] << b.center_uv.x() - half.x(), b.center_uv.x() + half.x(),
-          b.center_uv.y() - half.y(), b.center_uv.y() + half.y();
+      const double u_low = b.center_uv.x() - half.x(), u_high = b.center_uv.x() + half.x();
+      const double v_low = b.center_uv.y() - half.y(), v_high = b.center_uv.y() + half.y();
+      for (int i = 1; i < n; ++i) {
+        const double u = double(i) / n;
+        in_column[static_cast<std::size_t>(i)] = !(u < u_low || u > u_high);
+        in_row[static_cast<std::size_t>(i)] = !(u < v_low || u > v_high);
+      }
+      for (int j = 1; j < n; ++j) {
+        if (!in_row[static_cast<std::size_t>(j)]) continue;
+        for (int i = 1; i + j < n; ++i) {
+          const int r = sample_of[static_cast<std::size_t>(j * n + i)];
+          if (r < 0 || !in_column[static_cast<std::size_t>(i)]) continue;
+          bumps_at[static_cast<std::size_t>(r * k + bump_count[static_cast<std::size_t>(r)]++)] = c;
+        }
+      }
     }
-    std::vector<std::pair<Eigen::Index, double>> row;
+    Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(k, k);
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(k);
     for (Eigen::Index r = 0; r < m; ++r) {
       row.clear();
       const Eigen::Vector2d& at = uv[static_cast<std::size_t>(r)];
-      for (Eigen::Index c = 0; c < k; ++c) {
-        const Eigen::Vector4d& box = boxes[static_cast<std::size_t>(c)];
-        if (at.x() < box[0] || at.x() > box[1] || at.y() < box[2] || at.y() > box[3]) continue;
+      for (int b = 0; b < bump_count[static_cast<std::size_t>(r)]; ++b) {
+        const Eigen::Index c = bumps_at[static_cast<std::size_t>(r * k + b)];
         const double q = bumps[static_cast<std::size_t>(c)].shape_value(at);
         if (q > 0.0) row.emplace_back(c, q * q * q);
       }

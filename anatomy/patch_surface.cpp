@@ -51,6 +51,40 @@ double PatchBump::uv_area() const {
   return M_PI / std::sqrt(shape_uv.determinant());
 }
 
+namespace {
+
+/// Adds one bump's bounds a Q^3 [Q > 0] over a row of sub-triangles: for each i < count, the
+/// sub-triangle with corner values q0[i], q1[i], q2[i] (Q at its corners) gets a times the cube
+/// of its least corner value (lower) and of its largest plus `slack`, at most 1 (upper), each
+/// taken where positive; swapped for a < 0. Plain arrays in one pass each, so the compiler
+/// vectorizes it: the same operations on each element as one at a time, so the same sums.
+void add_row_bounds(double a, double slack, const double* q0, const double* q1, const double* q2, int count,
+                    double* __restrict lower, double* __restrict upper) {
+  // max(x, 0)^3 rather than a branch: vectorizable, and where x <= 0 it adds a zero either way
+  // (a sum that starts at +0 and only grows by these is never -0, so adding -0 changes no bit).
+  const auto cube_of_positive = [](double x) {
+    const double p = std::max(x, 0.0);
+    return p * p * p;
+  };
+  if (a > 0.0) {
+    for (int i = 0; i < count; ++i) {
+      const double q_low = std::min(std::min(q0[i], q1[i]), q2[i]);
+      const double q_high = std::min(1.0, std::max(std::max(q0[i], q1[i]), q2[i]) + slack);
+      lower[i] += a * cube_of_positive(q_low);
+      upper[i] += a * cube_of_positive(q_high);
+    }
+  } else {
+    for (int i = 0; i < count; ++i) {
+      const double q_low = std::min(std::min(q0[i], q1[i]), q2[i]);
+      const double q_high = std::min(1.0, std::max(std::max(q0[i], q1[i]), q2[i]) + slack);
+      lower[i] += a * cube_of_positive(q_high);
+      upper[i] += a * cube_of_positive(q_low);
+    }
+  }
+}
+
+} // namespace
+
 HeightRange patch_height_range(const std::vector<PatchBump>& bumps) {
   // The triangle is cut into n^2 similar sub-triangles, two per cell of the lattice (a, b) / n.
   // Over a triangle with corners p_j and barycentric weights l_j, a quadratic with Hessian H
@@ -59,12 +93,15 @@ HeightRange patch_height_range(const std::vector<PatchBump>& bumps) {
   // min_j Q(p_j) <= Q <= max_j Q(p_j) + E / 3, E the largest edge's e^T S e (every sub-triangle
   // has the same three edges). Each bump's share a Q^3 [Q > 0] is bounded from the corners, and
   // only on the cells its support's bounding box meets: elsewhere it is 0.
+  // Cell (i, j) holds two sub-triangles: the first with corners (i, j), (i + 1, j), (i, j + 1),
+  // the second (when i + j + 2 <= n) with (i + 1, j), (i, j + 1), (i + 1, j + 1); their bounds
+  // are kept in arrays of their own, at j n + i.
   constexpr int n = 32;
-  std::vector<double> upper(2 * n * n, 0.0), lower(2 * n * n, 0.0);
+  thread_local std::vector<double> upper, lower, upper2, lower2, q_grid;
+  for (std::vector<double>* sums : {&upper, &lower, &upper2, &lower2})
+    sums->assign(n * n, 0.0);
   const double step = 1.0 / n;
   const Eigen::Vector2d edges[3] = {{step, 0.0}, {0.0, step}, {step, -step}};
-  const auto cube_of_positive = [](double x) { return x > 0.0 ? x * x * x : 0.0; };
-  std::vector<double> q_grid;
   for (const PatchBump& bump : bumps) {
     const Eigen::Matrix2d S = 0.5 * (bump.shape_uv + bump.shape_uv.transpose());
     const double a = bump.amplitude_mm;
@@ -89,29 +126,27 @@ HeightRange patch_height_range(const std::vector<PatchBump>& bumps) {
         q_grid[static_cast<std::size_t>((j - b_first) * columns + (i - a_first))] = 1.0 - d.dot(S * d);
       }
     }
-    const auto q_at = [&](int i, int j) {
-      return q_grid[static_cast<std::size_t>((j - b_first) * columns + (i - a_first))];
-    };
-    const auto add = [&](std::size_t id, double q0, double q1, double q2) {
-      const double q_low = std::min({q0, q1, q2});
-      const double q_high = std::min(1.0, std::max({q0, q1, q2}) + slack);
-      lower[id] += a * cube_of_positive(a > 0.0 ? q_low : q_high);
-      upper[id] += a * cube_of_positive(a > 0.0 ? q_high : q_low);
-    };
     for (int j = b_first; j <= b_last; ++j) {
-      for (int i = a_first; i <= a_last && i + j < n; ++i) {
-        const double q00 = q_at(i, j), q10 = q_at(i + 1, j), q01 = q_at(i, j + 1);
-        const auto id = static_cast<std::size_t>(2 * (j * n + i));
-        add(id, q00, q10, q01);
-        if (i + j + 2 <= n) add(id + 1, q10, q01, q_at(i + 1, j + 1));
-      }
+      // The row's cells within the triangle (i + j < n), and those holding a second sub-triangle.
+      const int first_count = std::min(a_last, n - 1 - j) - a_first + 1;
+      const int second_count = std::min(a_last, n - 2 - j) - a_first + 1;
+      if (first_count <= 0) continue;
+      const double* row = q_grid.data() + (j - b_first) * columns;
+      const double* next_row = row + columns;
+      const std::size_t at = static_cast<std::size_t>(j * n + a_first);
+      add_row_bounds(a, slack, row, row + 1, next_row, first_count, lower.data() + at, upper.data() + at);
+      if (second_count > 0)
+        add_row_bounds(a, slack, row + 1, next_row, next_row + 1, second_count, lower2.data() + at,
+                       upper2.data() + at);
     }
   }
   HeightRange range;
-  for (std::size_t id = 0; id < upper.size(); ++id) {
-    range.highest = std::max(range.highest, upper[id]);
-    range.lowest = std::min(range.lowest, lower[id]);
-  }
+  for (const std::vector<double>* sums : {&upper, &upper2})
+    for (const double value : *sums)
+      range.highest = std::max(range.highest, value);
+  for (const std::vector<double>* sums : {&lower, &lower2})
+    for (const double value : *sums)
+      range.lowest = std::min(range.lowest, value);
   // Rounding of the sums above: a margin far below any voxel.
   double total = 0.0;
   for (const PatchBump& bump : bumps)

@@ -14,6 +14,9 @@
 #include <CGAL/Mesh_complex_3_in_triangulation_3.h>
 #include <CGAL/Mesh_criteria_3.h>
 #include <CGAL/Mesh_triangulation_3.h>
+// With TBB support (anatomy/CMakeLists.txt) the sliver exuder names this header's types without
+// including it.
+#include <CGAL/Mesh_3/Worksharing_data_structures.h>
 #include <CGAL/exude_mesh_3.h>
 #include <CGAL/make_mesh_3.h>
 #include <CGAL/refine_mesh_3.h>

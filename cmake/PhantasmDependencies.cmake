@@ -13,8 +13,11 @@ find_package(ZLIB REQUIRED)
 find_package(CHOLMOD REQUIRED)
 find_package(OpenBLAS CONFIG QUIET)
 
-# Anatomy: CGAL Mesh_3 (header-only; one translation unit includes it).
+# Anatomy: CGAL Mesh_3 (header-only; two adapter files include it), with TBB support for its
+# faster containers (anatomy/CMakeLists.txt).
 find_package(CGAL REQUIRED)
+find_package(TBB REQUIRED)
+include(CGAL_TBB_support)
 
 # Voxelization and .vdb output.
 list(APPEND CMAKE_MODULE_PATH /usr/lib/x86_64-linux-gnu/cmake/OpenVDB)

@@ -22,18 +22,7 @@ namespace {
 /// 1-30 random bumps of both signs: round and elongated, wide and very narrow (the eigenvalues
 /// of S from 4 to 4e5), centred anywhere in the triangle, some at its edges and corners.
 std::vector<PatchBump> random_bumps(std::mt19937& random, int count) {
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  std::vector<PatchBump> bumps(static_cast<std::size_t>(count));
-  for (PatchBump& b : bumps) {
-    double u = unit(random), v = unit(random);
-    if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
-    b.center_uv = {u, v};
-    const Eigen::Matrix2d R = Eigen::Rotation2Dd(M_PI * unit(random)).toRotationMatrix();
-    const Eigen::Vector2d eigenvalues(4.0 * std::pow(1e5, unit(random)), 4.0 * std::pow(1e5, unit(random)));
-    b.shape_uv = R * eigenvalues.asDiagonal() * R.transpose();
-    b.amplitude_mm = 4.0 * unit(random) - 1.5;
-  }
-  return bumps;
+  return phantasm::testing::random_bumps(random, count, 4.0, 1e5, -1.5, 2.5);
 }
 
 /// Q as the level sets compute it (PatchBump::add_height, S made symmetric).

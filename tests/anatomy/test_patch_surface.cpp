@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -517,28 +518,86 @@ TEST(PatchBump, HeightGradientAndHessianMatchCentralFiniteDifferences) {
 }
 
 TEST(PatchHeightRange, EnclosesEveryHeightOfRandomBumps) {
+
   // 1-12 bumps of both signs, round and elongated, wide and narrow (the eigenvalues of S from 4
   // to 400), centred anywhere in the triangle.
   std::mt19937 random(11);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
   for (int patch = 0; patch < 300; ++patch) {
-    std::vector<PatchBump> bumps(static_cast<std::size_t>(1 + patch % 12));
-    for (PatchBump& b : bumps) {
-      double u = unit(random), v = unit(random);
-      if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
-      b.center_uv = {u, v};
-      const Eigen::Matrix2d R = Eigen::Rotation2Dd(M_PI * unit(random)).toRotationMatrix();
-      const Eigen::Vector2d eigenvalues(4.0 * std::pow(100.0, unit(random)),
-                                        4.0 * std::pow(100.0, unit(random)));
-      b.shape_uv = R * eigenvalues.asDiagonal() * R.transpose();
-      b.amplitude_mm = 4.0 * unit(random) - 1.5;
-    }
+    const std::vector<PatchBump> bumps = random_bumps(random, 1 + patch % 12, 4.0, 100.0, -1.5, 2.5);
     const HeightRange range = patch_height_range(bumps), sampled = sampled_height_range(bumps);
     ASSERT_LE(range.lowest, sampled.lowest) << "patch " << patch;
     ASSERT_GE(range.highest, sampled.highest) << "patch " << patch;
     // Never looser than the sums of the amplitudes.
     EXPECT_LE(range.highest, sum_of_amplitudes(bumps, 1.0) + 1e-9) << "patch " << patch;
     EXPECT_GE(range.lowest, -sum_of_amplitudes(bumps, -1.0) - 1e-9) << "patch " << patch;
+  }
+}
+
+namespace {
+
+/// patch_height_range's bounds one sub-triangle at a time, as written out in its comment: each
+/// bump's Q at the three corners of each sub-triangle of the 32 x 32 lattice its support box
+/// meets, the bounds summed in bump order, the extremes over every sub-triangle.
+HeightRange height_range_by_sub_triangle(const std::vector<PatchBump>& bumps) {
+  constexpr int n = 32;
+  std::vector<double> upper(2 * n * n, 0.0), lower(2 * n * n, 0.0);
+  const double step = 1.0 / n;
+  const Eigen::Vector2d edges[3] = {{step, 0.0}, {0.0, step}, {step, -step}};
+  const auto cube_of_positive = [](double x) { return x > 0.0 ? x * x * x : 0.0; };
+  for (const PatchBump& bump : bumps) {
+    const Eigen::Matrix2d S = 0.5 * (bump.shape_uv + bump.shape_uv.transpose());
+    const double a = bump.amplitude_mm;
+    if (a == 0.0) continue;
+    double widest = 0.0;
+    for (const Eigen::Vector2d& e : edges)
+      widest = std::max(widest, e.dot(S * e));
+    const double det = S.determinant();
+    const Eigen::Vector2d half(std::sqrt(S(1, 1) / det), std::sqrt(S(0, 0) / det));
+    const auto cell = [](double x) { return static_cast<int>(std::clamp(std::floor(x * n), 0.0, n - 1.0)); };
+    const auto q = [&](int i, int j) {
+      const Eigen::Vector2d d = step * Eigen::Vector2d(i, j) - bump.center_uv;
+      return 1.0 - d.dot(S * d);
+    };
+    const auto add = [&](std::size_t id, double q0, double q1, double q2) {
+      const double q_low = std::min({q0, q1, q2});
+      const double q_high = std::min(1.0, std::max({q0, q1, q2}) + widest / 3.0);
+      lower[id] += a * cube_of_positive(a > 0.0 ? q_low : q_high);
+      upper[id] += a * cube_of_positive(a > 0.0 ? q_high : q_low);
+    };
+    for (int j = cell(bump.center_uv.y() - half.y()); j <= cell(bump.center_uv.y() + half.y()); ++j) {
+      for (int i = cell(bump.center_uv.x() - half.x()); i <= cell(bump.center_uv.x() + half.x()) && i + j < n;
+           ++i) {
+        const auto id = static_cast<std::size_t>(2 * (j * n + i));
+        add(id, q(i, j), q(i + 1, j), q(i, j + 1));
+        if (i + j + 2 <= n) add(id + 1, q(i + 1, j), q(i, j + 1), q(i + 1, j + 1));
+      }
+    }
+  }
+  HeightRange range;
+  for (std::size_t id = 0; id < upper.size(); ++id) {
+    range.highest = std::max(range.highest, upper[id]);
+    range.lowest = std::min(range.lowest, lower[id]);
+  }
+  double total = 0.0;
+  for (const PatchBump& bump : bumps)
+    total += std::abs(bump.amplitude_mm);
+  range.lowest -= 1e-12 * total;
+  range.highest += 1e-12 * total;
+  return range;
+}
+
+} // namespace
+
+TEST(PatchHeightRange, IsTheSubTriangleBoundsToTheBit) {
+  // Computed row by row (vectorizable), the bounds are those summed sub-triangle by sub-triangle,
+  // bit for bit: fitted anatomy's level sets and the anatomy cache hold them.
+  std::mt19937 random(23);
+  for (int patch = 0; patch < 400; ++patch) {
+    std::vector<PatchBump> bumps = random_bumps(random, 1 + patch % 21, 2.0, 200.0, -2.0, 2.0);
+    if (patch % 5 == 0) bumps[static_cast<std::size_t>(patch / 5) % bumps.size()].amplitude_mm = 0.0;
+    const HeightRange range = patch_height_range(bumps), reference = height_range_by_sub_triangle(bumps);
+    ASSERT_EQ(range.lowest, reference.lowest) << "patch " << patch;
+    ASSERT_EQ(range.highest, reference.highest) << "patch " << patch;
   }
 }
 

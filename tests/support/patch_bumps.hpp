@@ -7,6 +7,8 @@
 
 #include <Eigen/Geometry>
 
+#include <cmath>
+#include <random>
 #include <vector>
 
 namespace phantasm::testing {
@@ -24,6 +26,26 @@ inline PatchBump disc_in_triangle(const TriangleMesh& base, Eigen::Index t, cons
   PatchBump bump = PatchBump::disc(center_uv, fraction * inradius, metric);
   bump.amplitude_mm = amplitude_mm;
   return bump;
+}
+
+/// `count` random bumps centred anywhere in the triangle (some at its edges and corners), of any
+/// orientation, round and elongated: the eigenvalues of S from `smallest` to `smallest` x `span`
+/// (log-uniform), the amplitudes from `lowest` to `highest` mm.
+inline std::vector<PatchBump> random_bumps(std::mt19937& random, int count, double smallest, double span,
+                                           double lowest, double highest) {
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<PatchBump> bumps(static_cast<std::size_t>(count));
+  for (PatchBump& b : bumps) {
+    double u = unit(random), v = unit(random);
+    if (u + v > 1.0) u = 1.0 - u, v = 1.0 - v;
+    b.center_uv = {u, v};
+    const Eigen::Matrix2d R = Eigen::Rotation2Dd(M_PI * unit(random)).toRotationMatrix();
+    const Eigen::Vector2d eigenvalues(smallest * std::pow(span, unit(random)),
+                                      smallest * std::pow(span, unit(random)));
+    b.shape_uv = R * eigenvalues.asDiagonal() * R.transpose();
+    b.amplitude_mm = lowest + (highest - lowest) * unit(random);
+  }
+  return bumps;
 }
 
 /// A disc of the fitting basis of anatomy/patch_fit: centred on a sub-triangle of the triangle cut
