@@ -2,6 +2,7 @@
 
 #include "anatomy/mesh_distance.hpp"
 #include "anatomy/phantom.hpp"
+#include "anatomy/trilinear_volume.hpp"
 #include "core/error.hpp"
 
 #include <Eigen/Geometry>
@@ -9,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace phantasm {
 namespace {
@@ -66,13 +68,6 @@ public:
       throw InputError(what + ": expected " + std::to_string(grid.voxel_count()) + " label values, found " +
                        std::to_string(labels.size()));
     }
-    // value() runs millions of times while meshing: invert the affine once.
-    m_voxel_from_world = grid.world_from_voxel.topLeftCorner<3, 3>().inverse();
-    m_origin = grid.world_from_voxel.topRightCorner<3, 1>();
-    m_axis_aligned = true;
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c)
-        m_axis_aligned = m_axis_aligned && (r == c || m_voxel_from_world(r, c) == 0.0);
     const auto in_set = [&label_set](std::int32_t l) {
       return std::find(label_set.begin(), label_set.end(), l) != label_set.end();
     };
@@ -104,17 +99,15 @@ public:
         (3.0 * smoothing_mm * grid.spacing_mm.cwiseInverse()).array().ceil().cast<int>().matrix() +
         Eigen::Vector3i::Ones();
     m_low = (low - reach).cwiseMax(Eigen::Vector3i::Zero());
-    m_low_d = m_low.cast<double>();
     const Eigen::Vector3i top = (high + reach).cwiseMin(grid.dims - Eigen::Vector3i::Ones());
     m_dims = top - m_low + Eigen::Vector3i::Ones();
-    m_last_cell = (m_dims - Eigen::Vector3i::Ones()).cast<double>();
-    m_inside.assign(static_cast<std::size_t>(m_dims.cast<std::int64_t>().prod()), 0.0f);
+    m_trilinear.emplace(grid.world_from_voxel, m_low, m_dims);
     for (int k = 0; k < m_dims.z(); ++k)
       for (int j = 0; j < m_dims.y(); ++j)
         for (int i = 0; i < m_dims.x(); ++i) {
           const std::size_t index = static_cast<std::size_t>(
               (std::int64_t{k + m_low.z()} * grid.dims.y() + j + m_low.y()) * grid.dims.x() + i + m_low.x());
-          if (in_set(labels[index])) m_inside[local_index(Eigen::Vector3i(i, j, k))] = 1.0f;
+          if (in_set(labels[index])) m_trilinear->values()[local_index(Eigen::Vector3i(i, j, k))] = 1.0f;
         }
     if (smoothing_mm > 0.0) smooth(smoothing_mm);
     measure_max_difference();
@@ -148,34 +141,8 @@ public:
   bool star_shaped() const override { return m_star_shaped; }
   bool smoothed_indicator() const override { return true; }
 
-  double value(const Eigen::Vector3d& x) const override {
-    // On a grid whose axes are the world's (the atlases, most scans), the matrix's other terms
-    // are zeros, which add nothing: the same bits for a third of the work.
-    const Eigen::Vector3d ijk =
-        m_axis_aligned ? Eigen::Vector3d(m_voxel_from_world(0, 0) * (x.x() - m_origin.x()) - m_low_d.x(),
-                                         m_voxel_from_world(1, 1) * (x.y() - m_origin.y()) - m_low_d.y(),
-                                         m_voxel_from_world(2, 2) * (x.z() - m_origin.z()) - m_low_d.z())
-                       : Eigen::Vector3d(m_voxel_from_world * (x - m_origin) - m_low_d);
-    // A cell inside the box: 0 <= ijk < dims - 1 (so floor(ijk) + 1 < dims), where truncation is
-    // the floor.
-    if (!(ijk.x() >= 0.0 && ijk.y() >= 0.0 && ijk.z() >= 0.0 && ijk.x() < m_last_cell.x() &&
-          ijk.y() < m_last_cell.y() && ijk.z() < m_last_cell.z()))
-      return value_near_edge(ijk, ijk.array().floor());
-    const Eigen::Vector3i at(static_cast<int>(ijk.x()), static_cast<int>(ijk.y()), static_cast<int>(ijk.z()));
-    const Eigen::Vector3d base = at.cast<double>();
-    // The cell lies in the box: its eight values, weighted as value_near_edge weights them (the
-    // same products in the same order, so the same bits), without a bounds test per corner.
-    const Eigen::Vector3d t = ijk - base;
-    const float* cell = m_inside.data() + local_index(at);
-    const std::ptrdiff_t dy = m_dims.x(), dz = std::ptrdiff_t{m_dims.x()} * m_dims.y();
-    const double wx[2] = {1.0 - t.x(), t.x()}, wy[2] = {1.0 - t.y(), t.y()}, wz[2] = {1.0 - t.z(), t.z()};
-    double total = 0.0;
-    for (int corner = 0; corner < 8; ++corner) {
-      const int ox = corner & 1, oy = (corner >> 1) & 1, oz = (corner >> 2) & 1;
-      total += wx[ox] * wy[oy] * wz[oz] * cell[ox + oy * dy + oz * dz];
-    }
-    return total - 0.5;
-  }
+  double value(const Eigen::Vector3d& x) const override { return m_trilinear->value(x); }
+  const TrilinearVolume* trilinear_volume() const override { return &*m_trilinear; }
   Eigen::Vector3d gradient(const Eigen::Vector3d& x) const override {
     return numeric_gradient(*this, x, m_step);
   }
@@ -183,7 +150,7 @@ public:
   double slope_bound(const Eigen::Vector3d& direction) const override {
     // Along each voxel axis the interpolant's slope is a weighted mean of differences of
     // neighbouring values, so at most their largest difference along that axis.
-    return (m_voxel_from_world * direction).cwiseAbs().dot(m_max_difference);
+    return (m_trilinear->voxel_from_world() * direction).cwiseAbs().dot(m_max_difference);
   }
   double bounding_radius() const override { return m_radius; }
   double volume() const override { return m_volume; }
@@ -201,24 +168,6 @@ public:
   }
 
 private:
-  /// value() at a point whose cell reaches past the kept box: corners outside it count as 0.
-  double value_near_edge(const Eigen::Vector3d& ijk, const Eigen::Vector3d& base) const {
-    double total = 0.0;
-    for (int corner = 0; corner < 8; ++corner) {
-      double weight = 1.0;
-      Eigen::Vector3i at;
-      for (int a = 0; a < 3; ++a) {
-        const int offset = (corner >> a) & 1;
-        at[a] = static_cast<int>(base[a]) + offset;
-        const double t = ijk[a] - base[a];
-        weight *= offset ? t : 1.0 - t;
-      }
-      if ((at.array() < 0).any() || (at.array() >= m_dims.array()).any() || weight == 0.0) continue;
-      total += weight * m_inside[local_index(at)];
-    }
-    return total - 0.5;
-  }
-
   /// The largest difference of neighbouring values along each voxel axis, the values outside the
   /// box counting as 0 (slope_bound).
   void measure_max_difference() {
@@ -227,11 +176,11 @@ private:
       for (int j = 0; j < m_dims.y(); ++j)
         for (int i = 0; i < m_dims.x(); ++i) {
           const Eigen::Vector3i at(i, j, k);
-          const double v = m_inside[local_index(at)];
+          const double v = m_trilinear->values()[local_index(at)];
           for (int a = 0; a < 3; ++a) {
             Eigen::Vector3i next = at;
             ++next[a];
-            const double w = next[a] < m_dims[a] ? m_inside[local_index(next)] : 0.0;
+            const double w = next[a] < m_dims[a] ? m_trilinear->values()[local_index(next)] : 0.0;
             m_max_difference[a] = std::max(m_max_difference[a], std::abs(w - v));
             if (at[a] == 0) m_max_difference[a] = std::max(m_max_difference[a], std::abs(v));
           }
@@ -262,7 +211,7 @@ private:
           Eigen::Vector3i p = at;
           for (p[axis] = 0; p[axis] < n; ++p[axis]) {
             const auto q = static_cast<std::size_t>(p[axis]);
-            line[q] = m_inside[local_index(p)];
+            line[q] = m_trilinear->values()[local_index(p)];
             not_zero[q + 1] = not_zero[q] + (line[q] != 0.0f);
             not_one[q + 1] = not_one[q] + (line[q] != 1.0f);
           }
@@ -272,11 +221,11 @@ private:
             const auto first = static_cast<std::size_t>(std::max(0, p[axis] - half));
             const auto end = static_cast<std::size_t>(std::min(n, p[axis] + half + 1));
             if (not_zero[end] == not_zero[first]) {
-              m_inside[local_index(p)] = 0.0f;
+              m_trilinear->values()[local_index(p)] = 0.0f;
               continue;
             }
             if (not_one[end] == not_one[first]) {
-              m_inside[local_index(p)] = 1.0f;
+              m_trilinear->values()[local_index(p)] = 1.0f;
               continue;
             }
             double sum = 0.0, weight = 0.0;
@@ -287,25 +236,19 @@ private:
               sum += w * line[static_cast<std::size_t>(q)];
               weight += w;
             }
-            m_inside[local_index(p)] = static_cast<float>(sum / weight);
+            m_trilinear->values()[local_index(p)] = static_cast<float>(sum / weight);
           }
         }
     }
   }
 
-  std::size_t local_index(const Eigen::Vector3i& at) const {
-    return static_cast<std::size_t>((std::int64_t{at.z()} * m_dims.y() + at.y()) * m_dims.x() + at.x());
-  }
+  std::size_t local_index(const Eigen::Vector3i& at) const { return m_trilinear->local_index(at); }
 
   ImageGrid m_grid;
-  Eigen::Matrix3d m_voxel_from_world = Eigen::Matrix3d::Identity();
-  bool m_axis_aligned = true;           ///< m_voxel_from_world is diagonal
-  Eigen::Vector3d m_low_d{0, 0, 0};     ///< m_low as doubles
-  Eigen::Vector3d m_last_cell{0, 0, 0}; ///< m_dims - 1 as doubles: the cells' lower corners lie below
-  Eigen::Vector3d m_origin{0, 0, 0};
-  Eigen::Vector3i m_low{0, 0, 0};            ///< the kept box's first voxel in the volume
-  Eigen::Vector3i m_dims{0, 0, 0};           ///< the kept box's size in voxels
-  std::vector<float> m_inside;               ///< the indicator of the labels (smoothed when asked)
+  Eigen::Vector3i m_low{0, 0, 0};  ///< the kept box's first voxel in the volume
+  Eigen::Vector3i m_dims{0, 0, 0}; ///< the kept box's size in voxels
+  /// The indicator of the labels (smoothed when asked) over the kept box, and value()'s sampling.
+  std::optional<TrilinearVolume> m_trilinear;
   Eigen::Vector3d m_max_difference{0, 0, 0}; ///< measure_max_difference
   Eigen::Vector3d m_center;
   double m_radius = 0.0, m_volume = 0.0, m_step = 0.05;
@@ -313,6 +256,36 @@ private:
 };
 
 } // namespace
+
+TrilinearVolume::TrilinearVolume(const Eigen::Matrix4d& world_from_voxel, const Eigen::Vector3i& low,
+                                 const Eigen::Vector3i& dims)
+    : m_low_d(low.cast<double>()), m_last_cell((dims - Eigen::Vector3i::Ones()).cast<double>()), m_low(low),
+      m_dims(dims), m_values(static_cast<std::size_t>(dims.cast<std::int64_t>().prod()), 0.0f) {
+  // value() runs millions of times while meshing: invert the affine once.
+  m_voxel_from_world = world_from_voxel.topLeftCorner<3, 3>().inverse();
+  m_origin = world_from_voxel.topRightCorner<3, 1>();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      m_axis_aligned = m_axis_aligned && (r == c || m_voxel_from_world(r, c) == 0.0);
+}
+
+double TrilinearVolume::value_near_edge(const Eigen::Vector3d& ijk) const {
+  const Eigen::Vector3d base = ijk.array().floor();
+  double total = 0.0;
+  for (int corner = 0; corner < 8; ++corner) {
+    double weight = 1.0;
+    Eigen::Vector3i at;
+    for (int a = 0; a < 3; ++a) {
+      const int offset = (corner >> a) & 1;
+      at[a] = static_cast<int>(base[a]) + offset;
+      const double t = ijk[a] - base[a];
+      weight *= offset ? t : 1.0 - t;
+    }
+    if ((at.array() < 0).any() || (at.array() >= m_dims.array()).any() || weight == 0.0) continue;
+    total += weight * m_values[local_index(at)];
+  }
+  return total - 0.5;
+}
 
 std::unique_ptr<ImplicitShape> make_mesh_shape(const TriangleMesh& mesh, const std::string& what) {
   return std::make_unique<MeshShape>(mesh, what);

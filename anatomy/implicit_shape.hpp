@@ -10,6 +10,8 @@
 
 namespace phantasm {
 
+class TrilinearVolume;
+
 /// A closed target surface given implicitly: value(x) > 0 inside, < 0 outside, 0 on the surface
 /// (the sign convention of patch functions). Positions are RAS mm. Shapes that say they are
 /// star_shaped() about center() can be sampled by rays from it (the icosphere base mesh of the
@@ -46,6 +48,9 @@ public:
   /// infinity when the shape knows none. Root searches along a line use it to skip samples whose
   /// sign an earlier sample already settles (same samples' signs, fewer evaluations).
   virtual double slope_bound(const Eigen::Vector3d& direction) const;
+  /// The voxel values value() samples, when it is their trilinear interpolant minus 1/2 (a label
+  /// volume's shape): searches that sample it millions of times call it inline. Null otherwise.
+  virtual const TrilinearVolume* trilinear_volume() const { return nullptr; }
 
   /// The surface point on the ray center() + t d (d unit, t > 0), by bisection, to 1e-12 mm.
   Eigen::Vector3d ray_from_center(const Eigen::Vector3d& direction) const;

@@ -2,6 +2,7 @@
 
 #include "anatomy/mesh_distance.hpp"
 #include "anatomy/surface_extraction.hpp"
+#include "anatomy/trilinear_volume.hpp"
 #include "core/cancellation.hpp"
 
 #include <Eigen/Cholesky>
@@ -75,19 +76,21 @@ std::vector<PatchBump> basis_bumps(const Eigen::Vector3d& x0, const Eigen::Vecto
   return bumps;
 }
 
-/// Height of the target above base point b along unit normal n, within +-limit (NaN if none):
+/// Height of the target (whose value at x is value(x)) above base point b along unit normal n,
+/// within +-limit (NaN if none):
 /// a sign change bracketed by stepping outward from b, up and down in turn, then regula falsi
 /// (Illinois variant). A sample whose value exceeds the target's slope bound times the distance to
 /// the next samples on its side settles their sign, so they are not evaluated: the bracket found,
 /// and its values, are those of evaluating every step.
-double target_height(const ImplicitShape& target, const Eigen::Vector3d& b, const Eigen::Vector3d& n,
-                     double limit) {
-  auto f = [&](double h) { return target.value(b + h * n); };
+template <class Value>
+double height_search(const Value& value, double slope_bound, const Eigen::Vector3d& b,
+                     const Eigen::Vector3d& n, double limit) {
+  auto f = [&](double h) { return value(b + h * n); };
   const double f0 = f(0.0);
   if (f0 == 0.0) return 0.0;
   constexpr int steps = 32;
   // The bound of the value's change over one step, with a margin for the values' rounding.
-  const double change_per_step = target.slope_bound(n) * (limit / steps) * (1.0 + 1e-6);
+  const double change_per_step = slope_bound * (limit / steps) * (1.0 + 1e-6);
   struct Side {
     double sign;           // +1 stepping up, -1 down
     int step = 0;          // the last step evaluated
@@ -136,6 +139,16 @@ double target_height(const ImplicitShape& target, const Eigen::Vector3d& b, cons
     }
   }
   return 0.5 * (lo + hi);
+}
+
+double target_height(const ImplicitShape& target, const Eigen::Vector3d& b, const Eigen::Vector3d& n,
+                     double limit) {
+  // A label volume's values inline: the same values, without a call through the shape.
+  if (const TrilinearVolume* volume = target.trilinear_volume())
+    return height_search([volume](const Eigen::Vector3d& x) { return volume->value(x); },
+                         target.slope_bound(n), b, n, limit);
+  return height_search([&target](const Eigen::Vector3d& x) { return target.value(x); }, target.slope_bound(n),
+                       b, n, limit);
 }
 
 } // namespace
