@@ -56,30 +56,24 @@ namespace {
 /// Adds one bump's bounds a Q^3 [Q > 0] over a row of sub-triangles: for each i < count, the
 /// sub-triangle with corner values q0[i], q1[i], q2[i] (Q at its corners) gets a times the cube
 /// of its least corner value (lower) and of its largest plus `slack`, at most 1 (upper), each
-/// taken where positive; swapped for a < 0. Plain arrays in one pass each, so the compiler
-/// vectorizes it: the same operations on each element as one at a time, so the same sums.
+/// taken where positive; the other way round for a < 0. Branch-free per element (the same
+/// operations as one sub-triangle at a time, so the same sums).
 void add_row_bounds(double a, double slack, const double* q0, const double* q1, const double* q2, int count,
-                    double* __restrict lower, double* __restrict upper) {
-  // max(x, 0)^3 rather than a branch: vectorizable, and where x <= 0 it adds a zero either way
-  // (a sum that starts at +0 and only grows by these is never -0, so adding -0 changes no bit).
+                    double* lower, double* upper) {
+  // max(x, 0)^3 rather than a branch: where x <= 0 it adds a zero either way (a sum that starts
+  // at +0 and only grows by these is never -0, so adding -0 changes no bit).
   const auto cube_of_positive = [](double x) {
     const double p = std::max(x, 0.0);
     return p * p * p;
   };
-  if (a > 0.0) {
-    for (int i = 0; i < count; ++i) {
-      const double q_low = std::min(std::min(q0[i], q1[i]), q2[i]);
-      const double q_high = std::min(1.0, std::max(std::max(q0[i], q1[i]), q2[i]) + slack);
-      lower[i] += a * cube_of_positive(q_low);
-      upper[i] += a * cube_of_positive(q_high);
-    }
-  } else {
-    for (int i = 0; i < count; ++i) {
-      const double q_low = std::min(std::min(q0[i], q1[i]), q2[i]);
-      const double q_high = std::min(1.0, std::max(std::max(q0[i], q1[i]), q2[i]) + slack);
-      lower[i] += a * cube_of_positive(q_high);
-      upper[i] += a * cube_of_positive(q_low);
-    }
+  // a > 0: the least corner bounds from below; a < 0: from above.
+  double* __restrict by_least = a > 0.0 ? lower : upper;
+  double* __restrict by_largest = a > 0.0 ? upper : lower;
+  for (int i = 0; i < count; ++i) {
+    const double q_low = std::min(std::min(q0[i], q1[i]), q2[i]);
+    const double q_high = std::min(1.0, std::max(std::max(q0[i], q1[i]), q2[i]) + slack);
+    by_least[i] += a * cube_of_positive(q_low);
+    by_largest[i] += a * cube_of_positive(q_high);
   }
 }
 

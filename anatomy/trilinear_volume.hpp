@@ -51,8 +51,6 @@ public:
   std::size_t local_index(const Eigen::Vector3i& at) const {
     return static_cast<std::size_t>((std::int64_t{at.z()} * m_dims.y() + at.y()) * m_dims.x() + at.x());
   }
-  const Eigen::Vector3i& low() const { return m_low; }
-  const Eigen::Vector3i& dims() const { return m_dims; }
   const Eigen::Matrix3d& voxel_from_world() const { return m_voxel_from_world; }
   std::vector<float>& values() { return m_values; }
   const std::vector<float>& values() const { return m_values; }
@@ -66,7 +64,6 @@ private:
   Eigen::Vector3d m_low_d{0, 0, 0};     ///< m_low as doubles
   Eigen::Vector3d m_last_cell{0, 0, 0}; ///< m_dims - 1 as doubles: the cells' lower corners lie below
   Eigen::Vector3d m_origin{0, 0, 0};
-  Eigen::Vector3i m_low{0, 0, 0};  ///< the box's first voxel in the volume
   Eigen::Vector3i m_dims{0, 0, 0}; ///< the box's size in voxels
   std::vector<float> m_values;     ///< by local_index()
 };

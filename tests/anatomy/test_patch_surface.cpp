@@ -589,7 +589,7 @@ HeightRange height_range_by_sub_triangle(const std::vector<PatchBump>& bumps) {
 } // namespace
 
 TEST(PatchHeightRange, IsTheSubTriangleBoundsToTheBit) {
-  // Computed row by row (vectorizable), the bounds are those summed sub-triangle by sub-triangle,
+  // Computed row by row without branches, the bounds are those summed sub-triangle by sub-triangle,
   // bit for bit: fitted anatomy's level sets and the anatomy cache hold them.
   std::mt19937 random(23);
   for (int patch = 0; patch < 400; ++patch) {
