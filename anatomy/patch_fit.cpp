@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 namespace phantasm {
@@ -76,69 +77,181 @@ std::vector<PatchBump> basis_bumps(const Eigen::Vector3d& x0, const Eigen::Vecto
   return bumps;
 }
 
-/// Height of the target (whose value at x is value(x)) above base point b along unit normal n,
-/// within +-limit (NaN if none):
-/// a sign change bracketed by stepping outward from b, up and down in turn, then regula falsi
-/// (Illinois variant). A sample whose value exceeds the target's slope bound times the distance to
-/// the next samples on its side settles their sign, so they are not evaluated: the bracket found,
-/// and its values, are those of evaluating every step.
-template <class Value>
-double height_search(const Value& value, double slope_bound, const Eigen::Vector3d& b,
-                     const Eigen::Vector3d& n, double limit) {
-  auto f = [&](double h) { return value(b + h * n); };
-  const double f0 = f(0.0);
-  if (f0 == 0.0) return 0.0;
-  constexpr int steps = 32;
-  // The bound of the value's change over one step, with a margin for the values' rounding.
-  const double change_per_step = slope_bound * (limit / steps) * (1.0 + 1e-6);
+/// Height of the target above a base point b along unit normal n, within +-limit (NaN if none),
+/// as a machine that asks for one value at a time: next() is the height h whose value, the
+/// target's at b + h n, feed() takes next, until done(). A sign change is bracketed by stepping
+/// outward from b, up and down in turn, then refined by regula falsi (Illinois variant). A
+/// sample whose value exceeds the target's slope bound times the distance to the next samples on
+/// its side settles their sign, so they are not evaluated: the bracket found, and its values,
+/// are those of evaluating every step. Asking for values one at a time lets a patch's searches
+/// run interleaved (height_searches): each its own numbers in its own order, so the same
+/// heights as one search after another, while the processor overlaps their evaluations.
+class HeightSearch {
+public:
+  HeightSearch(double slope_bound, double limit)
+      : m_limit(limit), m_change_per_step(slope_bound * (limit / k_steps) * (1.0 + 1e-6)) {}
+
+  bool done() const { return m_phase == Phase::done; }
+  double next() const { return m_next; }
+  /// The height found (NaN if none), once done().
+  double height() const { return m_height; }
+
+  /// The value at next().
+  void feed(double value) {
+    switch (m_phase) {
+    case Phase::base:
+      if (value == 0.0) return finish(0.0);
+      m_up.value = m_down.value = m_lo_value = value;
+      settle(m_up);
+      settle(m_down);
+      return march();
+    case Phase::step: {
+      Side& side = m_on_up ? m_up : m_down;
+      if ((value > 0.0) != (side.value > 0.0)) {
+        m_hi = m_next, m_hi_value = value;
+        if (side.step == m_step - 1) {
+          m_lo = side.h, m_lo_value = side.value;
+          return refine();
+        }
+        // The last step evaluated on this side lies further back: the step before this one was
+        // settled, its value not known.
+        m_lo = side.sign * (m_limit * (m_step - 1) / k_steps);
+        m_next = m_lo;
+        m_phase = Phase::low;
+        return;
+      }
+      side.step = m_step, side.h = m_next, side.value = value;
+      settle(side);
+      if (m_on_up) {
+        m_on_up = false;
+      } else {
+        m_on_up = true;
+        ++m_step;
+      }
+      return march();
+    }
+    case Phase::low: m_lo_value = value; return refine();
+    case Phase::refine:
+      if (value == 0.0) return finish(m_next);
+      if ((value > 0.0) == (m_lo_value > 0.0)) {
+        m_lo = m_next, m_lo_value = value;
+        if (m_kept == -1) m_hi_value *= 0.5;
+        m_kept = -1;
+      } else {
+        m_hi = m_next, m_hi_value = value;
+        if (m_kept == 1) m_lo_value *= 0.5;
+        m_kept = 1;
+      }
+      ++m_iteration;
+      return refine();
+    case Phase::done: return;
+    }
+  }
+
+private:
+  static constexpr int k_steps = 32;
+  enum class Phase { base, step, low, refine, done };
   struct Side {
     double sign;           // +1 stepping up, -1 down
     int step = 0;          // the last step evaluated
     double h = 0.0, value; // its height and value
     int settled = 0;       // steps up to this one have that value's sign
   };
-  const auto settle = [&](Side& side) {
-    const double room = (std::abs(side.value) - 1e-12) / change_per_step;
-    side.settled = side.step + (room > 0.0 ? static_cast<int>(std::min(room, double(steps))) : 0);
-  };
-  Side up{1.0, 0, 0.0, f0}, down{-1.0, 0, 0.0, f0};
-  settle(up);
-  settle(down);
-  double lo = 0.0, f_lo = f0, hi = 0.0, f_hi = 0.0;
-  // Step s on one side: true with lo, hi bracketing a sign change between steps s - 1 and s.
-  const auto advance = [&](Side& side, int s) {
-    if (s <= side.settled) return false;
-    const double h = side.sign * (limit * s / steps), fh = f(h);
-    if ((fh > 0.0) != (side.value > 0.0)) {
-      lo = side.step == s - 1 ? side.h : side.sign * (limit * (s - 1) / steps);
-      f_lo = side.step == s - 1 ? side.value : f(lo);
-      hi = h, f_hi = fh;
-      return true;
-    }
-    side.step = s, side.h = h, side.value = fh;
-    settle(side);
-    return false;
-  };
-  bool bracketed = false;
-  for (int s = 1; s <= steps && !bracketed; ++s)
-    bracketed = advance(up, s) || advance(down, s);
-  if (!bracketed) return std::nan("");
-  int side = 0;
-  for (int i = 0; i < 100 && std::abs(hi - lo) > 1e-12 * limit; ++i) {
-    const double h = (lo * f_hi - hi * f_lo) / (f_hi - f_lo);
-    const double fh = f(h);
-    if (fh == 0.0) return h;
-    if ((fh > 0.0) == (f_lo > 0.0)) {
-      lo = h, f_lo = fh;
-      if (side == -1) f_hi *= 0.5;
-      side = -1;
-    } else {
-      hi = h, f_hi = fh;
-      if (side == 1) f_lo *= 0.5;
-      side = 1;
-    }
+
+  void settle(Side& side) const {
+    const double room = (std::abs(side.value) - 1e-12) / m_change_per_step;
+    side.settled = side.step + (room > 0.0 ? static_cast<int>(std::min(room, double(k_steps))) : 0);
   }
-  return 0.5 * (lo + hi);
+
+  /// The next step to evaluate, up then down at each step number, skipping settled ones.
+  void march() {
+    for (; m_step <= k_steps; ++m_step) {
+      if (m_on_up) {
+        if (m_step > m_up.settled) return ask(m_up);
+        m_on_up = false;
+      }
+      if (m_step > m_down.settled) return ask(m_down);
+      m_on_up = true;
+    }
+    finish(std::nan(""));
+  }
+
+  void ask(const Side& side) {
+    m_next = side.sign * (m_limit * m_step / k_steps);
+    m_phase = Phase::step;
+  }
+
+  /// The next regula falsi point, or the bracket's middle once it is narrow enough.
+  void refine() {
+    if (m_iteration < 100 && std::abs(m_hi - m_lo) > 1e-12 * m_limit) {
+      m_next = (m_lo * m_hi_value - m_hi * m_lo_value) / (m_hi_value - m_lo_value);
+      m_phase = Phase::refine;
+      return;
+    }
+    finish(0.5 * (m_lo + m_hi));
+  }
+
+  void finish(double height) {
+    m_height = height;
+    m_phase = Phase::done;
+  }
+
+  double m_limit, m_change_per_step;
+  Phase m_phase = Phase::base;
+  double m_next = 0.0, m_height = 0.0;
+  Side m_up{1.0, 0, 0.0, 0.0}, m_down{-1.0, 0, 0.0, 0.0};
+  int m_step = 1;      // the step number being marched
+  bool m_on_up = true; // on the upper side at that step
+  double m_lo = 0.0, m_lo_value = 0.0, m_hi = 0.0, m_hi_value = 0.0;
+  int m_iteration = 0, m_kept = 0; // regula falsi's count, and the end kept last (-1 lo, 1 hi)
+};
+
+/// The target's value along base point b + h n.
+template <class Value>
+double value_along(const Value& value, const Eigen::Vector3d& b, const Eigen::Vector3d& n, double h) {
+  return value(b + h * n);
+}
+
+template <class Value>
+double height_search(const Value& value, double slope_bound, const Eigen::Vector3d& b,
+                     const Eigen::Vector3d& n, double limit) {
+  HeightSearch search(slope_bound, limit);
+  while (!search.done())
+    search.feed(value_along(value, b, n, search.next()));
+  return search.height();
+}
+
+/// height_search from each of `bases` along n into `heights`, the searches interleaved: each
+/// round feeds every unfinished search one value.
+template <class Value>
+void height_searches(const Value& value, double slope_bound, const std::vector<Eigen::Vector3d>& bases,
+                     const Eigen::Vector3d& n, double limit, std::vector<HeightSearch>& searches,
+                     std::vector<std::uint32_t>& running, std::vector<double>& values,
+                     std::vector<double>& heights) {
+  searches.assign(bases.size(), HeightSearch(slope_bound, limit));
+  running.resize(bases.size());
+  for (std::size_t k = 0; k < bases.size(); ++k)
+    running[k] = static_cast<std::uint32_t>(k);
+  heights.resize(bases.size());
+  values.resize(bases.size());
+  while (!running.empty()) {
+    // The values first, in a loop of their own (no branching on the searches' states), then
+    // each search's step.
+    for (std::size_t r = 0; r < running.size(); ++r)
+      values[r] = value_along(value, bases[running[r]], n, searches[running[r]].next());
+    std::size_t kept = 0;
+    for (std::size_t r = 0; r < running.size(); ++r) {
+      const std::uint32_t k = running[r];
+      HeightSearch& search = searches[k];
+      search.feed(values[r]);
+      if (search.done()) {
+        heights[k] = search.height();
+      } else {
+        running[kept++] = k;
+      }
+    }
+    running.resize(kept);
+  }
 }
 
 double target_height(const ImplicitShape& target, const Eigen::Vector3d& b, const Eigen::Vector3d& n,
@@ -149,6 +262,18 @@ double target_height(const ImplicitShape& target, const Eigen::Vector3d& b, cons
                          target.slope_bound(n), b, n, limit);
   return height_search([&target](const Eigen::Vector3d& x) { return target.value(x); }, target.slope_bound(n),
                        b, n, limit);
+}
+
+/// target_height from each of `bases`, interleaved (height_searches).
+void target_heights(const ImplicitShape& target, const std::vector<Eigen::Vector3d>& bases,
+                    const Eigen::Vector3d& n, double limit, std::vector<HeightSearch>& searches,
+                    std::vector<std::uint32_t>& running, std::vector<double>& values,
+                    std::vector<double>& heights) {
+  if (const TrilinearVolume* volume = target.trilinear_volume())
+    return height_searches([volume](const Eigen::Vector3d& x) { return volume->value(x); },
+                           target.slope_bound(n), bases, n, limit, searches, running, values, heights);
+  return height_searches([&target](const Eigen::Vector3d& x) { return target.value(x); },
+                         target.slope_bound(n), bases, n, limit, searches, running, values, heights);
 }
 
 } // namespace
@@ -243,6 +368,11 @@ void fit_bumps(PatchSurface& surface, const ImplicitShape& target, const PatchFi
   std::vector<Eigen::Index> bumps_at;
   std::vector<std::pair<Eigen::Index, double>> row;
   std::vector<char> in_column(static_cast<std::size_t>(n)), in_row(static_cast<std::size_t>(n));
+  // The grid's interior points, their searches and heights (NaN: no target found).
+  std::vector<Eigen::Vector3d> grid_bases;
+  std::vector<double> grid_values, grid_heights;
+  std::vector<HeightSearch> searches;
+  std::vector<std::uint32_t> running;
   for (Eigen::Index t = 0; t < surface.patch_count(); ++t) {
     throw_if_cancelled();
     const PatchFrame frame = surface.frame(t);
@@ -252,17 +382,24 @@ void fit_bumps(PatchSurface& surface, const ImplicitShape& target, const PatchFi
     std::vector<PatchBump> bumps = basis_bumps(x0, x1, x2, options.bump_levels);
     // The samples on the grid's interior points (i, j) / n, those whose search found the target;
     // `sample_of` numbers them by grid point (-1: none there).
-    uv.clear();
-    heights.clear();
-    sample_of.assign(static_cast<std::size_t>(n * n), -1);
+    grid_bases.clear();
     for (int j = 1; j < n; ++j) {
       for (int i = 1; i + j < n; ++i) {
         const double u = double(i) / n, v = double(j) / n;
-        const double h = target_height(target, frame.origin + u * frame.edge1 + v * frame.edge2, frame.normal,
-                                       frame.length_scale);
+        grid_bases.emplace_back(frame.origin + u * frame.edge1 + v * frame.edge2);
+      }
+    }
+    target_heights(target, grid_bases, frame.normal, frame.length_scale, searches, running, grid_values,
+                   grid_heights);
+    uv.clear();
+    heights.clear();
+    sample_of.assign(static_cast<std::size_t>(n * n), -1);
+    for (int j = 1, g = 0; j < n; ++j) {
+      for (int i = 1; i + j < n; ++i, ++g) {
+        const double h = grid_heights[static_cast<std::size_t>(g)];
         if (std::isnan(h)) continue;
         sample_of[static_cast<std::size_t>(j * n + i)] = static_cast<int>(uv.size());
-        uv.emplace_back(u, v);
+        uv.emplace_back(double(i) / n, double(j) / n);
         heights.push_back(h);
       }
     }

@@ -17,6 +17,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <numeric>
 #include <optional>
 #include <random>
 #include <sstream>
@@ -353,10 +354,18 @@ Phantom build_phantom(const AnatomySettings& anatomy, const std::map<std::string
   ProgressBar progress(reporter, "anatomy", settings.size());
   // Organs are fitted side by side, one per thread (each fit is the same on any thread: its
   // own parallel loops write their own slots, and each mesher reseeds its thread's generator),
-  // and logged in scene order.
+  // and logged in scene order. The largest base meshes are taken first, so the small organs fill
+  // the threads at the end instead of one large fit running alone (on the Colin head grey and
+  // white matter, 40 000 triangles each, come fourth and fifth in scene order).
+  std::vector<std::size_t> order(settings.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return base_triangles(anatomy, a) > base_triangles(anatomy, b);
+  });
   std::vector<std::optional<Organ>> built(settings.size());
   run_tasks_in_parallel(settings.size(), static_cast<std::size_t>(std::max(1, omp_get_max_threads())),
-                        [&](std::size_t o) {
+                        [&](std::size_t task) {
+                          const std::size_t o = order[task];
                           throw_if_cancelled();
                           Organ organ = organ_without_geometry(settings[o], varied.targets[o]);
                           build_organ_geometry(organ, anatomy, o, varied.shapes[o], progress);
