@@ -61,7 +61,7 @@ private:
 
   Eigen::Matrix3d m_voxel_from_world = Eigen::Matrix3d::Identity();
   bool m_axis_aligned = true;           ///< m_voxel_from_world is diagonal
-  Eigen::Vector3d m_low_d{0, 0, 0};     ///< m_low as doubles
+  Eigen::Vector3d m_low_d{0, 0, 0};     ///< the box's first voxel in the volume, as doubles
   Eigen::Vector3d m_last_cell{0, 0, 0}; ///< m_dims - 1 as doubles: the cells' lower corners lie below
   Eigen::Vector3d m_origin{0, 0, 0};
   Eigen::Vector3i m_dims{0, 0, 0}; ///< the box's size in voxels
